@@ -1,0 +1,72 @@
+# gridbvh - see README.md.
+#   make            optimized library, tools and experiments (bin/)
+#   make test       the test suite (T=name filters tests by substring)
+#   make report     runs every experiment and rewrites REPORT.md (QUICK=1: smoke run)
+#   make sanitize   the test suite under AddressSanitizer + UBSan
+#   make fuzz       libFuzzer targets for the loaders (clang)
+CC      ?= cc
+ARCH    ?= -march=native
+OPT     ?= -O3
+CFLAGS  ?= $(OPT) $(ARCH) -g
+CFLAGS  += -std=c11 -D_GNU_SOURCE -Wall -Wextra -pthread -Iaccel -I.
+LDLIBS  += -lm -pthread
+BUILD   ?= build
+BIN     ?= bin
+
+# Every backend folder's .c files go into the library; a new backend is a
+# new folder listed here plus its line in accel/registry.c.
+BACKENDS := grid nested_grid bvh
+LIB_SRC  := $(wildcard accel/*.c) $(foreach d,$(BACKENDS),$(wildcard $(d)/*.c))
+LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/%.o)
+LIB      := $(BUILD)/libgridbvh.a
+HDRS     := $(wildcard accel/*.h) $(foreach d,$(BACKENDS),$(wildcard $(d)/*.h)) $(wildcard experiments/*.h) $(wildcard tests/*.h)
+
+TOOLS    := $(patsubst tools/%.c,$(BIN)/%,$(wildcard tools/*.c))
+EXP_LIB  := $(filter-out experiments/exp_%.c,$(wildcard experiments/*.c))
+EXP_BINS := $(patsubst experiments/%.c,$(BIN)/%,$(wildcard experiments/exp_*.c))
+TEST_SRC := $(wildcard tests/*.c)
+
+.PHONY: all test report sanitize fuzz clean bench
+all: $(TOOLS) $(EXP_BINS) $(BIN)/run_tests
+
+$(BUILD)/%.o: %.c $(HDRS)
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) -c $< -o $@
+
+$(LIB): $(LIB_OBJ)
+	@rm -f $@
+	ar rcs $@ $^
+
+$(BIN)/%: tools/%.c $(LIB) $(HDRS)
+	@mkdir -p $(BIN)
+	$(CC) $(CFLAGS) $< $(LIB) -o $@ $(LDLIBS)
+
+$(BIN)/exp_%: experiments/exp_%.c $(EXP_LIB) $(LIB) $(HDRS)
+	@mkdir -p $(BIN)
+	$(CC) $(CFLAGS) $< $(EXP_LIB) $(LIB) -o $@ $(LDLIBS)
+
+$(BIN)/run_tests: $(TEST_SRC) $(LIB) $(HDRS)
+	@mkdir -p $(BIN)
+	$(CC) $(CFLAGS) $(TEST_SRC) $(LIB) -o $@ $(LDLIBS)
+
+test: all
+	./$(BIN)/run_tests $(T)
+
+report: all
+	./experiments/report.sh $(if $(QUICK),--quick,)
+
+bench: all
+	./experiments/report.sh --bench-only
+
+# Tests under ASan + UBSan in a separate build tree.
+sanitize:
+	$(MAKE) BUILD=build-san BIN=bin-san OPT=-O1 \
+	  CFLAGS="-O1 -g -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined" \
+	  LDLIBS="-lm -pthread -fsanitize=address,undefined" bin-san/run_tests
+	ASAN_OPTIONS=detect_leaks=1 ./bin-san/run_tests $(T)
+
+fuzz:
+	$(MAKE) -C tests/fuzz
+
+clean:
+	rm -rf build build-san bin bin-san

@@ -1,0 +1,264 @@
+/*
+ * accel.h - the shared ray/primitive interface of gridbvh.
+ *
+ * Every accelerator kind (brute, grid, nested_grid, bvh, a student's own) is
+ * a table of functions (accel_kind) listed once in registry.c. Tools, tests
+ * and experiments only ever go through this table, so that all kinds are
+ * built from the same scene and traced with the same rays.
+ *
+ * Rules for a kind (see ../shared/STYLE.md):
+ *  - build returns a status and fills a caller-owned accel_error; it never
+ *    exits or prints;
+ *  - the built structure is immutable; intersect/occluded are reentrant and
+ *    may be called from many threads at once on disjoint ray ranges;
+ *  - intersect/occluded are called per batch of rays. counters == NULL is
+ *    the timing path: kernels are written once as always-inline functions
+ *    taking a counters pointer, and the batch entry calls them with a
+ *    literal NULL so the compiler emits a copy without any counting code.
+ */
+#ifndef ACCEL_ACCEL_H
+#define ACCEL_ACCEL_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "geom.h"
+
+/* ---- rays and hits: exactly the FORMATS.md records ---------------------- */
+
+typedef struct {
+    float ox, oy, oz, t_near;
+    float dx, dy, dz, t_far;
+} accel_ray;
+
+typedef struct {
+    float t;       /* +inf on a miss */
+    uint32_t prim; /* ACCEL_MISS on a miss */
+    float u, v;    /* barycentric weights of the 2nd and 3rd vertex */
+} accel_hit;
+
+_Static_assert(sizeof(accel_ray) == 32, "accel_ray must be the 32-byte FORMATS.md record");
+_Static_assert(sizeof(accel_hit) == 16, "accel_hit must be the 16-byte FORMATS.md record");
+
+#define ACCEL_MISS 0xFFFFFFFFu
+
+static inline accel_hit accel_hit_miss(void)
+{
+    accel_hit h = {INFINITY, ACCEL_MISS, 0.0f, 0.0f};
+    return h;
+}
+
+/* ---- errors ------------------------------------------------------------- */
+
+typedef enum {
+    ACCEL_OK = 0,
+    ACCEL_ERR_IO,      /* cannot open / read / write a file */
+    ACCEL_ERR_PARSE,   /* malformed input: the message names file and line */
+    ACCEL_ERR_RANGE,   /* a value or size out of the accepted range */
+    ACCEL_ERR_NOMEM,   /* an allocation failed */
+    ACCEL_ERR_SPEC,    /* bad spec string or command-line option */
+    ACCEL_ERR_INTERNAL /* a broken invariant (e.g. a traversal step bound hit) */
+} accel_status;
+
+typedef struct {
+    int code;
+    char msg[512];
+} accel_error;
+
+/* Sets err (if not NULL) and returns code, so that `return accel_fail(...)` reads well. */
+int accel_fail(accel_error *err, int code, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+
+/* ---- scenes ------------------------------------------------------------- */
+
+typedef struct {
+    vec3 eye, look_at, up;
+    float fov_deg; /* full vertical field of view, degrees */
+} accel_camera;
+
+/*
+ * A scene is a list of primitives: ids 0..tri_count-1 are triangles (in file
+ * order, FORMATS.md numbering), ids tri_count..prim_count-1 are spheres.
+ * A triangle-only scene has sphere_count == 0, and kernels specialize on it.
+ *
+ * Degenerate triangles (zero area in double precision) keep their ids but are
+ * left out of `live`: builders build over live[0..live_count-1] only, so a
+ * degenerate triangle can never be hit.
+ */
+typedef struct accel_scene {
+    char name[128];          /* spec string or file name it came from */
+    uint32_t tri_count;
+    uint32_t sphere_count;
+    uint32_t prim_count;     /* tri_count + sphere_count */
+    float *tris;             /* 9 floats per triangle: v0, v1, v2 */
+    float *spheres;          /* 4 floats per sphere: centre, radius */
+    uint32_t live_count;
+    uint32_t *live;          /* ids of the non-degenerate primitives */
+    uint32_t degenerate_count;
+    box3 bounds;             /* of all live primitives */
+    accel_camera camera;     /* default view */
+    vec3 light;              /* point light for shadow rays */
+} accel_scene;
+
+/* Primitive bounds and centroid (for builders). */
+box3 accel_prim_bounds(const accel_scene *s, uint32_t prim);
+vec3 accel_prim_centroid(const accel_scene *s, uint32_t prim);
+
+/* ---- counters ----------------------------------------------------------- */
+
+/* Traversal statistics summed over the rays of a batch. Which fields a kind
+ * fills is its own choice (a BVH leaves mailbox_skips at zero); steps means
+ * cells stepped for grids and nodes visited for trees (accel_kind.step_name). */
+typedef struct {
+    uint64_t rays;
+    uint64_t steps;         /* grid cells stepped / BVH nodes visited */
+    uint64_t empty_steps;   /* cells stepped that held no primitive */
+    uint64_t box_tests;     /* ray/box slab tests */
+    uint64_t prim_tests;    /* ray/primitive intersection tests */
+    uint64_t mailbox_skips; /* primitive tests avoided by mailboxing */
+    uint64_t level_steps[4];/* nested grids: steps per level (0 = top) */
+    uint64_t packet_box_tests; /* packets: box tests done for whole packets */
+    /* Optional per-ray costs for heatmaps (index = ray index in the batch),
+     * filled with the ray's steps and primitive tests when not NULL. */
+    uint32_t *ray_steps;
+    uint32_t *ray_prims;
+} accel_counters;
+
+/* Adds b's totals into a (not the per-ray arrays). */
+void accel_counters_add(accel_counters *a, const accel_counters *b);
+
+/* ---- parameters and spec strings ----------------------------------------- */
+
+typedef enum {
+    ACCEL_PARAM_INT,
+    ACCEL_PARAM_FLOAT,
+    ACCEL_PARAM_ENUM, /* one of choices, "a|b|c" */
+    ACCEL_PARAM_BOOL, /* 0/1/on/off/true/false; a bare key means 1 */
+    ACCEL_PARAM_STR   /* free text checked by the kind (e.g. res=128x64x32) */
+} accel_param_type;
+
+typedef struct {
+    const char *key;
+    accel_param_type type;
+    const char *def;     /* default, as it would be written in a spec */
+    double min, max;     /* accepted range for INT and FLOAT */
+    const char *choices; /* ENUM: "a|b|c" */
+    const char *help;    /* meaning, with its unit */
+} accel_param_def;
+
+#define ACCEL_MAX_PARAMS 24
+
+struct accel_kind;
+
+/* A parsed spec: values for every parameter of the kind (defaults filled in). */
+typedef struct {
+    const struct accel_kind *kind;
+    double num[ACCEL_MAX_PARAMS];       /* INT, FLOAT, BOOL, ENUM (choice index) */
+    char str[ACCEL_MAX_PARAMS][64];     /* textual value of every parameter */
+    unsigned char given[ACCEL_MAX_PARAMS];
+    char spec[256];                     /* canonical "kind:key=value,..." of the given keys */
+    int naive;                          /* common parameter tri=naive (Moller-Trumbore) */
+} accel_params;
+
+/* Parameters every kind accepts, handled by the parser itself. */
+extern const accel_param_def accel_common_params[];
+extern const size_t accel_common_param_count;
+
+/* Parses "key=value,key=value,flag" against a parameter table: fills num[],
+ * str[] and given[] (defaults first). `what` names the thing in messages
+ * ("bvh", "scene sphereflake"). Shared by accelerator and scene specs. */
+int accel_parse_kv(const char *what, const char *text, const accel_param_def *defs, size_t n,
+                   double *num, char (*str)[64], unsigned char *given, accel_error *err);
+/* Appends "  key  (type, default D, range) help" lines for a table to buf. */
+void accel_params_help(const accel_param_def *defs, size_t n, char *buf, size_t size);
+
+/* Parses "kind" or "kind:key=value,key=value,flag". Unknown kinds, keys,
+ * bad numbers and out-of-range values fail with a message that lists what
+ * is accepted. */
+int accel_params_parse(const char *spec, accel_params *out, accel_error *err);
+/* Lookups by key; the key must be one of the kind's parameters (asserted). */
+double accel_param_num(const accel_params *p, const char *key);
+const char *accel_param_str(const accel_params *p, const char *key);
+int accel_param_given(const accel_params *p, const char *key);
+
+/* ---- the accelerator kind table ----------------------------------------- */
+
+typedef struct {
+    double ms;         /* wall-clock build time */
+    size_t bytes;      /* memory held by the built structure */
+    uint64_t nodes;    /* BVH nodes / grid cells (all levels) */
+    uint64_t leaves;   /* BVH leaves / non-empty cells */
+    uint64_t refs;     /* primitive references stored (grids: >= prims) */
+    double sah_cost;   /* BVH: SAH cost normalized by the root area; NAN if n/a */
+    int depth;         /* tree depth / grid nesting depth */
+    int res[3];        /* grids: top-level resolution */
+} accel_build_stats;
+
+typedef struct accel_kind {
+    const char *name;
+    const char *summary;       /* one line for --help */
+    const char *step_name;     /* "cells" or "nodes": what counters.steps counts */
+    const accel_param_def *params;
+    size_t param_count;
+    /* Parameter strings (after "name:") the conformance and stability suites
+     * run, NULL-terminated; the first should be "" (defaults). */
+    const char *const *variants;
+
+    int (*build)(const accel_scene *scene, const accel_params *params, int threads,
+                 void **out, accel_build_stats *stats, accel_error *err);
+    void (*intersect)(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
+                      accel_counters *counters);
+    /* occluded[i] = 1 if any primitive is hit within [t_near, t_far]. */
+    void (*occluded)(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
+                     accel_counters *counters);
+    size_t (*memory)(const void *accel);
+    void (*destroy)(void *accel);
+} accel_kind;
+
+/* registry.c: every kind, one line each. */
+extern const accel_kind *const accel_kinds[];
+extern const size_t accel_kind_count;
+const accel_kind *accel_find_kind(const char *name);
+
+/* Convenience: parse spec, build with the given thread count, time it.
+ * On success *kind_out and *accel_out are set; destroy with kind->destroy. */
+int accel_build_spec(const char *spec, const accel_scene *scene, int threads,
+                     const accel_kind **kind_out, void **accel_out, accel_build_stats *stats,
+                     accel_error *err);
+
+/* Traces count rays with `threads` threads, in chunks of ACCEL_CHUNK rays
+ * (a multiple of 64 so that 8x8 packets stay whole). counters may be NULL. */
+#define ACCEL_CHUNK 4096
+void accel_trace(const accel_kind *kind, const void *accel, const accel_ray *rays, accel_hit *hits,
+                 size_t count, int threads, accel_counters *counters);
+void accel_trace_occluded(const accel_kind *kind, const void *accel, const accel_ray *rays,
+                          uint8_t *occluded, size_t count, int threads, accel_counters *counters);
+
+/* Runs fn(ctx, begin, end, thread) over [0, count) in chunks of `chunk`
+ * items, handed out dynamically to `threads` pthreads (the calling thread
+ * is one of them; threads <= 1 runs inline). `thread` is in [0, threads). */
+void accel_parallel_for(size_t count, size_t chunk, int threads,
+                        void (*fn)(void *ctx, size_t begin, size_t end, int thread), void *ctx);
+
+/* ---- the oracle ---------------------------------------------------------- */
+
+/* Brute force over every live primitive in double precision with the
+ * watertight test: the reference every test compares against. */
+void accel_reference_trace(const accel_scene *scene, const accel_ray *rays, accel_hit *hits,
+                           size_t count, int threads);
+
+/* ---- small shared utilities ---------------------------------------------- */
+
+double accel_now_ms(void);
+/* Number of usable cores. */
+int accel_cpu_count(void);
+
+/* Aborts with a message naming the step bound: used by every traversal loop
+ * so that a bug turns an endless loop into a reported error. */
+#define ACCEL_STEP_BOUND_CHECK(steps, bound)                                                 \
+    do {                                                                                     \
+        if ((steps) > (bound)) accel_step_bound_exceeded(__FILE__, __LINE__, (uint64_t)(bound)); \
+    } while (0)
+void accel_step_bound_exceeded(const char *file, int line, uint64_t bound) __attribute__((noreturn));
+
+#endif

@@ -1,0 +1,113 @@
+/*
+ * geom.h - small vector and box math shared by every backend.
+ *
+ * Everything here is static inline so that each backend's kernels see the
+ * same arithmetic: differences between accelerators then come from traversal
+ * alone, never from a different box test.
+ *
+ * The slab test follows Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013:
+ * the reciprocal direction is computed with IEEE division (1/±0 = ±inf), the
+ * near and far planes are picked by the sign of the direction, and the far
+ * distance is enlarged by 2*gamma(3) so that rounding in the slab products
+ * can never make a box the ray touches look missed.
+ */
+#ifndef ACCEL_GEOM_H
+#define ACCEL_GEOM_H
+
+#include <math.h>
+#include <stdint.h>
+
+typedef struct { float x, y, z; } vec3;
+typedef struct { vec3 min, max; } box3;
+
+static inline vec3 v3(float x, float y, float z) { vec3 r = {x, y, z}; return r; }
+static inline vec3 v3_add(vec3 a, vec3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
+static inline vec3 v3_sub(vec3 a, vec3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
+static inline vec3 v3_mul(vec3 a, vec3 b) { return v3(a.x * b.x, a.y * b.y, a.z * b.z); }
+static inline vec3 v3_scale(vec3 a, float s) { return v3(a.x * s, a.y * s, a.z * s); }
+static inline float v3_dot(vec3 a, vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+static inline vec3 v3_cross(vec3 a, vec3 b)
+{
+    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+static inline float v3_len(vec3 a) { return sqrtf(v3_dot(a, a)); }
+static inline vec3 v3_norm(vec3 a)
+{
+    float l = v3_len(a);
+    return l > 0.0f ? v3_scale(a, 1.0f / l) : a;
+}
+/* min/max as compare-and-select: compiles to minss/maxss, and a NaN in the
+ * second operand leaves the first (the slab test relies on that). */
+static inline float minf(float acc, float x) { return x < acc ? x : acc; }
+static inline float maxf(float acc, float x) { return x > acc ? x : acc; }
+static inline vec3 v3_min(vec3 a, vec3 b) { return v3(minf(a.x, b.x), minf(a.y, b.y), minf(a.z, b.z)); }
+static inline vec3 v3_max(vec3 a, vec3 b) { return v3(maxf(a.x, b.x), maxf(a.y, b.y), maxf(a.z, b.z)); }
+static inline float v3_get(vec3 a, int axis) { return axis == 0 ? a.x : axis == 1 ? a.y : a.z; }
+static inline vec3 v3_load(const float *p) { return v3(p[0], p[1], p[2]); }
+static inline int v3_max_axis(vec3 a)
+{
+    return (a.x >= a.y && a.x >= a.z) ? 0 : (a.y >= a.z ? 1 : 2);
+}
+
+/* An empty box has min > max on every axis, so growing it by any point works. */
+static inline box3 box3_empty(void)
+{
+    box3 b = {{INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY}};
+    return b;
+}
+static inline box3 box3_grow(box3 b, vec3 p)
+{
+    b.min = v3_min(b.min, p);
+    b.max = v3_max(b.max, p);
+    return b;
+}
+static inline box3 box3_union(box3 a, box3 b)
+{
+    a.min = v3_min(a.min, b.min);
+    a.max = v3_max(a.max, b.max);
+    return a;
+}
+static inline int box3_is_empty(box3 b) { return !(b.min.x <= b.max.x); }
+static inline vec3 box3_extent(box3 b) { return v3_sub(b.max, b.min); }
+static inline vec3 box3_center(box3 b) { return v3_scale(v3_add(b.min, b.max), 0.5f); }
+/* Half the surface area: the SAH only ever compares areas, so the factor 2 is dropped. */
+static inline float box3_half_area(box3 b)
+{
+    if (box3_is_empty(b)) return 0.0f;
+    vec3 e = box3_extent(b);
+    return e.x * e.y + e.y * e.z + e.z * e.x;
+}
+
+/* gamma(n) = n*eps/(1-n*eps) with eps = 2^-24 (pbrt-v3, section 3.9). */
+#define ACCEL_GAMMA(n) (((float)(n) * 0x1p-24f) / (1.0f - (float)(n) * 0x1p-24f))
+/* Ize 2013: enlarging t_far by 2*gamma(3)*|t_far| makes the float slab test conservative. */
+#define ACCEL_SLAB_PAD (2.0f * ACCEL_GAMMA(3))
+
+/*
+ * Robust slab test against box [lo, hi] (given as two float[3]).
+ * inv_dir = 1/dir per component (±inf for a ±0 component); neg[a] = 1 when
+ * the direction's sign bit is set on axis a, which picks the near plane.
+ * A zero direction component with the origin exactly on a plane gives
+ * 0*inf = NaN: maxf/minf then keep the running value, so the ray counts as
+ * inside that slab (it lies in the face's plane: the conservative answer).
+ * Returns nonzero when [t_near, t_far] overlaps the box; *t_entry gets the
+ * entry distance (clamped to t_near).
+ */
+static inline int box3_slab(const float *lo, const float *hi, vec3 org, vec3 inv_dir,
+                            const int *neg, float t_near, float t_far, float *t_entry)
+{
+    float nx = neg[0] ? hi[0] : lo[0], fx = neg[0] ? lo[0] : hi[0];
+    float ny = neg[1] ? hi[1] : lo[1], fy = neg[1] ? lo[1] : hi[1];
+    float nz = neg[2] ? hi[2] : lo[2], fz = neg[2] ? lo[2] : hi[2];
+    float t0 = t_near, t1 = t_far;
+    t0 = maxf(t0, (nx - org.x) * inv_dir.x);
+    t0 = maxf(t0, (ny - org.y) * inv_dir.y);
+    t0 = maxf(t0, (nz - org.z) * inv_dir.z);
+    t1 = minf(t1, (fx - org.x) * inv_dir.x);
+    t1 = minf(t1, (fy - org.y) * inv_dir.y);
+    t1 = minf(t1, (fz - org.z) * inv_dir.z);
+    *t_entry = t0;
+    return t0 <= t1 + fabsf(t1) * ACCEL_SLAB_PAD;
+}
+
+#endif

@@ -1,0 +1,41 @@
+/*
+ * registry.c - the one place that names every accelerator kind.
+ *
+ * Adding a backend: write its folder (see grid/ or bvh/), declare its kind
+ * below and add one line to accel_kinds[]. Tools, tests and experiments
+ * iterate over this table; nothing else names a backend.
+ */
+#include <string.h>
+
+#include "accel.h"
+
+extern const accel_kind accel_kind_brute;
+
+const accel_kind *const accel_kinds[] = {
+    &accel_kind_brute,
+};
+const size_t accel_kind_count = sizeof accel_kinds / sizeof accel_kinds[0];
+
+const accel_kind *accel_find_kind(const char *name)
+{
+    for (size_t i = 0; i < accel_kind_count; i++)
+        if (!strcmp(accel_kinds[i]->name, name)) return accel_kinds[i];
+    return NULL;
+}
+
+int accel_build_spec(const char *spec, const accel_scene *scene, int threads,
+                     const accel_kind **kind_out, void **accel_out, accel_build_stats *stats,
+                     accel_error *err)
+{
+    accel_params p;
+    int rc = accel_params_parse(spec, &p, err);
+    if (rc) return rc;
+    memset(stats, 0, sizeof *stats);
+    double t0 = accel_now_ms();
+    rc = p.kind->build(scene, &p, threads, accel_out, stats, err);
+    if (rc) return rc;
+    stats->ms = accel_now_ms() - t0;
+    stats->bytes = p.kind->memory(*accel_out);
+    *kind_out = p.kind;
+    return 0;
+}

@@ -1,0 +1,318 @@
+/*
+ * scene.c - scene construction, framing, export and transformation.
+ *
+ * Loaders and generators append primitives to a scene_builder; scene_finish
+ * then fixes the scene: the list of live (non-degenerate) primitives, the
+ * bounds and a default camera. A triangle is degenerate when its edge cross
+ * product is exactly zero in double precision: such a triangle has no
+ * interior, keeps its id (FORMATS.md numbering) and is never hit.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "scene.h"
+
+#define SCENE_MAX_PRIMS 0xFFFFFFFEu /* ids are uint32 and 0xFFFFFFFF means miss */
+
+static int grow(void **p, size_t *cap, size_t need, size_t elem, accel_error *err)
+{
+    if (need <= *cap) return 0;
+    size_t n = *cap ? *cap : 1024;
+    while (n < need) {
+        if (n > ((size_t)SCENE_MAX_PRIMS + 1) / 2 + 1) { n = need; break; }
+        n *= 2;
+    }
+    if (n > SIZE_MAX / elem) return accel_fail(err, ACCEL_ERR_NOMEM, "scene too large");
+    void *q = realloc(*p, n * elem);
+    if (!q)
+        return accel_fail(err, ACCEL_ERR_NOMEM, "out of memory growing a scene to %zu primitives",
+                          n);
+    *p = q;
+    *cap = n;
+    return 0;
+}
+
+int scene_builder_reserve_tris(scene_builder *b, size_t n, accel_error *err)
+{
+    if (n > SCENE_MAX_PRIMS || b->tri_count + n > SCENE_MAX_PRIMS)
+        return accel_fail(err, ACCEL_ERR_RANGE, "too many triangles (%zu)", n);
+    return grow((void **)&b->tris, &b->tri_cap, b->tri_count + n, 9 * sizeof(float), err);
+}
+
+int scene_builder_add_tri(scene_builder *b, vec3 a, vec3 c, vec3 d, accel_error *err)
+{
+    if (b->tri_count >= SCENE_MAX_PRIMS)
+        return accel_fail(err, ACCEL_ERR_RANGE, "more than %u triangles", SCENE_MAX_PRIMS);
+    if (b->tri_count == b->tri_cap) {
+        int rc = grow((void **)&b->tris, &b->tri_cap, b->tri_count + 1, 9 * sizeof(float), err);
+        if (rc) return rc;
+    }
+    float *t = b->tris + 9 * b->tri_count++;
+    t[0] = a.x, t[1] = a.y, t[2] = a.z;
+    t[3] = c.x, t[4] = c.y, t[5] = c.z;
+    t[6] = d.x, t[7] = d.y, t[8] = d.z;
+    return 0;
+}
+
+int scene_builder_add_sphere(scene_builder *b, vec3 centre, float radius, accel_error *err)
+{
+    if (b->sphere_count == b->sphere_cap) {
+        int rc = grow((void **)&b->spheres, &b->sphere_cap, b->sphere_count + 1,
+                      4 * sizeof(float), err);
+        if (rc) return rc;
+    }
+    float *s = b->spheres + 4 * b->sphere_count++;
+    s[0] = centre.x, s[1] = centre.y, s[2] = centre.z, s[3] = radius;
+    return 0;
+}
+
+void scene_builder_free(scene_builder *b)
+{
+    free(b->tris);
+    free(b->spheres);
+    memset(b, 0, sizeof *b);
+}
+
+box3 accel_prim_bounds(const accel_scene *s, uint32_t prim)
+{
+    box3 b = box3_empty();
+    if (prim < s->tri_count) {
+        const float *t = s->tris + 9 * (size_t)prim;
+        b = box3_grow(b, v3_load(t));
+        b = box3_grow(b, v3_load(t + 3));
+        b = box3_grow(b, v3_load(t + 6));
+    } else {
+        const float *sp = s->spheres + 4 * (size_t)(prim - s->tri_count);
+        vec3 r = v3(sp[3], sp[3], sp[3]);
+        b.min = v3_sub(v3_load(sp), r);
+        b.max = v3_add(v3_load(sp), r);
+    }
+    return b;
+}
+
+vec3 accel_prim_centroid(const accel_scene *s, uint32_t prim)
+{
+    return box3_center(accel_prim_bounds(s, prim));
+}
+
+static int tri_degenerate(const float *t)
+{
+    double e1[3], e2[3];
+    for (int i = 0; i < 3; i++) {
+        e1[i] = (double)t[3 + i] - t[i];
+        e2[i] = (double)t[6 + i] - t[i];
+    }
+    double cx = e1[1] * e2[2] - e1[2] * e2[1];
+    double cy = e1[2] * e2[0] - e1[0] * e2[2];
+    double cz = e1[0] * e2[1] - e1[1] * e2[0];
+    return cx == 0.0 && cy == 0.0 && cz == 0.0;
+}
+
+accel_camera scene_camera_framing(box3 bounds, vec3 from, float fov_deg)
+{
+    accel_camera c;
+    vec3 centre = box3_center(bounds);
+    float radius = 0.5f * v3_len(box3_extent(bounds));
+    if (!(radius > 0.0f)) radius = 1.0f;
+    float half = 0.5f * fov_deg * 3.14159265f / 180.0f;
+    float dist = radius / sinf(half);
+    c.look_at = centre;
+    c.eye = v3_add(centre, v3_scale(v3_norm(from), dist));
+    vec3 fwd = v3_norm(v3_sub(c.look_at, c.eye));
+    c.up = fabsf(fwd.y) > 0.99f ? v3(0, 0, 1) : v3(0, 1, 0);
+    c.fov_deg = fov_deg;
+    return c;
+}
+
+int scene_finish(scene_builder *b, const char *name, accel_scene *s, accel_error *err)
+{
+    memset(s, 0, sizeof *s);
+    size_t n = b->tri_count + b->sphere_count;
+    if (n > SCENE_MAX_PRIMS)
+        return accel_fail(err, ACCEL_ERR_RANGE, "%s: %zu primitives exceed the limit of %u", name,
+                          n, SCENE_MAX_PRIMS);
+    snprintf(s->name, sizeof s->name, "%s", name);
+    s->tri_count = (uint32_t)b->tri_count;
+    s->sphere_count = (uint32_t)b->sphere_count;
+    s->prim_count = (uint32_t)n;
+    s->live = malloc((n ? n : 1) * sizeof *s->live);
+    if (!s->live) return accel_fail(err, ACCEL_ERR_NOMEM, "%s: out of memory", name);
+    s->tris = b->tris;
+    s->spheres = b->spheres;
+    b->tris = b->spheres = NULL;
+    b->tri_count = b->tri_cap = b->sphere_count = b->sphere_cap = 0;
+    s->bounds = box3_empty();
+    for (uint32_t i = 0; i < s->prim_count; i++) {
+        int dead;
+        if (i < s->tri_count) {
+            dead = tri_degenerate(s->tris + 9 * (size_t)i);
+        } else {
+            float r = s->spheres[4 * (size_t)(i - s->tri_count) + 3];
+            dead = !(r > 0.0f) || !isfinite(r);
+        }
+        if (dead) {
+            s->degenerate_count++;
+            continue;
+        }
+        s->live[s->live_count++] = i;
+        s->bounds = box3_union(s->bounds, accel_prim_bounds(s, i));
+    }
+    box3 frame = box3_is_empty(s->bounds) ? (box3){{-1, -1, -1}, {1, 1, 1}} : s->bounds;
+    s->camera = scene_camera_framing(frame, v3(0.3f, 0.35f, 1.0f), 40.0f);
+    vec3 ext = box3_extent(frame);
+    s->light = v3_add(frame.max, v3_scale(ext, 0.5f));
+    return 0;
+}
+
+void scene_free(accel_scene *s)
+{
+    free(s->tris);
+    free(s->spheres);
+    free(s->live);
+    memset(s, 0, sizeof *s);
+}
+
+static const char *extension(const char *path)
+{
+    const char *dot = strrchr(path, '.');
+    const char *slash = strrchr(path, '/');
+    return (dot && (!slash || dot > slash)) ? dot + 1 : "";
+}
+
+int scene_load_file(const char *path, accel_scene *s, accel_error *err)
+{
+    scene_builder b = {0};
+    const char *ext = extension(path);
+    int rc;
+    if (!strcasecmp(ext, "obj"))
+        rc = scene_load_obj(path, &b, err);
+    else if (!strcasecmp(ext, "ply"))
+        rc = scene_load_ply(path, &b, err);
+    else if (!strcasecmp(ext, "off"))
+        rc = scene_load_off(path, &b, err);
+    else
+        rc = accel_fail(err, ACCEL_ERR_SPEC,
+                        "%s: unknown mesh format '.%s' (accepted: .obj, .ply, .off)", path, ext);
+    if (rc == 0) {
+        const char *slash = strrchr(path, '/');
+        rc = scene_finish(&b, slash ? slash + 1 : path, s, err);
+    }
+    scene_builder_free(&b);
+    return rc;
+}
+
+int scene_create(const char *spec, accel_scene *s, accel_error *err)
+{
+    memset(s, 0, sizeof *s);
+    char name[64];
+    const char *colon = strchr(spec, ':');
+    size_t nlen = colon ? (size_t)(colon - spec) : strlen(spec);
+    if (nlen < sizeof name) {
+        memcpy(name, spec, nlen);
+        name[nlen] = 0;
+        for (size_t i = 0; i < scene_generator_count; i++) {
+            const scene_generator *g = scene_generators[i];
+            if (strcmp(g->name, name) != 0) continue;
+            double num[ACCEL_MAX_PARAMS];
+            char str[ACCEL_MAX_PARAMS][64];
+            unsigned char given[ACCEL_MAX_PARAMS];
+            char what[96];
+            snprintf(what, sizeof what, "scene %s", g->name);
+            int rc = accel_parse_kv(what, colon ? colon + 1 : "", g->params, g->param_count, num,
+                                    str, given, err);
+            if (rc) return rc;
+            scene_builder b = {0};
+            accel_camera cam;
+            vec3 light;
+            rc = g->generate(num, &b, &cam, &light, err);
+            if (rc == 0) rc = scene_finish(&b, spec, s, err);
+            scene_builder_free(&b);
+            if (rc) return rc;
+            s->camera = cam;
+            s->light = light;
+            return 0;
+        }
+    }
+    if (strchr(spec, '.')) return scene_load_file(spec, s, err);
+    char names[512] = "";
+    for (size_t i = 0; i < scene_generator_count; i++) {
+        size_t len = strlen(names);
+        snprintf(names + len, sizeof names - len, "%s%s", i ? ", " : "", scene_generators[i]->name);
+    }
+    return accel_fail(err, ACCEL_ERR_SPEC,
+                      "unknown scene '%s': give a mesh file (.obj, .ply, .off) or one of: %s",
+                      spec, names);
+}
+
+int scene_export_obj(const accel_scene *s, const char *path, int segments, accel_error *err)
+{
+    FILE *f = fopen(path, "w");
+    if (!f) return accel_fail(err, ACCEL_ERR_IO, "%s: cannot open for writing", path);
+    if (segments < 3) segments = 3;
+    fprintf(f, "# gridbvh scene %s: %u triangles, %u spheres (tessellated)\n", s->name,
+            s->tri_count, s->sphere_count);
+    size_t v = 1;
+    for (uint32_t i = 0; i < s->tri_count; i++) {
+        const float *t = s->tris + 9 * (size_t)i;
+        for (int k = 0; k < 3; k++)
+            fprintf(f, "v %.9g %.9g %.9g\n", t[3 * k], t[3 * k + 1], t[3 * k + 2]);
+        fprintf(f, "f %zu %zu %zu\n", v, v + 1, v + 2);
+        v += 3;
+    }
+    int rings = segments / 2 < 2 ? 2 : segments / 2;
+    for (uint32_t i = 0; i < s->sphere_count; i++) {
+        const float *sp = s->spheres + 4 * (size_t)i;
+        /* UV sphere: rings+1 latitude rows of segments vertices (poles repeated). */
+        for (int r = 0; r <= rings; r++) {
+            double th = 3.14159265358979 * r / rings;
+            for (int k = 0; k < segments; k++) {
+                double ph = 2 * 3.14159265358979 * k / segments;
+                fprintf(f, "v %.9g %.9g %.9g\n", sp[0] + sp[3] * sin(th) * cos(ph),
+                        sp[1] + sp[3] * cos(th), sp[2] + sp[3] * sin(th) * sin(ph));
+            }
+        }
+        for (int r = 0; r < rings; r++)
+            for (int k = 0; k < segments; k++) {
+                size_t a = v + (size_t)r * segments + k;
+                size_t bb = v + (size_t)r * segments + (k + 1) % segments;
+                size_t c = a + segments, d = bb + segments;
+                if (r > 0) fprintf(f, "f %zu %zu %zu\n", a, bb, c);
+                if (r < rings - 1) fprintf(f, "f %zu %zu %zu\n", bb, d, c);
+            }
+        v += (size_t)(rings + 1) * segments;
+    }
+    int bad = ferror(f);
+    if (fclose(f) != 0 || bad) return accel_fail(err, ACCEL_ERR_IO, "%s: write failed", path);
+    return 0;
+}
+
+int scene_transform(const accel_scene *s, float scale, vec3 offset, accel_scene *out,
+                    accel_error *err)
+{
+    scene_builder b = {0};
+    int rc = scene_builder_reserve_tris(&b, s->tri_count, err);
+    for (uint32_t i = 0; rc == 0 && i < s->tri_count; i++) {
+        const float *t = s->tris + 9 * (size_t)i;
+        vec3 p[3];
+        for (int k = 0; k < 3; k++) p[k] = v3_add(v3_scale(v3_load(t + 3 * k), scale), offset);
+        rc = scene_builder_add_tri(&b, p[0], p[1], p[2], err);
+    }
+    for (uint32_t i = 0; rc == 0 && i < s->sphere_count; i++) {
+        const float *sp = s->spheres + 4 * (size_t)i;
+        rc = scene_builder_add_sphere(&b, v3_add(v3_scale(v3_load(sp), scale), offset),
+                                      sp[3] * fabsf(scale), err);
+    }
+    char name[160];
+    snprintf(name, sizeof name, "%s*%g+(%g,%g,%g)", s->name, scale, offset.x, offset.y, offset.z);
+    if (rc == 0) rc = scene_finish(&b, name, out, err);
+    scene_builder_free(&b);
+    if (rc) return rc;
+    out->camera = s->camera;
+    out->camera.eye = v3_add(v3_scale(s->camera.eye, scale), offset);
+    out->camera.look_at = v3_add(v3_scale(s->camera.look_at, scale), offset);
+    out->light = v3_add(v3_scale(s->light, scale), offset);
+    return 0;
+}
