@@ -1,0 +1,75 @@
+/*
+ * rays.h - ray sets, ray and hit files, hit comparison.
+ *
+ * Ray sets are generated deterministically: every random number comes from a
+ * hash of (seed, ray index), so every accelerator and every thread count
+ * traces exactly the same rays. Primary rays are emitted in 8x8 pixel tiles
+ * (the packet shape of the BVH issue); pixel[i] maps ray i back to its pixel.
+ *
+ * Secondary rays start at primary hit points computed from the hit's
+ * triangle and barycentrics (not o + t*d), offset along the geometric normal
+ * with the integer-ULP method of Waechter and Binder, "A Fast and Robust
+ * Method for Avoiding Self-Intersection", Ray Tracing Gems ch. 6, 2019.
+ */
+#ifndef ACCEL_RAYS_H
+#define ACCEL_RAYS_H
+
+#include "accel.h"
+
+typedef struct {
+    accel_ray *rays;
+    uint32_t *pixel; /* pixel index (y*width + x) of each ray, or NULL */
+    size_t count;
+    int width, height; /* image the rays belong to (0 for a plain ray file) */
+} rays_set;
+
+void rays_free(rays_set *r);
+
+/* Pinhole camera rays, W x H, in 8x8 tiles; t range [0, inf]. */
+int rays_primary(const accel_camera *cam, int width, int height, rays_set *out, accel_error *err);
+
+/* Hit point, geometric normal facing the incoming ray, and the robustly
+ * offset origin for a secondary ray leaving the surface on that side. */
+int rays_hit_frame(const accel_scene *s, const accel_ray *r, const accel_hit *h, vec3 *point,
+                   vec3 *normal);
+vec3 rays_offset_origin(vec3 p, vec3 n);
+
+/* Secondary rays from each primary hit (misses produce no ray; pixel[]
+ * follows the primary's pixel):
+ *   shadow:  towards s->light, t_far just short of the light (any-hit);
+ *   diffuse: one cosine-weighted bounce around the normal;
+ *   ao:      `samples` cosine-weighted rays per hit, t_far = ao_radius. */
+int rays_shadow(const accel_scene *s, const rays_set *prim, const accel_hit *hits, rays_set *out,
+                accel_error *err);
+int rays_diffuse(const accel_scene *s, const rays_set *prim, const accel_hit *hits, uint64_t seed,
+                 rays_set *out, accel_error *err);
+int rays_ao(const accel_scene *s, const rays_set *prim, const accel_hit *hits, int samples,
+            float ao_radius, uint64_t seed, rays_set *out, accel_error *err);
+
+/* A deterministic uniform float in [0,1) from (seed, index, dimension). */
+float rays_rand(uint64_t seed, uint64_t index, uint32_t dim);
+
+/* ---- files (FORMATS.md) --------------------------------------------------- */
+
+int rays_write(const char *path, const accel_ray *rays, size_t count, accel_error *err);
+int rays_read(const char *path, rays_set *out, accel_error *err);
+int hits_write(const char *path, const accel_hit *hits, size_t count, accel_error *err);
+int hits_read(const char *path, accel_hit **hits, size_t *count, accel_error *err);
+
+/* ---- comparison (FORMATS.md rule) ----------------------------------------- */
+
+typedef struct {
+    size_t rays;
+    size_t agree;
+    size_t holes;          /* a hits, b misses */
+    size_t false_hits;     /* a misses, b hits */
+    size_t disagreements;  /* both hit, different triangle at a different t */
+    size_t first_bad;      /* index of the first ray that does not agree, or SIZE_MAX */
+} hits_diff;
+
+/* Does hit b agree with hit a (the reference) by the FORMATS.md rule? */
+int hits_agree(const accel_hit *a, const accel_hit *b);
+/* Compares b against the reference a over n rays. */
+hits_diff hits_compare(const accel_hit *a, const accel_hit *b, size_t n);
+
+#endif
