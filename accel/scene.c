@@ -305,8 +305,9 @@ int scene_transform(const accel_scene *s, float scale, vec3 offset, accel_scene 
         rc = scene_builder_add_sphere(&b, v3_add(v3_scale(v3_load(sp), scale), offset),
                                       sp[3] * fabsf(scale), err);
     }
-    char name[160];
-    snprintf(name, sizeof name, "%s*%g+(%g,%g,%g)", s->name, scale, offset.x, offset.y, offset.z);
+    char name[256];
+    snprintf(name, sizeof name, "%.100s*%g+(%g,%g,%g)", s->name, scale, offset.x, offset.y,
+             offset.z);
     if (rc == 0) rc = scene_finish(&b, name, out, err);
     scene_builder_free(&b);
     if (rc) return rc;

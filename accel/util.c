@@ -1,7 +1,7 @@
 /*
  * util.c - errors, clocks, core count, counters and the traversal step bound.
  */
-#define _GNU_SOURCE
+
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>

@@ -1,0 +1,210 @@
+/*
+ * bench.c - ray sets of a view, timed traces and builds (see bench.h).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bench.h"
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+void accel_timing_of(double *samples, int n, accel_timing *out)
+{
+    memset(out, 0, sizeof *out);
+    if (n <= 0) return;
+    qsort(samples, (size_t)n, sizeof *samples, cmp_double);
+    out->n = n;
+    out->min = samples[0];
+    out->max = samples[n - 1];
+    out->median = n % 2 ? samples[n / 2] : 0.5 * (samples[n / 2 - 1] + samples[n / 2]);
+}
+
+int bench_set_bit_of(const char *name)
+{
+    if (!strcmp(name, "primary")) return BENCH_PRIMARY;
+    if (!strcmp(name, "shadow")) return BENCH_SHADOW;
+    if (!strcmp(name, "diffuse")) return BENCH_DIFFUSE;
+    if (!strcmp(name, "ao")) return BENCH_AO;
+    return 0;
+}
+
+const rays_set *bench_sets_get(const bench_sets *b, int bit)
+{
+    switch (bit) {
+    case BENCH_PRIMARY: return &b->primary;
+    case BENCH_SHADOW: return &b->shadow;
+    case BENCH_DIFFUSE: return &b->diffuse;
+    case BENCH_AO: return &b->ao;
+    }
+    return NULL;
+}
+
+void bench_sets_free(bench_sets *b)
+{
+    rays_free(&b->primary);
+    rays_free(&b->shadow);
+    rays_free(&b->diffuse);
+    rays_free(&b->ao);
+    free(b->primary_hits);
+    memset(b, 0, sizeof *b);
+}
+
+int bench_sets_make(const accel_scene *s, const bench_set_opts *o, int mask, bench_sets *out,
+                    accel_error *err)
+{
+    memset(out, 0, sizeof *out);
+    const accel_camera *cam = o->camera ? o->camera : &s->camera;
+    int rc = rays_primary(cam, o->width, o->height, &out->primary, err);
+    if (rc) return rc;
+    out->made = BENCH_PRIMARY;
+    if (!(mask & (BENCH_SHADOW | BENCH_DIFFUSE | BENCH_AO))) return 0;
+    out->primary_hits = malloc(out->primary.count * sizeof *out->primary_hits);
+    if (!out->primary_hits) {
+        bench_sets_free(out);
+        return accel_fail(err, ACCEL_ERR_NOMEM, "out of memory for primary hits");
+    }
+    const char *gen = o->gen_spec ? o->gen_spec : (accel_find_kind("bvh") ? "bvh" : "brute");
+    const accel_kind *kind;
+    void *accel;
+    accel_build_stats st;
+    rc = accel_build_spec(gen, s, o->threads, &kind, &accel, &st, err);
+    if (rc) {
+        bench_sets_free(out);
+        return rc;
+    }
+    accel_trace(kind, accel, out->primary.rays, out->primary_hits, out->primary.count, o->threads,
+                NULL);
+    kind->destroy(accel);
+    float diag = v3_len(box3_extent(s->bounds));
+    float radius = o->ao_radius > 0 ? o->ao_radius : 0.1f * (diag > 0 ? diag : 1.0f);
+    if (!rc && (mask & BENCH_SHADOW)) {
+        rc = rays_shadow(s, &out->primary, out->primary_hits, &out->shadow, err);
+        if (!rc) out->made |= BENCH_SHADOW;
+    }
+    if (!rc && (mask & BENCH_DIFFUSE)) {
+        rc = rays_diffuse(s, &out->primary, out->primary_hits, o->seed, &out->diffuse, err);
+        if (!rc) out->made |= BENCH_DIFFUSE;
+    }
+    if (!rc && (mask & BENCH_AO)) {
+        rc = rays_ao(s, &out->primary, out->primary_hits, o->ao_samples > 0 ? o->ao_samples : 4,
+                     radius, o->seed, &out->ao, err);
+        if (!rc) out->made |= BENCH_AO;
+    }
+    if (rc) bench_sets_free(out);
+    return rc;
+}
+
+static void one_pass(const accel_kind *kind, const void *accel, const rays_set *rays,
+                     int occlusion, int threads, accel_hit *hits, uint8_t *occ,
+                     accel_counters *c)
+{
+    if (occlusion)
+        accel_trace_occluded(kind, accel, rays->rays, occ, rays->count, threads, c);
+    else
+        accel_trace(kind, accel, rays->rays, hits, rays->count, threads, c);
+}
+
+int bench_trace(const accel_kind *kind, const void *accel, const rays_set *rays, int occlusion,
+                const bench_trace_opts *o, bench_result *out, accel_error *err)
+{
+    memset(out, 0, sizeof *out);
+    size_t n = rays->count;
+    accel_hit *hits = o->hits;
+    uint8_t *occ = o->occluded;
+    accel_hit *own_hits = NULL;
+    uint8_t *own_occ = NULL;
+    if (!occlusion && !hits) hits = own_hits = malloc((n ? n : 1) * sizeof *hits);
+    if (occlusion && !occ) occ = own_occ = malloc(n ? n : 1);
+    if ((!occlusion && !hits) || (occlusion && !occ))
+        return accel_fail(err, ACCEL_ERR_NOMEM, "out of memory for %zu results", n);
+    for (int i = 0; i < o->warmup; i++)
+        one_pass(kind, accel, rays, occlusion, o->threads, hits, occ, NULL);
+    double samples[100];
+    int reps = 0, want = o->repeats < 1 ? 1 : o->repeats;
+    double total = 0;
+    while (reps < 100 && (reps < want || total < o->min_ms)) {
+        double t0 = accel_now_ms();
+        one_pass(kind, accel, rays, occlusion, o->threads, hits, occ, NULL);
+        samples[reps] = accel_now_ms() - t0;
+        total += samples[reps++];
+    }
+    double mr[100];
+    for (int i = 0; i < reps; i++) mr[i] = samples[i] > 0 ? (double)n / (samples[i] * 1e3) : 0;
+    accel_timing_of(samples, reps, &out->ms);
+    accel_timing_of(mr, reps, &out->mrays);
+    out->rays = n;
+    for (size_t i = 0; i < n; i++)
+        out->hits += occlusion ? occ[i] != 0 : hits[i].prim != ACCEL_MISS;
+    if (o->count_pass) {
+        out->counters.ray_steps = o->ray_steps;
+        out->counters.ray_prims = o->ray_prims;
+        one_pass(kind, accel, rays, occlusion, o->threads, hits, occ, &out->counters);
+        out->counters.ray_steps = out->counters.ray_prims = NULL;
+        out->counted = 1;
+    }
+    free(own_hits);
+    free(own_occ);
+    return 0;
+}
+
+int bench_build(const char *spec, const accel_scene *s, int threads, int repeats, double budget_ms,
+                const accel_kind **kind, void **accel, accel_build_stats *stats,
+                accel_timing *timing, accel_error *err)
+{
+    double samples[64];
+    int n = 0;
+    double total = 0;
+    *accel = NULL;
+    if (repeats < 1) repeats = 1;
+    if (repeats > 64) repeats = 64;
+    while (n < repeats) {
+        if (*accel) (*kind)->destroy(*accel);
+        *accel = NULL;
+        int rc = accel_build_spec(spec, s, threads, kind, accel, stats, err);
+        if (rc) return rc;
+        samples[n++] = stats->ms;
+        total += stats->ms;
+        if (total > budget_ms) break;
+    }
+    accel_timing_of(samples, n, timing);
+    stats->ms = timing->median;
+    return 0;
+}
+
+void bench_machine_info(char *cpu, size_t cpu_n, int *cores)
+{
+    snprintf(cpu, cpu_n, "unknown CPU");
+    FILE *f = fopen("/proc/cpuinfo", "r");
+    if (f) {
+        char line[512];
+        while (fgets(line, sizeof line, f)) {
+            if (strncmp(line, "model name", 10) != 0) continue;
+            char *colon = strchr(line, ':');
+            if (!colon) continue;
+            colon++;
+            while (*colon == ' ') colon++;
+            colon[strcspn(colon, "\n")] = 0;
+            snprintf(cpu, cpu_n, "%s", colon);
+            break;
+        }
+        fclose(f);
+    }
+    *cores = accel_cpu_count();
+}
+
+const char *bench_compiler(void)
+{
+#if defined(__clang__)
+    return "clang " __clang_version__;
+#elif defined(__GNUC__)
+    return "gcc " __VERSION__;
+#else
+    return "unknown compiler";
+#endif
+}
