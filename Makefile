@@ -53,10 +53,10 @@ test: all
 	./$(BIN)/run_tests $(T)
 
 report: all
-	./experiments/report.sh $(if $(QUICK),--quick,)
+	GRIDBVH_CFLAGS="$(CFLAGS)" CC="$(CC)" ./experiments/report.sh $(if $(QUICK),--quick,)
 
 bench: all
-	./experiments/report.sh --bench-only
+	./experiments/bench.sh
 
 # Tests under ASan + UBSan in a separate build tree.
 sanitize:

@@ -1,0 +1,227 @@
+/*
+ * harness.c - options, output files and measurement helpers shared by every
+ * experiment binary (see harness.h).
+ */
+#include <dirent.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "harness.h"
+
+static void usage(const exp_ctx *x, const char *question, const char *extra)
+{
+    printf("usage: %s [options]\n%s\n\n"
+           "  --quick          smoke-test budget (tiny scenes, 1 repeat)\n"
+           "  --out DIR        where <name>.csv and <name>.md go (default experiments/out)\n"
+           "  --threads N      threads for builds and traces (default 1)\n"
+           "  --repeat N       timed passes per measurement (default 5, quick 1)\n"
+           "  --size N         primary image N x N (default 256, quick 64)\n"
+           "  --mesh FILE      add a mesh (repeatable; default ../shared/scenes/*.off if present)\n"
+           "  --no-meshes      built-in scenes only\n"
+           "  --help           this text\n%s",
+           x->name, question, extra ? extra : "");
+}
+
+static void find_default_meshes(exp_ctx *x)
+{
+    static const char *const dirs[] = {"../shared/scenes", "../../shared/scenes"};
+    static char paths[EXP_MAX_MESHES][512];
+    for (size_t d = 0; d < sizeof dirs / sizeof dirs[0]; d++) {
+        DIR *dir = opendir(dirs[d]);
+        if (!dir) continue;
+        struct dirent *e;
+        while ((e = readdir(dir)) && x->mesh_count < EXP_MAX_MESHES) {
+            const char *dot = strrchr(e->d_name, '.');
+            if (!dot || (strcmp(dot, ".off") && strcmp(dot, ".obj") && strcmp(dot, ".ply")))
+                continue;
+            snprintf(paths[x->mesh_count], sizeof paths[0], "%s/%s", dirs[d], e->d_name);
+            x->meshes[x->mesh_count] = paths[x->mesh_count];
+            x->mesh_count++;
+        }
+        closedir(dir);
+        /* Sorted so that reports list meshes in a stable order. */
+        for (int i = 1; i < x->mesh_count; i++)
+            for (int j = i; j > 0 && strcmp(x->meshes[j - 1], x->meshes[j]) > 0; j--) {
+                const char *t = x->meshes[j];
+                x->meshes[j] = x->meshes[j - 1];
+                x->meshes[j - 1] = t;
+            }
+        return;
+    }
+}
+
+void exp_init(exp_ctx *x, int argc, char **argv, const char *name, const char *question,
+              const char *extra_help)
+{
+    memset(x, 0, sizeof *x);
+    x->name = name;
+    x->out_dir = "experiments/out";
+    x->threads = 1;
+    x->repeats = -1;
+    x->size = -1;
+    int no_meshes = 0, explicit_meshes = 0;
+    for (int i = 1; i < argc; i++) {
+        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
+        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+            usage(x, question, extra_help);
+            exit(0);
+        } else if (!strcmp(a, "--quick")) {
+            x->quick = 1;
+        } else if (!strcmp(a, "--no-meshes")) {
+            no_meshes = 1;
+        } else if (v && !strcmp(a, "--out")) {
+            x->out_dir = v, i++;
+        } else if (v && !strcmp(a, "--threads")) {
+            x->threads = atoi(v), i++;
+        } else if (v && !strcmp(a, "--repeat")) {
+            x->repeats = atoi(v), i++;
+        } else if (v && !strcmp(a, "--size")) {
+            x->size = atoi(v), i++;
+        } else if (v && !strcmp(a, "--mesh")) {
+            if (x->mesh_count < EXP_MAX_MESHES) x->meshes[x->mesh_count++] = v;
+            explicit_meshes = 1;
+            i++;
+        } else {
+            fprintf(stderr, "%s: unknown or incomplete option '%s' (see --help)\n", name, a);
+            exit(2);
+        }
+    }
+    if (x->threads < 1 || x->threads > 256) {
+        fprintf(stderr, "%s: --threads must be 1..256\n", name);
+        exit(2);
+    }
+    if (x->repeats < 0) x->repeats = x->quick ? 1 : 5;
+    if (x->repeats < 1 || x->repeats > 100) {
+        fprintf(stderr, "%s: --repeat must be 1..100\n", name);
+        exit(2);
+    }
+    if (x->size < 0) x->size = x->quick ? 64 : 256;
+    if (x->size < 8 || x->size > 8192) {
+        fprintf(stderr, "%s: --size must be 8..8192\n", name);
+        exit(2);
+    }
+    if (no_meshes)
+        x->mesh_count = 0;
+    else if (!explicit_meshes && !x->quick)
+        find_default_meshes(x);
+    mkdir(x->out_dir, 0777);
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s.csv", x->out_dir, name);
+    x->csv = fopen(path, "w");
+    snprintf(path, sizeof path, "%s/%s.md", x->out_dir, name);
+    x->md = fopen(path, "w");
+    if (!x->csv || !x->md) {
+        fprintf(stderr, "%s: cannot write into %s\n", name, x->out_dir);
+        exit(1);
+    }
+    x->t_start = accel_now_ms();
+    fprintf(stderr, "%s: %s\n", name, x->quick ? "quick budget" : "full budget");
+}
+
+int exp_finish(exp_ctx *x)
+{
+    double s = (accel_now_ms() - x->t_start) / 1e3;
+    exp_md(x, "\n_%s ran in %.1f s (%s budget, %d thread%s, %d timed repeat%s, images %dx%d)._\n",
+           x->name, s, x->quick ? "quick" : "full", x->threads, x->threads > 1 ? "s" : "",
+           x->repeats, x->repeats > 1 ? "s" : "", x->size, x->size);
+    fclose(x->csv);
+    fclose(x->md);
+    fprintf(stderr, "%s: done in %.1f s\n", x->name, s);
+    return 0;
+}
+
+void exp_csv(exp_ctx *x, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vfprintf(x->csv, fmt, ap);
+    va_end(ap);
+    fflush(x->csv);
+}
+
+void exp_md(exp_ctx *x, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vfprintf(x->md, fmt, ap);
+    va_end(ap);
+    fflush(x->md);
+}
+
+void exp_md_table(exp_ctx *x, const char *cols)
+{
+    int n = 1;
+    for (const char *p = cols; *p; p++) n += *p == '|';
+    exp_md(x, "\n| %s |\n|", cols);
+    for (int i = 0; i < n; i++) exp_md(x, "---|");
+    exp_md(x, "\n");
+}
+
+const char *exp_fmt_timing(char *buf, size_t n, const accel_timing *t, int decimals)
+{
+    snprintf(buf, n, "%.*f (%.*f-%.*f)", decimals, t->median, decimals, t->min, decimals, t->max);
+    return buf;
+}
+
+void exp_scene(const char *spec, accel_scene *s)
+{
+    accel_error err = {0};
+    if (scene_create(spec, s, &err)) {
+        fprintf(stderr, "experiment: %s\n", err.msg);
+        exit(1);
+    }
+}
+
+void exp_sets(exp_ctx *x, const accel_scene *s, int mask, bench_sets *out)
+{
+    accel_error err = {0};
+    bench_set_opts o = {NULL, x->size, x->size, 4, 0, 1, x->threads, NULL};
+    if (bench_sets_make(s, &o, mask, out, &err)) {
+        fprintf(stderr, "experiment: ray sets for %s: %s\n", s->name, err.msg);
+        exit(1);
+    }
+}
+
+int exp_run(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets *sets, int mask,
+            exp_measure *m, char *why, size_t why_n)
+{
+    memset(m, 0, sizeof *m);
+    accel_error err = {0};
+    const accel_kind *kind;
+    void *accel;
+    int build_reps = x->quick ? 1 : 3;
+    if (bench_build(spec, s, x->threads, build_reps, 5000.0, &kind, &accel, &m->build,
+                    &m->build_ms, &err)) {
+        snprintf(why, why_n, "%s", err.msg);
+        return 1;
+    }
+    for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
+        if (!(mask & bit) || !(sets->made & bit)) continue;
+        int i = exp_set_index(bit);
+        bench_trace_opts o = {x->threads, 1, x->repeats, 1, x->quick ? 0.0 : 50.0,
+                              NULL, NULL, NULL, NULL};
+        if (bench_trace(kind, accel, bench_sets_get(sets, bit), bench_set_is_occlusion(bit), &o,
+                        &m->res[i], &err)) {
+            snprintf(why, why_n, "%s", err.msg);
+            kind->destroy(accel);
+            return 1;
+        }
+        m->have[i] = 1;
+    }
+    kind->destroy(accel);
+    return 0;
+}
+
+void exp_plot(exp_ctx *x, const char *plot_name, const char *script)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s.gp", x->out_dir, plot_name);
+    FILE *f = fopen(path, "w");
+    if (!f) return;
+    fprintf(f, "set terminal png size 800,500 noenhanced\nset output '%s/%s.png'\n"
+               "set datafile separator ','\nset key outside\nset grid\n%s\n",
+            x->out_dir, plot_name, script);
+    fclose(f);
+}
