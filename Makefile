@@ -13,9 +13,11 @@ LDLIBS  += -lm -pthread
 BUILD   ?= build
 BIN     ?= bin
 
-# Every backend folder's .c files go into the library; a new backend is a
-# new folder listed here plus its line in accel/registry.c.
-BACKENDS := grid nested_grid bvh
+# Every top-level folder with .c files other than these is a backend whose
+# files go into the library: a new backend is a new folder plus its line in
+# accel/registry.c, nothing else.
+NOT_BACKENDS := accel experiments tests tools build build-san bin bin-san
+BACKENDS := $(filter-out $(NOT_BACKENDS),$(patsubst %/,%,$(sort $(dir $(wildcard */*.c)))))
 LIB_SRC  := $(wildcard accel/*.c) $(foreach d,$(BACKENDS),$(wildcard $(d)/*.c))
 LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/%.o)
 LIB      := $(BUILD)/libgridbvh.a
