@@ -124,6 +124,15 @@ typedef struct {
     uint32_t *ray_prims;
 } accel_counters;
 
+/* Compiling with -DACCEL_COUNTERS=0 removes every counter statement: the
+ * reference build against which `make bench` shows that the counter-free
+ * kernel copies (counters == NULL) of a normal build run at the same speed.
+ * Every batch entry starts with `counters = ACCEL_COUNTERS_ON(counters);`. */
+#ifndef ACCEL_COUNTERS
+#define ACCEL_COUNTERS 1
+#endif
+#define ACCEL_COUNTERS_ON(c) (ACCEL_COUNTERS ? (c) : (accel_counters *)NULL)
+
 /* Adds b's totals into a (not the per-ray arrays). */
 void accel_counters_add(accel_counters *a, const accel_counters *b);
 

@@ -204,6 +204,7 @@ static void brute_intersect(const void *a, const accel_ray *rays, accel_hit *hit
                             accel_counters *c)
 {
     const brute_accel *b = a;
+    c = ACCEL_COUNTERS_ON(c);
     BRUTE_DISPATCH(b, rays, hits, (uint8_t *)NULL, n, c);
 }
 
@@ -211,6 +212,7 @@ static void brute_occluded(const void *a, const accel_ray *rays, uint8_t *occ, s
                            accel_counters *c)
 {
     const brute_accel *b = a;
+    c = ACCEL_COUNTERS_ON(c);
     BRUTE_DISPATCH(b, rays, (accel_hit *)NULL, occ, n, c);
 }
 
