@@ -221,7 +221,8 @@ void exp_plot(exp_ctx *x, const char *plot_name, const char *script)
     FILE *f = fopen(path, "w");
     if (!f) return;
     fprintf(f, "set terminal png size 800,500 noenhanced\nset output '%s/%s.png'\n"
-               "set datafile separator ','\nset key outside\nset grid\n%s\n",
-            x->out_dir, plot_name, script);
+               "csv = '%s/%s.csv'\nset datafile separator ','\nset key outside\nset grid\n%s\n",
+            x->out_dir, plot_name, x->out_dir, x->name, script);
     fclose(f);
+    exp_md(x, "\n<!-- plot: %s -->\n", plot_name);
 }

@@ -77,7 +77,8 @@ static inline double exp_per_ray(uint64_t v, const bench_result *r)
     return r->rays ? (double)v / (double)r->rays : 0.0;
 }
 
-/* Writes a gnuplot script beside the CSV (used by report.sh when gnuplot exists). */
+/* Writes DIR/<plot_name>.gp drawing DIR/<plot_name>.png; the script may use
+ * the variable `csv` (this experiment's CSV). report.sh runs it when gnuplot exists. */
 void exp_plot(exp_ctx *x, const char *plot_name, const char *script);
 
 #endif

@@ -17,9 +17,9 @@ while [ $# -gt 0 ]; do
   shift
 done
 if [ "$quick" = 1 ]; then
-  out=build/quick-report; report=build/quick-report/REPORT.md; flag=--quick; budget="quick (smoke test)"
+  out=build/quick-report; report=build/quick-report/REPORT.md; flag=--quick; budget="quick (smoke test)"; linkdir=""
 else
-  out=report; report=REPORT.md; flag=""; budget="full"
+  out=report; report=REPORT.md; flag=""; budget="full"; linkdir="report/"
 fi
 mkdir -p "$out"
 # Experiments in the order the report reads them.
@@ -77,7 +77,15 @@ cc_version=$(${CC:-cc} --version 2>/dev/null | head -1)
     [ -f "$out/$e.md" ] || continue
     case " $ran " in *" $e "*) ;; *) [ -n "$only" ] || continue ;; esac
     echo
-    cat "$out/$e.md"
+    # Plot placeholders become image links when the PNG was drawn.
+    while IFS= read -r line; do
+      case "$line" in
+        "<!-- plot: "*" -->")
+          name=${line#<!-- plot: }; name=${name% -->}
+          if [ -f "$out/$name.png" ]; then echo "![$name]($linkdir$name.png)"; else echo "_(plot $name not drawn: gnuplot absent; data in $linkdir$e.csv)_"; fi ;;
+        *) printf '%s\n' "$line" ;;
+      esac
+    done < "$out/$e.md"
   done
 } > "$report.tmp"
 mv "$report.tmp" "$report"
