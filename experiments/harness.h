@@ -26,7 +26,7 @@ typedef struct {
     int threads;          /* trace/build threads (default 1) */
     int repeats;          /* timed passes per measurement */
     int size;             /* primary image size (square) */
-    const char *meshes[EXP_MAX_MESHES]; /* extra mesh files (default: ../shared/scenes/*.off) */
+    const char *meshes[EXP_MAX_MESHES]; /* extra mesh files (default: the meshes in ../shared/scenes) */
     int mesh_count;
     FILE *csv;
     FILE *md;
