@@ -113,19 +113,32 @@ static int tri_degenerate(const float *t)
 
 accel_camera scene_camera_framing(box3 bounds, vec3 from, float fov_deg)
 {
+    /* Tightest distance at which all 8 box corners project inside a square
+     * frame: a corner at offset q from the centre needs
+     * d >= max(|q.right|, |q.up|) / tan(fov/2) - q.fwd. */
     accel_camera c;
     vec3 centre = box3_center(bounds);
-    float radius = 0.5f * v3_len(box3_extent(bounds));
-    if (!(radius > 0.0f)) radius = 1.0f;
-    float half = 0.5f * fov_deg * 3.14159265f / 180.0f;
-    float dist = radius / sinf(half);
-    c.look_at = centre;
-    c.eye = v3_add(centre, v3_scale(v3_norm(from), dist));
-    vec3 fwd = v3_norm(v3_sub(c.look_at, c.eye));
+    vec3 back = v3_norm(from), fwd = v3_scale(back, -1.0f);
     c.up = fabsf(fwd.y) > 0.99f ? v3(0, 0, 1) : v3(0, 1, 0);
+    vec3 right = v3_norm(v3_cross(fwd, c.up));
+    vec3 up = v3_cross(right, fwd);
+    float t = tanf(0.5f * fov_deg * 3.14159265f / 180.0f);
+    float dist = 0.0f;
+    for (int i = 0; i < 8; i++) {
+        vec3 p = v3(i & 1 ? bounds.max.x : bounds.min.x, i & 2 ? bounds.max.y : bounds.min.y,
+                    i & 4 ? bounds.max.z : bounds.min.z);
+        vec3 q = v3_sub(p, centre);
+        float need = fmaxf(fabsf(v3_dot(q, right)), fabsf(v3_dot(q, up))) / t - v3_dot(q, fwd);
+        dist = fmaxf(dist, need);
+    }
+    if (!(dist > 0.0f)) dist = 1.0f;
+    c.look_at = centre;
+    c.eye = v3_add(centre, v3_scale(back, dist * 1.02f));
     c.fov_deg = fov_deg;
     return c;
 }
+
+static accel_camera camera_fit_prims(const accel_scene *s, vec3 from, float fov_deg);
 
 int scene_finish(scene_builder *b, const char *name, accel_scene *s, accel_error *err)
 {
@@ -161,10 +174,54 @@ int scene_finish(scene_builder *b, const char *name, accel_scene *s, accel_error
         s->bounds = box3_union(s->bounds, accel_prim_bounds(s, i));
     }
     box3 frame = box3_is_empty(s->bounds) ? (box3){{-1, -1, -1}, {1, 1, 1}} : s->bounds;
-    s->camera = scene_camera_framing(frame, v3(0.3f, 0.35f, 1.0f), 40.0f);
+    s->camera = box3_is_empty(s->bounds) ? scene_camera_framing(frame, v3(0.3f, 0.35f, 1.0f), 40.0f)
+                                          : camera_fit_prims(s, v3(0.3f, 0.35f, 1.0f), 40.0f);
     vec3 ext = box3_extent(frame);
     s->light = v3_add(frame.max, v3_scale(ext, 0.5f));
     return 0;
+}
+
+/* Frames the primitives themselves (not their box) from direction `from`:
+ * centres the view on the projected extent of every vertex and moves the
+ * eye to the nearest distance at which all of them fit the square frame,
+ * so that a mesh fills the image as a real render would. */
+static accel_camera camera_fit_prims(const accel_scene *s, vec3 from, float fov_deg)
+{
+    accel_camera c = scene_camera_framing(s->bounds, from, fov_deg);
+    vec3 fwd = v3_norm(v3_sub(c.look_at, c.eye));
+    vec3 right = v3_norm(v3_cross(fwd, c.up));
+    vec3 up = v3_cross(right, fwd);
+    vec3 centre = c.look_at;
+    float x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+    for (int pass = 0; pass < 2; pass++) {
+        float t = tanf(0.5f * fov_deg * 3.14159265f / 180.0f), dist = 0.0f;
+        for (uint32_t k = 0; k < s->live_count; k++) {
+            box3 b = accel_prim_bounds(s, s->live[k]);
+            int corners = s->live[k] < s->tri_count ? 3 : 8;
+            const float *tri = s->tris + 9 * (size_t)s->live[k];
+            for (int i = 0; i < corners; i++) {
+                vec3 p = corners == 3 ? v3_load(tri + 3 * i)
+                                      : v3(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y,
+                                           i & 4 ? b.max.z : b.min.z);
+                vec3 q = v3_sub(p, centre);
+                float x = v3_dot(q, right), y = v3_dot(q, up);
+                if (pass == 0) {
+                    x0 = fminf(x0, x), x1 = fmaxf(x1, x), y0 = fminf(y0, y), y1 = fmaxf(y1, y);
+                } else {
+                    dist = fmaxf(dist, fmaxf(fabsf(x), fabsf(y)) / t - v3_dot(q, fwd));
+                }
+            }
+        }
+        if (pass == 0) {
+            if (!(x0 <= x1)) return c;
+            centre = v3_add(centre, v3_add(v3_scale(right, 0.5f * (x0 + x1)),
+                                           v3_scale(up, 0.5f * (y0 + y1))));
+        } else if (dist > 0.0f) {
+            c.look_at = centre;
+            c.eye = v3_sub(centre, v3_scale(fwd, dist * 1.03f));
+        }
+    }
+    return c;
 }
 
 void scene_free(accel_scene *s)
