@@ -116,6 +116,22 @@ int load_fail(const load_text *t, int code, const char *fmt, ...)
     return accel_fail(t->err, code, "%s:%zu: %s", t->name, t->line, msg);
 }
 
+int load_fail_eof(const load_text *t, const char *fmt, ...)
+{
+    if (!t->err) return ACCEL_ERR_PARSE;
+    char msg[400];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    /* In a file that ends with a line end, name its last line (as an editor
+     * numbers them), not the empty one after it. */
+    size_t line = t->line;
+    if (line > 1 && t->end > t->begin && (t->end[-1] == '\n' || t->end[-1] == '\r')) line--;
+    return accel_fail(t->err, ACCEL_ERR_PARSE, "%s:%zu: unexpected end of file%s", t->name, line,
+                      msg);
+}
+
 void load_token_text(const char *p, const char *end, char *buf, size_t size)
 {
     size_t n = 0;
@@ -135,7 +151,7 @@ void load_token_text(const char *p, const char *end, char *buf, size_t size)
 
 int load_fail_expected(const load_text *t, const char *what)
 {
-    if (t->p >= t->end) return load_fail(t, ACCEL_ERR_PARSE, "expected %s, found end of file", what);
+    if (t->p >= t->end) return load_fail_eof(t, ": expected %s", what);
     if (*t->p == '\n' || *t->p == '\r')
         return load_fail(t, ACCEL_ERR_PARSE, "expected %s, found end of line", what);
     if (t->comment && *t->p == t->comment)

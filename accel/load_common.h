@@ -53,6 +53,9 @@ int load_check_text(const char *name, const char *data, size_t size, size_t text
 /* "name:line: message" (text) */
 int load_fail(const load_text *t, int code, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
+/* "name:line: unexpected end of file" followed by the message, naming the last line of a
+ * file that ends with a line end (not the empty line after it). */
+int load_fail_eof(const load_text *t, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* "name:line: expected WHAT, found 'TOKEN'" (or "found end of line / end of file") */
 int load_fail_expected(const load_text *t, const char *what);
 

@@ -40,9 +40,10 @@ static int parse_header(load_text *t)
 {
     load_skip_space(t);
     if (t->p >= t->end) return load_fail(t, ACCEL_ERR_PARSE, "empty file (no OFF header)");
-    if ((unsigned)(*t->p - '0') < 10u) return 0; /* no keyword: the counts come first */
     const char *k = t->p, *q = t->p;
-    while (q < t->end && !load_is_delim(t, *q)) q++;
+    int digits = 1;
+    for (; q < t->end && !load_is_delim(t, *q); q++) digits &= (unsigned)(*q - '0') < 10u;
+    if (digits) return 0; /* no keyword: the counts come first */
     size_t len = (size_t)(q - k);
     if (!plain_variant(k, len)) {
         char tok[200];
@@ -102,9 +103,7 @@ static int parse_off(load_text *t, scene_builder *b, float **verts_out)
     for (int64_t i = 0; i < nv; i++) {
         load_skip_space(t);
         if (t->p >= t->end)
-            return load_fail(t, ACCEL_ERR_PARSE,
-                             "unexpected end of file: %lld of %lld vertices read", (long long)i,
-                             (long long)nv);
+            return load_fail_eof(t, ": %lld of %lld vertices read", (long long)i, (long long)nv);
         for (int k = 0; k < 3; k++) {
             if (k) load_skip_hspace(t);
             if ((rc = load_float_token(t, axis[k], &v[3 * i + k]))) return rc;
@@ -114,8 +113,7 @@ static int parse_off(load_text *t, scene_builder *b, float **verts_out)
     for (int64_t f = 0; f < nf; f++) {
         load_skip_space(t);
         if (t->p >= t->end)
-            return load_fail(t, ACCEL_ERR_PARSE, "unexpected end of file: %lld of %lld faces read",
-                             (long long)f, (long long)nf);
+            return load_fail_eof(t, ": %lld of %lld faces read", (long long)f, (long long)nf);
         int64_t n;
         if ((rc = load_int_token(t, "face vertex count", &n))) return rc;
         if (n < 3)

@@ -206,7 +206,7 @@ static int parse_header(ply_file *f)
     int first = 1, done = 0;
     while (!done) {
         if (t->p >= t->end)
-            return load_fail(t, ACCEL_ERR_PARSE, "unexpected end of file in the header (no end_header)");
+            return load_fail_eof(t, " in the header (no end_header)");
         const char *ls = t->p, *le = ls;
         while (le < t->end && *le != '\n' && *le != '\r') le++;
         if (memchr(ls, 0, (size_t)(le - ls)))
@@ -223,10 +223,11 @@ static int parse_header(ply_file *f)
             int rc = parse_header_line(f, ls, le, &done);
             if (rc) return rc;
         }
+        if (done && f->format < 0)
+            return load_fail(t, ACCEL_ERR_PARSE, "no format line in the header");
         t->p = le;
         load_eat_newline(t); /* exactly one line end: binary data may follow */
     }
-    if (f->format < 0) return load_fail(t, ACCEL_ERR_PARSE, "no format line in the header");
     return 0;
 }
 
@@ -312,9 +313,8 @@ static int check_header(ply_file *f)
 
 static int ascii_eof(ply_file *f, const ply_elem *e, uint64_t i)
 {
-    return load_fail(&f->t, ACCEL_ERR_PARSE,
-                     "unexpected end of file in element '%s' (instance %llu of %llu)", e->name,
-                     (unsigned long long)i, (unsigned long long)e->count);
+    return load_fail_eof(&f->t, " in element '%s' (instance %llu of %llu)", e->name,
+                         (unsigned long long)i, (unsigned long long)e->count);
 }
 
 /* A value we do not use: any number (NaN and infinity too). */
@@ -398,9 +398,10 @@ static int bin_fail(ply_file *f, const char *at, const char *fmt, ...)
                       (size_t)(at - f->t.begin), msg);
 }
 
+/* Reported at the end of the file: where the missing data should be. */
 static int bin_eof(ply_file *f, const ply_elem *e, uint64_t i)
 {
-    return bin_fail(f, f->t.p, "unexpected end of file in element '%s' (instance %llu of %llu)",
+    return bin_fail(f, f->t.end, "unexpected end of file in element '%s' (instance %llu of %llu)",
                     e->name, (unsigned long long)i, (unsigned long long)e->count);
 }
 
@@ -452,14 +453,14 @@ static int binary_element(ply_file *f, const ply_elem *e, scene_builder *b)
     }
     if (e != f->vertex && e != f->face && !has_list) {
         /* fixed-size instances: skip them all at once (check_header bounded the count) */
-        if (e->count > (uint64_t)(end - p) / (fixed ? fixed : 1)) return bin_eof(f, e, 0);
+        if (e->count > (uint64_t)(end - p) / (fixed ? fixed : 1))
+            return bin_eof(f, e, (uint64_t)(end - p) / (fixed ? fixed : 1));
         f->t.p = p + e->count * fixed;
         return 0;
     }
     for (uint64_t i = 0; i < e->count; i++) {
         for (size_t j = e->first; j < e->first + e->n; j++) {
             const ply_prop *pr = &f->props[j];
-            f->t.p = p;
             if (!pr->is_list) {
                 unsigned sz = type_size[pr->type];
                 if ((size_t)(end - p) < sz) return bin_eof(f, e, i);
@@ -484,10 +485,7 @@ static int binary_element(ply_file *f, const ply_elem *e, scene_builder *b)
                 return bin_fail(f, p, "face %llu has %lld vertices (at least 3 needed)",
                                 (unsigned long long)i, (long long)n);
             p += csz;
-            if ((uint64_t)n > (uint64_t)(end - p) / isz) {
-                f->t.p = end;
-                return bin_eof(f, e, i);
-            }
+            if ((uint64_t)n > (uint64_t)(end - p) / isz) return bin_eof(f, e, i);
             if (!face) {
                 p += (size_t)n * isz;
                 continue;
