@@ -1,0 +1,42 @@
+/*
+ * grid.h - the regular grid accelerator kind `grid`.
+ *
+ * A uniform grid over the scene bounds (Fujimoto et al. 1986; Amanatides &
+ * Woo 1987), stored compactly (one offset per cell into one array of
+ * primitive ids), built with exact primitive/cell overlap, traversed with a
+ * 3D-DDA that stops at the first cell whose exit lies beyond the nearest
+ * hit. See grid/README.md for how it works and what its knobs cost.
+ *
+ * Spec parameters (`grid:key=value,...`):
+ *   lambda   cells per primitive (target density; default GRID_DEFAULT_LAMBDA):
+ *            n_i = d_i * cbrt(lambda * N / V), see grid_resolution()
+ *   res      auto | N | NxNyNz: cells per axis, overriding lambda
+ *   overlap  exact | bbox: membership by exact triangle/sphere-box overlap,
+ *            or by bounding box only
+ *   mailbox  0/1: test a primitive spanning several cells once per ray
+ *   max_mb   memory limit for offsets + references, MiB (larger is refused)
+ *   tri      watertight | naive (common to all kinds)
+ */
+#ifndef GRID_GRID_H
+#define GRID_GRID_H
+
+#include "accel.h"
+#include "grid_core.h"
+
+/* Default cells per primitive, from the sweep reported in grid/README.md. */
+#define GRID_DEFAULT_LAMBDA 4
+
+extern const accel_kind accel_kind_grid;
+
+/* Read-only view of a built grid (tests, tools, heatmaps). */
+typedef struct {
+    const grid_frame *frame;
+    const uint32_t *offsets; /* cell_count + 1 */
+    const uint32_t *refs;    /* ref_count */
+    uint64_t cell_count, ref_count;
+} grid_view;
+
+/* Fills *v from an accelerator built by accel_kind_grid. */
+void grid_get_view(const void *accel, grid_view *v);
+
+#endif

@@ -1,0 +1,261 @@
+/*
+ * grid_core.h - the grid API shared by the regular grid (grid/) and the
+ * nested grid (nested_grid/): everything a uniform grid of cells over a box
+ * needs, independent of what a cell holds.
+ *
+ *  - the resolution rule (Cleary & Wyvill 1988; Wald et al., "Ray Tracing
+ *    Animated Scenes using Coherent Grid Traversal", SIGGRAPH 2006, sec. 3):
+ *    n_i = d_i * cbrt(lambda * N / V), extended to flat and thin boxes;
+ *  - overflow-safe sizing against a memory limit;
+ *  - the cell frame: boundary planes stored once per axis, so that the
+ *    builder's cell boxes and the traversal's crossing distances come from
+ *    the very same floats;
+ *  - the cell range of a box and exact primitive/cell membership (overlap.h);
+ *  - the compact cell storage build: count pass, prefix sum, fill pass
+ *    (multithreaded, with a result identical to the single-threaded one);
+ *  - the 3D-DDA of Amanatides & Woo, "A Fast Voxel Traversal Algorithm for
+ *    Ray Tracing", Eurographics 1987: setup from the slab entry and step.
+ *
+ * Robustness contract (what makes the DDA skip no cell that matters):
+ *  1. membership is conservative: a primitive belongs to every cell whose
+ *     box, enlarged by frame.pad on every side, it touches;
+ *  2. every crossing distance is computed from a stored boundary plane,
+ *     t = (plane - org) * inv_dir, never accumulated: the sequence of cells
+ *     is then exactly the one these (monotone) distances define;
+ *  3. the entry cell is made consistent with those distances: its entry
+ *     plane is crossed at or before t_entry, its exit plane after it;
+ *  4. the caller keeps the nearest hit of every primitive it tested, even
+ *     when that hit lies beyond the current cell, and stops only when the
+ *     current cell's exit distance reaches it.
+ * A ray through an edge or a corner then visits the cells on one side of it
+ * (the 6-connected path), and a primitive it hits within rounding distance
+ * of that edge belongs to those cells by the padding.
+ */
+#ifndef GRID_GRID_CORE_H
+#define GRID_GRID_CORE_H
+
+#include <float.h>
+#include <stdint.h>
+
+#include "accel.h"
+#include "prim.h"
+
+/* Largest resolution along one axis (cells); keeps cell indices exact in
+ * float and the per-axis plane tables small. */
+#define GRID_MAX_AXIS_RES 65536
+/* Membership padding, in cells: a primitive within this fraction of a cell
+ * of a cell's box belongs to it. Covers the DDA's rounding (a few float ulps
+ * of the distance travelled) for rays starting up to about 20 grid sizes
+ * away at 256 cells per axis; costs a reference only for primitives that
+ * end within 1/1024 of a cell from a boundary. */
+#define GRID_PAD_CELLS (1.0 / 1024.0)
+/* Membership padding relative to the magnitude of the coordinates (float
+ * ulps), for scenes far from the origin. */
+#define GRID_PAD_ULPS 16.0
+
+/* ---- resolution and sizing ------------------------------------------------ */
+
+/*
+ * Cells per axis for prim_count primitives in box `bounds` at a density of
+ * lambda cells per primitive: n_i = d_i * (lambda*N / prod d_j)^(1/k) over
+ * the k axes that are not flat. An axis with zero extent, or one on which
+ * the rule gives less than one cell, gets one cell and the rule is redone on
+ * the remaining axes (a thin slab becomes a 2D grid of about lambda*N cells,
+ * not a 3D one with most cells clamped away). Results are rounded and
+ * clamped to [1, GRID_MAX_AXIS_RES].
+ */
+void grid_resolution(box3 bounds, double prim_count, double lambda, int res[3]);
+
+/* Parses "auto" (res[] = 0), "N" (N cells on every axis) or "NxNyNz". */
+int grid_parse_res(const char *text, int res[3], accel_error *err);
+
+/* Cell count of res[] in 64 bits, refused with ACCEL_ERR_RANGE (and a
+ * message naming `what`) when the offset array and plane tables alone would
+ * exceed max_bytes or when the count does not fit a uint32 cell index. */
+int grid_cell_count(const char *what, const int res[3], double max_bytes, uint64_t *cells,
+                    accel_error *err);
+
+/* ---- the frame: box, resolution, boundary planes --------------------------- */
+
+typedef struct {
+    float lo[3], hi[3];     /* grid box */
+    int res[3];             /* cells per axis */
+    uint32_t stride[3];     /* 1, nx, nx*ny: linear cell = x + nx*(y + ny*z) */
+    float inv_cell[3];      /* res / extent: only for first guesses of a cell */
+    float pad[3];           /* membership padding per axis, world units */
+    const float *planes[3]; /* res[a]+1 boundary positions per axis, planes[a][0] = lo */
+} grid_frame;
+
+/* The box a grid is laid over: `bounds` with every flat (zero-extent) axis
+ * widened symmetrically so that cells have positive size. An empty box
+ * becomes the unit cube. */
+box3 grid_frame_box(box3 bounds);
+
+/* Floats the plane tables of res[] take: sum of (res[a] + 1). */
+static inline size_t grid_plane_count(const int res[3])
+{
+    return (size_t)res[0] + (size_t)res[1] + (size_t)res[2] + 3;
+}
+
+/* Fills the frame; `planes` (grid_plane_count floats, owned by the caller)
+ * receives the boundary positions lo + extent*k/n, rounded once from double. */
+void grid_frame_init(grid_frame *f, box3 box, const int res[3], float *planes);
+
+/* Range of cells (inclusive, per axis) whose padded boxes the box b touches,
+ * clamped to the grid. Returns 0 when b misses the padded grid. */
+int grid_cell_range(const grid_frame *f, box3 b, int lo[3], int hi[3]);
+
+/* Padded box of cell (x, y, z) in double. */
+void grid_cell_box(const grid_frame *f, int x, int y, int z, double lo[3], double hi[3]);
+
+/* ---- compact cell storage --------------------------------------------------- */
+
+typedef enum {
+    GRID_OVERLAP_EXACT = 0, /* triangle/box SAT, sphere/box distance (overlap.h) */
+    GRID_OVERLAP_BBOX = 1   /* every cell the primitive's bounding box touches */
+} grid_overlap;
+
+/* One grid's cells: the references of cell c are refs[offsets[c] ..
+ * offsets[c+1]-1], sorted by increasing primitive id. */
+typedef struct {
+    uint32_t *offsets;  /* cell_count + 1 */
+    uint32_t *refs;     /* ref_count primitive ids */
+    uint64_t cell_count, ref_count;
+} grid_cells;
+
+/* Count pass: counts[c] += number of prims[] overlapping cell c (counts has
+ * one entry per cell). With threads > 1 the increments are atomic. */
+void grid_count_pass(const grid_frame *f, const accel_scene *s, const uint32_t *prims,
+                     uint32_t prim_count, grid_overlap mode, uint32_t *counts, int threads);
+
+/* Prefix sum: turns counts a[0..n-1] into exclusive offsets and sets a[n] to
+ * the total (*total). Fails, leaving a[] untouched, when the total does not
+ * fit a uint32. */
+int grid_prefix_sum(uint32_t *a, uint64_t n, int threads, uint64_t *total, accel_error *err);
+
+/* Fill pass: writes every overlapping (prim, cell) into refs at the cell's
+ * offsets, then sorts each cell's list so that any thread count gives the
+ * same arrays. offsets must come from grid_prefix_sum of the count pass
+ * with the same arguments; it is left unchanged on return. */
+void grid_fill_pass(const grid_frame *f, const accel_scene *s, const uint32_t *prims,
+                    uint32_t prim_count, grid_overlap mode, uint32_t *offsets, uint32_t *refs,
+                    int threads);
+
+/* All three passes, with allocation and the reference-count checks: the
+ * references (4 bytes each) plus offsets must stay within max_bytes. On
+ * failure nothing is left allocated. */
+int grid_cells_build(const grid_frame *f, const accel_scene *s, const uint32_t *prims,
+                     uint32_t prim_count, grid_overlap mode, int threads, double max_bytes,
+                     grid_cells *out, accel_error *err);
+void grid_cells_free(grid_cells *c);
+
+/* ---- 3D-DDA (Amanatides & Woo 1987) ---------------------------------------- */
+
+typedef struct {
+    int idx[3];            /* current cell per axis */
+    int step[3];           /* +1 / -1, or 0 on an axis the ray does not move along */
+    int out[3];            /* idx value meaning "left the grid" (idx itself when step = 0) */
+    uint32_t cell_step[3]; /* change of the linear index per step (mod 2^32) */
+    uint32_t cell;         /* linear index of the current cell */
+    float t_next[3];       /* distance of the next crossing per axis (+inf: none) */
+    const float *next_plane[3]; /* next_plane[a][idx[a]] is the plane crossed next */
+    float org[3], inv_dir[3];
+} grid_dda;
+
+/* Distance of a boundary plane along axis a, clamped below +inf: an
+ * overflowing distance stays finite, so an axis that moves always steps
+ * before the "no crossing" axes (+inf). Never NaN: inv_dir is finite here. */
+static inline float grid_plane_t(float plane, float org, float inv_dir)
+{
+    return minf((plane - org) * inv_dir, FLT_MAX);
+}
+
+/*
+ * Sets up the walk for a prepared ray that enters the grid box at t_entry
+ * (from box3_slab). An axis moves when its inverse direction is finite and
+ * its direction nonzero (so +0, -0 and denormal components do not step).
+ * The cell per axis is guessed from the entry point and then corrected
+ * against the plane distances (contract point 3), so that neither rounding
+ * in the entry point nor an origin exactly on a boundary can start the walk
+ * past a cell the ray passes through.
+ */
+static inline __attribute__((always_inline)) void
+grid_dda_init(grid_dda *d, const grid_frame *f, const accel_ray_prep *p, float t_entry)
+{
+    const float o[3] = {p->org.x, p->org.y, p->org.z};
+    const float dir[3] = {p->dir.x, p->dir.y, p->dir.z};
+    const float inv[3] = {p->inv_dir.x, p->inv_dir.y, p->inv_dir.z};
+    d->cell = 0;
+    for (int a = 0; a < 3; a++) {
+        const int n = f->res[a];
+        const float *pl = f->planes[a];
+        int moves = dir[a] != 0.0f && isfinite(inv[a]);
+        float pos = moves ? o[a] + t_entry * dir[a] : o[a];
+        float g = (pos - f->lo[a]) * f->inv_cell[a];
+        int i = g >= (float)n ? n - 1 : (g > 0.0f ? (int)g : 0); /* also maps NaN to 0 */
+        d->org[a] = o[a];
+        d->inv_dir[a] = inv[a];
+        if (!moves) {
+            /* The ray stays in the slab of its origin: pick the cell whose
+             * planes bracket it (either one when it lies on a plane). */
+            while (i > 0 && o[a] < pl[i]) i--;
+            while (i < n - 1 && o[a] > pl[i + 1]) i++;
+            d->step[a] = 0;
+            d->out[a] = i;
+            d->cell_step[a] = 0;
+            d->t_next[a] = INFINITY;
+            d->next_plane[a] = pl;
+        } else if (dir[a] > 0.0f) {
+            /* Entry plane pl[i] crossed at or before t_entry, exit plane after. */
+            while (i > 0 && grid_plane_t(pl[i], o[a], inv[a]) > t_entry) i--;
+            while (i < n - 1 && grid_plane_t(pl[i + 1], o[a], inv[a]) <= t_entry) i++;
+            d->step[a] = 1;
+            d->out[a] = n;
+            d->cell_step[a] = f->stride[a];
+            d->next_plane[a] = pl + 1;
+            d->t_next[a] = grid_plane_t(pl[i + 1], o[a], inv[a]);
+        } else {
+            while (i < n - 1 && grid_plane_t(pl[i + 1], o[a], inv[a]) > t_entry) i++;
+            while (i > 0 && grid_plane_t(pl[i], o[a], inv[a]) <= t_entry) i--;
+            d->step[a] = -1;
+            d->out[a] = -1;
+            d->cell_step[a] = 0u - f->stride[a];
+            d->next_plane[a] = pl;
+            d->t_next[a] = grid_plane_t(pl[i], o[a], inv[a]);
+        }
+        d->idx[a] = i;
+        d->cell += (uint32_t)i * f->stride[a];
+    }
+}
+
+/* Distance at which the ray leaves the current cell. */
+static inline float grid_dda_exit(const grid_dda *d)
+{
+    return minf(minf(d->t_next[0], d->t_next[1]), d->t_next[2]);
+}
+
+/* Axis of the nearest crossing. Ties go to the higher axis, so a ray through
+ * an edge or corner steps one axis at a time and visits the cells between. */
+static inline int grid_dda_axis(const grid_dda *d)
+{
+    /* bit 2: t0 < t1, bit 1: t0 < t2, bit 0: t1 < t2; impossible orders map anywhere. */
+    static const int8_t axis_of[8] = {2, 1, 2, 1, 2, 2, 0, 0};
+    int bits = ((d->t_next[0] < d->t_next[1]) << 2) | ((d->t_next[0] < d->t_next[2]) << 1) |
+               (d->t_next[1] < d->t_next[2]);
+    return axis_of[bits];
+}
+
+/* Moves to the next cell along the ray; returns 0 once the ray leaves the
+ * grid (or when asked to step along an axis it does not move on). */
+static inline __attribute__((always_inline)) int grid_dda_step(grid_dda *d)
+{
+    int a = grid_dda_axis(d);
+    int i = d->idx[a] + d->step[a];
+    if (i == d->out[a]) return 0;
+    d->idx[a] = i;
+    d->cell += d->cell_step[a];
+    d->t_next[a] = grid_plane_t(d->next_plane[a][i], d->org[a], d->inv_dir[a]);
+    return 1;
+}
+
+#endif

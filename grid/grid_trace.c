@@ -1,0 +1,144 @@
+/*
+ * grid_trace.c - traversal of the `grid` kind: the 3D-DDA of Amanatides &
+ * Woo (Eurographics 1987) over the compact cells, closest-hit and any-hit.
+ *
+ * Per ray: clip to the grid box with the robust slab test (geom.h), set up
+ * the DDA at the entry distance (grid_dda_init), then walk cells in order.
+ * Every primitive of a cell is tested against the whole ray (not against
+ * the cell), and the nearest hit so far is kept even when it lies beyond
+ * the current cell; the walk stops once the current cell's exit distance
+ * reaches that hit, so the first hit accepted is the nearest one and a
+ * primitive tested early is never lost (this is what makes mailboxing safe
+ * without remembering per-primitive distances).
+ *
+ * Mailboxing (Amanatides & Woo 1987, sec. 4; per-ray rather than per-object
+ * so that any number of threads can trace at once): a 16-entry direct-mapped
+ * cache of the ids tested by this ray, on the stack. A primitive that spans
+ * several consecutive cells is found in it and skipped; a collision only
+ * costs a repeated test, never a wrong answer.
+ *
+ * Kernels are written once (grid_kernel) and instantiated with constant
+ * flags by the batch entries: counters, spheres, naive triangles, mailbox,
+ * closest-hit or any-hit. The uncounted copies contain no counting code and
+ * no step-bound check; counted runs check the bound nx+ny+nz+3 cells.
+ */
+#include <string.h>
+
+#include "grid_impl.h"
+
+/* Entries of the per-ray mailbox (power of two). */
+#define GRID_MAILBOX 16
+
+static inline __attribute__((always_inline)) void
+grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
+            size_t count, accel_counters *c, int naive, int spheres, int mailbox)
+{
+    const accel_scene *s = g->scene;
+    const grid_frame *f = &g->frame;
+    const uint32_t *offsets = g->cells.offsets;
+    const uint32_t *refs = g->cells.refs;
+    const uint64_t bound = (uint64_t)f->res[0] + f->res[1] + f->res[2] + 3;
+    for (size_t i = 0; i < count; i++) {
+        accel_ray_prep p;
+        accel_hit h = accel_hit_miss();
+        uint32_t steps = 0, empty = 0, tests = 0, skips = 0, boxes = 0;
+        float t_entry = 0.0f;
+        int live = accel_prep_ray(&rays[i], &p) && g->cells.ref_count > 0;
+        if (live) {
+            boxes = 1;
+            live = box3_slab(f->lo, f->hi, p.org, p.inv_dir, p.neg, p.t_near, p.t_far, &t_entry);
+        }
+        if (live) {
+            /* Set up 3D DDA for the ray. */
+            grid_dda d;
+            grid_dda_init(&d, f, &p, t_entry);
+            uint32_t box[GRID_MAILBOX];
+            if (mailbox) memset(box, 0xFF, sizeof box); /* ACCEL_MISS: no primitive */
+            float t = p.t_far, u = 0.0f, v = 0.0f;
+            /* Walk the ray through the cells. */
+            for (;;) {
+                if (c) {
+                    steps++;
+                    ACCEL_STEP_BOUND_CHECK(steps, bound);
+                }
+                uint32_t k = offsets[d.cell], end = offsets[d.cell + 1];
+                if (c && k == end) empty++;
+                for (; k < end; k++) {
+                    uint32_t prim = refs[k];
+                    if (mailbox) {
+                        uint32_t *slot = &box[prim & (GRID_MAILBOX - 1)];
+                        if (*slot == prim) {
+                            if (c) skips++;
+                            continue;
+                        }
+                        *slot = prim;
+                    }
+                    if (c) tests++;
+                    if (accel_prim_hit(s, prim, &p, &t, &u, &v, naive, spheres)) {
+                        h.t = t, h.u = u, h.v = v, h.prim = prim;
+                        if (occ) goto done;
+                    }
+                }
+                /* A hit (or the ray's end) before this cell's exit: nothing
+                 * in a later cell can be nearer. */
+                if (grid_dda_exit(&d) >= t) break;
+                if (!grid_dda_step(&d)) break;
+            }
+        }
+    done:
+        if (occ)
+            occ[i] = h.prim != ACCEL_MISS;
+        else
+            hits[i] = h;
+        if (c) {
+            c->rays++;
+            c->steps += steps;
+            c->empty_steps += empty;
+            c->prim_tests += tests;
+            c->mailbox_skips += skips;
+            c->box_tests += boxes;
+            if (c->ray_steps) c->ray_steps[i] = steps;
+            if (c->ray_prims) c->ray_prims[i] = tests;
+        }
+    }
+}
+
+/* Picks the kernel copy once per batch. Counted runs take the flags at run
+ * time (one copy); uncounted runs get a copy per constant combination. */
+#define GRID_DISPATCH(g, rays, hits, occ, n, c)                                           \
+    do {                                                                                  \
+        int sph_ = (g)->has_spheres, nv_ = (g)->naive, mb_ = (g)->mailbox;                \
+        if (c) {                                                                          \
+            grid_kernel(g, rays, hits, occ, n, c, nv_, sph_, mb_);                        \
+        } else if (mb_) {                                                                 \
+            if (nv_) {                                                                    \
+                if (sph_) grid_kernel(g, rays, hits, occ, n, NULL, 1, 1, 1);              \
+                else grid_kernel(g, rays, hits, occ, n, NULL, 1, 0, 1);                   \
+            } else {                                                                      \
+                if (sph_) grid_kernel(g, rays, hits, occ, n, NULL, 0, 1, 1);              \
+                else grid_kernel(g, rays, hits, occ, n, NULL, 0, 0, 1);                   \
+            }                                                                             \
+        } else {                                                                          \
+            if (nv_) {                                                                    \
+                if (sph_) grid_kernel(g, rays, hits, occ, n, NULL, 1, 1, 0);              \
+                else grid_kernel(g, rays, hits, occ, n, NULL, 1, 0, 0);                   \
+            } else {                                                                      \
+                if (sph_) grid_kernel(g, rays, hits, occ, n, NULL, 0, 1, 0);              \
+                else grid_kernel(g, rays, hits, occ, n, NULL, 0, 0, 0);                   \
+            }                                                                             \
+        }                                                                                 \
+    } while (0)
+
+void grid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
+                    accel_counters *counters)
+{
+    const grid_accel *g = accel;
+    GRID_DISPATCH(g, rays, hits, (uint8_t *)NULL, count, counters);
+}
+
+void grid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
+                   accel_counters *counters)
+{
+    const grid_accel *g = accel;
+    GRID_DISPATCH(g, rays, (accel_hit *)NULL, occluded, count, counters);
+}
