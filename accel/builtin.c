@@ -1,0 +1,472 @@
+/*
+ * builtin.c - the table of built-in scenes, the shared mesh helpers and the
+ * small synthetic scenes (soup, slivers, teapot_stadium, cube, sphere).
+ * The SPD scenes live in spd.c, the teapot's patches in teapot.c.
+ *
+ * Every generator is deterministic (its random numbers come from a
+ * scene_rng seeded from its parameters), scales through one size parameter
+ * from about a thousand to tens of millions of primitives, and sets a view
+ * in which most primary rays hit something, as in a real render.
+ *
+ * The closed meshes (cube, sphere, and the tessellated spheres of the SPD
+ * scenes) compute every vertex from integers by one expression, so a vertex
+ * shared by several triangles is bit-identical in all of them: the meshes are
+ * watertight by construction, which the stability experiments rely on.
+ */
+#include <math.h>
+#include <stdlib.h>
+
+#include "builtin.h"
+
+#define BUILTIN_PI 3.14159265358979323846
+
+int scene_check_count(const char *scene, uint64_t count, accel_error *err)
+{
+    if (count > SCENE_BUILTIN_MAX_PRIMS)
+        return accel_fail(err, ACCEL_ERR_RANGE,
+                          "scene %s: %llu primitives exceed the limit of %llu; choose a smaller size",
+                          scene, (unsigned long long)count, SCENE_BUILTIN_MAX_PRIMS);
+    return 0;
+}
+
+int scene_add_quad(scene_builder *b, vec3 a, vec3 c, vec3 d, vec3 e, accel_error *err)
+{
+    int rc = scene_builder_add_tri(b, a, c, d, err);
+    return rc ? rc : scene_builder_add_tri(b, a, d, e, err);
+}
+
+/* ---- meshes ---------------------------------------------------------------- */
+
+void scene_mesh_free(scene_mesh *m)
+{
+    free(m->verts);
+    free(m->tris);
+    m->verts = NULL;
+    m->tris = NULL;
+    m->vert_count = m->tri_count = 0;
+}
+
+static int mesh_alloc(scene_mesh *m, size_t verts, size_t tris, const char *what, accel_error *err)
+{
+    m->verts = NULL;
+    m->tris = NULL;
+    m->vert_count = m->tri_count = 0;
+    if (verts > UINT32_MAX || verts > SIZE_MAX / sizeof *m->verts || tris > SIZE_MAX / 3 / sizeof *m->tris)
+        return accel_fail(err, ACCEL_ERR_RANGE, "%s: mesh too large (%zu vertices)", what, verts);
+    m->verts = malloc(verts * sizeof *m->verts);
+    m->tris = malloc(tris * 3 * sizeof *m->tris);
+    if (!m->verts || !m->tris) {
+        scene_mesh_free(m);
+        return accel_fail(err, ACCEL_ERR_NOMEM, "%s: out of memory for %zu triangles", what, tris);
+    }
+    m->vert_count = verts;
+    m->tri_count = tris;
+    return 0;
+}
+
+/*
+ * The surface of the lattice cube {0..n}^3: face f has axis f/2 and points
+ * out along + (f even) or - (f odd). Its (n+1)^2 grid points are stored per
+ * face; a point on a cube edge is stored by every face holding it, each time
+ * computed by map() from the same integer triple, hence bit-identical.
+ */
+static int mesh_cube_lattice(scene_mesh *m, int n, int sphere, const char *what, accel_error *err)
+{
+    if (n < 1 || n > 4096)
+        return accel_fail(err, ACCEL_ERR_RANGE, "%s: %d divisions per cube edge (1..4096)", what, n);
+    size_t side = (size_t)n + 1;
+    int rc = mesh_alloc(m, 6 * side * side, 12 * (size_t)n * (size_t)n, what, err);
+    if (rc) return rc;
+    /* Lattice coordinate k as a cube coordinate in [-1, 1]; for the sphere
+     * the angle is split evenly instead (equally spaced great circles). */
+    double *coord = malloc(side * sizeof *coord);
+    if (!coord) {
+        scene_mesh_free(m);
+        return accel_fail(err, ACCEL_ERR_NOMEM, "%s: out of memory", what);
+    }
+    for (int k = 0; k <= n; k++) {
+        double c = (double)(2 * k - n) / n;
+        coord[k] = sphere ? tan(0.25 * BUILTIN_PI * c) : c;
+    }
+    dvec3 *v = m->verts;
+    uint32_t *t = m->tris;
+    for (int f = 0; f < 6; f++) {
+        int axis = f / 2, u = (axis + 1) % 3, w = (axis + 2) % 3, out = f % 2 == 0;
+        uint32_t base = (uint32_t)(v - m->verts);
+        for (int i = 0; i <= n; i++) {
+            for (int j = 0; j <= n; j++) {
+                int lattice[3];
+                lattice[axis] = out ? n : 0;
+                lattice[u] = i;
+                lattice[w] = j;
+                dvec3 p = {coord[lattice[0]], coord[lattice[1]], coord[lattice[2]]};
+                if (sphere) {
+                    double len = sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+                    p.x /= len, p.y /= len, p.z /= len;
+                }
+                *v++ = p;
+            }
+        }
+        /* e_u x e_w = e_axis, so (i,j) -> (i+1,j) -> (i+1,j+1) turns
+         * counter-clockwise seen from +axis; the - faces run it backwards. */
+        for (int i = 0; i < n; i++) {
+            for (int j = 0; j < n; j++) {
+                uint32_t c00 = base + (uint32_t)(i * side + j), c01 = c00 + 1;
+                uint32_t c10 = c00 + (uint32_t)side, c11 = c10 + 1;
+                uint32_t quad[6] = {c00, c10, c11, c00, c11, c01};
+                if (!out) quad[1] = c11, quad[2] = c10, quad[4] = c01, quad[5] = c11;
+                for (int q = 0; q < 6; q++) *t++ = quad[q];
+            }
+        }
+    }
+    free(coord);
+    return 0;
+}
+
+int scene_mesh_cube(scene_mesh *m, int n, accel_error *err)
+{
+    return mesh_cube_lattice(m, n, 0, "cube", err);
+}
+
+int scene_mesh_cube_sphere(scene_mesh *m, int n, accel_error *err)
+{
+    return mesh_cube_lattice(m, n, 1, "sphere", err);
+}
+
+int scene_mesh_uv_sphere(scene_mesh *m, int segments, accel_error *err)
+{
+    if (segments < 4 || segments > 65536)
+        return accel_fail(err, ACCEL_ERR_RANGE, "uv sphere: %d segments (4..65536)", segments);
+    size_t seg = (size_t)segments, bands = seg / 2;
+    int rc = mesh_alloc(m, 2 + (bands - 1) * seg, 2 * seg * (bands - 1), "uv sphere", err);
+    if (rc) return rc;
+    /* Vertex 0 is the +z pole, then the rings b = 1..bands-1, then -z. */
+    dvec3 *v = m->verts;
+    *v++ = (dvec3){0.0, 0.0, 1.0};
+    for (size_t b = 1; b < bands; b++) {
+        double theta = BUILTIN_PI * (double)b / (double)bands;
+        for (size_t k = 0; k < seg; k++) {
+            double phi = 2.0 * BUILTIN_PI * (double)k / (double)seg;
+            *v++ = (dvec3){sin(theta) * cos(phi), sin(theta) * sin(phi), cos(theta)};
+        }
+    }
+    *v = (dvec3){0.0, 0.0, -1.0};
+    uint32_t south = (uint32_t)(m->vert_count - 1);
+    uint32_t *t = m->tris;
+    for (size_t b = 0; b < bands; b++) {
+        for (size_t k = 0; k < seg; k++) {
+            size_t k1 = (k + 1) % seg; /* the seam reuses the first meridian */
+            uint32_t a0 = (uint32_t)(1 + (b - 1) * seg + k), a1 = (uint32_t)(1 + (b - 1) * seg + k1);
+            uint32_t c0 = (uint32_t)(1 + b * seg + k), c1 = (uint32_t)(1 + b * seg + k1);
+            if (b == 0) {
+                *t++ = 0, *t++ = c0, *t++ = c1;
+            } else if (b == bands - 1) {
+                *t++ = a0, *t++ = south, *t++ = a1;
+            } else {
+                *t++ = a0, *t++ = c0, *t++ = c1;
+                *t++ = a0, *t++ = c1, *t++ = a1;
+            }
+        }
+    }
+    return 0;
+}
+
+int scene_mesh_add(const scene_mesh *m, scene_builder *b, dvec3 centre, double scale,
+                   accel_error *err)
+{
+    int rc = scene_builder_reserve_tris(b, m->tri_count, err);
+    for (size_t i = 0; i < m->tri_count && rc == 0; i++) {
+        vec3 p[3];
+        for (int k = 0; k < 3; k++) {
+            dvec3 v = m->verts[m->tris[3 * i + k]];
+            p[k] = v3((float)(centre.x + scale * v.x), (float)(centre.y + scale * v.y),
+                      (float)(centre.z + scale * v.z));
+        }
+        rc = scene_builder_add_tri(b, p[0], p[1], p[2], err);
+    }
+    return rc;
+}
+
+static accel_camera camera(vec3 eye, vec3 look_at, vec3 up, float fov_deg)
+{
+    accel_camera c = {eye, look_at, up, fov_deg};
+    return c;
+}
+
+/* ---- cube, sphere: closed meshes for the stability suite -------------------- */
+
+enum { CUBE_N };
+static const accel_param_def cube_params[] = {
+    {"n", ACCEL_PARAM_INT, "32", 1, 4096, NULL,
+     "squares per face edge: 12*n^2 triangles on the cube [-1,1]^3"},
+};
+
+static int gen_cube(const double *values, scene_builder *b, accel_camera *cam, vec3 *light,
+                    accel_error *err)
+{
+    int n = (int)values[CUBE_N];
+    scene_mesh m;
+    int rc = scene_check_count("cube", 12ull * (uint64_t)n * (uint64_t)n, err);
+    if (rc == 0) rc = scene_mesh_cube(&m, n, err);
+    if (rc) return rc;
+    rc = scene_mesh_add(&m, b, (dvec3){0, 0, 0}, 1.0, err);
+    scene_mesh_free(&m);
+    *cam = camera(v3(2.1f, 1.7f, 2.75f), v3(0, 0, 0), v3(0, 1, 0), 40.0f);
+    *light = v3(3, 5, 4);
+    return rc;
+}
+
+static const scene_generator gen_cube_def = {
+    "cube",
+    "closed cube [-1,1]^3, n x n squares per face (watertight: shared vertices bit-identical)",
+    cube_params, sizeof cube_params / sizeof cube_params[0], gen_cube, "cube:n=16",
+};
+
+enum { SPHERE_SEGMENTS, SPHERE_TESS };
+static const accel_param_def sphere_params[] = {
+    {"segments", ACCEL_PARAM_INT, "32", 1, 4096, NULL,
+     "cube: squares per cube-face edge (12*s^2 triangles); uv: meridians (2*s*(s/2-1))"},
+    {"tess", ACCEL_PARAM_ENUM, "cube", 0, 0, "cube|uv",
+     "cube: projected cube, no poles; uv: latitude/longitude with pole fans"},
+};
+
+static int gen_sphere(const double *values, scene_builder *b, accel_camera *cam, vec3 *light,
+                      accel_error *err)
+{
+    int seg = (int)values[SPHERE_SEGMENTS];
+    int uv = values[SPHERE_TESS] == 1.0;
+    uint64_t count = uv ? 2ull * (uint64_t)seg * (uint64_t)(seg / 2 > 0 ? seg / 2 - 1 : 0)
+                        : 12ull * (uint64_t)seg * (uint64_t)seg;
+    scene_mesh m;
+    int rc = scene_check_count("sphere", count, err);
+    if (rc == 0 && uv && seg < 4)
+        rc = accel_fail(err, ACCEL_ERR_SPEC, "scene sphere: tess=uv needs segments >= 4 (got %d)",
+                        seg);
+    if (rc == 0) rc = uv ? scene_mesh_uv_sphere(&m, seg, err) : scene_mesh_cube_sphere(&m, seg, err);
+    if (rc) return rc;
+    rc = scene_mesh_add(&m, b, (dvec3){0, 0, 0}, 1.0, err);
+    scene_mesh_free(&m);
+    *cam = camera(v3(0.75f, 0.9f, 2.3f), v3(0, 0, 0), v3(0, 1, 0), 45.0f);
+    *light = v3(3, 5, 4);
+    return rc;
+}
+
+static const scene_generator gen_sphere_def = {
+    "sphere",
+    "closed unit sphere mesh (watertight: shared vertices bit-identical)",
+    sphere_params, sizeof sphere_params / sizeof sphere_params[0], gen_sphere, "sphere:segments=16",
+};
+
+/* ---- soup and slivers: random triangles in the unit cube -------------------- */
+
+/* A triangle of random shape near `centre`: each vertex offset by up to
+ * half of `size` on every axis. */
+static int add_random_tri(scene_builder *b, scene_rng *r, dvec3 centre, double size,
+                          accel_error *err)
+{
+    vec3 p[3];
+    for (int k = 0; k < 3; k++) {
+        double dx = scene_rng_uniform(r) - 0.5, dy = scene_rng_uniform(r) - 0.5,
+               dz = scene_rng_uniform(r) - 0.5;
+        p[k] = v3((float)(centre.x + size * dx), (float)(centre.y + size * dy),
+                  (float)(centre.z + size * dz));
+    }
+    return scene_builder_add_tri(b, p[0], p[1], p[2], err);
+}
+
+static dvec3 random_point(scene_rng *r)
+{
+    double x = scene_rng_uniform(r), y = scene_rng_uniform(r), z = scene_rng_uniform(r);
+    return (dvec3){x, y, z};
+}
+
+/* Looking into the unit cube from outside, its front faces filling the view. */
+static void cube_view(accel_camera *cam, vec3 *light)
+{
+    *cam = camera(v3(1.23f, 1.15f, 2.13f), v3(0.5f, 0.5f, 0.5f), v3(0, 1, 0), 36.0f);
+    *light = v3(2.0f, 3.0f, 2.5f);
+}
+
+enum { SOUP_TRIS, SOUP_SIZE, SOUP_SEED };
+static const accel_param_def soup_params[] = {
+    {"tris", ACCEL_PARAM_INT, "100000", 1, 4e9, NULL, "number of triangles"},
+    {"size", ACCEL_PARAM_FLOAT, "1", 1e-3, 1e3, NULL,
+     "triangle extent per axis, in mean spacings (1/cbrt(tris))"},
+    {"seed", ACCEL_PARAM_INT, "1", 0, 4e9, NULL, "random seed"},
+};
+
+static int gen_soup(const double *values, scene_builder *b, accel_camera *cam, vec3 *light,
+                    accel_error *err)
+{
+    uint64_t n = (uint64_t)values[SOUP_TRIS];
+    double size = values[SOUP_SIZE] / cbrt((double)n);
+    scene_rng r = {(uint64_t)values[SOUP_SEED] * 0xD1B54A32D192ED03ull ^ 0x50u};
+    int rc = scene_check_count("soup", n, err);
+    if (rc == 0) rc = scene_builder_reserve_tris(b, (size_t)n, err);
+    for (uint64_t i = 0; i < n && rc == 0; i++) rc = add_random_tri(b, &r, random_point(&r), size, err);
+    cube_view(cam, light);
+    return rc;
+}
+
+static const scene_generator gen_soup_def = {
+    "soup",
+    "random small triangles uniformly filling the unit cube",
+    soup_params, sizeof soup_params / sizeof soup_params[0], gen_soup, "soup:tris=3000",
+};
+
+/*
+ * Slivers: `slivers` needles from a random point of one face of the unit
+ * cube to a random point of the opposite face, `width` mean spacings wide at
+ * their start, among `tris` small random triangles (as in soup). Every
+ * needle crosses the whole scene: a uniform grid sized for the small
+ * triangles stores each needle in about cbrt(tris) cells.
+ */
+enum { SLIV_TRIS, SLIV_SLIVERS, SLIV_SIZE, SLIV_WIDTH, SLIV_SEED };
+static const accel_param_def sliver_params[] = {
+    {"tris", ACCEL_PARAM_INT, "50000", 0, 4e9, NULL, "number of small triangles"},
+    {"slivers", ACCEL_PARAM_INT, "1000", 0, 4e9, NULL, "number of long thin triangles"},
+    {"size", ACCEL_PARAM_FLOAT, "1", 1e-3, 1e3, NULL,
+     "small triangle extent per axis, in mean spacings (1/cbrt(tris))"},
+    {"width", ACCEL_PARAM_FLOAT, "0.5", 1e-6, 1e3, NULL, "sliver width, in mean spacings"},
+    {"seed", ACCEL_PARAM_INT, "1", 0, 4e9, NULL, "random seed"},
+};
+
+static int gen_slivers(const double *values, scene_builder *b, accel_camera *cam, vec3 *light,
+                       accel_error *err)
+{
+    uint64_t n = (uint64_t)values[SLIV_TRIS], ns = (uint64_t)values[SLIV_SLIVERS];
+    double spacing = 1.0 / cbrt((double)(n ? n : 1));
+    double size = values[SLIV_SIZE] * spacing, width = values[SLIV_WIDTH] * spacing;
+    scene_rng r = {(uint64_t)values[SLIV_SEED] * 0xD1B54A32D192ED03ull ^ 0x51u};
+    int rc = scene_check_count("slivers", n + ns, err);
+    if (rc == 0 && n + ns == 0)
+        rc = accel_fail(err, ACCEL_ERR_SPEC, "scene slivers: tris and slivers are both 0");
+    if (rc == 0) rc = scene_builder_reserve_tris(b, (size_t)(n + ns), err);
+    for (uint64_t i = 0; i < n && rc == 0; i++) rc = add_random_tri(b, &r, random_point(&r), size, err);
+    for (uint64_t i = 0; i < ns && rc == 0; i++) {
+        int axis = (int)(scene_rng_next(&r) % 3);
+        dvec3 p = random_point(&r), q = random_point(&r);
+        double *pa = axis == 0 ? &p.x : axis == 1 ? &p.y : &p.z;
+        double *qa = axis == 0 ? &q.x : axis == 1 ? &q.y : &q.z;
+        *pa = 0.0, *qa = 1.0;
+        if (scene_rng_next(&r) & 1) *pa = 1.0, *qa = 0.0;
+        /* The wide end: p moved by `width` in a random direction (rejection
+         * sampling of the unit ball). */
+        dvec3 d;
+        double len2;
+        do {
+            d = random_point(&r);
+            d.x = 2 * d.x - 1, d.y = 2 * d.y - 1, d.z = 2 * d.z - 1;
+            len2 = d.x * d.x + d.y * d.y + d.z * d.z;
+        } while (len2 > 1.0 || len2 < 1e-6);
+        double s = width / sqrt(len2);
+        vec3 e = v3((float)(p.x + s * d.x), (float)(p.y + s * d.y), (float)(p.z + s * d.z));
+        rc = scene_builder_add_tri(b, dvec3_to_float(p), dvec3_to_float(q), e, err);
+    }
+    cube_view(cam, light);
+    return rc;
+}
+
+static const scene_generator gen_slivers_def = {
+    "slivers",
+    "long thin triangles spanning the unit cube among many small ones (a grid's worst case)",
+    sliver_params, sizeof sliver_params / sizeof sliver_params[0], gen_slivers,
+    "slivers:tris=3000,slivers=100",
+};
+
+/* ---- teapot in a stadium ---------------------------------------------------- */
+
+/*
+ * Haines' "teapot in a stadium": a small detailed object inside a huge
+ * sparse one, the classic case where a uniform grid sized by the primitive
+ * count puts the whole teapot in a cell or two. The teapot (about 6.5 units
+ * long) stands at the centre of a round field of radius 3000 (1 cell = 1
+ * floor triangle of a fan of `stadium` slices); around it `tiers` steps of
+ * 50 units rise 40 units apart, a bowl 8000 units across: about 1200 times
+ * the teapot. The field lies 0.01 below the teapot so that the teapot's
+ * bottom does not coincide with it.
+ */
+#define STADIUM_FIELD_RADIUS 3000.0
+#define STADIUM_TIER_DEPTH 40.0  /* units, radial */
+#define STADIUM_TIER_HEIGHT 50.0 /* units */
+#define STADIUM_FIELD_Z (-0.01)
+
+enum { TS_N, TS_STADIUM, TS_TIERS };
+static const accel_param_def stadium_params[] = {
+    {"n", ACCEL_PARAM_INT, "32", 1, 8192, NULL,
+     "teapot quads per patch side: 64*n^2-8*n triangles"},
+    {"stadium", ACCEL_PARAM_INT, "128", 3, 1 << 20, NULL,
+     "stadium slices around: stadium*(1+4*tiers) triangles"},
+    {"tiers", ACCEL_PARAM_INT, "24", 0, 1000, NULL, "steps of the stadium bowl"},
+};
+
+static vec3 ring_point(double radius, double c, double s, double z)
+{
+    return v3((float)(radius * c), (float)(radius * s), (float)z);
+}
+
+static int add_stadium(scene_builder *b, int slices, int tiers, accel_error *err)
+{
+    double *cs = malloc(2 * (size_t)slices * sizeof *cs);
+    if (!cs) return accel_fail(err, ACCEL_ERR_NOMEM, "teapot_stadium: out of memory");
+    for (int j = 0; j < slices; j++) {
+        double phi = 2.0 * BUILTIN_PI * j / slices;
+        cs[2 * j] = cos(phi);
+        cs[2 * j + 1] = sin(phi);
+    }
+    int rc = 0;
+    vec3 centre = v3(0, 0, (float)STADIUM_FIELD_Z);
+    for (int j = 0; j < slices && rc == 0; j++) {
+        const double *a = cs + 2 * j, *c = cs + 2 * ((j + 1) % slices);
+        rc = scene_builder_add_tri(b, centre, ring_point(STADIUM_FIELD_RADIUS, a[0], a[1], STADIUM_FIELD_Z),
+                                   ring_point(STADIUM_FIELD_RADIUS, c[0], c[1], STADIUM_FIELD_Z), err);
+    }
+    for (int k = 0; k < tiers && rc == 0; k++) {
+        double r0 = STADIUM_FIELD_RADIUS + k * STADIUM_TIER_DEPTH, r1 = r0 + STADIUM_TIER_DEPTH;
+        double z0 = STADIUM_FIELD_Z + k * STADIUM_TIER_HEIGHT, z1 = z0 + STADIUM_TIER_HEIGHT;
+        for (int j = 0; j < slices && rc == 0; j++) {
+            const double *a = cs + 2 * j, *c = cs + 2 * ((j + 1) % slices);
+            /* Riser facing the field, then the tread facing up. */
+            rc = scene_add_quad(b, ring_point(r0, a[0], a[1], z0), ring_point(r0, a[0], a[1], z1),
+                                ring_point(r0, c[0], c[1], z1), ring_point(r0, c[0], c[1], z0), err);
+            if (rc == 0)
+                rc = scene_add_quad(b, ring_point(r0, a[0], a[1], z1), ring_point(r1, a[0], a[1], z1),
+                                    ring_point(r1, c[0], c[1], z1), ring_point(r0, c[0], c[1], z1),
+                                    err);
+        }
+    }
+    free(cs);
+    return rc;
+}
+
+static int gen_teapot_stadium(const double *values, scene_builder *b, accel_camera *cam,
+                              vec3 *light, accel_error *err)
+{
+    int n = (int)values[TS_N], slices = (int)values[TS_STADIUM], tiers = (int)values[TS_TIERS];
+    uint64_t stadium = (uint64_t)slices * (1ull + 4ull * (uint64_t)tiers);
+    uint64_t count = scene_teapot_tri_count(n) + stadium;
+    int rc = scene_check_count("teapot_stadium", count, err);
+    if (rc == 0) rc = scene_builder_reserve_tris(b, (size_t)count, err);
+    if (rc == 0) rc = scene_teapot_add(b, n, err);
+    if (rc == 0) rc = add_stadium(b, slices, tiers, err);
+    /* Close to the teapot, a little above it: the teapot fills the middle of
+     * the frame, the field and the lower tiers the rest. */
+    *cam = camera(v3(-4.4f, -7.8f, 3.4f), v3(0.2f, 0.0f, 1.3f), v3(0, 0, 1), 40.0f);
+    *light = v3(-1500.0f, -2500.0f, 4000.0f);
+    return rc;
+}
+
+static const scene_generator gen_teapot_stadium_def = {
+    "teapot_stadium",
+    "Newell's teapot at the centre of a stadium 1000x its size (the case that defeats grids)",
+    stadium_params, sizeof stadium_params / sizeof stadium_params[0], gen_teapot_stadium,
+    "teapot_stadium:n=6,stadium=32,tiers=4",
+};
+
+/* ---- the table -------------------------------------------------------------- */
+
+const scene_generator *const scene_generators[] = {
+    &scene_gen_sphereflake, &scene_gen_tetra, &scene_gen_mount, &gen_soup_def,
+    &gen_teapot_stadium_def, &gen_slivers_def, &gen_cube_def, &gen_sphere_def,
+};
+const size_t scene_generator_count = sizeof scene_generators / sizeof scene_generators[0];
