@@ -132,6 +132,25 @@ int load_fail_eof(const load_text *t, const char *fmt, ...)
                       msg);
 }
 
+int load_prefix(accel_error *err, int rc, const char *fmt, ...)
+{
+    if (!err) return rc;
+    char where[300];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(where, sizeof where, fmt, ap);
+    va_end(ap);
+    size_t wl = strlen(where), cap = sizeof err->msg;
+    if (wl + 3 > cap) return rc;
+    size_t ml = strnlen(err->msg, cap - 1);
+    if (ml > cap - 1 - (wl + 2)) ml = cap - 1 - (wl + 2); /* truncate the old message */
+    memmove(err->msg + wl + 2, err->msg, ml);
+    memcpy(err->msg, where, wl);
+    memcpy(err->msg + wl, ": ", 2);
+    err->msg[wl + 2 + ml] = 0;
+    return rc;
+}
+
 void load_token_text(const char *p, const char *end, char *buf, size_t size)
 {
     size_t n = 0;

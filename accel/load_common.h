@@ -59,6 +59,11 @@ int load_fail_eof(const load_text *t, const char *fmt, ...) __attribute__((forma
 /* "name:line: expected WHAT, found 'TOKEN'" (or "found end of line / end of file") */
 int load_fail_expected(const load_text *t, const char *what);
 
+/* Puts a location (formatted by fmt: "name:line", "name: byte N") before
+ * the message another module set in err (the scene builder's "out of
+ * memory"), so that every loader error names the file. Returns rc. */
+int load_prefix(accel_error *err, int rc, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+
 /* Copies the token at p (up to a delimiter, at most 40 characters) into buf
  * with non-printable bytes escaped as \xNN, for messages. */
 void load_token_text(const char *p, const char *end, char *buf, size_t size);

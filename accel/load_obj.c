@@ -154,7 +154,7 @@ static int parse_face(load_text *t, const vertex_list *vl, scene_builder *b)
         if (n == 0) first = i;
         if (n >= 2) {
             int rc = load_add_tri(b, vl->v, first, prev, i, t->err);
-            if (rc) return rc;
+            if (rc) return load_prefix(t->err, rc, "%s:%zu", t->name, t->line);
         }
         prev = i;
         n++;

@@ -95,9 +95,13 @@ static int parse_off(load_text *t, scene_builder *b, float **verts_out)
                          (long long)nv, (long long)nf, (size_t)(t->end - t->p));
     }
     float *v = malloc(nv ? (size_t)nv * 3 * sizeof *v : 1);
-    if (!v) return load_fail(t, ACCEL_ERR_NOMEM, "out of memory for %lld vertices", (long long)nv);
+    if (!v) {
+        t->line = counts_line;
+        return load_fail(t, ACCEL_ERR_NOMEM, "out of memory for %lld vertices", (long long)nv);
+    }
     *verts_out = v;
-    if ((rc = scene_builder_reserve_tris(b, (size_t)nf, t->err))) return rc;
+    if ((rc = scene_builder_reserve_tris(b, (size_t)nf, t->err)))
+        return load_prefix(t->err, rc, "%s:%zu", t->name, counts_line);
 
     static const char *const axis[3] = {"x coordinate", "y coordinate", "z coordinate"};
     for (int64_t i = 0; i < nv; i++) {
@@ -134,7 +138,8 @@ static int parse_off(load_text *t, scene_builder *b, float **verts_out)
                                  (long long)idx, (long long)nv);
             size_t i = (size_t)idx;
             if (k == 0) first = i;
-            if (k >= 2 && (rc = load_add_tri(b, v, first, prev, i, t->err))) return rc;
+            if (k >= 2 && (rc = load_add_tri(b, v, first, prev, i, t->err)))
+                return load_prefix(t->err, rc, "%s:%zu", t->name, t->line);
             prev = i;
         }
         load_next_line(t); /* optional face colour */

@@ -374,7 +374,7 @@ static int ascii_element(ply_file *f, const ply_elem *e, scene_builder *b)
                                      (long long)idx, f->vert_count);
                 if (k == 0) first = (size_t)idx;
                 if (k >= 2 && (rc = load_add_tri(b, f->verts, first, prev, (size_t)idx, t->err)))
-                    return rc;
+                    return load_prefix(t->err, rc, "%s:%zu", t->name, t->line);
                 prev = (size_t)idx;
             }
         }
@@ -502,7 +502,9 @@ static int binary_element(ply_file *f, const ply_elem *e, scene_builder *b)
                 if (k == 0) first = (size_t)idx;
                 if (k >= 2) {
                     int rc = load_add_tri(b, f->verts, first, prev, (size_t)idx, f->t.err);
-                    if (rc) return rc;
+                    if (rc)
+                        return load_prefix(f->t.err, rc, "%s: byte %zu", f->t.name,
+                                           (size_t)(p - f->t.begin));
                 }
                 prev = (size_t)idx;
             }
@@ -541,12 +543,14 @@ static int parse_ply(ply_file *f, scene_builder *b)
             /* check_header bounded the count by the file size */
             f->verts = malloc(e->count ? (size_t)e->count * 3 * sizeof(float) : 1);
             if (!f->verts)
-                return accel_fail(f->t.err, ACCEL_ERR_NOMEM, "%s: out of memory for %llu vertices",
-                                  f->t.name, (unsigned long long)e->count);
+                return accel_fail(f->t.err, ACCEL_ERR_NOMEM, "%s:%zu: out of memory for %llu vertices",
+                                  f->t.name, e->line, (unsigned long long)e->count);
             f->vert_count = (size_t)e->count;
         }
-        if (e == f->face && (rc = scene_builder_reserve_tris(b, (size_t)e->count, f->t.err)))
-            return rc;
+        if (e == f->face && (rc = scene_builder_reserve_tris(b, (size_t)e->count, f->t.err))) {
+            f->t.line = e->line;
+            return load_prefix(f->t.err, rc, "%s:%zu", f->t.name, e->line);
+        }
         rc = f->format == PLY_ASCII ? ascii_element(f, e, b) : binary_element(f, e, b);
         if (rc) return rc;
     }

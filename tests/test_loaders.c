@@ -508,6 +508,19 @@ TEST(loader_rejects_malformed_input)
     }
 }
 
+TEST(loader_error_prefix)
+{
+    /* errors from the scene builder get the file and line put before them */
+    accel_error err = {0};
+    accel_fail(&err, ACCEL_ERR_NOMEM, "out of memory growing a scene");
+    CHECK(load_prefix(&err, ACCEL_ERR_NOMEM, "%s:%d", "a.obj", 3) == ACCEL_ERR_NOMEM);
+    CHECKF(!strcmp(err.msg, "a.obj:3: out of memory growing a scene"), "%s", err.msg);
+    memset(err.msg, 'x', sizeof err.msg - 1);
+    err.msg[sizeof err.msg - 1] = 0;
+    load_prefix(&err, 1, "%s: byte %d", "b.ply", 12);
+    CHECK(!strncmp(err.msg, "b.ply: byte 12: xxx", 19) && strlen(err.msg) == sizeof err.msg - 1);
+}
+
 /* Offset of the first byte after "end_header\n" (or \r\n). */
 static size_t data_offset(const bin_writer *w)
 {
