@@ -24,7 +24,8 @@ int scene_check_count(const char *scene, uint64_t count, accel_error *err)
 {
     if (count > SCENE_BUILTIN_MAX_PRIMS)
         return accel_fail(err, ACCEL_ERR_RANGE,
-                          "scene %s: %llu primitives exceed the limit of %llu; choose a smaller size",
+                          "scene %s: %llu primitives exceed the limit of %llu; "
+                          "choose a smaller size",
                           scene, (unsigned long long)count, SCENE_BUILTIN_MAX_PRIMS);
     return 0;
 }
@@ -51,7 +52,8 @@ static int mesh_alloc(scene_mesh *m, size_t verts, size_t tris, const char *what
     m->verts = NULL;
     m->tris = NULL;
     m->vert_count = m->tri_count = 0;
-    if (verts > UINT32_MAX || verts > SIZE_MAX / sizeof *m->verts || tris > SIZE_MAX / 3 / sizeof *m->tris)
+    if (verts > UINT32_MAX || verts > SIZE_MAX / sizeof *m->verts ||
+        tris > SIZE_MAX / 3 / sizeof *m->tris)
         return accel_fail(err, ACCEL_ERR_RANGE, "%s: mesh too large (%zu vertices)", what, verts);
     m->verts = malloc(verts * sizeof *m->verts);
     m->tris = malloc(tris * 3 * sizeof *m->tris);
@@ -73,7 +75,8 @@ static int mesh_alloc(scene_mesh *m, size_t verts, size_t tris, const char *what
 static int mesh_cube_lattice(scene_mesh *m, int n, int sphere, const char *what, accel_error *err)
 {
     if (n < 1 || n > 4096)
-        return accel_fail(err, ACCEL_ERR_RANGE, "%s: %d divisions per cube edge (1..4096)", what, n);
+        return accel_fail(err, ACCEL_ERR_RANGE, "%s: %d divisions per cube edge (1..4096)", what,
+                          n);
     size_t side = (size_t)n + 1;
     int rc = mesh_alloc(m, 6 * side * side, 12 * (size_t)n * (size_t)n, what, err);
     if (rc) return rc;
@@ -156,8 +159,10 @@ int scene_mesh_uv_sphere(scene_mesh *m, int segments, accel_error *err)
     for (size_t b = 0; b < bands; b++) {
         for (size_t k = 0; k < seg; k++) {
             size_t k1 = (k + 1) % seg; /* the seam reuses the first meridian */
-            uint32_t a0 = (uint32_t)(1 + (b - 1) * seg + k), a1 = (uint32_t)(1 + (b - 1) * seg + k1);
-            uint32_t c0 = (uint32_t)(1 + b * seg + k), c1 = (uint32_t)(1 + b * seg + k1);
+            /* ring b (above, unused for b = 0) and ring b + 1 (below) */
+            size_t above = 1 + (b - 1) * seg, below = 1 + b * seg;
+            uint32_t a0 = (uint32_t)(above + k), a1 = (uint32_t)(above + k1);
+            uint32_t c0 = (uint32_t)(below + k), c1 = (uint32_t)(below + k1);
             if (b == 0) {
                 *t++ = 0, *t++ = c0, *t++ = c1;
             } else if (b == bands - 1) {
@@ -242,7 +247,8 @@ static int gen_sphere(const double *values, scene_builder *b, accel_camera *cam,
     if (rc == 0 && uv && seg < 4)
         rc = accel_fail(err, ACCEL_ERR_SPEC, "scene sphere: tess=uv needs segments >= 4 (got %d)",
                         seg);
-    if (rc == 0) rc = uv ? scene_mesh_uv_sphere(&m, seg, err) : scene_mesh_cube_sphere(&m, seg, err);
+    if (rc == 0)
+        rc = uv ? scene_mesh_uv_sphere(&m, seg, err) : scene_mesh_cube_sphere(&m, seg, err);
     if (rc) return rc;
     rc = scene_mesh_add(&m, b, (dvec3){0, 0, 0}, 1.0, err);
     scene_mesh_free(&m);
@@ -303,7 +309,8 @@ static int gen_soup(const double *values, scene_builder *b, accel_camera *cam, v
     scene_rng r = {(uint64_t)values[SOUP_SEED] * 0xD1B54A32D192ED03ull ^ 0x50u};
     int rc = scene_check_count("soup", n, err);
     if (rc == 0) rc = scene_builder_reserve_tris(b, (size_t)n, err);
-    for (uint64_t i = 0; i < n && rc == 0; i++) rc = add_random_tri(b, &r, random_point(&r), size, err);
+    for (uint64_t i = 0; i < n && rc == 0; i++)
+        rc = add_random_tri(b, &r, random_point(&r), size, err);
     cube_view(cam, light);
     return rc;
 }
@@ -342,7 +349,8 @@ static int gen_slivers(const double *values, scene_builder *b, accel_camera *cam
     if (rc == 0 && n + ns == 0)
         rc = accel_fail(err, ACCEL_ERR_SPEC, "scene slivers: tris and slivers are both 0");
     if (rc == 0) rc = scene_builder_reserve_tris(b, (size_t)(n + ns), err);
-    for (uint64_t i = 0; i < n && rc == 0; i++) rc = add_random_tri(b, &r, random_point(&r), size, err);
+    for (uint64_t i = 0; i < n && rc == 0; i++)
+        rc = add_random_tri(b, &r, random_point(&r), size, err);
     for (uint64_t i = 0; i < ns && rc == 0; i++) {
         int axis = (int)(scene_rng_next(&r) % 3);
         dvec3 p = random_point(&r), q = random_point(&r);
@@ -415,11 +423,11 @@ static int add_stadium(scene_builder *b, int slices, int tiers, accel_error *err
         cs[2 * j + 1] = sin(phi);
     }
     int rc = 0;
-    vec3 centre = v3(0, 0, (float)STADIUM_FIELD_Z);
+    const double field = STADIUM_FIELD_RADIUS, zf = STADIUM_FIELD_Z;
     for (int j = 0; j < slices && rc == 0; j++) {
         const double *a = cs + 2 * j, *c = cs + 2 * ((j + 1) % slices);
-        rc = scene_builder_add_tri(b, centre, ring_point(STADIUM_FIELD_RADIUS, a[0], a[1], STADIUM_FIELD_Z),
-                                   ring_point(STADIUM_FIELD_RADIUS, c[0], c[1], STADIUM_FIELD_Z), err);
+        rc = scene_builder_add_tri(b, v3(0, 0, (float)zf), ring_point(field, a[0], a[1], zf),
+                                   ring_point(field, c[0], c[1], zf), err);
     }
     for (int k = 0; k < tiers && rc == 0; k++) {
         double r0 = STADIUM_FIELD_RADIUS + k * STADIUM_TIER_DEPTH, r1 = r0 + STADIUM_TIER_DEPTH;
@@ -427,12 +435,11 @@ static int add_stadium(scene_builder *b, int slices, int tiers, accel_error *err
         for (int j = 0; j < slices && rc == 0; j++) {
             const double *a = cs + 2 * j, *c = cs + 2 * ((j + 1) % slices);
             /* Riser facing the field, then the tread facing up. */
-            rc = scene_add_quad(b, ring_point(r0, a[0], a[1], z0), ring_point(r0, a[0], a[1], z1),
-                                ring_point(r0, c[0], c[1], z1), ring_point(r0, c[0], c[1], z0), err);
-            if (rc == 0)
-                rc = scene_add_quad(b, ring_point(r0, a[0], a[1], z1), ring_point(r1, a[0], a[1], z1),
-                                    ring_point(r1, c[0], c[1], z1), ring_point(r0, c[0], c[1], z1),
-                                    err);
+            vec3 in_a0 = ring_point(r0, a[0], a[1], z0), in_c0 = ring_point(r0, c[0], c[1], z0);
+            vec3 in_a1 = ring_point(r0, a[0], a[1], z1), in_c1 = ring_point(r0, c[0], c[1], z1);
+            vec3 out_a1 = ring_point(r1, a[0], a[1], z1), out_c1 = ring_point(r1, c[0], c[1], z1);
+            rc = scene_add_quad(b, in_a0, in_a1, in_c1, in_c0, err);
+            if (rc == 0) rc = scene_add_quad(b, in_a1, out_a1, out_c1, in_c1, err);
         }
     }
     free(cs);

@@ -168,7 +168,8 @@ static int gen_sphereflake(const double *values, scene_builder *b, accel_camera 
     int segments = (int)values[FLAKE_SEGMENTS];
     uint64_t count = 1;
     for (int i = 0; i < level; i++) count = count * 9 + 1;
-    uint64_t prims = 2 + (spheres ? count : count * 12ull * (uint64_t)segments * (uint64_t)segments);
+    uint64_t per_sphere = spheres ? 1 : 12ull * (uint64_t)segments * (uint64_t)segments;
+    uint64_t prims = 2 + count * per_sphere;
     int rc = scene_check_count("sphereflake", prims, err);
     if (rc) return rc;
     if (!spheres) rc = scene_builder_reserve_tris(b, (size_t)prims, err);
@@ -346,13 +347,22 @@ typedef struct {
     accel_error *err;
 } mount_ctx;
 
+/* The Gaussian displacement at grid point (x, y): a function of the point
+ * alone, so both squares sharing an edge displace its midpoint alike. */
+static double mount_gauss(const mount_ctx *m, int x, int y)
+{
+    return spd_gauss(MOUNT_NO + mount_hash(x, y, m->level));
+}
+
 static int mount_grow(mount_ctx *m, int width, int llx, int lly, double ll, double lr, double ur,
                       double ul)
 {
     if (width == 1) {
         /* Corners at -1 + 2 * index / fnum: exact (fnum is a power of two). */
-        float lx = (float)(-1.0 + llx * 2.0 / m->fnum), rx = (float)(-1.0 + (llx + 1) * 2.0 / m->fnum);
-        float ly = (float)(-1.0 + lly * 2.0 / m->fnum), uy = (float)(-1.0 + (lly + 1) * 2.0 / m->fnum);
+        float lx = (float)(-1.0 + llx * 2.0 / m->fnum);
+        float rx = (float)(-1.0 + (llx + 1) * 2.0 / m->fnum);
+        float ly = (float)(-1.0 + lly * 2.0 / m->fnum);
+        float uy = (float)(-1.0 + (lly + 1) * 2.0 / m->fnum);
         vec3 p0 = v3(lx, ly, (float)ll), p1 = v3(rx, ly, (float)lr), p2 = v3(rx, uy, (float)ur),
              p3 = v3(lx, uy, (float)ul);
         int rc = scene_builder_add_tri(m->b, p0, p1, p2, m->err);
@@ -360,14 +370,12 @@ static int mount_grow(mount_ctx *m, int width, int llx, int lly, double ll, doub
     }
     int half = width >> 1;
     double rise = (double)half * 2.0 / m->fnum * m->roughness;
-    double lower = (ll + lr) / 2.0 + rise * spd_gauss(MOUNT_NO + mount_hash(llx + half, lly, m->level));
-    double right =
-        (lr + ur) / 2.0 + rise * spd_gauss(MOUNT_NO + mount_hash(llx + width, lly + half, m->level));
-    double upper =
-        (ur + ul) / 2.0 + rise * spd_gauss(MOUNT_NO + mount_hash(llx + half, lly + width, m->level));
-    double left = (ul + ll) / 2.0 + rise * spd_gauss(MOUNT_NO + mount_hash(llx, lly + half, m->level));
-    double middle = (ll + lr + ur + ul) / 4.0 +
-                    1.4142136 * rise * spd_gauss(MOUNT_NO + mount_hash(llx + half, lly + half, m->level));
+    double lower = (ll + lr) / 2.0 + rise * mount_gauss(m, llx + half, lly);
+    double right = (lr + ur) / 2.0 + rise * mount_gauss(m, llx + width, lly + half);
+    double upper = (ur + ul) / 2.0 + rise * mount_gauss(m, llx + half, lly + width);
+    double left = (ul + ll) / 2.0 + rise * mount_gauss(m, llx, lly + half);
+    double middle =
+        (ll + lr + ur + ul) / 4.0 + 1.4142136 * rise * mount_gauss(m, llx + half, lly + half);
     int rc = mount_grow(m, half, llx, lly, ll, lower, middle, left);
     if (rc == 0) rc = mount_grow(m, half, llx + half, lly, lower, lr, right, middle);
     if (rc == 0) rc = mount_grow(m, half, llx + half, lly + half, middle, right, ur, upper);

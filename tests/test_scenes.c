@@ -354,8 +354,8 @@ static double hit_fraction(const accel_scene *s, const accel_ray *rays, size_t n
 }
 
 /* Every default view shows mostly geometry (the SPD scenes keep the SPD's
- * views: 34% background for mount, 81% for tetra by the SPD's own count). Default sizes, since a soup only
- * becomes opaque with enough triangles. */
+ * views: 34% background for mount, 81% for tetra by the SPD's own count).
+ * Default sizes, since a soup only becomes opaque with enough triangles. */
 TEST(scenes_default_views_hit)
 {
     for (size_t i = 0; i < scene_generator_count; i++) {
@@ -381,7 +381,8 @@ TEST(scenes_default_views_hit)
  * mount 173125, tetra 49788, at their default sizes 4, 6, 6, "within about
  * 10%" for any ray tracer. All 513 x 513 rays through the reference here give
  * balls 263169, mount 173686 (+0.3%), tetra 49949 (+0.3%). The test traces
- * every 4th ray of each row and column.
+ * every 8th ray of each row and column (65 x 65 rays: 4225, 2729 and 780
+ * hits, within 2.5% of the published rates).
  */
 static double spd_corner_hits(const accel_scene *s, int stride)
 {
@@ -421,7 +422,7 @@ TEST(scenes_spd_published_eye_hits)
     for (size_t i = 0; i < sizeof spd / sizeof spd[0]; i++) {
         accel_scene s;
         if (make(spd[i].spec, &s)) continue;
-        double want = spd[i].hits / (513.0 * 513.0), got = spd_corner_hits(&s, 4);
+        double want = spd[i].hits / (513.0 * 513.0), got = spd_corner_hits(&s, 8);
         CHECKF(fabs(got - want) <= 0.05 * want, "%s: %.4f of eye rays hit, the SPD has %.4f",
                spd[i].spec, got, want);
         scene_free(&s);
