@@ -37,6 +37,8 @@ static inline int accel_prep_ray(const accel_ray *r, accel_ray_prep *p)
     p->dir = v3(r->dx, r->dy, r->dz);
     p->t_near = r->t_near;
     p->t_far = r->t_far;
+    p->kx = 0, p->ky = 1, p->kz = 2;
+    p->sx = p->sy = p->sz = 0.0f;
     if (!(isfinite(r->ox) && isfinite(r->oy) && isfinite(r->oz) && isfinite(r->dx) &&
           isfinite(r->dy) && isfinite(r->dz)))
         return 0;
@@ -61,7 +63,109 @@ static inline int accel_prep_ray(const accel_ray *r, accel_ray_prep *p)
 
 static inline float v3_idx(vec3 a, int i) { return i == 0 ? a.x : (i == 1 ? a.y : a.z); }
 
-/* Watertight triangle test. On a hit within [t_near, *t] stores t, u, v and returns 1. */
+/* ---- double precision: the reference's arithmetic ------------------------
+ * The oracle (reference.c) runs these on every primitive. The float kernels
+ * below fall back to them whenever their own rounding could change an
+ * inside/outside decision, so that a float kernel and the reference decide
+ * every ray through an edge, a vertex or a silhouette the same way. */
+typedef struct {
+    double o[3], d[3];
+    int kx, ky, kz;
+    double sx, sy, sz;
+    double t_near;
+} accel_ray_d;
+
+static inline void accel_prep_ray_d(const accel_ray_prep *p, accel_ray_d *r)
+{
+    r->o[0] = p->org.x, r->o[1] = p->org.y, r->o[2] = p->org.z;
+    r->d[0] = p->dir.x, r->d[1] = p->dir.y, r->d[2] = p->dir.z;
+    r->kx = p->kx, r->ky = p->ky, r->kz = p->kz;
+    r->sx = r->d[r->kx] / r->d[r->kz];
+    r->sy = r->d[r->ky] / r->d[r->kz];
+    r->sz = 1.0 / r->d[r->kz];
+    r->t_near = p->t_near;
+}
+
+/* Watertight test (Woop et al. 2013) in double; hit if t in [t_near, *t]. */
+static inline int accel_tri_watertight_d(const accel_ray_d *r, const float *tri, double *t,
+                                         double *u, double *v)
+{
+    double a[3], b[3], c[3];
+    for (int i = 0; i < 3; i++) {
+        a[i] = (double)tri[i] - r->o[i];
+        b[i] = (double)tri[3 + i] - r->o[i];
+        c[i] = (double)tri[6 + i] - r->o[i];
+    }
+    double ax = a[r->kx] - r->sx * a[r->kz], ay = a[r->ky] - r->sy * a[r->kz];
+    double bx = b[r->kx] - r->sx * b[r->kz], by = b[r->ky] - r->sy * b[r->kz];
+    double cx = c[r->kx] - r->sx * c[r->kz], cy = c[r->ky] - r->sy * c[r->kz];
+    double U = cx * by - cy * bx, V = ax * cy - ay * cx, W = bx * ay - by * ax;
+    if ((U < 0 || V < 0 || W < 0) && (U > 0 || V > 0 || W > 0)) return 0;
+    double det = U + V + W;
+    if (det == 0.0) return 0;
+    double tt = (U * a[r->kz] + V * b[r->kz] + W * c[r->kz]) * r->sz / det;
+    if (!(tt >= r->t_near && tt <= *t)) return 0;
+    *t = tt;
+    *u = V / det;
+    *v = W / det;
+    return 1;
+}
+
+/* Ray/sphere in double, same formulation as the float test below. */
+static inline int accel_sphere_hit_d(const accel_ray_d *r, const float *s, double *t)
+{
+    double f[3], a = 0, b = 0, ff = 0;
+    for (int i = 0; i < 3; i++) {
+        f[i] = r->o[i] - (double)s[i];
+        a += r->d[i] * r->d[i];
+        b -= f[i] * r->d[i];
+        ff += f[i] * f[i];
+    }
+    double rr = (double)s[3] * s[3], l2 = 0;
+    for (int i = 0; i < 3; i++) {
+        double l = f[i] + r->d[i] * (b / a);
+        l2 += l * l;
+    }
+    double disc = rr - l2;
+    if (disc < 0) return 0;
+    double q = b + copysign(sqrt(a * disc), b);
+    double t0 = q / a, t1 = q != 0 ? (ff - rr) / q : t0;
+    if (t0 > t1) { double x = t0; t0 = t1; t1 = x; }
+    double tt = t0 >= r->t_near ? t0 : t1;
+    if (!(tt >= r->t_near && tt <= *t)) return 0;
+    *t = tt;
+    return 1;
+}
+
+/* Bound on the float error of an edge function, relative to the magnitudes
+ * of its inputs: 16 * 2^-24 covers the origin subtraction, the shear and the
+ * 2x2 determinant (about 11 units of roundoff; see Shewchuk, "Adaptive
+ * Precision Floating-Point Arithmetic and Fast Robust Geometric Predicates",
+ * 1997, for the filter idea). */
+#define ACCEL_EDGE_FILTER (16.0f * 0x1p-24f)
+
+static int accel_tri_fallback(const accel_ray_prep *p, const float *tri, float *t, float *u,
+                              float *v) __attribute__((noinline, cold));
+static int accel_tri_fallback(const accel_ray_prep *p, const float *tri, float *t, float *u,
+                              float *v)
+{
+    accel_ray_d r;
+    accel_prep_ray_d(p, &r);
+    double tt = *t, uu, vv;
+    if (!accel_tri_watertight_d(&r, tri, &tt, &uu, &vv)) return 0;
+    float tf = (float)tt;
+    if (tf > *t) tf = *t; /* rounding must not push the hit past the current one */
+    *t = tf;
+    *u = (float)uu;
+    *v = (float)vv;
+    return 1;
+}
+
+/* Watertight triangle test. On a hit within [t_near, *t] stores t, u, v and
+ * returns 1. The edge functions are computed in float; when one of them is
+ * too close to zero for its sign to be certain (a ray through an edge, a
+ * vertex or a silhouette), the whole test is redone in double exactly as the
+ * reference does it, so float and reference never disagree on coverage. */
 static inline int accel_tri_watertight(const accel_ray_prep *p, const float *tri, float *t,
                                        float *u, float *v)
 {
@@ -69,30 +173,43 @@ static inline int accel_tri_watertight(const accel_ray_prep *p, const float *tri
     vec3 b = v3_sub(v3_load(tri + 3), p->org);
     vec3 c = v3_sub(v3_load(tri + 6), p->org);
     float az_ = v3_idx(a, p->kz), bz_ = v3_idx(b, p->kz), cz_ = v3_idx(c, p->kz);
-    float ax = v3_idx(a, p->kx) - p->sx * az_, ay = v3_idx(a, p->ky) - p->sy * az_;
-    float bx = v3_idx(b, p->kx) - p->sx * bz_, by = v3_idx(b, p->ky) - p->sy * bz_;
-    float cx = v3_idx(c, p->kx) - p->sx * cz_, cy = v3_idx(c, p->ky) - p->sy * cz_;
+    float ax_ = v3_idx(a, p->kx), ay_ = v3_idx(a, p->ky);
+    float bx_ = v3_idx(b, p->kx), by_ = v3_idx(b, p->ky);
+    float cx_ = v3_idx(c, p->kx), cy_ = v3_idx(c, p->ky);
+    float ax = ax_ - p->sx * az_, ay = ay_ - p->sy * az_;
+    float bx = bx_ - p->sx * bz_, by = by_ - p->sy * bz_;
+    float cx = cx_ - p->sx * cz_, cy = cy_ - p->sy * cz_;
     float U = cx * by - cy * bx;
     float V = ax * cy - ay * cx;
     float W = bx * ay - by * ax;
-    /* An edge function that rounds to exactly zero is redone in double, so
-     * that a ray through an edge or vertex is decided consistently for every
-     * triangle sharing it (Woop et al. 2013, section 3). */
-    if (U == 0.0f || V == 0.0f || W == 0.0f) {
-        U = (float)((double)cx * by - (double)cy * bx);
-        V = (float)((double)ax * cy - (double)ay * cx);
-        W = (float)((double)bx * ay - (double)by * ax);
-    }
-    if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return 0;
+    /* Quick reject: a clear sign mix is a miss whatever the rounding. */
+    float sxa = fabsf(p->sx), sya = fabsf(p->sy);
+    float max_ = fabsf(ax_) + sxa * fabsf(az_), may_ = fabsf(ay_) + sya * fabsf(az_);
+    float mbx_ = fabsf(bx_) + sxa * fabsf(bz_), mby_ = fabsf(by_) + sya * fabsf(bz_);
+    float mcx_ = fabsf(cx_) + sxa * fabsf(cz_), mcy_ = fabsf(cy_) + sya * fabsf(cz_);
+    float eu = ACCEL_EDGE_FILTER * (mcx_ * mby_ + mcy_ * mbx_);
+    float ev = ACCEL_EDGE_FILTER * (max_ * mcy_ + may_ * mcx_);
+    float ew = ACCEL_EDGE_FILTER * (mbx_ * may_ + mby_ * max_);
+    int sure_neg = U < -eu || V < -ev || W < -ew;
+    int sure_pos = U > eu || V > ev || W > ew;
+    if (sure_neg && sure_pos) return 0;
+    if (!(fabsf(U) > eu && fabsf(V) > ev && fabsf(W) > ew))
+        return accel_tri_fallback(p, tri, t, u, v);
     float det = U + V + W;
-    if (det == 0.0f) return 0;
     float T = U * (p->sz * az_) + V * (p->sz * bz_) + W * (p->sz * cz_);
     /* Compare T/det against the t range without dividing. A hit at exactly
      * *t is accepted, so t = t_far is inside the ray as FORMATS.md says. */
     float sgn = det < 0.0f ? -1.0f : 1.0f;
     det *= sgn;
     T *= sgn;
-    if (T < p->t_near * det || T > *t * det) return 0;
+    /* T carries rounding too: a hit within its error of either end of the
+     * t range (a secondary ray re-hitting its own surface at t ~ 0, a hit
+     * at the current closest distance) is decided in double as well. */
+    float et = ACCEL_EDGE_FILTER *
+               (fabsf(U * (p->sz * az_)) + fabsf(V * (p->sz * bz_)) + fabsf(W * (p->sz * cz_)));
+    float lo = p->t_near * det, hi = *t * det;
+    if (T < lo - et || T > hi + et) return 0;
+    if (T <= lo + et || T >= hi - et) return accel_tri_fallback(p, tri, t, u, v);
     float rcp = 1.0f / det;
     *t = T * rcp;
     *u = V * sgn * rcp;
@@ -126,8 +243,24 @@ static inline int accel_tri_naive(const accel_ray_prep *p, const float *tri, flo
     return 1;
 }
 
+static int accel_sphere_fallback(const accel_ray_prep *p, const float *s, float *t, float *u,
+                                 float *v) __attribute__((noinline, cold));
+static int accel_sphere_fallback(const accel_ray_prep *p, const float *s, float *t, float *u,
+                                 float *v)
+{
+    accel_ray_d r;
+    accel_prep_ray_d(p, &r);
+    double tt = *t;
+    if (!accel_sphere_hit_d(&r, s, &tt)) return 0;
+    float tf = (float)tt;
+    *t = tf > *t ? *t : tf;
+    *u = *v = 0.0f;
+    return 1;
+}
+
 /* Ray/sphere (centre xyz, radius w). Reports the nearest root in
- * [t_near, *t]; u = v = 0 for spheres. */
+ * [t_near, *t]; u = v = 0 for spheres. A grazing ray (discriminant within
+ * its rounding error of zero) is decided in double, as by the reference. */
 static inline int accel_sphere_hit(const accel_ray_prep *p, const float *s, float *t, float *u,
                                    float *v)
 {
@@ -139,12 +272,20 @@ static inline int accel_sphere_hit(const accel_ray_prep *p, const float *s, floa
     /* |f - (f.d/a) d|^2: the squared distance of the centre to the ray's line,
      * computed without cancellation (Ray Tracing Gems, eq. 7.5). */
     vec3 l = v3_add(f, v3_scale(p->dir, b / a));
-    float disc = r * r - v3_dot(l, l);
-    if (disc < 0.0f) return 0;
+    float l2 = v3_dot(l, l), rr = r * r;
+    float disc = rr - l2;
+    float err = ACCEL_EDGE_FILTER * (rr + v3_dot(f, f));
+    if (disc < -err) return 0;
+    if (disc <= err) return accel_sphere_fallback(p, s, t, u, v);
     float q = b + copysignf(sqrtf(a * disc), b);
-    float t0 = q / a, t1 = v3_dot(f, f) - r * r;
+    float t0 = q / a, t1 = v3_dot(f, f) - rr;
     t1 = q != 0.0f ? t1 / q : t0;
     if (t0 > t1) { float tmp = t0; t0 = t1; t1 = tmp; }
+    /* A root within rounding of t_near (a ray leaving the sphere's surface)
+     * is decided in double, as by the reference. */
+    float et = ACCEL_EDGE_FILTER * (sqrtf(v3_dot(f, f)) + r) / sqrtf(a);
+    if (fabsf(t0 - p->t_near) <= et || fabsf(t1 - p->t_near) <= et)
+        return accel_sphere_fallback(p, s, t, u, v);
     float tt = t0 >= p->t_near ? t0 : t1;
     if (!(tt >= p->t_near && tt <= *t)) return 0;
     *t = tt;

@@ -16,77 +16,6 @@
 #include "prim.h"
 
 typedef struct {
-    double o[3], d[3];
-    int kx, ky, kz;
-    double sx, sy, sz;
-    double t_near, t_far;
-} ref_ray;
-
-static int ref_prep(const accel_ray *r, ref_ray *p)
-{
-    accel_ray_prep fp;
-    if (!accel_prep_ray(r, &fp)) return 0;
-    p->o[0] = r->ox, p->o[1] = r->oy, p->o[2] = r->oz;
-    p->d[0] = r->dx, p->d[1] = r->dy, p->d[2] = r->dz;
-    p->kx = fp.kx, p->ky = fp.ky, p->kz = fp.kz;
-    p->sx = p->d[p->kx] / p->d[p->kz];
-    p->sy = p->d[p->ky] / p->d[p->kz];
-    p->sz = 1.0 / p->d[p->kz];
-    p->t_near = r->t_near;
-    p->t_far = r->t_far;
-    return 1;
-}
-
-static int ref_tri(const ref_ray *r, const float *tri, double *t, double *u, double *v)
-{
-    double a[3], b[3], c[3];
-    for (int i = 0; i < 3; i++) {
-        a[i] = (double)tri[i] - r->o[i];
-        b[i] = (double)tri[3 + i] - r->o[i];
-        c[i] = (double)tri[6 + i] - r->o[i];
-    }
-    double ax = a[r->kx] - r->sx * a[r->kz], ay = a[r->ky] - r->sy * a[r->kz];
-    double bx = b[r->kx] - r->sx * b[r->kz], by = b[r->ky] - r->sy * b[r->kz];
-    double cx = c[r->kx] - r->sx * c[r->kz], cy = c[r->ky] - r->sy * c[r->kz];
-    double U = cx * by - cy * bx, V = ax * cy - ay * cx, W = bx * ay - by * ax;
-    if ((U < 0 || V < 0 || W < 0) && (U > 0 || V > 0 || W > 0)) return 0;
-    double det = U + V + W;
-    if (det == 0.0) return 0;
-    double T = (U * a[r->kz] + V * b[r->kz] + W * c[r->kz]) * r->sz;
-    double tt = T / det;
-    if (!(tt >= r->t_near && tt <= *t)) return 0;
-    *t = tt;
-    *u = V / det;
-    *v = W / det;
-    return 1;
-}
-
-static int ref_sphere(const ref_ray *r, const float *s, double *t)
-{
-    double f[3], a = 0, b = 0, ff = 0;
-    for (int i = 0; i < 3; i++) {
-        f[i] = r->o[i] - (double)s[i];
-        a += r->d[i] * r->d[i];
-        b -= f[i] * r->d[i];
-        ff += f[i] * f[i];
-    }
-    double rr = (double)s[3] * s[3], l2 = 0;
-    for (int i = 0; i < 3; i++) {
-        double l = f[i] + r->d[i] * (b / a);
-        l2 += l * l;
-    }
-    double disc = rr - l2;
-    if (disc < 0) return 0;
-    double q = b + copysign(sqrt(a * disc), b);
-    double t0 = q / a, t1 = q != 0 ? (ff - rr) / q : t0;
-    if (t0 > t1) { double x = t0; t0 = t1; t1 = x; }
-    double tt = t0 >= r->t_near ? t0 : t1;
-    if (!(tt >= r->t_near && tt <= *t)) return 0;
-    *t = tt;
-    return 1;
-}
-
-typedef struct {
     const accel_scene *scene;
     const accel_ray *rays;
     accel_hit *hits;
@@ -99,15 +28,17 @@ static void ref_chunk(void *p, size_t begin, size_t end, int thread)
     const accel_scene *s = j->scene;
     for (size_t i = begin; i < end; i++) {
         accel_hit h = accel_hit_miss();
-        ref_ray r;
-        if (ref_prep(&j->rays[i], &r)) {
-            double t = r.t_far, u = 0, v = 0;
+        accel_ray_prep fp;
+        accel_ray_d r;
+        if (accel_prep_ray(&j->rays[i], &fp)) {
+            accel_prep_ray_d(&fp, &r);
+            double t = fp.t_far, u = 0, v = 0;
             uint32_t best = ACCEL_MISS;
             for (uint32_t k = 0; k < s->live_count; k++) {
                 uint32_t prim = s->live[k];
                 int hit = prim < s->tri_count
-                              ? ref_tri(&r, s->tris + 9 * (size_t)prim, &t, &u, &v)
-                              : ref_sphere(&r, s->spheres + 4 * (size_t)(prim - s->tri_count), &t);
+                              ? accel_tri_watertight_d(&r, s->tris + 9 * (size_t)prim, &t, &u, &v)
+                              : accel_sphere_hit_d(&r, s->spheres + 4 * (size_t)(prim - s->tri_count), &t);
                 if (hit) {
                     best = prim;
                     if (prim >= s->tri_count) u = v = 0;
