@@ -159,6 +159,31 @@ int main(int argc, char **argv)
         bench_sets_free(&sets);
         scene_free(&s);
     }
+    /* The lecture's "visualize traversal depth": steps per pixel per kind. */
+    const char *heat_scenes[2] = {x.quick ? "sphereflake:level=1" : "teapot_stadium",
+                                  x.quick ? NULL : (x.mesh_count ? x.meshes[0] : "sphereflake")};
+    exp_md(&x, "\n### Heatmaps: steps per pixel\n\nEach kind with its default parameters on the "
+               "same primary rays; brighter = more cells stepped / nodes visited.\n");
+    for (int h = 0; h < 2; h++) {
+        if (!heat_scenes[h]) continue;
+        accel_scene s;
+        exp_scene(heat_scenes[h], &s);
+        bench_sets sets;
+        exp_sets(&x, &s, BENCH_PRIMARY, &sets);
+        for (size_t k = 0; k < accel_kind_count; k++) {
+            const accel_kind *kind = accel_kinds[k];
+            if (!strcmp(kind->name, "brute")) continue; /* every pixel costs N: no picture */
+            char name[128], caption[256], why[600];
+            snprintf(name, sizeof name, "heat_%s_%d", kind->name, h);
+            for (char *c = name; *c; c++)
+                if (*c == ':' || *c == ',' || *c == '=' || *c == '/' || *c == '.') *c = '_';
+            snprintf(caption, sizeof caption, "`%s` on %s", kind->name, s.name);
+            if (exp_heatmap(&x, kind->name, &s, &sets, 's', name, caption, why, sizeof why))
+                exp_md(&x, "\n`%s` on %s: skipped (%s)\n", kind->name, s.name, why);
+        }
+        bench_sets_free(&sets);
+        scene_free(&s);
+    }
     exp_md(&x, "\n**Findings:**\n\n%s", findings);
     exp_md(&x, "\nA step and a test do not cost the same everywhere: the fitted constants "
                "absorb cache behaviour (coherent primary rays against incoherent diffuse ones), "

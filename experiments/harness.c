@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 
 #include "harness.h"
+#include "image.h"
 
 static void usage(const exp_ctx *x, const char *question, const char *extra)
 {
@@ -225,4 +226,57 @@ void exp_plot(exp_ctx *x, const char *plot_name, const char *script)
             x->out_dir, plot_name, x->out_dir, x->name, script);
     fclose(f);
     exp_md(x, "\n<!-- plot: %s -->\n", plot_name);
+}
+
+int exp_heatmap(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets *sets,
+                char what, const char *image_name, const char *caption, char *why, size_t why_n)
+{
+    accel_error err = {0};
+    const accel_kind *kind;
+    void *accel;
+    accel_build_stats st;
+    if (accel_build_spec(spec, s, x->threads, &kind, &accel, &st, &err)) {
+        snprintf(why, why_n, "%s", err.msg);
+        return 1;
+    }
+    const rays_set *r = &sets->primary;
+    size_t n = r->count;
+    uint32_t *steps = calloc(n ? n : 1, sizeof *steps), *prims = calloc(n ? n : 1, sizeof *prims);
+    float *v = calloc((size_t)r->width * r->height, sizeof *v);
+    accel_hit *hits = malloc((n ? n : 1) * sizeof *hits);
+    int rc = 1;
+    if (steps && prims && v && hits) {
+        accel_counters c = {0};
+        c.ray_steps = steps;
+        c.ray_prims = prims;
+        accel_trace(kind, accel, r->rays, hits, n, x->threads, &c);
+        double total = 0;
+        for (size_t i = 0; i < n; i++) {
+            uint32_t val = what == 's' ? steps[i] : prims[i];
+            v[r->pixel[i]] = (float)val;
+            total += val;
+        }
+        image_rgb img;
+        char path[1024];
+        snprintf(path, sizeof path, "%s/%s.png", x->out_dir, image_name);
+        if (image_heatmap(v, r->width, r->height, 0, &img, &err) == 0) {
+            rc = image_write(path, &img, &err);
+            image_free(&img);
+        }
+        if (rc == 0)
+            exp_md(x, "\n%s (mean %.1f %s per ray; colour scale from 0 to the maximum, printed "
+                      "under the image):\n\n<!-- image: %s -->\n",
+                   caption, n ? total / (double)n : 0.0,
+                   what == 's' ? kind->step_name : "primitive tests", image_name);
+        else
+            snprintf(why, why_n, "%s", err.msg);
+    } else {
+        snprintf(why, why_n, "out of memory");
+    }
+    free(steps);
+    free(prims);
+    free(v);
+    free(hits);
+    kind->destroy(accel);
+    return rc;
 }

@@ -81,4 +81,11 @@ static inline double exp_per_ray(uint64_t v, const bench_result *r)
  * the variable `csv` (this experiment's CSV). report.sh runs it when gnuplot exists. */
 void exp_plot(exp_ctx *x, const char *plot_name, const char *script);
 
+/* Traces the primary rays of `sets` with spec on s in a counted pass and
+ * writes DIR/<image_name>.png: steps (what='s') or primitive tests ('p')
+ * per pixel with a colour scale; adds the image to the Markdown section.
+ * Returns 0 or nonzero (reason in why). */
+int exp_heatmap(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets *sets,
+                char what, const char *image_name, const char *caption, char *why, size_t why_n);
+
 #endif

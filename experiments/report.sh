@@ -83,6 +83,9 @@ cc_version=$(${CC:-cc} --version 2>/dev/null | head -1)
         "<!-- plot: "*" -->")
           name=${line#<!-- plot: }; name=${name% -->}
           if [ -f "$out/$name.png" ]; then echo "![$name]($linkdir$name.png)"; else echo "_(plot $name not drawn: gnuplot absent; data in $linkdir$e.csv)_"; fi ;;
+        "<!-- image: "*" -->")
+          name=${line#<!-- image: }; name=${name% -->}
+          if [ -f "$out/$name.png" ]; then echo "![$name]($linkdir$name.png)"; else echo "_(image $name missing)_"; fi ;;
         *) printf '%s\n' "$line" ;;
       esac
     done < "$out/$e.md"
