@@ -164,7 +164,7 @@ int main(int argc, char **argv)
         }
         /* Region dependence: where the cells are stepped, at two resolutions. */
         if (si == 1 || (x.quick && si == 0)) {
-            char why[600], name[64], cap[128];
+            char why[600], name[64], cap[256];
             const char *const heat[] = {"grid:lambda=0.5", "grid:lambda=16"};
             for (int h = 0; h < 2; h++) {
                 snprintf(name, sizeof name, "grid_res_heat_%d", h);
