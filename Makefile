@@ -8,7 +8,9 @@ CC      ?= cc
 ARCH    ?= -march=native
 OPT     ?= -O3
 CFLAGS  ?= $(OPT) $(ARCH) -g
-CFLAGS  += -std=c11 -D_GNU_SOURCE -Wall -Wextra -pthread -Iaccel -I.
+# Flags every build needs, kept apart so that `make CFLAGS=...` cannot drop them.
+BASE_CFLAGS := -std=c11 -D_GNU_SOURCE -Wall -Wextra -pthread -Iaccel -I.
+ALL_CFLAGS = $(BASE_CFLAGS) $(CFLAGS)
 LDLIBS  += -lm -pthread
 BUILD   ?= build
 BIN     ?= bin
@@ -33,7 +35,7 @@ all: $(TOOLS) $(EXP_BINS) $(BIN)/run_tests
 
 $(BUILD)/%.o: %.c $(HDRS)
 	@mkdir -p $(dir $@)
-	$(CC) $(CFLAGS) -c $< -o $@
+	$(CC) $(ALL_CFLAGS) -c $< -o $@
 
 $(LIB): $(LIB_OBJ)
 	@rm -f $@
@@ -41,21 +43,21 @@ $(LIB): $(LIB_OBJ)
 
 $(BIN)/%: tools/%.c $(LIB) $(HDRS)
 	@mkdir -p $(BIN)
-	$(CC) $(CFLAGS) $< $(LIB) -o $@ $(LDLIBS)
+	$(CC) $(ALL_CFLAGS) $< $(LIB) -o $@ $(LDLIBS)
 
 $(BIN)/exp_%: experiments/exp_%.c $(EXP_LIB) $(LIB) $(HDRS)
 	@mkdir -p $(BIN)
-	$(CC) $(CFLAGS) $< $(EXP_LIB) $(LIB) -o $@ $(LDLIBS)
+	$(CC) $(ALL_CFLAGS) $< $(EXP_LIB) $(LIB) -o $@ $(LDLIBS)
 
 $(BIN)/run_tests: $(TEST_SRC) $(LIB) $(HDRS)
 	@mkdir -p $(BIN)
-	$(CC) $(CFLAGS) $(TEST_SRC) $(LIB) -o $@ $(LDLIBS)
+	$(CC) $(ALL_CFLAGS) $(TEST_SRC) $(LIB) -o $@ $(LDLIBS)
 
 test: all
 	./$(BIN)/run_tests $(T)
 
 report: all
-	GRIDBVH_CFLAGS="$(CFLAGS)" CC="$(CC)" ./experiments/report.sh $(if $(QUICK),--quick,)
+	GRIDBVH_CFLAGS="$(ALL_CFLAGS)" CC="$(CC)" ./experiments/report.sh $(if $(QUICK),--quick,)
 
 bench: all
 	./experiments/bench.sh
