@@ -123,12 +123,20 @@ int bench_trace(const accel_kind *kind, const void *accel, const rays_set *rays,
     if (occlusion && !occ) occ = own_occ = malloc(n ? n : 1);
     if ((!occlusion && !hits) || (occlusion && !occ))
         return accel_fail(err, ACCEL_ERR_NOMEM, "out of memory for %zu results", n);
-    for (int i = 0; i < o->warmup; i++)
+    double warm_ms = 0;
+    for (int i = 0; i < o->warmup; i++) {
+        double t0 = accel_now_ms();
         one_pass(kind, accel, rays, occlusion, o->threads, hits, occ, NULL);
+        warm_ms = accel_now_ms() - t0;
+    }
     double samples[100];
     int reps = 0, want = o->repeats < 1 ? 1 : o->repeats;
+    if (o->max_ms > 0 && warm_ms * want > o->max_ms) {
+        want = (int)(o->max_ms / (warm_ms > 0 ? warm_ms : 1));
+        if (want < 1) want = 1;
+    }
     double total = 0;
-    while (reps < 100 && (reps < want || total < o->min_ms)) {
+    while (reps < 100 && (reps < want || (total < o->min_ms && reps < o->repeats * 20))) {
         double t0 = accel_now_ms();
         one_pass(kind, accel, rays, occlusion, o->threads, hits, occ, NULL);
         samples[reps] = accel_now_ms() - t0;

@@ -62,6 +62,8 @@ typedef struct {
     int repeats;       /* timed passes (>= 1) */
     int count_pass;    /* run one extra counted pass for counters */
     double min_ms;     /* keep repeating (up to 100 passes) until this much time is timed */
+    double max_ms;     /* > 0: fewer timed passes (at least 1) when the warm-up pass shows
+                          that `repeats` of them would exceed this; the timing's n says so */
     accel_hit *hits;   /* optional: closest-hit results (ray count entries) */
     uint8_t *occluded; /* optional: any-hit results */
     uint32_t *ray_steps, *ray_prims; /* optional per-ray costs from the counted pass */

@@ -144,7 +144,7 @@ int main(int argc, char **argv)
                         0.1f * v3_len(box3_extent(s.bounds)), 5, &ao, &err))
                 break;
             uint8_t *occ = malloc(ao.count ? ao.count : 1);
-            bench_trace_opts o = {x.threads, 1, x.repeats, 0, 0, NULL, occ, NULL, NULL};
+            bench_trace_opts o = {.threads = x.threads, .warmup = 1, .repeats = x.repeats, .occluded = occ};
             bench_result r;
             bench_trace(k, a, &ao, 1, &o, &r, &err);
             ao_image(&ao, occ, spp, img, pixels);
@@ -197,7 +197,7 @@ int main(int argc, char **argv)
             accel_build_stats st;
             if (accel_build_spec(spec, &cs, x.threads, &k, &a, &st, &err)) continue;
             accel_hit *h = malloc((stiff.count ? stiff.count : 1) * sizeof *h);
-            bench_trace_opts o = {x.threads, 1, x.repeats, 0, 0, h, NULL, NULL, NULL};
+            bench_trace_opts o = {.threads = x.threads, .warmup = 1, .repeats = x.repeats, .hits = h};
             bench_result r;
             bench_trace(k, a, &stiff, 0, &o, &r, &err);
             hits_diff d = hits_compare(ref, h, stiff.count);

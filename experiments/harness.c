@@ -201,8 +201,9 @@ int exp_run(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets
     for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
         if (!(mask & bit) || !(sets->made & bit)) continue;
         int i = exp_set_index(bit);
-        bench_trace_opts o = {x->threads, 1, x->repeats, 1, x->quick ? 0.0 : 50.0,
-                              NULL, NULL, NULL, NULL};
+        bench_trace_opts o = {.threads = x->threads, .warmup = 1, .repeats = x->repeats,
+                              .count_pass = 1, .min_ms = x->quick ? 0.0 : 50.0,
+                              .max_ms = x->quick ? 2000.0 : 10000.0};
         if (bench_trace(kind, accel, bench_sets_get(sets, bit), bench_set_is_occlusion(bit), &o,
                         &m->res[i], &err)) {
             snprintf(why, why_n, "%s", err.msg);

@@ -420,8 +420,10 @@ int main(int argc, char **argv)
                 fprintf(stderr, "trace: out of memory for %zu rays\n", n);
                 return 1;
             }
-            bench_trace_opts to = {o.threads, o.warmup, o.repeat, o.counters || want_heat, 0,
-                                   hits, occ, steps, prims};
+            bench_trace_opts to = {.threads = o.threads, .warmup = o.warmup,
+                                   .repeats = o.repeat, .count_pass = o.counters || want_heat,
+                                   .hits = hits, .occluded = occ, .ray_steps = steps,
+                                   .ray_prims = prims};
             bench_result br;
             if (bench_trace(kind, accel, r, occl, &to, &br, &err)) {
                 fprintf(stderr, "trace: %s\n", err.msg);
