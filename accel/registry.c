@@ -10,9 +10,11 @@
 #include "accel.h"
 
 extern const accel_kind accel_kind_brute;
+extern const accel_kind accel_kind_bvh;
 
 const accel_kind *const accel_kinds[] = {
     &accel_kind_brute,
+    &accel_kind_bvh,
 };
 const size_t accel_kind_count = sizeof accel_kinds / sizeof accel_kinds[0];
 

@@ -1,0 +1,438 @@
+/*
+ * build_common.c - the builder-independent half of BVH construction:
+ * primitive references, the SAH termination rule, the object-median split,
+ * the (parallel, deterministic) build driver, and the final pass that lays
+ * the nodes out depth-first and copies the primitives in leaf order.
+ *
+ * The driver follows the usual top-down recursion (pbrt-v3 section 4.3;
+ * Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies",
+ * RT 2007): near the root the split functions may use all threads for
+ * their per-node loops (binning), below that each subtree is one task.
+ */
+#include <assert.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "build_common.h"
+
+/* Tasks with fewer references than this are built by a single thread: a
+ * subtree of a few thousand primitives takes well under a millisecond. */
+#define BVH_PAR_MIN_REFS 4096u
+/* Subtree tasks handed to the threads per thread (load balance). */
+#define BVH_TASKS_PER_THREAD 8
+#define BVH_MAX_TOP_TASKS 512
+
+bvh_node *bvh_alloc_nodes(size_t n)
+{
+    if (n == 0) n = 1;
+    if (n > SIZE_MAX / sizeof(bvh_node)) return NULL;
+    void *p = NULL;
+    if (posix_memalign(&p, BVH_NODE_ALIGN, n * sizeof(bvh_node)) != 0) return NULL;
+    return p;
+}
+
+void *bvh_alloc_array(size_t n, size_t size)
+{
+    if (size && n > SIZE_MAX / size) return NULL;
+    return malloc(n && size ? n * size : 1);
+}
+
+static void set_node_box(bvh_node *n, box3 b)
+{
+    n->bmin[0] = b.min.x, n->bmin[1] = b.min.y, n->bmin[2] = b.min.z;
+    n->bmax[0] = b.max.x, n->bmax[1] = b.max.y, n->bmax[2] = b.max.z;
+}
+
+static box3 node_box(const bvh_node *n)
+{
+    box3 b = {{n->bmin[0], n->bmin[1], n->bmin[2]}, {n->bmax[0], n->bmax[1], n->bmax[2]}};
+    return b;
+}
+
+int bvh_split_pays(const bvh_build *ctx, const bvh_task *t, double split_sum)
+{
+    if (t->count > (uint32_t)ctx->opts.max_leaf) return 1;
+    double area = bvh_half_area(t->bounds);
+    if (!(area > 0.0)) return 0;
+    double leaf = (double)ctx->opts.ci * t->count;
+    double split = (double)ctx->opts.ct + (double)ctx->opts.ci * split_sum / area;
+    return split < leaf;
+}
+
+void bvh_refs_bounds(const bvh_ref *refs, uint32_t first, uint32_t count, box3 *bounds,
+                     box3 *cbounds)
+{
+    box3 b = box3_empty(), c = box3_empty();
+    for (uint32_t i = first; i < first + count; i++) {
+        b = box3_union(b, bvh_ref_box(&refs[i]));
+        c = box3_grow(c, bvh_ref_center(&refs[i]));
+    }
+    *bounds = b;
+    *cbounds = c;
+}
+
+/* ---- object median ------------------------------------------------------ */
+
+/* The order the median uses: centroid on `axis`, then primitive id, so that
+ * equal centroids (coincident primitives) still have one answer. */
+static inline int ref_before(const bvh_ref *a, const bvh_ref *b, int axis)
+{
+    float ca = bvh_ref_centroid(a, axis), cb = bvh_ref_centroid(b, axis);
+    return ca < cb || (ca == cb && a->prim < b->prim);
+}
+
+static inline void swap_refs(bvh_ref *a, bvh_ref *b)
+{
+    bvh_ref t = *a;
+    *a = *b;
+    *b = t;
+}
+
+/* Quickselect (Hoare 1961) with a median-of-three pivot: afterwards r[k] is
+ * the k-th reference in ref_before order, everything before it precedes it
+ * and everything after it follows it. */
+static void select_kth(bvh_ref *r, uint32_t n, uint32_t k, int axis)
+{
+    uint32_t lo = 0, hi = n - 1;
+    while (hi > lo) {
+        if (hi - lo == 1) {
+            if (ref_before(&r[hi], &r[lo], axis)) swap_refs(&r[lo], &r[hi]);
+            return;
+        }
+        uint32_t mid = lo + (hi - lo) / 2;
+        if (ref_before(&r[mid], &r[lo], axis)) swap_refs(&r[mid], &r[lo]);
+        if (ref_before(&r[hi], &r[lo], axis)) swap_refs(&r[hi], &r[lo]);
+        if (ref_before(&r[hi], &r[mid], axis)) swap_refs(&r[hi], &r[mid]);
+        if (hi - lo == 2) return;
+        /* r[lo] <= pivot <= r[hi] are sentinels for the two scans. */
+        swap_refs(&r[mid], &r[hi - 1]);
+        bvh_ref pivot = r[hi - 1];
+        uint32_t i = lo, j = hi - 1;
+        for (;;) {
+            while (ref_before(&r[++i], &pivot, axis)) {}
+            while (ref_before(&pivot, &r[--j], axis)) {}
+            if (i >= j) break;
+            swap_refs(&r[i], &r[j]);
+        }
+        swap_refs(&r[i], &r[hi - 1]);
+        if (k == i) return;
+        if (k < i)
+            hi = i - 1;
+        else
+            lo = i + 1;
+    }
+}
+
+void bvh_split_median(bvh_build *ctx, const bvh_task *t, bvh_split *out)
+{
+    assert(t->count >= 2);
+    int axis = v3_max_axis(box3_extent(t->cbounds));
+    uint32_t half = t->count / 2;
+    bvh_ref *r = ctx->refs + t->first;
+    select_kth(r, t->count, half, axis);
+    out->left_count = half;
+    bvh_refs_bounds(ctx->refs, t->first, half, &out->left, &out->left_c);
+    bvh_refs_bounds(ctx->refs, t->first + half, t->count - half, &out->right, &out->right_c);
+}
+
+/* ---- the driver ---------------------------------------------------------- */
+
+/* Splits one task (or makes it a leaf). Returns 1 and fills the children
+ * tasks when it split. */
+static int split_task(bvh_build *ctx, const bvh_task *t, int threads, bvh_task *l, bvh_task *r)
+{
+    bvh_node *node = &ctx->nodes[t->node];
+    bvh_split s;
+    s.left_count = 0;
+    if (t->count > 1) {
+        ctx->split(ctx, t, threads, &s);
+        /* A split function must split an oversized task; the median always can. */
+        if (s.left_count == 0 && t->count > (uint32_t)ctx->opts.max_leaf)
+            bvh_split_median(ctx, t, &s);
+    }
+    if (s.left_count == 0) {
+        node->left_first = t->first;
+        node->count = t->count;
+        return 0;
+    }
+    assert(s.left_count < t->count);
+    assert(t->level < BVH_MAX_DEPTH);
+    uint32_t pair = t->region;
+    uint32_t nl = s.left_count, nr = t->count - nl;
+    node->left_first = pair;
+    node->count = 0;
+    set_node_box(&ctx->nodes[pair], s.left);
+    set_node_box(&ctx->nodes[pair + 1], s.right);
+    *l = (bvh_task){pair, t->first, nl, pair + 2, t->level + 1, s.left, s.left_c};
+    *r = (bvh_task){pair + 1, t->first + nl, nr, pair + 2 + 2 * (nl - 1), t->level + 1, s.right,
+                    s.right_c};
+    return 1;
+}
+
+/* Depth-first, one thread. Pending right siblings: at most one per level. */
+static void build_subtree(bvh_build *ctx, const bvh_task *root)
+{
+    bvh_task stack[BVH_MAX_DEPTH + 1];
+    int sp = 0;
+    stack[sp++] = *root;
+    while (sp > 0) {
+        bvh_task t = stack[--sp], l, r;
+        if (!split_task(ctx, &t, 1, &l, &r)) continue;
+        assert(sp + 2 <= BVH_MAX_DEPTH + 1);
+        stack[sp++] = r;
+        stack[sp++] = l;
+    }
+}
+
+typedef struct {
+    bvh_build *ctx;
+    bvh_task *tasks;
+} subtree_job;
+
+static void subtree_chunk(void *p, size_t begin, size_t end, int thread)
+{
+    (void)thread;
+    subtree_job *j = p;
+    for (size_t i = begin; i < end; i++) build_subtree(j->ctx, &j->tasks[i]);
+}
+
+static int by_count_desc(const void *a, const void *b)
+{
+    uint32_t x = ((const bvh_task *)a)->count, y = ((const bvh_task *)b)->count;
+    return x < y ? 1 : x > y ? -1 : 0;
+}
+
+void bvh_build_tree(bvh_build *ctx)
+{
+    bvh_task root;
+    root.node = 0;
+    root.first = 0;
+    root.count = ctx->ref_count;
+    root.region = 2;
+    root.level = 1;
+    bvh_refs_bounds(ctx->refs, 0, ctx->ref_count, &root.bounds, &root.cbounds);
+    set_node_box(&ctx->nodes[0], root.bounds);
+    int threads = ctx->threads;
+    if (threads <= 1 || ctx->ref_count < 2 * BVH_PAR_MIN_REFS) {
+        build_subtree(ctx, &root);
+        return;
+    }
+    /* Top of the tree: split the largest task with every thread helping,
+     * until there are enough subtrees to keep the threads busy. */
+    bvh_task tasks[BVH_MAX_TOP_TASKS];
+    size_t n = 1, want = (size_t)threads * BVH_TASKS_PER_THREAD;
+    if (want > BVH_MAX_TOP_TASKS - 1) want = BVH_MAX_TOP_TASKS - 1;
+    tasks[0] = root;
+    while (n < want) {
+        size_t big = 0;
+        for (size_t i = 1; i < n; i++)
+            if (tasks[i].count > tasks[big].count) big = i;
+        if (tasks[big].count < BVH_PAR_MIN_REFS) break;
+        bvh_task l, r;
+        if (split_task(ctx, &tasks[big], threads, &l, &r)) {
+            tasks[big] = l;
+            tasks[n++] = r;
+        } else {
+            tasks[big] = tasks[--n]; /* became a leaf: done */
+            if (n == 0) return;
+        }
+    }
+    /* The rest: one subtree per task, largest first. */
+    qsort(tasks, n, sizeof tasks[0], by_count_desc);
+    subtree_job job = {ctx, tasks};
+    accel_parallel_for(n, 1, threads, subtree_chunk, &job);
+}
+
+/* ---- references, final layout, statistics --------------------------------- */
+
+static int finite_box(box3 b)
+{
+    return isfinite(b.min.x) && isfinite(b.min.y) && isfinite(b.min.z) && isfinite(b.max.x) &&
+           isfinite(b.max.y) && isfinite(b.max.z);
+}
+
+/* One reference per live primitive. A primitive with a non-finite
+ * coordinate is left out: no finite ray can hit it and its box would poison
+ * every area and bin computation above it. */
+static uint32_t make_refs(const accel_scene *s, bvh_ref *refs)
+{
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < s->live_count; i++) {
+        uint32_t prim = s->live[i];
+        box3 b = accel_prim_bounds(s, prim);
+        if (!finite_box(b)) continue;
+        bvh_ref *r = &refs[n++];
+        r->lo[0] = b.min.x, r->lo[1] = b.min.y, r->lo[2] = b.min.z;
+        r->hi[0] = b.max.x, r->hi[1] = b.max.y, r->hi[2] = b.max.z;
+        r->prim = prim;
+        r->pad = 0;
+    }
+    return n;
+}
+
+double bvh_sah_cost(const bvh_node *nodes, uint32_t node_count, double ct, double ci)
+{
+    if (node_count == 0) return 0.0;
+    double root = bvh_half_area(node_box(&nodes[0]));
+    if (!(root > 0.0)) return NAN;
+    double sum = 0.0;
+    for (uint32_t i = 0; i < node_count; i++) {
+        if (i == 1) continue; /* padding */
+        double a = bvh_half_area(node_box(&nodes[i]));
+        sum += nodes[i].count ? ci * nodes[i].count * a : ct * a;
+    }
+    return sum / root;
+}
+
+/* Copies the temporary tree into `out` (sized by count_interior) in
+ * depth-first order of child pairs; returns the depth, counts leaves. */
+typedef struct {
+    uint32_t src, dst; /* node in the temporary pool, its place in the final one */
+    int level;
+} compact_entry;
+
+static int compact_nodes(const bvh_node *tmp, bvh_node *out, uint64_t *leaves)
+{
+    compact_entry stack[BVH_MAX_DEPTH + 1];
+    int sp = 0, depth = 0;
+    uint32_t next = 2;
+    out[0] = tmp[0];
+    stack[sp++] = (compact_entry){0, 0, 1};
+    *leaves = 0;
+    while (sp > 0) {
+        compact_entry e = stack[--sp];
+        if (e.level > depth) depth = e.level;
+        const bvh_node *src = &tmp[e.src];
+        if (src->count) {
+            (*leaves)++;
+            continue;
+        }
+        uint32_t pair = next;
+        next += 2;
+        out[e.dst].left_first = pair;
+        out[pair] = tmp[src->left_first];
+        out[pair + 1] = tmp[src->left_first + 1];
+        assert(sp + 2 <= BVH_MAX_DEPTH + 1);
+        stack[sp++] = (compact_entry){src->left_first + 1, pair + 1, e.level + 1};
+        stack[sp++] = (compact_entry){src->left_first, pair, e.level + 1};
+    }
+    return depth;
+}
+
+static uint32_t count_interior(const bvh_node *tmp)
+{
+    uint32_t stack[BVH_MAX_DEPTH + 1], interior = 0;
+    int sp = 0;
+    stack[sp++] = 0;
+    while (sp > 0) {
+        const bvh_node *n = &tmp[stack[--sp]];
+        if (n->count) continue;
+        interior++;
+        stack[sp++] = n->left_first + 1;
+        stack[sp++] = n->left_first;
+    }
+    return interior;
+}
+
+typedef struct {
+    const accel_scene *scene;
+    const bvh_ref *refs;
+    bvh *out;
+} gather_job;
+
+/* Primitive data in leaf order: the leaf loop then reads one contiguous run. */
+static void gather_chunk(void *p, size_t begin, size_t end, int thread)
+{
+    (void)thread;
+    gather_job *j = p;
+    const accel_scene *s = j->scene;
+    for (size_t i = begin; i < end; i++) {
+        uint32_t prim = j->refs[i].prim;
+        float *dst = j->out->prim_data + BVH_SLOT_FLOATS * i;
+        j->out->prim_ids[i] = prim;
+        if (prim < s->tri_count) {
+            memcpy(dst, s->tris + 9 * (size_t)prim, 9 * sizeof(float));
+        } else {
+            memcpy(dst, s->spheres + 4 * (size_t)(prim - s->tri_count), 4 * sizeof(float));
+            memset(dst + 4, 0, 5 * sizeof(float));
+        }
+    }
+}
+
+void bvh_release(bvh *b)
+{
+    free(b->nodes);
+    free(b->prim_data);
+    free(b->prim_ids);
+    b->nodes = NULL;
+    b->prim_data = NULL;
+    b->prim_ids = NULL;
+}
+
+int bvh_build_run(const accel_scene *scene, const bvh_build_opts *opts, int threads, bvh *out,
+                  accel_build_stats *stats, accel_error *err)
+{
+    memset(out, 0, sizeof *out);
+    out->tri_count = scene->tri_count;
+    out->has_spheres = scene->sphere_count > 0;
+    uint32_t live = scene->live_count;
+    /* Node indices are uint32 and the temporary pool holds 2N nodes. */
+    if (live > 0x7FFFFFFFu)
+        return accel_fail(err, ACCEL_ERR_RANGE,
+                          "bvh: %u primitives exceed the limit of 2^31-1 (uint32 node indices)",
+                          live);
+    bvh_build ctx;
+    memset(&ctx, 0, sizeof ctx);
+    ctx.scene = scene;
+    ctx.opts = *opts;
+    ctx.threads = threads < 1 ? 1 : threads;
+    ctx.refs = bvh_alloc_array(live, sizeof(bvh_ref));
+    if (!ctx.refs) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for %u references", live);
+    ctx.ref_count = make_refs(scene, ctx.refs);
+    int rc = 0;
+    if (ctx.ref_count > 0) {
+        ctx.nodes = bvh_alloc_nodes(2 * (size_t)ctx.ref_count);
+        if (!ctx.nodes) {
+            free(ctx.refs);
+            return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for %u nodes",
+                              2 * ctx.ref_count);
+        }
+        switch (opts->builder) {
+        case BVH_BUILD_BINNED: rc = bvh_build_binned(&ctx, err); break;
+        case BVH_BUILD_SAH: rc = bvh_build_sweep(&ctx, err); break;
+        case BVH_BUILD_MID: rc = bvh_build_mid(&ctx, err); break;
+        case BVH_BUILD_MEDIAN: rc = bvh_build_median(&ctx, err); break;
+        default: rc = accel_fail(err, ACCEL_ERR_INTERNAL, "bvh: unknown builder %d", opts->builder);
+        }
+    }
+    if (rc == 0 && ctx.ref_count > 0) {
+        uint32_t interior = count_interior(ctx.nodes);
+        out->node_count = interior ? 2 + 2 * interior : 1;
+        out->nodes = bvh_alloc_nodes(out->node_count);
+        out->prim_data = bvh_alloc_array(ctx.ref_count, BVH_SLOT_FLOATS * sizeof(float));
+        out->prim_ids = bvh_alloc_array(ctx.ref_count, sizeof(uint32_t));
+        if (!out->nodes || !out->prim_data || !out->prim_ids) {
+            rc = accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for the final pools");
+        } else {
+            if (out->node_count > 1) { /* padding node: an empty box, never referenced */
+                memset(&out->nodes[1], 0, sizeof(bvh_node));
+                set_node_box(&out->nodes[1], box3_empty());
+            }
+            out->depth = compact_nodes(ctx.nodes, out->nodes, &stats->leaves);
+            out->prim_count = ctx.ref_count;
+            gather_job job = {scene, ctx.refs, out};
+            accel_parallel_for(ctx.ref_count, 16384, ctx.threads, gather_chunk, &job);
+        }
+    }
+    free(ctx.nodes);
+    free(ctx.refs);
+    if (rc) {
+        bvh_release(out);
+        return rc;
+    }
+    stats->nodes = out->node_count;
+    stats->refs = out->prim_count;
+    stats->depth = out->depth;
+    stats->sah_cost = bvh_sah_cost(out->nodes, out->node_count, opts->ct, opts->ci);
+    return 0;
+}

@@ -1,0 +1,171 @@
+/*
+ * build_common.h - what every BVH builder shares (internal to bvh/).
+ *
+ * A build works on an array of primitive references (one 32-byte record per
+ * primitive: its box and its scene id) and a temporary node pool of 2N
+ * nodes. A builder is one split function: given a task (a node and its run
+ * of references) it either declares a leaf or partitions the run in place,
+ * quicksort-like, into a left and a right part. The common driver
+ * (build_common.c) does everything else: the SAH termination rule, the depth
+ * bound, node allocation, the parallel schedule, and the final pass that
+ * writes the compact node pool and the primitives in leaf order.
+ *
+ * Determinism: node indices never depend on timing. A task over n references
+ * owns a fixed region of 2(n-1) node slots for its descendants (its children
+ * pair first, then the left child's region, then the right child's), so the
+ * same splits give the same temporary pool whichever thread makes them; the
+ * final pass renumbers nodes in depth-first order. Parallel binning merges
+ * per-chunk bins with min, max and integer sums, which are exact in any
+ * order. So the tree is byte-identical for any thread count.
+ */
+#ifndef BVH_BUILD_COMMON_H
+#define BVH_BUILD_COMMON_H
+
+#include "bvh_node.h"
+
+/* A primitive reference: the box and the scene id, 32 bytes like a node so
+ * that the partition passes stream whole cache lines. */
+typedef struct {
+    float lo[3];
+    uint32_t prim;
+    float hi[3];
+    uint32_t pad;
+} bvh_ref;
+
+_Static_assert(sizeof(bvh_ref) == 32, "bvh_ref is one half cache line");
+
+typedef enum { BVH_BUILD_BINNED = 0, BVH_BUILD_SAH, BVH_BUILD_MID, BVH_BUILD_MEDIAN } bvh_builder;
+
+typedef struct {
+    bvh_builder builder;
+    int bins;      /* binned: bins per axis, 2..256 */
+    int axes;      /* binned: 1 (largest centroid extent) or 3 */
+    int max_leaf;  /* most primitives a leaf may hold */
+    float ct, ci;  /* SAH: cost of a node visit and of a primitive test (one unit) */
+} bvh_build_opts;
+
+/* A node to build: its place in the temporary pool and its references. */
+typedef struct {
+    uint32_t node;   /* index in the temporary pool */
+    uint32_t first;  /* first reference */
+    uint32_t count;  /* references, >= 1 */
+    uint32_t region; /* first of the 2(count-1) node slots its descendants own */
+    int level;       /* root = 1 */
+    box3 bounds;     /* of the primitives */
+    box3 cbounds;    /* of their centroids */
+} bvh_task;
+
+/* A split function's answer. */
+typedef struct {
+    uint32_t left_count;  /* 0: make the task a leaf */
+    box3 left, right;     /* children's bounds */
+    box3 left_c, right_c; /* children's centroid bounds */
+} bvh_split;
+
+struct bvh_build;
+/* Decides the task's split and partitions its references in place so that
+ * the left part comes first. `threads` > 1 only near the root, for the
+ * builder's own data-parallel loops; the answer must not depend on it. A
+ * split function cannot fail: scratch memory is allocated up front. */
+typedef void (*bvh_split_fn)(struct bvh_build *ctx, const bvh_task *t, int threads, bvh_split *out);
+
+typedef struct bvh_build {
+    const accel_scene *scene;
+    bvh_build_opts opts;
+    bvh_ref *refs;        /* ref_count references */
+    uint32_t ref_count;
+    bvh_node *nodes;      /* temporary pool, 2 * ref_count nodes */
+    bvh_split_fn split;
+    void *data;           /* the builder's scratch */
+    int threads;
+} bvh_build;
+
+/* Centroid of a reference on one axis: halves first, so that it never
+ * overflows for any finite box. */
+static inline float bvh_ref_centroid(const bvh_ref *r, int axis)
+{
+    return 0.5f * r->lo[axis] + 0.5f * r->hi[axis];
+}
+
+static inline box3 bvh_ref_box(const bvh_ref *r)
+{
+    box3 b = {{r->lo[0], r->lo[1], r->lo[2]}, {r->hi[0], r->hi[1], r->hi[2]}};
+    return b;
+}
+
+static inline vec3 bvh_ref_center(const bvh_ref *r)
+{
+    return v3(bvh_ref_centroid(r, 0), bvh_ref_centroid(r, 1), bvh_ref_centroid(r, 2));
+}
+
+/* Half surface area in double: extents of float boxes can neither overflow
+ * nor underflow there, so SAH costs stay finite and comparable. */
+static inline double bvh_half_area(box3 b)
+{
+    if (box3_is_empty(b)) return 0.0;
+    double x = (double)b.max.x - b.min.x, y = (double)b.max.y - b.min.y,
+           z = (double)b.max.z - b.min.z;
+    return x * y + y * z + z * x;
+}
+
+/* ceil(log2(n)) for n >= 1. */
+static inline int bvh_ceil_log2(uint32_t n)
+{
+    int k = 0;
+    while (k < 32 && ((uint64_t)1 << k) < n) k++;
+    return k;
+}
+
+/* The depth bound: when even halving the task at every level could only
+ * just fit under BVH_MAX_DEPTH, the task must be split at the object
+ * median. Once true it stays true for both halves (each level removes one
+ * level of room and one halving), so no leaf lies deeper than the bound. */
+static inline int bvh_task_forced(const bvh_task *t)
+{
+    return t->level + bvh_ceil_log2(t->count) >= BVH_MAX_DEPTH;
+}
+
+/* The SAH termination rule (Goldsmith & Salmon 1987; MacDonald & Booth
+ * 1990; Wald 2007, eq. 1): a split into parts costing `split_sum` =
+ * A_L*N_L + A_R*N_R (half areas) is worth its node visit when
+ *   ct + ci * split_sum / A_node  <  ci * N.
+ * A task larger than max_leaf is always split. */
+int bvh_split_pays(const bvh_build *ctx, const bvh_task *t, double split_sum);
+
+/* Object median on the axis of largest centroid extent (quickselect on the
+ * centroid, ties broken by primitive id so the result is unique): the
+ * `median` builder, and every builder's fallback when forced by the depth
+ * bound or when no other split separates the references. Always splits
+ * (count >= 2); fills both children's bounds. */
+void bvh_split_median(bvh_build *ctx, const bvh_task *t, bvh_split *out);
+
+/* Bounds and centroid bounds of refs[first, first+count). */
+void bvh_refs_bounds(const bvh_ref *refs, uint32_t first, uint32_t count, box3 *bounds,
+                     box3 *cbounds);
+
+/* The common driver: builds the whole tree in ctx->nodes with ctx->split,
+ * using ctx->threads threads (binning near the root, subtrees as tasks). */
+void bvh_build_tree(bvh_build *ctx);
+
+/* The builders (one file each). Each sets ctx->split, allocates its scratch,
+ * runs bvh_build_tree and leaves ctx->refs in leaf order. */
+int bvh_build_binned(bvh_build *ctx, accel_error *err);
+int bvh_build_sweep(bvh_build *ctx, accel_error *err);
+int bvh_build_mid(bvh_build *ctx, accel_error *err);
+int bvh_build_median(bvh_build *ctx, accel_error *err);
+
+/* Builds a complete bvh (nodes, primitives in leaf order, stats) over the
+ * scene's live primitives. Fills stats->nodes, leaves, refs, sah_cost,
+ * depth; the caller sets the traversal fields of *out. */
+int bvh_build_run(const accel_scene *scene, const bvh_build_opts *opts, int threads, bvh *out,
+                  accel_build_stats *stats, accel_error *err);
+
+/* Frees what bvh_build_run allocated in b. */
+void bvh_release(bvh *b);
+
+/* Allocates n nodes aligned to BVH_NODE_ALIGN (NULL on failure or overflow). */
+bvh_node *bvh_alloc_nodes(size_t n);
+/* malloc(n * size) with the product checked (NULL on overflow); n = 0 allocates one byte. */
+void *bvh_alloc_array(size_t n, size_t size);
+
+#endif

@@ -1,0 +1,138 @@
+/*
+ * trace.c - single-ray BVH traversal: closest hit and any hit.
+ *
+ * A stack-based loop in the style of pbrt-v3's BVHAccel::Intersect and of
+ * Aila and Laine, "Understanding the Efficiency of Ray Traversal on GPUs",
+ * HPG 2009: at an interior node both children (one cache line) are tested
+ * at once, the nearer one is visited next and the farther one is pushed
+ * with its entry distance; a popped node whose entry lies beyond the
+ * closest hit found so far is dropped without touching it again. The box
+ * test is bvh_slab (Ize 2013, see bvh_node.h).
+ *
+ * Counters follow STYLE.md: the kernel is written once as an always-inline
+ * function, and the batch entries call it with a literal NULL counters
+ * pointer and constant flags, so the timed copies contain no counting code.
+ * The step count is kept in every copy because it feeds the step bound
+ * check: a ray visits each node at most once, so more steps than nodes
+ * means a broken tree or loop.
+ */
+#include "bvh_node.h"
+
+typedef struct {
+    uint32_t node;
+    float t_entry;
+} stack_entry;
+
+static inline __attribute__((always_inline)) void
+trace_ray(const bvh *b, const accel_ray *ray, accel_hit *hit_out, uint8_t *occ_out,
+          accel_counters *c, size_t ray_idx, int naive, int has_spheres, int any_hit)
+{
+    accel_hit hit = accel_hit_miss();
+    uint32_t steps = 0, boxes = 0, prims = 0;
+    accel_ray_prep p;
+    if (b->node_count > 0 && accel_prep_ray(ray, &p)) {
+        bvh_slab_ray r;
+        bvh_slab_setup(&r, &p);
+        const bvh_node *nodes = b->nodes;
+        float t = p.t_far, t_entry;
+        uint32_t slot = ACCEL_MISS;
+        stack_entry stack[BVH_MAX_DEPTH];
+        int sp = 0;
+        boxes++;
+        const bvh_node *node = bvh_slab(&nodes[0], &r, p.t_near, t, &t_entry) ? &nodes[0] : NULL;
+        while (node) {
+            steps++;
+            ACCEL_STEP_BOUND_CHECK(steps, b->node_count);
+            if (node->count) {
+                /* Leaf: its primitives are one contiguous run of slots. */
+                uint32_t end = node->left_first + node->count;
+                for (uint32_t i = node->left_first; i < end; i++) {
+                    prims++;
+                    if (bvh_slot_hit(b, i, &p, &t, &hit.u, &hit.v, naive, has_spheres)) {
+                        slot = i;
+                        if (any_hit) goto done;
+                    }
+                }
+            } else {
+                /* Interior: test both children, near one first. The
+                 * choice is made with selects rather than branches: which
+                 * child is nearer is the least predictable decision here. */
+                uint32_t left = node->left_first;
+                float e0, e1;
+                int hits = bvh_slab(&nodes[left], &r, p.t_near, t, &e0) |
+                           bvh_slab(&nodes[left + 1], &r, p.t_near, t, &e1) << 1;
+                boxes += 2;
+                if (hits) {
+                    int second = hits == 2 || (hits == 3 && e1 < e0);
+                    stack[sp].node = left + !second;
+                    stack[sp].t_entry = second ? e0 : e1;
+                    sp += hits == 3;
+                    node = &nodes[left + second];
+                    continue;
+                }
+            }
+            /* Pop the next far child that can still hold a closer hit. */
+            node = NULL;
+            while (sp > 0) {
+                sp--;
+                if (bvh_entry_before(stack[sp].t_entry, t)) {
+                    node = &nodes[stack[sp].node];
+                    break;
+                }
+            }
+        }
+    done:
+        if (slot != ACCEL_MISS) {
+            hit.t = t;
+            hit.prim = b->prim_ids[slot];
+        } else {
+            hit.u = hit.v = 0.0f;
+        }
+    }
+    if (any_hit)
+        occ_out[ray_idx] = hit.prim != ACCEL_MISS;
+    else
+        hit_out[ray_idx] = hit;
+    if (c) {
+        c->rays++;
+        c->steps += steps;
+        c->box_tests += boxes;
+        c->prim_tests += prims;
+        if (c->ray_steps) c->ray_steps[ray_idx] = steps;
+        if (c->ray_prims) c->ray_prims[ray_idx] = prims;
+    }
+}
+
+static inline __attribute__((always_inline)) void
+trace_batch(const bvh *b, const accel_ray *rays, accel_hit *hits, uint8_t *occ, size_t count,
+            accel_counters *c, int naive, int has_spheres, int any_hit)
+{
+    for (size_t i = 0; i < count; i++)
+        trace_ray(b, &rays[i], hits, occ, c, i, naive, has_spheres, any_hit);
+}
+
+/* The counted copy takes the flags at run time; the timed copies are
+ * specialized on them. */
+#define TRACE_DISPATCH(b, rays, hits, occ, n, c, any_hit)                                   \
+    do {                                                                                    \
+        if (c)                                                                              \
+            trace_batch(b, rays, hits, occ, n, c, (b)->naive, (b)->has_spheres, any_hit);   \
+        else if ((b)->naive)                                                                \
+            trace_batch(b, rays, hits, occ, n, NULL, 1, (b)->has_spheres, any_hit);         \
+        else if ((b)->has_spheres)                                                          \
+            trace_batch(b, rays, hits, occ, n, NULL, 0, 1, any_hit);                        \
+        else                                                                                \
+            trace_batch(b, rays, hits, occ, n, NULL, 0, 0, any_hit);                        \
+    } while (0)
+
+void bvh_trace_intersect(const bvh *b, const accel_ray *rays, accel_hit *hits, size_t count,
+                         accel_counters *c)
+{
+    TRACE_DISPATCH(b, rays, hits, (uint8_t *)NULL, count, c, 0);
+}
+
+void bvh_trace_occluded(const bvh *b, const accel_ray *rays, uint8_t *occ, size_t count,
+                        accel_counters *c)
+{
+    TRACE_DISPATCH(b, rays, (accel_hit *)NULL, occ, count, c, 1);
+}
