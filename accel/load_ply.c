@@ -95,10 +95,12 @@ static int word_is(const char *w, size_t len, const char *s)
     return strlen(s) == len && memcmp(w, s, len) == 0;
 }
 
+/* Names go into messages: bytes that are not printable ASCII become '?'
+ * (such a name matches nothing the loader looks for anyway). */
 static void copy_name(char *dst, const char *w, size_t len)
 {
     if (len >= PLY_NAME_MAX) len = PLY_NAME_MAX - 1;
-    memcpy(dst, w, len);
+    for (size_t i = 0; i < len; i++) dst[i] = w[i] > 0x20 && w[i] < 0x7F ? w[i] : '?';
     dst[len] = 0;
 }
 

@@ -784,26 +784,28 @@ TEST(loader_shared_scenes)
 
 /* ---- fuzz regressions ---------------------------------------------------- */
 
-/* Every input that once crashed a fuzz target (tests/data/fuzz_regress/,
- * named after the format: obj-*, ply-*, off-*) must now load or fail with a
- * message naming the file. Under `make sanitize` this also proves the
- * inputs no longer read out of bounds or leak. */
-TEST(loader_fuzz_regressions)
+/* Runs every file of dir named obj-*, ply-* or off-* (or, with `format`, every
+ * file) through its parser: it must load or fail with a message naming the
+ * file; files whose name ends in "-ok" (and seed corpus files) must load. */
+static int run_inputs(const char *dir, const char *format, int must_load)
 {
-    const char *dir = "tests/data/fuzz_regress";
     DIR *d = opendir(dir);
-    if (!d) {
-        test_note("skipped: %s absent (run from the repository root)", dir);
-        return;
-    }
+    if (!d) return -1;
     struct dirent *ent;
     int count = 0;
     while ((ent = readdir(d))) {
-        parse_fn parse = !strncmp(ent->d_name, "obj-", 4)   ? scene_parse_obj
-                         : !strncmp(ent->d_name, "ply-", 4) ? scene_parse_ply
-                         : !strncmp(ent->d_name, "off-", 4) ? scene_parse_off
-                                                             : NULL;
-        if (!parse) continue;
+        const char *fmt = format;
+        if (!fmt) {
+            if (strlen(ent->d_name) < 4 || ent->d_name[3] != '-') continue;
+            fmt = ent->d_name;
+        }
+        parse_fn parse = !strncmp(fmt, "obj", 3)   ? scene_parse_obj
+                         : !strncmp(fmt, "ply", 3) ? scene_parse_ply
+                         : !strncmp(fmt, "off", 3) ? scene_parse_off
+                                                   : NULL;
+        if (!parse || ent->d_name[0] == '.') continue;
+        size_t len = strlen(ent->d_name);
+        int load = must_load || (len > 3 && !strcmp(ent->d_name + len - 3, "-ok"));
         char path[1024];
         snprintf(path, sizeof path, "%s/%s", dir, ent->d_name);
         char *data;
@@ -814,16 +816,45 @@ TEST(loader_fuzz_regressions)
             continue;
         }
         char *copy = malloc(size ? size : 1); /* exact size: reads past it are caught */
+        if (!copy) {
+            free(data);
+            continue;
+        }
         memcpy(copy, data, size);
         scene_builder b = {0};
         int rc = parse(ent->d_name, copy, size, &b, &err);
-        CHECKF(rc == 0 || strstr(err.msg, ent->d_name) == err.msg, "%s: message '%s'",
-               ent->d_name, err.msg);
+        CHECKF(rc == 0 || (!load && strstr(err.msg, ent->d_name) == err.msg), "%s: message '%s'",
+               path, err.msg);
+        CHECKF(rc == 0 || b.tri_count == 0, "%s: a failed load left triangles", path);
         scene_builder_free(&b);
         free(copy);
         free(data);
         count++;
     }
     closedir(d);
-    test_note("%d fuzz regression inputs", count);
+    return count;
+}
+
+/* tests/data/fuzz_regress/ keeps every input that made a fuzz target fail
+ * (none so far) and, from the fuzzers' corpora, the smallest input reaching
+ * each distinct loader outcome; tests/fuzz/corpus/ holds the seeds, all valid.
+ * Under `make sanitize` this also checks them for memory errors and leaks. */
+TEST(loader_fuzz_regressions)
+{
+    int n = run_inputs("tests/data/fuzz_regress", NULL, 0);
+    if (n < 0) {
+        test_note("skipped: tests/data/fuzz_regress absent (run from the repository root)");
+        return;
+    }
+    CHECK(n > 0);
+    int seeds = 0;
+    static const char *const formats[3] = {"obj", "ply", "off"};
+    for (int i = 0; i < 3; i++) {
+        char dir[64];
+        snprintf(dir, sizeof dir, "tests/fuzz/corpus/%s", formats[i]);
+        int k = run_inputs(dir, formats[i], 1);
+        CHECKF(k > 0, "%s: no seed inputs", dir);
+        seeds += k > 0 ? k : 0;
+    }
+    test_note("%d fuzz regression inputs, %d seeds", n, seeds);
 }
