@@ -20,75 +20,169 @@
 
 #include "build_common.h"
 
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
 #define BINS_MAX 256
 /* References per chunk of the parallel binning pass. */
 #define BIN_CHUNK 16384
 
-/* Bins of up to three axes. The box is kept as two float[4] so that the
- * grow step is two 4-wide min/max operations. */
+/* ---- boxes and bin indices, 4-wide where the machine has SSE ------------- */
+
+#if defined(__SSE2__)
 typedef struct {
+    __m128 lo, hi; /* lane 3 unused */
+} box4;
+
+static inline void box4_clear(box4 *b)
+{
+    b->lo = _mm_set1_ps(INFINITY);
+    b->hi = _mm_set1_ps(-INFINITY);
+}
+
+/* Lane 3 of a reference's halves holds its id and padding bits, denormal
+ * numbers as floats: they are cleared on loading, since arithmetic on a
+ * denormal costs a microcode assist. Grown boxes then have 0 in lane 3. */
+static inline void box4_grow_ref(box4 *b, const bvh_ref *r)
+{
+    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
+    b->lo = _mm_min_ps(b->lo, _mm_and_ps(_mm_loadu_ps(r->lo), xyz));
+    b->hi = _mm_max_ps(b->hi, _mm_and_ps(_mm_loadu_ps(r->hi), xyz));
+}
+
+static inline void box4_union(box4 *b, const box4 *o)
+{
+    b->lo = _mm_min_ps(b->lo, o->lo);
+    b->hi = _mm_max_ps(b->hi, o->hi);
+}
+
+static inline box3 box4_to_box3(const box4 *b)
+{
     float lo[4], hi[4];
-} bin_box;
-
+    _mm_storeu_ps(lo, b->lo);
+    _mm_storeu_ps(hi, b->hi);
+    box3 r = {{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
+    return r;
+}
+#else
 typedef struct {
-    bin_box box[3][BINS_MAX];
-    uint32_t count[3][BINS_MAX];
-} bin_set;
+    box3 b;
+} box4;
 
-/* Which axes to bin and how centroids map to bins on each. */
+static inline void box4_clear(box4 *b) { b->b = box3_empty(); }
+static inline void box4_grow_ref(box4 *b, const bvh_ref *r) { b->b = box3_union(b->b, bvh_ref_box(r)); }
+static inline void box4_union(box4 *b, const box4 *o) { b->b = box3_union(b->b, o->b); }
+static inline box3 box4_to_box3(const box4 *b) { return b->b; }
+#endif
+
+/*
+ * Half area of a box with its extents scaled by `scale` (1 / the node's
+ * largest extent): the same factor on every axis keeps areas proportional,
+ * and relative areas are at most 3, so the sweep can run in float without
+ * overflow whatever the scene's size.
+ */
+#if defined(__SSE2__)
+static inline float box4_scaled_area(const box4 *b, __m128 scale)
+{
+    __m128 e = _mm_mul_ps(_mm_sub_ps(b->hi, b->lo), scale); /* lane 3: 0 */
+    __m128 p = _mm_mul_ps(e, _mm_shuffle_ps(e, e, _MM_SHUFFLE(3, 0, 2, 1))); /* xy yz zx 0 */
+    p = _mm_add_ps(p, _mm_movehl_ps(p, p));
+    return _mm_cvtss_f32(_mm_add_ss(p, _mm_shuffle_ps(p, p, 1)));
+}
+#else
+static inline float box4_scaled_area(const box4 *b, float scale)
+{
+    vec3 e = v3_scale(box3_extent(b->b), scale);
+    return e.x * e.y + e.y * e.z + e.z * e.x;
+}
+#endif
+
+/* Which axes to bin and how centroids map to bins, per axis (lane). */
 typedef struct {
     int axis_count;
-    int axis[3];
-    float cmin[3];
-    float scale[3]; /* bins per unit of centroid coordinate */
+    int axis[3];             /* the axes binned */
+    _Alignas(16) float cmin[4];
+    _Alignas(16) float scale[4]; /* bins per unit of centroid coordinate; 0 on unused axes */
     int bins;
 } bin_plan;
 
-static inline int bin_index(float c, float cmin, float scale, int last)
+/*
+ * Bin of a reference's centroid on each axis (out[axis]). Binning and
+ * partitioning both use this one function, so that they can never disagree
+ * about a reference. The centroid is 0.5*lo + 0.5*hi as bvh_ref_centroid
+ * computes it; any rounding difference from the centroid bounds only moves
+ * a reference by a bin, and the clamps keep it inside [0, bins-1].
+ */
+static inline void bin_ref(const bin_plan *p, const bvh_ref *r, int out[4])
 {
-    /* c >= cmin, so f >= 0; f <= bins (times 1 + a few ulps) by construction. */
-    int b = (int)((c - cmin) * scale);
-    return b < last ? b : last;
+#if defined(__SSE2__)
+    /* Lane 3 (id bits: a denormal as a float) is cleared before any
+     * arithmetic: denormal operands cost a microcode assist each. */
+    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
+    const __m128 half = _mm_set1_ps(0.5f);
+    __m128 lo = _mm_and_ps(_mm_loadu_ps(r->lo), xyz), hi = _mm_and_ps(_mm_loadu_ps(r->hi), xyz);
+    __m128 c = _mm_add_ps(_mm_mul_ps(lo, half), _mm_mul_ps(hi, half));
+    __m128 f = _mm_mul_ps(_mm_sub_ps(c, _mm_load_ps(p->cmin)), _mm_load_ps(p->scale));
+    f = _mm_max_ps(f, _mm_setzero_ps()); /* also turns a NaN into 0 */
+    f = _mm_min_ps(f, _mm_set1_ps((float)(p->bins - 1)));
+    _mm_storeu_si128((__m128i *)out, _mm_cvttps_epi32(f));
+#else
+    for (int a = 0; a < 3; a++) {
+        float f = (bvh_ref_centroid(r, a) - p->cmin[a]) * p->scale[a];
+        f = f > 0.0f ? f : 0.0f;
+        f = f < (float)(p->bins - 1) ? f : (float)(p->bins - 1);
+        out[a] = (int)f;
+    }
+#endif
 }
+
+/* ---- bins ------------------------------------------------------------------- */
+
+/* Bins of all three axes. */
+typedef struct {
+    box4 box[3][BINS_MAX];
+    uint32_t count[3][BINS_MAX];
+} bin_set;
+
+/* The non-empty bins of one axis in bin order: the only places a plane
+ * can separate anything (a plane after an empty bin partitions like the
+ * plane after the non-empty bin before it, at the same cost, and the
+ * sweep keeps the first plane of equal cost, which is that one). */
+typedef struct {
+    box4 box;
+    uint32_t count;
+    int bin;
+} bin_group;
 
 static void clear_bins(bin_set *s, const bin_plan *p)
 {
     for (int k = 0; k < p->axis_count; k++) {
-        memset(s->count[k], 0, (size_t)p->bins * sizeof(uint32_t));
-        for (int i = 0; i < p->bins; i++)
-            for (int j = 0; j < 4; j++) s->box[k][i].lo[j] = INFINITY, s->box[k][i].hi[j] = -INFINITY;
-    }
-}
-
-static inline void grow_bin(bin_box *b, const bvh_ref *r)
-{
-    for (int j = 0; j < 3; j++) {
-        b->lo[j] = minf(b->lo[j], r->lo[j]);
-        b->hi[j] = maxf(b->hi[j], r->hi[j]);
+        int a = p->axis[k];
+        memset(s->count[a], 0, (size_t)p->bins * sizeof(uint32_t));
+        for (int i = 0; i < p->bins; i++) box4_clear(&s->box[a][i]);
     }
 }
 
 static void bin_range(const bvh_ref *refs, size_t begin, size_t end, const bin_plan *p, bin_set *s)
 {
-    int last = p->bins - 1;
-    if (p->axis_count == 3) {
+    int b[4];
+    if (p->axis_count == 3) { /* the common case, with constant axes */
         for (size_t i = begin; i < end; i++) {
-            const bvh_ref *r = &refs[i];
-            for (int k = 0; k < 3; k++) {
-                int b = bin_index(bvh_ref_centroid(r, k), p->cmin[k], p->scale[k], last);
-                s->count[k][b]++;
-                grow_bin(&s->box[k][b], r);
+            bin_ref(p, &refs[i], b);
+            for (int a = 0; a < 3; a++) {
+                s->count[a][b[a]]++;
+                box4_grow_ref(&s->box[a][b[a]], &refs[i]);
             }
         }
         return;
     }
     for (size_t i = begin; i < end; i++) {
-        const bvh_ref *r = &refs[i];
+        bin_ref(p, &refs[i], b);
         for (int k = 0; k < p->axis_count; k++) {
             int a = p->axis[k];
-            int b = bin_index(bvh_ref_centroid(r, a), p->cmin[k], p->scale[k], last);
-            s->count[k][b]++;
-            grow_bin(&s->box[k][b], r);
+            s->count[a][b[a]]++;
+            box4_grow_ref(&s->box[a][b[a]], &refs[i]);
         }
     }
 }
@@ -106,12 +200,6 @@ static void bin_chunk(void *p, size_t begin, size_t end, int thread)
     bin_range(j->refs, j->first + begin, j->first + end, j->plan, &j->sets[thread]);
 }
 
-static box3 bin_to_box(const bin_box *b)
-{
-    box3 r = {{b->lo[0], b->lo[1], b->lo[2]}, {b->hi[0], b->hi[1], b->hi[2]}};
-    return r;
-}
-
 /* Sets up the axes worth binning: those with a positive, finite centroid
  * extent and a finite bin scale. */
 static void plan_bins(const bvh_build *ctx, const bvh_task *t, bin_plan *p)
@@ -124,16 +212,152 @@ static void plan_bins(const bvh_build *ctx, const bvh_task *t, bin_plan *p)
     }
     p->bins = ctx->opts.bins;
     p->axis_count = 0;
+    for (int a = 0; a < 4; a++) p->cmin[a] = 0.0f, p->scale[a] = 0.0f;
     for (int i = 0; i < n; i++) {
         int a = order[i];
         float e = v3_get(ext, a);
         float scale = (float)p->bins / e;
         if (!(e > 0.0f) || !isfinite(scale)) continue;
-        p->axis[p->axis_count] = a;
-        p->cmin[p->axis_count] = v3_get(t->cbounds.min, a);
-        p->scale[p->axis_count] = scale;
-        p->axis_count++;
+        p->axis[p->axis_count++] = a;
+        p->cmin[a] = v3_get(t->cbounds.min, a);
+        p->scale[a] = scale;
     }
+}
+
+/* Large tasks: bin every reference (with all threads near the root), then
+ * keep the non-empty bins. */
+static void groups_from_bins(bvh_build *ctx, const bvh_task *t, int threads, const bin_plan *plan,
+                             bin_group (*g)[BINS_MAX], int *ng)
+{
+    /* Subtree tasks run concurrently and bin into their own stack copy; only
+     * the top splits (one caller, all threads helping) use the shared sets. */
+    bin_set local, *sets = &local;
+    if (threads > 1 && t->count >= 2 * BIN_CHUNK) {
+        sets = ctx->data;
+        for (int i = 0; i < threads; i++) clear_bins(&sets[i], plan);
+        bin_job job = {ctx->refs, t->first, plan, sets};
+        accel_parallel_for(t->count, BIN_CHUNK, threads, bin_chunk, &job);
+        /* min, max and integer sums: exact in any order */
+        for (int i = 1; i < threads; i++)
+            for (int k = 0; k < plan->axis_count; k++)
+                for (int b = 0; b < plan->bins; b++) {
+                    sets[0].count[k][b] += sets[i].count[k][b];
+                    box4_union(&sets[0].box[k][b], &sets[i].box[k][b]);
+                }
+    } else {
+        clear_bins(sets, plan);
+        bin_range(ctx->refs, t->first, (size_t)t->first + t->count, plan, sets);
+    }
+    for (int k = 0; k < plan->axis_count; k++) {
+        int a = plan->axis[k];
+        ng[k] = 0;
+        for (int b = 0; b < plan->bins; b++) {
+            if (!sets->count[a][b]) continue;
+            bin_group *x = &g[k][ng[k]++];
+            x->box = sets->box[a][b];
+            x->count = sets->count[a][b];
+            x->bin = b;
+        }
+    }
+}
+
+/* Small tasks (fewer references than bins): the same groups without
+ * clearing and sweeping all K bins. A bitmask records which bins are
+ * occupied; a bin is initialized when first touched, and the groups are
+ * read off the set bits in order. Bit-identical to groups_from_bins. */
+static void groups_sparse(const bvh_build *ctx, const bvh_task *t, const bin_plan *plan,
+                          bin_group (*g)[BINS_MAX], int *ng)
+{
+    const bvh_ref *refs = ctx->refs + t->first;
+    uint32_t n = t->count;
+    for (int k = 0; k < plan->axis_count; k++) {
+        int a = plan->axis[k];
+        uint64_t used[BINS_MAX / 64] = {0};
+        int words = (plan->bins + 63) / 64;
+        box4 box[BINS_MAX];
+        uint32_t count[BINS_MAX];
+        for (uint32_t i = 0; i < n; i++) {
+            int b[4];
+            bin_ref(plan, &refs[i], b);
+            int x = b[a];
+            uint64_t bit = (uint64_t)1 << (x & 63);
+            if (!(used[x >> 6] & bit)) {
+                used[x >> 6] |= bit;
+                box4_clear(&box[x]);
+                count[x] = 0;
+            }
+            box4_grow_ref(&box[x], &refs[i]);
+            count[x]++;
+        }
+        ng[k] = 0;
+        for (int w = 0; w < words; w++)
+            for (uint64_t m = used[w]; m; m &= m - 1) {
+                int x = 64 * w + __builtin_ctzll(m);
+                bin_group *gr = &g[k][ng[k]++];
+                gr->box = box[x];
+                gr->count = count[x];
+                gr->bin = x;
+            }
+    }
+}
+
+/*
+ * Branch-free Lomuto partition: every reference is swapped with the first
+ * right-side slot, and that slot advances only for a left reference.
+ * Which side a reference goes to is a coin flip for the branch predictor;
+ * two 32-byte copies per reference cost less than a misprediction.
+ */
+static uint32_t partition(bvh_ref *r, uint32_t n, const bin_plan *plan, int axis, int best_bin,
+                          box3 *lc, box3 *rc)
+{
+    uint32_t l = 0;
+#if defined(__SSE2__)
+    __m128 llo = _mm_set1_ps(INFINITY), lhi = _mm_set1_ps(-INFINITY);
+    __m128 rlo = llo, rhi = lhi;
+    const __m128 half = _mm_set1_ps(0.5f);
+    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
+    for (uint32_t i = 0; i < n; i++) {
+        int b[4];
+        bin_ref(plan, &r[i], b);
+        int left = b[axis] <= best_bin;
+        __m128 c = _mm_add_ps(_mm_mul_ps(_mm_and_ps(_mm_loadu_ps(r[i].lo), xyz), half),
+                              _mm_mul_ps(_mm_and_ps(_mm_loadu_ps(r[i].hi), xyz), half));
+        __m128 m = _mm_castsi128_ps(_mm_set1_epi32(-left));
+        /* grow the chosen side's centroid box: min/max with c, or with +-inf */
+        __m128 cl = _mm_or_ps(_mm_and_ps(m, c), _mm_andnot_ps(m, _mm_set1_ps(INFINITY)));
+        __m128 cr = _mm_or_ps(_mm_andnot_ps(m, c), _mm_and_ps(m, _mm_set1_ps(INFINITY)));
+        llo = _mm_min_ps(llo, cl);
+        rlo = _mm_min_ps(rlo, cr);
+        cl = _mm_or_ps(_mm_and_ps(m, c), _mm_andnot_ps(m, _mm_set1_ps(-INFINITY)));
+        cr = _mm_or_ps(_mm_andnot_ps(m, c), _mm_and_ps(m, _mm_set1_ps(-INFINITY)));
+        lhi = _mm_max_ps(lhi, cl);
+        rhi = _mm_max_ps(rhi, cr);
+        bvh_ref tmp = r[i];
+        r[i] = r[l];
+        r[l] = tmp;
+        l += (uint32_t)left;
+    }
+    box4 L = {llo, lhi}, R = {rlo, rhi};
+    *lc = box4_to_box3(&L);
+    *rc = box4_to_box3(&R);
+#else
+    *lc = box3_empty();
+    *rc = box3_empty();
+    for (uint32_t i = 0; i < n; i++) {
+        int b[4];
+        bin_ref(plan, &r[i], b);
+        vec3 c = bvh_ref_center(&r[i]);
+        if (b[axis] <= best_bin)
+            *lc = box3_grow(*lc, c);
+        else
+            *rc = box3_grow(*rc, c);
+        bvh_ref tmp = r[i];
+        r[i] = r[l];
+        r[l] = tmp;
+        l += b[axis] <= best_bin;
+    }
+#endif
+    return l;
 }
 
 static void binned_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_split *out)
@@ -147,88 +371,66 @@ static void binned_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_spl
     plan_bins(ctx, t, &plan);
     if (plan.axis_count == 0) return; /* all centroids equal: leaf, or the driver's median */
 
-    /* 1. Bin the centroids. Subtree tasks run concurrently and bin into
-     * their own stack copy; only the top splits (one caller, all threads
-     * helping) use the shared per-thread sets. */
-    bin_set local, *sets = &local;
-    if (threads > 1 && t->count >= 2 * BIN_CHUNK) {
-        int nsets = threads;
-        sets = ctx->data;
-        for (int i = 0; i < nsets; i++) clear_bins(&sets[i], &plan);
-        bin_job job = {ctx->refs, t->first, &plan, sets};
-        accel_parallel_for(t->count, BIN_CHUNK, threads, bin_chunk, &job);
-        for (int i = 1; i < nsets; i++)
-            for (int k = 0; k < plan.axis_count; k++)
-                for (int b = 0; b < plan.bins; b++) {
-                    sets[0].count[k][b] += sets[i].count[k][b];
-                    for (int j = 0; j < 3; j++) {
-                        sets[0].box[k][b].lo[j] = minf(sets[0].box[k][b].lo[j], sets[i].box[k][b].lo[j]);
-                        sets[0].box[k][b].hi[j] = maxf(sets[0].box[k][b].hi[j], sets[i].box[k][b].hi[j]);
-                    }
-                }
-    } else {
-        clear_bins(&sets[0], &plan);
-        bin_range(ctx->refs, t->first, (size_t)t->first + t->count, &plan, &sets[0]);
-    }
-    const bin_set *s = &sets[0];
+    /* 1. Bin the centroids: the non-empty bins of each axis, in order. */
+    bin_group groups[3][BINS_MAX];
+    int ng[3];
+    if (t->count < (uint32_t)plan.bins)
+        groups_sparse(ctx, t, &plan, groups, ng);
+    else
+        groups_from_bins(ctx, t, threads, &plan, groups, ng);
 
     /* 2. Sweep: right-to-left suffix areas, then left-to-right costs. The
-     * plane after bin i sends bins 0..i left. Ties keep the first plane
+     * plane after group i sends groups 0..i left. Ties keep the first plane
      * found, so the choice is unique. */
-    double best = INFINITY;
-    int best_k = -1, best_bin = -1;
+    vec3 ext = box3_extent(t->bounds);
+    float scale = 1.0f / maxf(maxf(ext.x, ext.y), ext.z);
+    if (!isfinite(scale)) scale = 0.0f; /* a degenerate or overflowing node: all areas 0 */
+#if defined(__SSE2__)
+    const __m128 sc = _mm_set1_ps(scale);
+#else
+    const float sc = scale;
+#endif
+    float best = INFINITY;
+    int best_k = -1, best_g = -1;
     for (int k = 0; k < plan.axis_count; k++) {
-        double right_area[BINS_MAX];
-        uint32_t right_count[BINS_MAX];
-        box3 acc = box3_empty();
-        uint32_t cnt = 0;
-        for (int i = plan.bins - 1; i >= 1; i--) {
-            acc = box3_union(acc, bin_to_box(&s->box[k][i]));
-            cnt += s->count[k][i];
-            right_area[i] = bvh_half_area(acc);
-            right_count[i] = cnt;
+        const bin_group *g = groups[k];
+        float right_area[BINS_MAX];
+        box4 acc;
+        box4_clear(&acc);
+        for (int i = ng[k] - 1; i >= 1; i--) {
+            box4_union(&acc, &g[i].box);
+            right_area[i] = box4_scaled_area(&acc, sc);
         }
-        acc = box3_empty();
-        cnt = 0;
-        for (int i = 0; i < plan.bins - 1; i++) {
-            acc = box3_union(acc, bin_to_box(&s->box[k][i]));
-            cnt += s->count[k][i];
-            if (cnt == 0 || right_count[i + 1] == 0) continue;
-            double cost = bvh_half_area(acc) * cnt + right_area[i + 1] * right_count[i + 1];
+        box4_clear(&acc);
+        uint32_t left = 0;
+        for (int i = 0; i < ng[k] - 1; i++) {
+            box4_union(&acc, &g[i].box);
+            left += g[i].count;
+            float cost = box4_scaled_area(&acc, sc) * (float)left +
+                         right_area[i + 1] * (float)(t->count - left);
             if (cost < best) {
                 best = cost;
                 best_k = k;
-                best_bin = i;
+                best_g = i;
             }
         }
     }
-    if (best_k < 0 || !bvh_split_pays(ctx, t, best)) return;
+    /* back to absolute half areas for the termination rule */
+    double sum = scale > 0.0f ? (double)best / ((double)scale * scale) : 0.0;
+    if (best_k < 0 || !bvh_split_pays(ctx, t, sum)) return;
 
-    /* 3. Partition in place (Hoare-style), growing the children's centroid
-     * bounds on the way; their boxes come from the bins. */
-    int a = plan.axis[best_k], last = plan.bins - 1;
-    float cmin = plan.cmin[best_k], scale = plan.scale[best_k];
-    bvh_ref *r = ctx->refs;
-    uint32_t i = t->first, j = t->first + t->count; /* [i, j) unclassified */
-    box3 lc = box3_empty(), rc = box3_empty();
-    while (i < j) {
-        if (bin_index(bvh_ref_centroid(&r[i], a), cmin, scale, last) <= best_bin) {
-            lc = box3_grow(lc, bvh_ref_center(&r[i]));
-            i++;
-        } else {
-            j--;
-            bvh_ref tmp = r[i];
-            r[i] = r[j];
-            r[j] = tmp;
-            rc = box3_grow(rc, bvh_ref_center(&r[j]));
-        }
-    }
-    box3 lb = box3_empty(), rb = box3_empty();
-    for (int b = 0; b <= best_bin; b++) lb = box3_union(lb, bin_to_box(&s->box[best_k][b]));
-    for (int b = best_bin + 1; b < plan.bins; b++) rb = box3_union(rb, bin_to_box(&s->box[best_k][b]));
-    out->left_count = i - t->first;
-    out->left = lb;
-    out->right = rb;
+    /* 3. Partition in place, growing the children's centroid bounds on the
+     * way; their boxes come from the groups. */
+    int best_bin = groups[best_k][best_g].bin;
+    box3 lc, rc;
+    uint32_t nl = partition(ctx->refs + t->first, t->count, &plan, plan.axis[best_k], best_bin, &lc, &rc);
+    box4 lb, rb;
+    box4_clear(&lb);
+    box4_clear(&rb);
+    for (int g = 0; g < ng[best_k]; g++) box4_union(g <= best_g ? &lb : &rb, &groups[best_k][g].box);
+    out->left_count = nl;
+    out->left = box4_to_box3(&lb);
+    out->right = box4_to_box3(&rb);
     out->left_c = lc;
     out->right_c = rc;
 }

@@ -245,22 +245,27 @@ void bvh_build_tree(bvh_build *ctx)
 
 /* ---- references, final layout, statistics --------------------------------- */
 
-static int finite_box(box3 b)
+/* Whether all of a primitive's coordinates are finite. */
+static int prim_finite(const accel_scene *s, uint32_t prim)
 {
-    return isfinite(b.min.x) && isfinite(b.min.y) && isfinite(b.min.z) && isfinite(b.max.x) &&
-           isfinite(b.max.y) && isfinite(b.max.z);
+    const float *p = prim < s->tri_count ? s->tris + 9 * (size_t)prim
+                                         : s->spheres + 4 * (size_t)(prim - s->tri_count);
+    int n = prim < s->tri_count ? 9 : 4;
+    for (int i = 0; i < n; i++)
+        if (!isfinite(p[i])) return 0;
+    return 1;
 }
 
 /* One reference per live primitive. A primitive with a non-finite
- * coordinate is left out: no finite ray can hit it and its box would poison
- * every area and bin computation above it. */
+ * coordinate is left out: no finite ray can hit it (the reference never
+ * reports one), and its box would poison every area and bin above it. */
 static uint32_t make_refs(const accel_scene *s, bvh_ref *refs)
 {
     uint32_t n = 0;
     for (uint32_t i = 0; i < s->live_count; i++) {
         uint32_t prim = s->live[i];
+        if (!prim_finite(s, prim)) continue;
         box3 b = accel_prim_bounds(s, prim);
-        if (!finite_box(b)) continue;
         bvh_ref *r = &refs[n++];
         r->lo[0] = b.min.x, r->lo[1] = b.min.y, r->lo[2] = b.min.z;
         r->hi[0] = b.max.x, r->hi[1] = b.max.y, r->hi[2] = b.max.z;
@@ -284,54 +289,46 @@ double bvh_sah_cost(const bvh_node *nodes, uint32_t node_count, double ct, doubl
     return sum / root;
 }
 
-/* Copies the temporary tree into `out` (sized by count_interior) in
- * depth-first order of child pairs; returns the depth, counts leaves. */
-typedef struct {
-    uint32_t src, dst; /* node in the temporary pool, its place in the final one */
-    int level;
-} compact_entry;
-
-static int compact_nodes(const bvh_node *tmp, bvh_node *out, uint64_t *leaves)
+/*
+ * Removes the gaps of the region layout in place. The regions put every
+ * subtree's child pairs after its own pair, left subtree first, so the
+ * pairs already lie in depth-first order; visiting them in that order and
+ * moving each down to the next free slot never overwrites a pair not yet
+ * moved (its new place is at or below its old one, and every pair still to
+ * come lies above). Returns the node count; fills the depth and the leaves.
+ */
+static uint32_t compact_nodes(bvh_node *nodes, int *depth, uint64_t *leaves)
 {
-    compact_entry stack[BVH_MAX_DEPTH + 1];
-    int sp = 0, depth = 0;
+    struct {
+        uint32_t node;
+        int level;
+    } stack[BVH_MAX_DEPTH + 1];
+    int sp = 0;
     uint32_t next = 2;
-    out[0] = tmp[0];
-    stack[sp++] = (compact_entry){0, 0, 1};
+    *depth = 0;
     *leaves = 0;
+    stack[sp].node = 0, stack[sp].level = 1, sp++;
     while (sp > 0) {
-        compact_entry e = stack[--sp];
-        if (e.level > depth) depth = e.level;
-        const bvh_node *src = &tmp[e.src];
-        if (src->count) {
+        sp--;
+        uint32_t i = stack[sp].node;
+        int level = stack[sp].level;
+        if (level > *depth) *depth = level;
+        bvh_node *n = &nodes[i];
+        if (n->count) {
             (*leaves)++;
             continue;
         }
-        uint32_t pair = next;
+        uint32_t old = n->left_first, pair = next;
+        assert(pair <= old);
         next += 2;
-        out[e.dst].left_first = pair;
-        out[pair] = tmp[src->left_first];
-        out[pair + 1] = tmp[src->left_first + 1];
+        nodes[pair] = nodes[old];
+        nodes[pair + 1] = nodes[old + 1];
+        n->left_first = pair;
         assert(sp + 2 <= BVH_MAX_DEPTH + 1);
-        stack[sp++] = (compact_entry){src->left_first + 1, pair + 1, e.level + 1};
-        stack[sp++] = (compact_entry){src->left_first, pair, e.level + 1};
+        stack[sp].node = pair + 1, stack[sp].level = level + 1, sp++;
+        stack[sp].node = pair, stack[sp].level = level + 1, sp++;
     }
-    return depth;
-}
-
-static uint32_t count_interior(const bvh_node *tmp)
-{
-    uint32_t stack[BVH_MAX_DEPTH + 1], interior = 0;
-    int sp = 0;
-    stack[sp++] = 0;
-    while (sp > 0) {
-        const bvh_node *n = &tmp[stack[--sp]];
-        if (n->count) continue;
-        interior++;
-        stack[sp++] = n->left_first + 1;
-        stack[sp++] = n->left_first;
-    }
-    return interior;
+    return next == 2 ? 1 : next;
 }
 
 typedef struct {
@@ -406,19 +403,28 @@ int bvh_build_run(const accel_scene *scene, const bvh_build_opts *opts, int thre
         }
     }
     if (rc == 0 && ctx.ref_count > 0) {
-        uint32_t interior = count_interior(ctx.nodes);
-        out->node_count = interior ? 2 + 2 * interior : 1;
-        out->nodes = bvh_alloc_nodes(out->node_count);
+        out->node_count = compact_nodes(ctx.nodes, &out->depth, &stats->leaves);
+        if (out->node_count > 1) { /* padding node: an empty box, never referenced */
+            memset(&ctx.nodes[1], 0, sizeof(bvh_node));
+            set_node_box(&ctx.nodes[1], box3_empty());
+        }
+        /* Give back the unused tail of the 2N pool (realloc keeps the
+         * contents; should it lose the alignment, copy to an aligned block). */
+        out->nodes = realloc(ctx.nodes, (size_t)out->node_count * sizeof(bvh_node));
+        if (!out->nodes) {
+            out->nodes = ctx.nodes; /* shrinking failed: keep the larger block */
+        } else if ((uintptr_t)out->nodes % BVH_NODE_ALIGN != 0) {
+            bvh_node *aligned = bvh_alloc_nodes(out->node_count);
+            if (aligned) memcpy(aligned, out->nodes, (size_t)out->node_count * sizeof(bvh_node));
+            free(out->nodes);
+            out->nodes = aligned;
+        }
+        ctx.nodes = NULL;
         out->prim_data = bvh_alloc_array(ctx.ref_count, BVH_SLOT_FLOATS * sizeof(float));
         out->prim_ids = bvh_alloc_array(ctx.ref_count, sizeof(uint32_t));
         if (!out->nodes || !out->prim_data || !out->prim_ids) {
             rc = accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for the final pools");
         } else {
-            if (out->node_count > 1) { /* padding node: an empty box, never referenced */
-                memset(&out->nodes[1], 0, sizeof(bvh_node));
-                set_node_box(&out->nodes[1], box3_empty());
-            }
-            out->depth = compact_nodes(ctx.nodes, out->nodes, &stats->leaves);
             out->prim_count = ctx.ref_count;
             gather_job job = {scene, ctx.refs, out};
             accel_parallel_for(ctx.ref_count, 16384, ctx.threads, gather_chunk, &job);

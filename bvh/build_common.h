@@ -81,10 +81,14 @@ typedef struct bvh_build {
 } bvh_build;
 
 /* Centroid of a reference on one axis: halves first, so that it never
- * overflows for any finite box. */
+ * overflows for any finite box; separate statements, so that no compiler
+ * contracts it into a fused multiply-add (it must round the same way
+ * everywhere). */
 static inline float bvh_ref_centroid(const bvh_ref *r, int axis)
 {
-    return 0.5f * r->lo[axis] + 0.5f * r->hi[axis];
+    float lo = 0.5f * r->lo[axis];
+    float hi = 0.5f * r->hi[axis];
+    return lo + hi;
 }
 
 static inline box3 bvh_ref_box(const bvh_ref *r)
