@@ -51,7 +51,7 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
         if (live) {
             /* Set up 3D DDA for the ray. */
             grid_dda d;
-            grid_dda_init(&d, f, &p, t_entry);
+            grid_dda_init(&d, f, &p, p.t_near);
             uint32_t box[GRID_MAILBOX];
             if (mailbox) memset(box, 0xFF, sizeof box); /* ACCEL_MISS: no primitive */
             float t = p.t_far, u = 0.0f, v = 0.0f;
