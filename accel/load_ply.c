@@ -336,6 +336,7 @@ static int ascii_element(ply_file *f, const ply_elem *e, scene_builder *b)
 {
     load_text *t = &f->t;
     int rc;
+    if (e->n == 0) return 0; /* no properties: no data, whatever the count */
     for (uint64_t i = 0; i < e->count; i++) {
         for (size_t j = e->first; j < e->first + e->n; j++) {
             const ply_prop *pr = &f->props[j];
@@ -447,6 +448,7 @@ static int binary_element(ply_file *f, const ply_elem *e, scene_builder *b)
 {
     const char *p = f->t.p, *end = f->t.end;
     int big = f->format == PLY_BINARY_BE;
+    if (e->n == 0) return 0; /* no properties: no data, whatever the count */
     int has_list = 0;
     size_t fixed = 0;
     for (size_t j = e->first; j < e->first + e->n; j++) {

@@ -170,7 +170,7 @@ static void quads_ply_binary(bin_writer *w, int big)
         put_str(w, "element vertex 6\nproperty float x\nproperty uchar red\nproperty float y\n"
                    "property float z\nproperty list uchar float extra\nelement edge 1\n"
                    "property int a\nproperty int b\nelement face 3\nproperty int flags\n"
-                   "property list uchar int vertex_indices\nend_header\n");
+                   "property list uchar int vertex_indices\nelement none 4000000000\nend_header\n");
     for (int i = 0; i < 6; i++) {
         if (big) {
             put_uint(w, 0xFFFE, 2);
@@ -359,6 +359,11 @@ TEST(loader_line_endings_and_syntax)
         {"h.ply", "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
                   "property float z\nend_header\n", 0},
         {"i.off", "OFF\n3 1 0\n0 0 0\n0 0 0\n0 0 0\n3 0 0 0\n", 1}, /* degenerate: kept */
+        /* an element without properties holds no data, however many it declares */
+        {"j.ply", "ply\nformat ascii 1.0\nelement nothing 9000000000000000000\nelement vertex 3\n"
+                  "property float x\nproperty float y\nproperty float z\nelement face 1\n"
+                  "property list uchar int vertex_indices\nelement nothing2 99999999999\n"
+                  "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n", 1},
     };
     for (size_t i = 0; i < sizeof ok / sizeof ok[0]; i++) {
         scene_builder b = {0};
