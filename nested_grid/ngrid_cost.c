@@ -1,0 +1,186 @@
+/*
+ * ngrid_cost.c - the step/intersect cost model of the nested grid's auto
+ * mode: which resolution, if any, a grid over a box should have.
+ *
+ * The lecture's model prices a ray as C_step*N_steps + C_intersect*N_tests.
+ * For a ray known to cross a box B (the scene, or one cell being considered
+ * for a sub-grid), geometric probability gives both expectations for a
+ * uniform grid over B without tracing anything (Cauchy-Crofton: an
+ * isotropic random line crossing B crosses a convex C inside B with
+ * probability area(C)/area(B); the argument MacDonald & Booth, "Heuristics
+ * for Ray Tracing Using Space Subdivision", The Visual Computer 1990, use
+ * for the SAH):
+ *   E[cells] = sum over cells of area(cell)/area(B)   (ngrid_expected_cells)
+ *   E[tests] = references * area(cell)/area(B)        (every cell the same size)
+ * The reference count of a candidate resolution comes from the shared count
+ * pass (grid_count_pass), so exact overlap is priced exactly as it is built.
+ *
+ * What the model leaves out, on purpose: rays stop at their first hit (both
+ * terms shrink about alike), and the mailbox tests a primitive spanning
+ * several cells once, so E[tests] is an upper bound that grows with the
+ * resolution; the model therefore errs towards coarser grids.
+ *
+ * Decisions are greedy and local, as in SAH tree builds: a cell holding n
+ * primitives gets the sub-grid of least expected cost when that cost, plus
+ * the cost of entering it, is below testing its n primitives; each cell of
+ * the chosen sub-grid is then decided the same way.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ngrid_impl.h"
+
+/* Cost of entering a sub-grid (slab-free DDA setup for three axes), in
+ * cell steps. */
+#define NGRID_ENTER_STEPS 2.0
+/* Primitives the top-level candidates are counted on (a deterministic
+ * stride subset): enough for a reference count within about 1%. */
+#define NGRID_AUTO_SAMPLE 32768
+/* Cells-per-primitive ladders the auto mode chooses from: the resolution
+ * rule's result for each (duplicates and 1x1x1 skipped). */
+static const double top_ladder[] = {0.0625, 0.125, 0.25, 0.5, 1, 2, 4, 8};
+static const double sub_ladder[] = {0.25, 0.5, 1, 2, 4, 8, 16};
+
+static void extents(const grid_frame *f, double d[3])
+{
+    for (int a = 0; a < 3; a++) d[a] = (double)f->hi[a] - f->lo[a];
+}
+
+double ngrid_expected_cells(const grid_frame *f)
+{
+    double d[3];
+    extents(f, d);
+    double area = d[1] * d[2] + d[2] * d[0] + d[0] * d[1];
+    if (!(area > 0.0)) return 1.0;
+    return (f->res[0] * d[1] * d[2] + f->res[1] * d[2] * d[0] + f->res[2] * d[0] * d[1]) / area;
+}
+
+double ngrid_cell_probability(const grid_frame *f)
+{
+    double d[3], c[3];
+    extents(f, d);
+    for (int a = 0; a < 3; a++) c[a] = d[a] / f->res[a];
+    double area = d[1] * d[2] + d[2] * d[0] + d[0] * d[1];
+    if (!(area > 0.0)) return 1.0;
+    return (c[1] * c[2] + c[2] * c[0] + c[0] * c[1]) / area;
+}
+
+/*
+ * References of prims[] in a grid of resolution res over box, padded as a
+ * sub-grid (ngrid_sub_pad) when pads is not NULL (pads[0]: scene ulp part,
+ * pads[1]: parent's padding), else as the top grid. Returns 0, or 1 when
+ * the grid is too large for max_bytes (a candidate to skip, not an error),
+ * or an error status.
+ */
+static int count_refs(const accel_scene *s, box3 box, const float (*pads)[3], const int res[3],
+                      const uint32_t *prims, uint32_t n, grid_overlap mode, int threads,
+                      double max_bytes, grid_frame *f, uint64_t *refs, accel_error *err)
+{
+    uint64_t cells;
+    accel_error ignore;
+    if (grid_cell_count("nested_grid", res, max_bytes, &cells, &ignore)) return 1;
+    float *planes = malloc(grid_plane_count(res) * sizeof *planes);
+    uint32_t *counts = calloc(cells, sizeof *counts);
+    if (!planes || !counts) {
+        free(planes);
+        free(counts);
+        return accel_fail(err, ACCEL_ERR_NOMEM,
+                          "nested_grid: out of memory for a %dx%dx%d cost estimate", res[0],
+                          res[1], res[2]);
+    }
+    grid_frame_init(f, box, res, planes);
+    if (pads) ngrid_sub_pad(f, pads[0], pads[1]);
+    grid_count_pass(f, s, prims, n, mode, counts, threads);
+    uint64_t total = 0;
+    for (uint64_t c = 0; c < cells; c++) total += counts[c];
+    free(counts);
+    free(planes);
+    f->planes[0] = f->planes[1] = f->planes[2] = NULL;
+    *refs = total;
+    return 0;
+}
+
+static int same_res(const int a[3], const int b[3])
+{
+    return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
+}
+
+int ngrid_auto_top_res(const accel_scene *s, box3 box, grid_overlap mode, const ngrid_costs *m,
+                       double max_bytes, int res[3], accel_error *err)
+{
+    uint32_t n = s->live_count;
+    grid_resolution(s->bounds, (double)n, 1.0, res);
+    if (n == 0) return ACCEL_OK;
+    /* A stride subset stands for the whole scene: its reference count,
+     * scaled by n/sample, estimates the full one. */
+    uint32_t stride = n > NGRID_AUTO_SAMPLE ? (n + NGRID_AUTO_SAMPLE - 1) / NGRID_AUTO_SAMPLE : 1;
+    uint32_t sample_n = (n + stride - 1) / stride;
+    uint32_t *sample = s->live;
+    if (stride > 1) {
+        sample = malloc((size_t)sample_n * sizeof *sample);
+        if (!sample) return accel_fail(err, ACCEL_ERR_NOMEM, "nested_grid: out of memory");
+        for (uint32_t i = 0; i < sample_n; i++) sample[i] = s->live[(size_t)i * stride];
+    }
+    double scale = (double)n / sample_n;
+    double best = INFINITY;
+    int prev[3] = {0, 0, 0};
+    int rc = ACCEL_OK;
+    for (size_t k = 0; k < sizeof top_ladder / sizeof top_ladder[0]; k++) {
+        int r[3];
+        grid_resolution(s->bounds, (double)n, top_ladder[k], r);
+        if (same_res(r, prev)) continue;
+        memcpy(prev, r, sizeof prev);
+        grid_frame f;
+        uint64_t refs;
+        rc = count_refs(s, box, NULL, r, sample, sample_n, mode, 1, max_bytes, &f, &refs, err);
+        if (rc == 1) {
+            rc = ACCEL_OK;
+            continue;
+        }
+        if (rc) break;
+        double cost = m->c_step * ngrid_expected_cells(&f) +
+                      m->c_isect * (double)refs * scale * ngrid_cell_probability(&f);
+        if (cost < best) {
+            best = cost;
+            memcpy(res, r, sizeof r);
+        }
+    }
+    if (sample != s->live) free(sample);
+    return rc;
+}
+
+int ngrid_auto_sub_res(const accel_scene *s, box3 box, const float scene_ulp_pad[3],
+                       const float parent_pad[3],
+                       const uint32_t *prims, uint32_t prim_count, grid_overlap mode,
+                       const ngrid_costs *m, double max_bytes, int res[3], accel_error *err)
+{
+    res[0] = res[1] = res[2] = 0;
+    /* Testing the cell's primitives: every one of them, once. */
+    double best = m->c_isect * prim_count;
+    /* No sub-grid can cost less than entering it and stepping one cell. */
+    if (best <= m->c_step * (NGRID_ENTER_STEPS + 1.0)) return ACCEL_OK;
+    float pads[2][3];
+    memcpy(pads[0], scene_ulp_pad, sizeof pads[0]);
+    memcpy(pads[1], parent_pad, sizeof pads[1]);
+    int prev[3] = {1, 1, 1};
+    for (size_t k = 0; k < sizeof sub_ladder / sizeof sub_ladder[0]; k++) {
+        int r[3];
+        grid_resolution(box, (double)prim_count, sub_ladder[k], r);
+        if (same_res(r, prev)) continue;
+        memcpy(prev, r, sizeof prev);
+        grid_frame f;
+        uint64_t refs;
+        int rc = count_refs(s, box, (const float(*)[3])pads, r, prims, prim_count, mode, 1, max_bytes, &f,
+                            &refs, err);
+        if (rc == 1) continue;
+        if (rc) return rc;
+        double cost = m->c_step * (NGRID_ENTER_STEPS + ngrid_expected_cells(&f)) +
+                      m->c_isect * (double)refs * ngrid_cell_probability(&f);
+        if (cost < best) {
+            best = cost;
+            memcpy(res, r, sizeof r);
+        }
+    }
+    return ACCEL_OK;
+}

@@ -1,0 +1,80 @@
+/*
+ * ngrid_impl.h - the built nested grid and the build's internal interface,
+ * shared by ngrid_build.c, ngrid_cost.c and ngrid_trace.c. Private to
+ * nested_grid/.
+ */
+#ifndef NESTED_GRID_NGRID_IMPL_H
+#define NESTED_GRID_NGRID_IMPL_H
+
+#include "ngrid.h"
+
+typedef struct {
+    const accel_scene *scene;
+    ngrid_node *nodes;   /* node_count grids, breadth-first, top first */
+    uint32_t node_count;
+    uint32_t *cells;     /* cell words (ngrid.h) */
+    uint64_t cell_count;
+    uint32_t *lists;     /* count-prefixed primitive lists; lists[0] = 0 */
+    uint64_t list_len;
+    float *planes;       /* storage behind every node's frame.planes */
+    size_t plane_count;
+    uint64_t ref_count;
+    uint64_t leaf_count; /* cells holding a non-empty primitive list */
+    uint64_t step_bound; /* most cells (all levels) one ray can visit */
+    int levels;
+    int naive, mailbox, has_spheres;
+} ngrid_accel;
+
+/*
+ * Membership padding of a sub-grid. The regular grid pads by a fraction of a
+ * cell plus a few ulps of the coordinates' magnitude (grid_core.h). A
+ * sub-grid keeps the cell part at its own cell size, but takes the ulp part
+ * from the whole scene's magnitude (scene_ulp_pad, from the top frame): the
+ * walk's rounding grows with the distance a ray has travelled, which for a
+ * ray starting anywhere in the scene is bounded by the scene's size, not by
+ * the size of the small region a deep sub-grid covers. The result never
+ * exceeds the parent's padding (clamped, against rounding), so each padded
+ * sub-cell lies inside its padded parent cell, whose list is therefore
+ * complete for it.
+ */
+static inline void ngrid_sub_pad(grid_frame *f, const float scene_ulp_pad[3],
+                                 const float parent_pad[3])
+{
+    for (int a = 0; a < 3; a++) {
+        double cell = ((double)f->hi[a] - f->lo[a]) / f->res[a];
+        f->pad[a] = minf(parent_pad[a], (float)(cell * GRID_PAD_CELLS + scene_ulp_pad[a]));
+    }
+}
+
+/* Cost model constants (ns) and the choices the build leaves to it. */
+typedef struct {
+    double c_step, c_isect;
+} ngrid_costs;
+
+/*
+ * Auto mode, top level: the resolution (among the rule's results for a
+ * ladder of lambdas) with the least expected cost c_step*E[cells] +
+ * c_isect*E[tests] of a ray crossing the scene box. Counts references on a
+ * deterministic subset of at most NGRID_AUTO_SAMPLE primitives.
+ */
+int ngrid_auto_top_res(const accel_scene *s, box3 box, grid_overlap mode, const ngrid_costs *m,
+                       double max_bytes, int res[3], accel_error *err);
+
+/*
+ * Auto mode, one cell: the sub-grid resolution whose expected cost for a
+ * ray crossing the cell beats testing the cell's prim_count primitives, or
+ * res = {0,0,0} when none does (the cell stays a leaf). scene_ulp_pad and
+ * parent_pad: see ngrid_sub_pad.
+ */
+int ngrid_auto_sub_res(const accel_scene *s, box3 box, const float scene_ulp_pad[3],
+                       const float parent_pad[3],
+                       const uint32_t *prims, uint32_t prim_count, grid_overlap mode,
+                       const ngrid_costs *m, double max_bytes, int res[3], accel_error *err);
+
+/* Traversal entry points (ngrid_trace.c). */
+void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
+                     accel_counters *counters);
+void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
+                    accel_counters *counters);
+
+#endif

@@ -1,0 +1,175 @@
+/*
+ * ngrid_trace.c - traversal of the `nested_grid` kind: a hierarchical
+ * 3D-DDA (Amanatides & Woo, Eurographics 1987, at every level; the
+ * descent follows Jevans & Wyvill, Graphics Interface 1989), closest-hit
+ * and any-hit.
+ *
+ * Per ray: clip to the top grid's box (robust slab test, geom.h) and set up
+ * the top walk at the entry distance. Each level keeps its own DDA state on
+ * a small stack. Entering a cell that holds a sub-grid sets up the sub-grid's
+ * walk at the distance where the ray entered that cell; when the sub-grid's
+ * walk leaves its box, the parent's walk takes its next step (and so on up).
+ * A sub-grid's box is its parent cell's box, bounded by the parent's own
+ * boundary planes, so the sub-walk leaves at exactly the distance the
+ * parent's walk would have left the cell.
+ *
+ * The stopping rule is the regular grid's, applied to whichever cell is
+ * current, at any level: every primitive tested keeps its nearest hit even
+ * beyond the current cell, and the walk stops once the current cell's exit
+ * distance reaches that hit. Every later cell, at any level, starts at or
+ * beyond that exit, so the hit kept is the nearest one, and a primitive
+ * tested in one cell never needs testing again: the per-ray mailbox (a
+ * 16-entry direct-mapped cache of ids, on the stack) is shared by all levels.
+ *
+ * Kernels are written once (ngrid_kernel) and instantiated with constant
+ * flags by the batch entries: counters, spheres, naive triangles, mailbox,
+ * closest-hit or any-hit. The uncounted copies contain no counting code and
+ * no step-bound check; counted runs check the build's bound on the cells one
+ * ray can visit over all levels.
+ */
+#include <string.h>
+
+#include "ngrid_impl.h"
+
+/* Entries of the per-ray mailbox (power of two). */
+#define NGRID_MAILBOX 16
+
+static inline __attribute__((always_inline)) void
+ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
+             size_t count, accel_counters *c, int naive, int spheres, int mailbox)
+{
+    const accel_scene *s = g->scene;
+    const ngrid_node *nodes = g->nodes;
+    const grid_frame *top = &nodes[0].frame;
+    const uint32_t *lists = g->lists;
+    for (size_t i = 0; i < count; i++) {
+        accel_ray_prep p;
+        accel_hit h = accel_hit_miss();
+        uint32_t steps = 0, empty = 0, tests = 0, skips = 0, boxes = 0;
+        uint32_t level_steps[NGRID_MAX_LEVELS] = {0};
+        float t_entry = 0.0f;
+        int live = accel_prep_ray(&rays[i], &p) && g->ref_count > 0;
+        if (live) {
+            boxes = 1;
+            live = box3_slab(top->lo, top->hi, p.org, p.inv_dir, p.neg, p.t_near, p.t_far,
+                             &t_entry);
+        }
+        if (live) {
+            /* Set up the top-level 3D DDA for the ray. */
+            grid_dda dda[NGRID_MAX_LEVELS];
+            const uint32_t *words[NGRID_MAX_LEVELS];
+            int level = 0;
+            grid_dda_init(&dda[0], top, &p, t_entry);
+            words[0] = g->cells + nodes[0].cell_base;
+            float t_cell = t_entry; /* where the ray enters the current cell */
+            uint32_t box[NGRID_MAILBOX];
+            if (mailbox) memset(box, 0xFF, sizeof box); /* ACCEL_MISS: no primitive */
+            float t = p.t_far, u = 0.0f, v = 0.0f;
+            /* Walk the ray through the cells, descending into sub-grids. */
+            for (;;) {
+                if (c) {
+                    steps++;
+                    level_steps[level]++;
+                    ACCEL_STEP_BOUND_CHECK(steps, g->step_bound);
+                }
+                uint32_t w = words[level][dda[level].cell];
+                if (w & NGRID_CHILD) {
+                    /* Continue in the sub-grid from the ray's entry into this cell. */
+                    const ngrid_node *child = &nodes[w & ~NGRID_CHILD];
+                    level++;
+                    words[level] = g->cells + child->cell_base;
+                    grid_dda_init(&dda[level], &child->frame, &p, t_cell);
+                    continue;
+                }
+                const uint32_t *list = lists + w;
+                uint32_t n = list[0];
+                if (c && n == 0) empty++;
+                for (uint32_t k = 1; k <= n; k++) {
+                    uint32_t prim = list[k];
+                    if (mailbox) {
+                        uint32_t *slot = &box[prim & (NGRID_MAILBOX - 1)];
+                        if (*slot == prim) {
+                            if (c) skips++;
+                            continue;
+                        }
+                        *slot = prim;
+                    }
+                    if (c) tests++;
+                    if (accel_prim_hit(s, prim, &p, &t, &u, &v, naive, spheres)) {
+                        h.t = t, h.u = u, h.v = v, h.prim = prim;
+                        if (occ) goto done;
+                    }
+                }
+                /* A hit (or the ray's end) before this cell's exit: nothing
+                 * in a later cell, at any level, can be nearer. */
+                float t_exit = grid_dda_exit(&dda[level]);
+                if (t_exit >= t) break;
+                /* Next cell of this grid; once the ray leaves a sub-grid,
+                 * the parent's walk resumes with its next cell. */
+                while (!grid_dda_step(&dda[level])) {
+                    if (level == 0) goto done;
+                    level--;
+                }
+                t_cell = t_exit;
+            }
+        }
+    done:
+        if (occ)
+            occ[i] = h.prim != ACCEL_MISS;
+        else
+            hits[i] = h;
+        if (c) {
+            c->rays++;
+            c->steps += steps;
+            c->empty_steps += empty;
+            c->prim_tests += tests;
+            c->mailbox_skips += skips;
+            c->box_tests += boxes;
+            for (int l = 0; l < NGRID_MAX_LEVELS; l++) c->level_steps[l] += level_steps[l];
+            if (c->ray_steps) c->ray_steps[i] = steps;
+            if (c->ray_prims) c->ray_prims[i] = tests;
+        }
+    }
+}
+
+/* Picks the kernel copy once per batch. Counted runs take the flags at run
+ * time (one copy); uncounted runs get a copy per constant combination. */
+#define NGRID_DISPATCH(g, rays, hits, occ, n, c)                                          \
+    do {                                                                                  \
+        int sph_ = (g)->has_spheres, nv_ = (g)->naive, mb_ = (g)->mailbox;                \
+        if (c) {                                                                          \
+            ngrid_kernel(g, rays, hits, occ, n, c, nv_, sph_, mb_);                       \
+        } else if (mb_) {                                                                 \
+            if (nv_) {                                                                    \
+                if (sph_) ngrid_kernel(g, rays, hits, occ, n, NULL, 1, 1, 1);             \
+                else ngrid_kernel(g, rays, hits, occ, n, NULL, 1, 0, 1);                  \
+            } else {                                                                      \
+                if (sph_) ngrid_kernel(g, rays, hits, occ, n, NULL, 0, 1, 1);             \
+                else ngrid_kernel(g, rays, hits, occ, n, NULL, 0, 0, 1);                  \
+            }                                                                             \
+        } else {                                                                          \
+            if (nv_) {                                                                    \
+                if (sph_) ngrid_kernel(g, rays, hits, occ, n, NULL, 1, 1, 0);             \
+                else ngrid_kernel(g, rays, hits, occ, n, NULL, 1, 0, 0);                  \
+            } else {                                                                      \
+                if (sph_) ngrid_kernel(g, rays, hits, occ, n, NULL, 0, 1, 0);             \
+                else ngrid_kernel(g, rays, hits, occ, n, NULL, 0, 0, 0);                  \
+            }                                                                             \
+        }                                                                                 \
+    } while (0)
+
+void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
+                     accel_counters *counters)
+{
+    const ngrid_accel *g = accel;
+    counters = ACCEL_COUNTERS_ON(counters);
+    NGRID_DISPATCH(g, rays, hits, (uint8_t *)NULL, count, counters);
+}
+
+void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
+                    accel_counters *counters)
+{
+    const ngrid_accel *g = accel;
+    counters = ACCEL_COUNTERS_ON(counters);
+    NGRID_DISPATCH(g, rays, (accel_hit *)NULL, occluded, count, counters);
+}
