@@ -1,6 +1,7 @@
 # gridbvh - see README.md.
 #   make            optimized library, tools and experiments (bin/)
-#   make test       the test suite (T=name filters tests by substring)
+#   make test       the test suite (T=word: tests whose name contains it;
+#                   KINDS=grid,bvh: only these accelerator kinds)
 #   make report     runs every experiment and rewrites REPORT.md (QUICK=1: smoke run)
 #   make sanitize   the test suite under AddressSanitizer + UBSan
 #   make fuzz       libFuzzer targets for the loaders (clang)

@@ -206,9 +206,9 @@ static accel_camera camera_fit_prims(const accel_scene *s, vec3 from, float fov_
                 vec3 q = v3_sub(p, centre);
                 float x = v3_dot(q, right), y = v3_dot(q, up);
                 if (pass == 0) {
-                    x0 = fminf(x0, x), x1 = fmaxf(x1, x), y0 = fminf(y0, y), y1 = fmaxf(y1, y);
+                    x0 = minf(x0, x), x1 = maxf(x1, x), y0 = minf(y0, y), y1 = maxf(y1, y);
                 } else {
-                    dist = fmaxf(dist, fmaxf(fabsf(x), fabsf(y)) / t - v3_dot(q, fwd));
+                    dist = maxf(dist, maxf(fabsf(x), fabsf(y)) / t - v3_dot(q, fwd));
                 }
             }
         }

@@ -31,6 +31,10 @@ void test_note(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
         if (!(cond)) test_fail(__FILE__, __LINE__, __VA_ARGS__);                         \
     } while (0)
 
+/* Whether the suites should run kind `name`: all, unless the environment
+ * variable KINDS lists kinds (comma-separated), e.g. make test KINDS=grid. */
+int test_kind_selected(const char *name);
+
 /* Path of ../shared/scenes relative to the repository (NULL when absent). */
 const char *test_shared_scenes(void);
 

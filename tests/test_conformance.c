@@ -296,6 +296,7 @@ static void run_all_kinds(test_scene *ts)
 {
     for (size_t k = 0; k < accel_kind_count; k++) {
         const accel_kind *kind = accel_kinds[k];
+        if (!test_kind_selected(kind->name)) continue;
         const char *const *vars = kind->variants;
         static const char *const none[] = {"", NULL};
         if (!vars) vars = none;

@@ -1,0 +1,353 @@
+/*
+ * stiff.c - the stiff and extreme cases (see stiff.h).
+ *
+ * The closed meshes come from the built-in `cube` and `sphere` generators,
+ * whose shared vertices are bit-identical: a watertight tracer must never
+ * let a ray from inside escape through a shared edge or vertex. The
+ * inside rays follow Woop et al. 2013 (a ray through an edge must hit one
+ * of its two triangles) and Ize 2013 (box tests must be conservative, or
+ * a vertex on a node boundary leaks).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene.h"
+#include "stiff.h"
+
+static int reserve(rays_set *r, size_t more, size_t *cap, accel_error *err)
+{
+    if (r->count + more <= *cap) return 0;
+    size_t n = (*cap ? *cap * 2 : 1024);
+    while (n < r->count + more) n *= 2;
+    accel_ray *q = realloc(r->rays, n * sizeof *q);
+    if (!q) return accel_fail(err, ACCEL_ERR_NOMEM, "stiff: out of memory for %zu rays", n);
+    r->rays = q;
+    *cap = n;
+    return 0;
+}
+
+static void push(rays_set *r, vec3 o, vec3 d, float t_near, float t_far)
+{
+    accel_ray ray = {o.x, o.y, o.z, t_near, d.x, d.y, d.z, t_far};
+    r->rays[r->count++] = ray;
+}
+
+/* Capacity bookkeeping lives beside the set while a case is built. */
+typedef struct {
+    rays_set *r;
+    size_t cap;
+    accel_error *err;
+    int rc;
+} ray_sink;
+
+static void add(ray_sink *k, vec3 o, vec3 d, float t_near, float t_far)
+{
+    if (k->rc) return;
+    k->rc = reserve(k->r, 1, &k->cap, k->err);
+    if (!k->rc) push(k->r, o, d, t_near, t_far);
+}
+
+static vec3 target_of(const accel_scene *s, uint32_t prim, uint64_t seed, uint64_t i)
+{
+    const float *t = s->tris + 9 * (size_t)prim;
+    int c = (int)(rays_rand(seed, i, 1) * 3);
+    vec3 a = v3_load(t + 3 * c), b = v3_load(t + 3 * ((c + 1) % 3));
+    /* Even: a vertex exactly; odd: an edge midpoint (exact when representable). */
+    return (i & 1) ? v3_scale(v3_add(a, b), 0.5f) : a;
+}
+
+static void vertex_rays(ray_sink *k, const accel_scene *s, vec3 eye, size_t count, uint64_t seed)
+{
+    if (s->tri_count == 0 || s->live_count == 0) return;
+    for (size_t i = 0; i < count; i++) {
+        uint32_t prim = s->live[(size_t)(rays_rand(seed, i, 0) * s->live_count)];
+        if (prim >= s->tri_count) continue;
+        add(k, eye, v3_sub(target_of(s, prim, seed, i), eye), 0.0f, INFINITY);
+    }
+}
+
+int stiff_add_vertex_rays(const accel_scene *s, vec3 eye, size_t count, uint64_t seed,
+                          rays_set *r, accel_error *err)
+{
+    ray_sink k = {r, r->count, err, 0};
+    vertex_rays(&k, s, eye, count, seed);
+    return k.rc;
+}
+
+/* Eyes around the bounds (outside), deterministic. */
+static vec3 outside_eye(box3 b, uint64_t seed, uint64_t i)
+{
+    vec3 c = box3_center(b);
+    float r = v3_len(box3_extent(b));
+    if (!(r > 0)) r = 1;
+    float z = 2 * rays_rand(seed, i, 7) - 1, ph = 6.2831853f * rays_rand(seed, i, 8);
+    float rr = sqrtf(fmaxf(0, 1 - z * z));
+    return v3_add(c, v3_scale(v3(rr * cosf(ph), rr * sinf(ph), z), 1.5f * r));
+}
+
+/* Vertex/edge rays from several outside eyes, then leak rays from inside. */
+static void closed_mesh_rays(ray_sink *k, const accel_scene *s, vec3 inside, size_t per_eye,
+                             int eyes, size_t *leak_begin)
+{
+    for (int e = 0; e < eyes; e++) vertex_rays(k, s, outside_eye(s->bounds, 21, (uint64_t)e), per_eye, 100 + (uint64_t)e);
+    *leak_begin = k->r->count;
+    vertex_rays(k, s, inside, per_eye * 2, 77);
+}
+
+/* Axis rays (+-x, +-y, +-z; other components +0 or -0) and cell-diagonal
+ * rays starting on a lattice of planes at k/16 of the bounds: every
+ * power-of-two grid up to 16 cells has its boundaries there, and the
+ * centre planes are the spatial-median split planes of a BVH. */
+static void lattice_rays(ray_sink *k, box3 b)
+{
+    const int n = 16;
+    vec3 e = box3_extent(b);
+    for (int axis = 0; axis < 3; axis++)
+        for (int i = 0; i <= n; i += 2)
+            for (int j = 0; j <= n; j += 2)
+                for (int side = 0; side < 2; side++) {
+                    float o[3], d[3] = {0, 0, 0};
+                    const float lo[3] = {b.min.x, b.min.y, b.min.z};
+                    const float ex[3] = {e.x, e.y, e.z};
+                    int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+                    o[a1] = lo[a1] + ex[a1] * (float)i / (float)n;
+                    o[a2] = lo[a2] + ex[a2] * (float)j / (float)n;
+                    o[axis] = side ? lo[axis] + ex[axis] : lo[axis];
+                    d[axis] = side ? -1.0f : 1.0f;
+                    d[a1] = ((i / 2 + j / 2) & 1) ? -0.0f : 0.0f;
+                    d[a2] = (i & 4) ? -0.0f : 0.0f;
+                    add(k, v3(o[0], o[1], o[2]), v3(d[0], d[1], d[2]), 0.0f, INFINITY);
+                    /* The same ray starting inside, exactly on the centre plane. */
+                    o[axis] = lo[axis] + ex[axis] * 0.5f;
+                    add(k, v3(o[0], o[1], o[2]), v3(d[0], d[1], d[2]), 0.0f, INFINITY);
+                }
+    /* Cell diagonals: direction = extent (the diagonal of every cell of any
+     * n x n x n grid), from lattice corners, in the 8 sign combinations. */
+    for (int i = 0; i <= n; i += 4)
+        for (int j = 0; j <= n; j += 4)
+            for (int sgn = 0; sgn < 8; sgn++) {
+                vec3 d = v3(sgn & 1 ? -e.x : e.x, sgn & 2 ? -e.y : e.y, sgn & 4 ? -e.z : e.z);
+                vec3 o = v3(sgn & 1 ? b.max.x : b.min.x, b.min.y + e.y * (float)i / (float)n,
+                            b.min.z + e.z * (float)j / (float)n);
+                if (sgn & 2) o.y = b.max.y - e.y * (float)i / (float)n;
+                add(k, o, d, 0.0f, INFINITY);
+            }
+}
+
+/* Rays lying in the planes of the cube's faces and along its edges. */
+static void grazing_rays(ray_sink *k, box3 b)
+{
+    const int n = 9;
+    for (int f = 0; f < 6; f++) {
+        int axis = f / 2;
+        float plane = f & 1 ? v3_get(b.max, axis) : v3_get(b.min, axis);
+        for (int i = 0; i < n; i++) {
+            float t = (float)i / (float)(n - 1);
+            float c[3] = {b.min.x + (b.max.x - b.min.x) * t, b.min.y + (b.max.y - b.min.y) * t,
+                          b.min.z + (b.max.z - b.min.z) * t};
+            c[axis] = plane;
+            int a1 = (axis + 1) % 3;
+            float o[3] = {c[0], c[1], c[2]}, d[3] = {0, 0, 0};
+            o[a1] = v3_get(b.min, a1) - 1.0f;
+            d[a1] = 1.0f;
+            add(k, v3(o[0], o[1], o[2]), v3(d[0], d[1], d[2]), 0.0f, INFINITY);
+        }
+    }
+}
+
+/* Random rays starting inside random primitives' boxes. */
+static void inside_box_rays(ray_sink *k, const accel_scene *s, size_t count)
+{
+    for (size_t i = 0; i < count && s->live_count; i++) {
+        uint32_t prim = s->live[(size_t)(rays_rand(31, i, 0) * s->live_count)];
+        box3 b = accel_prim_bounds(s, prim);
+        vec3 e = box3_extent(b);
+        vec3 o = v3_add(b.min, v3_mul(e, v3(rays_rand(31, i, 1), rays_rand(31, i, 2),
+                                            rays_rand(31, i, 3))));
+        float z = 2 * rays_rand(31, i, 4) - 1, ph = 6.2831853f * rays_rand(31, i, 5);
+        float rr = sqrtf(fmaxf(0, 1 - z * z));
+        add(k, o, v3(rr * cosf(ph), rr * sinf(ph), z), 0.0f, INFINITY);
+    }
+}
+
+typedef struct {
+    const char *name;
+    const char *what;
+    const char *scene;      /* built-in spec, or NULL for a hand-made scene */
+    int kind;               /* how rays are made, see stiff_case_make */
+    float scale;            /* scene transform */
+    float offset;
+} case_def;
+
+enum { RAYS_CLOSED, RAYS_LATTICE, RAYS_GRAZING, RAYS_INSIDE_BOXES, RAYS_MIXED };
+
+static const case_def cases[] = {
+    {"cube_edges", "closed cube: rays exactly at shared vertices and edge midpoints; leak rays from inside",
+     "cube:n=8", RAYS_CLOSED, 1, 0},
+    {"sphere_edges", "closed cube-sphere: vertex and edge rays; leak rays from inside",
+     "sphere:segments=12", RAYS_CLOSED, 1, 0},
+    {"uvsphere_poles", "closed lat/long sphere (pole fans): vertex and edge rays; leak rays",
+     "sphere:segments=24,tess=uv", RAYS_CLOSED, 1, 0},
+    {"sphere_far_1e4", "closed sphere moved to (1e4,1e4,1e4): vertex, edge and leak rays",
+     "sphere:segments=12", RAYS_CLOSED, 1, 1e4f},
+    {"sphere_far_1e6", "closed sphere moved to (1e6,1e6,1e6): vertex, edge and leak rays",
+     "sphere:segments=12", RAYS_CLOSED, 1, 1e6f},
+    {"cube_tiny_1e-4", "closed cube scaled by 1e-4", "cube:n=8", RAYS_CLOSED, 1e-4f, 0},
+    {"cube_huge_1e6", "closed cube scaled by 1e6", "cube:n=8", RAYS_CLOSED, 1e6f, 0},
+    {"soup_lattice", "axis rays (+-0 components) and cell-diagonal rays from cell boundaries and split planes",
+     "soup:tris=3000", RAYS_LATTICE, 1, 0},
+    {"cube_lattice", "axis and diagonal rays on the closed cube: along faces, edges and vertex rows",
+     "cube:n=4", RAYS_LATTICE, 1, 0},
+    {"cube_grazing", "rays lying in the cube's face planes and along its edges", "cube:n=4",
+     RAYS_GRAZING, 1, 0},
+    {"soup_inside_boxes", "random rays starting inside primitives' bounding boxes",
+     "soup:tris=3000,size=3", RAYS_INSIDE_BOXES, 1, 0},
+    {"flat", "zero-thickness scene: every triangle in the plane z = 0, rays across and in it",
+     NULL, RAYS_MIXED, 1, 0},
+    {"tiny_huge", "tiny (1e-4) and huge (1e4) triangles side by side", NULL, RAYS_MIXED, 1, 0},
+    {"degenerate", "zero-area and collinear triangles among normal ones (never to be hit)",
+     NULL, RAYS_MIXED, 1, 0},
+    {"coincident", "many coincident and coplanar triangles (ties in t)", NULL, RAYS_MIXED, 1, 0},
+    {"same_centroid", "every triangle with the same centroid (binning must not divide by zero)",
+     NULL, RAYS_MIXED, 1, 0},
+};
+
+int stiff_case_count(void) { return (int)(sizeof cases / sizeof cases[0]); }
+
+void stiff_case_free(stiff_case *c)
+{
+    scene_free(&c->scene);
+    rays_free(&c->rays);
+}
+
+/* Hand-made scenes for the RAYS_MIXED cases. */
+static int make_special(const char *name, scene_builder *b, accel_error *err)
+{
+    int rc = 0;
+    uint64_t seed = 5;
+    if (!strcmp(name, "flat")) {
+        for (int i = 0; rc == 0 && i < 2000; i++) {
+            vec3 a = v3(rays_rand(seed, (uint64_t)i, 0), rays_rand(seed, (uint64_t)i, 1), 0);
+            vec3 c = v3_add(a, v3(0.05f * rays_rand(seed, (uint64_t)i, 2), 0.03f, 0));
+            vec3 d = v3_add(a, v3(-0.02f, 0.05f * rays_rand(seed, (uint64_t)i, 3), 0));
+            rc = scene_builder_add_tri(b, a, c, d, err);
+        }
+    } else if (!strcmp(name, "tiny_huge")) {
+        rc = scene_builder_add_tri(b, v3(-1e4f, -1e4f, 0), v3(1e4f, -1e4f, 0), v3(0, 1e4f, 0), err);
+        for (int i = 0; rc == 0 && i < 2000; i++) {
+            vec3 a = v3(2 * rays_rand(seed, (uint64_t)i, 0) - 1, 2 * rays_rand(seed, (uint64_t)i, 1) - 1,
+                        1e-3f + rays_rand(seed, (uint64_t)i, 2));
+            rc = scene_builder_add_tri(b, a, v3_add(a, v3(1e-4f, 0, 0)), v3_add(a, v3(0, 1e-4f, 1e-5f)), err);
+        }
+        for (int i = 0; rc == 0 && i < 4; i++)
+            rc = scene_builder_add_tri(b, v3(-1e4f, 3e3f * (float)i, -5e3f), v3(1e4f, 3e3f * (float)i, -5e3f),
+                                       v3(0, 3e3f * (float)i, 1e4f), err);
+    } else if (!strcmp(name, "degenerate")) {
+        for (int i = 0; rc == 0 && i < 1500; i++) {
+            vec3 a = v3(rays_rand(seed, (uint64_t)i, 0), rays_rand(seed, (uint64_t)i, 1),
+                        rays_rand(seed, (uint64_t)i, 2));
+            vec3 e = v3(0.05f, 0.02f, 0.01f);
+            switch (i % 3) {
+            case 0: rc = scene_builder_add_tri(b, a, a, v3_add(a, e), err); break;          /* repeated vertex */
+            case 1: rc = scene_builder_add_tri(b, a, v3_add(a, e), v3_add(a, v3_scale(e, 2)), err); break; /* collinear */
+            default: rc = scene_builder_add_tri(b, a, v3_add(a, e), v3_add(a, v3(0, 0.04f, 0)), err); break;
+            }
+        }
+    } else if (!strcmp(name, "coincident")) {
+        for (int i = 0; rc == 0 && i < 400; i++) {
+            vec3 a = v3(rays_rand(seed, (uint64_t)(i / 8), 0), rays_rand(seed, (uint64_t)(i / 8), 1), 0.5f);
+            rc = scene_builder_add_tri(b, a, v3_add(a, v3(0.2f, 0, 0)), v3_add(a, v3(0, 0.2f, 0)), err);
+        }
+        for (int i = 0; rc == 0 && i < 200; i++) /* coplanar, overlapping, different shapes */
+            rc = scene_builder_add_tri(b, v3(0, 0, 0.25f), v3(1, 0.005f * (float)i, 0.25f),
+                                       v3(0.005f * (float)i, 1, 0.25f), err);
+    } else if (!strcmp(name, "same_centroid")) {
+        for (int i = 0; rc == 0 && i < 1000; i++) {
+            float ang = 6.2831853f * (float)i / 1000.0f, r = 0.2f + 0.8f * rays_rand(seed, (uint64_t)i, 0);
+            vec3 u = v3(cosf(ang), sinf(ang), 0.3f * rays_rand(seed, (uint64_t)i, 1));
+            vec3 w = v3(-sinf(ang) * 0.5f, cosf(ang) * 0.5f, 1);
+            /* Vertices p, q, -(p+q) around the origin: centroid exactly 0. */
+            vec3 p = v3_scale(u, r), q = v3_scale(w, r * 0.7f);
+            rc = scene_builder_add_tri(b, p, q, v3_scale(v3_add(p, q), -1.0f), err);
+        }
+    }
+    return rc;
+}
+
+int stiff_case_make(int i, stiff_case *c, accel_error *err)
+{
+    memset(c, 0, sizeof *c);
+    if (i < 0 || i >= stiff_case_count())
+        return accel_fail(err, ACCEL_ERR_RANGE, "stiff case %d out of range", i);
+    const case_def *d = &cases[i];
+    snprintf(c->name, sizeof c->name, "%s", d->name);
+    snprintf(c->what, sizeof c->what, "%s", d->what);
+    int rc;
+    if (d->scene) {
+        accel_scene base;
+        rc = scene_create(d->scene, &base, err);
+        if (rc) return rc;
+        if (d->scale != 1.0f || d->offset != 0.0f) {
+            rc = scene_transform(&base, d->scale, v3(d->offset, d->offset, d->offset), &c->scene, err);
+            scene_free(&base);
+            if (rc) return rc;
+        } else {
+            c->scene = base;
+        }
+    } else {
+        scene_builder b = {0};
+        rc = make_special(d->name, &b, err);
+        if (rc == 0) rc = scene_finish(&b, d->name, &c->scene, err);
+        scene_builder_free(&b);
+        if (rc) return rc;
+    }
+    ray_sink k = {&c->rays, 0, err, 0};
+    const accel_scene *s = &c->scene;
+    c->leak_begin = SIZE_MAX;
+    switch (d->kind) {
+    case RAYS_CLOSED:
+        closed_mesh_rays(&k, s, box3_center(s->bounds), 400, 4, &c->leak_begin);
+        break;
+    case RAYS_LATTICE:
+        lattice_rays(&k, s->bounds);
+        break;
+    case RAYS_GRAZING:
+        grazing_rays(&k, s->bounds);
+        lattice_rays(&k, s->bounds);
+        break;
+    case RAYS_INSIDE_BOXES:
+        inside_box_rays(&k, s, 2000);
+        break;
+    case RAYS_MIXED:
+        for (int e = 0; e < 3; e++) vertex_rays(&k, s, outside_eye(s->bounds, 3, (uint64_t)e), 300, 40 + (uint64_t)e);
+        lattice_rays(&k, s->bounds);
+        inside_box_rays(&k, s, 500);
+        break;
+    }
+    if (c->leak_begin == SIZE_MAX) c->leak_begin = c->rays.count;
+    if (k.rc) stiff_case_free(c);
+    return k.rc;
+}
+
+int stiff_case_from_scene(const char *spec, int closed, stiff_case *c, accel_error *err)
+{
+    memset(c, 0, sizeof *c);
+    int rc = scene_create(spec, &c->scene, err);
+    if (rc) return rc;
+    snprintf(c->name, sizeof c->name, "%s", c->scene.name);
+    snprintf(c->what, sizeof c->what, "vertex and edge rays from outside%s",
+             closed ? ", leak rays from inside" : "");
+    ray_sink k = {&c->rays, 0, err, 0};
+    if (closed)
+        closed_mesh_rays(&k, &c->scene, box3_center(c->scene.bounds), 500, 4, &c->leak_begin);
+    else {
+        for (int e = 0; e < 4; e++)
+            vertex_rays(&k, &c->scene, outside_eye(c->scene.bounds, 21, (uint64_t)e), 500, 100 + (uint64_t)e);
+        vertex_rays(&k, &c->scene, c->scene.camera.eye, 1000, 99);
+        c->leak_begin = c->rays.count;
+    }
+    if (k.rc) stiff_case_free(c);
+    return k.rc;
+}

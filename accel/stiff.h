@@ -1,0 +1,42 @@
+/*
+ * stiff.h - the stiff and extreme cases of the stability study.
+ *
+ * Each case is a scene plus a ray set built to hit a known weakness:
+ * rays aimed exactly at shared vertices and edges of closed meshes (from
+ * outside, and from inside, where a miss is a leak whatever the reference
+ * says), rays along the axes and along cell diagonals with +0/-0
+ * components starting exactly on cell boundaries and split planes, rays
+ * grazing faces, origins inside primitives' boxes, scenes far from the
+ * origin, tiny and huge, flat, degenerate, coincident and same-centroid
+ * geometry. Deterministic: case i is always the same scene and rays.
+ */
+#ifndef ACCEL_STIFF_H
+#define ACCEL_STIFF_H
+
+#include "rays.h"
+
+typedef struct {
+    char name[96];
+    char what[160];          /* one line: what the case probes */
+    accel_scene scene;
+    rays_set rays;
+    /* Rays [leak_begin, rays.count) start inside a closed mesh: each must
+     * hit something (a miss is a leak), whatever any tracer says. */
+    size_t leak_begin;
+} stiff_case;
+
+/* Number of built-in cases. */
+int stiff_case_count(void);
+/* Makes case i (0 <= i < stiff_case_count()). */
+int stiff_case_make(int i, stiff_case *c, accel_error *err);
+/* Case from any scene (a mesh file): vertex/edge rays from outside and,
+ * when `closed`, from the centre of its bounds (leak rays). */
+int stiff_case_from_scene(const char *spec, int closed, stiff_case *c, accel_error *err);
+void stiff_case_free(stiff_case *c);
+
+/* Rays from `eye` aimed exactly at vertices and edge midpoints of `count`
+ * deterministic random live triangles (appends to *r, growing it). */
+int stiff_add_vertex_rays(const accel_scene *s, vec3 eye, size_t count, uint64_t seed,
+                          rays_set *r, accel_error *err);
+
+#endif

@@ -1,0 +1,156 @@
+/*
+ * test_stability.c - every registered kind and variant on the stiff and
+ * extreme cases of accel/stiff.c.
+ *
+ * Held for the robust (watertight) kernels: zero holes, zero false hits,
+ * zero disagreements against the double-precision reference, zero leaks
+ * (rays from inside a closed mesh that escape), occluded agreeing with the
+ * reference; every traversal finishes (step bounds turn a loop into an
+ * abort). The naive kernels' counts are printed per million rays: they are
+ * the study's subject, not a failure.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "stiff.h"
+#include "test.h"
+
+typedef struct {
+    size_t rays, holes, false_hits, disagreements, leaks, occ_bad;
+} tally;
+
+static void run_spec(const stiff_case *c, const accel_hit *ref, const char *spec, tally *t,
+                     int *build_failed)
+{
+    double t0 = accel_now_ms();
+    accel_error err = {0};
+    const accel_kind *kind;
+    void *accel;
+    accel_build_stats st;
+    memset(t, 0, sizeof *t);
+    if (accel_build_spec(spec, &c->scene, 2, &kind, &accel, &st, &err)) {
+        test_fail(__FILE__, __LINE__, "%s on %s: build failed: %s", spec, c->name, err.msg);
+        *build_failed = 1;
+        return;
+    }
+    size_t n = c->rays.count;
+    accel_hit *h = malloc((n ? n : 1) * sizeof *h);
+    uint8_t *occ = malloc(n ? n : 1);
+    accel_trace(kind, accel, c->rays.rays, h, n, 2, NULL);
+    accel_trace_occluded(kind, accel, c->rays.rays, occ, n, 2, NULL);
+    hits_diff d = hits_compare(ref, h, n);
+    t->rays = n;
+    t->holes = d.holes;
+    t->false_hits = d.false_hits;
+    t->disagreements = d.disagreements;
+    for (size_t i = c->leak_begin; i < n; i++) t->leaks += h[i].prim == ACCEL_MISS;
+    for (size_t i = 0; i < n; i++) t->occ_bad += occ[i] != (ref[i].prim != ACCEL_MISS);
+    free(h);
+    free(occ);
+    kind->destroy(accel);
+    double ms = accel_now_ms() - t0;
+    if (ms > 2000) test_note("slow: %s on %s took %.0f ms", spec, c->name, ms);
+}
+
+TEST(stability_stiff_cases)
+{
+    for (int ci = 0; ci < stiff_case_count(); ci++) {
+        stiff_case c;
+        accel_error err = {0};
+        if (stiff_case_make(ci, &c, &err)) {
+            test_fail(__FILE__, __LINE__, "stiff case %d: %s", ci, err.msg);
+            continue;
+        }
+        size_t n = c.rays.count;
+        accel_hit *ref = malloc((n ? n : 1) * sizeof *ref);
+        accel_reference_trace(&c.scene, c.rays.rays, ref, n, accel_cpu_count());
+        /* The case itself: the reference must not leak either. */
+        size_t ref_leaks = 0;
+        for (size_t i = c.leak_begin; i < n; i++) ref_leaks += ref[i].prim == ACCEL_MISS;
+        CHECKF(ref_leaks == 0, "%s: the reference leaks %zu of %zu inside rays", c.name, ref_leaks,
+               n - c.leak_begin);
+        CHECKF(n > 100, "%s: only %zu rays", c.name, n);
+        for (size_t k = 0; k < accel_kind_count; k++) {
+            const accel_kind *kind = accel_kinds[k];
+            if (!test_kind_selected(kind->name)) continue;
+            static const char *const none[] = {"", NULL};
+            const char *const *vars = kind->variants ? kind->variants : none;
+            for (int v = 0; vars[v]; v++) {
+                for (int naive = 0; naive < 2; naive++) {
+                    if (naive && (v > 0 || strstr(vars[v], "tri=naive"))) continue;
+                    char spec[256];
+                    snprintf(spec, sizeof spec, "%s%s%s%s", kind->name,
+                             vars[v][0] || naive ? ":" : "", vars[v],
+                             naive ? (vars[v][0] ? ",tri=naive" : "tri=naive") : "");
+                    int is_naive = naive || strstr(vars[v], "tri=naive") != NULL;
+                    tally t;
+                    int failed = 0;
+                    run_spec(&c, ref, spec, &t, &failed);
+                    if (failed) continue;
+                    size_t bad = t.holes + t.false_hits + t.disagreements + t.leaks + t.occ_bad;
+                    if (is_naive) {
+                        if (bad)
+                            test_note("%s on %s: per million rays: %.0f holes, %.0f false hits, "
+                                      "%.0f disagreements, %.0f leaks",
+                                      spec, c.name, 1e6 * t.holes / n, 1e6 * t.false_hits / n,
+                                      1e6 * t.disagreements / n, 1e6 * t.leaks / n);
+                    } else {
+                        CHECKF(bad == 0,
+                               "%s on %s (%s): %zu holes, %zu false hits, %zu disagreements, "
+                               "%zu leaks, %zu occluded mismatches of %zu rays",
+                               spec, c.name, c.what, t.holes, t.false_hits, t.disagreements,
+                               t.leaks, t.occ_bad, n);
+                    }
+                }
+            }
+        }
+        free(ref);
+        stiff_case_free(&c);
+    }
+}
+
+TEST(stability_shared_meshes_vertex_rays)
+{
+    const char *dir = test_shared_scenes();
+    if (!dir) {
+        test_note("skipped: ../shared/scenes not found");
+        return;
+    }
+    static const char *const meshes[] = {"bunny.off", "armadillo.off"};
+    for (size_t m = 0; m < sizeof meshes / sizeof meshes[0]; m++) {
+        char path[512];
+        snprintf(path, sizeof path, "%s/%s", dir, meshes[m]);
+        stiff_case c;
+        accel_error err = {0};
+        if (stiff_case_from_scene(path, 0, &c, &err)) {
+            test_note("skipped %s: %s", path, err.msg);
+            continue;
+        }
+        size_t n = c.rays.count;
+        accel_hit *ref = malloc((n ? n : 1) * sizeof *ref);
+        accel_reference_trace(&c.scene, c.rays.rays, ref, n, accel_cpu_count());
+        for (size_t k = 0; k < accel_kind_count; k++) {
+            if (!strcmp(accel_kinds[k]->name, "brute")) continue; /* the reference's twin */
+            if (!test_kind_selected(accel_kinds[k]->name)) continue;
+            for (int naive = 0; naive < 2; naive++) {
+                char spec[128];
+                snprintf(spec, sizeof spec, "%s%s", accel_kinds[k]->name, naive ? ":tri=naive" : "");
+                tally t;
+                int failed = 0;
+                run_spec(&c, ref, spec, &t, &failed);
+                if (failed) continue;
+                size_t bad = t.holes + t.false_hits + t.disagreements + t.occ_bad;
+                if (naive)
+                    test_note("%s on %s: %zu rays, per million: %.0f holes, %.0f false hits, "
+                              "%.0f disagreements", spec, meshes[m], n, 1e6 * t.holes / n,
+                              1e6 * t.false_hits / n, 1e6 * t.disagreements / n);
+                else
+                    CHECKF(bad == 0, "%s on %s: %zu holes, %zu false hits, %zu disagreements, "
+                           "%zu occluded mismatches of %zu rays", spec, meshes[m], t.holes,
+                           t.false_hits, t.disagreements, t.occ_bad, n);
+            }
+        }
+        free(ref);
+        stiff_case_free(&c);
+    }
+}
