@@ -20,7 +20,7 @@
 
 #include "build_common.h"
 
-#if defined(__SSE2__)
+#if BVH_SSE
 #include <immintrin.h>
 #endif
 
@@ -30,7 +30,7 @@
 
 /* ---- boxes and bin indices, 4-wide where the machine has SSE ------------- */
 
-#if defined(__SSE2__)
+#if BVH_SSE
 typedef struct {
     __m128 lo, hi; /* lane 3 unused */
 } box4;
@@ -39,16 +39,6 @@ static inline void box4_clear(box4 *b)
 {
     b->lo = _mm_set1_ps(INFINITY);
     b->hi = _mm_set1_ps(-INFINITY);
-}
-
-/* Lane 3 of a reference's halves holds its id and padding bits, denormal
- * numbers as floats: they are cleared on loading, since arithmetic on a
- * denormal costs a microcode assist. Grown boxes then have 0 in lane 3. */
-static inline void box4_grow_ref(box4 *b, const bvh_ref *r)
-{
-    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
-    b->lo = _mm_min_ps(b->lo, _mm_and_ps(_mm_loadu_ps(r->lo), xyz));
-    b->hi = _mm_max_ps(b->hi, _mm_and_ps(_mm_loadu_ps(r->hi), xyz));
 }
 
 static inline void box4_union(box4 *b, const box4 *o)
@@ -71,7 +61,6 @@ typedef struct {
 } box4;
 
 static inline void box4_clear(box4 *b) { b->b = box3_empty(); }
-static inline void box4_grow_ref(box4 *b, const bvh_ref *r) { b->b = box3_union(b->b, bvh_ref_box(r)); }
 static inline void box4_union(box4 *b, const box4 *o) { b->b = box3_union(b->b, o->b); }
 static inline box3 box4_to_box3(const box4 *b) { return b->b; }
 #endif
@@ -82,7 +71,7 @@ static inline box3 box4_to_box3(const box4 *b) { return b->b; }
  * and relative areas are at most 3, so the sweep can run in float without
  * overflow whatever the scene's size.
  */
-#if defined(__SSE2__)
+#if BVH_SSE
 static inline float box4_scaled_area(const box4 *b, __m128 scale)
 {
     __m128 e = _mm_mul_ps(_mm_sub_ps(b->hi, b->lo), scale); /* lane 3: 0 */
@@ -108,31 +97,45 @@ typedef struct {
 } bin_plan;
 
 /*
- * Bin of a reference's centroid on each axis (out[axis]). Binning and
- * partitioning both use this one function, so that they can never disagree
- * about a reference. The centroid is 0.5*lo + 0.5*hi as bvh_ref_centroid
- * computes it; any rounding difference from the centroid bounds only moves
- * a reference by a bin, and the clamps keep it inside [0, bins-1].
+ * A reference as the binner sees it: its box, its centroid, and its bin on
+ * each axis (bin[axis]). Binning and partitioning both use this one
+ * function, so that they can never disagree about a reference. The
+ * centroid is 0.5*lo + 0.5*hi as bvh_ref_centroid computes it; a rounding
+ * difference from the centroid bounds only moves a reference by a bin, and
+ * the clamps keep every bin inside [0, bins-1].
  */
-static inline void bin_ref(const bin_plan *p, const bvh_ref *r, int out[4])
+typedef struct {
+    box4 box;
+#if BVH_SSE
+    __m128 c; /* lane 3: 0 */
+#else
+    vec3 c;
+#endif
+    int bin[4];
+} ref_view;
+
+static inline void view_ref(const bin_plan *p, const bvh_ref *r, ref_view *v)
 {
-#if defined(__SSE2__)
+#if BVH_SSE
     /* Lane 3 (id bits: a denormal as a float) is cleared before any
      * arithmetic: denormal operands cost a microcode assist each. */
     const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
     const __m128 half = _mm_set1_ps(0.5f);
-    __m128 lo = _mm_and_ps(_mm_loadu_ps(r->lo), xyz), hi = _mm_and_ps(_mm_loadu_ps(r->hi), xyz);
-    __m128 c = _mm_add_ps(_mm_mul_ps(lo, half), _mm_mul_ps(hi, half));
-    __m128 f = _mm_mul_ps(_mm_sub_ps(c, _mm_load_ps(p->cmin)), _mm_load_ps(p->scale));
+    v->box.lo = _mm_and_ps(_mm_loadu_ps(r->lo), xyz);
+    v->box.hi = _mm_and_ps(_mm_loadu_ps(r->hi), xyz);
+    v->c = _mm_add_ps(_mm_mul_ps(v->box.lo, half), _mm_mul_ps(v->box.hi, half));
+    __m128 f = _mm_mul_ps(_mm_sub_ps(v->c, _mm_load_ps(p->cmin)), _mm_load_ps(p->scale));
     f = _mm_max_ps(f, _mm_setzero_ps()); /* also turns a NaN into 0 */
     f = _mm_min_ps(f, _mm_set1_ps((float)(p->bins - 1)));
-    _mm_storeu_si128((__m128i *)out, _mm_cvttps_epi32(f));
+    _mm_storeu_si128((__m128i *)v->bin, _mm_cvttps_epi32(f));
 #else
+    v->box.b = bvh_ref_box(r);
+    v->c = bvh_ref_center(r);
     for (int a = 0; a < 3; a++) {
-        float f = (bvh_ref_centroid(r, a) - p->cmin[a]) * p->scale[a];
+        float f = (v3_get(v->c, a) - p->cmin[a]) * p->scale[a];
         f = f > 0.0f ? f : 0.0f;
         f = f < (float)(p->bins - 1) ? f : (float)(p->bins - 1);
-        out[a] = (int)f;
+        v->bin[a] = (int)f;
     }
 #endif
 }
@@ -166,23 +169,23 @@ static void clear_bins(bin_set *s, const bin_plan *p)
 
 static void bin_range(const bvh_ref *refs, size_t begin, size_t end, const bin_plan *p, bin_set *s)
 {
-    int b[4];
+    ref_view v;
     if (p->axis_count == 3) { /* the common case, with constant axes */
         for (size_t i = begin; i < end; i++) {
-            bin_ref(p, &refs[i], b);
+            view_ref(p, &refs[i], &v);
             for (int a = 0; a < 3; a++) {
-                s->count[a][b[a]]++;
-                box4_grow_ref(&s->box[a][b[a]], &refs[i]);
+                s->count[a][v.bin[a]]++;
+                box4_union(&s->box[a][v.bin[a]], &v.box);
             }
         }
         return;
     }
     for (size_t i = begin; i < end; i++) {
-        bin_ref(p, &refs[i], b);
+        view_ref(p, &refs[i], &v);
         for (int k = 0; k < p->axis_count; k++) {
             int a = p->axis[k];
-            s->count[a][b[a]]++;
-            box4_grow_ref(&s->box[a][b[a]], &refs[i]);
+            s->count[a][v.bin[a]]++;
+            box4_union(&s->box[a][v.bin[a]], &v.box);
         }
     }
 }
@@ -270,24 +273,25 @@ static void groups_sparse(const bvh_build *ctx, const bvh_task *t, const bin_pla
 {
     const bvh_ref *refs = ctx->refs + t->first;
     uint32_t n = t->count;
+    ref_view v[BINS_MAX];
+    for (uint32_t i = 0; i < n; i++) view_ref(plan, &refs[i], &v[i]);
+    int words = (plan->bins + 63) / 64;
     for (int k = 0; k < plan->axis_count; k++) {
         int a = plan->axis[k];
         uint64_t used[BINS_MAX / 64] = {0};
-        int words = (plan->bins + 63) / 64;
         box4 box[BINS_MAX];
         uint32_t count[BINS_MAX];
         for (uint32_t i = 0; i < n; i++) {
-            int b[4];
-            bin_ref(plan, &refs[i], b);
-            int x = b[a];
+            int x = v[i].bin[a];
             uint64_t bit = (uint64_t)1 << (x & 63);
             if (!(used[x >> 6] & bit)) {
                 used[x >> 6] |= bit;
-                box4_clear(&box[x]);
-                count[x] = 0;
+                box[x] = v[i].box;
+                count[x] = 1;
+            } else {
+                box4_union(&box[x], &v[i].box);
+                count[x]++;
             }
-            box4_grow_ref(&box[x], &refs[i]);
-            count[x]++;
         }
         ng[k] = 0;
         for (int w = 0; w < words; w++)
@@ -311,17 +315,14 @@ static uint32_t partition(bvh_ref *r, uint32_t n, const bin_plan *plan, int axis
                           box3 *lc, box3 *rc)
 {
     uint32_t l = 0;
-#if defined(__SSE2__)
+#if BVH_SSE
     __m128 llo = _mm_set1_ps(INFINITY), lhi = _mm_set1_ps(-INFINITY);
     __m128 rlo = llo, rhi = lhi;
-    const __m128 half = _mm_set1_ps(0.5f);
-    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
     for (uint32_t i = 0; i < n; i++) {
-        int b[4];
-        bin_ref(plan, &r[i], b);
-        int left = b[axis] <= best_bin;
-        __m128 c = _mm_add_ps(_mm_mul_ps(_mm_and_ps(_mm_loadu_ps(r[i].lo), xyz), half),
-                              _mm_mul_ps(_mm_and_ps(_mm_loadu_ps(r[i].hi), xyz), half));
+        ref_view v;
+        view_ref(plan, &r[i], &v);
+        int left = v.bin[axis] <= best_bin;
+        __m128 c = v.c;
         __m128 m = _mm_castsi128_ps(_mm_set1_epi32(-left));
         /* grow the chosen side's centroid box: min/max with c, or with +-inf */
         __m128 cl = _mm_or_ps(_mm_and_ps(m, c), _mm_andnot_ps(m, _mm_set1_ps(INFINITY)));
@@ -344,17 +345,17 @@ static uint32_t partition(bvh_ref *r, uint32_t n, const bin_plan *plan, int axis
     *lc = box3_empty();
     *rc = box3_empty();
     for (uint32_t i = 0; i < n; i++) {
-        int b[4];
-        bin_ref(plan, &r[i], b);
-        vec3 c = bvh_ref_center(&r[i]);
-        if (b[axis] <= best_bin)
-            *lc = box3_grow(*lc, c);
+        ref_view v;
+        view_ref(plan, &r[i], &v);
+        int left = v.bin[axis] <= best_bin;
+        if (left)
+            *lc = box3_grow(*lc, v.c);
         else
-            *rc = box3_grow(*rc, c);
+            *rc = box3_grow(*rc, v.c);
         bvh_ref tmp = r[i];
         r[i] = r[l];
         r[l] = tmp;
-        l += b[axis] <= best_bin;
+        l += (uint32_t)left;
     }
 #endif
     return l;
@@ -367,6 +368,7 @@ static void binned_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_spl
         bvh_split_median(ctx, t, out);
         return;
     }
+    if (bvh_leaf_certain(ctx, t)) return;
     bin_plan plan;
     plan_bins(ctx, t, &plan);
     if (plan.axis_count == 0) return; /* all centroids equal: leaf, or the driver's median */
@@ -385,7 +387,7 @@ static void binned_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_spl
     vec3 ext = box3_extent(t->bounds);
     float scale = 1.0f / maxf(maxf(ext.x, ext.y), ext.z);
     if (!isfinite(scale)) scale = 0.0f; /* a degenerate or overflowing node: all areas 0 */
-#if defined(__SSE2__)
+#if BVH_SSE
     const __m128 sc = _mm_set1_ps(scale);
 #else
     const float sc = scale;

@@ -59,6 +59,19 @@ int bvh_split_pays(const bvh_build *ctx, const bvh_task *t, double split_sum)
     return split < leaf;
 }
 
+int bvh_leaf_certain(const bvh_build *ctx, const bvh_task *t)
+{
+    if (t->count > (uint32_t)ctx->opts.max_leaf) return 0;
+    double area = bvh_half_area(t->bounds);
+    if (!(area > 0.0)) return 0;
+    double sum = 0.0;
+    for (uint32_t i = t->first; i < t->first + t->count; i++)
+        sum += bvh_half_area(bvh_ref_box(&ctx->refs[i]));
+    double leaf = (double)ctx->opts.ci * t->count;
+    double bound = (double)ctx->opts.ct + (double)ctx->opts.ci * sum / area;
+    return bound > leaf * (1.0 + 1e-3);
+}
+
 void bvh_refs_bounds(const bvh_ref *refs, uint32_t first, uint32_t count, box3 *bounds,
                      box3 *cbounds)
 {

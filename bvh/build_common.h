@@ -136,6 +136,14 @@ static inline int bvh_task_forced(const bvh_task *t)
  * A task larger than max_leaf is always split. */
 int bvh_split_pays(const bvh_build *ctx, const bvh_task *t, double split_sum);
 
+/* A lower bound that spares small tasks the split search: every part's box
+ * contains the boxes of its primitives, so A_L*N_L + A_R*N_R is at least
+ * the sum of the primitives' own areas, and when even that bound makes a
+ * split cost more than the leaf (by a margin that covers rounding in the
+ * builders' own cost sums), any split function would answer "leaf" too.
+ * Only for tasks whose references lie at refs[first, first+count). */
+int bvh_leaf_certain(const bvh_build *ctx, const bvh_task *t);
+
 /* Object median on the axis of largest centroid extent (quickselect on the
  * centroid, ties broken by primitive id so the result is unique): the
  * `median` builder, and every builder's fallback when forced by the depth

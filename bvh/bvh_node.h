@@ -66,6 +66,19 @@ enum { BVH_TRAVERSE_SINGLE = 0, BVH_TRAVERSE_PACKET = 1 };
 /* Rays per packet: the 8x8 screen tiles the primary ray sets emit. */
 #define BVH_PACKET_SIZE 64
 
+/* SIMD paths (SSE in the binned builder, AVX in the packet kernel); build
+ * with -DBVH_NO_SIMD to compare against their scalar twins. */
+#if defined(__SSE2__) && !defined(BVH_NO_SIMD)
+#define BVH_SSE 1
+#else
+#define BVH_SSE 0
+#endif
+#if defined(__AVX__) && !defined(BVH_NO_SIMD)
+#define BVH_AVX 1
+#else
+#define BVH_AVX 0
+#endif
+
 /* The built structure. Immutable after build. */
 typedef struct bvh {
     bvh_node *nodes;      /* node_count nodes, BVH_NODE_ALIGN-aligned */

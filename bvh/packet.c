@@ -11,12 +11,21 @@
  *   1. early in: test the first active ray; if it hits, descend;
  *   2. otherwise scan for the first ray that hits the box; it becomes the
  *      new `first`; if none does, skip the node;
- *   3. leaf: intersect every primitive with every ray from `first` on;
+ *   3. leaf: intersect the primitives with the rays from `first` on;
  *      interior: visit the child nearer along the first active ray's
  *      direction first and push the other with `first`.
- * Per-ray box tests are bvh_slab, the same robust test as single rays, so
- * a packet is correct for any rays: mixed direction signs, different
- * origins, invalid rays (they start dead and never hit a box).
+ *
+ * The packet is stored as arrays (one per ray attribute), so the box test
+ * runs on 8 rays at once with AVX: steps 1 and 2 test the group of 8 that
+ * holds `first` and then the following groups, and take the lowest ray
+ * that hits. The 8-wide test performs, lane by lane, exactly the
+ * operations of bvh_slab (Ize 2013), so it accepts exactly the boxes the
+ * single-ray kernel accepts: a packet is correct for any rays, mixed
+ * direction signs, different origins, invalid rays (they start dead: an
+ * empty t range misses every box). At a leaf the same test culls the rays
+ * that miss the leaf's box before their primitive tests (the lecture tests
+ * all remaining rays; the culling test is 8 rays per instruction sequence,
+ * a primitive test is one ray).
  *
  * frustum=1 adds a conservative early-out before step 1, by interval
  * arithmetic on the packet (Wald et al. 2007, section 4.3): when every live
@@ -25,9 +34,9 @@
  * bounds on every ray's slab entry and exit follow from the box's planes.
  * If even the earliest possible entry lies beyond the latest possible exit,
  * no ray can hit the box and the node is skipped after one test instead of
- * up to 64. Rounding is monotone, so the bounds computed in float enclose
- * the float values each ray's own test computes: the early-out never drops
- * a box that some ray's bvh_slab would accept.
+ * up to 8 groups. Rounding is monotone, so the bounds computed in float
+ * enclose the float values each ray's own test computes: the early-out
+ * never drops a box that some ray's test would accept.
  *
  * Counters: steps and box tests are per ray (a node visit counts for every
  * ray from `first` on; ray_steps uses a difference array so that counting a
@@ -37,17 +46,35 @@
 
 #include "bvh_node.h"
 
+#if BVH_AVX
+#include <immintrin.h>
+#endif
+
 #define P BVH_PACKET_SIZE
+#define GROUP 8 /* rays per box test: one AVX register */
+#define GROUPS (P / GROUP)
+
+_Static_assert(P == 64, "the live-ray mask is one uint64_t");
 
 typedef struct {
+    /* Slab-test data, one array per attribute. Rays past the packet's end
+     * and invalid rays have the empty range [+inf, -inf]. */
+    _Alignas(32) float ox[P];
+    _Alignas(32) float oy[P];
+    _Alignas(32) float oz[P];
+    _Alignas(32) float ix[P];
+    _Alignas(32) float iy[P];
+    _Alignas(32) float iz[P];
+    _Alignas(32) float t_near[P];
+    _Alignas(32) float t[P]; /* closest hit so far */
+    _Alignas(32) int32_t negx[P]; /* -1 when the direction's sign bit is set */
+    _Alignas(32) int32_t negy[P];
+    _Alignas(32) int32_t negz[P];
+    uint64_t alive; /* bit i: ray i is still traced */
     uint32_t n;
-    uint32_t alive_count;
-    float t_near[P], t[P];     /* t: closest hit so far; a dead ray has [+inf, -inf] */
     uint32_t slot[P];
     float u[P], v[P];
-    uint8_t alive[P];
-    bvh_slab_ray sr[P];
-    accel_ray_prep prep[P];
+    accel_ray_prep prep[P]; /* for the primitive tests */
     /* Interval bounds of the live rays (frustum=1). */
     int ia;                    /* the bounds are usable */
     int ia_near[3], ia_far[3]; /* shared plane offsets */
@@ -60,43 +87,53 @@ typedef struct {
     uint32_t first;
 } packet_entry;
 
+static void kill_ray(packet *pk, uint32_t i)
+{
+    pk->alive &= ~((uint64_t)1 << i);
+    pk->t_near[i] = INFINITY;
+    pk->t[i] = -INFINITY;
+}
+
 static void packet_setup(packet *pk, const accel_ray *rays, uint32_t n, int frustum)
 {
     pk->n = n;
-    pk->alive_count = 0;
-    for (uint32_t i = 0; i < n; i++) {
+    pk->alive = 0;
+    for (uint32_t i = 0; i < P; i++) {
         pk->slot[i] = ACCEL_MISS;
         pk->u[i] = pk->v[i] = 0.0f;
-        if (accel_prep_ray(&rays[i], &pk->prep[i])) {
-            pk->alive[i] = 1;
-            pk->alive_count++;
-            bvh_slab_setup(&pk->sr[i], &pk->prep[i]);
-            pk->t_near[i] = pk->prep[i].t_near;
-            pk->t[i] = pk->prep[i].t_far;
+        accel_ray_prep *p = &pk->prep[i];
+        if (i < n && accel_prep_ray(&rays[i], p)) {
+            pk->alive |= (uint64_t)1 << i;
+            pk->ox[i] = p->org.x, pk->oy[i] = p->org.y, pk->oz[i] = p->org.z;
+            pk->ix[i] = p->inv_dir.x, pk->iy[i] = p->inv_dir.y, pk->iz[i] = p->inv_dir.z;
+            pk->negx[i] = -p->neg[0], pk->negy[i] = -p->neg[1], pk->negz[i] = -p->neg[2];
+            pk->t_near[i] = p->t_near;
+            pk->t[i] = p->t_far;
         } else {
-            pk->alive[i] = 0;
-            memset(&pk->sr[i], 0, sizeof pk->sr[i]);
-            pk->t_near[i] = INFINITY;
-            pk->t[i] = -INFINITY;
+            pk->ox[i] = pk->oy[i] = pk->oz[i] = 0.0f;
+            pk->ix[i] = pk->iy[i] = pk->iz[i] = 0.0f;
+            pk->negx[i] = pk->negy[i] = pk->negz[i] = 0;
+            kill_ray(pk, i);
         }
     }
     pk->ia = 0;
-    if (!frustum || pk->alive_count == 0) return;
+    if (!frustum || pk->alive == 0) return;
     int first = 1;
     for (uint32_t i = 0; i < n; i++) {
-        if (!pk->alive[i]) continue;
+        if (!(pk->alive >> i & 1)) continue;
         const accel_ray_prep *p = &pk->prep[i];
         float o[3] = {p->org.x, p->org.y, p->org.z};
         float r[3] = {p->inv_dir.x, p->inv_dir.y, p->inv_dir.z};
         for (int a = 0; a < 3; a++) {
             if (!isfinite(r[a])) return; /* a zero direction component */
+            int near = a + (p->neg[a] ? BVH_BMAX_OFS : 0);
             if (first) {
-                pk->ia_near[a] = a + (p->neg[a] ? BVH_BMAX_OFS : 0);
+                pk->ia_near[a] = near;
                 pk->ia_far[a] = a + (p->neg[a] ? 0 : BVH_BMAX_OFS);
                 pk->omin[a] = pk->omax[a] = o[a];
                 pk->rmin[a] = pk->rmax[a] = r[a];
             } else {
-                if (pk->ia_near[a] != a + (p->neg[a] ? BVH_BMAX_OFS : 0)) return; /* mixed signs */
+                if (pk->ia_near[a] != near) return; /* mixed signs */
                 pk->omin[a] = minf(pk->omin[a], o[a]);
                 pk->omax[a] = maxf(pk->omax[a], o[a]);
                 pk->rmin[a] = minf(pk->rmin[a], r[a]);
@@ -109,6 +146,55 @@ static void packet_setup(packet *pk, const accel_ray *rays, uint32_t n, int frus
     pk->t_max = -INFINITY;
     for (uint32_t i = 0; i < n; i++) pk->t_max = maxf(pk->t_max, pk->t[i]);
     pk->ia = 1;
+}
+
+/* Bit k set when ray 8g+k hits the node's box: bvh_slab, lane by lane. */
+static inline uint32_t group_hits(const packet *pk, const bvh_node *node, uint32_t g)
+{
+    const float *b = (const float *)node;
+    uint32_t o = GROUP * g;
+#if BVH_AVX
+    /* vmaxps(x, acc) is x > acc ? x : acc, as maxf(acc, x): a NaN x keeps acc */
+    __m256 t0 = _mm256_load_ps(pk->t_near + o), t1 = _mm256_load_ps(pk->t + o);
+    const float *org[3] = {pk->ox + o, pk->oy + o, pk->oz + o};
+    const float *inv[3] = {pk->ix + o, pk->iy + o, pk->iz + o};
+    const int32_t *neg[3] = {pk->negx + o, pk->negy + o, pk->negz + o};
+    for (int a = 0; a < 3; a++) {
+        __m256 lo = _mm256_set1_ps(b[a]), hi = _mm256_set1_ps(b[a + BVH_BMAX_OFS]);
+        __m256 m = _mm256_load_ps((const float *)neg[a]);
+        __m256 near = _mm256_blendv_ps(lo, hi, m), far = _mm256_blendv_ps(hi, lo, m);
+        __m256 oa = _mm256_load_ps(org[a]), ia = _mm256_load_ps(inv[a]);
+        t0 = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(near, oa), ia), t0);
+        t1 = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(far, oa), ia), t1);
+    }
+    const __m256 sign = _mm256_set1_ps(-0.0f);
+    __m256 lim = _mm256_add_ps(t1, _mm256_mul_ps(_mm256_andnot_ps(sign, t1), _mm256_set1_ps(ACCEL_SLAB_PAD)));
+    return (uint32_t)_mm256_movemask_ps(_mm256_cmp_ps(t0, lim, _CMP_LE_OQ));
+#else
+    uint32_t mask = 0;
+    for (uint32_t k = 0; k < GROUP; k++) {
+        uint32_t i = o + k;
+        float t0 = pk->t_near[i], t1 = pk->t[i];
+        int nx = pk->negx[i] ? BVH_BMAX_OFS : 0, ny = pk->negy[i] ? BVH_BMAX_OFS : 0,
+            nz = pk->negz[i] ? BVH_BMAX_OFS : 0;
+        t0 = maxf(t0, (b[nx] - pk->ox[i]) * pk->ix[i]);
+        t0 = maxf(t0, (b[1 + ny] - pk->oy[i]) * pk->iy[i]);
+        t0 = maxf(t0, (b[2 + nz] - pk->oz[i]) * pk->iz[i]);
+        t1 = minf(t1, (b[BVH_BMAX_OFS - nx] - pk->ox[i]) * pk->ix[i]);
+        t1 = minf(t1, (b[1 + BVH_BMAX_OFS - ny] - pk->oy[i]) * pk->iy[i]);
+        t1 = minf(t1, (b[2 + BVH_BMAX_OFS - nz] - pk->oz[i]) * pk->iz[i]);
+        mask |= (uint32_t)(t0 <= t1 + fabsf(t1) * ACCEL_SLAB_PAD) << k;
+    }
+    return mask;
+#endif
+}
+
+/* Rays from `first` on, within the packet, as a mask of group g. */
+static inline uint32_t group_range(const packet *pk, uint32_t g, uint32_t first)
+{
+    uint64_t from = first >= P ? 0 : ~(uint64_t)0 << first;
+    uint64_t to = pk->n >= P ? ~(uint64_t)0 : ((uint64_t)1 << pk->n) - 1;
+    return (uint32_t)((from & to & pk->alive) >> (GROUP * g)) & 0xFFu;
 }
 
 static inline float min4(float a, float b, float c, float d) { return minf(minf(a, b), minf(c, d)); }
@@ -137,27 +223,35 @@ trace_packet(const bvh *b, packet *pk, accel_counters *c, uint32_t *ray_steps,
              uint32_t *ray_prims, int naive, int has_spheres, int any_hit, int frustum)
 {
     const bvh_node *nodes = b->nodes;
-    const uint32_t n = pk->n;
+    const uint32_t n = pk->n, groups = (n + GROUP - 1) / GROUP;
     int32_t step_diff[P + 1];
     uint64_t steps = 0, boxes = 0, prims = 0, packet_boxes = 0;
     uint32_t visits = 0;
     if (c) memset(step_diff, 0, sizeof step_diff);
-    if (b->node_count == 0 || pk->alive_count == 0) goto out;
+    if (b->node_count == 0 || pk->alive == 0) goto out;
 
     packet_entry stack[BVH_MAX_DEPTH];
     int sp = 0;
-    uint32_t node_idx = 0, first = 0;
+    uint32_t node_idx = 0, first = (uint32_t)__builtin_ctzll(pk->alive);
     for (;;) {
         const bvh_node *node = &nodes[node_idx];
         if (frustum && pk->ia) {
             packet_boxes++;
             if (packet_misses(pk, node)) goto pop;
         }
-        /* Early in on the first active ray, else scan for one that hits. */
-        uint32_t f = first;
-        float entry;
-        while (f < n && !bvh_slab(node, &pk->sr[f], pk->t_near[f], pk->t[f], &entry)) f++;
-        if (c) boxes += (f < n ? f + 1 : n) - first;
+        /* Early in on the group of the first active ray, else scan the
+         * following groups; f = the first ray that hits. */
+        uint32_t f = n;
+        for (uint32_t g = first / GROUP; g < groups; g++) {
+            uint32_t range = group_range(pk, g, first);
+            if (!range) continue;
+            uint32_t m = group_hits(pk, node, g) & range;
+            if (c) boxes += (uint64_t)__builtin_popcount(range);
+            if (m) {
+                f = GROUP * g + (uint32_t)__builtin_ctz(m);
+                break;
+            }
+        }
         if (f == n) goto pop;
         visits++;
         ACCEL_STEP_BOUND_CHECK(visits, b->node_count);
@@ -166,24 +260,30 @@ trace_packet(const bvh *b, packet *pk, accel_counters *c, uint32_t *ray_steps,
             step_diff[f]++;
         }
         if (node->count) {
-            /* Leaf: every primitive against every live ray from f on. */
+            /* Leaf: the rays from f on that hit its box, against each of
+             * its primitives. */
             uint32_t end = node->left_first + node->count;
-            for (uint32_t k = node->left_first; k < end; k++) {
-                for (uint32_t i = f; i < n; i++) {
-                    if (!pk->alive[i]) continue;
-                    if (c) {
-                        prims++;
-                        if (ray_prims) ray_prims[i]++;
-                    }
-                    if (!bvh_slot_hit(b, k, &pk->prep[i], &pk->t[i], &pk->u[i], &pk->v[i], naive,
-                                      has_spheres))
-                        continue;
-                    pk->slot[i] = k;
-                    if (any_hit) {
-                        pk->alive[i] = 0;
-                        pk->t_near[i] = INFINITY;
-                        pk->t[i] = -INFINITY;
-                        if (--pk->alive_count == 0) goto out;
+            for (uint32_t g = f / GROUP; g < groups; g++) {
+                uint32_t range = group_range(pk, g, f);
+                if (!range) continue;
+                uint32_t m = group_hits(pk, node, g) & range;
+                if (c) boxes += (uint64_t)__builtin_popcount(range);
+                for (; m; m &= m - 1) {
+                    uint32_t i = GROUP * g + (uint32_t)__builtin_ctz(m);
+                    for (uint32_t k = node->left_first; k < end; k++) {
+                        if (c) {
+                            prims++;
+                            if (ray_prims) ray_prims[i]++;
+                        }
+                        if (!bvh_slot_hit(b, k, &pk->prep[i], &pk->t[i], &pk->u[i], &pk->v[i],
+                                          naive, has_spheres))
+                            continue;
+                        pk->slot[i] = k;
+                        if (any_hit) {
+                            kill_ray(pk, i);
+                            if (!pk->alive) goto out;
+                            break;
+                        }
                     }
                 }
             }
@@ -241,7 +341,7 @@ static inline __attribute__((always_inline)) void
 packet_batch(const bvh *b, const accel_ray *rays, accel_hit *hits, uint8_t *occ, size_t count,
              accel_counters *c, int naive, int has_spheres, int any_hit, int frustum)
 {
-    packet pk;
+    packet pk; /* about 10 KB, aligned by its members */
     for (size_t base = 0; base < count; base += P) {
         uint32_t n = (uint32_t)(count - base < P ? count - base : P);
         packet_setup(&pk, rays + base, n, frustum);
