@@ -126,6 +126,82 @@ static inline int accel_overlap_tri_box(const float *tri, const double lo[3], co
 }
 
 /*
+ * The same test for one triangle against many boxes of one size (the cells
+ * of a grid): everything that does not depend on the box's position is
+ * computed once. For each of the nine edge axes and the normal, the
+ * triangle's projection (relative to v0) widened by the box's radius along
+ * that axis gives an interval; a box centred at c is separated along the
+ * axis when axis.(c - v0) falls outside it. The three box normals are NOT
+ * tested: the caller must already know that the triangle's bounding box
+ * touches the box (a grid gets that from the cell range of the bounds).
+ * Zero axes (degenerate edges, a zero normal) are dropped: they separate
+ * nothing. The slack covers double rounding for boxes whose centres lie
+ * within the triangle's bounds widened by the box size.
+ */
+typedef struct {
+    double v0[3];
+    double axis[10][3];
+    double lo[10], hi[10];
+    int count;
+} accel_tri_cells;
+
+/* Adds axis L to c unless it is zero (p: vertices relative to v0). */
+static inline void overlap_add_axis(accel_tri_cells *c, double lx, double ly, double lz,
+                                    const double p[3][3], const double half[3], double reach)
+{
+    double norm1 = fabs(lx) + fabs(ly) + fabs(lz);
+    if (norm1 == 0.0) return;
+    double q1 = lx * p[1][0] + ly * p[1][1] + lz * p[1][2]; /* v0 projects to 0 */
+    double q2 = lx * p[2][0] + ly * p[2][1] + lz * p[2][2];
+    double r = half[0] * fabs(lx) + half[1] * fabs(ly) + half[2] * fabs(lz);
+    double qmin = overlap_min3(0.0, q1, q2), qmax = overlap_max3(0.0, q1, q2);
+    double slack = ACCEL_OVERLAP_SLACK * (fabs(qmin) + fabs(qmax) + r + norm1 * reach);
+    int k = c->count++;
+    c->axis[k][0] = lx, c->axis[k][1] = ly, c->axis[k][2] = lz;
+    c->lo[k] = qmin - r - slack;
+    c->hi[k] = qmax + r + slack;
+}
+
+static inline void accel_tri_cells_prep(accel_tri_cells *c, const float *tri, const double half[3])
+{
+    double p[3][3], e[3][3], reach = 0.0;
+    for (int a = 0; a < 3; a++) {
+        c->v0[a] = tri[a];
+        p[0][a] = 0.0;
+        p[1][a] = (double)tri[3 + a] - tri[a];
+        p[2][a] = (double)tri[6 + a] - tri[a];
+        double ext = overlap_max3(0.0, p[1][a], p[2][a]) - overlap_min3(0.0, p[1][a], p[2][a]);
+        reach = fmax(reach, ext + 2.0 * half[a]);
+    }
+    for (int a = 0; a < 3; a++) {
+        e[0][a] = p[1][a];
+        e[1][a] = p[2][a] - p[1][a];
+        e[2][a] = -p[2][a];
+    }
+    c->count = 0;
+    /* unit(x) x e = (0, -ez, ey), unit(y) x e = (ez, 0, -ex), unit(z) x e = (-ey, ex, 0). */
+    for (int k = 0; k < 3; k++) {
+        overlap_add_axis(c, 0.0, -e[k][2], e[k][1], p, half, reach);
+        overlap_add_axis(c, e[k][2], 0.0, -e[k][0], p, half, reach);
+        overlap_add_axis(c, -e[k][1], e[k][0], 0.0, p, half, reach);
+    }
+    overlap_add_axis(c, e[0][1] * e[1][2] - e[0][2] * e[1][1], e[0][2] * e[1][0] - e[0][0] * e[1][2],
+                     e[0][0] * e[1][1] - e[0][1] * e[1][0], p, half, reach);
+}
+
+/* Does the prepared triangle touch the box centred at `centre` (of the
+ * half-size given to the prep), given that their bounding boxes touch? */
+static inline int accel_tri_cells_overlap(const accel_tri_cells *c, const double centre[3])
+{
+    const double d[3] = {centre[0] - c->v0[0], centre[1] - c->v0[1], centre[2] - c->v0[2]};
+    for (int k = 0; k < c->count; k++) {
+        double q = c->axis[k][0] * d[0] + c->axis[k][1] * d[1] + c->axis[k][2] * d[2];
+        if (q < c->lo[k] || q > c->hi[k]) return 0;
+    }
+    return 1;
+}
+
+/*
  * Does the sphere (centre xyz, radius w: 4 floats) touch the box [lo, hi]?
  * Arvo 1990: sum the squared distances to the box along each axis where the
  * centre lies outside the slab; compare with r^2 (with the relative slack).

@@ -14,6 +14,7 @@
  *   overlap  exact | bbox: membership by exact triangle/sphere-box overlap,
  *            or by bounding box only
  *   mailbox  0/1: test a primitive spanning several cells once per ray
+ *   reorder  0/1: copy the primitives in Morton order of their centroids
  *   max_mb   memory limit for offsets + references, MiB (larger is refused)
  *   tri      watertight | naive (common to all kinds)
  */
@@ -24,7 +25,7 @@
 #include "grid_core.h"
 
 /* Default cells per primitive, from the sweep reported in grid/README.md. */
-#define GRID_DEFAULT_LAMBDA 4
+#define GRID_DEFAULT_LAMBDA 8
 
 extern const accel_kind accel_kind_grid;
 
@@ -32,7 +33,9 @@ extern const accel_kind accel_kind_grid;
 typedef struct {
     const grid_frame *frame;
     const uint32_t *offsets; /* cell_count + 1 */
-    const uint32_t *refs;    /* ref_count */
+    const uint32_t *refs;    /* ref_count local primitive ids */
+    const uint32_t *prim_id; /* local id -> scene primitive id */
+    uint32_t prim_count;     /* local ids: the scene's live primitives */
     uint64_t cell_count, ref_count;
 } grid_view;
 

@@ -157,6 +157,7 @@ void grid_frame_init(grid_frame *f, box3 box, const int res[3], float *planes)
         for (int k = 0; k <= n; k++) p[k] = (float)((double)lo[a] + ext * k / n);
         p[0] = lo[a];
         p[n] = hi[a];
+
         f->planes[a] = p;
         p += n + 1;
     }
@@ -212,19 +213,22 @@ typedef enum { VISIT_COUNT, VISIT_FILL } visit_kind;
  * axes. Spelled once; `kind` and `atomic` are constants in each caller.
  */
 static inline __attribute__((always_inline)) void
-visit_prim(const grid_frame *f, const accel_scene *s, uint32_t prim, grid_overlap mode,
-           visit_kind kind, int atomic, uint32_t *offsets, uint32_t *refs)
+visit_prim(const grid_frame *f, const double cell_half[3], const accel_scene *s, uint32_t prim,
+           grid_overlap mode, visit_kind kind, int atomic, uint32_t *offsets, uint32_t *refs)
 {
     int lo[3], hi[3];
     if (!grid_cell_range(f, accel_prim_bounds(s, prim), lo, hi)) return;
     int spread = (hi[0] > lo[0]) + (hi[1] > lo[1]) + (hi[2] > lo[2]);
     int exact = mode == GRID_OVERLAP_EXACT && spread >= 2;
     int is_tri = prim < s->tri_count;
-    accel_tri_overlap tri;
+    accel_tri_cells tri;
     const float *sphere = NULL;
     if (exact) {
+        /* Triangles: each cell's padded box lies within the box of half-size
+         * cell_half around its centre, which is tested instead (a superset:
+         * still conservative). */
         if (is_tri)
-            accel_tri_overlap_prep(&tri, s->tris + 9 * (size_t)prim);
+            accel_tri_cells_prep(&tri, s->tris + 9 * (size_t)prim, cell_half);
         else
             sphere = s->spheres + 4 * (size_t)(prim - s->tri_count);
     }
@@ -232,17 +236,16 @@ visit_prim(const grid_frame *f, const accel_scene *s, uint32_t prim, grid_overla
         for (int y = lo[1]; y <= hi[1]; y++)
             for (int x = lo[0]; x <= hi[0]; x++) {
                 if (exact) {
-                    double blo[3], bhi[3];
-                    grid_cell_box(f, x, y, z, blo, bhi);
                     int hit;
                     if (is_tri) {
-                        double c[3], h[3];
-                        for (int a = 0; a < 3; a++) {
-                            c[a] = 0.5 * (blo[a] + bhi[a]);
-                            h[a] = 0.5 * (bhi[a] - blo[a]);
-                        }
-                        hit = accel_tri_overlap_box(&tri, c, h);
+                        const double c[3] = {
+                            0.5 * ((double)f->planes[0][x] + f->planes[0][x + 1]),
+                            0.5 * ((double)f->planes[1][y] + f->planes[1][y + 1]),
+                            0.5 * ((double)f->planes[2][z] + f->planes[2][z + 1])};
+                        hit = accel_tri_cells_overlap(&tri, c);
                     } else {
+                        double blo[3], bhi[3];
+                        grid_cell_box(f, x, y, z, blo, bhi);
                         hit = accel_overlap_sphere_box(sphere, blo, bhi);
                     }
                     if (!hit) continue;
@@ -261,8 +264,23 @@ visit_prim(const grid_frame *f, const accel_scene *s, uint32_t prim, grid_overla
             }
 }
 
+/* The i-th primitive of a pass: prims[i], or i itself for a NULL list. */
+#define PRIM_AT(prims, i) ((prims) ? (prims)[i] : (uint32_t)(i))
+
+/* Largest padded cell half-size per axis (cells differ by float rounding). */
+static void largest_half(const grid_frame *f, double half[3])
+{
+    for (int a = 0; a < 3; a++) {
+        const float *pl = f->planes[a];
+        double h = 0.0;
+        for (int k = 0; k < f->res[a]; k++) h = fmax(h, 0.5 * ((double)pl[k + 1] - pl[k]));
+        half[a] = h + f->pad[a];
+    }
+}
+
 typedef struct {
     const grid_frame *f;
+    double cell_half[3];
     const accel_scene *s;
     const uint32_t *prims;
     grid_overlap mode;
@@ -277,9 +295,11 @@ static void pass_chunk(void *ctx, size_t begin, size_t end, int thread)
     const pass_job *j = ctx;
     for (size_t i = begin; i < end; i++) {
         if (j->kind == VISIT_COUNT)
-            visit_prim(j->f, j->s, j->prims[i], j->mode, VISIT_COUNT, 1, j->offsets, NULL);
+            visit_prim(j->f, j->cell_half, j->s, PRIM_AT(j->prims, i), j->mode, VISIT_COUNT, 1,
+                       j->offsets, NULL);
         else
-            visit_prim(j->f, j->s, j->prims[i], j->mode, VISIT_FILL, 1, j->offsets, j->refs);
+            visit_prim(j->f, j->cell_half, j->s, PRIM_AT(j->prims, i), j->mode, VISIT_FILL, 1,
+                       j->offsets, j->refs);
     }
 }
 
@@ -290,16 +310,18 @@ static void run_pass(const grid_frame *f, const accel_scene *s, const uint32_t *
                      uint32_t prim_count, grid_overlap mode, visit_kind kind, uint32_t *offsets,
                      uint32_t *refs, int threads)
 {
+    double half[3];
+    largest_half(f, half);
     if (threads <= 1 || prim_count <= GRID_PASS_CHUNK) {
         for (uint32_t i = 0; i < prim_count; i++) {
             if (kind == VISIT_COUNT)
-                visit_prim(f, s, prims[i], mode, VISIT_COUNT, 0, offsets, NULL);
+                visit_prim(f, half, s, PRIM_AT(prims, i), mode, VISIT_COUNT, 0, offsets, NULL);
             else
-                visit_prim(f, s, prims[i], mode, VISIT_FILL, 0, offsets, refs);
+                visit_prim(f, half, s, PRIM_AT(prims, i), mode, VISIT_FILL, 0, offsets, refs);
         }
         return;
     }
-    pass_job j = {f, s, prims, mode, offsets, refs, kind};
+    pass_job j = {f, {half[0], half[1], half[2]}, s, prims, mode, offsets, refs, kind};
     accel_parallel_for(prim_count, GRID_PASS_CHUNK, threads, pass_chunk, &j);
 }
 
@@ -422,6 +444,7 @@ static void sort_chunk(void *ctx, size_t begin, size_t end, int thread)
 
 static int ids_increasing(const uint32_t *prims, uint32_t n)
 {
+    if (!prims) return 1;
     for (uint32_t i = 1; i < n; i++)
         if (prims[i] <= prims[i - 1]) return 0;
     return 1;

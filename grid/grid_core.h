@@ -124,6 +124,9 @@ typedef struct {
     uint64_t cell_count, ref_count;
 } grid_cells;
 
+/* In the passes below, prims lists the scene primitives to place (ids into
+ * s); NULL stands for 0..prim_count-1. */
+
 /* Count pass: counts[c] += number of prims[] overlapping cell c (counts has
  * one entry per cell). With threads > 1 the increments are atomic. */
 void grid_count_pass(const grid_frame *f, const accel_scene *s, const uint32_t *prims,

@@ -8,7 +8,12 @@
 #include "grid.h"
 
 typedef struct {
-    const accel_scene *scene;
+    /* The live primitives, copied in the order of the Morton code of their
+     * centroids (or in scene order with reorder=0): local ids 0..T-1 are
+     * triangles, T..T+S-1 spheres, so that accel_prim_hit works on `local`
+     * unchanged. Cells hold local ids; prim_id maps them back. */
+    accel_scene local;
+    uint32_t *prim_id;
     grid_frame frame;
     grid_cells cells;
     float *planes;      /* storage behind frame.planes */

@@ -33,7 +33,7 @@ static inline __attribute__((always_inline)) void
 grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
             size_t count, accel_counters *c, int naive, int spheres, int mailbox)
 {
-    const accel_scene *s = g->scene;
+    const accel_scene *s = &g->local;
     const grid_frame *f = &g->frame;
     const uint32_t *offsets = g->cells.offsets;
     const uint32_t *refs = g->cells.refs;
@@ -75,7 +75,7 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
                     }
                     if (c) tests++;
                     if (accel_prim_hit(s, prim, &p, &t, &u, &v, naive, spheres)) {
-                        h.t = t, h.u = u, h.v = v, h.prim = prim;
+                        h.t = t, h.u = u, h.v = v, h.prim = prim; /* local id until done */
                         if (occ) goto done;
                     }
                 }
@@ -86,6 +86,7 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
             }
         }
     done:
+        if (h.prim != ACCEL_MISS) h.prim = g->prim_id[h.prim];
         if (occ)
             occ[i] = h.prim != ACCEL_MISS;
         else

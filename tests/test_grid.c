@@ -834,12 +834,14 @@ TEST(grid_build_threads_identical)
          * primitive referenced at least once. */
         int ok = v1.offsets[0] == 0 && v1.offsets[v1.cell_count] == v1.ref_count;
         uint8_t *seen = calloc(s.prim_count, 1);
+        ok &= v1.prim_count == s.live_count &&
+              memcmp(v1.prim_id, v2.prim_id, v1.prim_count * sizeof *v1.prim_id) == 0;
         for (uint64_t c = 0; c < v1.cell_count && ok; c++) {
             ok &= v1.offsets[c] <= v1.offsets[c + 1];
             for (uint32_t r = v1.offsets[c]; ok && r < v1.offsets[c + 1]; r++) {
-                ok &= v1.refs[r] < s.prim_count;
+                ok &= v1.refs[r] < v1.prim_count;
                 if (r > v1.offsets[c]) ok &= v1.refs[r] > v1.refs[r - 1];
-                if (ok) seen[v1.refs[r]] = 1;
+                if (ok) seen[v1.prim_id[v1.refs[r]]] = 1;
             }
         }
         CHECKF(ok, "%s: malformed cell arrays", specs[k]);
