@@ -27,8 +27,6 @@
  * depends on its inputs alone and results are gathered in job order, so
  * any thread count builds the same arrays.
  */
-#include <float.h>
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -40,8 +38,8 @@
 
 /* Cost model defaults, ns: fitted by the calibration run described in
  * nested_grid/README.md (exp_step_cost on this machine). */
-#define NGRID_DEFAULT_C_STEP 2.0
-#define NGRID_DEFAULT_C_ISECT 8.0
+#define NGRID_DEFAULT_C_STEP 3.0
+#define NGRID_DEFAULT_C_ISECT 12.0
 /* Sub-grids with at least this many primitives are built one at a time
  * with every thread rather than as one job among many. */
 #define NGRID_BIG_JOB 16384
@@ -96,7 +94,6 @@ typedef struct {
     uint32_t threshold;
     ngrid_costs costs;
     double max_bytes;
-    float ulp_pad[3]; /* scene-magnitude part of every sub-grid's padding (ngrid_sub_pad) */
     bgrid **grids;    /* breadth-first */
     uint32_t grid_count, grid_cap;
     double bytes;     /* offsets, references and planes of every grid so far */
@@ -172,7 +169,7 @@ static int build_sub(const builder *b, const bgrid *parent, uint32_t cell, int t
     uint32_t n = cell_prims(parent, cell);
     int res[3];
     if (b->is_auto) {
-        int rc = ngrid_auto_sub_res(b->scene, box, b->ulp_pad, pf->pad, prims, n, b->mode, &b->costs, budget,
+        int rc = ngrid_auto_sub_res(b->scene, box, pf->pad, prims, n, b->mode, &b->costs, budget,
                                     res, err);
         if (rc) return rc;
         if (res[0] == 0) return ACCEL_OK;
@@ -190,7 +187,7 @@ static int build_sub(const builder *b, const bgrid *parent, uint32_t cell, int t
     bgrid *g;
     rc = bgrid_new(box, res, parent->level + 1, &g, err);
     if (rc) return rc;
-    ngrid_sub_pad(&g->frame, b->ulp_pad, pf->pad);
+    ngrid_sub_pad(&g->frame, pf->pad);
     g->parent_cell = cell;
     rc = grid_cells_build(&g->frame, b->scene, prims, n, b->mode, threads, budget, &g->cells, err);
     if (rc) {
@@ -537,10 +534,6 @@ static int ngrid_build(const accel_scene *scene, const accel_params *params, int
     if (rc) {
         bgrid_free(top);
         return wrap_error(err, rc, "top level");
-    }
-    for (int a = 0; a < 3; a++) {
-        float mag = maxf(fabsf(top->frame.lo[a]), fabsf(top->frame.hi[a]));
-        b.ulp_pad[a] = (float)(GRID_PAD_ULPS * FLT_EPSILON * mag);
     }
     rc = push_grid(&b, top, err);
     if (rc) {

@@ -31,14 +31,18 @@
 
 #include "ngrid_impl.h"
 
-/* Cost of entering a sub-grid (slab-free DDA setup for three axes), in
- * cell steps. */
-#define NGRID_ENTER_STEPS 2.0
+/* Cost of entering a sub-grid, in cell steps: the DDA setup of the
+ * sub-grid (three reciprocals, entry and cell per axis), measured at 3.5 to
+ * 4.3 times a step by the micro-benchmark in nested_grid/README.md. */
+#define NGRID_ENTER_STEPS 4.0
 /* Primitives the top-level candidates are counted on (a deterministic
  * stride subset): enough for a reference count within about 1%. */
 #define NGRID_AUTO_SAMPLE 32768
 /* Cells-per-primitive ladders the auto mode chooses from: the resolution
- * rule's result for each (duplicates and 1x1x1 skipped). */
+ * rule's result for each (duplicates and 1x1x1 skipped), tried from coarse
+ * to fine until the cost rises (it is unimodal in practice: steps grow and
+ * tests shrink with the resolution), which spares the count passes of the
+ * finest, most expensive candidates. */
 static const double top_ladder[] = {0.0625, 0.125, 0.25, 0.5, 1, 2, 4, 8};
 static const double sub_ladder[] = {0.25, 0.5, 1, 2, 4, 8, 16};
 
@@ -68,12 +72,12 @@ double ngrid_cell_probability(const grid_frame *f)
 
 /*
  * References of prims[] in a grid of resolution res over box, padded as a
- * sub-grid (ngrid_sub_pad) when pads is not NULL (pads[0]: scene ulp part,
- * pads[1]: parent's padding), else as the top grid. Returns 0, or 1 when
+ * sub-grid of a grid padded by parent_pad (ngrid_sub_pad), or as the top
+ * grid when parent_pad is NULL. Returns 0, or 1 when
  * the grid is too large for max_bytes (a candidate to skip, not an error),
  * or an error status.
  */
-static int count_refs(const accel_scene *s, box3 box, const float (*pads)[3], const int res[3],
+static int count_refs(const accel_scene *s, box3 box, const float *parent_pad, const int res[3],
                       const uint32_t *prims, uint32_t n, grid_overlap mode, int threads,
                       double max_bytes, grid_frame *f, uint64_t *refs, accel_error *err)
 {
@@ -90,7 +94,7 @@ static int count_refs(const accel_scene *s, box3 box, const float (*pads)[3], co
                           res[1], res[2]);
     }
     grid_frame_init(f, box, res, planes);
-    if (pads) ngrid_sub_pad(f, pads[0], pads[1]);
+    if (parent_pad) ngrid_sub_pad(f, parent_pad);
     grid_count_pass(f, s, prims, n, mode, counts, threads);
     uint64_t total = 0;
     for (uint64_t c = 0; c < cells; c++) total += counts[c];
@@ -123,7 +127,7 @@ int ngrid_auto_top_res(const accel_scene *s, box3 box, grid_overlap mode, const 
         for (uint32_t i = 0; i < sample_n; i++) sample[i] = s->live[(size_t)i * stride];
     }
     double scale = (double)n / sample_n;
-    double best = INFINITY;
+    double best = INFINITY, prev_cost = INFINITY;
     int prev[3] = {0, 0, 0};
     int rc = ACCEL_OK;
     for (size_t k = 0; k < sizeof top_ladder / sizeof top_ladder[0]; k++) {
@@ -145,13 +149,14 @@ int ngrid_auto_top_res(const accel_scene *s, box3 box, grid_overlap mode, const 
             best = cost;
             memcpy(res, r, sizeof r);
         }
+        if (cost > prev_cost) break;
+        prev_cost = cost;
     }
     if (sample != s->live) free(sample);
     return rc;
 }
 
-int ngrid_auto_sub_res(const accel_scene *s, box3 box, const float scene_ulp_pad[3],
-                       const float parent_pad[3],
+int ngrid_auto_sub_res(const accel_scene *s, box3 box, const float parent_pad[3],
                        const uint32_t *prims, uint32_t prim_count, grid_overlap mode,
                        const ngrid_costs *m, double max_bytes, int res[3], accel_error *err)
 {
@@ -160,9 +165,7 @@ int ngrid_auto_sub_res(const accel_scene *s, box3 box, const float scene_ulp_pad
     double best = m->c_isect * prim_count;
     /* No sub-grid can cost less than entering it and stepping one cell. */
     if (best <= m->c_step * (NGRID_ENTER_STEPS + 1.0)) return ACCEL_OK;
-    float pads[2][3];
-    memcpy(pads[0], scene_ulp_pad, sizeof pads[0]);
-    memcpy(pads[1], parent_pad, sizeof pads[1]);
+    double prev_cost = INFINITY;
     int prev[3] = {1, 1, 1};
     for (size_t k = 0; k < sizeof sub_ladder / sizeof sub_ladder[0]; k++) {
         int r[3];
@@ -171,7 +174,7 @@ int ngrid_auto_sub_res(const accel_scene *s, box3 box, const float scene_ulp_pad
         memcpy(prev, r, sizeof prev);
         grid_frame f;
         uint64_t refs;
-        int rc = count_refs(s, box, (const float(*)[3])pads, r, prims, prim_count, mode, 1, max_bytes, &f,
+        int rc = count_refs(s, box, parent_pad, r, prims, prim_count, mode, 1, max_bytes, &f,
                             &refs, err);
         if (rc == 1) continue;
         if (rc) return rc;
@@ -181,6 +184,8 @@ int ngrid_auto_sub_res(const accel_scene *s, box3 box, const float scene_ulp_pad
             best = cost;
             memcpy(res, r, sizeof r);
         }
+        if (cost > prev_cost) break;
+        prev_cost = cost;
     }
     return ACCEL_OK;
 }

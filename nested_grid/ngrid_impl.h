@@ -26,23 +26,22 @@ typedef struct {
 } ngrid_accel;
 
 /*
- * Membership padding of a sub-grid. The regular grid pads by a fraction of a
- * cell plus a few ulps of the coordinates' magnitude (grid_core.h). A
- * sub-grid keeps the cell part at its own cell size, but takes the ulp part
- * from the whole scene's magnitude (scene_ulp_pad, from the top frame): the
- * walk's rounding grows with the distance a ray has travelled, which for a
- * ray starting anywhere in the scene is bounded by the scene's size, not by
- * the size of the small region a deep sub-grid covers. The result never
- * exceeds the parent's padding (clamped, against rounding), so each padded
- * sub-cell lies inside its padded parent cell, whose list is therefore
- * complete for it.
+ * Membership padding of a sub-grid. The regular grid pads a cell by
+ * GRID_PAD_CELLS of a cell plus GRID_PAD_ULPS float ulps of the coordinates'
+ * magnitude (grid_core.h). A sub-grid keeps the first part, at its own cell
+ * size, and leaves out the second: the walk's distances are doubles that
+ * follow the ray to about 1e-16 of its length (grid_core.h), far inside a
+ * 1/1024-cell margin, while 16 ulps of the coordinates would exceed the
+ * cells of a deep sub-grid in a scene far from the origin (0.02 units at
+ * 1e4) and put every primitive in all of them. The result is clamped to the
+ * parent's padding, so each padded sub-cell lies inside its padded parent
+ * cell, whose list is therefore complete for it.
  */
-static inline void ngrid_sub_pad(grid_frame *f, const float scene_ulp_pad[3],
-                                 const float parent_pad[3])
+static inline void ngrid_sub_pad(grid_frame *f, const float parent_pad[3])
 {
     for (int a = 0; a < 3; a++) {
         double cell = ((double)f->hi[a] - f->lo[a]) / f->res[a];
-        f->pad[a] = minf(parent_pad[a], (float)(cell * GRID_PAD_CELLS + scene_ulp_pad[a]));
+        f->pad[a] = minf(parent_pad[a], (float)(cell * GRID_PAD_CELLS));
     }
 }
 
@@ -63,11 +62,10 @@ int ngrid_auto_top_res(const accel_scene *s, box3 box, grid_overlap mode, const 
 /*
  * Auto mode, one cell: the sub-grid resolution whose expected cost for a
  * ray crossing the cell beats testing the cell's prim_count primitives, or
- * res = {0,0,0} when none does (the cell stays a leaf). scene_ulp_pad and
- * parent_pad: see ngrid_sub_pad.
+ * res = {0,0,0} when none does (the cell stays a leaf). parent_pad: the
+ * padding of the grid the cell belongs to (ngrid_sub_pad).
  */
-int ngrid_auto_sub_res(const accel_scene *s, box3 box, const float scene_ulp_pad[3],
-                       const float parent_pad[3],
+int ngrid_auto_sub_res(const accel_scene *s, box3 box, const float parent_pad[3],
                        const uint32_t *prims, uint32_t prim_count, grid_overlap mode,
                        const ngrid_costs *m, double max_bytes, int res[3], accel_error *err);
 

@@ -47,7 +47,7 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
         accel_hit h = accel_hit_miss();
         uint32_t steps = 0, empty = 0, tests = 0, skips = 0, boxes = 0;
         uint32_t level_steps[NGRID_MAX_LEVELS] = {0};
-        float t_entry = 0.0f;
+        float t_entry;
         int live = accel_prep_ray(&rays[i], &p) && g->ref_count > 0;
         if (live) {
             boxes = 1;
@@ -59,9 +59,10 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
             grid_dda dda[NGRID_MAX_LEVELS];
             const uint32_t *words[NGRID_MAX_LEVELS];
             int level = 0;
-            grid_dda_init(&dda[0], top, &p, t_entry);
+            /* Distances of the walk are doubles (grid_core.h); t_cell is
+             * where the ray enters the current cell, at any level. */
+            double t_cell = grid_dda_init(&dda[0], top, &p, p.t_near);
             words[0] = g->cells + nodes[0].cell_base;
-            float t_cell = t_entry; /* where the ray enters the current cell */
             uint32_t box[NGRID_MAILBOX];
             if (mailbox) memset(box, 0xFF, sizeof box); /* ACCEL_MISS: no primitive */
             float t = p.t_far, u = 0.0f, v = 0.0f;
@@ -102,7 +103,7 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
                 }
                 /* A hit (or the ray's end) before this cell's exit: nothing
                  * in a later cell, at any level, can be nearer. */
-                float t_exit = grid_dda_exit(&dda[level]);
+                double t_exit = grid_dda_exit(&dda[level]);
                 if (t_exit >= t) break;
                 /* Next cell of this grid; once the ray leaves a sub-grid,
                  * the parent's walk resumes with its next cell. */
