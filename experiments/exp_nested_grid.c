@@ -36,7 +36,7 @@ static void run_cfg(exp_ctx *x, const accel_scene *s, const bench_sets *sets, cf
     c->steps = (double)(m.res[0].counters.steps + m.res[2].counters.steps) / rays;
     c->prims = (double)(m.res[0].counters.prim_tests + m.res[2].counters.prim_tests) / rays;
     c->ok = 1;
-    exp_md(x, "| `%s` | %.0f | %.1f | %.1f | %.1f | %.1f | %.0f |\n", c->spec, c->ns, c->steps,
+    exp_md(x, "| `%s` | %.0f | %.1f | %.1f | %.1f | %.1f | %.2f |\n", c->spec, c->ns, c->steps,
            c->prims, c->build_ms, c->mb, 1e3 / c->ns);
     exp_csv(x, "%s,%s,%.3f,%.3f,%.3f,%.4f,%.4f\n", s->name, c->spec, c->ns, c->steps, c->prims,
             c->build_ms, c->mb);
