@@ -126,13 +126,32 @@ int main(int argc, char **argv)
             }
             double coef[3] = {NAN, NAN, NAN};
             int fitted = n >= 4 && fit3(st, pr, ns, n, coef);
+            if (fitted && (coef[0] < 0 || coef[1] < 0 || coef[2] < 0)) {
+                /* A negative cost is no cost: refit without the per-ray
+                 * constant, and give up if the slopes still come out negative. */
+                double sp = 0, ss = 0, pp = 0, sy = 0, py = 0;
+                for (int i = 0; i < n; i++) {
+                    ss += st[i] * st[i], sp += st[i] * pr[i], pp += pr[i] * pr[i];
+                    sy += st[i] * ns[i], py += pr[i] * ns[i];
+                }
+                double det = ss * pp - sp * sp;
+                fitted = fabs(det) > 1e-12;
+                if (fitted) {
+                    coef[0] = (sy * pp - py * sp) / det;
+                    coef[1] = (ss * py - sp * sy) / det;
+                    coef[2] = 0;
+                    fitted = coef[0] >= 0 && coef[1] >= 0;
+                }
+            }
             exp_md(&x, "\n**%s**: ", families[f].kind);
             if (fitted)
                 exp_md(&x, "C_step = %.2f ns, C_intersect = %.2f ns, C_ray = %.1f ns "
                            "(C_intersect / C_step = %.1f)\n",
                        coef[0], coef[1], coef[2], coef[1] / coef[0]);
             else
-                exp_md(&x, "not enough distinct configurations to fit the model\n");
+                exp_md(&x, "the model does not fit these measurements (no non-negative "
+                           "C_step, C_intersect explain them: timing noise or memory effects "
+                           "dominate)\n");
             exp_md_table(&x, "configuration|rays|steps/ray|prims/ray|measured ns/ray|"
                              "predicted ns/ray|error");
             double worst = 0;
