@@ -4,8 +4,10 @@
  * needs, independent of what a cell holds.
  *
  *  - the resolution rule (Cleary & Wyvill 1988; Wald et al., "Ray Tracing
- *    Animated Scenes using Coherent Grid Traversal", SIGGRAPH 2006, sec. 3):
- *    n_i = d_i * cbrt(lambda * N / V), extended to flat and thin boxes;
+ *    Animated Scenes using Coherent Grid Traversal", SIGGRAPH 2006; Ize et
+ *    al., "An Evaluation of Parallel Grid Construction for Ray Tracing
+ *    Dynamic Scenes", RT 2006): n_i = d_i * cbrt(lambda * N / V), extended
+ *    to flat and thin boxes;
  *  - overflow-safe sizing against a memory limit;
  *  - the cell frame: boundary planes stored once per axis, so that the
  *    builder's cell boxes and the traversal's crossing distances come from
@@ -14,7 +16,7 @@
  *  - the compact cell storage build: count pass, prefix sum, fill pass
  *    (multithreaded, with a result identical to the single-threaded one);
  *  - the 3D-DDA of Amanatides & Woo, "A Fast Voxel Traversal Algorithm for
- *    Ray Tracing", Eurographics 1987: setup from the slab entry and step.
+ *    Ray Tracing", Eurographics 1987: setup at the grid entry and step.
  *
  * Robustness contract (what makes the DDA skip no cell that matters):
  *  1. membership is conservative: a primitive belongs to every cell whose
@@ -28,8 +30,9 @@
  *     when that hit lies beyond the current cell, and stops only when the
  *     current cell's exit distance reaches it.
  * A ray through an edge or a corner then visits the cells on one side of it
- * (the 6-connected path), and a primitive it hits within rounding distance
- * of that edge belongs to those cells by the padding.
+ * (the 6-connected path), and a primitive it hits exactly there touches
+ * those cells too. The walk's distances are doubles, accurate to about
+ * 1e-16 of the distance travelled; the padding is a margin over that.
  */
 #ifndef GRID_GRID_CORE_H
 #define GRID_GRID_CORE_H
@@ -45,10 +48,10 @@
  * float and the per-axis plane tables small. */
 #define GRID_MAX_AXIS_RES 65536
 /* Membership padding, in cells: a primitive within this fraction of a cell
- * of a cell's box belongs to it. Covers the DDA's rounding (a few float ulps
- * of the distance travelled) for rays starting up to about 20 grid sizes
- * away at 256 cells per axis; costs a reference only for primitives that
- * end within 1/1024 of a cell from a boundary. */
+ * of a cell's box belongs to it. A margin over the walk's rounding (about
+ * 1e-16 of the distance travelled, see grid_dda); costs a reference only
+ * for primitives that end within 1/1024 of a cell from a boundary. A caller
+ * may change frame.pad after grid_frame_init (the passes read it). */
 #define GRID_PAD_CELLS (1.0 / 1024.0)
 /* Membership padding relative to the magnitude of the coordinates (float
  * ulps), for scenes far from the origin. */
