@@ -55,14 +55,16 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
                              &t_entry);
         }
         if (live) {
-            /* Set up the top-level 3D DDA for the ray. */
-            grid_dda dda[NGRID_MAX_LEVELS];
-            const uint32_t *words[NGRID_MAX_LEVELS];
+            /* Set up the top-level 3D DDA for the ray. The current level's
+             * walk lives in `d` (registers); the parents' walks wait on a
+             * small stack while a sub-grid is walked. Distances are doubles
+             * (grid_core.h); t_cell is where the ray entered the current
+             * cell, at whatever level. */
+            grid_dda d, parents[NGRID_MAX_LEVELS - 1];
+            const uint32_t *parent_words[NGRID_MAX_LEVELS - 1];
             int level = 0;
-            /* Distances of the walk are doubles (grid_core.h); t_cell is
-             * where the ray enters the current cell, at any level. */
-            double t_cell = grid_dda_init(&dda[0], top, &p, p.t_near);
-            words[0] = g->cells + nodes[0].cell_base;
+            double t_cell = grid_dda_init(&d, top, &p, p.t_near);
+            const uint32_t *words = g->cells + nodes[0].cell_base;
             uint32_t box[NGRID_MAILBOX];
             if (mailbox) memset(box, 0xFF, sizeof box); /* ACCEL_MISS: no primitive */
             float t = p.t_far, u = 0.0f, v = 0.0f;
@@ -73,13 +75,15 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
                     level_steps[level]++;
                     ACCEL_STEP_BOUND_CHECK(steps, g->step_bound);
                 }
-                uint32_t w = words[level][dda[level].cell];
+                uint32_t w = words[d.cell];
                 if (w & NGRID_CHILD) {
                     /* Continue in the sub-grid from the ray's entry into this cell. */
                     const ngrid_node *child = &nodes[w & ~NGRID_CHILD];
+                    parents[level] = d;
+                    parent_words[level] = words;
                     level++;
-                    words[level] = g->cells + child->cell_base;
-                    grid_dda_init(&dda[level], &child->frame, &p, t_cell);
+                    words = g->cells + child->cell_base;
+                    grid_dda_init(&d, &child->frame, &p, t_cell);
                     continue;
                 }
                 const uint32_t *list = lists + w;
@@ -103,13 +107,15 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
                 }
                 /* A hit (or the ray's end) before this cell's exit: nothing
                  * in a later cell, at any level, can be nearer. */
-                double t_exit = grid_dda_exit(&dda[level]);
+                double t_exit = grid_dda_exit(&d);
                 if (t_exit >= t) break;
                 /* Next cell of this grid; once the ray leaves a sub-grid,
                  * the parent's walk resumes with its next cell. */
-                while (!grid_dda_step(&dda[level])) {
+                while (!grid_dda_step(&d)) {
                     if (level == 0) goto done;
                     level--;
+                    d = parents[level];
+                    words = parent_words[level];
                 }
                 t_cell = t_exit;
             }
