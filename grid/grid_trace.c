@@ -11,7 +11,7 @@
  * primitive tested early is never lost (this is what makes mailboxing safe
  * without remembering per-primitive distances).
  *
- * Mailboxing (Amanatides & Woo 1987, sec. 4; per-ray rather than per-object
+ * Mailboxing (Amanatides & Woo 1987; per-ray rather than per-object
  * so that any number of threads can trace at once): a 16-entry direct-mapped
  * cache of the ids tested by this ray, on the stack. A primitive that spans
  * several consecutive cells is found in it and skipped; a collision only
@@ -52,8 +52,8 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
             /* Set up 3D DDA for the ray. */
             grid_dda d;
             grid_dda_init(&d, f, &p, p.t_near);
-            uint32_t box[GRID_MAILBOX];
-            if (mailbox) memset(box, 0xFF, sizeof box); /* ACCEL_MISS: no primitive */
+            uint32_t mail[GRID_MAILBOX];
+            if (mailbox) memset(mail, 0xFF, sizeof mail); /* ACCEL_MISS: no primitive */
             float t = p.t_far, u = 0.0f, v = 0.0f;
             /* Walk the ray through the cells. */
             for (;;) {
@@ -66,7 +66,7 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
                 for (; k < end; k++) {
                     uint32_t prim = refs[k];
                     if (mailbox) {
-                        uint32_t *slot = &box[prim & (GRID_MAILBOX - 1)];
+                        uint32_t *slot = &mail[prim & (GRID_MAILBOX - 1)];
                         if (*slot == prim) {
                             if (c) skips++;
                             continue;
