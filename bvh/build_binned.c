@@ -25,7 +25,7 @@
 #endif
 
 #define BINS_MAX 256
-/* References per chunk of the parallel binning pass. */
+/* Tasks of at least 2 * BIN_CHUNK references are binned by all threads. */
 #define BIN_CHUNK 16384
 
 /* ---- boxes and bin indices, 4-wide where the machine has SSE ------------- */
@@ -190,17 +190,27 @@ static void bin_range(const bvh_ref *refs, size_t begin, size_t end, const bin_p
     }
 }
 
+/* Parallel binning: the task's references in BIN_SPLITS * threads equal
+ * chunks, each binned into its own set, whichever thread takes it; the
+ * sets are then merged in chunk order. */
+#define BIN_SPLITS 4
+
 typedef struct {
     const bvh_ref *refs;
-    size_t first;
+    size_t first, count, chunks;
     const bin_plan *plan;
-    bin_set *sets; /* one per thread */
+    bin_set *sets; /* one per chunk */
 } bin_job;
 
 static void bin_chunk(void *p, size_t begin, size_t end, int thread)
 {
+    (void)thread;
     bin_job *j = p;
-    bin_range(j->refs, j->first + begin, j->first + end, j->plan, &j->sets[thread]);
+    for (size_t c = begin; c < end; c++) {
+        size_t lo = j->count * c / j->chunks, hi = j->count * (c + 1) / j->chunks;
+        clear_bins(&j->sets[c], j->plan);
+        bin_range(j->refs, j->first + lo, j->first + hi, j->plan, &j->sets[c]);
+    }
 }
 
 /* Sets up the axes worth binning: those with a positive, finite centroid
@@ -237,16 +247,18 @@ static void groups_from_bins(bvh_build *ctx, const bvh_task *t, int threads, con
     bin_set local, *sets = &local;
     if (threads > 1 && t->count >= 2 * BIN_CHUNK) {
         sets = ctx->data;
-        for (int i = 0; i < threads; i++) clear_bins(&sets[i], plan);
-        bin_job job = {ctx->refs, t->first, plan, sets};
-        accel_parallel_for(t->count, BIN_CHUNK, threads, bin_chunk, &job);
+        size_t chunks = (size_t)threads * BIN_SPLITS;
+        bin_job job = {ctx->refs, t->first, t->count, chunks, plan, sets};
+        accel_parallel_for(chunks, 1, threads, bin_chunk, &job);
         /* min, max and integer sums: exact in any order */
-        for (int i = 1; i < threads; i++)
-            for (int k = 0; k < plan->axis_count; k++)
+        for (size_t c = 1; c < chunks; c++)
+            for (int k = 0; k < plan->axis_count; k++) {
+                int a = plan->axis[k];
                 for (int b = 0; b < plan->bins; b++) {
-                    sets[0].count[k][b] += sets[i].count[k][b];
-                    box4_union(&sets[0].box[k][b], &sets[i].box[k][b]);
+                    sets[0].count[a][b] += sets[c].count[a][b];
+                    box4_union(&sets[0].box[a][b], &sets[c].box[a][b]);
                 }
+            }
     } else {
         clear_bins(sets, plan);
         bin_range(ctx->refs, t->first, (size_t)t->first + t->count, plan, sets);
@@ -439,7 +451,7 @@ static void binned_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_spl
 
 int bvh_build_binned(bvh_build *ctx, accel_error *err)
 {
-    int sets = ctx->threads > 1 ? ctx->threads : 1;
+    int sets = ctx->threads > 1 ? ctx->threads * BIN_SPLITS : 1;
     bin_set *bins = bvh_alloc_array((size_t)sets, sizeof(bin_set));
     if (!bins) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for %d bin sets", sets);
     ctx->data = bins;
