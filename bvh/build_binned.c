@@ -378,6 +378,7 @@ static void binned_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_spl
     out->left_count = 0;
     if (bvh_task_forced(t)) {
         bvh_split_median(ctx, t, out);
+        if (!bvh_split_pays(ctx, t, bvh_split_sum(out, t->count))) out->left_count = 0;
         return;
     }
     if (bvh_leaf_certain(ctx, t)) return;

@@ -16,7 +16,7 @@
 #include "build_common.h"
 
 /* Tasks with fewer references than this are built by a single thread: a
- * subtree of a few thousand primitives takes well under a millisecond. */
+ * subtree of a few thousand primitives takes about a millisecond. */
 #define BVH_PAR_MIN_REFS 4096u
 /* Subtree tasks handed to the threads per thread (load balance). */
 #define BVH_TASKS_PER_THREAD 8
@@ -57,6 +57,12 @@ int bvh_split_pays(const bvh_build *ctx, const bvh_task *t, double split_sum)
     double leaf = (double)ctx->opts.ci * t->count;
     double split = (double)ctx->opts.ct + (double)ctx->opts.ci * split_sum / area;
     return split < leaf;
+}
+
+double bvh_split_sum(const bvh_split *s, uint32_t count)
+{
+    return bvh_half_area(s->left) * s->left_count +
+           bvh_half_area(s->right) * (count - s->left_count);
 }
 
 int bvh_leaf_certain(const bvh_build *ctx, const bvh_task *t)

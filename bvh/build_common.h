@@ -136,6 +136,9 @@ static inline int bvh_task_forced(const bvh_task *t)
  * A task larger than max_leaf is always split. */
 int bvh_split_pays(const bvh_build *ctx, const bvh_task *t, double split_sum);
 
+/* A_L*N_L + A_R*N_R of a split (half areas), for bvh_split_pays. */
+double bvh_split_sum(const bvh_split *s, uint32_t count);
+
 /* A lower bound that spares small tasks the split search: every part's box
  * contains the boxes of its primitives, so A_L*N_L + A_R*N_R is at least
  * the sum of the primitives' own areas, and when even that bound makes a

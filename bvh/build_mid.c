@@ -13,17 +13,11 @@
  */
 #include "build_common.h"
 
-static double split_sum(const bvh_split *s, uint32_t count)
-{
-    return bvh_half_area(s->left) * s->left_count +
-           bvh_half_area(s->right) * (count - s->left_count);
-}
-
 static void median_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_split *out)
 {
     (void)threads;
     bvh_split_median(ctx, t, out);
-    if (!bvh_split_pays(ctx, t, split_sum(out, t->count))) out->left_count = 0;
+    if (!bvh_split_pays(ctx, t, bvh_split_sum(out, t->count))) out->left_count = 0;
 }
 
 static void mid_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_split *out)
@@ -61,7 +55,7 @@ static void mid_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_split 
     }
     out->left_count = nl;
     out->left = lb, out->right = rb, out->left_c = lc, out->right_c = rc;
-    if (!bvh_split_pays(ctx, t, split_sum(out, t->count))) out->left_count = 0;
+    if (!bvh_split_pays(ctx, t, bvh_split_sum(out, t->count))) out->left_count = 0;
 }
 
 int bvh_build_mid(bvh_build *ctx, accel_error *err)

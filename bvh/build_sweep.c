@@ -174,9 +174,9 @@ static void sweep_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_spli
     memset(&job, 0, sizeof job);
     job.ctx = ctx;
     job.t = t;
-    int axis;
+    int axis, forced = bvh_task_forced(t);
     uint32_t at;
-    if (bvh_task_forced(t)) {
+    if (forced) {
         /* Object median by rank on the axis of largest centroid extent. */
         float ext[3];
         for (int a = 0; a < 3; a++) ext[a] = d->key[a][d->order[a][f + n - 1]] - d->key[a][d->order[a][f]];
@@ -207,6 +207,9 @@ static void sweep_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_spli
     out->left_count = at;
     list_bounds(ctx, o, at, &out->left, &out->left_c);
     list_bounds(ctx, o + at, n - at, &out->right, &out->right_c);
+    /* A forced median may still end as a leaf (the lists stay valid: each
+     * holds the same references in its own order). */
+    if (forced && !bvh_split_pays(ctx, t, bvh_split_sum(out, n))) out->left_count = 0;
 }
 
 int bvh_build_sweep(bvh_build *ctx, accel_error *err)
