@@ -46,7 +46,7 @@
 
 #include "bvh_node.h"
 
-#if BVH_AVX
+#if BVH_SSE || BVH_AVX
 #include <immintrin.h>
 #endif
 
@@ -75,10 +75,13 @@ typedef struct {
     uint32_t slot[P];
     float u[P], v[P];
     accel_ray_prep prep[P]; /* for the primitive tests */
-    /* Interval bounds of the live rays (frustum=1). */
-    int ia;                    /* the bounds are usable */
-    int ia_near[3], ia_far[3]; /* shared plane offsets */
-    float omin[3], omax[3], rmin[3], rmax[3];
+    /* Interval bounds of the live rays per axis (frustum=1), lane 3 zero. */
+    int ia; /* the bounds are usable */
+    _Alignas(16) float ia_neg[4]; /* all-ones bits when the rays' direction is negative */
+    _Alignas(16) float ia_omin[4];
+    _Alignas(16) float ia_omax[4];
+    _Alignas(16) float ia_rmin[4]; /* reciprocal directions */
+    _Alignas(16) float ia_rmax[4];
     float t_near_min, t_max;
 } packet;
 
@@ -92,6 +95,22 @@ static void kill_ray(packet *pk, uint32_t i)
     pk->alive &= ~((uint64_t)1 << i);
     pk->t_near[i] = INFINITY;
     pk->t[i] = -INFINITY;
+}
+
+/* The largest t of the packet (dead rays have -inf). */
+static inline float packet_t_max(const packet *pk)
+{
+#if BVH_AVX
+    __m256 m = _mm256_load_ps(pk->t);
+    for (int g = 1; g < GROUPS; g++) m = _mm256_max_ps(m, _mm256_load_ps(pk->t + GROUP * g));
+    __m128 h = _mm_max_ps(_mm256_castps256_ps128(m), _mm256_extractf128_ps(m, 1));
+    h = _mm_max_ps(h, _mm_movehl_ps(h, h));
+    return _mm_cvtss_f32(_mm_max_ss(h, _mm_shuffle_ps(h, h, 1)));
+#else
+    float tm = -INFINITY;
+    for (uint32_t i = 0; i < P; i++) tm = maxf(tm, pk->t[i]);
+    return tm;
+#endif
 }
 
 static void packet_setup(packet *pk, const accel_ray *rays, uint32_t n, int frustum)
@@ -126,25 +145,24 @@ static void packet_setup(packet *pk, const accel_ray *rays, uint32_t n, int frus
         float r[3] = {p->inv_dir.x, p->inv_dir.y, p->inv_dir.z};
         for (int a = 0; a < 3; a++) {
             if (!isfinite(r[a])) return; /* a zero direction component */
-            int near = a + (p->neg[a] ? BVH_BMAX_OFS : 0);
             if (first) {
-                pk->ia_near[a] = near;
-                pk->ia_far[a] = a + (p->neg[a] ? 0 : BVH_BMAX_OFS);
-                pk->omin[a] = pk->omax[a] = o[a];
-                pk->rmin[a] = pk->rmax[a] = r[a];
+                uint32_t bits = p->neg[a] ? 0xFFFFFFFFu : 0u;
+                memcpy(&pk->ia_neg[a], &bits, sizeof bits);
+                pk->ia_omin[a] = pk->ia_omax[a] = o[a];
+                pk->ia_rmin[a] = pk->ia_rmax[a] = r[a];
             } else {
-                if (pk->ia_near[a] != near) return; /* mixed signs */
-                pk->omin[a] = minf(pk->omin[a], o[a]);
-                pk->omax[a] = maxf(pk->omax[a], o[a]);
-                pk->rmin[a] = minf(pk->rmin[a], r[a]);
-                pk->rmax[a] = maxf(pk->rmax[a], r[a]);
+                if (p->neg[a] != pk->prep[__builtin_ctzll(pk->alive)].neg[a]) return; /* mixed signs */
+                pk->ia_omin[a] = minf(pk->ia_omin[a], o[a]);
+                pk->ia_omax[a] = maxf(pk->ia_omax[a], o[a]);
+                pk->ia_rmin[a] = minf(pk->ia_rmin[a], r[a]);
+                pk->ia_rmax[a] = maxf(pk->ia_rmax[a], r[a]);
             }
         }
         pk->t_near_min = first ? p->t_near : minf(pk->t_near_min, p->t_near);
         first = 0;
     }
-    pk->t_max = -INFINITY;
-    for (uint32_t i = 0; i < n; i++) pk->t_max = maxf(pk->t_max, pk->t[i]);
+    pk->ia_neg[3] = pk->ia_omin[3] = pk->ia_omax[3] = pk->ia_rmin[3] = pk->ia_rmax[3] = 0.0f;
+    pk->t_max = packet_t_max(pk);
     pk->ia = 1;
 }
 
@@ -202,19 +220,45 @@ static inline float max4(float a, float b, float c, float d) { return maxf(maxf(
 
 /* 1 when no live ray of the packet can hit the node's box. Corner products
  * bound fl((plane - o) * r) over the box of (o, r): the product is monotone
- * in each factor, and so is its rounding. */
+ * in each factor, and so is its rounding. The SSE version runs the same
+ * operations with the three axes in three lanes. */
 static inline int packet_misses(const packet *pk, const bvh_node *node)
 {
     const float *b = (const float *)node;
+#if BVH_SSE
+    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
+    /* lane 3 holds left_first / count bits: cleared before any arithmetic */
+    __m128 lo3 = _mm_and_ps(_mm_loadu_ps(b), xyz), hi3 = _mm_and_ps(_mm_loadu_ps(b + BVH_BMAX_OFS), xyz);
+    __m128 neg = _mm_load_ps(pk->ia_neg);
+    __m128 pn = _mm_or_ps(_mm_and_ps(neg, hi3), _mm_andnot_ps(neg, lo3));
+    __m128 pf = _mm_or_ps(_mm_and_ps(neg, lo3), _mm_andnot_ps(neg, hi3));
+    __m128 omin = _mm_load_ps(pk->ia_omin), omax = _mm_load_ps(pk->ia_omax);
+    __m128 r0 = _mm_load_ps(pk->ia_rmin), r1 = _mm_load_ps(pk->ia_rmax);
+    __m128 n0 = _mm_sub_ps(pn, omax), n1 = _mm_sub_ps(pn, omin);
+    __m128 f0 = _mm_sub_ps(pf, omax), f1 = _mm_sub_ps(pf, omin);
+    __m128 near = _mm_min_ps(_mm_min_ps(_mm_mul_ps(n0, r0), _mm_mul_ps(n0, r1)),
+                             _mm_min_ps(_mm_mul_ps(n1, r0), _mm_mul_ps(n1, r1)));
+    __m128 far = _mm_max_ps(_mm_max_ps(_mm_mul_ps(f0, r0), _mm_mul_ps(f0, r1)),
+                            _mm_max_ps(_mm_mul_ps(f1, r0), _mm_mul_ps(f1, r1)));
+    /* lane 3 becomes the packet's t range, then reduce over the lanes */
+    near = _mm_or_ps(_mm_and_ps(xyz, near), _mm_andnot_ps(xyz, _mm_set1_ps(pk->t_near_min)));
+    far = _mm_or_ps(_mm_and_ps(xyz, far), _mm_andnot_ps(xyz, _mm_set1_ps(pk->t_max)));
+    near = _mm_max_ps(near, _mm_movehl_ps(near, near));
+    far = _mm_min_ps(far, _mm_movehl_ps(far, far));
+    float lo = _mm_cvtss_f32(_mm_max_ss(near, _mm_shuffle_ps(near, near, 1)));
+    float hi = _mm_cvtss_f32(_mm_min_ss(far, _mm_shuffle_ps(far, far, 1)));
+#else
     float lo = pk->t_near_min, hi = pk->t_max;
     for (int a = 0; a < 3; a++) {
-        float pn = b[pk->ia_near[a]], pf = b[pk->ia_far[a]];
-        float n0 = pn - pk->omax[a], n1 = pn - pk->omin[a];
-        float f0 = pf - pk->omax[a], f1 = pf - pk->omin[a];
-        float r0 = pk->rmin[a], r1 = pk->rmax[a];
+        int neg = pk->ia_neg[a] != 0.0f;
+        float pn = b[a + (neg ? BVH_BMAX_OFS : 0)], pf = b[a + (neg ? 0 : BVH_BMAX_OFS)];
+        float n0 = pn - pk->ia_omax[a], n1 = pn - pk->ia_omin[a];
+        float f0 = pf - pk->ia_omax[a], f1 = pf - pk->ia_omin[a];
+        float r0 = pk->ia_rmin[a], r1 = pk->ia_rmax[a];
         lo = maxf(lo, min4(n0 * r0, n0 * r1, n1 * r0, n1 * r1));
         hi = minf(hi, max4(f0 * r0, f0 * r1, f1 * r0, f1 * r1));
     }
+#endif
     return lo > hi + fabsf(hi) * ACCEL_SLAB_PAD;
 }
 
@@ -235,12 +279,10 @@ trace_packet(const bvh *b, packet *pk, accel_counters *c, uint32_t *ray_steps,
     uint32_t node_idx = 0, first = (uint32_t)__builtin_ctzll(pk->alive);
     for (;;) {
         const bvh_node *node = &nodes[node_idx];
-        if (frustum && pk->ia) {
-            packet_boxes++;
-            if (packet_misses(pk, node)) goto pop;
-        }
-        /* Early in on the group of the first active ray, else scan the
-         * following groups; f = the first ray that hits. */
+        /* Early in on the group of the first active ray; if none of its
+         * rays hits, the frustum test (when on) may reject the node for the
+         * whole packet; otherwise scan the following groups. f = the first
+         * ray that hits. */
         uint32_t f = n;
         for (uint32_t g = first / GROUP; g < groups; g++) {
             uint32_t range = group_range(pk, g, first);
@@ -250,6 +292,10 @@ trace_packet(const bvh *b, packet *pk, accel_counters *c, uint32_t *ray_steps,
             if (m) {
                 f = GROUP * g + (uint32_t)__builtin_ctz(m);
                 break;
+            }
+            if (frustum && pk->ia && g == first / GROUP) {
+                packet_boxes++;
+                if (packet_misses(pk, node)) break;
             }
         }
         if (f == n) goto pop;
@@ -287,11 +333,7 @@ trace_packet(const bvh *b, packet *pk, accel_counters *c, uint32_t *ray_steps,
                     }
                 }
             }
-            if (frustum && pk->ia) {
-                float tm = -INFINITY;
-                for (uint32_t i = 0; i < n; i++) tm = maxf(tm, pk->t[i]);
-                pk->t_max = tm;
-            }
+            if (frustum && pk->ia) pk->t_max = packet_t_max(pk);
             goto pop;
         }
         /* Interior: the child whose centre lies nearer along the first

@@ -566,6 +566,15 @@ TEST(bvh_packets_mixed_rays)
     for (size_t i = 256; i < 320; i++) {
         rays[i] = (accel_ray){-3, 0.5f, 0.5f, 0, 1, 0.01f * (float)(i % 8), 0.01f * (float)(i / 8 % 8), INFINITY};
     }
+    /* two packets of same-sign directions from spread-out origins (the
+     * frustum test's interval case), one with finite t ranges */
+    vec3 lo = s.bounds.min, ext = box3_extent(s.bounds);
+    for (size_t i = 320; i < 448; i++) {
+        vec3 o = v3_sub(lo, v3_mul(ext, v3(frand(), frand(), frand())));
+        vec3 target = v3_add(lo, v3_mul(ext, v3(frand(), frand(), frand())));
+        vec3 d = v3_sub(target, o);
+        rays[i] = (accel_ray){o.x, o.y, o.z, 0.0f, d.x, d.y, d.z, i < 384 ? INFINITY : 0.9f + 0.2f * frand()};
+    }
     const char *specs[] = {"bvh:traverse=packet", "bvh:traverse=packet,frustum=1",
                            "bvh:traverse=packet,frustum=1,build=sah,leaf=1"};
     for (size_t i = 0; i < 3; i++) {
