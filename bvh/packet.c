@@ -27,7 +27,8 @@
  * all remaining rays; the culling test is 8 rays per instruction sequence,
  * a primitive test is one ray).
  *
- * frustum=1 adds a conservative early-out before step 1, by interval
+ * frustum=1 adds a conservative early-out between steps 1 and 2 (when the
+ * group of the first active ray misses the node), by interval
  * arithmetic on the packet (Wald et al. 2007, section 4.3): when every live
  * ray has the same direction signs and no zero direction component, the
  * packet's origins and reciprocal directions are bounded per axis, and
