@@ -2,7 +2,7 @@
  * build_binned.c - binned SAH construction (build=binned).
  *
  * Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies",
- * IEEE Symposium on Interactive Ray Tracing 2007, section 3: instead of
+ * IEEE Symposium on Interactive Ray Tracing 2007: instead of
  * evaluating the SAH at every primitive, drop the centroids into K equal
  * bins along an axis of the node's centroid bounds, keep a box and a count
  * per bin, and evaluate the K-1 planes between bins with one sweep from

@@ -7,7 +7,7 @@
  * Booth, "Heuristics for ray tracing using space subdivision", The Visual
  * Computer 6(3), 1990; the sweep as in Wald, Boulos and Shirley, "Ray
  * Tracing Deformable Scenes Using Dynamic Bounding Volume Hierarchies",
- * ACM TOG 26(1), 2007, section 4.2).
+ * ACM TOG 26(1), 2007).
  *
  * To avoid sorting at every node, the references are sorted once per axis
  * (an LSD radix sort of the centroids, ties by reference index), and each

@@ -29,7 +29,9 @@
  *
  * frustum=1 adds a conservative early-out between steps 1 and 2 (when the
  * group of the first active ray misses the node), by interval
- * arithmetic on the packet (Wald et al. 2007, section 4.3): when every live
+ * arithmetic on the packet (Boulos, Wald and Shirley, "Geometric and
+ * Arithmetic Culling Methods for Entire Ray Packets", tech. report
+ * UUCS-06-010, 2006; used by Wald et al. 2007): when every live
  * ray has the same direction signs and no zero direction component, the
  * packet's origins and reciprocal directions are bounded per axis, and
  * bounds on every ray's slab entry and exit follow from the box's planes.
