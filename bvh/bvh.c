@@ -206,15 +206,18 @@ int bvh_save(const void *accel, const char *path, accel_error *err)
     return ok ? 0 : accel_fail(err, ACCEL_ERR_IO, "%s: write failed", path);
 }
 
-/* A file must describe a tree the kernels can walk safely: children after
- * their parent (so no cycles), in range, leaves inside the slot array, and
- * no deeper than the traversal stack. */
+/* A file must describe a tree the kernels can walk safely: exactly the
+ * layout the builder writes (child pairs numbered 2, 4, 6, ... in
+ * depth-first order, so no node has two parents and none is its own
+ * ancestor), leaves inside the slot array, no deeper than the traversal
+ * stack, every node used. */
 static int check_tree(const bvh *b, const char *path, accel_error *err)
 {
     if (b->node_count == 0) return b->prim_count == 0 ? 0 : accel_fail(err, ACCEL_ERR_PARSE,
                                                                        "%s: primitives without nodes", path);
     struct { uint32_t node; int level; } stack[BVH_MAX_DEPTH + 1];
     int sp = 0, depth = 0;
+    uint32_t next = 2;
     stack[sp].node = 0, stack[sp].level = 1, sp++;
     while (sp > 0) {
         sp--;
@@ -231,11 +234,16 @@ static int check_tree(const bvh *b, const char *path, accel_error *err)
             continue;
         }
         uint32_t l = n->left_first;
-        if (l <= i || l < 2 || (l & 1) || (uint64_t)l + 1 >= b->node_count)
-            return accel_fail(err, ACCEL_ERR_PARSE, "%s: node %u: bad child index %u", path, i, l);
+        if (l != next || (uint64_t)l + 1 >= b->node_count)
+            return accel_fail(err, ACCEL_ERR_PARSE, "%s: node %u: bad child index %u (expected %u)",
+                              path, i, l, next);
+        next += 2;
         stack[sp].node = l + 1, stack[sp].level = level + 1, sp++;
         stack[sp].node = l, stack[sp].level = level + 1, sp++;
     }
+    if (b->node_count != (next == 2 ? 1 : next))
+        return accel_fail(err, ACCEL_ERR_PARSE, "%s: %u nodes, the tree uses %u", path,
+                          b->node_count, next == 2 ? 1 : next);
     if (depth != b->depth)
         return accel_fail(err, ACCEL_ERR_PARSE, "%s: header says depth %d, tree has %d", path,
                           b->depth, depth);

@@ -699,8 +699,27 @@ TEST(bvh_save_load)
         free(rays);
         accel_kind_bvh.destroy(b);
     }
-    /* Corrupt a child index: the loader refuses the file. */
+    /* Point a child pair at another node's pair (two parents): refused. */
+    uint32_t nc;
+    const bvh_node *nodes = bvh_nodes(a, &nc);
+    uint32_t victim = 0; /* an interior node whose pair is not 2 */
+    for (uint32_t i = 2; i < nc && !victim; i++)
+        if (!nodes[i].count && nodes[i].left_first != 2) victim = i;
+    CHECK(victim != 0);
     FILE *f = fopen(path, "r+b");
+    if (f && victim) {
+        uint32_t two = 2;
+        fseek(f, 32 + 32 * (long)victim + 12, SEEK_SET);
+        fwrite(&two, 4, 1, f);
+        fclose(f);
+        b = NULL;
+        CHECK(bvh_load(path, &b, &err) == ACCEL_ERR_PARSE && b == NULL);
+        CHECK(bvh_save(a, path, &err) == 0); /* restore for the next case */
+    } else if (f) {
+        fclose(f);
+    }
+    /* Corrupt a child index: the loader refuses the file. */
+    f = fopen(path, "r+b");
     if (f) {
         uint32_t bad = 1; /* node 0's left_first: odd, and the padding node */
         fseek(f, 32 + 12, SEEK_SET);
