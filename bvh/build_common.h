@@ -14,7 +14,8 @@
  * owns a fixed region of 2(n-1) node slots for its descendants (its children
  * pair first, then the left child's region, then the right child's), so the
  * same splits give the same temporary pool whichever thread makes them; the
- * final pass renumbers nodes in depth-first order. Parallel binning merges
+ * final pass closes the gaps in place (the regions already lie in
+ * depth-first order). Parallel binning merges
  * per-chunk bins with min, max and integer sums, which are exact in any
  * order. So the tree is byte-identical for any thread count.
  */

@@ -94,7 +94,7 @@ typedef struct bvh {
     int depth;            /* levels of the tree (a lone leaf is 1) */
 } bvh;
 
-/* ---- pieces both traversal files use ----------------------------------- */
+/* ---- pieces of the traversal kernels -------------------------------------- */
 
 /* Per-ray slab-test constants: plane offsets picked once per ray by the
  * direction's sign bit, so the box test has no per-node branch. */
