@@ -188,7 +188,7 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
     stats->refs = g->cells.ref_count;
     stats->sah_cost = NAN;
     stats->depth = 1;
-    for (int a = 0; a < 3; a++) stats->res[a] = res[a];
+    for (int a = 0; a < 3; a++) stats->res[a] = g->frame.res[a];
     *out = g;
     return ACCEL_OK;
 }
@@ -209,7 +209,7 @@ void grid_get_view(const void *accel, grid_view *v)
  * limit), a very fine grid, bounding-box membership, no mailbox, the naive
  * triangle test, and the two ends of the density range. */
 static const char *const grid_variants[] = {
-    "", "res=1", "res=256", "res=7x1x13", "overlap=bbox", "mailbox=0", "tri=naive",
+    "", "res=1", "res=128", "res=7x1x13", "overlap=bbox", "mailbox=0", "tri=naive",
     "lambda=0.05", "lambda=64", "overlap=bbox,mailbox=0", "reorder=0", NULL,
 };
 

@@ -148,11 +148,22 @@ void grid_frame_init(grid_frame *f, box3 box, const int res[3], float *planes)
     for (int a = 0; a < 3; a++) {
         int n = res[a];
         double ext = (double)hi[a] - lo[a];
+        double mag = fabs((double)lo[a]) > fabs((double)hi[a]) ? fabs((double)lo[a]) : fabs((double)hi[a]);
+        /* Cells narrower than the rounding margin of their coordinates buy
+         * nothing (every primitive in one is also padded into its
+         * neighbours) and, far from the origin, make every primitive fall
+         * into every cell: the resolution is capped so that a cell is at
+         * least twice the ulp margin wide. Callers sized planes for res[a],
+         * which is never exceeded. */
+        double ulp_margin = GRID_PAD_ULPS * FLT_EPSILON * mag;
+        if (ulp_margin > 0 && ext / n < 2.0 * ulp_margin) {
+            double cap = floor(ext / (2.0 * ulp_margin));
+            n = cap < 1.0 ? 1 : (int)cap;
+        }
         f->lo[a] = lo[a];
         f->hi[a] = hi[a];
         f->res[a] = n;
         f->inv_cell[a] = (float)(n / ext);
-        double mag = fabs((double)lo[a]) > fabs((double)hi[a]) ? fabs((double)lo[a]) : fabs((double)hi[a]);
         f->pad[a] = (float)(ext / n * GRID_PAD_CELLS + GRID_PAD_ULPS * FLT_EPSILON * mag);
         for (int k = 0; k <= n; k++) p[k] = (float)((double)lo[a] + ext * k / n);
         p[0] = lo[a];
@@ -162,8 +173,8 @@ void grid_frame_init(grid_frame *f, box3 box, const int res[3], float *planes)
         p += n + 1;
     }
     f->stride[0] = 1;
-    f->stride[1] = (uint32_t)res[0];
-    f->stride[2] = (uint32_t)res[0] * (uint32_t)res[1];
+    f->stride[1] = (uint32_t)f->res[0];
+    f->stride[2] = (uint32_t)f->res[0] * (uint32_t)f->res[1];
 }
 
 int grid_cell_range(const grid_frame *f, box3 b, int lo[3], int hi[3])
