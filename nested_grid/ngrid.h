@@ -43,6 +43,10 @@
 #define NGRID_DEFAULT_SUB_LAMBDA 4
 #define NGRID_DEFAULT_THRESHOLD 12
 #define NGRID_DEFAULT_DEPTH 3
+/* Cost model defaults, ns: least-squares fit of this kernel's trace times
+ * against its counters on this machine (calibration in README.md). */
+#define NGRID_DEFAULT_C_STEP 7
+#define NGRID_DEFAULT_C_ISECT 13
 
 extern const accel_kind accel_kind_nested_grid;
 

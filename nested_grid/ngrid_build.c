@@ -36,10 +36,6 @@
 #define STR_(x) #x
 #define STR(x) STR_(x)
 
-/* Cost model defaults, ns: fitted by the calibration run described in
- * nested_grid/README.md (exp_step_cost on this machine). */
-#define NGRID_DEFAULT_C_STEP 3.0
-#define NGRID_DEFAULT_C_ISECT 12.0
 /* Sub-grids with at least this many primitives are built one at a time
  * with every thread rather than as one job among many. */
 #define NGRID_BIG_JOB 16384

@@ -551,8 +551,9 @@ TEST(ngrid_auto_follows_costs)
                  dflt.res[2]);
         check_spec(&s, "nested_grid:auto", rays, 2500, NULL, &c_auto);
         check_spec(&s, flat, rays, 2500, NULL, &c_flat);
-        double cost_auto = 2.0 * c_auto.steps + 8.0 * c_auto.prim_tests;
-        double cost_flat = 2.0 * c_flat.steps + 8.0 * c_flat.prim_tests;
+        const double cs = NGRID_DEFAULT_C_STEP, ci = NGRID_DEFAULT_C_ISECT;
+        double cost_auto = cs * c_auto.steps + ci * c_auto.prim_tests;
+        double cost_flat = cs * c_flat.steps + ci * c_flat.prim_tests;
         CHECKF(cost_auto < 0.5 * cost_flat, "model cost per ray: auto %.1f, flat %.1f",
                cost_auto / 2500, cost_flat / 2500);
         free(rays);
