@@ -9,7 +9,8 @@
  *
  * Sphere/box: Arvo, "A Simple Method for Box-Sphere Intersection Testing",
  * Graphics Gems, 1990: the squared distance from the centre to the box (sum
- * over axes of the distance to the nearer face, where outside) against r^2.
+ * over axes of the distance to the nearer face, where outside) against r^2;
+ * for the sphere's surface also the distance to the farthest corner.
  *
  * Both tests are conservative, which is what a grid needs: a primitive that
  * touches the box, even on a single face, edge or corner point, counts as
@@ -126,79 +127,45 @@ static inline int accel_overlap_tri_box(const float *tri, const double lo[3], co
 }
 
 /*
- * The same test for one triangle against many boxes of one size (the cells
- * of a grid): everything that does not depend on the box's position is
- * computed once. For each of the nine edge axes and the normal, the
- * triangle's projection (relative to v0) widened by the box's radius along
- * that axis gives an interval; a box centred at c is separated along the
- * axis when axis.(c - v0) falls outside it. The three box normals are NOT
- * tested: the caller must already know that the triangle's bounding box
- * touches the box (a grid gets that from the cell range of the bounds).
- * Zero axes (degenerate edges, a zero normal) are dropped: they separate
- * nothing. The slack covers double rounding for boxes whose centres lie
- * within the triangle's bounds widened by the box size.
+ * Clipping a convex polygon to an axis-aligned slab (Sutherland & Hodgman,
+ * "Reentrant Polygon Clipping", CACM 1974), for grid builders that walk the
+ * rows of cells a triangle crosses instead of testing every cell of its
+ * bounding box. Inclusive: a polygon that only touches the slab keeps the
+ * touching point, so the result is empty only when they are disjoint.
+ * Each half-space adds at most one vertex: a triangle clipped to two slabs
+ * has at most 7. Crossing points are interpolated in double and then set
+ * exactly on the plane; callers widen the slab by their own slack to stay
+ * conservative against that rounding.
  */
-typedef struct {
-    double v0[3];
-    double axis[10][3];
-    double lo[10], hi[10];
-    int count;
-} accel_tri_cells;
-
-/* Adds axis L to c unless it is zero (p: vertices relative to v0). */
-static inline void overlap_add_axis(accel_tri_cells *c, double lx, double ly, double lz,
-                                    const double p[3][3], const double half[3], double reach)
+static inline int overlap_clip_half(const double (*in)[3], int n, int axis, double c, double sgn,
+                                    double (*out)[3])
 {
-    double norm1 = fabs(lx) + fabs(ly) + fabs(lz);
-    if (norm1 == 0.0) return;
-    double q1 = lx * p[1][0] + ly * p[1][1] + lz * p[1][2]; /* v0 projects to 0 */
-    double q2 = lx * p[2][0] + ly * p[2][1] + lz * p[2][2];
-    double r = half[0] * fabs(lx) + half[1] * fabs(ly) + half[2] * fabs(lz);
-    double qmin = overlap_min3(0.0, q1, q2), qmax = overlap_max3(0.0, q1, q2);
-    double slack = ACCEL_OVERLAP_SLACK * (fabs(qmin) + fabs(qmax) + r + norm1 * reach);
-    int k = c->count++;
-    c->axis[k][0] = lx, c->axis[k][1] = ly, c->axis[k][2] = lz;
-    c->lo[k] = qmin - r - slack;
-    c->hi[k] = qmax + r + slack;
+    int m = 0;
+    for (int i = 0; i < n; i++) {
+        const double *a = in[i], *b = in[i + 1 == n ? 0 : i + 1];
+        double da = sgn * (a[axis] - c), db = sgn * (b[axis] - c);
+        if (da >= 0.0) {
+            out[m][0] = a[0], out[m][1] = a[1], out[m][2] = a[2];
+            m++;
+        }
+        if ((da >= 0.0) != (db >= 0.0)) {
+            double t = da / (da - db);
+            for (int k = 0; k < 3; k++) out[m][k] = a[k] + t * (b[k] - a[k]);
+            out[m][axis] = c;
+            m++;
+        }
+    }
+    return m;
 }
 
-static inline void accel_tri_cells_prep(accel_tri_cells *c, const float *tri, const double half[3])
+/* Clips polygon in[0..n-1] (n <= 5) to lo <= p[axis] <= hi; out needs n + 2
+ * entries. Returns the vertex count, 0 when the polygon misses the slab. */
+static inline int accel_clip_slab(const double (*in)[3], int n, int axis, double lo, double hi,
+                                  double (*out)[3])
 {
-    double p[3][3], e[3][3], reach = 0.0;
-    for (int a = 0; a < 3; a++) {
-        c->v0[a] = tri[a];
-        p[0][a] = 0.0;
-        p[1][a] = (double)tri[3 + a] - tri[a];
-        p[2][a] = (double)tri[6 + a] - tri[a];
-        double ext = overlap_max3(0.0, p[1][a], p[2][a]) - overlap_min3(0.0, p[1][a], p[2][a]);
-        reach = fmax(reach, ext + 2.0 * half[a]);
-    }
-    for (int a = 0; a < 3; a++) {
-        e[0][a] = p[1][a];
-        e[1][a] = p[2][a] - p[1][a];
-        e[2][a] = -p[2][a];
-    }
-    c->count = 0;
-    /* unit(x) x e = (0, -ez, ey), unit(y) x e = (ez, 0, -ex), unit(z) x e = (-ey, ex, 0). */
-    for (int k = 0; k < 3; k++) {
-        overlap_add_axis(c, 0.0, -e[k][2], e[k][1], p, half, reach);
-        overlap_add_axis(c, e[k][2], 0.0, -e[k][0], p, half, reach);
-        overlap_add_axis(c, -e[k][1], e[k][0], 0.0, p, half, reach);
-    }
-    overlap_add_axis(c, e[0][1] * e[1][2] - e[0][2] * e[1][1], e[0][2] * e[1][0] - e[0][0] * e[1][2],
-                     e[0][0] * e[1][1] - e[0][1] * e[1][0], p, half, reach);
-}
-
-/* Does the prepared triangle touch the box centred at `centre` (of the
- * half-size given to the prep), given that their bounding boxes touch? */
-static inline int accel_tri_cells_overlap(const accel_tri_cells *c, const double centre[3])
-{
-    const double d[3] = {centre[0] - c->v0[0], centre[1] - c->v0[1], centre[2] - c->v0[2]};
-    for (int k = 0; k < c->count; k++) {
-        double q = c->axis[k][0] * d[0] + c->axis[k][1] * d[1] + c->axis[k][2] * d[2];
-        if (q < c->lo[k] || q > c->hi[k]) return 0;
-    }
-    return 1;
+    double tmp[8][3];
+    int m = overlap_clip_half(in, n, axis, lo, 1.0, tmp);
+    return m ? overlap_clip_half((const double(*)[3])tmp, m, axis, hi, -1.0, out) : 0;
 }
 
 /*
@@ -219,6 +186,30 @@ static inline int accel_overlap_sphere_box(const float *sphere, const double lo[
     double r = sphere[3];
     double slack = ACCEL_OVERLAP_SLACK * (scale + r);
     return d2 <= (r + slack) * (r + slack);
+}
+
+/*
+ * Does the sphere's surface (not the ball) touch the box? As above, and the
+ * box must not lie entirely inside the ball: its farthest corner from the
+ * centre must be at least r away. A ray can only hit a sphere where its
+ * surface is, so a cell deep inside a large ball need not reference it.
+ */
+static inline int accel_overlap_sphere_surface_box(const float *sphere, const double lo[3],
+                                                   const double hi[3])
+{
+    if (!accel_overlap_sphere_box(sphere, lo, hi)) return 0;
+    double far2 = 0.0, scale = 0.0;
+    for (int a = 0; a < 3; a++) {
+        double c = sphere[a];
+        double dl = fabs(c - lo[a]), dh = fabs(c - hi[a]);
+        double d = dl > dh ? dl : dh;
+        far2 += d * d;
+        scale += fabs(c) + fabs(lo[a]) + fabs(hi[a]);
+    }
+    double r = sphere[3];
+    double slack = ACCEL_OVERLAP_SLACK * (scale + r);
+    double inner = r - slack;
+    return inner <= 0.0 || far2 >= inner * inner;
 }
 
 #endif

@@ -149,17 +149,6 @@ void grid_frame_init(grid_frame *f, box3 box, const int res[3], float *planes)
         int n = res[a];
         double ext = (double)hi[a] - lo[a];
         double mag = fabs((double)lo[a]) > fabs((double)hi[a]) ? fabs((double)lo[a]) : fabs((double)hi[a]);
-        /* Cells narrower than the rounding margin of their coordinates buy
-         * nothing (every primitive in one is also padded into its
-         * neighbours) and, far from the origin, make every primitive fall
-         * into every cell: the resolution is capped so that a cell is at
-         * least twice the ulp margin wide. Callers sized planes for res[a],
-         * which is never exceeded. */
-        double ulp_margin = GRID_PAD_ULPS * FLT_EPSILON * mag;
-        if (ulp_margin > 0 && ext / n < 2.0 * ulp_margin) {
-            double cap = floor(ext / (2.0 * ulp_margin));
-            n = cap < 1.0 ? 1 : (int)cap;
-        }
         f->lo[a] = lo[a];
         f->hi[a] = hi[a];
         f->res[a] = n;
@@ -216,82 +205,128 @@ void grid_cell_box(const grid_frame *f, int x, int y, int z, double lo[3], doubl
 
 typedef enum { VISIT_COUNT, VISIT_FILL } visit_kind;
 
+/* min/max as compare-and-select (fmin/fmax are library calls without fast-math). */
+static inline double dmin(double a, double b) { return b < a ? b : a; }
+static inline double dmax(double a, double b) { return b > a ? b : a; }
+
+/*
+ * Cells k in [k_lo, k_hi] of axis a whose padded slab, widened by slack,
+ * meets [bmin, bmax]: written to *i..*j; returns 0 when there are none.
+ */
+static inline int slab_range(const grid_frame *f, int a, double bmin, double bmax, double slack,
+                             int k_lo, int k_hi, int *i_out, int *j_out)
+{
+    const float *pl = f->planes[a];
+    double pad = (double)f->pad[a] + slack;
+    double g = (bmin - f->lo[a]) * f->inv_cell[a];
+    int i = g >= k_hi ? k_hi : (g > k_lo ? (int)g : k_lo); /* also maps NaN to k_lo */
+    while (i > k_lo && pl[i] + pad >= bmin) i--;
+    while (i < k_hi && pl[i + 1] + pad < bmin) i++;
+    g = (bmax - f->lo[a]) * f->inv_cell[a];
+    int j = g >= k_hi ? k_hi : (g > k_lo ? (int)g : k_lo);
+    while (j < k_hi && pl[j + 1] - pad <= bmax) j++;
+    while (j > k_lo && pl[j] - pad > bmax) j--;
+    if (j < i || pl[i + 1] + pad < bmin || pl[j] - pad > bmax) return 0;
+    *i_out = i;
+    *j_out = j;
+    return 1;
+}
+
+static inline __attribute__((always_inline)) void
+emit_cell(const grid_frame *f, int x, int y, int z, uint32_t prim, visit_kind kind, int atomic,
+          uint32_t *offsets, uint32_t *refs)
+{
+    uint32_t cell = (uint32_t)x + f->stride[1] * (uint32_t)y + f->stride[2] * (uint32_t)z;
+    if (kind == VISIT_COUNT) {
+        if (atomic)
+            __atomic_fetch_add(&offsets[cell], 1u, __ATOMIC_RELAXED);
+        else
+            offsets[cell]++;
+    } else {
+        uint32_t at = atomic ? __atomic_fetch_add(&offsets[cell], 1u, __ATOMIC_RELAXED)
+                             : offsets[cell]++;
+        refs[at] = prim;
+    }
+}
+
 /*
  * Visits every cell primitive `prim` belongs to: counts it or writes it.
+ * `kind` and `atomic` are constants in each caller.
+ *
  * A primitive whose cell range has more than one cell along at most one
- * axis overlaps all of them (it is connected and spans its bounds along that
- * axis), so exact tests run only for ranges that extend along two or three
- * axes. Spelled once; `kind` and `atomic` are constants in each caller.
+ * axis overlaps all of them (it is connected and spans its bounds along
+ * that axis). Otherwise a triangle is clipped to each z slab of its range,
+ * the clipped polygon to each y slab it reaches, and the x extent of what
+ * remains gives the run of cells in that row (exact: the polygon is the
+ * triangle's part in the row's slabs, and it is convex). The cost follows
+ * the cells the triangle crosses, not the volume of its bounding box. A
+ * sphere is tested per cell of its range against its surface.
  */
 static inline __attribute__((always_inline)) void
-visit_prim(const grid_frame *f, const double cell_half[3], const accel_scene *s, uint32_t prim,
-           grid_overlap mode, visit_kind kind, int atomic, uint32_t *offsets, uint32_t *refs)
+visit_prim(const grid_frame *f, const accel_scene *s, uint32_t prim, grid_overlap mode,
+           visit_kind kind, int atomic, uint32_t *offsets, uint32_t *refs)
 {
     int lo[3], hi[3];
     if (!grid_cell_range(f, accel_prim_bounds(s, prim), lo, hi)) return;
     int spread = (hi[0] > lo[0]) + (hi[1] > lo[1]) + (hi[2] > lo[2]);
-    int exact = mode == GRID_OVERLAP_EXACT && spread >= 2;
-    int is_tri = prim < s->tri_count;
-    accel_tri_cells tri;
-    const float *sphere = NULL;
-    if (exact) {
-        /* Triangles: each cell's padded box lies within the box of half-size
-         * cell_half around its centre, which is tested instead (a superset:
-         * still conservative). */
-        if (is_tri)
-            accel_tri_cells_prep(&tri, s->tris + 9 * (size_t)prim, cell_half);
-        else
-            sphere = s->spheres + 4 * (size_t)(prim - s->tri_count);
+    if (mode != GRID_OVERLAP_EXACT || spread < 2) {
+        for (int z = lo[2]; z <= hi[2]; z++)
+            for (int y = lo[1]; y <= hi[1]; y++)
+                for (int x = lo[0]; x <= hi[0]; x++)
+                    emit_cell(f, x, y, z, prim, kind, atomic, offsets, refs);
+        return;
     }
-    for (int z = lo[2]; z <= hi[2]; z++)
-        for (int y = lo[1]; y <= hi[1]; y++)
-            for (int x = lo[0]; x <= hi[0]; x++) {
-                if (exact) {
-                    int hit;
-                    if (is_tri) {
-                        const double c[3] = {
-                            0.5 * ((double)f->planes[0][x] + f->planes[0][x + 1]),
-                            0.5 * ((double)f->planes[1][y] + f->planes[1][y + 1]),
-                            0.5 * ((double)f->planes[2][z] + f->planes[2][z + 1])};
-                        hit = accel_tri_cells_overlap(&tri, c);
-                    } else {
-                        double blo[3], bhi[3];
-                        grid_cell_box(f, x, y, z, blo, bhi);
-                        hit = accel_overlap_sphere_box(sphere, blo, bhi);
-                    }
-                    if (!hit) continue;
+    if (prim >= s->tri_count) {
+        const float *sphere = s->spheres + 4 * (size_t)(prim - s->tri_count);
+        for (int z = lo[2]; z <= hi[2]; z++)
+            for (int y = lo[1]; y <= hi[1]; y++)
+                for (int x = lo[0]; x <= hi[0]; x++) {
+                    double blo[3], bhi[3];
+                    grid_cell_box(f, x, y, z, blo, bhi);
+                    if (accel_overlap_sphere_surface_box(sphere, blo, bhi))
+                        emit_cell(f, x, y, z, prim, kind, atomic, offsets, refs);
                 }
-                uint32_t cell = (uint32_t)x + f->stride[1] * (uint32_t)y + f->stride[2] * (uint32_t)z;
-                if (kind == VISIT_COUNT) {
-                    if (atomic)
-                        __atomic_fetch_add(&offsets[cell], 1u, __ATOMIC_RELAXED);
-                    else
-                        offsets[cell]++;
-                } else {
-                    uint32_t at = atomic ? __atomic_fetch_add(&offsets[cell], 1u, __ATOMIC_RELAXED)
-                                         : offsets[cell]++;
-                    refs[at] = prim;
-                }
-            }
+        return;
+    }
+    const float *t = s->tris + 9 * (size_t)prim;
+    double v[3][3], mag = 0.0;
+    for (int k = 0; k < 3; k++)
+        for (int a = 0; a < 3; a++) {
+            v[k][a] = t[3 * k + a];
+            mag = dmax(mag, dmax(fabs(v[k][a]), dmax(fabs((double)f->lo[a]), fabs((double)f->hi[a]))));
+        }
+    /* Covers the rounding of the clipping, far below any padding. */
+    const double slack = ACCEL_OVERLAP_SLACK * mag;
+    const float *pz = f->planes[2], *py = f->planes[1];
+    for (int z = lo[2]; z <= hi[2]; z++) {
+        double in_z[8][3];
+        int nz = accel_clip_slab((const double(*)[3])v, 3, 2, pz[z] - (double)f->pad[2] - slack,
+                                 pz[z + 1] + (double)f->pad[2] + slack, in_z);
+        if (!nz) continue;
+        double ymin = in_z[0][1], ymax = in_z[0][1];
+        for (int k = 1; k < nz; k++) ymin = dmin(ymin, in_z[k][1]), ymax = dmax(ymax, in_z[k][1]);
+        int y0, y1;
+        if (!slab_range(f, 1, ymin, ymax, slack, lo[1], hi[1], &y0, &y1)) continue;
+        for (int y = y0; y <= y1; y++) {
+            double in_zy[8][3];
+            int n = accel_clip_slab((const double(*)[3])in_z, nz, 1,
+                                    py[y] - (double)f->pad[1] - slack,
+                                    py[y + 1] + (double)f->pad[1] + slack, in_zy);
+            if (!n) continue;
+            double xmin = in_zy[0][0], xmax = in_zy[0][0];
+            for (int k = 1; k < n; k++) xmin = dmin(xmin, in_zy[k][0]), xmax = dmax(xmax, in_zy[k][0]);
+            int x0, x1;
+            if (!slab_range(f, 0, xmin, xmax, slack, lo[0], hi[0], &x0, &x1)) continue;
+            for (int x = x0; x <= x1; x++) emit_cell(f, x, y, z, prim, kind, atomic, offsets, refs);
+        }
+    }
 }
 
 /* The i-th primitive of a pass: prims[i], or i itself for a NULL list. */
 #define PRIM_AT(prims, i) ((prims) ? (prims)[i] : (uint32_t)(i))
 
-/* Largest padded cell half-size per axis (cells differ by float rounding). */
-static void largest_half(const grid_frame *f, double half[3])
-{
-    for (int a = 0; a < 3; a++) {
-        const float *pl = f->planes[a];
-        double h = 0.0;
-        for (int k = 0; k < f->res[a]; k++) h = fmax(h, 0.5 * ((double)pl[k + 1] - pl[k]));
-        half[a] = h + f->pad[a];
-    }
-}
-
 typedef struct {
     const grid_frame *f;
-    double cell_half[3];
     const accel_scene *s;
     const uint32_t *prims;
     grid_overlap mode;
@@ -306,11 +341,10 @@ static void pass_chunk(void *ctx, size_t begin, size_t end, int thread)
     const pass_job *j = ctx;
     for (size_t i = begin; i < end; i++) {
         if (j->kind == VISIT_COUNT)
-            visit_prim(j->f, j->cell_half, j->s, PRIM_AT(j->prims, i), j->mode, VISIT_COUNT, 1,
-                       j->offsets, NULL);
+            visit_prim(j->f, j->s, PRIM_AT(j->prims, i), j->mode, VISIT_COUNT, 1, j->offsets, NULL);
         else
-            visit_prim(j->f, j->cell_half, j->s, PRIM_AT(j->prims, i), j->mode, VISIT_FILL, 1,
-                       j->offsets, j->refs);
+            visit_prim(j->f, j->s, PRIM_AT(j->prims, i), j->mode, VISIT_FILL, 1, j->offsets,
+                       j->refs);
     }
 }
 
@@ -321,18 +355,16 @@ static void run_pass(const grid_frame *f, const accel_scene *s, const uint32_t *
                      uint32_t prim_count, grid_overlap mode, visit_kind kind, uint32_t *offsets,
                      uint32_t *refs, int threads)
 {
-    double half[3];
-    largest_half(f, half);
     if (threads <= 1 || prim_count <= GRID_PASS_CHUNK) {
         for (uint32_t i = 0; i < prim_count; i++) {
             if (kind == VISIT_COUNT)
-                visit_prim(f, half, s, PRIM_AT(prims, i), mode, VISIT_COUNT, 0, offsets, NULL);
+                visit_prim(f, s, PRIM_AT(prims, i), mode, VISIT_COUNT, 0, offsets, NULL);
             else
-                visit_prim(f, half, s, PRIM_AT(prims, i), mode, VISIT_FILL, 0, offsets, refs);
+                visit_prim(f, s, PRIM_AT(prims, i), mode, VISIT_FILL, 0, offsets, refs);
         }
         return;
     }
-    pass_job j = {f, {half[0], half[1], half[2]}, s, prims, mode, offsets, refs, kind};
+    pass_job j = {f, s, prims, mode, offsets, refs, kind};
     accel_parallel_for(prim_count, GRID_PASS_CHUNK, threads, pass_chunk, &j);
 }
 

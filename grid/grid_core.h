@@ -53,9 +53,12 @@
  * for primitives that end within 1/1024 of a cell from a boundary. A caller
  * may change frame.pad after grid_frame_init (the passes read it). */
 #define GRID_PAD_CELLS (1.0 / 1024.0)
-/* Membership padding relative to the magnitude of the coordinates (float
- * ulps), for scenes far from the origin. */
-#define GRID_PAD_ULPS 16.0
+/* Membership padding relative to the magnitude of the coordinates, in
+ * float ulps. Zero: membership, planes and the walk are all evaluated in
+ * double on the same floats, so far from the origin they stay consistent
+ * without a margin; a margin of a few ulps there would be wider than the
+ * cells of a small scene and put every primitive in every cell. */
+#define GRID_PAD_ULPS 0.0
 
 /* ---- resolution and sizing ------------------------------------------------ */
 

@@ -347,6 +347,38 @@ TEST(grid_overlap_triangle_box)
     CHECK(found_sep > 0);
 }
 
+TEST(grid_overlap_clip_slab)
+{
+    const double tri[3][3] = {{0, 0, 0}, {2, 0, 0}, {0, 2, 0}};
+    double out[8][3];
+    /* Crossing: the part with 0.5 <= x <= 1 is a quadrilateral. */
+    int n = accel_clip_slab(tri, 3, 0, 0.5, 1.0, out);
+    CHECKF(n == 4, "crossing: %d vertices", n);
+    double xmin = 9, xmax = -9, ymax = -9;
+    for (int k = 0; k < n; k++) {
+        xmin = out[k][0] < xmin ? out[k][0] : xmin;
+        xmax = out[k][0] > xmax ? out[k][0] : xmax;
+        ymax = out[k][1] > ymax ? out[k][1] : ymax;
+    }
+    CHECK(xmin == 0.5 && xmax == 1.0 && ymax == 1.5);
+    /* Touching with a vertex only (slab [2, 3]), with an edge (y in [-1, 0]),
+     * and disjoint by a hair. */
+    n = accel_clip_slab(tri, 3, 0, 2.0, 3.0, out);
+    CHECKF(n >= 1 && out[0][0] == 2.0 && out[0][1] == 0.0, "vertex touch: %d vertices", n);
+    n = accel_clip_slab(tri, 3, 1, -1.0, 0.0, out);
+    CHECKF(n >= 2, "edge touch: %d vertices", n);
+    for (int k = 0; k < n; k++) CHECK(out[k][1] == 0.0);
+    CHECK(accel_clip_slab(tri, 3, 0, 2.0000001, 3.0, out) == 0);
+    CHECK(accel_clip_slab(tri, 3, 2, 1e-9, 1.0, out) == 0);
+    /* A flat slab (lo == hi) through the triangle: a segment. */
+    n = accel_clip_slab(tri, 3, 1, 1.0, 1.0, out);
+    CHECKF(n >= 2, "flat slab: %d vertices", n);
+    /* A degenerate polygon (one point) inside and outside. */
+    const double pt[1][3] = {{0.5, 0.5, 0.5}};
+    CHECK(accel_clip_slab(pt, 1, 2, 0.5, 0.5, out) == 1);
+    CHECK(accel_clip_slab(pt, 1, 2, 0.6, 0.7, out) == 0);
+}
+
 TEST(grid_overlap_sphere_box)
 {
     const double lo[3] = {0, 0, 0}, hi[3] = {1, 1, 1};
@@ -362,6 +394,112 @@ TEST(grid_overlap_sphere_box)
     const float inside[4] = {0.5f, 0.5f, 0.5f, 0.01f}, around[4] = {0.5f, 0.5f, 0.5f, 10};
     CHECK(accel_overlap_sphere_box(inside, lo, hi));
     CHECK(accel_overlap_sphere_box(around, lo, hi));
+}
+
+/*
+ * The build's membership (slab clipping, grid_core.c) against the SAT of
+ * overlap.h on every padded cell: equal for random triangles, and a
+ * superset for triangles on the cell lattice (touching faces, edges and
+ * corners, where both must say yes). Spheres: the cells cut by the surface,
+ * none deep inside the ball.
+ */
+TEST(grid_membership_matches_sat)
+{
+    scene_builder b = {0};
+    accel_error err = {0};
+    rng_state = 606;
+    add_tri(&b, v3(0, 0, 0), v3(0.01f, 0, 0), v3(0, 0.01f, 0)); /* pin the bounds to [0,10]^3 */
+    add_tri(&b, v3(10, 10, 10), v3(9.99f, 10, 10), v3(10, 9.99f, 10));
+    const uint32_t first = 2, random_count = 300, lattice_count = 200;
+    for (uint32_t i = 0; i < random_count; i++) {
+        float sz = i % 10 == 0 ? 9.0f : (i % 3 ? 0.6f : 2.5f);
+        vec3 c = v3(frange(0.5f, 9.5f), frange(0.5f, 9.5f), frange(0.5f, 9.5f));
+        vec3 p[3];
+        for (int k = 0; k < 3; k++)
+            p[k] = v3_min(v3(10, 10, 10), v3_max(v3(0, 0, 0), v3_add(c, v3(frange(-sz, sz),
+                                                                            frange(-sz, sz),
+                                                                            frange(-sz, sz)))));
+        add_tri(&b, p[0], p[1], p[2]);
+    }
+    /* On the lattice of a 10^3 grid (cells of 1): vertices on cell corners,
+     * edge midpoints, face centres. */
+    for (uint32_t i = 0; i < lattice_count; i++) {
+        vec3 base = v3((float)(int)(frand() * 9), (float)(int)(frand() * 9), (float)(int)(frand() * 9));
+        vec3 p[3];
+        for (int k = 0; k < 3; k++)
+            p[k] = v3_add(base, v3(0.5f * (int)(frand() * 3), 0.5f * (int)(frand() * 3),
+                                   0.5f * (int)(frand() * 3)));
+        add_tri(&b, p[0], p[1], p[2]);
+    }
+    scene_builder_add_sphere(&b, v3(5, 5, 5), 3.7f, &err);
+    scene_builder_add_sphere(&b, v3(2, 2, 2), 1.0f, &err); /* touches cell planes exactly */
+    accel_scene s;
+    if (!finish(&b, "membership", &s)) return;
+    static const char *const specs[] = {"grid:res=10", "grid:res=13x17x11"};
+    for (int sp = 0; sp < 2; sp++) {
+        const accel_kind *kind;
+        void *accel;
+        accel_build_stats st;
+        if (accel_build_spec(specs[sp], &s, 1, &kind, &accel, &st, &err)) {
+            test_fail(__FILE__, __LINE__, "%s: %s", specs[sp], err.msg);
+            continue;
+        }
+        grid_view v;
+        grid_get_view(accel, &v);
+        const grid_frame *f = v.frame;
+        uint8_t *member = calloc((size_t)s.prim_count * v.cell_count, 1);
+        uint8_t *live = calloc(s.prim_count, 1);
+        for (uint32_t k = 0; k < s.live_count; k++) live[s.live[k]] = 1;
+        for (uint64_t c = 0; c < v.cell_count; c++)
+            for (uint32_t r = v.offsets[c]; r < v.offsets[c + 1]; r++)
+                member[(size_t)v.prim_id[v.refs[r]] * v.cell_count + c] = 1;
+        size_t missing = 0, extra_random = 0, inside_ball = 0, shell_missing = 0;
+        for (int z = 0; z < f->res[2]; z++)
+            for (int y = 0; y < f->res[1]; y++)
+                for (int x = 0; x < f->res[0]; x++) {
+                    uint64_t c = (uint64_t)x + f->stride[1] * (uint64_t)y + f->stride[2] * (uint64_t)z;
+                    double lo[3], hi[3];
+                    grid_cell_box(f, x, y, z, lo, hi);
+                    for (uint32_t k = first; k < s.tri_count; k++) {
+                        int sat = accel_overlap_tri_box(s.tris + 9 * (size_t)k, lo, hi);
+                        int got = member[(size_t)k * v.cell_count + c];
+                        sat &= live[k]; /* degenerate triangles are in no cell */
+                        missing += sat && !got;
+                        extra_random += k < first + random_count && got && !sat;
+                    }
+                    for (uint32_t k = s.tri_count; k < s.prim_count; k++) {
+                        const float *sph = s.spheres + 4 * (size_t)(k - s.tri_count);
+                        int got = member[(size_t)k * v.cell_count + c];
+                        int ball = accel_overlap_sphere_box(sph, lo, hi);
+                        int shell = accel_overlap_sphere_surface_box(sph, lo, hi);
+                        inside_ball += got && ball && !shell;
+                        shell_missing += shell && !got;
+                    }
+                }
+        CHECKF(missing == 0, "%s: %zu (triangle, cell) pairs the SAT finds are missing", specs[sp],
+               missing);
+        CHECKF(extra_random == 0, "%s: %zu extra (triangle, cell) pairs for random triangles",
+               specs[sp], extra_random);
+        CHECKF(inside_ball == 0 && shell_missing == 0,
+               "%s: spheres: %zu cells inside a ball referenced, %zu cut cells missing", specs[sp],
+               inside_ball, shell_missing);
+        free(member);
+        free(live);
+        kind->destroy(accel);
+    }
+    /* The big sphere hit from inside and outside, through the thinned cells. */
+    size_t n = 3000;
+    accel_ray *rays = malloc(n * sizeof *rays);
+    for (size_t i = 0; i < n; i++) {
+        float r = i % 2 ? 2.0f : 12.0f;
+        vec3 o = v3(5 + frange(-r, r), 5 + frange(-r, r), 5 + frange(-r, r));
+        vec3 d = v3(frange(-1, 1), frange(-1, 1), frange(-1, 1));
+        rays[i] = mk_ray(o.x, o.y, o.z, d.x, d.y, d.z, 0, INFINITY);
+    }
+    static const char *const extra[] = {"res=10", "res=40", NULL};
+    check_all_variants(&s, rays, n, extra, "membership");
+    free(rays);
+    scene_free(&s);
 }
 
 /* ---- DDA edge cases against the reference ----------------------------------------- */
