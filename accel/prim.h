@@ -209,7 +209,9 @@ static inline int accel_tri_watertight(const accel_ray_prep *p, const float *tri
                (fabsf(U * (p->sz * az_)) + fabsf(V * (p->sz * bz_)) + fabsf(W * (p->sz * cz_)));
     float lo = p->t_near * det, hi = *t * det;
     if (T < lo - et || T > hi + et) return 0;
-    if (T <= lo + et || T >= hi - et) return accel_tri_fallback(p, tri, t, u, v);
+    /* Written so that a NaN (overflow at coordinates near FLT_MAX) also
+     * goes to the double test, whose range covers it. */
+    if (!(T > lo + et && T < hi - et)) return accel_tri_fallback(p, tri, t, u, v);
     float rcp = 1.0f / det;
     *t = T * rcp;
     *u = V * sgn * rcp;

@@ -352,3 +352,21 @@ TEST(core_offset_origin_leaves_surface)
     }
     CHECKF(bad == 0, "%d of 1000 offset rays re-hit their own triangle", bad);
 }
+
+TEST(core_huge_coordinates_no_nan)
+{
+    /* Coordinates near 1e22: float products overflow; the decision must
+     * fall to the double test, never a NaN hit. */
+    const float big = 1.25e22f;
+    const float tri[9] = {big, -1e21f, 0, big + 1e21f, 1e21f, 0, big - 1e21f, 1e21f, 0};
+    accel_ray_prep p;
+    accel_ray r = {big, 0, 1e22f, 0, 0, 0, -1, INFINITY};
+    CHECK(accel_prep_ray(&r, &p) == 1);
+    float t = INFINITY, u, v;
+    int hit = accel_tri_watertight(&p, tri, &t, &u, &v);
+    CHECKF(!hit || (t == t && fabsf(t - 1e22f) <= 1e16f), "hit %d t %g", hit, t);
+    accel_ray miss = {big * 3, 0, 1e22f, 0, 0, 0, -1, INFINITY};
+    accel_prep_ray(&miss, &p);
+    t = INFINITY;
+    CHECK(accel_tri_watertight(&p, tri, &t, &u, &v) == 0);
+}
