@@ -180,7 +180,7 @@ int accel_params_parse(const char *spec, accel_params *out, accel_error *err)
     accel_param_def defs[ACCEL_MAX_PARAMS];
     size_t n = k->param_count + accel_common_param_count;
     assert(n <= ACCEL_MAX_PARAMS);
-    memcpy(defs, k->params, k->param_count * sizeof *defs);
+    if (k->param_count) memcpy(defs, k->params, k->param_count * sizeof *defs);
     memcpy(defs + k->param_count, accel_common_params, accel_common_param_count * sizeof *defs);
     out->kind = k;
     int rc = accel_parse_kv(k->name, colon ? colon + 1 : "", defs, n, out->num, out->str,

@@ -103,6 +103,20 @@ static inline int accel_tri_watertight_d(const accel_ray_d *r, const float *tri,
     if ((U < 0 || V < 0 || W < 0) && (U > 0 || V > 0 || W > 0)) return 0;
     double det = U + V + W;
     if (det == 0.0) return 0;
+    /* All three edge functions within double rounding of zero: the ray lies
+     * in the triangle's plane (its projection is a segment), and a tiny
+     * rounded determinant would give an arbitrary t. Edge-on is a miss. */
+    double mx[3], my[3];
+    const double *pts[3] = {a, b, c};
+    for (int i = 0; i < 3; i++) {
+        mx[i] = fabs(pts[i][r->kx]) + fabs(r->sx * pts[i][r->kz]);
+        my[i] = fabs(pts[i][r->ky]) + fabs(r->sy * pts[i][r->kz]);
+    }
+    const double eps = 16.0 * 0x1p-53;
+    if (fabs(U) <= eps * (mx[2] * my[1] + my[2] * mx[1]) &&
+        fabs(V) <= eps * (mx[0] * my[2] + my[0] * mx[2]) &&
+        fabs(W) <= eps * (mx[1] * my[0] + my[1] * mx[0]))
+        return 0;
     double tt = (U * a[r->kz] + V * b[r->kz] + W * c[r->kz]) * r->sz / det;
     if (!(tt >= r->t_near && tt <= *t)) return 0;
     *t = tt;

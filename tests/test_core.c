@@ -370,3 +370,26 @@ TEST(core_huge_coordinates_no_nan)
     t = INFINITY;
     CHECK(accel_tri_watertight(&p, tri, &t, &u, &v) == 0);
 }
+
+TEST(core_ray_in_triangle_plane_misses)
+{
+    /* The ray lies in the triangle's plane: edge-on, no hit (the rounded
+     * determinant is tiny, not zero, and must not yield an arbitrary t). */
+    const float tri[9] = {2, 1, 4, 2, 0, 4.5f, 1.5f, 0, 4};
+    accel_ray r = {3, 1, 5, 0, -2, 3, -3.5f, INFINITY};
+    accel_ray_prep p;
+    CHECK(accel_prep_ray(&r, &p) == 1);
+    float t = INFINITY, u, v;
+    int hit = accel_tri_watertight(&p, tri, &t, &u, &v);
+    accel_hit ref;
+    accel_scene s = {0};
+    float tris[9];
+    memcpy(tris, tri, sizeof tris);
+    uint32_t live = 0;
+    s.tri_count = s.prim_count = s.live_count = 1;
+    s.tris = tris;
+    s.live = &live;
+    accel_reference_trace(&s, &r, &ref, 1, 1);
+    CHECKF(ref.prim == ACCEL_MISS, "reference hits an edge-on triangle at t %g", ref.t);
+    CHECKF(!hit, "float kernel hits an edge-on triangle at t %g", t);
+}
