@@ -39,7 +39,7 @@
 #define NGRID_MAX_LEVELS 4
 
 /* Defaults, from the sweep reported in nested_grid/README.md. */
-#define NGRID_DEFAULT_LAMBDA 1
+#define NGRID_DEFAULT_LAMBDA 2
 #define NGRID_DEFAULT_SUB_LAMBDA 4
 #define NGRID_DEFAULT_THRESHOLD 12
 #define NGRID_DEFAULT_DEPTH 3
