@@ -190,9 +190,19 @@ static int build_sub(const builder *b, const bgrid *parent, uint32_t cell, int t
         bgrid_free(g);
         return wrap_error(err, rc, context);
     }
-    /* A sub-grid every cell of which holds every primitive separates
-     * nothing (large primitives spanning the cell): keep the leaf. */
-    if (!b->is_auto && g->cells.ref_count == (uint64_t)n * g->cells.cell_count) {
+    /* A sub-grid whose non-empty cells still hold, on average, more than
+     * half of the primitives separates almost nothing (large primitives
+     * spanning the cell, all sharing one region): keep the leaf. Without
+     * this, overlapping primitives multiply their references level after
+     * level (1000 triangles around one centroid reached 140M references). */
+    uint64_t nonempty = 0;
+    for (uint64_t c = 0; c < g->cells.cell_count; c++)
+        nonempty += g->cells.offsets[c + 1] != g->cells.offsets[c];
+    /* Likewise a sub-grid that copies its primitives more than 8 times over
+     * (primitives much larger than its cells) costs memory without saving
+     * tests. */
+    if (!b->is_auto && nonempty > 0 &&
+        (g->cells.ref_count * 2 > (uint64_t)n * nonempty || g->cells.ref_count > 8 * (uint64_t)n)) {
         bgrid_free(g);
         return ACCEL_OK;
     }
