@@ -21,6 +21,8 @@
  *   auto        pick the top resolution and every sub-grid (or none) from the
  *               cost model c_step*E[cells] + c_isect*E[tests] instead of
  *               lambda, sub_lambda and threshold
+ *   lookahead   auto: price cells that may still be subdivided by an estimate of
+ *               their best sub-grid rather than as leaves (ngrid_cost.c)
  *   c_step      cost model: cost of one cell step, ns
  *   c_isect     cost model: cost of one primitive test, ns
  *   overlap     exact | bbox cell membership

@@ -58,6 +58,9 @@ static const accel_param_def ngrid_params[] = {
     {"auto", ACCEL_PARAM_BOOL, "0", 0, 0, NULL,
      "cost model picks the top resolution and every sub-grid (ignores lambda, sub_lambda, "
      "sub_res, threshold)"},
+    {"lookahead", ACCEL_PARAM_BOOL, "0", 0, 0, NULL,
+     "auto: price a cell that may still get a sub-grid by its best sub-grid's estimate "
+     "(0: as a leaf)"},
     {"c_step", ACCEL_PARAM_FLOAT, STR(NGRID_DEFAULT_C_STEP), 1e-3, 1e6, NULL,
      "auto: cost of one cell step, ns"},
     {"c_isect", ACCEL_PARAM_FLOAT, STR(NGRID_DEFAULT_C_ISECT), 1e-3, 1e6, NULL,
@@ -85,7 +88,7 @@ typedef struct {
 typedef struct {
     const accel_scene *scene;
     grid_overlap mode;
-    int is_auto, depth, sub_res;
+    int is_auto, lookahead, depth, sub_res;
     double sub_lambda;
     uint32_t threshold;
     ngrid_costs costs;
@@ -165,8 +168,9 @@ static int build_sub(const builder *b, const bgrid *parent, uint32_t cell, int t
     uint32_t n = cell_prims(parent, cell);
     int res[3];
     if (b->is_auto) {
-        int rc = ngrid_auto_sub_res(b->scene, box, pf->pad, prims, n, b->mode, &b->costs, budget,
-                                    res, err);
+        int deeper = b->lookahead && parent->level + 2 < b->depth;
+        int rc = ngrid_auto_sub_res(b->scene, box, pf->pad, prims, n, b->mode, deeper, &b->costs,
+                                    budget, res, err);
         if (rc) return rc;
         if (res[0] == 0) return ACCEL_OK;
     } else if (b->sub_res > 0) {
@@ -504,6 +508,7 @@ static int ngrid_build(const accel_scene *scene, const accel_params *params, int
     b.scene = scene;
     b.mode = (int)accel_param_num(params, "overlap") == 1 ? GRID_OVERLAP_BBOX : GRID_OVERLAP_EXACT;
     b.is_auto = accel_param_num(params, "auto") != 0.0;
+    b.lookahead = accel_param_num(params, "lookahead") != 0.0;
     b.depth = (int)accel_param_num(params, "depth");
     b.sub_res = (int)accel_param_num(params, "sub_res");
     b.sub_lambda = accel_param_num(params, "sub_lambda");
@@ -521,7 +526,8 @@ static int ngrid_build(const accel_scene *scene, const accel_params *params, int
     box3 box = grid_frame_box(scene->bounds);
     if (res[0] == 0) {
         if (b.is_auto) {
-            rc = ngrid_auto_top_res(scene, box, b.mode, &b.costs, b.max_bytes, res, err);
+            rc = ngrid_auto_top_res(scene, box, b.mode, b.lookahead && b.depth > 1, &b.costs,
+                                    b.max_bytes, res, err);
             if (rc) return rc;
         } else {
             grid_resolution(scene->bounds, (double)scene->live_count,

@@ -71,15 +71,43 @@ double ngrid_cell_probability(const grid_frame *f)
 }
 
 /*
- * References of prims[] in a grid of resolution res over box, padded as a
- * sub-grid of a grid padded by parent_pad (ngrid_sub_pad), or as the top
- * grid when parent_pad is NULL. Returns 0, or 1 when
- * the grid is too large for max_bytes (a candidate to skip, not an error),
- * or an error status.
+ * Expected cost of a ray crossing a cell that holds n primitives: testing
+ * all of them, or, when the cell may still get a sub-grid of its own (a
+ * one-level lookahead), the cheaper of that and an estimate of the best
+ * sub-grid. The estimate takes the n primitives as small and spread over a
+ * cube cell: a sub-grid of k cells is crossed in about k^(1/3) cells, with
+ * about n/k^(2/3) tests, so c_step*k^(1/3) + c_isect*n*k^(-2/3) is least at
+ * k = 2*c_isect*n/c_step, where it is (3/2)*c_step*k^(1/3); entering it
+ * costs NGRID_ENTER_STEPS steps more. Without the lookahead (the default,
+ * lookahead=0) every candidate is priced as if its cells stayed leaves: the
+ * top level comes out about as fine as the best regular grid and the
+ * sub-grids refine what it leaves dense. With it, coarse levels look cheap
+ * wherever refinement could follow; for isotropic rays that is right, but
+ * rays that all converge on one small dense region (the camera's rays on
+ * the teapot in its stadium) find that region under-resolved when the depth
+ * runs out (nested_grid/README.md has the numbers).
  */
-static int count_refs(const accel_scene *s, box3 box, const float *parent_pad, const int res[3],
-                      const uint32_t *prims, uint32_t n, grid_overlap mode, int threads,
-                      double max_bytes, grid_frame *f, uint64_t *refs, accel_error *err)
+static double cell_cost(double n, int deeper, const ngrid_costs *m)
+{
+    double leaf = m->c_isect * n;
+    if (!deeper) return leaf;
+    double k = 2.0 * m->c_isect * n / m->c_step;
+    double sub = m->c_step * (NGRID_ENTER_STEPS + 1.5 * cbrt(k));
+    return sub < leaf ? sub : leaf;
+}
+
+/*
+ * Expected cost, for a ray crossing box, of a grid of resolution res over
+ * it holding prims[]: c_step*E[cells] + P(cell) * sum over cells of
+ * cell_cost(count * scale). Padded as a sub-grid of a grid padded by
+ * parent_pad (ngrid_sub_pad), or as the top grid when parent_pad is NULL.
+ * Returns 0, or 1 when the grid is too large for max_bytes (a candidate to
+ * skip, not an error), or an error status.
+ */
+static int grid_cost(const accel_scene *s, box3 box, const float *parent_pad, const int res[3],
+                     const uint32_t *prims, uint32_t n, double scale, int deeper,
+                     grid_overlap mode, double max_bytes, const ngrid_costs *m, double *cost,
+                     accel_error *err)
 {
     uint64_t cells;
     accel_error ignore;
@@ -93,15 +121,16 @@ static int count_refs(const accel_scene *s, box3 box, const float *parent_pad, c
                           "nested_grid: out of memory for a %dx%dx%d cost estimate", res[0],
                           res[1], res[2]);
     }
-    grid_frame_init(f, box, res, planes);
-    if (parent_pad) ngrid_sub_pad(f, parent_pad);
-    grid_count_pass(f, s, prims, n, mode, counts, threads);
-    uint64_t total = 0;
-    for (uint64_t c = 0; c < cells; c++) total += counts[c];
+    grid_frame f;
+    grid_frame_init(&f, box, res, planes);
+    if (parent_pad) ngrid_sub_pad(&f, parent_pad);
+    grid_count_pass(&f, s, prims, n, mode, counts, 1);
+    double tests = 0.0;
+    for (uint64_t c = 0; c < cells; c++)
+        if (counts[c]) tests += cell_cost(counts[c] * scale, deeper, m);
     free(counts);
     free(planes);
-    f->planes[0] = f->planes[1] = f->planes[2] = NULL;
-    *refs = total;
+    *cost = m->c_step * ngrid_expected_cells(&f) + ngrid_cell_probability(&f) * tests;
     return 0;
 }
 
@@ -110,13 +139,13 @@ static int same_res(const int a[3], const int b[3])
     return a[0] == b[0] && a[1] == b[1] && a[2] == b[2];
 }
 
-int ngrid_auto_top_res(const accel_scene *s, box3 box, grid_overlap mode, const ngrid_costs *m,
-                       double max_bytes, int res[3], accel_error *err)
+int ngrid_auto_top_res(const accel_scene *s, box3 box, grid_overlap mode, int deeper,
+                       const ngrid_costs *m, double max_bytes, int res[3], accel_error *err)
 {
     uint32_t n = s->live_count;
     grid_resolution(s->bounds, (double)n, 1.0, res);
     if (n == 0) return ACCEL_OK;
-    /* A stride subset stands for the whole scene: its reference count,
+    /* A stride subset stands for the whole scene: each cell's count,
      * scaled by n/sample, estimates the full one. */
     uint32_t stride = n > NGRID_AUTO_SAMPLE ? (n + NGRID_AUTO_SAMPLE - 1) / NGRID_AUTO_SAMPLE : 1;
     uint32_t sample_n = (n + stride - 1) / stride;
@@ -135,16 +164,14 @@ int ngrid_auto_top_res(const accel_scene *s, box3 box, grid_overlap mode, const 
         grid_resolution(s->bounds, (double)n, top_ladder[k], r);
         if (same_res(r, prev)) continue;
         memcpy(prev, r, sizeof prev);
-        grid_frame f;
-        uint64_t refs;
-        rc = count_refs(s, box, NULL, r, sample, sample_n, mode, 1, max_bytes, &f, &refs, err);
+        double cost;
+        rc = grid_cost(s, box, NULL, r, sample, sample_n, scale, deeper, mode, max_bytes, m, &cost,
+                       err);
         if (rc == 1) {
             rc = ACCEL_OK;
             continue;
         }
         if (rc) break;
-        double cost = m->c_step * ngrid_expected_cells(&f) +
-                      m->c_isect * (double)refs * scale * ngrid_cell_probability(&f);
         if (cost < best) {
             best = cost;
             memcpy(res, r, sizeof r);
@@ -157,7 +184,7 @@ int ngrid_auto_top_res(const accel_scene *s, box3 box, grid_overlap mode, const 
 }
 
 int ngrid_auto_sub_res(const accel_scene *s, box3 box, const float parent_pad[3],
-                       const uint32_t *prims, uint32_t prim_count, grid_overlap mode,
+                       const uint32_t *prims, uint32_t prim_count, grid_overlap mode, int deeper,
                        const ngrid_costs *m, double max_bytes, int res[3], accel_error *err)
 {
     res[0] = res[1] = res[2] = 0;
@@ -172,14 +199,12 @@ int ngrid_auto_sub_res(const accel_scene *s, box3 box, const float parent_pad[3]
         grid_resolution(box, (double)prim_count, sub_ladder[k], r);
         if (same_res(r, prev)) continue;
         memcpy(prev, r, sizeof prev);
-        grid_frame f;
-        uint64_t refs;
-        int rc = count_refs(s, box, parent_pad, r, prims, prim_count, mode, 1, max_bytes, &f,
-                            &refs, err);
+        double cost;
+        int rc = grid_cost(s, box, parent_pad, r, prims, prim_count, 1.0, deeper, mode, max_bytes,
+                           m, &cost, err);
         if (rc == 1) continue;
         if (rc) return rc;
-        double cost = m->c_step * (NGRID_ENTER_STEPS + ngrid_expected_cells(&f)) +
-                      m->c_isect * (double)refs * ngrid_cell_probability(&f);
+        cost += m->c_step * NGRID_ENTER_STEPS;
         if (cost < best) {
             best = cost;
             memcpy(res, r, sizeof r);

@@ -53,20 +53,23 @@ typedef struct {
 /*
  * Auto mode, top level: the resolution (among the rule's results for a
  * ladder of lambdas) with the least expected cost c_step*E[cells] +
- * c_isect*E[tests] of a ray crossing the scene box. Counts references on a
- * deterministic subset of at most NGRID_AUTO_SAMPLE primitives.
+ * c_isect*E[tests] of a ray crossing the scene box, cells that may get
+ * sub-grids (deeper) priced with the lookahead of ngrid_cost.c. Counts
+ * references on a deterministic subset of at most NGRID_AUTO_SAMPLE
+ * primitives.
  */
-int ngrid_auto_top_res(const accel_scene *s, box3 box, grid_overlap mode, const ngrid_costs *m,
-                       double max_bytes, int res[3], accel_error *err);
+int ngrid_auto_top_res(const accel_scene *s, box3 box, grid_overlap mode, int deeper,
+                       const ngrid_costs *m, double max_bytes, int res[3], accel_error *err);
 
 /*
  * Auto mode, one cell: the sub-grid resolution whose expected cost for a
  * ray crossing the cell beats testing the cell's prim_count primitives, or
  * res = {0,0,0} when none does (the cell stays a leaf). parent_pad: the
- * padding of the grid the cell belongs to (ngrid_sub_pad).
+ * padding of the grid the cell belongs to (ngrid_sub_pad); deeper: whether
+ * the sub-grid's cells may get sub-grids in turn.
  */
 int ngrid_auto_sub_res(const accel_scene *s, box3 box, const float parent_pad[3],
-                       const uint32_t *prims, uint32_t prim_count, grid_overlap mode,
+                       const uint32_t *prims, uint32_t prim_count, grid_overlap mode, int deeper,
                        const ngrid_costs *m, double max_bytes, int res[3], accel_error *err);
 
 /* Traversal entry points (ngrid_trace.c). */

@@ -537,6 +537,16 @@ TEST(ngrid_auto_follows_costs)
     CHECKF(cheap_tests.depth == 1 && cheap_steps.depth >= 2 && dflt.depth >= 2,
            "depths: cheap tests %d, cheap steps %d, default %d", cheap_tests.depth,
            cheap_steps.depth, dflt.depth);
+    /* The lookahead prices dense cells by their future sub-grids: the top
+     * level comes out no finer than without it. */
+    accel_build_stats ahead;
+    ok = build("nested_grid:auto,lookahead=1", &s, 1, &a, &ahead, &err) == 0;
+    CHECKF(ok, "%s", err.msg);
+    if (ok) accel_kind_nested_grid.destroy(a);
+    CHECKF((uint64_t)ahead.res[0] * ahead.res[1] * ahead.res[2] <=
+               (uint64_t)dflt.res[0] * dflt.res[1] * dflt.res[2],
+           "top level with lookahead %dx%dx%d, without %dx%dx%d", ahead.res[0], ahead.res[1],
+           ahead.res[2], dflt.res[0], dflt.res[1], dflt.res[2]);
     CHECKF(cheap_tests.nodes < dflt.nodes && dflt.nodes < cheap_steps.nodes,
            "cells: cheap tests %llu, default %llu, cheap steps %llu",
            (unsigned long long)cheap_tests.nodes, (unsigned long long)dflt.nodes,
@@ -574,6 +584,7 @@ TEST(ngrid_cluster_against_reference)
                                         "depth=4,threshold=2,sub_lambda=1",
                                         "sub_res=3,threshold=0,depth=4",
                                         "auto,depth=4,mailbox=0",
+                                        "auto,lookahead=1",
                                         "lambda=0.01,sub_lambda=30",
                                         NULL};
     check_variants(&s, rays, n, extra, 0);
