@@ -18,7 +18,7 @@ static void usage(const exp_ctx *x, const char *question, const char *extra)
            "  --out DIR        where <name>.csv and <name>.md go (default experiments/out)\n"
            "  --threads N      threads for builds and traces (default 1)\n"
            "  --repeat N       timed passes per measurement (default 5, quick 1)\n"
-           "  --size N         primary image N x N (default 256, quick 64)\n"
+           "  --size N         primary image N x N (default 128, quick 64)\n"
            "  --mesh FILE      add a mesh (repeatable; default ../shared/scenes/*.off if present)\n"
            "  --no-meshes      built-in scenes only\n"
            "  --help           this text\n%s",
@@ -98,7 +98,7 @@ void exp_init(exp_ctx *x, int argc, char **argv, const char *name, const char *q
         fprintf(stderr, "%s: --repeat must be 1..100\n", name);
         exit(2);
     }
-    if (x->size < 0) x->size = x->quick ? 64 : 256;
+    if (x->size < 0) x->size = x->quick ? 64 : 128;
     if (x->size < 8 || x->size > 8192) {
         fprintf(stderr, "%s: --size must be 8..8192\n", name);
         exit(2);
