@@ -18,7 +18,9 @@
  * What the model leaves out, on purpose: rays stop at their first hit (both
  * terms shrink about alike), and the mailbox tests a primitive spanning
  * several cells once, so E[tests] is an upper bound that grows with the
- * resolution; the model therefore errs towards coarser grids.
+ * resolution, which pushes towards coarser grids. (Measured, the larger
+ * error goes the other way: pricing cells as leaves makes the top level
+ * too fine for a nested grid; see cell_cost and nested_grid/README.md.)
  *
  * Decisions are greedy and local, as in SAH tree builds: a cell holding n
  * primitives gets the sub-grid of least expected cost when that cost, plus
@@ -35,8 +37,8 @@
  * sub-grid (three reciprocals, entry and cell per axis), measured at 3.5 to
  * 4.3 times a step by the micro-benchmark in nested_grid/README.md. */
 #define NGRID_ENTER_STEPS 4.0
-/* Primitives the top-level candidates are counted on (a deterministic
- * stride subset): enough for a reference count within about 1%. */
+/* Most primitives the top-level candidates are counted on: a deterministic
+ * stride subset, its counts scaled by N / subset size. */
 #define NGRID_AUTO_SAMPLE 32768
 /* Cells-per-primitive ladders the auto mode chooses from: the resolution
  * rule's result for each (duplicates and 1x1x1 skipped), tried from coarse
