@@ -219,8 +219,12 @@ static inline int accel_tri_watertight(const accel_ray_prep *p, const float *tri
     /* T carries rounding too: a hit within its error of either end of the
      * t range (a secondary ray re-hitting its own surface at t ~ 0, a hit
      * at the current closest distance) is decided in double as well. */
-    float et = ACCEL_EDGE_FILTER *
-               (fabsf(U * (p->sz * az_)) + fabsf(V * (p->sz * bz_)) + fabsf(W * (p->sz * cz_)));
+    /* Its bound: the rounding of the sum itself, plus each edge function's
+     * own error bound carried through its factor (a huge triangle seen from
+     * just above its plane sums large terms to a tiny T). */
+    float za = fabsf(p->sz * az_), zb = fabsf(p->sz * bz_), zc = fabsf(p->sz * cz_);
+    float et = ACCEL_EDGE_FILTER * (fabsf(U) * za + fabsf(V) * zb + fabsf(W) * zc) +
+               eu * za + ev * zb + ew * zc;
     float lo = p->t_near * det, hi = *t * det;
     if (T < lo - et || T > hi + et) return 0;
     /* Written so that a NaN (overflow at coordinates near FLT_MAX) also
