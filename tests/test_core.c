@@ -399,7 +399,8 @@ TEST(core_huge_triangle_grazing_origin)
     /* A ray starting just above a huge ground triangle and leaving it: the
      * float T sums large terms to a tiny value; it must not report a hit
      * (found on teapot_stadium's ground by the nested grid's tests). */
-    const float tri[9] = {0, 0, -0.01f, 870.854f, 2870.821f, -0.01f, 728.941f, 2910.094f, -0.01f};
+    const float tri[9] = {0, 0, -0.00999999978f, 870.854004f, 2870.82104f, -0.00999999978f,
+                          728.940552f, 2910.09375f, -0.00999999978f};
     accel_ray r = {11.3944912f, 41.7122116f, -0.00998474099f, 0,
                    -0.532983184f, 0.705718935f, 0.466786623f, INFINITY};
     accel_ray_prep p;
