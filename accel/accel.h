@@ -133,6 +133,32 @@ typedef struct {
 #endif
 #define ACCEL_COUNTERS_ON(c) (ACCEL_COUNTERS ? (c) : (accel_counters *)NULL)
 
+/* Picks a kernel copy once per batch. K is a function-like macro
+ * K(counters, naive, spheres, mailbox) calling the always-inline kernel:
+ * counted runs take the flags at run time (one copy), uncounted runs get
+ * one copy per constant combination, with no counting code in any of them.
+ * Applies ACCEL_COUNTERS_ON itself, so every user honours ACCEL_COUNTERS=0. */
+#define ACCEL_DISPATCH(K, c, naive, spheres, mailbox)                                     \
+    do {                                                                                  \
+        accel_counters *c_ = ACCEL_COUNTERS_ON(c);                                        \
+        int nv_ = (naive) != 0, sp_ = (spheres) != 0, mb_ = (mailbox) != 0;              \
+        if (c_) {                                                                         \
+            K(c_, nv_, sp_, mb_);                                                         \
+        } else if (mb_) {                                                                 \
+            if (nv_) {                                                                    \
+                if (sp_) K(NULL, 1, 1, 1); else K(NULL, 1, 0, 1);                         \
+            } else {                                                                      \
+                if (sp_) K(NULL, 0, 1, 1); else K(NULL, 0, 0, 1);                         \
+            }                                                                             \
+        } else {                                                                          \
+            if (nv_) {                                                                    \
+                if (sp_) K(NULL, 1, 1, 0); else K(NULL, 1, 0, 0);                         \
+            } else {                                                                      \
+                if (sp_) K(NULL, 0, 1, 0); else K(NULL, 0, 0, 0);                         \
+            }                                                                             \
+        }                                                                                 \
+    } while (0)
+
 /* Adds b's totals into a (not the per-ray arrays). */
 void accel_counters_add(accel_counters *a, const accel_counters *b);
 

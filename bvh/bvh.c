@@ -92,6 +92,7 @@ static void bvh_intersect(const void *a, const accel_ray *rays, accel_hit *hits,
                           accel_counters *c)
 {
     const bvh *b = a;
+    c = ACCEL_COUNTERS_ON(c);
     if (b->traverse == BVH_TRAVERSE_PACKET)
         bvh_packet_intersect(b, rays, hits, count, c);
     else
@@ -102,6 +103,7 @@ static void bvh_occluded(const void *a, const accel_ray *rays, uint8_t *occ, siz
                          accel_counters *c)
 {
     const bvh *b = a;
+    c = ACCEL_COUNTERS_ON(c);
     if (b->traverse == BVH_TRAVERSE_PACKET)
         bvh_packet_occluded(b, rays, occ, count, c);
     else

@@ -139,44 +139,20 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
     }
 }
 
-/* Picks the kernel copy once per batch. Counted runs take the flags at run
- * time (one copy); uncounted runs get a copy per constant combination. */
-#define NGRID_DISPATCH(g, rays, hits, occ, n, c)                                          \
-    do {                                                                                  \
-        int sph_ = (g)->has_spheres, nv_ = (g)->naive, mb_ = (g)->mailbox;                \
-        if (c) {                                                                          \
-            ngrid_kernel(g, rays, hits, occ, n, c, nv_, sph_, mb_);                       \
-        } else if (mb_) {                                                                 \
-            if (nv_) {                                                                    \
-                if (sph_) ngrid_kernel(g, rays, hits, occ, n, NULL, 1, 1, 1);             \
-                else ngrid_kernel(g, rays, hits, occ, n, NULL, 1, 0, 1);                  \
-            } else {                                                                      \
-                if (sph_) ngrid_kernel(g, rays, hits, occ, n, NULL, 0, 1, 1);             \
-                else ngrid_kernel(g, rays, hits, occ, n, NULL, 0, 0, 1);                  \
-            }                                                                             \
-        } else {                                                                          \
-            if (nv_) {                                                                    \
-                if (sph_) ngrid_kernel(g, rays, hits, occ, n, NULL, 1, 1, 0);             \
-                else ngrid_kernel(g, rays, hits, occ, n, NULL, 1, 0, 0);                  \
-            } else {                                                                      \
-                if (sph_) ngrid_kernel(g, rays, hits, occ, n, NULL, 0, 1, 0);             \
-                else ngrid_kernel(g, rays, hits, occ, n, NULL, 0, 0, 0);                  \
-            }                                                                             \
-        }                                                                                 \
-    } while (0)
+/* Kernel copies are picked once per batch by ACCEL_DISPATCH (accel.h). */
+#define NGRID_DISPATCH_HIT(c_, nv, sp, mb) ngrid_kernel(g, rays, hits, (uint8_t *)NULL, count, c_, nv, sp, mb)
+#define NGRID_DISPATCH_OCC(c_, nv, sp, mb) ngrid_kernel(g, rays, (accel_hit *)NULL, occluded, count, c_, nv, sp, mb)
 
 void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
                      accel_counters *counters)
 {
     const ngrid_accel *g = accel;
-    counters = ACCEL_COUNTERS_ON(counters);
-    NGRID_DISPATCH(g, rays, hits, (uint8_t *)NULL, count, counters);
+    ACCEL_DISPATCH(NGRID_DISPATCH_HIT, counters, g->naive, g->has_spheres, g->mailbox);
 }
 
 void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                     accel_counters *counters)
 {
     const ngrid_accel *g = accel;
-    counters = ACCEL_COUNTERS_ON(counters);
-    NGRID_DISPATCH(g, rays, (accel_hit *)NULL, occluded, count, counters);
+    ACCEL_DISPATCH(NGRID_DISPATCH_OCC, counters, g->naive, g->has_spheres, g->mailbox);
 }
