@@ -16,43 +16,54 @@ LDLIBS  += -lm -pthread
 BUILD   ?= build
 BIN     ?= bin
 
-# Every top-level folder with .c files other than these is a backend whose
-# files go into the library: a new backend is a new folder plus its line in
-# accel/registry.c, nothing else.
-NOT_BACKENDS := accel experiments tests tools build build-san bin bin-san
-BACKENDS := $(filter-out $(NOT_BACKENDS),$(patsubst %/,%,$(sort $(dir $(wildcard */*.c)))))
-LIB_SRC  := $(wildcard accel/*.c) $(foreach d,$(BACKENDS),$(wildcard $(d)/*.c))
+# The library's sources and the backend discovery rule (shared with tests/fuzz).
+ROOT :=
+include sources.mk
 LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/%.o)
 LIB      := $(BUILD)/libgridbvh.a
-HDRS     := $(wildcard accel/*.h) $(foreach d,$(BACKENDS),$(wildcard $(d)/*.h)) $(wildcard experiments/*.h) $(wildcard tests/*.h)
+# Header dependencies come from the compiler (-MMD -MP, the .d files); a
+# change of compiler or flags rebuilds everything through the flags stamp.
+DEPFLAGS  = -MMD -MP
+FLAGS_STAMP := $(BUILD)/.flags
 
 TOOLS    := $(patsubst tools/%.c,$(BIN)/%,$(wildcard tools/*.c))
 EXP_LIB  := $(filter-out experiments/exp_%.c,$(wildcard experiments/*.c))
 EXP_BINS := $(patsubst experiments/%.c,$(BIN)/%,$(wildcard experiments/exp_*.c))
 TEST_SRC := $(wildcard tests/*.c)
 
-.PHONY: all test report sanitize fuzz clean bench
+.PHONY: all test report sanitize fuzz clean bench FORCE
 all: $(TOOLS) $(EXP_BINS) $(BIN)/run_tests
 
-$(BUILD)/%.o: %.c $(HDRS)
+$(FLAGS_STAMP): FORCE
 	@mkdir -p $(dir $@)
-	$(CC) $(ALL_CFLAGS) -c $< -o $@
+	@echo '$(CC) $(ALL_CFLAGS) $(LDLIBS)' | cmp -s - $@ || echo '$(CC) $(ALL_CFLAGS) $(LDLIBS)' > $@
+
+$(BUILD)/%.o: %.c $(FLAGS_STAMP)
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(DEPFLAGS) -c $< -o $@
 
 $(LIB): $(LIB_OBJ)
 	@rm -f $@
 	ar rcs $@ $^
 
-$(BIN)/%: tools/%.c $(LIB) $(HDRS)
+EXP_OBJ  := $(EXP_LIB:%.c=$(BUILD)/%.o)
+TEST_OBJ := $(TEST_SRC:%.c=$(BUILD)/%.o)
+
+$(BIN)/%: $(BUILD)/tools/%.o $(LIB)
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $< $(LIB) -o $@ $(LDLIBS)
 
-$(BIN)/exp_%: experiments/exp_%.c $(EXP_LIB) $(LIB) $(HDRS)
+$(BIN)/exp_%: $(BUILD)/experiments/exp_%.o $(EXP_OBJ) $(LIB)
 	@mkdir -p $(BIN)
-	$(CC) $(ALL_CFLAGS) $< $(EXP_LIB) $(LIB) -o $@ $(LDLIBS)
+	$(CC) $(ALL_CFLAGS) $< $(EXP_OBJ) $(LIB) -o $@ $(LDLIBS)
 
-$(BIN)/run_tests: $(TEST_SRC) $(LIB) $(HDRS)
+$(BIN)/run_tests: $(TEST_OBJ) $(LIB)
 	@mkdir -p $(BIN)
-	$(CC) $(ALL_CFLAGS) $(TEST_SRC) $(LIB) -o $@ $(LDLIBS)
+	$(CC) $(ALL_CFLAGS) $(TEST_OBJ) $(LIB) -o $@ $(LDLIBS)
+
+.SECONDARY:
+
+-include $(shell find $(BUILD) -name '*.d' 2>/dev/null)
 
 test: all
 	./$(BIN)/run_tests $(T)

@@ -22,7 +22,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "geom.h"
+#include "core/geom.h"
 
 /* ---- rays and hits: exactly the FORMATS.md records ---------------------- */
 

@@ -1,10 +1,10 @@
 /*
- * build_common.c - the builder-independent half of BVH construction:
- * primitive references, the SAH termination rule, the object-median split,
- * the (parallel, deterministic) build driver, and the final pass that lays
- * the nodes out depth-first and copies the primitives in leaf order.
+ * build_common.c - what every BVH builder shares: aligned allocation, the
+ * SAH termination rule, the object-median split and the (parallel,
+ * deterministic) top-down recursion that calls a builder's split function.
+ * The driver that runs a builder and lays out its result is bvh_build.c.
  *
- * The driver follows the usual top-down recursion (pbrt-v3 section 4.3;
+ * The recursion follows the usual top-down recursion (pbrt-v3 section 4.3;
  * Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies",
  * RT 2007): near the root the split functions may use all threads for
  * their per-node loops (binning), below that each subtree is one task.
@@ -35,18 +35,6 @@ void *bvh_alloc_array(size_t n, size_t size)
 {
     if (size && n > SIZE_MAX / size) return NULL;
     return malloc(n && size ? n * size : 1);
-}
-
-static void set_node_box(bvh_node *n, box3 b)
-{
-    n->bmin[0] = b.min.x, n->bmin[1] = b.min.y, n->bmin[2] = b.min.z;
-    n->bmax[0] = b.max.x, n->bmax[1] = b.max.y, n->bmax[2] = b.max.z;
-}
-
-static box3 node_box(const bvh_node *n)
-{
-    box3 b = {{n->bmin[0], n->bmin[1], n->bmin[2]}, {n->bmax[0], n->bmax[1], n->bmax[2]}};
-    return b;
 }
 
 int bvh_split_pays(const bvh_build *ctx, const bvh_task *t, double split_sum)
@@ -180,8 +168,8 @@ static int split_task(bvh_build *ctx, const bvh_task *t, int threads, bvh_task *
     uint32_t nl = s.left_count, nr = t->count - nl;
     node->left_first = pair;
     node->count = 0;
-    set_node_box(&ctx->nodes[pair], s.left);
-    set_node_box(&ctx->nodes[pair + 1], s.right);
+    bvh_node_set_box(&ctx->nodes[pair], s.left);
+    bvh_node_set_box(&ctx->nodes[pair + 1], s.right);
     *l = (bvh_task){pair, t->first, nl, pair + 2, t->level + 1, s.left, s.left_c};
     *r = (bvh_task){pair + 1, t->first + nl, nr, pair + 2 + 2 * (nl - 1), t->level + 1, s.right,
                     s.right_c};
@@ -230,7 +218,7 @@ void bvh_build_tree(bvh_build *ctx)
     root.region = 2;
     root.level = 1;
     bvh_refs_bounds(ctx->refs, 0, ctx->ref_count, &root.bounds, &root.cbounds);
-    set_node_box(&ctx->nodes[0], root.bounds);
+    bvh_node_set_box(&ctx->nodes[0], root.bounds);
     int threads = ctx->threads;
     if (threads <= 1 || ctx->ref_count < 2 * BVH_PAR_MIN_REFS) {
         build_subtree(ctx, &root);
@@ -262,202 +250,3 @@ void bvh_build_tree(bvh_build *ctx)
     accel_parallel_for(n, 1, threads, subtree_chunk, &job);
 }
 
-/* ---- references, final layout, statistics --------------------------------- */
-
-/* Whether all of a primitive's coordinates are finite. */
-static int prim_finite(const accel_scene *s, uint32_t prim)
-{
-    const float *p = prim < s->tri_count ? s->tris + 9 * (size_t)prim
-                                         : s->spheres + 4 * (size_t)(prim - s->tri_count);
-    int n = prim < s->tri_count ? 9 : 4;
-    for (int i = 0; i < n; i++)
-        if (!isfinite(p[i])) return 0;
-    return 1;
-}
-
-/* One reference per live primitive. A primitive with a non-finite
- * coordinate is left out: no finite ray can hit it (the reference never
- * reports one), and its box would poison every area and bin above it. */
-static uint32_t make_refs(const accel_scene *s, bvh_ref *refs)
-{
-    uint32_t n = 0;
-    for (uint32_t i = 0; i < s->live_count; i++) {
-        uint32_t prim = s->live[i];
-        if (!prim_finite(s, prim)) continue;
-        box3 b = accel_prim_bounds(s, prim);
-        bvh_ref *r = &refs[n++];
-        r->lo[0] = b.min.x, r->lo[1] = b.min.y, r->lo[2] = b.min.z;
-        r->hi[0] = b.max.x, r->hi[1] = b.max.y, r->hi[2] = b.max.z;
-        r->prim = prim;
-        r->pad = 0;
-    }
-    return n;
-}
-
-double bvh_sah_cost(const bvh_node *nodes, uint32_t node_count, double ct, double ci)
-{
-    if (node_count == 0) return 0.0;
-    double root = bvh_half_area(node_box(&nodes[0]));
-    if (!(root > 0.0)) return NAN;
-    double sum = 0.0;
-    for (uint32_t i = 0; i < node_count; i++) {
-        if (i == 1) continue; /* padding */
-        double a = bvh_half_area(node_box(&nodes[i]));
-        sum += nodes[i].count ? ci * nodes[i].count * a : ct * a;
-    }
-    return sum / root;
-}
-
-/*
- * Removes the gaps of the region layout in place. The regions put every
- * subtree's child pairs after its own pair, left subtree first, so the
- * pairs already lie in depth-first order; visiting them in that order and
- * moving each down to the next free slot never overwrites a pair not yet
- * moved (its new place is at or below its old one, and every pair still to
- * come lies above). Returns the node count; fills the depth and the leaves.
- */
-static uint32_t compact_nodes(bvh_node *nodes, int *depth, uint64_t *leaves)
-{
-    struct {
-        uint32_t node;
-        int level;
-    } stack[BVH_MAX_DEPTH + 1];
-    int sp = 0;
-    uint32_t next = 2;
-    *depth = 0;
-    *leaves = 0;
-    stack[sp].node = 0, stack[sp].level = 1, sp++;
-    while (sp > 0) {
-        sp--;
-        uint32_t i = stack[sp].node;
-        int level = stack[sp].level;
-        if (level > *depth) *depth = level;
-        bvh_node *n = &nodes[i];
-        if (n->count) {
-            (*leaves)++;
-            continue;
-        }
-        uint32_t old = n->left_first, pair = next;
-        assert(pair <= old);
-        next += 2;
-        nodes[pair] = nodes[old];
-        nodes[pair + 1] = nodes[old + 1];
-        n->left_first = pair;
-        assert(sp + 2 <= BVH_MAX_DEPTH + 1);
-        stack[sp].node = pair + 1, stack[sp].level = level + 1, sp++;
-        stack[sp].node = pair, stack[sp].level = level + 1, sp++;
-    }
-    return next == 2 ? 1 : next;
-}
-
-typedef struct {
-    const accel_scene *scene;
-    const bvh_ref *refs;
-    bvh *out;
-} gather_job;
-
-/* Primitive data in leaf order: the leaf loop then reads one contiguous run. */
-static void gather_chunk(void *p, size_t begin, size_t end, int thread)
-{
-    (void)thread;
-    gather_job *j = p;
-    const accel_scene *s = j->scene;
-    for (size_t i = begin; i < end; i++) {
-        uint32_t prim = j->refs[i].prim;
-        float *dst = j->out->prim_data + BVH_SLOT_FLOATS * i;
-        j->out->prim_ids[i] = prim;
-        if (prim < s->tri_count) {
-            memcpy(dst, s->tris + 9 * (size_t)prim, 9 * sizeof(float));
-        } else {
-            memcpy(dst, s->spheres + 4 * (size_t)(prim - s->tri_count), 4 * sizeof(float));
-            memset(dst + 4, 0, 5 * sizeof(float));
-        }
-    }
-}
-
-void bvh_release(bvh *b)
-{
-    free(b->nodes);
-    free(b->prim_data);
-    free(b->prim_ids);
-    b->nodes = NULL;
-    b->prim_data = NULL;
-    b->prim_ids = NULL;
-}
-
-int bvh_build_run(const accel_scene *scene, const bvh_build_opts *opts, int threads, bvh *out,
-                  accel_build_stats *stats, accel_error *err)
-{
-    memset(out, 0, sizeof *out);
-    out->tri_count = scene->tri_count;
-    out->has_spheres = scene->sphere_count > 0;
-    uint32_t live = scene->live_count;
-    /* Node indices are uint32 and the temporary pool holds 2N nodes. */
-    if (live > 0x7FFFFFFFu)
-        return accel_fail(err, ACCEL_ERR_RANGE,
-                          "bvh: %u primitives exceed the limit of 2^31-1 (uint32 node indices)",
-                          live);
-    bvh_build ctx;
-    memset(&ctx, 0, sizeof ctx);
-    ctx.scene = scene;
-    ctx.opts = *opts;
-    ctx.threads = threads < 1 ? 1 : threads;
-    ctx.refs = bvh_alloc_array(live, sizeof(bvh_ref));
-    if (!ctx.refs) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for %u references", live);
-    ctx.ref_count = make_refs(scene, ctx.refs);
-    int rc = 0;
-    if (ctx.ref_count > 0) {
-        ctx.nodes = bvh_alloc_nodes(2 * (size_t)ctx.ref_count);
-        if (!ctx.nodes) {
-            free(ctx.refs);
-            return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for %u nodes",
-                              2 * ctx.ref_count);
-        }
-        switch (opts->builder) {
-        case BVH_BUILD_BINNED: rc = bvh_build_binned(&ctx, err); break;
-        case BVH_BUILD_SAH: rc = bvh_build_sweep(&ctx, err); break;
-        case BVH_BUILD_MID: rc = bvh_build_mid(&ctx, err); break;
-        case BVH_BUILD_MEDIAN: rc = bvh_build_median(&ctx, err); break;
-        default: rc = accel_fail(err, ACCEL_ERR_INTERNAL, "bvh: unknown builder %d", opts->builder);
-        }
-    }
-    if (rc == 0 && ctx.ref_count > 0) {
-        out->node_count = compact_nodes(ctx.nodes, &out->depth, &stats->leaves);
-        if (out->node_count > 1) { /* padding node: an empty box, never referenced */
-            memset(&ctx.nodes[1], 0, sizeof(bvh_node));
-            set_node_box(&ctx.nodes[1], box3_empty());
-        }
-        /* Give back the unused tail of the 2N pool (realloc keeps the
-         * contents; should it lose the alignment, copy to an aligned block). */
-        out->nodes = realloc(ctx.nodes, (size_t)out->node_count * sizeof(bvh_node));
-        if (!out->nodes) {
-            out->nodes = ctx.nodes; /* shrinking failed: keep the larger block */
-        } else if ((uintptr_t)out->nodes % BVH_NODE_ALIGN != 0) {
-            bvh_node *aligned = bvh_alloc_nodes(out->node_count);
-            if (aligned) memcpy(aligned, out->nodes, (size_t)out->node_count * sizeof(bvh_node));
-            free(out->nodes);
-            out->nodes = aligned;
-        }
-        ctx.nodes = NULL;
-        out->prim_data = bvh_alloc_array(ctx.ref_count, BVH_SLOT_FLOATS * sizeof(float));
-        out->prim_ids = bvh_alloc_array(ctx.ref_count, sizeof(uint32_t));
-        if (!out->nodes || !out->prim_data || !out->prim_ids) {
-            rc = accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for the final pools");
-        } else {
-            out->prim_count = ctx.ref_count;
-            gather_job job = {scene, ctx.refs, out};
-            accel_parallel_for(ctx.ref_count, 16384, ctx.threads, gather_chunk, &job);
-        }
-    }
-    free(ctx.nodes);
-    free(ctx.refs);
-    if (rc) {
-        bvh_release(out);
-        return rc;
-    }
-    stats->nodes = out->node_count;
-    stats->refs = out->prim_count;
-    stats->depth = out->depth;
-    stats->sah_cost = bvh_sah_cost(out->nodes, out->node_count, opts->ct, opts->ci);
-    return 0;
-}

@@ -166,7 +166,7 @@ void bvh_build_tree(bvh_build *ctx);
 /* The builders (one file each). Each sets ctx->split, allocates its scratch,
  * runs bvh_build_tree and leaves ctx->refs in leaf order. */
 int bvh_build_binned(bvh_build *ctx, accel_error *err);
-int bvh_build_sweep(bvh_build *ctx, accel_error *err);
+int bvh_build_sah(bvh_build *ctx, accel_error *err);
 int bvh_build_mid(bvh_build *ctx, accel_error *err);
 int bvh_build_median(bvh_build *ctx, accel_error *err);
 

@@ -31,7 +31,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "prim.h"
+#include "core/prim.h"
 
 typedef struct {
     float bmin[3];
@@ -157,7 +157,20 @@ bvh_slot_hit(const bvh *b, uint32_t slot, const accel_ray_prep *p, float *t, flo
     return naive ? accel_tri_naive(p, data, t, u, v) : accel_tri_watertight(p, data, t, u, v);
 }
 
-/* Kernels in trace.c (single rays) and packet.c (64-ray packets). */
+/* A node's box as a box3, and back (builders and the statistics pass). */
+static inline void bvh_node_set_box(bvh_node *n, box3 b)
+{
+    n->bmin[0] = b.min.x, n->bmin[1] = b.min.y, n->bmin[2] = b.min.z;
+    n->bmax[0] = b.max.x, n->bmax[1] = b.max.y, n->bmax[2] = b.max.z;
+}
+
+static inline box3 bvh_node_box(const bvh_node *n)
+{
+    box3 b = {{n->bmin[0], n->bmin[1], n->bmin[2]}, {n->bmax[0], n->bmax[1], n->bmax[2]}};
+    return b;
+}
+
+/* Kernels in bvh_single.c (single rays) and bvh_packet.c (64-ray packets). */
 void bvh_trace_intersect(const bvh *b, const accel_ray *rays, accel_hit *hits, size_t count,
                          accel_counters *c);
 void bvh_trace_occluded(const bvh *b, const accel_ray *rays, uint8_t *occ, size_t count,

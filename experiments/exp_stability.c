@@ -14,7 +14,7 @@
 #include <string.h>
 
 #include "harness.h"
-#include "stiff.h"
+#include "bench/stiff.h"
 
 static void measure_case(exp_ctx *x, stiff_case *c, double *worst_naive, char *worst_what,
                          size_t worst_n, int *robust_bad)

@@ -9,7 +9,7 @@
 #include <sys/stat.h>
 
 #include "harness.h"
-#include "image.h"
+#include "bench/image.h"
 
 static void usage(const exp_ctx *x, const char *question, const char *extra)
 {

@@ -14,8 +14,8 @@
 
 #include <stdio.h>
 
-#include "bench.h"
-#include "scene.h"
+#include "bench/bench.h"
+#include "scene/scene.h"
 
 #define EXP_MAX_MESHES 16
 

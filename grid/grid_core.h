@@ -42,7 +42,7 @@
 #include <stdint.h>
 
 #include "accel.h"
-#include "prim.h"
+#include "core/prim.h"
 
 /* Largest resolution along one axis (cells); keeps cell indices exact in
  * float and the per-axis plane tables small. */

@@ -14,8 +14,8 @@
 #include <unistd.h>
 
 #include "bvh/bvh.h"
-#include "rays.h"
-#include "scene.h"
+#include "rays/rays.h"
+#include "scene/scene.h"
 #include "test.h"
 
 /* ---- helpers ------------------------------------------------------------------ */

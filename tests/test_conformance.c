@@ -20,8 +20,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rays.h"
-#include "scene.h"
+#include "rays/rays.h"
+#include "scene/scene.h"
 #include "test.h"
 
 #define SET_COUNT 7

@@ -8,10 +8,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "image.h"
-#include "prim.h"
-#include "rays.h"
-#include "scene.h"
+#include "bench/image.h"
+#include "core/prim.h"
+#include "rays/rays.h"
+#include "scene/scene.h"
 #include "test.h"
 
 TEST(core_spec_parsing)

@@ -10,10 +10,10 @@
 #include <string.h>
 
 #include "grid/grid.h"
-#include "overlap.h"
-#include "prim.h"
-#include "rays.h"
-#include "scene.h"
+#include "grid/overlap.h"
+#include "core/prim.h"
+#include "rays/rays.h"
+#include "scene/scene.h"
 #include "test.h"
 
 /* ---- helpers ------------------------------------------------------------------ */

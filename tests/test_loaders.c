@@ -13,8 +13,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "load_common.h"
-#include "scene.h"
+#include "scene/load_common.h"
+#include "scene/scene.h"
 #include "test.h"
 
 typedef int (*parse_fn)(const char *, const char *, size_t, scene_builder *, accel_error *);

@@ -13,8 +13,8 @@
 #include <string.h>
 
 #include "nested_grid/ngrid.h"
-#include "rays.h"
-#include "scene.h"
+#include "rays/rays.h"
+#include "scene/scene.h"
 #include "test.h"
 
 /* ---- helpers ------------------------------------------------------------------ */

@@ -14,9 +14,9 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "builtin.h"
-#include "rays.h"
-#include "scene.h"
+#include "scene/builtin.h"
+#include "rays/rays.h"
+#include "scene/scene.h"
 #include "test.h"
 
 static int make(const char *spec, accel_scene *s)

@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "stiff.h"
+#include "bench/stiff.h"
 #include "test.h"
 
 typedef struct {

@@ -13,9 +13,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bench.h"
-#include "image.h"
-#include "scene.h"
+#include "bench/bench.h"
+#include "bench/image.h"
+#include "scene/scene.h"
 
 #define MAX_ACCELS 32
 #define MAX_SETS 8

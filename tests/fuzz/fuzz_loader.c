@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "scene.h"
+#include "scene/scene.h"
 
 #if defined(FUZZ_FORMAT_OBJ)
 #define FUZZ_PARSE scene_parse_obj

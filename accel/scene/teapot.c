@@ -24,7 +24,7 @@
  */
 #include <stdlib.h>
 
-#include "builtin.h"
+#include "scene/builtin.h"
 
 #define TEAPOT_PATCHES 32
 #define TEAPOT_POINTS 290

@@ -29,19 +29,3 @@ const accel_kind *accel_find_kind(const char *name)
     return NULL;
 }
 
-int accel_build_spec(const char *spec, const accel_scene *scene, int threads,
-                     const accel_kind **kind_out, void **accel_out, accel_build_stats *stats,
-                     accel_error *err)
-{
-    accel_params p;
-    int rc = accel_params_parse(spec, &p, err);
-    if (rc) return rc;
-    memset(stats, 0, sizeof *stats);
-    double t0 = accel_now_ms();
-    rc = p.kind->build(scene, &p, threads, accel_out, stats, err);
-    if (rc) return rc;
-    stats->ms = accel_now_ms() - t0;
-    stats->bytes = p.kind->memory(*accel_out);
-    *kind_out = p.kind;
-    return 0;
-}

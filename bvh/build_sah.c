@@ -1,5 +1,5 @@
 /*
- * build_sweep.c - exact SAH construction with a full sweep (build=sah).
+ * build_sah.c - exact SAH construction with a full sweep (build=sah).
  *
  * The quality reference: every node considers every split "first k
  * primitives left, the rest right" in centroid order on each of the three
@@ -212,7 +212,7 @@ static void sweep_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_spli
     if (forced && !bvh_split_pays(ctx, t, bvh_split_sum(out, n))) out->left_count = 0;
 }
 
-int bvh_build_sweep(bvh_build *ctx, accel_error *err)
+int bvh_build_sah(bvh_build *ctx, accel_error *err)
 {
     uint32_t n = ctx->ref_count;
     sweep_data d;

@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "rays.h"
+#include "rays/rays.h"
 
 void rays_free(rays_set *r)
 {

@@ -13,7 +13,7 @@
 #include <string.h>
 #include <strings.h>
 
-#include "scene.h"
+#include "scene/scene.h"
 
 #define SCENE_MAX_PRIMS 0xFFFFFFFEu /* ids are uint32 and 0xFFFFFFFF means miss */
 
@@ -74,28 +74,6 @@ void scene_builder_free(scene_builder *b)
     free(b->tris);
     free(b->spheres);
     memset(b, 0, sizeof *b);
-}
-
-box3 accel_prim_bounds(const accel_scene *s, uint32_t prim)
-{
-    box3 b = box3_empty();
-    if (prim < s->tri_count) {
-        const float *t = s->tris + 9 * (size_t)prim;
-        b = box3_grow(b, v3_load(t));
-        b = box3_grow(b, v3_load(t + 3));
-        b = box3_grow(b, v3_load(t + 6));
-    } else {
-        const float *sp = s->spheres + 4 * (size_t)(prim - s->tri_count);
-        vec3 r = v3(sp[3], sp[3], sp[3]);
-        b.min = v3_sub(v3_load(sp), r);
-        b.max = v3_add(v3_load(sp), r);
-    }
-    return b;
-}
-
-vec3 accel_prim_centroid(const accel_scene *s, uint32_t prim)
-{
-    return box3_center(accel_prim_bounds(s, prim));
 }
 
 static int tri_degenerate(const float *t)
@@ -230,78 +208,6 @@ void scene_free(accel_scene *s)
     free(s->spheres);
     free(s->live);
     memset(s, 0, sizeof *s);
-}
-
-static const char *extension(const char *path)
-{
-    const char *dot = strrchr(path, '.');
-    const char *slash = strrchr(path, '/');
-    return (dot && (!slash || dot > slash)) ? dot + 1 : "";
-}
-
-int scene_load_file(const char *path, accel_scene *s, accel_error *err)
-{
-    scene_builder b = {0};
-    const char *ext = extension(path);
-    int rc;
-    if (!strcasecmp(ext, "obj"))
-        rc = scene_load_obj(path, &b, err);
-    else if (!strcasecmp(ext, "ply"))
-        rc = scene_load_ply(path, &b, err);
-    else if (!strcasecmp(ext, "off"))
-        rc = scene_load_off(path, &b, err);
-    else
-        rc = accel_fail(err, ACCEL_ERR_SPEC,
-                        "%s: unknown mesh format '.%s' (accepted: .obj, .ply, .off)", path, ext);
-    if (rc == 0) {
-        const char *slash = strrchr(path, '/');
-        rc = scene_finish(&b, slash ? slash + 1 : path, s, err);
-    }
-    scene_builder_free(&b);
-    return rc;
-}
-
-int scene_create(const char *spec, accel_scene *s, accel_error *err)
-{
-    memset(s, 0, sizeof *s);
-    char name[64];
-    const char *colon = strchr(spec, ':');
-    size_t nlen = colon ? (size_t)(colon - spec) : strlen(spec);
-    if (nlen < sizeof name) {
-        memcpy(name, spec, nlen);
-        name[nlen] = 0;
-        for (size_t i = 0; i < scene_generator_count; i++) {
-            const scene_generator *g = scene_generators[i];
-            if (strcmp(g->name, name) != 0) continue;
-            double num[ACCEL_MAX_PARAMS];
-            char str[ACCEL_MAX_PARAMS][64];
-            unsigned char given[ACCEL_MAX_PARAMS];
-            char what[96];
-            snprintf(what, sizeof what, "scene %s", g->name);
-            int rc = accel_parse_kv(what, colon ? colon + 1 : "", g->params, g->param_count, num,
-                                    str, given, err);
-            if (rc) return rc;
-            scene_builder b = {0};
-            accel_camera cam;
-            vec3 light;
-            rc = g->generate(num, &b, &cam, &light, err);
-            if (rc == 0) rc = scene_finish(&b, spec, s, err);
-            scene_builder_free(&b);
-            if (rc) return rc;
-            s->camera = cam;
-            s->light = light;
-            return 0;
-        }
-    }
-    if (strchr(spec, '.')) return scene_load_file(spec, s, err);
-    char names[512] = "";
-    for (size_t i = 0; i < scene_generator_count; i++) {
-        size_t len = strlen(names);
-        snprintf(names + len, sizeof names - len, "%s%s", i ? ", " : "", scene_generators[i]->name);
-    }
-    return accel_fail(err, ACCEL_ERR_SPEC,
-                      "unknown scene '%s': give a mesh file (.obj, .ply, .off) or one of: %s",
-                      spec, names);
 }
 
 int scene_export_obj(const accel_scene *s, const char *path, int segments, accel_error *err)

@@ -17,7 +17,7 @@
 #ifndef ACCEL_PRIM_H
 #define ACCEL_PRIM_H
 
-#include "geom.h"
+#include "core/geom.h"
 #include "accel.h"
 
 /* Per-ray constants every kernel needs, computed once per ray. */

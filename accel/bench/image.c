@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "image.h"
+#include "bench/image.h"
 
 int image_alloc(image_rgb *img, int width, int height, accel_error *err)
 {

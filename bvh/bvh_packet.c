@@ -1,5 +1,5 @@
 /*
- * packet.c - 64-ray packet traversal (traverse=packet), the lecture's
+ * bvh_packet.c - 64-ray packet traversal (traverse=packet), the lecture's
  * section 3, after Wald, Boulos and Shirley, "Ray Tracing Deformable Scenes
  * Using Dynamic Bounding Volume Hierarchies", ACM TOG 26(1), 2007.
  *

@@ -16,8 +16,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "load_common.h"
-#include "scene.h"
+#include "scene/load_common.h"
+#include "scene/scene.h"
 
 typedef struct {
     float *v;

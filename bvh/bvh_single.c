@@ -1,5 +1,5 @@
 /*
- * trace.c - single-ray BVH traversal: closest hit and any hit.
+ * bvh_single.c - single-ray BVH traversal: closest hit and any hit.
  *
  * A stack-based loop in the style of pbrt-v3's BVHAccel::Intersect and of
  * Aila and Laine, "Understanding the Efficiency of Ray Traversal on GPUs",

@@ -12,7 +12,7 @@
 
 #include <stdint.h>
 
-#include "scene.h"
+#include "scene/scene.h"
 
 /* The largest scene scene_finish accepts (ids are uint32, 0xFFFFFFFF = miss).
  * Generators check their primitive count against it before allocating. */

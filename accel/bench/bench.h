@@ -8,7 +8,7 @@
 #ifndef ACCEL_BENCH_H
 #define ACCEL_BENCH_H
 
-#include "rays.h"
+#include "rays/rays.h"
 
 typedef struct {
     double median, min, max;

@@ -13,8 +13,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "scene.h"
-#include "stiff.h"
+#include "scene/scene.h"
+#include "bench/stiff.h"
 
 static int reserve(rays_set *r, size_t more, size_t *cap, accel_error *err)
 {

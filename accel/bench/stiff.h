@@ -13,7 +13,7 @@
 #ifndef ACCEL_STIFF_H
 #define ACCEL_STIFF_H
 
-#include "rays.h"
+#include "rays/rays.h"
 
 typedef struct {
     char name[96];

@@ -18,8 +18,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "load_common.h"
-#include "scene.h"
+#include "scene/load_common.h"
+#include "scene/scene.h"
 
 /* Shortest possible vertex line "0 0 0\n" and face line "3 0 0 0\n" (bytes):
  * the bound that rejects absurd declared counts before allocating. */

@@ -1,5 +1,5 @@
 /*
- * util.c - errors, clocks, core count, counters and the traversal step bound.
+ * error.c - errors, clocks, core count, counters and the traversal step bound.
  */
 
 #include <stdarg.h>

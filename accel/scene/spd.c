@@ -30,7 +30,7 @@
  */
 #include <math.h>
 
-#include "builtin.h"
+#include "scene/builtin.h"
 
 #define SPD_PI 3.14159265358979323846
 

@@ -20,8 +20,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "load_common.h"
-#include "scene.h"
+#include "scene/load_common.h"
+#include "scene/scene.h"
 
 typedef enum { PLY_I8, PLY_U8, PLY_I16, PLY_U16, PLY_I32, PLY_U32, PLY_F32, PLY_F64 } ply_type;
 

@@ -28,7 +28,7 @@
 #include <stdint.h>
 
 #include "accel.h"
-#include "scene.h"
+#include "scene/scene.h"
 
 /* A cursor over a text buffer, with the 1-based number of the line it is on. */
 typedef struct {

@@ -10,7 +10,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "load_common.h"
+#include "scene/load_common.h"
 
 int load_read_file(const char *path, char **data, size_t *size, accel_error *err)
 {

@@ -1,0 +1,113 @@
+/*
+ * variant.h - specialized kernel copies, picked once per batch: the one
+ * mechanism every kind uses (brute, grid, nested_grid, every bvh traversal).
+ *
+ * A kernel is written once as an always-inline function
+ *
+ *     KERNEL(const void *accel, const accel_ray *rays, void *out, size_t count,
+ *            accel_counters *c, unsigned flags)
+ *
+ * (out is accel_hit * for closest hit, uint8_t * for any hit). The macro
+ * ACCEL_KERNEL_TABLE(name, KERNEL) compiles it ACCEL_V_COPIES + 1 times:
+ * one copy per combination of the flags below with counters == NULL and the
+ * flags as literals, so each timed copy holds no counting code and no
+ * branch on a flag; and one counted copy that takes the flags at run time.
+ * accel_run_kernel() picks the copy for a batch. This is the C form of the
+ * variant tables of Embree and madmann91/bvh (see ../shared/STYLE.md).
+ *
+ * Counters are switched off in exactly one place: accel_run_kernel applies
+ * ACCEL_COUNTERS_ON, and with -DACCEL_COUNTERS=0 the counted copy is the
+ * uncounted kernel too.
+ *
+ * The step bound (the guard that turns a traversal bug into a reported
+ * error instead of an endless loop) follows one policy for every kind: it
+ * is checked in counted runs only, where it costs nothing measured, and a
+ * broken bound is recorded in the counters (accel_counters.broken), never
+ * by abort(). accel_counters_status() turns it into an accel_error. The
+ * conformance and stability suites trace every case counted, so a loop is
+ * caught there; timed copies carry no bound check.
+ */
+#ifndef ACCEL_CORE_VARIANT_H
+#define ACCEL_CORE_VARIANT_H
+
+#include "accel.h"
+
+/* The flags a kernel copy is specialized on. */
+enum {
+    ACCEL_V_NAIVE = 1u,   /* tri=naive: Moller-Trumbore instead of watertight */
+    ACCEL_V_SPHERES = 2u, /* the scene holds spheres (triangle-only scenes skip the branch) */
+    ACCEL_V_OPT = 4u,     /* the kind's own switch: mailbox (grids), frustum (bvh packets) */
+    ACCEL_V_COPIES = 8
+};
+
+typedef void (*accel_kernel_fn)(const void *accel, const accel_ray *rays, void *out, size_t count,
+                                accel_counters *c, unsigned flags);
+
+typedef struct {
+    accel_kernel_fn counted;              /* counters on, flags at run time */
+    accel_kernel_fn fast[ACCEL_V_COPIES]; /* counters compiled out, flags constant */
+} accel_kernel_table;
+
+#define ACCEL_KERNEL_COPY_(NAME, KERNEL, F)                                                 \
+    static void NAME##_v##F(const void *a, const accel_ray *r, void *o, size_t n,           \
+                            accel_counters *c, unsigned f)                                  \
+    {                                                                                       \
+        (void)c;                                                                            \
+        (void)f;                                                                            \
+        KERNEL(a, r, o, n, (accel_counters *)NULL, F##u);                                   \
+    }
+
+#if ACCEL_COUNTERS
+#define ACCEL_KERNEL_COUNTED_(NAME, KERNEL)                                                 \
+    static void NAME##_counted(const void *a, const accel_ray *r, void *o, size_t n,        \
+                               accel_counters *c, unsigned f)                               \
+    {                                                                                       \
+        KERNEL(a, r, o, n, c, f);                                                           \
+    }
+#else
+#define ACCEL_KERNEL_COUNTED_(NAME, KERNEL)                                                 \
+    static void NAME##_counted(const void *a, const accel_ray *r, void *o, size_t n,        \
+                               accel_counters *c, unsigned f)                               \
+    {                                                                                       \
+        (void)c;                                                                            \
+        KERNEL(a, r, o, n, (accel_counters *)NULL, f);                                      \
+    }
+#endif
+
+/* Defines `static const accel_kernel_table NAME` from an always-inline KERNEL. */
+#define ACCEL_KERNEL_TABLE(NAME, KERNEL)                                                    \
+    ACCEL_KERNEL_COUNTED_(NAME, KERNEL)                                                     \
+    ACCEL_KERNEL_COPY_(NAME, KERNEL, 0)                                                     \
+    ACCEL_KERNEL_COPY_(NAME, KERNEL, 1)                                                     \
+    ACCEL_KERNEL_COPY_(NAME, KERNEL, 2)                                                     \
+    ACCEL_KERNEL_COPY_(NAME, KERNEL, 3)                                                     \
+    ACCEL_KERNEL_COPY_(NAME, KERNEL, 4)                                                     \
+    ACCEL_KERNEL_COPY_(NAME, KERNEL, 5)                                                     \
+    ACCEL_KERNEL_COPY_(NAME, KERNEL, 6)                                                     \
+    ACCEL_KERNEL_COPY_(NAME, KERNEL, 7)                                                     \
+    static const accel_kernel_table NAME = {                                                \
+        NAME##_counted,                                                                     \
+        {NAME##_v0, NAME##_v1, NAME##_v2, NAME##_v3, NAME##_v4, NAME##_v5, NAME##_v6,       \
+         NAME##_v7}};
+
+/* Runs one batch with the copy for these flags: the counted copy when
+ * counters are given (and compiled in), else the specialized one. */
+static inline void accel_run_kernel(const accel_kernel_table *t, const void *accel,
+                                    const accel_ray *rays, void *out, size_t count,
+                                    accel_counters *c, unsigned flags)
+{
+    c = ACCEL_COUNTERS_ON(c);
+    if (c)
+        t->counted(accel, rays, out, count, c, flags);
+    else
+        t->fast[flags & (ACCEL_V_COPIES - 1)](accel, rays, out, count, NULL, flags);
+}
+
+/* True (and recorded in c) when a counted traversal has taken more than
+ * `bound` steps: the kernel then ends that ray. Always false in the timed
+ * copies, where c is a literal NULL and the test compiles away. */
+#define ACCEL_STEP_BOUND_BROKEN(c, steps, bound)                                            \
+    ((c) != NULL && (uint64_t)(steps) > (uint64_t)(bound) &&                                \
+     accel_counters_note_broken((c), __FILE__, __LINE__, (uint64_t)(bound)))
+
+#endif

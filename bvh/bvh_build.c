@@ -1,0 +1,212 @@
+/*
+ * bvh_build.c - the build driver of the `bvh` kind: one reference per live
+ * primitive, the chosen builder (build_binned.c, build_sah.c, build_mid.c),
+ * then the final pass that lays the nodes out depth-first, copies the
+ * primitives in leaf order and computes the statistics.
+ */
+#include <assert.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "build_common.h"
+
+/* ---- references, final layout, statistics --------------------------------- */
+
+/* Whether all of a primitive's coordinates are finite. */
+static int prim_finite(const accel_scene *s, uint32_t prim)
+{
+    const float *p = prim < s->tri_count ? s->tris + 9 * (size_t)prim
+                                         : s->spheres + 4 * (size_t)(prim - s->tri_count);
+    int n = prim < s->tri_count ? 9 : 4;
+    for (int i = 0; i < n; i++)
+        if (!isfinite(p[i])) return 0;
+    return 1;
+}
+
+/* One reference per live primitive. A primitive with a non-finite
+ * coordinate is left out: no finite ray can hit it (the reference never
+ * reports one), and its box would poison every area and bin above it. */
+static uint32_t make_refs(const accel_scene *s, bvh_ref *refs)
+{
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < s->live_count; i++) {
+        uint32_t prim = s->live[i];
+        if (!prim_finite(s, prim)) continue;
+        box3 b = accel_prim_bounds(s, prim);
+        bvh_ref *r = &refs[n++];
+        r->lo[0] = b.min.x, r->lo[1] = b.min.y, r->lo[2] = b.min.z;
+        r->hi[0] = b.max.x, r->hi[1] = b.max.y, r->hi[2] = b.max.z;
+        r->prim = prim;
+        r->pad = 0;
+    }
+    return n;
+}
+
+double bvh_sah_cost(const bvh_node *nodes, uint32_t node_count, double ct, double ci)
+{
+    if (node_count == 0) return 0.0;
+    double root = bvh_half_area(bvh_node_box(&nodes[0]));
+    if (!(root > 0.0)) return NAN;
+    double sum = 0.0;
+    for (uint32_t i = 0; i < node_count; i++) {
+        if (i == 1) continue; /* padding */
+        double a = bvh_half_area(bvh_node_box(&nodes[i]));
+        sum += nodes[i].count ? ci * nodes[i].count * a : ct * a;
+    }
+    return sum / root;
+}
+
+/*
+ * Removes the gaps of the region layout in place. The regions put every
+ * subtree's child pairs after its own pair, left subtree first, so the
+ * pairs already lie in depth-first order; visiting them in that order and
+ * moving each down to the next free slot never overwrites a pair not yet
+ * moved (its new place is at or below its old one, and every pair still to
+ * come lies above). Returns the node count; fills the depth and the leaves.
+ */
+static uint32_t compact_nodes(bvh_node *nodes, int *depth, uint64_t *leaves)
+{
+    struct {
+        uint32_t node;
+        int level;
+    } stack[BVH_MAX_DEPTH + 1];
+    int sp = 0;
+    uint32_t next = 2;
+    *depth = 0;
+    *leaves = 0;
+    stack[sp].node = 0, stack[sp].level = 1, sp++;
+    while (sp > 0) {
+        sp--;
+        uint32_t i = stack[sp].node;
+        int level = stack[sp].level;
+        if (level > *depth) *depth = level;
+        bvh_node *n = &nodes[i];
+        if (n->count) {
+            (*leaves)++;
+            continue;
+        }
+        uint32_t old = n->left_first, pair = next;
+        assert(pair <= old);
+        next += 2;
+        nodes[pair] = nodes[old];
+        nodes[pair + 1] = nodes[old + 1];
+        n->left_first = pair;
+        assert(sp + 2 <= BVH_MAX_DEPTH + 1);
+        stack[sp].node = pair + 1, stack[sp].level = level + 1, sp++;
+        stack[sp].node = pair, stack[sp].level = level + 1, sp++;
+    }
+    return next == 2 ? 1 : next;
+}
+
+typedef struct {
+    const accel_scene *scene;
+    const bvh_ref *refs;
+    bvh *out;
+} gather_job;
+
+/* Primitive data in leaf order: the leaf loop then reads one contiguous run. */
+static void gather_chunk(void *p, size_t begin, size_t end, int thread)
+{
+    (void)thread;
+    gather_job *j = p;
+    const accel_scene *s = j->scene;
+    for (size_t i = begin; i < end; i++) {
+        uint32_t prim = j->refs[i].prim;
+        float *dst = j->out->prim_data + BVH_SLOT_FLOATS * i;
+        j->out->prim_ids[i] = prim;
+        if (prim < s->tri_count) {
+            memcpy(dst, s->tris + 9 * (size_t)prim, 9 * sizeof(float));
+        } else {
+            memcpy(dst, s->spheres + 4 * (size_t)(prim - s->tri_count), 4 * sizeof(float));
+            memset(dst + 4, 0, 5 * sizeof(float));
+        }
+    }
+}
+
+void bvh_release(bvh *b)
+{
+    free(b->nodes);
+    free(b->prim_data);
+    free(b->prim_ids);
+    b->nodes = NULL;
+    b->prim_data = NULL;
+    b->prim_ids = NULL;
+}
+
+int bvh_build_run(const accel_scene *scene, const bvh_build_opts *opts, int threads, bvh *out,
+                  accel_build_stats *stats, accel_error *err)
+{
+    memset(out, 0, sizeof *out);
+    out->tri_count = scene->tri_count;
+    out->has_spheres = scene->sphere_count > 0;
+    uint32_t live = scene->live_count;
+    /* Node indices are uint32 and the temporary pool holds 2N nodes. */
+    if (live > 0x7FFFFFFFu)
+        return accel_fail(err, ACCEL_ERR_RANGE,
+                          "bvh: %u primitives exceed the limit of 2^31-1 (uint32 node indices)",
+                          live);
+    bvh_build ctx;
+    memset(&ctx, 0, sizeof ctx);
+    ctx.scene = scene;
+    ctx.opts = *opts;
+    ctx.threads = threads < 1 ? 1 : threads;
+    ctx.refs = bvh_alloc_array(live, sizeof(bvh_ref));
+    if (!ctx.refs) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for %u references", live);
+    ctx.ref_count = make_refs(scene, ctx.refs);
+    int rc = 0;
+    if (ctx.ref_count > 0) {
+        ctx.nodes = bvh_alloc_nodes(2 * (size_t)ctx.ref_count);
+        if (!ctx.nodes) {
+            free(ctx.refs);
+            return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for %u nodes",
+                              2 * ctx.ref_count);
+        }
+        switch (opts->builder) {
+        case BVH_BUILD_BINNED: rc = bvh_build_binned(&ctx, err); break;
+        case BVH_BUILD_SAH: rc = bvh_build_sah(&ctx, err); break;
+        case BVH_BUILD_MID: rc = bvh_build_mid(&ctx, err); break;
+        case BVH_BUILD_MEDIAN: rc = bvh_build_median(&ctx, err); break;
+        default: rc = accel_fail(err, ACCEL_ERR_INTERNAL, "bvh: unknown builder %d", opts->builder);
+        }
+    }
+    if (rc == 0 && ctx.ref_count > 0) {
+        out->node_count = compact_nodes(ctx.nodes, &out->depth, &stats->leaves);
+        if (out->node_count > 1) { /* padding node: an empty box, never referenced */
+            memset(&ctx.nodes[1], 0, sizeof(bvh_node));
+            bvh_node_set_box(&ctx.nodes[1], box3_empty());
+        }
+        /* Give back the unused tail of the 2N pool (realloc keeps the
+         * contents; should it lose the alignment, copy to an aligned block). */
+        out->nodes = realloc(ctx.nodes, (size_t)out->node_count * sizeof(bvh_node));
+        if (!out->nodes) {
+            out->nodes = ctx.nodes; /* shrinking failed: keep the larger block */
+        } else if ((uintptr_t)out->nodes % BVH_NODE_ALIGN != 0) {
+            bvh_node *aligned = bvh_alloc_nodes(out->node_count);
+            if (aligned) memcpy(aligned, out->nodes, (size_t)out->node_count * sizeof(bvh_node));
+            free(out->nodes);
+            out->nodes = aligned;
+        }
+        ctx.nodes = NULL;
+        out->prim_data = bvh_alloc_array(ctx.ref_count, BVH_SLOT_FLOATS * sizeof(float));
+        out->prim_ids = bvh_alloc_array(ctx.ref_count, sizeof(uint32_t));
+        if (!out->nodes || !out->prim_data || !out->prim_ids) {
+            rc = accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for the final pools");
+        } else {
+            out->prim_count = ctx.ref_count;
+            gather_job job = {scene, ctx.refs, out};
+            accel_parallel_for(ctx.ref_count, 16384, ctx.threads, gather_chunk, &job);
+        }
+    }
+    free(ctx.nodes);
+    free(ctx.refs);
+    if (rc) {
+        bvh_release(out);
+        return rc;
+    }
+    stats->nodes = out->node_count;
+    stats->refs = out->prim_count;
+    stats->depth = out->depth;
+    stats->sah_cost = bvh_sah_cost(out->nodes, out->node_count, opts->ct, opts->ci);
+    return 0;
+}

@@ -1,0 +1,14 @@
+# sources.mk - which files make up the library, shared by the top-level
+# Makefile and tests/fuzz/Makefile (set ROOT to the repository, with a
+# trailing slash, before including; empty at the top level).
+#
+# Every top-level folder with .c files other than NOT_BACKENDS is a backend
+# whose files go into the library: a new backend is a new folder plus its
+# line in accel/core/registry.c, nothing else.
+NOT_BACKENDS := accel experiments tests tools lab build build-san bin bin-san build-nocount bin-nocount
+BACKENDS     := $(filter-out $(NOT_BACKENDS),$(patsubst $(ROOT)%/,%,$(sort $(dir $(wildcard $(ROOT)*/*.c)))))
+ACCEL_LAYERS := core scene rays bench
+CORE_SRC     := $(foreach l,$(ACCEL_LAYERS),$(wildcard $(ROOT)accel/$(l)/*.c))
+BACKEND_SRC  := $(foreach d,$(BACKENDS),$(wildcard $(ROOT)$(d)/*.c))
+LIB_SRC      := $(CORE_SRC) $(BACKEND_SRC)
+LOADER_SRC   := $(wildcard $(ROOT)accel/scene/load_*.c)

@@ -1,0 +1,227 @@
+/*
+ * test_layout.c - the layering rule of the source tree, checked on the
+ * files themselves (the tests run from the repository root):
+ *
+ *  - accel/ is layered core < scene < rays < bench: a file includes only
+ *    accel.h, its own layer and the layers below it;
+ *  - a backend (every top-level folder the build treats as one, read from
+ *    sources.mk) includes only accel.h, accel/core/ headers, its own
+ *    folder's headers, and the one documented cross-backend API,
+ *    grid/grid_core.h (the grid walk the nested grid reuses);
+ *  - no library, tool or experiment source file is over 650 lines.
+ */
+#include <dirent.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "test.h"
+
+static const char *const layers[] = {"core", "scene", "rays", "bench"};
+enum { LAYER_COUNT = 4, MAX_LINES = 650 };
+
+static int layer_of(const char *name)
+{
+    for (int i = 0; i < LAYER_COUNT; i++)
+        if (!strcmp(layers[i], name)) return i;
+    return -1;
+}
+
+static int source_file(const char *name)
+{
+    size_t n = strlen(name);
+    return n > 2 && name[n - 2] == '.' && (name[n - 1] == 'c' || name[n - 1] == 'h');
+}
+
+/* Calls fn(path, ctx) for every .c/.h file directly in dir. */
+static int each_source(const char *dir, void (*fn)(const char *path, const char *dir, void *ctx),
+                       void *ctx)
+{
+    DIR *d = opendir(dir);
+    if (!d) return 0;
+    int n = 0;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        if (!source_file(e->d_name)) continue;
+        char path[512];
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        fn(path, dir, ctx);
+        n++;
+    }
+    closedir(d);
+    return n;
+}
+
+/* Calls fn(file, line, target) for every #include "target" of a file. */
+static void each_include(const char *path, void (*fn)(const char *, int, const char *, void *),
+                         void *ctx)
+{
+    FILE *f = fopen(path, "r");
+    if (!f) {
+        test_fail(__FILE__, __LINE__, "cannot read %s", path);
+        return;
+    }
+    char line[1024];
+    int no = 0;
+    while (fgets(line, sizeof line, f)) {
+        no++;
+        const char *p = line;
+        while (*p == ' ' || *p == '\t') p++;
+        if (strncmp(p, "#include", 8)) continue;
+        const char *q = strchr(p, '"');
+        if (!q) continue; /* <system> header */
+        const char *end = strchr(q + 1, '"');
+        if (!end) continue;
+        char target[256];
+        size_t len = (size_t)(end - q - 1) < sizeof target - 1 ? (size_t)(end - q - 1) : sizeof target - 1;
+        memcpy(target, q + 1, len);
+        target[len] = 0;
+        fn(path, no, target, ctx);
+    }
+    fclose(f);
+}
+
+/* The layer a quoted include names ("core/prim.h" -> core), -1 for accel.h,
+ * -2 for anything else. */
+static int include_layer(const char *target)
+{
+    if (!strcmp(target, "accel.h")) return -1;
+    const char *slash = strchr(target, '/');
+    if (!slash) return -2;
+    char first[64];
+    size_t n = (size_t)(slash - target) < sizeof first - 1 ? (size_t)(slash - target) : sizeof first - 1;
+    memcpy(first, target, n);
+    first[n] = 0;
+    int l = layer_of(first);
+    return l >= 0 ? l : -2;
+}
+
+static void check_accel_include(const char *path, int line, const char *target, void *ctx)
+{
+    int own = *(const int *)ctx;
+    int l = include_layer(target);
+    CHECKF(l == -1 || (l >= 0 && l <= own),
+           "%s:%d: includes \"%s\": accel/%s may include only accel.h and accel/{%s} headers",
+           path, line, target, layers[own],
+           own == 0 ? "core" : own == 1 ? "core,scene" : own == 2 ? "core,scene,rays" : "core,scene,rays,bench");
+}
+
+static void check_accel_file(const char *path, const char *dir, void *ctx)
+{
+    (void)dir;
+    each_include(path, check_accel_include, ctx);
+}
+
+typedef struct {
+    const char *folder;
+} backend_ctx;
+
+static int file_exists(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0;
+}
+
+static void check_backend_include(const char *path, int line, const char *target, void *ctx)
+{
+    const backend_ctx *b = ctx;
+    int l = include_layer(target);
+    if (l == -1 || l == 0) return;
+    char own[512];
+    size_t fl = strlen(b->folder);
+    if (!strchr(target, '/')) {
+        snprintf(own, sizeof own, "%s/%s", b->folder, target);
+        if (file_exists(own)) return;
+    } else if (!strncmp(target, b->folder, fl) && target[fl] == '/') {
+        return;
+    }
+    if (!strcmp(target, "grid/grid_core.h")) return;
+    test_fail(__FILE__, __LINE__,
+              "%s:%d: includes \"%s\": a backend may include only accel.h, core/ headers, its "
+              "own folder and grid/grid_core.h",
+              path, line, target);
+}
+
+static void check_backend_file(const char *path, const char *dir, void *ctx)
+{
+    backend_ctx b = {dir};
+    (void)ctx;
+    each_include(path, check_backend_include, &b);
+}
+
+/* Backends as sources.mk defines them: every top-level folder holding .c
+ * files, less the NOT_BACKENDS list. */
+static int read_not_backends(char *out, size_t size)
+{
+    FILE *f = fopen("sources.mk", "r");
+    if (!f) return 0;
+    char line[1024];
+    int found = 0;
+    while (fgets(line, sizeof line, f)) {
+        if (strncmp(line, "NOT_BACKENDS", 12)) continue;
+        const char *eq = strstr(line, ":=");
+        if (!eq) continue;
+        snprintf(out, size, " %s ", eq + 2);
+        for (char *p = out; *p; p++)
+            if (*p == '\n' || *p == '\t') *p = ' ';
+        found = 1;
+    }
+    fclose(f);
+    return found;
+}
+
+static void count_c(const char *path, const char *dir, void *ctx)
+{
+    (void)dir;
+    size_t n = strlen(path);
+    if (path[n - 1] == 'c') ++*(int *)ctx;
+}
+
+TEST(layout_layers_and_backends)
+{
+    char not_backends[1024];
+    CHECKF(read_not_backends(not_backends, sizeof not_backends), "sources.mk: no NOT_BACKENDS line");
+    for (int l = 0; l < LAYER_COUNT; l++) {
+        char dir[64];
+        snprintf(dir, sizeof dir, "accel/%s", layers[l]);
+        CHECKF(each_source(dir, check_accel_file, &l) > 0, "%s: no sources", dir);
+    }
+    DIR *d = opendir(".");
+    CHECK(d != NULL);
+    if (!d) return;
+    int backends = 0;
+    struct dirent *e;
+    while ((e = readdir(d))) {
+        if (e->d_name[0] == '.') continue;
+        char key[300];
+        snprintf(key, sizeof key, " %s ", e->d_name);
+        if (strstr(not_backends, key)) continue;
+        int c_files = 0;
+        each_source(e->d_name, count_c, &c_files);
+        if (!c_files) continue;
+        backends++;
+        each_source(e->d_name, check_backend_file, NULL);
+    }
+    closedir(d);
+    CHECKF(backends >= 3, "only %d backends found (grid, nested_grid, bvh expected)", backends);
+}
+
+static void check_length(const char *path, const char *dir, void *ctx)
+{
+    (void)dir;
+    (void)ctx;
+    FILE *f = fopen(path, "r");
+    if (!f) return;
+    int lines = 0, ch;
+    while ((ch = fgetc(f)) != EOF) lines += ch == '\n';
+    fclose(f);
+    CHECKF(lines <= MAX_LINES, "%s: %d lines (split files past about 600 lines)", path, lines);
+}
+
+TEST(layout_file_length)
+{
+    static const char *const dirs[] = {"accel", "accel/core", "accel/scene", "accel/rays",
+                                       "accel/bench", "grid", "nested_grid", "bvh",
+                                       "tools", "experiments"};
+    for (size_t i = 0; i < sizeof dirs / sizeof dirs[0]; i++) each_source(dirs[i], check_length, NULL);
+}
