@@ -118,6 +118,12 @@ typedef struct {
     uint64_t mailbox_skips; /* primitive tests avoided by mailboxing */
     uint64_t level_steps[4];/* nested grids: steps per level (0 = top) */
     uint64_t packet_box_tests; /* packets: box tests done for whole packets */
+    /* Broken invariants seen by a counted run (a traversal over its step
+     * bound, see core/variant.h): how many rays, and where the first was. */
+    uint64_t broken;
+    const char *broken_file;
+    int broken_line;
+    uint64_t broken_bound;
     /* Optional per-ray costs for heatmaps (index = ray index in the batch),
      * filled with the ray's steps and primitive tests when not NULL. */
     uint32_t *ray_steps;
@@ -161,6 +167,11 @@ typedef struct {
 
 /* Adds b's totals into a (not the per-ray arrays). */
 void accel_counters_add(accel_counters *a, const accel_counters *b);
+/* Records a broken invariant in c (the first one's place is kept); returns 1. */
+int accel_counters_note_broken(accel_counters *c, const char *file, int line, uint64_t bound);
+/* ACCEL_ERR_INTERNAL with a message naming the kernel's file and line when
+ * a counted run saw a broken invariant, else 0. */
+int accel_counters_status(const accel_counters *c, accel_error *err);
 
 /* ---- parameters and spec strings ----------------------------------------- */
 

@@ -45,6 +45,33 @@ void accel_counters_add(accel_counters *a, const accel_counters *b)
     a->mailbox_skips += b->mailbox_skips;
     for (int i = 0; i < 4; i++) a->level_steps[i] += b->level_steps[i];
     a->packet_box_tests += b->packet_box_tests;
+    if (b->broken && !a->broken_file) {
+        a->broken_file = b->broken_file;
+        a->broken_line = b->broken_line;
+        a->broken_bound = b->broken_bound;
+    }
+    a->broken += b->broken;
+}
+
+int accel_counters_note_broken(accel_counters *c, const char *file, int line, uint64_t bound)
+{
+    if (!c->broken_file) {
+        c->broken_file = file;
+        c->broken_line = line;
+        c->broken_bound = bound;
+    }
+    c->broken++;
+    return 1;
+}
+
+int accel_counters_status(const accel_counters *c, accel_error *err)
+{
+    if (!c || !c->broken) return 0;
+    return accel_fail(err, ACCEL_ERR_INTERNAL,
+                      "%s:%d: %llu ray(s) exceeded the traversal step bound (%llu): a broken "
+                      "structure or an endless loop",
+                      c->broken_file, c->broken_line, (unsigned long long)c->broken,
+                      (unsigned long long)c->broken_bound);
 }
 
 void accel_step_bound_exceeded(const char *file, int line, uint64_t bound)
