@@ -1,5 +1,6 @@
 /*
- * error.c - errors, clocks, core count, counters and the traversal step bound.
+ * error.c - errors, clocks, core count and counters (with their record of
+ * broken invariants).
  */
 
 #include <stdarg.h>
@@ -72,11 +73,4 @@ int accel_counters_status(const accel_counters *c, accel_error *err)
                       "structure or an endless loop",
                       c->broken_file, c->broken_line, (unsigned long long)c->broken,
                       (unsigned long long)c->broken_bound);
-}
-
-void accel_step_bound_exceeded(const char *file, int line, uint64_t bound)
-{
-    fprintf(stderr, "%s:%d: traversal exceeded its step bound (%llu): endless loop?\n", file, line,
-            (unsigned long long)bound);
-    abort();
 }

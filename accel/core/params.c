@@ -19,6 +19,8 @@
 const accel_param_def accel_common_params[] = {
     {"tri", ACCEL_PARAM_ENUM, "watertight", 0, 0, "watertight|naive",
      "triangle test: watertight (Woop et al. 2013) or naive (Moller-Trumbore)"},
+    {"reorder", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
+     "primitive store: copy the primitives in Morton order of their centroids (0: scene order)"},
 };
 const size_t accel_common_param_count = sizeof accel_common_params / sizeof accel_common_params[0];
 
@@ -187,6 +189,7 @@ int accel_params_parse(const char *spec, accel_params *out, accel_error *err)
                             out->given, err);
     if (rc) return rc;
     out->naive = out->num[k->param_count] == 1; /* tri: 0 watertight, 1 naive */
+    out->reorder = out->num[k->param_count + 1] != 0.0;
     /* Canonical spec: the name and the parameters given, in table order. */
     size_t len = (size_t)snprintf(out->spec, sizeof out->spec, "%s", k->name);
     int first = 1;
