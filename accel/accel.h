@@ -146,6 +146,7 @@ typedef struct {
     uint64_t mailbox_skips; /* primitive tests avoided by mailboxing */
     uint64_t level_steps[4];/* nested grids: steps per level (0 = top) */
     uint64_t packet_box_tests; /* packets: box tests done for whole packets */
+    uint64_t packet_steps;     /* packets: nodes / cells fetched once for a whole packet */
     /* Broken invariants seen by a counted run (a traversal over its step
      * bound, see core/variant.h): how many rays, and where the first was. */
     uint64_t broken;
@@ -226,6 +227,10 @@ void accel_params_help(const accel_param_def *defs, size_t n, char *buf, size_t 
  * bad numbers and out-of-range values fail with a message that lists what
  * is accepted. */
 int accel_params_parse(const char *spec, accel_params *out, accel_error *err);
+/* The same for a kind given directly (registered or not, e.g. the lab's
+ * starter kind): kv is the part after "name:". */
+int accel_params_parse_kind(const struct accel_kind *kind, const char *kv, accel_params *out,
+                            accel_error *err);
 /* Lookups by key; the key must be one of the kind's parameters (asserted). */
 double accel_param_num(const accel_params *p, const char *key);
 const char *accel_param_str(const accel_params *p, const char *key);
@@ -275,6 +280,9 @@ const accel_kind *accel_find_kind(const char *name);
 int accel_build_spec(const char *spec, const accel_scene *scene, int threads,
                      const accel_kind **kind_out, void **accel_out, accel_build_stats *stats,
                      accel_error *err);
+/* The same for a kind given directly; kv is the part after "name:". */
+int accel_build_kind(const accel_kind *kind, const char *kv, const accel_scene *scene,
+                     int threads, void **accel_out, accel_build_stats *stats, accel_error *err);
 
 /* Traces count rays with `threads` threads, in chunks of
  * accel_trace_chunk(count, threads) rays: a multiple of 64 so that 8x8

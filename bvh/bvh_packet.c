@@ -372,6 +372,7 @@ out:
         c->box_tests += boxes;
         c->prim_tests += prims;
         c->packet_box_tests += packet_boxes;
+        c->packet_steps += visits;
         if (ray_steps) {
             int32_t run = 0;
             for (uint32_t i = 0; i < n; i++) {

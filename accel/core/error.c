@@ -46,6 +46,7 @@ void accel_counters_add(accel_counters *a, const accel_counters *b)
     a->mailbox_skips += b->mailbox_skips;
     for (int i = 0; i < 4; i++) a->level_steps[i] += b->level_steps[i];
     a->packet_box_tests += b->packet_box_tests;
+    a->packet_steps += b->packet_steps;
     if (b->broken && !a->broken_file) {
         a->broken_file = b->broken_file;
         a->broken_line = b->broken_line;
