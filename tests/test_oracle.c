@@ -142,7 +142,8 @@ static void add_adversarial(const accel_scene *s, ray_list *l, size_t count, uin
                                                                  : v3(neg ? -1 : 1, 1, zero);
         push(l, v3_sub(p, v3_scale(d, 2 * (ext.x + ext.y + ext.z))), d, 0.0f, INFINITY);
         /* From 1e22 away, aimed at the vertex, and axis-parallel from 1e22. */
-        vec3 u = v3_norm(v3(rnd(seed, i, 2) - 0.5f, rnd(seed, i, 3) - 0.5f, rnd(seed, i, 4) - 0.5f));
+        vec3 u = v3_norm(
+            v3(rnd(seed, i, 2) - 0.5f, rnd(seed, i, 3) - 0.5f, rnd(seed, i, 4) - 0.5f));
         push(l, v3_add(p, v3_scale(u, 1e22f)), v3_scale(u, -1.0f), 0.0f, INFINITY);
         op[axis] = neg ? 1e22f : -1e22f;
         push(l, v3(op[0], op[1], op[2]), v3(dp[0], dp[1], dp[2]), 0.0f, INFINITY);

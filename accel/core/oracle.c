@@ -13,36 +13,41 @@
  * cannot rule out, and replays the tie rule: a hit replaces the current one
  * when its t is smaller, or equal and its live position later.
  *
- * Why the culling never drops a hit the double test would accept. Let
- * S = max|origin| + max|tree box coordinate| (all per ray), so every
- * difference vertex - origin is at most S per axis, and let eps = 2^-53.
- * Boxes are widened by M = 2^-20 S, about 10^7 times the double rounding
- * of anything below, so the slab arithmetic's own rounding cannot matter.
- *  1. Line: the double triangle test accepts only when its three rounded
- *     edge functions agree in sign and one of them clears 16 eps times its
- *     magnitude bound (the edge-on rule); that bound is about 8 times their
- *     rounding error, so the exact edge functions of the rounded sheared
- *     vertices put the ray's line within ~2 eps of their magnitudes of the
- *     triangle (Shewchuk-style filter reasoning, as in prim.h). With the
- *     rounding of vertex - origin and of the shear (each ~eps S), the ray's
- *     line passes within ~30 eps S of the triangle. The sphere test accepts
- *     only when r^2 >= |l|^2 for the rounded centre-to-line vector l, whose
- *     error is ~20 eps S: the line passes within r + 20 eps S of the centre.
- *     So a node whose widened box the infinite line misses holds no hit.
- *  2. Distance, triangles only: an accepted t is computed as
+ * Why the culling never drops a hit the double test would accept. Per ray,
+ * let S = max|origin coordinate| + max|coordinate of the tree's root box|,
+ * so that every vertex - origin difference is at most S per axis, and let
+ * eps = 2^-53. Every box is widened by M = 2^-20 S: about 10^7 times the
+ * double rounding errors below (each a few tens of eps S at most), which
+ * also makes the slab test's own rounding irrelevant.
+ *  1. The line. The triangle test accepts only when its three rounded edge
+ *     functions U, V, W share a sign and one of them exceeds 16 eps times
+ *     its magnitude bound (the edge-on rule), a bound about 8 times its
+ *     rounding error. So the exact edge functions of the rounded, sheared
+ *     vertices have that sign up to their rounding error, which puts the
+ *     ray within a few eps times the vertices' sheared magnitudes of the
+ *     (rounded) triangle; the rounding of vertex - origin and of the shear
+ *     moves each vertex by a few eps S more. The ray's line therefore meets
+ *     the triangle's box widened by ~30 eps S. The sphere test accepts only
+ *     when r^2 >= |l|^2 for the rounded centre-to-line vector l, whose error
+ *     is ~20 eps S: the line passes within r + 20 eps S of the centre, i.e.
+ *     through the sphere's widened box. A node whose widened box the
+ *     infinite line misses holds no acceptable primitive.
+ *  2. The distance, triangles only. An accepted t is computed as
  *     (U az + V bz + W cz) sz / det with U, V, W of one sign: a convex
- *     combination of the vertices' depths along the dominant axis kz, up to
- *     ~8 eps S. So t lies in the kz slab interval of any widened box holding
- *     the triangle: a node whose kz interval starts after the current hit's
- *     t (strictly: equal t may still win a tie) or ends before t_near holds
- *     no better hit. The full slab interval would not do: for a near edge-on
- *     triangle the rounded weights may move t anywhere within the
+ *     combination of the vertices' offsets along the dominant axis kz,
+ *     divided by d[kz], up to ~8 eps S. So t lies in the kz slab interval
+ *     of any widened box holding the triangle: a node whose kz interval
+ *     starts after the current hit's t (strictly after: an equal t may still
+ *     win the tie) or ends before t_near holds no better hit. The usual
+ *     slab interval over all three axes would not be safe: for a nearly
+ *     edge-on triangle the rounded weights may put t anywhere within the
  *     triangle's depth range, where the ray can be outside the triangle's
- *     box on the other axes. Spheres get no such bound (the second root
- *     (|f|^2 - r^2)/q is arbitrary when q is all rounding), so a subtree
- *     holding a sphere is culled by the line test alone.
- *  3. Primitives with a non-finite coordinate (kept live by the scene
- *     builder) have no usable box: they are tested against every ray.
+ *     box on the other two axes. Spheres get no distance bound (the second
+ *     root (|f|^2 - r^2)/q is arbitrary when q is all rounding, as for a
+ *     tangent ray from the surface), so a subtree holding a sphere is
+ *     culled by the line alone.
+ *  3. Primitives with a non-finite coordinate (scene_finish keeps them
+ *     live) have no box to test: they are tested against every ray.
  * tests/test_oracle.c checks the result against the brute-force loop,
  * bitwise, on every stiff case, every built-in scene and adversarial rays.
  */
@@ -252,7 +257,8 @@ static accel_hit trace_one(const accel_oracle *o, const accel_ray *ray, uint32_t
             uint32_t count = n->count & ~ORACLE_SPHERES;
             tally->steps++;
             if (count) {
-                for (uint32_t i = n->index; i < n->index + count; i++) test_item(s, &r, o->items[i], &b);
+                for (uint32_t i = n->index; i < n->index + count; i++)
+                    test_item(s, &r, o->items[i], &b);
                 tally->prim_tests += count;
             } else {
                 double o0, o1, c0, c1;
@@ -308,7 +314,8 @@ static void oracle_chunk(void *p, size_t begin, size_t end, int thread)
         return;
     }
     oracle_tally t = {0, 0, 0};
-    for (size_t i = begin; i < end; i++) j->hits[i] = trace_one(j->oracle, &j->rays[i], stack, stack_t, &t);
+    for (size_t i = begin; i < end; i++)
+        j->hits[i] = trace_one(j->oracle, &j->rays[i], stack, stack_t, &t);
     free(stack);
     free(stack_t);
     j->tally[thread].steps += t.steps;

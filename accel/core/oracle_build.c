@@ -190,6 +190,11 @@ int oracle_bvh_build(accel_oracle *o, accel_error *err)
         if (prim_box(s, r.prim, &r)) refs[finite++] = r;
         else refs[n - 1 - odd++] = r;
     }
+    if (finite > 0x7FFFFFFFu) {
+        free(refs); /* node ids would overflow: the caller falls back to brute force */
+        return accel_fail(err, ACCEL_ERR_RANGE, "oracle: %u primitives exceed the tree's limit",
+                          finite);
+    }
     o->always_count = odd;
     o->always = malloc((odd ? odd : 1) * sizeof *o->always);
     o->items = malloc((finite ? finite : 1) * sizeof *o->items);
@@ -202,7 +207,8 @@ int oracle_bvh_build(accel_oracle *o, accel_error *err)
         return accel_fail(err, ACCEL_ERR_NOMEM, "oracle: out of memory for a tree over %u prims",
                           finite);
     }
-    for (uint32_t k = 0; k < odd; k++) o->always[k] = (oracle_item){refs[n - 1 - k].prim, refs[n - 1 - k].pos};
+    for (uint32_t k = 0; k < odd; k++)
+        o->always[k] = (oracle_item){refs[n - 1 - k].prim, refs[n - 1 - k].pos};
     o->item_count = finite;
     if (finite == 0) {
         free(refs);
