@@ -447,3 +447,103 @@ TEST(oracle_culls)
     rays_free(&prim);
     scene_free(&s);
 }
+
+/* The k-th number of a stream (a function call, so that several draws in
+ * one expression are sequenced). */
+static float draw(uint64_t seed, uint64_t *k) { return rnd(seed, (*k)++, 0); }
+
+/* Random soups at scales 1e-20..1e20 and offsets up to 1e15: shared edges,
+ * coplanar neighbours, axis-aligned planes, float-step perturbations,
+ * spheres of every size; rays through vertices and edges, along edges,
+ * from 1e22, axis-parallel with +-0, random t ranges. */
+TEST(oracle_random_scales_match_brute)
+{
+    enum { SCENES = 24, TRIS = 200, SPHERES = 24, RAYS = 600 };
+    static float tris[9 * TRIS], spheres[4 * SPHERES];
+    static uint32_t live[TRIS + SPHERES];
+    ray_list l = {0};
+    for (uint64_t sc = 0; sc < SCENES; sc++) {
+        uint64_t k = 0;
+#define DRAW() draw(100 + sc, &k)
+        double scale = pow(10.0, (int)(DRAW() * 9) * 5 - 20);
+        double off = DRAW() < 0.3f ? pow(10.0, (int)(DRAW() * 5) * 5 - 5) * (DRAW() - 0.5) : 0;
+        double size = sc % 3 == 0 ? scale * 1e-6 : scale * DRAW();
+        for (int i = 0; i < TRIS; i++) {
+            float *t = tris + 9 * i;
+            if (i > 0 && DRAW() < 0.25f) {
+                const float *p = tris + 9 * (int)(DRAW() * i);
+                memcpy(t, p, 9 * sizeof *t);
+                double a = 4 * DRAW() - 2, b = 4 * DRAW() - 2; /* a coplanar neighbour */
+                for (int c = 0; c < 3; c++)
+                    t[6 + c] = (float)(p[c] + a * (p[3 + c] - p[c]) + b * (p[6 + c] - p[c]));
+                continue;
+            }
+            for (int c = 0; c < 3; c++) {
+                double centre = off + scale * (2 * DRAW() - 1);
+                for (int v = 0; v < 3; v++)
+                    t[3 * v + c] = (float)(centre + (v ? size * (2 * DRAW() - 1) : 0));
+            }
+            if (DRAW() < 0.15f) t[3 + (int)(DRAW() * 6)] = nextafterf(t[0], INFINITY);
+            if (DRAW() < 0.15f) { /* an axis-aligned plane */
+                int a = (int)(DRAW() * 3);
+                t[3 + a] = t[6 + a] = t[a];
+            }
+        }
+        for (int i = 0; i < SPHERES; i++) {
+            for (int c = 0; c < 3; c++)
+                spheres[4 * i + c] = (float)(off + scale * (2 * DRAW() - 1));
+            spheres[4 * i + 3] = (float)(scale * pow(10.0, -(int)(DRAW() * 8))) * (i % 5 ? 1 : -1);
+        }
+        uint32_t n = 0;
+        for (uint32_t i = 0; i < TRIS + (sc % 2 ? SPHERES : 0); i++)
+            if (DRAW() < 0.9f) live[n++] = i;
+        accel_scene s = {0};
+        s.tri_count = TRIS;
+        s.sphere_count = SPHERES;
+        s.prim_count = TRIS + SPHERES;
+        s.tris = tris;
+        s.spheres = spheres;
+        s.live = live;
+        s.live_count = n;
+        l.n = 0;
+        for (int i = 0; n && i < RAYS; i++) {
+            uint32_t prim = live[(int)(DRAW() * n)];
+            const float *p = prim < TRIS ? tris + 9 * prim : spheres + 4 * (prim - TRIS);
+            int v = prim < TRIS ? (int)(DRAW() * 3) : 0, w = (v + 1) % 3;
+            float a = i % 3 == 0 ? 0.5f : (i % 3 == 1 ? 0.0f : DRAW());
+            vec3 target = prim < TRIS ? v3_add(v3_scale(v3_load(p + 3 * v), 1 - a),
+                                               v3_scale(v3_load(p + 3 * w), a))
+                                      : v3_add(v3_load(p), v3(fabsf(p[3]), 0, 0));
+            vec3 o = v3((float)(off + 3 * scale * (2 * DRAW() - 1)),
+                        (float)(off + 3 * scale * (2 * DRAW() - 1)),
+                        (float)(off + 3 * scale * (2 * DRAW() - 1)));
+            vec3 d = v3_sub(target, o);
+            switch (i % 6) {
+            case 0: o = v3_add(target, v3_scale(v3(DRAW() - 0.5f, DRAW() - 0.5f, 1), 1e22f)); break;
+            case 1: /* from the target, along its edge or tangent to its sphere */
+                o = target;
+                d = prim < TRIS ? v3_sub(v3_load(p + 3 * w), v3_load(p + 3 * v)) : v3(0, 1, DRAW());
+                d.y = nextafterf(d.y, i % 4 ? INFINITY : -INFINITY);
+                break;
+            case 2: { /* axis-parallel through the target */
+                int axis = (int)(DRAW() * 3);
+                float zero = DRAW() < 0.5f ? 0.0f : -0.0f, t3[3] = {target.x, target.y, target.z};
+                float o3[3] = {t3[0], t3[1], t3[2]}, d3[3] = {zero, zero, zero};
+                d3[axis] = DRAW() < 0.5f ? 1.0f : -1.0f;
+                o3[axis] = t3[axis] - d3[axis] * (float)(4 * scale + fabs(off));
+                o = v3(o3[0], o3[1], o3[2]);
+                d = v3(d3[0], d3[1], d3[2]);
+                break;
+            }
+            default: break;
+            }
+            float t_near = DRAW() < 0.2f ? (DRAW() - 0.3f) * (float)scale : 0.0f;
+            push(&l, o, d, t_near, DRAW() < 0.2f ? 2 * DRAW() : INFINITY);
+        }
+#undef DRAW
+        char what[64];
+        snprintf(what, sizeof what, "random scene %d (scale %g)", (int)sc, scale);
+        check_same(&s, l.r, l.n, what, NULL);
+    }
+    free(l.r);
+}
