@@ -304,10 +304,34 @@ void accel_parallel_for(size_t count, size_t chunk, int threads,
 
 /* ---- the oracle ---------------------------------------------------------- */
 
-/* Brute force over every live primitive in double precision with the
- * watertight test: the reference every test compares against. */
+/*
+ * The reference every test compares against. Its answer is DEFINED by the
+ * brute-force loop, accel_reference_trace_brute: every live primitive, in
+ * live order, against every ray, in double precision with the watertight
+ * triangle test and the careful sphere test of core/prim.h; the closest
+ * accepted t wins, and on equal t the primitive latest in live order.
+ *
+ * accel_reference_trace returns exactly (bitwise t, prim, u, v) the same
+ * hits, fast: it builds a conservative culling tree over the scene for the
+ * call (core/oracle.c argues why no accepted hit is ever culled) and runs
+ * the same double tests on the candidates. To trace several ray sets over
+ * one scene, build once with accel_oracle_build, trace with
+ * accel_oracle_trace, release with accel_oracle_free. The oracle borrows
+ * the scene, which must outlive it and not change. `threads` is honoured
+ * (the build is single-threaded); counters, when not NULL, get rays, steps
+ * (tree nodes visited), box_tests and prim_tests added.
+ */
 void accel_reference_trace(const accel_scene *scene, const accel_ray *rays, accel_hit *hits,
                            size_t count, int threads);
+void accel_reference_trace_brute(const accel_scene *scene, const accel_ray *rays, accel_hit *hits,
+                                 size_t count, int threads);
+
+typedef struct accel_oracle accel_oracle;
+int accel_oracle_build(const accel_scene *scene, accel_oracle **out, accel_error *err);
+void accel_oracle_trace(const accel_oracle *oracle, const accel_ray *rays, accel_hit *hits,
+                        size_t count, int threads, accel_counters *counters);
+size_t accel_oracle_memory(const accel_oracle *oracle); /* bytes */
+void accel_oracle_free(accel_oracle *oracle);
 
 /* ---- small shared utilities ---------------------------------------------- */
 
