@@ -1,13 +1,7 @@
 /*
  * test_tools.c - tools that never surprise: bin/trace and the experiments
- * run as subprocesses (small sizes) and their pieces called directly.
- * Options are checked before any work (a typo in the second --accel costs
- * no build), bad numbers, empty scenes, degenerate cameras and --image
- * without primary rays are errors with the documented exit status, CSV
- * output is RFC 4180 with one schema (read back by a small RFC 4180
- * reader here), stdout is flushed in order with stderr's progress lines,
- * --threads bounds every phase, a broken invariant of a counted pass is an
- * error.
+ * run as subprocesses (small sizes), their pieces (bench/cli.h, csv.h,
+ * progress.h) called directly; CSV is read back by an RFC 4180 reader here.
  */
 #include <math.h>
 #include <stdio.h>
@@ -40,6 +34,15 @@ static char *read_file(const char *path)
     return buf;
 }
 
+/* The text written to a tmpfile, which is closed. */
+static void slurp(FILE *f, char *text, size_t size)
+{
+    rewind(f);
+    size_t n = fread(text, 1, size - 1, f);
+    text[n] = 0;
+    fclose(f);
+}
+
 /* Runs a shell command with stdout and stderr captured; returns its exit
  * status (-1 if it did not exit). *out and *err are malloc'd (may be NULL). */
 static int run(const char *cmd, char **out, char **err)
@@ -70,7 +73,6 @@ static void csv_doc_free(csv_doc *d)
 {
     for (int r = 0; r < d->count; r++)
         for (int f = 0; f < d->fields[r] && f < MAX_FIELDS; f++) free(d->field[r][f]);
-    memset(d, 0, sizeof *d);
 }
 
 /* Fields are split at commas outside quotes; a quoted field may hold
@@ -85,29 +87,15 @@ static void csv_read(const char *text, csv_doc *d)
             char buf[2048];
             size_t n = 0;
             if (*p == '"') {
-                p++;
-                for (;;) {
-                    if (!*p) {
-                        d->bad++;
-                        break;
-                    }
-                    if (*p == '"' && p[1] == '"') {
-                        if (n < sizeof buf - 1) buf[n++] = '"';
-                        p += 2;
-                    } else if (*p == '"') {
-                        p++;
-                        break;
-                    } else {
-                        if (n < sizeof buf - 1) buf[n++] = *p;
-                        p++;
-                    }
-                }
+                for (p++; *p && !(*p == '"' && p[1] != '"'); p += *p == '"' ? 2 : 1)
+                    if (n < sizeof buf - 1) buf[n++] = *p;
+                if (*p) p++; /* the closing quote */
+                else d->bad++;
                 if (*p && *p != ',' && *p != '\n' && !(*p == '\r' && p[1] == '\n')) d->bad++;
             } else {
-                while (*p && *p != ',' && *p != '\n' && !(*p == '\r' && p[1] == '\n')) {
-                    if (*p == '"') d->bad++;
+                for (; *p && *p != ',' && *p != '\n' && !(*p == '\r' && p[1] == '\n'); p++) {
+                    d->bad += *p == '"';
                     if (n < sizeof buf - 1) buf[n++] = *p;
-                    p++;
                 }
             }
             buf[n] = 0;
@@ -178,15 +166,14 @@ TEST(tools_cli_table_parses_strictly)
           o.seed == 18446744073709551615ull);
     CHECK(toy_parse("--x", "-0.5", &o, &err) == 0 && o.x == -0.5);
     CHECK(toy_parse("--size", "12x34", &o, &err) == 0 && o.size[0] == 12 && o.size[1] == 34);
-    static const char *const bad[][2] = {{"--n", "abc"},    {"--n", "3q"},    {"--n", "11"},
-                                         {"--n", "-1"},     {"--n", ""},      {"--seed", "abc"},
-                                         {"--seed", "-1"},  {"--seed", "1e3"}, {"--x", "2"},
-                                         {"--x", "nan"},    {"--size", "10xq"}, {"--size", "10x10q"},
-                                         {"--size", "x10"}, {"--size", "0x10"}, {"--nope", "1"}};
-    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-        int rc = toy_parse(bad[i][0], bad[i][1], &o, &err);
-        CHECKF(rc == ACCEL_ERR_SPEC, "%s %s accepted", bad[i][0], bad[i][1]);
-    }
+    static const char *const bad[][2] = {
+        {"--n", "abc"},    {"--n", "3q"},     {"--n", "11"},       {"--n", "-1"},
+        {"--n", ""},       {"--seed", "abc"}, {"--seed", "-1"},    {"--seed", "1e3"},
+        {"--x", "2"},      {"--x", "nan"},    {"--size", "10xq"},  {"--size", "10x10q"},
+        {"--size", "x10"}, {"--size", "0x10"}, {"--nope", "1"}};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
+        CHECKF(toy_parse(bad[i][0], bad[i][1], &o, &err) == ACCEL_ERR_SPEC, "%s %s accepted",
+               bad[i][0], bad[i][1]);
     char *argv[2] = {"toy", "--n"};
     CHECKF(cli_parse(toy_table, 6, 2, argv, 1, &o, &err) == ACCEL_ERR_SPEC &&
            strstr(err.msg, "needs"), "a missing value: %s", err.msg);
@@ -194,15 +181,11 @@ TEST(tools_cli_table_parses_strictly)
     FILE *f = tmpfile();
     cli_help(f, toy_table, 6);
     cli_help_exit_codes(f);
-    rewind(f);
-    char text[4096] = "";
-    size_t n = fread(text, 1, sizeof text - 1, f);
-    text[n] = 0;
-    fclose(f);
-    for (size_t i = 0; i < 6; i++) {
+    char text[4096];
+    slurp(f, text, sizeof text);
+    for (size_t i = 0; i < 6; i++)
         CHECKF(strstr(text, toy_table[i].name) && strstr(text, toy_table[i].help),
                "%s missing from the help", toy_table[i].name);
-    }
     CHECK(strstr(text, "--size WxH") != NULL);
     for (int code = 0; code <= 4; code++) {
         char line[16];
@@ -230,11 +213,8 @@ TEST(tools_csv_quotes_fields_and_keeps_one_schema)
     CHECK(csv_row(&c, "%s,%d,%s\n", "x,y", 1, "line\nbreak") == 0);
     CHECK(csv_row(&c, "%d,%d\n", 1, 2) == -1); /* two fields under a three-field header */
     CHECK(c.bad_rows == 1 && c.rows == 1 && c.columns == 3);
-    rewind(f);
-    char text[512] = "";
-    size_t len = fread(text, 1, sizeof text - 1, f);
-    text[len] = 0;
-    fclose(f);
+    char text[512];
+    slurp(f, text, sizeof text);
     csv_doc d;
     csv_read(text, &d);
     check_one_schema("csv_row", &d, 2);
@@ -267,11 +247,8 @@ TEST(tools_progress_estimates_and_reports_phases)
     bench_progress_add(p, 3);
     bench_progress_end(p);
     bench_progress_stop(p);
-    rewind(f);
-    char text[1024] = "";
-    size_t n = fread(text, 1, sizeof text - 1, f);
-    text[n] = 0;
-    fclose(f);
+    char text[1024];
+    slurp(f, text, sizeof text);
     CHECKF(strstr(text, "tool: phase one: done in") != NULL, "%s", text);
     CHECK(bench_progress_start(NULL, "tool", 0) == NULL);
     bench_progress_begin(NULL, "x", 1, 1); /* quiet: every call is a no-op */
@@ -332,6 +309,16 @@ TEST(tools_counted_pass_reports_broken_invariant)
 
 /* ---- bin/trace ------------------------------------------------------------ */
 
+/* Runs cmd: its exit status must be code, with `text` in its stderr. */
+static void expect_error(const char *cmd, int code, const char *text)
+{
+    char *err = NULL;
+    int rc = run(cmd, NULL, &err);
+    CHECKF(rc == code && err && strstr(err, text), "%s: exit %d (expected %d): %s", cmd, rc, code,
+           err ? err : "");
+    free(err);
+}
+
 #define TRACE "bin/trace --size 16x16 --repeat 1 --build-repeat 1 "
 
 TEST(tools_trace_checks_everything_before_work)
@@ -368,11 +355,8 @@ TEST(tools_trace_checks_everything_before_work)
         free(out), free(err);
     }
     /* Input errors: a file that is not there, or a directory that cannot take output. */
-    char *out = NULL;
-    CHECK(run(TRACE "--scene " DIR "/absent.off", &out, NULL) == CLI_EXIT_INPUT && out && !out[0]);
-    free(out);
-    CHECK(run(TRACE "--image /nonexistent-dir/x.png", &out, NULL) == CLI_EXIT_INPUT && out && !out[0]);
-    free(out);
+    expect_error(TRACE "--scene " DIR "/absent.off", CLI_EXIT_INPUT, "absent.off");
+    expect_error(TRACE "--image /nonexistent-dir/x.png", CLI_EXIT_INPUT, "nonexistent-dir");
 }
 
 TEST(tools_trace_refuses_silent_success)
@@ -383,26 +367,15 @@ TEST(tools_trace_refuses_silent_success)
     if (f) fputs("OFF\n0 0 0\n", f), fclose(f);
     f = fopen(DIR "/flat.off", "w");
     if (f) fputs("OFF\n3 1 0\n0 0 0\n1 1 1\n2 2 2\n3 0 1 2\n", f), fclose(f);
-    char *err = NULL;
-    int rc = run(TRACE "--scene " DIR "/empty.off", NULL, &err);
-    CHECKF(rc == CLI_EXIT_INPUT && err && strstr(err, "nothing to hit"), "empty scene: %d %s", rc,
-           err ? err : "");
-    free(err);
-    rc = run(TRACE "--scene " DIR "/flat.off", NULL, &err);
-    CHECKF(rc == CLI_EXIT_INPUT && err && strstr(err, "nothing to hit"), "degenerate scene: %d %s",
-           rc, err ? err : "");
-    free(err);
-    /* An up vector parallel to the scene's own view direction (sphereflake
-     * looks from (2.1, 1.3, 1.7) at the origin). */
-    rc = run(TRACE "--up 2.1,1.3,1.7", NULL, &err);
-    CHECKF(rc == CLI_EXIT_USAGE && err && strstr(err, "parallel"), "parallel up: %d %s", rc,
-           err ? err : "");
-    free(err);
+    expect_error(TRACE "--scene " DIR "/empty.off", CLI_EXIT_INPUT, "nothing to hit");
+    expect_error(TRACE "--scene " DIR "/flat.off", CLI_EXIT_INPUT, "nothing to hit");
+    /* Up parallel to the scene's own view (sphereflake looks from (2.1, 1.3, 1.7) at 0). */
+    expect_error(TRACE "--up 2.1,1.3,1.7", CLI_EXIT_USAGE, "parallel");
     /* .rays files carry no pixels: neither an image nor a heatmap. */
     CHECK(run(TRACE "--dump-rays " DIR "/p.rays", NULL, NULL) == 0);
-    CHECK(run(TRACE "--rays " DIR "/p.rays --image " DIR "/p.png", NULL, NULL) == CLI_EXIT_USAGE);
-    CHECK(run(TRACE "--rays " DIR "/p.rays --heatmap steps " DIR "/p.png", NULL, NULL) ==
-          CLI_EXIT_USAGE);
+    expect_error(TRACE "--rays " DIR "/p.rays --image " DIR "/p.png", CLI_EXIT_USAGE, "pixels");
+    expect_error(TRACE "--rays " DIR "/p.rays --heatmap steps " DIR "/p.png", CLI_EXIT_USAGE,
+                 "pixels");
 }
 
 /* Reads "word (a, b, c)" after `key` in text. */
@@ -423,19 +396,20 @@ TEST(tools_trace_prints_camera_and_bounds)
         free(out);
         return;
     }
-    double lo[3] = {NAN, NAN, NAN}, hi[3] = {NAN, NAN, NAN}, eye[3] = {NAN, NAN, NAN};
-    double look[3] = {NAN, NAN, NAN}, up[3] = {NAN, NAN, NAN};
+    double got[5][3]; /* bounds min, max; eye, look, up */
+    for (int k = 0; k < 15; k++) got[k / 3][k % 3] = NAN;
+    double *lo = got[0], *hi = got[1], *eye = got[2], *look = got[3], *up = got[4];
     CHECKF(read_vec(out, "bounds", lo) && read_vec(out, ") to", hi), "no bounds in: %s", out);
     const char *cam = strstr(out, "camera eye");
     CHECKF(cam && read_vec(cam, "camera eye", eye) && read_vec(cam, ") look", look) &&
            read_vec(cam, ") up", up), "no camera in: %s", out);
-    const float *want[5] = {&s.bounds.min.x, &s.bounds.max.x, &s.camera.eye.x, &s.camera.look_at.x,
-                            &s.camera.up.x};
-    double *got[5] = {lo, hi, eye, look, up};
+    vec3 want[5] = {s.bounds.min, s.bounds.max, s.camera.eye, s.camera.look_at, s.camera.up};
     for (int k = 0; k < 5; k++)
-        for (int i = 0; i < 3; i++)
-            CHECKF(fabs(got[k][i] - want[k][i]) <= 1e-5 * (1 + fabs(want[k][i])),
-                   "printed %g, scene has %g (vector %d)", got[k][i], want[k][i], k);
+        for (int i = 0; i < 3; i++) {
+            double w = i == 0 ? want[k].x : i == 1 ? want[k].y : want[k].z;
+            CHECKF(fabs(got[k][i] - w) <= 1e-5 * (1 + fabs(w)), "printed %g, scene has %g "
+                   "(vector %d)", got[k][i], w, k);
+        }
     const char *fov = strstr(out, "fov");
     CHECK(fov && fabs(atof(fov + 3) - s.camera.fov_deg) < 1e-4);
     free(out);
@@ -572,8 +546,7 @@ static void check_experiment_csv(const char *exp, const char *spec_with_comma)
 {
     char cmd[256], path[256];
     snprintf(cmd, sizeof cmd, "bin/%s --quick --quiet --out " DIR "/exp", exp);
-    int rc = run(cmd, NULL, NULL);
-    CHECKF(rc == 0, "%s exited %d", exp, rc);
+    CHECKF(run(cmd, NULL, NULL) == 0, "%s failed", exp);
     snprintf(path, sizeof path, DIR "/exp/%s.csv", exp);
     char *text = read_file(path);
     CHECKF(text != NULL, "%s not written", path);
@@ -594,12 +567,10 @@ TEST(tools_experiments_write_rfc4180_csv)
 {
     check_experiment_csv("exp_binning", "bvh:build=binned,bins=16,axes=3");
     check_experiment_csv("exp_stability", NULL);
-    char *err = NULL;
-    CHECK(run("bin/exp_sah --quick --out " DIR "/exp --repeat 3q", NULL, &err) == CLI_EXIT_USAGE);
-    free(err);
-    CHECK(run("bin/exp_sah --quick --out " DIR "/exp --size 64x", NULL, NULL) == CLI_EXIT_USAGE);
-    CHECK(run("bin/exp_sah --quick --out " DIR "/exp --mesh " DIR "/absent.off", NULL, NULL) ==
-          CLI_EXIT_INPUT);
+    expect_error("bin/exp_sah --quick --out " DIR "/exp --repeat 3q", CLI_EXIT_USAGE, "--repeat");
+    expect_error("bin/exp_sah --quick --out " DIR "/exp --size 64x", CLI_EXIT_USAGE, "--size");
+    expect_error("bin/exp_sah --quick --out " DIR "/exp --mesh " DIR "/absent.off", CLI_EXIT_INPUT,
+                 "absent.off");
 }
 
 /* exp_threads measures 1..N threads for --threads N (default: every core). */

@@ -272,6 +272,7 @@ static int set_camera(const options *o, run *r, accel_error *err)
 {
     accel_camera *c = &r->cam;
     *c = r->scene.camera;
+    if (r->from_file) return 0; /* a .rays file brings its own rays: no view to make */
     if (o->eye.given) c->eye = o->eye.v;
     if (o->look.given) c->look_at = o->look.v;
     if (o->up.given) c->up = o->up.v;
@@ -283,7 +284,7 @@ static int set_camera(const options *o, run *r, accel_error *err)
         return rc;
     }
     FILE *info = o->csv ? (o->quiet ? NULL : stderr) : stdout;
-    if (info && !r->from_file)
+    if (info)
         fprintf(info, "  camera eye (%.6g, %.6g, %.6g) look (%.6g, %.6g, %.6g) up (%.6g, %.6g, "
                 "%.6g) fov %.6g deg, %dx%d\n", c->eye.x, c->eye.y, c->eye.z, c->look_at.x,
                 c->look_at.y, c->look_at.z, c->up.x, c->up.y, c->up.z, c->fov_deg, o->size[0],
