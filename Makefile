@@ -19,6 +19,10 @@ BIN     ?= bin
 # The library's sources and the backend discovery rule (shared with tests/fuzz).
 ROOT :=
 include sources.mk
+ifdef LAB
+LIB_SRC     += lab/student.c
+BASE_CFLAGS += -DGRIDBVH_LAB
+endif
 LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/%.o)
 LIB      := $(BUILD)/libgridbvh.a
 # Header dependencies come from the compiler (-MMD -MP, the .d files); a
@@ -29,9 +33,11 @@ FLAGS_STAMP := $(BUILD)/.flags
 TOOLS    := $(patsubst tools/%.c,$(BIN)/%,$(wildcard tools/*.c))
 EXP_LIB  := $(filter-out experiments/exp_%.c,$(wildcard experiments/*.c))
 EXP_BINS := $(patsubst experiments/%.c,$(BIN)/%,$(wildcard experiments/exp_*.c))
-TEST_SRC := $(wildcard tests/*.c)
+# The lab's checks and its untouched starter kind are part of the tests
+# (tests/test_lab.c: every check passes on the project and fails on the starter).
+TEST_SRC := $(wildcard tests/*.c) lab/check.c lab/starter.c
 
-.PHONY: all test report sanitize fuzz clean bench FORCE
+.PHONY: all test report sanitize fuzz clean bench lab FORCE
 all: $(TOOLS) $(EXP_BINS) $(BIN)/run_tests
 
 $(FLAGS_STAMP): FORCE
@@ -56,6 +62,10 @@ $(BIN)/%: $(BUILD)/tools/%.o $(LIB)
 $(BIN)/exp_%: $(BUILD)/experiments/exp_%.o $(EXP_OBJ) $(LIB)
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $< $(EXP_OBJ) $(LIB) -o $@ $(LDLIBS)
+
+$(BIN)/lab: $(BUILD)/lab/lab.o $(BUILD)/lab/check.o $(LIB)
+	@mkdir -p $(BIN)
+	$(CC) $(ALL_CFLAGS) $^ -o $@ $(LDLIBS)
 
 $(BIN)/run_tests: $(TEST_OBJ) $(LIB)
 	@mkdir -p $(BIN)
@@ -84,5 +94,16 @@ sanitize:
 fuzz:
 	$(MAKE) -C tests/fuzz
 
+# The lab (LAB.md): the student's kind, lab/student.c, made from the starter
+# on first use and registered only in this build (build-lab/, bin-lab/).
+# make lab STEP=n runs step n's check on it.
+lab:
+	@test -f lab/student.c || { sed -e 's/accel_kind_starter/accel_kind_student/' \
+	  -e 's/"starter"/"student"/' -e 's@^ \* starter.c - @ * student.c - @' lab/starter.c > lab/student.c && \
+	  echo "lab: made lab/student.c from lab/starter.c: your kind is 'student'"; }
+	$(MAKE) BUILD=build-lab BIN=bin-lab LAB=1 bin-lab/lab bin-lab/trace
+	@if [ -n "$(STEP)" ]; then ./bin-lab/lab --step $(STEP) --out lab/out; \
+	 else echo "lab: built bin-lab/trace with your kind 'student'; make lab STEP=1..5 checks a step"; fi
+
 clean:
-	rm -rf build build-san bin bin-san
+	rm -rf build build-san bin bin-san build-lab bin-lab

@@ -104,6 +104,34 @@ typedef struct accel_scene {
 box3 accel_prim_bounds(const accel_scene *s, uint32_t prim);
 vec3 accel_prim_centroid(const accel_scene *s, uint32_t prim);
 
+/* ---- the primitive store: what every kind builds over --------------------
+ *
+ * Ownership rule, the same for every kind: a kind's build copies what it
+ * traverses. When build returns, the built structure owns all it reads; the
+ * caller's scene may be changed or freed at once, and the structure lives
+ * until kind->destroy. Nothing a kind returns points into the scene.
+ *
+ * Every kind starts from the same copy, an accel_prim_store: the scene's
+ * live primitives (degenerate triangles left out), triangles first and then
+ * spheres, each group in Morton order of the centroids (the common
+ * parameter reorder=1, the default for every kind) or in scene order
+ * (reorder=0). Its `prims` is itself a scene in which every primitive is
+ * live (live[i] == i), so a kind builds and traverses over local ids and
+ * maps a hit back with scene_id[] once per ray. A kind may keep the store
+ * (grid, nested_grid, brute) or copy it once more into its own layout and
+ * free it (bvh: 9-float slots in leaf order); each backend README says what
+ * it keeps. */
+typedef struct {
+    accel_scene prims;  /* local ids: 0..tri_count-1 triangles, then spheres; all live */
+    uint32_t *scene_id; /* local id -> the scene's primitive id */
+} accel_prim_store;
+
+int accel_prim_store_build(const accel_scene *scene, int reorder, accel_prim_store *out,
+                           accel_error *err);
+void accel_prim_store_free(accel_prim_store *st);
+/* Bytes held by the store (primitives, live list, id map). */
+size_t accel_prim_store_bytes(const accel_prim_store *st);
+
 /* ---- counters ----------------------------------------------------------- */
 
 /* Traversal statistics summed over the rays of a batch. Which fields a kind
@@ -118,6 +146,7 @@ typedef struct {
     uint64_t mailbox_skips; /* primitive tests avoided by mailboxing */
     uint64_t level_steps[4];/* nested grids: steps per level (0 = top) */
     uint64_t packet_box_tests; /* packets: box tests done for whole packets */
+    uint64_t packet_steps;     /* packets: nodes / cells fetched once for a whole packet */
     /* Broken invariants seen by a counted run (a traversal over its step
      * bound, see core/variant.h): how many rays, and where the first was. */
     uint64_t broken;
@@ -133,37 +162,12 @@ typedef struct {
 /* Compiling with -DACCEL_COUNTERS=0 removes every counter statement: the
  * reference build against which `make bench` shows that the counter-free
  * kernel copies (counters == NULL) of a normal build run at the same speed.
- * Every batch entry starts with `counters = ACCEL_COUNTERS_ON(counters);`. */
+ * accel_run_kernel (core/variant.h) applies it: the one place counters are
+ * switched off. */
 #ifndef ACCEL_COUNTERS
 #define ACCEL_COUNTERS 1
 #endif
 #define ACCEL_COUNTERS_ON(c) (ACCEL_COUNTERS ? (c) : (accel_counters *)NULL)
-
-/* Picks a kernel copy once per batch. K is a function-like macro
- * K(counters, naive, spheres, mailbox) calling the always-inline kernel:
- * counted runs take the flags at run time (one copy), uncounted runs get
- * one copy per constant combination, with no counting code in any of them.
- * Applies ACCEL_COUNTERS_ON itself, so every user honours ACCEL_COUNTERS=0. */
-#define ACCEL_DISPATCH(K, c, naive, spheres, mailbox)                                     \
-    do {                                                                                  \
-        accel_counters *c_ = ACCEL_COUNTERS_ON(c);                                        \
-        int nv_ = (naive) != 0, sp_ = (spheres) != 0, mb_ = (mailbox) != 0;              \
-        if (c_) {                                                                         \
-            K(c_, nv_, sp_, mb_);                                                         \
-        } else if (mb_) {                                                                 \
-            if (nv_) {                                                                    \
-                if (sp_) K(NULL, 1, 1, 1); else K(NULL, 1, 0, 1);                         \
-            } else {                                                                      \
-                if (sp_) K(NULL, 0, 1, 1); else K(NULL, 0, 0, 1);                         \
-            }                                                                             \
-        } else {                                                                          \
-            if (nv_) {                                                                    \
-                if (sp_) K(NULL, 1, 1, 0); else K(NULL, 1, 0, 0);                         \
-            } else {                                                                      \
-                if (sp_) K(NULL, 0, 1, 0); else K(NULL, 0, 0, 0);                         \
-            }                                                                             \
-        }                                                                                 \
-    } while (0)
 
 /* Adds b's totals into a (not the per-ray arrays). */
 void accel_counters_add(accel_counters *a, const accel_counters *b);
@@ -204,6 +208,7 @@ typedef struct {
     unsigned char given[ACCEL_MAX_PARAMS];
     char spec[256];                     /* canonical "kind:key=value,..." of the given keys */
     int naive;                          /* common parameter tri=naive (Moller-Trumbore) */
+    int reorder;                        /* common parameter reorder: Morton-ordered store */
 } accel_params;
 
 /* Parameters every kind accepts, handled by the parser itself. */
@@ -222,6 +227,10 @@ void accel_params_help(const accel_param_def *defs, size_t n, char *buf, size_t 
  * bad numbers and out-of-range values fail with a message that lists what
  * is accepted. */
 int accel_params_parse(const char *spec, accel_params *out, accel_error *err);
+/* The same for a kind given directly (registered or not, e.g. the lab's
+ * starter kind): kv is the part after "name:". */
+int accel_params_parse_kind(const struct accel_kind *kind, const char *kv, accel_params *out,
+                            accel_error *err);
 /* Lookups by key; the key must be one of the kind's parameters (asserted). */
 double accel_param_num(const accel_params *p, const char *key);
 const char *accel_param_str(const accel_params *p, const char *key);
@@ -271,10 +280,17 @@ const accel_kind *accel_find_kind(const char *name);
 int accel_build_spec(const char *spec, const accel_scene *scene, int threads,
                      const accel_kind **kind_out, void **accel_out, accel_build_stats *stats,
                      accel_error *err);
+/* The same for a kind given directly; kv is the part after "name:". */
+int accel_build_kind(const accel_kind *kind, const char *kv, const accel_scene *scene,
+                     int threads, void **accel_out, accel_build_stats *stats, accel_error *err);
 
-/* Traces count rays with `threads` threads, in chunks of ACCEL_CHUNK rays
- * (a multiple of 64 so that 8x8 packets stay whole). counters may be NULL. */
+/* Traces count rays with `threads` threads, in chunks of
+ * accel_trace_chunk(count, threads) rays: a multiple of 64 so that 8x8
+ * packets stay whole, at most ACCEL_CHUNK, about 16 per thread. counters may
+ * be NULL; a counted run records broken invariants in them
+ * (accel_counters_status). */
 #define ACCEL_CHUNK 4096
+size_t accel_trace_chunk(size_t count, int threads);
 void accel_trace(const accel_kind *kind, const void *accel, const accel_ray *rays, accel_hit *hits,
                  size_t count, int threads, accel_counters *counters);
 void accel_trace_occluded(const accel_kind *kind, const void *accel, const accel_ray *rays,
@@ -302,13 +318,5 @@ void accel_reference_trace(const accel_scene *scene, const accel_ray *rays, acce
 double accel_now_ms(void);
 /* Number of usable cores. */
 int accel_cpu_count(void);
-
-/* Aborts with a message naming the step bound: used by every traversal loop
- * so that a bug turns an endless loop into a reported error. */
-#define ACCEL_STEP_BOUND_CHECK(steps, bound)                                                 \
-    do {                                                                                     \
-        if ((steps) > (bound)) accel_step_bound_exceeded(__FILE__, __LINE__, (uint64_t)(bound)); \
-    } while (0)
-void accel_step_bound_exceeded(const char *file, int line, uint64_t bound) __attribute__((noreturn));
 
 #endif

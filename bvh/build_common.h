@@ -43,6 +43,7 @@ typedef struct {
     int axes;      /* binned: 1 (largest centroid extent) or 3 */
     int max_leaf;  /* most primitives a leaf may hold */
     float ct, ci;  /* SAH: cost of a node visit and of a primitive test (one unit) */
+    int reorder;       /* common parameter: Morton-ordered primitive store */
 } bvh_build_opts;
 
 /* A node to build: its place in the temporary pool and its references. */

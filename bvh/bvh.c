@@ -42,6 +42,7 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
     o->max_leaf = (int)accel_param_num(p, "leaf");
     o->ct = (float)accel_param_num(p, "ct");
     o->ci = (float)accel_param_num(p, "ci");
+    o->reorder = p->reorder;
     *traverse = (int)accel_param_num(p, "traverse");
     *frustum = (int)accel_param_num(p, "frustum");
     /* Options that would be silently ignored are errors. */

@@ -100,7 +100,8 @@ static uint32_t compact_nodes(bvh_node *nodes, int *depth, uint64_t *leaves)
 }
 
 typedef struct {
-    const accel_scene *scene;
+    const accel_scene *scene; /* the store's primitives: local ids */
+    const uint32_t *scene_id; /* local id -> scene id */
     const bvh_ref *refs;
     bvh *out;
 } gather_job;
@@ -114,7 +115,7 @@ static void gather_chunk(void *p, size_t begin, size_t end, int thread)
     for (size_t i = begin; i < end; i++) {
         uint32_t prim = j->refs[i].prim;
         float *dst = j->out->prim_data + BVH_SLOT_FLOATS * i;
-        j->out->prim_ids[i] = prim;
+        j->out->prim_ids[i] = j->scene_id[prim];
         if (prim < s->tri_count) {
             memcpy(dst, s->tris + 9 * (size_t)prim, 9 * sizeof(float));
         } else {
@@ -134,12 +135,11 @@ void bvh_release(bvh *b)
     b->prim_ids = NULL;
 }
 
-int bvh_build_run(const accel_scene *scene, const bvh_build_opts *opts, int threads, bvh *out,
-                  accel_build_stats *stats, accel_error *err)
+/* Builds over the primitive store's scene (local ids, all live). */
+static int build_over(const accel_prim_store *st, const bvh_build_opts *opts, int threads,
+                      bvh *out, accel_build_stats *stats, accel_error *err)
 {
-    memset(out, 0, sizeof *out);
-    out->tri_count = scene->tri_count;
-    out->has_spheres = scene->sphere_count > 0;
+    const accel_scene *scene = &st->prims;
     uint32_t live = scene->live_count;
     /* Node indices are uint32 and the temporary pool holds 2N nodes. */
     if (live > 0x7FFFFFFFu)
@@ -194,7 +194,7 @@ int bvh_build_run(const accel_scene *scene, const bvh_build_opts *opts, int thre
             rc = accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for the final pools");
         } else {
             out->prim_count = ctx.ref_count;
-            gather_job job = {scene, ctx.refs, out};
+            gather_job job = {scene, st->scene_id, ctx.refs, out};
             accel_parallel_for(ctx.ref_count, 16384, ctx.threads, gather_chunk, &job);
         }
     }
@@ -208,5 +208,23 @@ int bvh_build_run(const accel_scene *scene, const bvh_build_opts *opts, int thre
     stats->refs = out->prim_count;
     stats->depth = out->depth;
     stats->sah_cost = bvh_sah_cost(out->nodes, out->node_count, opts->ct, opts->ci);
+    return 0;
+}
+
+int bvh_build_run(const accel_scene *scene, const bvh_build_opts *opts, int threads, bvh *out,
+                  accel_build_stats *stats, accel_error *err)
+{
+    memset(out, 0, sizeof *out);
+    /* The builders work on the primitive store (accel.h); the gather pass
+     * maps its local ids back, and the tree keeps its own leaf-order copy of
+     * the primitives, so the store is freed here. */
+    accel_prim_store store;
+    int rc = accel_prim_store_build(scene, opts->reorder, &store, err);
+    if (rc) return rc;
+    rc = build_over(&store, opts, threads, out, stats, err);
+    accel_prim_store_free(&store);
+    if (rc) return rc;
+    out->tri_count = scene->tri_count;
+    out->has_spheres = scene->sphere_count > 0;
     return 0;
 }

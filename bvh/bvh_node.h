@@ -32,6 +32,7 @@
 #include <stdint.h>
 
 #include "core/prim.h"
+#include "core/variant.h"
 
 typedef struct {
     float bmin[3];
@@ -168,6 +169,14 @@ static inline box3 bvh_node_box(const bvh_node *n)
 {
     box3 b = {{n->bmin[0], n->bmin[1], n->bmin[2]}, {n->bmax[0], n->bmax[1], n->bmax[2]}};
     return b;
+}
+
+/* The kernel-variant flags of a built tree (core/variant.h); ACCEL_V_OPT is
+ * the packet frustum. */
+static inline unsigned bvh_variant_flags(const bvh *b)
+{
+    return (b->naive ? ACCEL_V_NAIVE : 0u) | (b->has_spheres ? ACCEL_V_SPHERES : 0u) |
+           (b->frustum ? ACCEL_V_OPT : 0u);
 }
 
 /* Kernels in bvh_single.c (single rays) and bvh_packet.c (64-ray packets). */

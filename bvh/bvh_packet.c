@@ -303,7 +303,7 @@ trace_packet(const bvh *b, packet *pk, accel_counters *c, uint32_t *ray_steps,
         }
         if (f == n) goto pop;
         visits++;
-        ACCEL_STEP_BOUND_CHECK(visits, b->node_count);
+        if (ACCEL_STEP_BOUND_BROKEN(c, visits, b->node_count)) goto out;
         if (c) {
             steps += n - f;
             step_diff[f]++;
@@ -372,6 +372,7 @@ out:
         c->box_tests += boxes;
         c->prim_tests += prims;
         c->packet_box_tests += packet_boxes;
+        c->packet_steps += visits;
         if (ray_steps) {
             int32_t run = 0;
             for (uint32_t i = 0; i < n; i++) {
@@ -407,30 +408,33 @@ packet_batch(const bvh *b, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
     }
 }
 
-#define PACKET_DISPATCH(b, rays, hits, occ, n, c, any_hit)                                      \
-    do {                                                                                        \
-        if (c)                                                                                  \
-            packet_batch(b, rays, hits, occ, n, c, (b)->naive, (b)->has_spheres, any_hit,       \
-                         (b)->frustum);                                                         \
-        else if ((b)->naive)                                                                    \
-            packet_batch(b, rays, hits, occ, n, NULL, 1, (b)->has_spheres, any_hit,             \
-                         (b)->frustum);                                                         \
-        else if ((b)->has_spheres)                                                              \
-            packet_batch(b, rays, hits, occ, n, NULL, 0, 1, any_hit, (b)->frustum);             \
-        else if ((b)->frustum)                                                                  \
-            packet_batch(b, rays, hits, occ, n, NULL, 0, 0, any_hit, 1);                        \
-        else                                                                                    \
-            packet_batch(b, rays, hits, occ, n, NULL, 0, 0, any_hit, 0);                        \
-    } while (0)
+static inline __attribute__((always_inline)) void
+packet_hit_kernel(const void *a, const accel_ray *rays, void *out, size_t count,
+                  accel_counters *c, unsigned f)
+{
+    packet_batch(a, rays, out, NULL, count, c, (f & ACCEL_V_NAIVE) != 0,
+                 (f & ACCEL_V_SPHERES) != 0, 0, (f & ACCEL_V_OPT) != 0);
+}
+
+static inline __attribute__((always_inline)) void
+packet_occ_kernel(const void *a, const accel_ray *rays, void *out, size_t count,
+                  accel_counters *c, unsigned f)
+{
+    packet_batch(a, rays, NULL, out, count, c, (f & ACCEL_V_NAIVE) != 0,
+                 (f & ACCEL_V_SPHERES) != 0, 1, (f & ACCEL_V_OPT) != 0);
+}
+
+ACCEL_KERNEL_TABLE(packet_hit_table, packet_hit_kernel)
+ACCEL_KERNEL_TABLE(packet_occ_table, packet_occ_kernel)
 
 void bvh_packet_intersect(const bvh *b, const accel_ray *rays, accel_hit *hits, size_t count,
                           accel_counters *c)
 {
-    PACKET_DISPATCH(b, rays, hits, (uint8_t *)NULL, count, c, 0);
+    accel_run_kernel(&packet_hit_table, b, rays, hits, count, c, bvh_variant_flags(b));
 }
 
 void bvh_packet_occluded(const bvh *b, const accel_ray *rays, uint8_t *occ, size_t count,
                          accel_counters *c)
 {
-    PACKET_DISPATCH(b, rays, (accel_hit *)NULL, occ, count, c, 1);
+    accel_run_kernel(&packet_occ_table, b, rays, occ, count, c, bvh_variant_flags(b));
 }

@@ -10,13 +10,13 @@
  * test is bvh_slab (Ize 2013, see bvh_node.h).
  *
  * Counters follow STYLE.md: the kernel is written once as an always-inline
- * function, and the batch entries call it with a literal NULL counters
- * pointer and constant flags, so the timed copies contain no counting code.
- * The step count is kept in every copy because it feeds the step bound
- * check: a ray visits each node at most once, so more steps than nodes
- * means a broken tree or loop.
+ * function and compiled into one variant table per query (core/variant.h),
+ * so the timed copies contain no counting code. Counted runs check the step
+ * bound: a ray visits each node at most once, so more steps than nodes means
+ * a broken tree or loop.
  */
 #include "bvh_node.h"
+#include "core/variant.h"
 
 typedef struct {
     uint32_t node;
@@ -42,7 +42,7 @@ trace_ray(const bvh *b, const accel_ray *ray, accel_hit *hit_out, uint8_t *occ_o
         const bvh_node *node = bvh_slab(&nodes[0], &r, p.t_near, t, &t_entry) ? &nodes[0] : NULL;
         while (node) {
             steps++;
-            ACCEL_STEP_BOUND_CHECK(steps, b->node_count);
+            if (ACCEL_STEP_BOUND_BROKEN(c, steps, b->node_count)) break;
             if (node->count) {
                 /* Leaf: its primitives are one contiguous run of slots. */
                 uint32_t end = node->left_first + node->count;
@@ -111,28 +111,33 @@ trace_batch(const bvh *b, const accel_ray *rays, accel_hit *hits, uint8_t *occ, 
         trace_ray(b, &rays[i], hits, occ, c, i, naive, has_spheres, any_hit);
 }
 
-/* The counted copy takes the flags at run time; the timed copies are
- * specialized on them. */
-#define TRACE_DISPATCH(b, rays, hits, occ, n, c, any_hit)                                   \
-    do {                                                                                    \
-        if (c)                                                                              \
-            trace_batch(b, rays, hits, occ, n, c, (b)->naive, (b)->has_spheres, any_hit);   \
-        else if ((b)->naive)                                                                \
-            trace_batch(b, rays, hits, occ, n, NULL, 1, (b)->has_spheres, any_hit);         \
-        else if ((b)->has_spheres)                                                          \
-            trace_batch(b, rays, hits, occ, n, NULL, 0, 1, any_hit);                        \
-        else                                                                                \
-            trace_batch(b, rays, hits, occ, n, NULL, 0, 0, any_hit);                        \
-    } while (0)
+static inline __attribute__((always_inline)) void
+single_hit_kernel(const void *a, const accel_ray *rays, void *out, size_t count,
+                  accel_counters *c, unsigned f)
+{
+    trace_batch(a, rays, out, NULL, count, c, (f & ACCEL_V_NAIVE) != 0,
+                (f & ACCEL_V_SPHERES) != 0, 0);
+}
+
+static inline __attribute__((always_inline)) void
+single_occ_kernel(const void *a, const accel_ray *rays, void *out, size_t count,
+                  accel_counters *c, unsigned f)
+{
+    trace_batch(a, rays, NULL, out, count, c, (f & ACCEL_V_NAIVE) != 0,
+                (f & ACCEL_V_SPHERES) != 0, 1);
+}
+
+ACCEL_KERNEL_TABLE(single_hit_table, single_hit_kernel)
+ACCEL_KERNEL_TABLE(single_occ_table, single_occ_kernel)
 
 void bvh_trace_intersect(const bvh *b, const accel_ray *rays, accel_hit *hits, size_t count,
                          accel_counters *c)
 {
-    TRACE_DISPATCH(b, rays, hits, (uint8_t *)NULL, count, c, 0);
+    accel_run_kernel(&single_hit_table, b, rays, hits, count, c, bvh_variant_flags(b));
 }
 
 void bvh_trace_occluded(const bvh *b, const accel_ray *rays, uint8_t *occ, size_t count,
                         accel_counters *c)
 {
-    TRACE_DISPATCH(b, rays, (accel_hit *)NULL, occ, count, c, 1);
+    accel_run_kernel(&single_occ_table, b, rays, occ, count, c, bvh_variant_flags(b));
 }

@@ -64,11 +64,13 @@ int main(int argc, char **argv)
     exp_md(&x, "## Thread scaling (exp_threads)\n\n"
                "**Question:** how do build and trace times scale from 1 to %d threads (%s)? "
                "Scene `%s` (%u primitives), %dx%d primary rays and one diffuse "
-               "bounce; rays are handed out in chunks of %d from a shared counter.\n\n"
+               "bounce; rays are handed out from a shared counter in chunks of about 1/16 of a "
+               "thread's share (%zu primary rays per chunk at %d threads, at most %d).\n\n"
                "**Lecture's claim:** \"near-linear scaling in cores, and about +20%% from "
                "hyper-threading\".\n",
                max_threads, x.threads_given ? "the --threads limit" : "this machine's cores",
-               s.name, s.live_count, x.size, x.size, ACCEL_CHUNK);
+               s.name, s.live_count, x.size, x.size,
+               accel_trace_chunk((size_t)x.size * x.size, max_threads), max_threads, ACCEL_CHUNK);
     exp_csv(&x, "kind,threads,build_ms,build_ms_min,build_ms_max,primary_mrays,primary_min,"
                 "primary_max,diffuse_mrays,diffuse_min,diffuse_max\n");
     exp_md_table(&x, "kind|threads|build ms|build speed-up|primary Mrays/s|speed-up|efficiency|"

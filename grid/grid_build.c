@@ -24,8 +24,6 @@ static const accel_param_def grid_params[] = {
      "cell membership: exact primitive/box overlap, or bounding box only"},
     {"mailbox", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
      "test a primitive spanning several cells once per ray (16-entry per-ray cache)"},
-    {"reorder", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
-     "copy the primitives in Morton order of their centroids (0: scene order)"},
     {"max_mb", ACCEL_PARAM_FLOAT, "4096", 1.0, 1048576.0, NULL,
      "memory limit for cell offsets + references, MiB: larger grids are refused"},
 };
@@ -36,9 +34,7 @@ static void grid_destroy(void *a)
     if (!g) return;
     grid_cells_free(&g->cells);
     free(g->planes);
-    free(g->local.tris);
-    free(g->local.spheres);
-    free(g->prim_id);
+    accel_prim_store_free(&g->store);
     free(g);
 }
 
@@ -47,97 +43,7 @@ static size_t grid_memory(const void *a)
     const grid_accel *g = a;
     return sizeof *g + (size_t)(g->cells.cell_count + 1) * sizeof(uint32_t) +
            (size_t)g->cells.ref_count * sizeof(uint32_t) +
-           grid_plane_count(g->frame.res) * sizeof(float) +
-           (size_t)g->local.tri_count * 9 * sizeof(float) +
-           (size_t)g->local.sphere_count * 4 * sizeof(float) +
-           (size_t)g->local.prim_count * sizeof(uint32_t);
-}
-
-/* Spreads the low 10 bits of x to every third bit (bit i -> bit 3i). */
-static uint32_t spread_bits(uint32_t x)
-{
-    x &= 0x3FF;
-    x = (x | (x << 16)) & 0x030000FF;
-    x = (x | (x << 8)) & 0x0300F00F;
-    x = (x | (x << 4)) & 0x030C30C3;
-    x = (x | (x << 2)) & 0x09249249;
-    return x;
-}
-
-/* 30-bit Morton code of a point quantized to 1024 steps per axis of box. */
-static uint32_t morton_of(vec3 p, box3 box)
-{
-    const float c[3] = {p.x, p.y, p.z};
-    const float lo[3] = {box.min.x, box.min.y, box.min.z};
-    const float hi[3] = {box.max.x, box.max.y, box.max.z};
-    uint32_t q[3];
-    for (int a = 0; a < 3; a++) {
-        float x = (c[a] - lo[a]) / (hi[a] - lo[a]) * 1024.0f;
-        q[a] = !(x > 0.0f) ? 0 : (x >= 1023.0f ? 1023 : (uint32_t)x);
-    }
-    return spread_bits(q[0]) | (spread_bits(q[1]) << 1) | (spread_bits(q[2]) << 2);
-}
-
-/* Stable LSD radix sort of n items (key in the high 32 bits, payload low)
- * by their 30-bit keys, in three passes of 10 bits; tmp holds n items. */
-static void sort_by_key(uint64_t *v, uint64_t *tmp, size_t n)
-{
-    for (int shift = 32; shift < 62; shift += 10) {
-        size_t count[1025] = {0};
-        for (size_t i = 0; i < n; i++) count[((v[i] >> shift) & 1023) + 1]++;
-        for (int b = 0; b < 1024; b++) count[b + 1] += count[b];
-        for (size_t i = 0; i < n; i++) tmp[count[(v[i] >> shift) & 1023]++] = v[i];
-        memcpy(v, tmp, n * sizeof *v);
-    }
-}
-
-/*
- * Copies the live primitives into g->local (triangles first, then spheres,
- * each group in Morton order of the centroids when `reorder`) and fills
- * g->prim_id. Traversal then reads triangles that are neighbours in space
- * from neighbouring memory, whatever the scene's file order.
- */
-static int make_local(grid_accel *g, const accel_scene *scene, box3 box, int reorder,
-                      accel_error *err)
-{
-    uint32_t n = scene->live_count, tris = 0;
-    while (tris < n && scene->live[tris] < scene->tri_count) tris++; /* live is increasing */
-    accel_scene *l = &g->local;
-    l->tri_count = tris;
-    l->sphere_count = n - tris;
-    l->prim_count = n;
-    l->bounds = scene->bounds;
-    l->tris = malloc(((size_t)tris * 9 + 1) * sizeof *l->tris);
-    l->spheres = malloc(((size_t)(n - tris) * 4 + 1) * sizeof *l->spheres);
-    g->prim_id = malloc(((size_t)n + 1) * sizeof *g->prim_id);
-    uint64_t *order = malloc(((size_t)n + 1) * sizeof *order);
-    uint64_t *tmp = reorder ? malloc(((size_t)n + 1) * sizeof *tmp) : NULL;
-    if (!l->tris || !l->spheres || !g->prim_id || !order || (reorder && !tmp)) {
-        free(order);
-        free(tmp);
-        return accel_fail(err, ACCEL_ERR_NOMEM, "grid: out of memory copying %u primitives", n);
-    }
-    for (uint32_t k = 0; k < n; k++) {
-        uint32_t prim = scene->live[k];
-        uint64_t key = reorder ? morton_of(accel_prim_centroid(scene, prim), box) : 0;
-        order[k] = key << 32 | prim;
-    }
-    if (reorder) {
-        sort_by_key(order, tmp, tris);
-        sort_by_key(order + tris, tmp, n - tris);
-    }
-    for (uint32_t k = 0; k < n; k++) {
-        uint32_t prim = (uint32_t)order[k];
-        g->prim_id[k] = prim;
-        if (k < tris)
-            memcpy(l->tris + 9 * (size_t)k, scene->tris + 9 * (size_t)prim, 9 * sizeof(float));
-        else
-            memcpy(l->spheres + 4 * (size_t)(k - tris),
-                   scene->spheres + 4 * (size_t)(prim - scene->tri_count), 4 * sizeof(float));
-    }
-    free(order);
-    free(tmp);
-    return ACCEL_OK;
+           grid_plane_count(g->frame.res) * sizeof(float) + accel_prim_store_bytes(&g->store);
 }
 
 static int grid_build(const accel_scene *scene, const accel_params *params, int threads,
@@ -166,14 +72,14 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
         return accel_fail(err, ACCEL_ERR_NOMEM, "grid: out of memory for plane tables");
     }
     grid_frame_init(&g->frame, box, res, g->planes);
-    rc = make_local(g, scene, box, accel_param_num(params, "reorder") != 0.0, err);
+    rc = accel_prim_store_build(scene, params->reorder, &g->store, err);
     if (rc) {
         grid_destroy(g);
         return rc;
     }
     grid_overlap mode = (int)accel_param_num(params, "overlap") == 1 ? GRID_OVERLAP_BBOX
                                                                       : GRID_OVERLAP_EXACT;
-    rc = grid_cells_build(&g->frame, &g->local, NULL, g->local.prim_count, mode, threads,
+    rc = grid_cells_build(&g->frame, &g->store.prims, NULL, g->store.prims.prim_count, mode, threads,
                           max_bytes, &g->cells, err);
     if (rc) {
         grid_destroy(g);
@@ -199,8 +105,8 @@ void grid_get_view(const void *accel, grid_view *v)
     v->frame = &g->frame;
     v->offsets = g->cells.offsets;
     v->refs = g->cells.refs;
-    v->prim_id = g->prim_id;
-    v->prim_count = g->local.prim_count;
+    v->prim_id = g->store.scene_id;
+    v->prim_count = g->store.prims.prim_count;
     v->cell_count = g->cells.cell_count;
     v->ref_count = g->cells.ref_count;
 }

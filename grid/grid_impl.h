@@ -8,12 +8,10 @@
 #include "grid.h"
 
 typedef struct {
-    /* The live primitives, copied in the order of the Morton code of their
-     * centroids (or in scene order with reorder=0): local ids 0..T-1 are
-     * triangles, T..T+S-1 spheres, so that accel_prim_hit works on `local`
-     * unchanged. Cells hold local ids; prim_id maps them back. */
-    accel_scene local;
-    uint32_t *prim_id;
+    /* The primitive store (accel.h): the live primitives copied in Morton
+     * order (reorder=1) or scene order; cells hold local ids, and
+     * store.scene_id maps a hit back. */
+    accel_prim_store store;
     grid_frame frame;
     grid_cells cells;
     float *planes;      /* storage behind frame.planes */

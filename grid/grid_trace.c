@@ -17,13 +17,14 @@
  * several consecutive cells is found in it and skipped; a collision only
  * costs a repeated test, never a wrong answer.
  *
- * Kernels are written once (grid_kernel) and instantiated with constant
- * flags by the batch entries: counters, spheres, naive triangles, mailbox,
- * closest-hit or any-hit. The uncounted copies contain no counting code and
- * no step-bound check; counted runs check the bound nx+ny+nz+3 cells.
+ * Kernels are written once (grid_kernel) and compiled into one variant
+ * table per query (core/variant.h): spheres, naive triangles and mailbox
+ * (ACCEL_V_OPT) as constants. The uncounted copies contain no counting code
+ * and no step-bound check; counted runs check the bound nx+ny+nz+3 cells.
  */
 #include <string.h>
 
+#include "core/variant.h"
 #include "grid_impl.h"
 
 /* Entries of the per-ray mailbox (power of two). */
@@ -33,7 +34,7 @@ static inline __attribute__((always_inline)) void
 grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
             size_t count, accel_counters *c, int naive, int spheres, int mailbox)
 {
-    const accel_scene *s = &g->local;
+    const accel_scene *s = &g->store.prims;
     const grid_frame *f = &g->frame;
     const uint32_t *offsets = g->cells.offsets;
     const uint32_t *refs = g->cells.refs;
@@ -57,10 +58,8 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
             float t = p.t_far, u = 0.0f, v = 0.0f;
             /* Walk the ray through the cells. */
             for (;;) {
-                if (c) {
-                    steps++;
-                    ACCEL_STEP_BOUND_CHECK(steps, bound);
-                }
+                if (c) steps++;
+                if (ACCEL_STEP_BOUND_BROKEN(c, steps, bound)) break;
                 uint32_t k = offsets[d.cell], end = offsets[d.cell + 1];
                 if (c && k == end) empty++;
                 for (; k < end; k++) {
@@ -86,7 +85,7 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
             }
         }
     done:
-        if (h.prim != ACCEL_MISS) h.prim = g->prim_id[h.prim];
+        if (h.prim != ACCEL_MISS) h.prim = g->store.scene_id[h.prim];
         if (occ)
             occ[i] = h.prim != ACCEL_MISS;
         else
@@ -104,20 +103,39 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
     }
 }
 
-/* Kernel copies are picked once per batch by ACCEL_DISPATCH (accel.h). */
-#define GRID_DISPATCH_HIT(c_, nv, sp, mb) grid_kernel(g, rays, hits, (uint8_t *)NULL, count, c_, nv, sp, mb)
-#define GRID_DISPATCH_OCC(c_, nv, sp, mb) grid_kernel(g, rays, (accel_hit *)NULL, occluded, count, c_, nv, sp, mb)
+static inline __attribute__((always_inline)) void
+grid_hit_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
+                unsigned f)
+{
+    grid_kernel(a, rays, out, NULL, count, c, (f & ACCEL_V_NAIVE) != 0,
+                (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0);
+}
+
+static inline __attribute__((always_inline)) void
+grid_occ_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
+                unsigned f)
+{
+    grid_kernel(a, rays, NULL, out, count, c, (f & ACCEL_V_NAIVE) != 0,
+                (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0);
+}
+
+ACCEL_KERNEL_TABLE(grid_hit_table, grid_hit_kernel)
+ACCEL_KERNEL_TABLE(grid_occ_table, grid_occ_kernel)
+
+static unsigned grid_flags(const grid_accel *g)
+{
+    return (g->naive ? ACCEL_V_NAIVE : 0u) | (g->has_spheres ? ACCEL_V_SPHERES : 0u) |
+           (g->mailbox ? ACCEL_V_OPT : 0u);
+}
 
 void grid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
                     accel_counters *counters)
 {
-    const grid_accel *g = accel;
-    ACCEL_DISPATCH(GRID_DISPATCH_HIT, counters, g->naive, g->has_spheres, g->mailbox);
+    accel_run_kernel(&grid_hit_table, accel, rays, hits, count, counters, grid_flags(accel));
 }
 
 void grid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                    accel_counters *counters)
 {
-    const grid_accel *g = accel;
-    ACCEL_DISPATCH(GRID_DISPATCH_OCC, counters, g->naive, g->has_spheres, g->mailbox);
+    accel_run_kernel(&grid_occ_table, accel, rays, occluded, count, counters, grid_flags(accel));
 }

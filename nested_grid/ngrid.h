@@ -73,6 +73,8 @@ typedef struct {
     const uint32_t *lists;   /* count-prefixed primitive lists, list_len */
     uint64_t list_len;
     uint64_t ref_count;      /* primitive ids stored in lists */
+    const uint32_t *prim_id; /* lists hold local ids: local id -> scene primitive id */
+    uint32_t prim_count;     /* local ids: the scene's live primitives */
     int levels;              /* levels actually built */
 } ngrid_view;
 

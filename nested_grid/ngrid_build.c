@@ -372,6 +372,7 @@ static void ngrid_destroy(void *a)
     free(g->cells);
     free(g->lists);
     free(g->planes);
+    accel_prim_store_free(&g->store);
     free(g);
 }
 
@@ -380,7 +381,7 @@ static size_t ngrid_memory(const void *a)
     const ngrid_accel *g = a;
     return sizeof *g + (size_t)g->node_count * sizeof *g->nodes +
            (size_t)g->cell_count * sizeof *g->cells + (size_t)g->list_len * sizeof *g->lists +
-           g->plane_count * sizeof *g->planes;
+           g->plane_count * sizeof *g->planes + accel_prim_store_bytes(&g->store);
 }
 
 /* Is cell c of grid g one that holds a sub-grid? `next` walks g's children
@@ -499,8 +500,9 @@ static void builder_free(builder *b)
 
 /* ---- the kind -------------------------------------------------------------------- */
 
-static int ngrid_build(const accel_scene *scene, const accel_params *params, int threads,
-                       void **out, accel_build_stats *stats, accel_error *err)
+/* Builds over the primitive store's scene (every primitive live, local ids). */
+static int build_over(const accel_scene *scene, const accel_params *params, int threads,
+                      ngrid_accel **out, accel_build_stats *stats, accel_error *err)
 {
     *out = NULL;
     builder b;
@@ -566,7 +568,6 @@ static int ngrid_build(const accel_scene *scene, const accel_params *params, int
         if (!g) rc = accel_fail(err, ACCEL_ERR_NOMEM, "nested_grid: out of memory");
     }
     if (!rc) {
-        g->scene = scene;
         g->naive = params->naive;
         g->mailbox = accel_param_num(params, "mailbox") != 0.0;
         g->has_spheres = scene->sphere_count > 0;
@@ -590,6 +591,25 @@ static int ngrid_build(const accel_scene *scene, const accel_params *params, int
     return ACCEL_OK;
 }
 
+static int ngrid_build(const accel_scene *scene, const accel_params *params, int threads,
+                       void **out, accel_build_stats *stats, accel_error *err)
+{
+    *out = NULL;
+    accel_prim_store store;
+    int rc = accel_prim_store_build(scene, params->reorder, &store, err);
+    if (rc) return rc;
+    ngrid_accel *g;
+    rc = build_over(&store.prims, params, threads, &g, stats, err);
+    if (rc) {
+        accel_prim_store_free(&store);
+        return rc;
+    }
+    g->store = store;
+    stats->bytes = ngrid_memory(g);
+    *out = g;
+    return ACCEL_OK;
+}
+
 void ngrid_get_view(const void *accel, ngrid_view *v)
 {
     const ngrid_accel *g = accel;
@@ -598,6 +618,8 @@ void ngrid_get_view(const void *accel, ngrid_view *v)
     v->cells = g->cells;
     v->cell_count = g->cell_count;
     v->lists = g->lists;
+    v->prim_id = g->store.scene_id;
+    v->prim_count = g->store.prims.prim_count;
     v->list_len = g->list_len;
     v->ref_count = g->ref_count;
     v->levels = g->levels;

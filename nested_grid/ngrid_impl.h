@@ -9,7 +9,9 @@
 #include "ngrid.h"
 
 typedef struct {
-    const accel_scene *scene;
+    /* The primitive store (accel.h): lists hold its local ids, and
+     * store.scene_id maps a hit back to the scene's id. */
+    accel_prim_store store;
     ngrid_node *nodes;   /* node_count grids, breadth-first, top first */
     uint32_t node_count;
     uint32_t *cells;     /* cell words (ngrid.h) */

@@ -21,14 +21,15 @@
  * tested in one cell never needs testing again: the per-ray mailbox (a
  * 16-entry direct-mapped cache of ids, on the stack) is shared by all levels.
  *
- * Kernels are written once (ngrid_kernel) and instantiated with constant
- * flags by the batch entries: counters, spheres, naive triangles, mailbox,
- * closest-hit or any-hit. The uncounted copies contain no counting code and
+ * Kernels are written once (ngrid_kernel) and compiled into one variant
+ * table per query (core/variant.h): spheres, naive triangles and mailbox
+ * (ACCEL_V_OPT) as constants. The uncounted copies contain no counting code and
  * no step-bound check; counted runs check the build's bound on the cells one
  * ray can visit over all levels.
  */
 #include <string.h>
 
+#include "core/variant.h"
 #include "ngrid_impl.h"
 
 /* Entries of the per-ray mailbox (power of two). */
@@ -38,7 +39,7 @@ static inline __attribute__((always_inline)) void
 ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
              size_t count, accel_counters *c, int naive, int spheres, int mailbox)
 {
-    const accel_scene *s = g->scene;
+    const accel_scene *s = &g->store.prims;
     const ngrid_node *nodes = g->nodes;
     const grid_frame *top = &nodes[0].frame;
     const uint32_t *lists = g->lists;
@@ -73,8 +74,8 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
                 if (c) {
                     steps++;
                     level_steps[level]++;
-                    ACCEL_STEP_BOUND_CHECK(steps, g->step_bound);
                 }
+                if (ACCEL_STEP_BOUND_BROKEN(c, steps, g->step_bound)) break;
                 uint32_t w = words[d.cell];
                 if (w & NGRID_CHILD) {
                     /* Continue in the sub-grid from the ray's entry into this cell. */
@@ -121,6 +122,7 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
             }
         }
     done:
+        if (h.prim != ACCEL_MISS) h.prim = g->store.scene_id[h.prim];
         if (occ)
             occ[i] = h.prim != ACCEL_MISS;
         else
@@ -139,20 +141,39 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
     }
 }
 
-/* Kernel copies are picked once per batch by ACCEL_DISPATCH (accel.h). */
-#define NGRID_DISPATCH_HIT(c_, nv, sp, mb) ngrid_kernel(g, rays, hits, (uint8_t *)NULL, count, c_, nv, sp, mb)
-#define NGRID_DISPATCH_OCC(c_, nv, sp, mb) ngrid_kernel(g, rays, (accel_hit *)NULL, occluded, count, c_, nv, sp, mb)
+static inline __attribute__((always_inline)) void
+ngrid_hit_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
+                 unsigned f)
+{
+    ngrid_kernel(a, rays, out, NULL, count, c, (f & ACCEL_V_NAIVE) != 0,
+                 (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0);
+}
+
+static inline __attribute__((always_inline)) void
+ngrid_occ_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
+                 unsigned f)
+{
+    ngrid_kernel(a, rays, NULL, out, count, c, (f & ACCEL_V_NAIVE) != 0,
+                 (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0);
+}
+
+ACCEL_KERNEL_TABLE(ngrid_hit_table, ngrid_hit_kernel)
+ACCEL_KERNEL_TABLE(ngrid_occ_table, ngrid_occ_kernel)
+
+static unsigned ngrid_flags(const ngrid_accel *g)
+{
+    return (g->naive ? ACCEL_V_NAIVE : 0u) | (g->has_spheres ? ACCEL_V_SPHERES : 0u) |
+           (g->mailbox ? ACCEL_V_OPT : 0u);
+}
 
 void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
                      accel_counters *counters)
 {
-    const ngrid_accel *g = accel;
-    ACCEL_DISPATCH(NGRID_DISPATCH_HIT, counters, g->naive, g->has_spheres, g->mailbox);
+    accel_run_kernel(&ngrid_hit_table, accel, rays, hits, count, counters, ngrid_flags(accel));
 }
 
 void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                     accel_counters *counters)
 {
-    const ngrid_accel *g = accel;
-    ACCEL_DISPATCH(NGRID_DISPATCH_OCC, counters, g->naive, g->has_spheres, g->mailbox);
+    accel_run_kernel(&ngrid_occ_table, accel, rays, occluded, count, counters, ngrid_flags(accel));
 }

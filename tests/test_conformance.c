@@ -257,6 +257,9 @@ static size_t check_variant(test_scene *ts, const char *spec, int naive, int inv
                    ts->scene.name, t->name);
             CHECKF(c.rays == n, "%s on %s/%s: counters saw %llu rays of %zu", spec,
                    ts->scene.name, t->name, (unsigned long long)c.rays, n);
+            accel_error broken = {0};
+            CHECKF(accel_counters_status(&c, &broken) == 0, "%s on %s/%s: %s", spec,
+                   ts->scene.name, t->name, broken.msg);
             accel_trace(kind, accel, t->rays.rays, h2, n, 2, NULL);
             CHECKF(hits_identical(hits, h2, n), "%s on %s/%s: 2 threads differ from 1", spec,
                    ts->scene.name, t->name);

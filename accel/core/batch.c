@@ -11,6 +11,9 @@
 
 #include "accel.h"
 
+/* Counters are summed per thread; beyond this many threads, chunks share. */
+#define BATCH_MAX_THREADS 256
+
 typedef struct {
     const accel_kind *kind;
     const void *accel;
@@ -18,7 +21,7 @@ typedef struct {
     accel_hit *hits;
     uint8_t *occluded;
     accel_counters *total;     /* NULL: uncounted */
-    accel_counters per_thread[256];
+    accel_counters *per_thread;
 } trace_job;
 
 static void trace_chunk(void *p, size_t begin, size_t end, int thread)
@@ -38,40 +41,52 @@ static void trace_chunk(void *p, size_t begin, size_t end, int thread)
     if (c) accel_counters_add(&j->per_thread[thread], c);
 }
 
+size_t accel_trace_chunk(size_t count, int threads)
+{
+    /* About 16 chunks per thread so that a thread drawing cheap rays takes
+     * more of them, in whole multiples of 64 rays (8x8 packets stay whole),
+     * at most ACCEL_CHUNK. A fixed 4096 would leave a 5,000-ray job two
+     * chunks, whatever the thread count. */
+    if (threads <= 1) return ACCEL_CHUNK;
+    size_t chunk = count / ((size_t)threads * 16);
+    chunk = (chunk + 63) / 64 * 64;
+    if (chunk < 64) chunk = 64;
+    if (chunk > ACCEL_CHUNK) chunk = ACCEL_CHUNK;
+    return chunk;
+}
+
 static void run_trace(trace_job *j, size_t count, int threads)
 {
     if (threads < 1) threads = 1;
-    if (threads > 256) threads = 256;
-    if (j->total) memset(j->per_thread, 0, sizeof(accel_counters) * (size_t)threads);
-    accel_parallel_for(count, ACCEL_CHUNK, threads, trace_chunk, j);
-    if (j->total)
+    if (threads > BATCH_MAX_THREADS) threads = BATCH_MAX_THREADS;
+    accel_counters one;
+    if (j->total) {
+        /* Counted runs need one counter block per thread; without memory
+         * for them the run is still right on one thread. */
+        j->per_thread = threads > 1 ? calloc((size_t)threads, sizeof *j->per_thread) : NULL;
+        if (!j->per_thread) {
+            threads = 1;
+            memset(&one, 0, sizeof one);
+            j->per_thread = &one;
+        }
+    }
+    accel_parallel_for(count, accel_trace_chunk(count, threads), threads, trace_chunk, j);
+    if (j->total) {
         for (int i = 0; i < threads; i++) accel_counters_add(j->total, &j->per_thread[i]);
+        if (j->per_thread != &one) free(j->per_thread);
+    }
 }
 
 void accel_trace(const accel_kind *kind, const void *accel, const accel_ray *rays, accel_hit *hits,
                  size_t count, int threads, accel_counters *counters)
 {
-    trace_job *j = calloc(1, sizeof *j);
-    if (!j) abort();
-    j->kind = kind;
-    j->accel = accel;
-    j->rays = rays;
-    j->hits = hits;
-    j->total = counters;
-    run_trace(j, count, threads);
-    free(j);
+    trace_job j = {kind, accel, rays, hits, NULL, counters, NULL};
+    run_trace(&j, count, threads);
 }
 
 void accel_trace_occluded(const accel_kind *kind, const void *accel, const accel_ray *rays,
                           uint8_t *occluded, size_t count, int threads, accel_counters *counters)
 {
-    trace_job *j = calloc(1, sizeof *j);
-    if (!j) abort();
-    j->kind = kind;
-    j->accel = accel;
-    j->rays = rays;
-    j->occluded = occluded;
-    j->total = counters;
-    run_trace(j, count, threads);
-    free(j);
+    trace_job j = {kind, accel, rays, NULL, occluded, counters, NULL};
+    run_trace(&j, count, threads);
 }

@@ -1,58 +1,88 @@
 /*
- * brute.c - the `brute` kind: every live primitive against every ray, in
- * float, with the shared kernels of prim.h. The study's O(N*M) baseline,
- * and the smallest complete accelerator kind: the template a student
- * copies to start a new one (parameters, build, batch kernels through the
- * variant table, memory, destroy).
+ * brute.c - the `brute` kind: every primitive against every ray, in float,
+ * with the shared kernels of prim.h. The study's O(N*M) baseline, and the
+ * smallest complete accelerator kind: the template a student copies to
+ * start a new one. Its parts, in the order a kind needs them:
+ *
+ *   1. the built structure: here only the primitive store (accel.h), the
+ *      copy of the live primitives every kind starts from;
+ *   2. build: parse nothing (no parameters of its own), copy the store;
+ *   3. the kernel, written once as an always-inline function taking a
+ *      counters pointer and the variant flags, compiled into one table of
+ *      specialized copies per query (core/variant.h);
+ *   4. the batch entries, memory, destroy, and the kind's table, which
+ *      core/registry.c lists.
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "core/prim.h"
-
-/* ---- brute: the float O(N*M) baseline ------------------------------------ */
+#include "core/variant.h"
 
 typedef struct {
-    const accel_scene *scene;
-    int naive;
+    accel_prim_store store; /* the live primitives, local ids (accel.h) */
+    int naive;              /* tri=naive */
 } brute_accel;
+
+static void brute_destroy(void *a)
+{
+    brute_accel *b = a;
+    if (!b) return;
+    accel_prim_store_free(&b->store);
+    free(b);
+}
+
+static size_t brute_memory(const void *a)
+{
+    const brute_accel *b = a;
+    return sizeof *b + accel_prim_store_bytes(&b->store);
+}
 
 static int brute_build(const accel_scene *scene, const accel_params *params, int threads,
                        void **out, accel_build_stats *stats, accel_error *err)
 {
     (void)threads;
-    brute_accel *b = malloc(sizeof *b);
+    *out = NULL;
+    brute_accel *b = calloc(1, sizeof *b);
     if (!b) return accel_fail(err, ACCEL_ERR_NOMEM, "brute: out of memory");
-    b->scene = scene;
+    int rc = accel_prim_store_build(scene, params->reorder, &b->store, err);
+    if (rc) {
+        free(b);
+        return rc;
+    }
     b->naive = params->naive;
     memset(stats, 0, sizeof *stats);
-    stats->bytes = sizeof *b;
+    stats->bytes = brute_memory(b);
+    stats->refs = b->store.prims.prim_count;
     stats->sah_cost = NAN;
     *out = b;
     return 0;
 }
 
-/* One kernel for both queries; the flags are constants in every copy. */
+/* One kernel for both queries (occ != NULL: any hit). The flags are
+ * literals in every timed copy, so the sphere and naive branches vanish. */
 static inline __attribute__((always_inline)) void
 brute_kernel(const brute_accel *b, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
-             size_t count, accel_counters *c, int naive, int spheres)
+             size_t count, accel_counters *c, unsigned flags)
 {
-    const accel_scene *s = b->scene;
+    const accel_scene *s = &b->store.prims;
+    const int naive = (flags & ACCEL_V_NAIVE) != 0, spheres = (flags & ACCEL_V_SPHERES) != 0;
     for (size_t i = 0; i < count; i++) {
         accel_ray_prep p;
         accel_hit h = accel_hit_miss();
         uint32_t tests = 0;
         if (accel_prep_ray(&rays[i], &p)) {
             float t = p.t_far, u, v;
-            for (uint32_t k = 0; k < s->live_count; k++) {
+            for (uint32_t k = 0; k < s->prim_count; k++) {
                 tests++;
-                if (accel_prim_hit(s, s->live[k], &p, &t, &u, &v, naive, spheres)) {
-                    h.t = t, h.u = u, h.v = v, h.prim = s->live[k];
+                if (accel_prim_hit(s, k, &p, &t, &u, &v, naive, spheres)) {
+                    h.t = t, h.u = u, h.v = v, h.prim = k;
                     if (occ) break;
                 }
             }
         }
+        if (h.prim != ACCEL_MISS) h.prim = b->store.scene_id[h.prim];
         if (occ)
             occ[i] = h.prim != ACCEL_MISS;
         else
@@ -66,45 +96,41 @@ brute_kernel(const brute_accel *b, const accel_ray *rays, accel_hit *hits, uint8
     }
 }
 
-#define BRUTE_DISPATCH(b, rays, hits, occ, n, c)                                        \
-    do {                                                                                \
-        int sph_ = (b)->scene->sphere_count > 0;                                        \
-        if (c) {                                                                        \
-            brute_kernel(b, rays, hits, occ, n, c, (b)->naive, sph_);                   \
-        } else if ((b)->naive) {                                                        \
-            if (sph_) brute_kernel(b, rays, hits, occ, n, NULL, 1, 1);                  \
-            else brute_kernel(b, rays, hits, occ, n, NULL, 1, 0);                       \
-        } else {                                                                        \
-            if (sph_) brute_kernel(b, rays, hits, occ, n, NULL, 0, 1);                  \
-            else brute_kernel(b, rays, hits, occ, n, NULL, 0, 0);                       \
-        }                                                                               \
-    } while (0)
+static inline __attribute__((always_inline)) void
+brute_hit_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
+                 unsigned flags)
+{
+    brute_kernel(a, rays, out, NULL, count, c, flags);
+}
+
+static inline __attribute__((always_inline)) void
+brute_occ_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
+                 unsigned flags)
+{
+    brute_kernel(a, rays, NULL, out, count, c, flags);
+}
+
+ACCEL_KERNEL_TABLE(brute_hit_table, brute_hit_kernel)
+ACCEL_KERNEL_TABLE(brute_occ_table, brute_occ_kernel)
+
+static unsigned brute_flags(const brute_accel *b)
+{
+    return (b->naive ? ACCEL_V_NAIVE : 0u) | (b->store.prims.sphere_count ? ACCEL_V_SPHERES : 0u);
+}
 
 static void brute_intersect(const void *a, const accel_ray *rays, accel_hit *hits, size_t n,
                             accel_counters *c)
 {
-    const brute_accel *b = a;
-    c = ACCEL_COUNTERS_ON(c);
-    BRUTE_DISPATCH(b, rays, hits, (uint8_t *)NULL, n, c);
+    accel_run_kernel(&brute_hit_table, a, rays, hits, n, c, brute_flags(a));
 }
 
 static void brute_occluded(const void *a, const accel_ray *rays, uint8_t *occ, size_t n,
                            accel_counters *c)
 {
-    const brute_accel *b = a;
-    c = ACCEL_COUNTERS_ON(c);
-    BRUTE_DISPATCH(b, rays, (accel_hit *)NULL, occ, n, c);
+    accel_run_kernel(&brute_occ_table, a, rays, occ, n, c, brute_flags(a));
 }
 
-static size_t brute_memory(const void *a)
-{
-    (void)a;
-    return sizeof(brute_accel);
-}
-
-static void brute_destroy(void *a) { free(a); }
-
-static const char *const brute_variants[] = {"", "tri=naive", NULL};
+static const char *const brute_variants[] = {"", "tri=naive", "reorder=0", NULL};
 
 const accel_kind accel_kind_brute = {
     .name = "brute",

@@ -1,5 +1,6 @@
 /*
- * error.c - errors, clocks, core count, counters and the traversal step bound.
+ * error.c - errors, clocks, core count and counters (with their record of
+ * broken invariants).
  */
 
 #include <stdarg.h>
@@ -45,6 +46,7 @@ void accel_counters_add(accel_counters *a, const accel_counters *b)
     a->mailbox_skips += b->mailbox_skips;
     for (int i = 0; i < 4; i++) a->level_steps[i] += b->level_steps[i];
     a->packet_box_tests += b->packet_box_tests;
+    a->packet_steps += b->packet_steps;
     if (b->broken && !a->broken_file) {
         a->broken_file = b->broken_file;
         a->broken_line = b->broken_line;
@@ -72,11 +74,4 @@ int accel_counters_status(const accel_counters *c, accel_error *err)
                       "structure or an endless loop",
                       c->broken_file, c->broken_line, (unsigned long long)c->broken,
                       (unsigned long long)c->broken_bound);
-}
-
-void accel_step_bound_exceeded(const char *file, int line, uint64_t bound)
-{
-    fprintf(stderr, "%s:%d: traversal exceeded its step bound (%llu): endless loop?\n", file, line,
-            (unsigned long long)bound);
-    abort();
 }

@@ -19,6 +19,8 @@
 const accel_param_def accel_common_params[] = {
     {"tri", ACCEL_PARAM_ENUM, "watertight", 0, 0, "watertight|naive",
      "triangle test: watertight (Woop et al. 2013) or naive (Moller-Trumbore)"},
+    {"reorder", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
+     "primitive store: copy the primitives in Morton order of their centroids (0: scene order)"},
 };
 const size_t accel_common_param_count = sizeof accel_common_params / sizeof accel_common_params[0];
 
@@ -176,6 +178,13 @@ int accel_params_parse(const char *spec, accel_params *out, accel_error *err)
         return accel_fail(err, ACCEL_ERR_SPEC, "unknown accelerator '%s'; accepted: %s", name,
                           names);
     }
+    return accel_params_parse_kind(k, colon ? colon + 1 : "", out, err);
+}
+
+int accel_params_parse_kind(const accel_kind *k, const char *kv, accel_params *out,
+                            accel_error *err)
+{
+    memset(out, 0, sizeof *out);
     /* The kind's own parameters and the common ones share one table. */
     accel_param_def defs[ACCEL_MAX_PARAMS];
     size_t n = k->param_count + accel_common_param_count;
@@ -183,10 +192,10 @@ int accel_params_parse(const char *spec, accel_params *out, accel_error *err)
     if (k->param_count) memcpy(defs, k->params, k->param_count * sizeof *defs);
     memcpy(defs + k->param_count, accel_common_params, accel_common_param_count * sizeof *defs);
     out->kind = k;
-    int rc = accel_parse_kv(k->name, colon ? colon + 1 : "", defs, n, out->num, out->str,
-                            out->given, err);
+    int rc = accel_parse_kv(k->name, kv, defs, n, out->num, out->str, out->given, err);
     if (rc) return rc;
     out->naive = out->num[k->param_count] == 1; /* tri: 0 watertight, 1 naive */
+    out->reorder = out->num[k->param_count + 1] != 0.0;
     /* Canonical spec: the name and the parameters given, in table order. */
     size_t len = (size_t)snprintf(out->spec, sizeof out->spec, "%s", k->name);
     int first = 1;

@@ -13,12 +13,18 @@ extern const accel_kind accel_kind_brute;
 extern const accel_kind accel_kind_bvh;
 extern const accel_kind accel_kind_grid;
 extern const accel_kind accel_kind_nested_grid;
+#ifdef GRIDBVH_LAB
+extern const accel_kind accel_kind_student; /* lab/student.c, in `make lab` builds only */
+#endif
 
 const accel_kind *const accel_kinds[] = {
     &accel_kind_brute,
     &accel_kind_bvh,
     &accel_kind_grid,
     &accel_kind_nested_grid,
+#ifdef GRIDBVH_LAB
+    &accel_kind_student,
+#endif
 };
 const size_t accel_kind_count = sizeof accel_kinds / sizeof accel_kinds[0];
 

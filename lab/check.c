@@ -1,0 +1,558 @@
+/*
+ * check.c - the lab's step checks (see check.h and LAB.md).
+ *
+ * Every check is a comparison with something known to be right: the
+ * double-precision oracle (accel_reference_trace) for answers, and the
+ * project's median-split BVH (bvh:build=median) for costs. On failure the
+ * report says what is wrong in the student's terms: which ray, which
+ * triangle, what the reference found, how many nodes a ray visits against
+ * the reference, and a hint. Sizes are small (a check takes seconds); step
+ * 5 is the one that measures speed, and it reports, never fails on speed.
+ */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bench/bench.h"
+#include "bench/image.h"
+#include "check.h"
+#include "scene/scene.h"
+
+static void say(lab_result *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void say(lab_result *r, const char *fmt, ...)
+{
+    size_t len = strlen(r->report);
+    if (len + 1 >= sizeof r->report) return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(r->report + len, sizeof r->report - len, fmt, ap);
+    va_end(ap);
+}
+
+/* Fails the step with a message (the first failure is the one to fix). */
+static void fail(lab_result *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void fail(lab_result *r, const char *fmt, ...)
+{
+    size_t len = strlen(r->report);
+    if (len + 8 < sizeof r->report) {
+        memcpy(r->report + len, "  FAIL ", 8);
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(r->report + len + 7, sizeof r->report - len - 7, fmt, ap);
+        va_end(ap);
+        say(r, "\n");
+    }
+    r->passed = 0;
+}
+
+const char *lab_step_title(int step)
+{
+    static const char *const titles[LAB_STEPS + 1] = {
+        "",
+        "a median-split BVH (build)",
+        "single-ray traversal with a ray/box test and the depth view",
+        "many meshes: your kind as the bottom level, rays in object space",
+        "packet traversal (traverse=packet)",
+        "real time: frames per second at 800x600, primary and shadow rays",
+    };
+    return step >= 1 && step <= LAB_STEPS ? titles[step] : "no such step";
+}
+
+/* Builds the subject with extra parameters appended to its own. */
+static int build(const lab_subject *s, const char *extra, const accel_scene *scene, void **a,
+                 accel_build_stats *st, accel_error *err)
+{
+    char kv[256];
+    snprintf(kv, sizeof kv, "%s%s%s", s->kv, *s->kv && *extra ? "," : "", extra);
+    return accel_build_kind(s->kind, kv, scene, 1, a, st, err);
+}
+
+/* The project's median-split BVH, the yardstick of costs (NULL when bvh is
+ * not registered, e.g. in a trimmed lab build). */
+static const accel_kind *reference_kind(void) { return accel_find_kind("bvh"); }
+
+/* ---- step 1 -------------------------------------------------------------- */
+
+static void check_build(const lab_subject *s, const char *spec, lab_result *r, accel_error *err)
+{
+    accel_scene scene;
+    if (scene_create(spec, &scene, err)) {
+        fail(r, "scene %s: %s", spec, err->msg);
+        return;
+    }
+    void *a = NULL;
+    accel_build_stats st;
+    uint32_t n = scene.live_count;
+    if (build(s, "", &scene, &a, &st, err)) {
+        fail(r, "%s: your build failed: %s", spec, err->msg);
+    } else if (st.nodes == 0 || st.leaves == 0) {
+        fail(r, "%s: your build made no nodes (stats: %llu nodes, %llu leaves) for %u "
+                "primitives: write build_node() and count the nodes and leaves",
+             spec, (unsigned long long)st.nodes, (unsigned long long)st.leaves, n);
+    } else if (st.nodes != 2 * st.leaves - 1 && st.nodes != 2 * st.leaves) {
+        fail(r, "%s: %llu nodes for %llu leaves: a binary tree with L leaves has 2L-1 nodes "
+                "(does every interior node get exactly two children?)",
+             spec, (unsigned long long)st.nodes, (unsigned long long)st.leaves);
+    } else if (st.refs != n) {
+        fail(r, "%s: your leaves hold %llu primitives, the scene has %u: each primitive "
+                "belongs to exactly one leaf (check the split: first..first+count)",
+             spec, (unsigned long long)st.refs, n);
+    } else {
+        int bound = (int)ceil(log2((double)(n > 1 ? n : 2))) + 2;
+        if (st.depth < 1 || st.depth > bound)
+            fail(r, "%s: depth %d for %u primitives: a median split halves the primitives "
+                    "at every level, so the depth is at most %d (split at the median of the "
+                    "centroids along the largest axis, not at the middle of the box)",
+                 spec, st.depth, n, bound);
+        else
+            say(r, "  ok   %s: %u primitives, %llu nodes, %llu leaves, depth %d, %.1f ms, "
+                   "%.0f bytes/primitive\n",
+                spec, n, (unsigned long long)st.nodes, (unsigned long long)st.leaves, st.depth,
+                st.ms, (double)st.bytes / (n ? n : 1));
+    }
+    if (a) s->kind->destroy(a);
+    scene_free(&scene);
+}
+
+/* ---- rays for step 2 ----------------------------------------------------- */
+
+typedef struct {
+    const char *name;
+    rays_set rays;
+    int occlusion; /* shadow rays: compared with occluded() */
+} ray_group;
+
+/* Rays from the eye through triangle vertices (the cases that leak through
+ * a careless edge test), and axis-parallel rays with +-0 components from
+ * the faces of the scene box (the cases that break a careless slab test). */
+static int make_stiff_rays(const accel_scene *sc, rays_set *out, accel_error *err)
+{
+    size_t verts = sc->tri_count < 150 ? sc->tri_count : 150;
+    size_t n = verts * 3 + 6 * 64;
+    memset(out, 0, sizeof *out);
+    out->rays = malloc(n * sizeof *out->rays);
+    if (!out->rays) return accel_fail(err, ACCEL_ERR_NOMEM, "lab: out of memory");
+    size_t k = 0;
+    vec3 eye = sc->camera.eye;
+    for (size_t i = 0; i < verts; i++) {
+        size_t tri = i * (sc->tri_count / (verts ? verts : 1));
+        for (int v = 0; v < 3; v++) {
+            const float *p = sc->tris + 9 * tri + 3 * v;
+            accel_ray r = {eye.x, eye.y, eye.z, 0.0f, p[0] - eye.x, p[1] - eye.y, p[2] - eye.z,
+                           INFINITY};
+            out->rays[k++] = r;
+        }
+    }
+    box3 b = sc->bounds;
+    const float lo[3] = {b.min.x, b.min.y, b.min.z}, hi[3] = {b.max.x, b.max.y, b.max.z};
+    for (int axis = 0; axis < 3; axis++)
+        for (int sign = 0; sign < 2; sign++)
+            for (int j = 0; j < 64; j++) {
+                int u = (axis + 1) % 3, w = (axis + 2) % 3;
+                float o[3], d[3] = {-0.0f, -0.0f, -0.0f};
+                o[axis] = sign ? hi[axis] : lo[axis];
+                o[u] = lo[u] + (hi[u] - lo[u]) * (float)(j % 8) / 7.0f;
+                o[w] = lo[w] + (hi[w] - lo[w]) * (float)(j / 8) / 7.0f;
+                if (j & 1) d[u] = 0.0f; /* +0 and -0 both */
+                d[axis] = sign ? -1.0f : 1.0f;
+                accel_ray r = {o[0], o[1], o[2], 0.0f, d[0], d[1], d[2], INFINITY};
+                out->rays[k++] = r;
+            }
+    out->count = k;
+    return 0;
+}
+
+static void describe_ray(lab_result *r, const accel_ray *ray)
+{
+    say(r, "         ray o=(%.7g, %.7g, %.7g) d=(%.7g, %.7g, %.7g) t in [%g, %g]\n", ray->ox,
+        ray->oy, ray->oz, ray->dx, ray->dy, ray->dz, ray->t_near, ray->t_far);
+}
+
+/* Compares the subject with the oracle on one ray group; 1 when it agrees. */
+static int compare_group(const accel_kind *k, const void *a, const accel_scene *sc,
+                         const ray_group *g, int threads, lab_result *r)
+{
+    size_t n = g->rays.count;
+    accel_hit *ref = malloc((n ? n : 1) * sizeof *ref), *hits = malloc((n ? n : 1) * sizeof *hits);
+    uint8_t *occ = malloc(n ? n : 1);
+    int ok = 1;
+    if (!ref || !hits || !occ) {
+        fail(r, "out of memory");
+        ok = 0;
+        goto out;
+    }
+    accel_reference_trace(sc, g->rays.rays, ref, n, threads);
+    accel_counters c = {0};
+    accel_trace(k, a, g->rays.rays, hits, n, 1, &c);
+    accel_error broken = {0};
+    if (accel_counters_status(&c, &broken)) {
+        fail(r, "%s / %s rays: %s", sc->name, g->name, broken.msg);
+        ok = 0;
+        goto out;
+    }
+    hits_diff d = hits_compare(ref, hits, n);
+    if (d.first_bad != SIZE_MAX) {
+        size_t i = d.first_bad;
+        fail(r, "%s / %s rays: %zu holes (the reference hits, you miss), %zu false hits, %zu "
+                "other disagreements of %zu rays. First: ray %zu",
+             sc->name, g->name, d.holes, d.false_hits, d.disagreements, n, i);
+        describe_ray(r, &g->rays.rays[i]);
+        if (ref[i].prim != ACCEL_MISS)
+            say(r, "         the reference hits triangle %u at t=%.9g; ", ref[i].prim, ref[i].t);
+        else
+            say(r, "         the reference misses; ");
+        if (hits[i].prim != ACCEL_MISS)
+            say(r, "you report triangle %u at t=%.9g\n", hits[i].prim, hits[i].t);
+        else
+            say(r, "you report a miss\n");
+        say(r, "         hint: %s\n",
+            hits[i].prim == ACCEL_MISS
+                ? "a box test that rejects a box the ray touches (t range, +-0 directions), or "
+                  "a node never visited (is the far child pushed and popped?)"
+                : "keep the nearest hit: pass the closest t so far to every test, and never "
+                  "stop at the first leaf that hits");
+        ok = 0;
+        goto out;
+    }
+    accel_trace_occluded(k, a, g->rays.rays, occ, n, 1, NULL);
+    for (size_t i = 0; i < n; i++)
+        if (occ[i] != (ref[i].prim != ACCEL_MISS)) {
+            fail(r, "%s / %s rays: occluded() says %d for ray %zu, the reference %s", sc->name,
+                 g->name, occ[i], i, ref[i].prim != ACCEL_MISS ? "hits" : "misses");
+            describe_ray(r, &g->rays.rays[i]);
+            ok = 0;
+            break;
+        }
+out:
+    free(ref);
+    free(hits);
+    free(occ);
+    return ok;
+}
+
+/* Mean nodes visited per primary ray by a built structure (counted run). */
+static double steps_per_ray(const accel_kind *k, const void *a, const rays_set *rays,
+                            uint32_t *ray_steps)
+{
+    accel_counters c = {0};
+    c.ray_steps = ray_steps;
+    accel_hit *h = malloc((rays->count ? rays->count : 1) * sizeof *h);
+    if (!h) return NAN;
+    accel_trace(k, a, rays->rays, h, rays->count, 1, &c);
+    free(h);
+    return rays->count ? (double)c.steps / (double)rays->count : 0.0;
+}
+
+static void write_depth_view(const lab_subject *s, const char *scene, const uint32_t *steps,
+                             int w, int h, lab_result *r)
+{
+    if (!s->out_dir) return;
+    float *v = malloc((size_t)w * h * sizeof *v);
+    image_rgb img = {0};
+    accel_error err = {0};
+    float vmax = 1.0f;
+    if (!v) return;
+    for (int i = 0; i < w * h; i++) {
+        v[i] = (float)steps[i];
+        if (v[i] > vmax) vmax = v[i];
+    }
+    char path[512];
+    snprintf(path, sizeof path, "%s/step2_depth_%s.png", s->out_dir, scene);
+    for (char *p = path + strlen(s->out_dir) + 1; *p; p++)
+        if (*p == ':' || *p == '=' || *p == ',') *p = '_';
+    if (image_heatmap(v, w, h, vmax, &img, &err) == 0 && image_write(path, &img, &err) == 0)
+        say(r, "       depth view (nodes visited per pixel, white = %.0f): %s\n", vmax, path);
+    image_free(&img);
+    free(v);
+}
+
+/* ---- step 2 -------------------------------------------------------------- */
+
+static void check_traversal(const lab_subject *s, const char *spec, lab_result *r,
+                            accel_error *err)
+{
+    accel_scene sc;
+    if (scene_create(spec, &sc, err)) {
+        fail(r, "scene %s: %s", spec, err->msg);
+        return;
+    }
+    int size = s->quick ? 32 : 64;
+    ray_group g[4];
+    memset(g, 0, sizeof g);
+    g[0].name = "primary";
+    g[1].name = "shadow";
+    g[1].occlusion = 1;
+    g[2].name = "diffuse";
+    g[3].name = "vertex and axis";
+    accel_hit *ph = NULL;
+    void *a = NULL, *ref_a = NULL;
+    accel_build_stats st;
+    const accel_kind *refk = reference_kind();
+    int ok = rays_primary(&sc.camera, size, size, &g[0].rays, err) == 0;
+    if (ok) ph = malloc(g[0].rays.count * sizeof *ph);
+    ok = ok && ph;
+    if (ok) accel_reference_trace(&sc, g[0].rays.rays, ph, g[0].rays.count, s->threads);
+    ok = ok && rays_shadow(&sc, &g[0].rays, ph, &g[1].rays, err) == 0 &&
+         rays_diffuse(&sc, &g[0].rays, ph, 7, &g[2].rays, err) == 0 &&
+         make_stiff_rays(&sc, &g[3].rays, err) == 0;
+    if (!ok) {
+        fail(r, "%s: could not make the rays: %s", spec, err->msg);
+        goto out;
+    }
+    if (build(s, "", &sc, &a, &st, err)) {
+        fail(r, "%s: your build failed: %s", spec, err->msg);
+        goto out;
+    }
+    for (int i = 0; i < 4; i++)
+        if (!compare_group(s->kind, a, &sc, &g[i], s->threads, r)) goto out;
+    uint32_t *steps = malloc(g[0].rays.count * sizeof *steps);
+    double mine = steps ? steps_per_ray(s->kind, a, &g[0].rays, steps) : NAN;
+    if (!(mine > 0.0)) {
+        fail(r, "%s: your traversal counts no node visits (*steps stays 0): the depth view "
+                "and the cost comparison need them",
+             spec);
+        free(steps);
+        goto out;
+    }
+    write_depth_view(s, spec, steps, size, size, r);
+    free(steps);
+    double theirs = NAN;
+    if (refk && accel_build_kind(refk, "build=median", &sc, 1, &ref_a, &st, err) == 0)
+        theirs = steps_per_ray(refk, ref_a, &g[0].rays, NULL);
+    if (theirs > 0.0 && mine > 2.0 * theirs) {
+        fail(r, "%s: your traversal visits %.1fx the nodes of a median-split BVH (%.1f against "
+                "%.1f per primary ray). Hint: visit the nearer child first, and drop a popped "
+                "node whose entry distance lies beyond the closest hit found so far",
+             spec, mine / theirs, mine, theirs);
+        goto out;
+    }
+    say(r, "  ok   %s: %zu rays agree with the reference; %.1f nodes per primary ray (median-split "
+           "BVH: %.1f)\n",
+        spec, g[0].rays.count + g[1].rays.count + g[2].rays.count + g[3].rays.count, mine, theirs);
+out:
+    if (a) s->kind->destroy(a);
+    if (ref_a) refk->destroy(ref_a);
+    for (int i = 0; i < 4; i++) rays_free(&g[i].rays);
+    free(ph);
+    scene_free(&sc);
+}
+
+/* ---- step 4 -------------------------------------------------------------- */
+
+static void check_packets(const lab_subject *s, const char *spec, lab_result *r, accel_error *err)
+{
+    accel_scene sc;
+    if (scene_create(spec, &sc, err)) {
+        fail(r, "scene %s: %s", spec, err->msg);
+        return;
+    }
+    ray_group g[2];
+    memset(g, 0, sizeof g);
+    g[0].name = "primary (8x8 packets)";
+    g[1].name = "shadow (packets)";
+    void *single = NULL, *packet = NULL;
+    accel_build_stats st;
+    accel_hit *ph = NULL;
+    int size = s->quick ? 48 : 96;
+    if (rays_primary(&sc.camera, size, size, &g[0].rays, err) ||
+        !(ph = malloc(g[0].rays.count * sizeof *ph))) {
+        fail(r, "%s: could not make the rays", spec);
+        goto out;
+    }
+    accel_reference_trace(&sc, g[0].rays.rays, ph, g[0].rays.count, s->threads);
+    if (rays_shadow(&sc, &g[0].rays, ph, &g[1].rays, err)) {
+        fail(r, "%s: could not make the shadow rays: %s", spec, err->msg);
+        goto out;
+    }
+    if (build(s, "traverse=packet", &sc, &packet, &st, err)) {
+        fail(r, "%s: your kind does not build with traverse=packet: %s", spec, err->msg);
+        goto out;
+    }
+    for (int i = 0; i < 2; i++)
+        if (!compare_group(s->kind, packet, &sc, &g[i], s->threads, r)) goto out;
+    if (build(s, "", &sc, &single, &st, err)) {
+        fail(r, "%s: your build failed: %s", spec, err->msg);
+        goto out;
+    }
+    accel_counters cp = {0};
+    accel_hit *h = malloc(g[0].rays.count * sizeof *h);
+    if (!h) goto out;
+    accel_trace(s->kind, packet, g[0].rays.rays, h, g[0].rays.count, 1, &cp);
+    free(h);
+    double per_ray = steps_per_ray(s->kind, single, &g[0].rays, NULL);
+    double fetched = (double)cp.packet_steps / (double)g[0].rays.count;
+    if (!(fetched > 0.0)) {
+        fail(r, "%s: your packets fetch no node for the packet as a whole (counters.packet_steps "
+                "stays 0): the packet mode still walks the tree once per ray. Walk it once per "
+                "packet, entering a node when any active ray hits its box, and count each node "
+                "the packet enters in packet_steps",
+             spec);
+        goto out;
+    }
+    if (fetched > 0.25 * per_ray) {
+        fail(r, "%s: your packets fetch %.2f nodes per ray, single rays visit %.2f: a packet of "
+                "64 coherent rays should share most nodes (at most a quarter of a single ray's "
+                "visits per ray). Hint: keep the first active ray's index, and pop a node "
+                "only when no ray of the packet needs it",
+             spec, fetched, per_ray);
+        goto out;
+    }
+    say(r, "  ok   %s: packets agree with the reference; %.3f node fetches per ray against %.1f "
+           "node visits per single ray (%.0fx fewer)\n",
+        spec, fetched, per_ray, per_ray / fetched);
+out:
+    if (single) s->kind->destroy(single);
+    if (packet) s->kind->destroy(packet);
+    for (int i = 0; i < 2; i++) rays_free(&g[i].rays);
+    free(ph);
+    scene_free(&sc);
+}
+
+/* ---- step 5 -------------------------------------------------------------- */
+
+typedef struct {
+    double ms_primary, ms_shadow;
+    accel_hit *hits;
+    uint8_t *occ;
+} frame_time;
+
+/* Median of 3 timed frames (primary then shadow rays) after one warm-up. */
+static int time_frames(const accel_kind *k, const void *a, const rays_set *prim,
+                       const rays_set *shadow, int threads, frame_time *out, accel_error *err)
+{
+    bench_trace_opts o = {0};
+    o.threads = threads;
+    o.warmup = 1;
+    o.repeats = 3;
+    o.hits = out->hits;
+    bench_result res;
+    int rc = bench_trace(k, a, prim, 0, &o, &res, err);
+    if (rc) return rc;
+    out->ms_primary = res.ms.median;
+    o.hits = NULL;
+    o.occluded = out->occ;
+    rc = bench_trace(k, a, shadow, 1, &o, &res, err);
+    out->ms_shadow = res.ms.median;
+    return rc;
+}
+
+static void check_real_time(const lab_subject *s, lab_result *r, accel_error *err)
+{
+    const char *spec = "teapot_stadium:n=16";
+    int w = s->quick ? 200 : 800, h = s->quick ? 150 : 600;
+    accel_scene sc;
+    if (scene_create(spec, &sc, err)) {
+        fail(r, "scene %s: %s", spec, err->msg);
+        return;
+    }
+    const accel_kind *refk = reference_kind();
+    rays_set prim = {0}, shadow = {0};
+    void *mine = NULL, *theirs = NULL;
+    accel_build_stats st_mine, st_theirs;
+    frame_time fm = {0}, ft = {0};
+    int ran = 0;
+    int threads = s->threads > 0 ? s->threads : 1;
+    if (rays_primary(&sc.camera, w, h, &prim, err)) goto out;
+    fm.hits = malloc(prim.count * sizeof *fm.hits);
+    ft.hits = malloc(prim.count * sizeof *ft.hits);
+    if (!fm.hits || !ft.hits || !refk) {
+        fail(r, "step 5 needs the project's bvh kind and memory for %zu rays", prim.count);
+        goto out;
+    }
+    if (accel_build_kind(refk, "traverse=packet", &sc, threads, &theirs, &st_theirs, err)) goto out;
+    accel_trace(refk, theirs, prim.rays, ft.hits, prim.count, threads, NULL);
+    if (rays_shadow(&sc, &prim, ft.hits, &shadow, err)) goto out;
+    fm.occ = malloc(shadow.count + 1);
+    ft.occ = malloc(shadow.count + 1);
+    if (!fm.occ || !ft.occ) goto out;
+    /* The student's fastest mode: packets when the kind has them. */
+    const char *mode = "traverse=packet";
+    if (build(s, mode, &sc, &mine, &st_mine, err)) {
+        mode = "";
+        if (build(s, mode, &sc, &mine, &st_mine, err)) {
+            fail(r, "%s: your build failed: %s", spec, err->msg);
+            goto out;
+        }
+    }
+    if (time_frames(s->kind, mine, &prim, &shadow, threads, &fm, err) ||
+        time_frames(refk, theirs, &prim, &shadow, threads, &ft, err))
+        goto out;
+    hits_diff d = hits_compare(ft.hits, fm.hits, prim.count);
+    size_t occ_bad = 0;
+    for (size_t i = 0; i < shadow.count; i++) occ_bad += fm.occ[i] != ft.occ[i];
+    if (d.first_bad != SIZE_MAX || occ_bad) {
+        fail(r, "%s at %dx%d: %zu primary rays and %zu shadow rays differ from the project's "
+                "BVH: fix steps 2 and 4 first",
+             spec, w, h, prim.count - d.agree, occ_bad);
+        goto out;
+    }
+    double f_mine = 1000.0 / (fm.ms_primary + fm.ms_shadow);
+    double f_theirs = 1000.0 / (ft.ms_primary + ft.ms_shadow);
+    say(r, "  ok   %s (%u triangles) at %dx%d, %d thread(s), primary + shadow rays:\n", spec,
+        sc.live_count, w, h, threads);
+    say(r, "       yours (%s%s%s): build %.1f ms, primary %.1f ms, shadow %.1f ms: %.1f frames/s\n",
+        s->kind->name, *mode ? ":" : "", mode, st_mine.ms, fm.ms_primary, fm.ms_shadow, f_mine);
+    say(r, "       project's bvh:traverse=packet: build %.1f ms, primary %.1f ms, shadow %.1f ms: "
+           "%.1f frames/s\n",
+        st_theirs.ms, ft.ms_primary, ft.ms_shadow, f_theirs);
+    if (w == 800 && h == 600)
+        say(r, "       the lecture's target is 20 frames/s at 800x600: %s\n",
+            f_mine >= 20.0 ? "reached. Be proud." : "not yet (LAB.md says what helps most)");
+    else
+        say(r, "       (a reduced size: the lecture's 20 frames/s target is for 800x600)\n");
+    ran = 1;
+out:
+    if (!ran && r->passed) fail(r, "step 5 could not run: %s", err->msg);
+    if (mine) s->kind->destroy(mine);
+    if (theirs) refk->destroy(theirs);
+    rays_free(&prim);
+    rays_free(&shadow);
+    free(fm.hits);
+    free(ft.hits);
+    free(fm.occ);
+    free(ft.occ);
+    scene_free(&sc);
+}
+
+/* ---- the steps ------------------------------------------------------------- */
+
+static const char *const step_scenes[] = {"soup:tris=3000,seed=7", "teapot_stadium:n=4",
+                                          "sphereflake:level=2", "cube:n=6"};
+
+int lab_check(int step, const lab_subject *s, lab_result *out, accel_error *err)
+{
+    memset(out, 0, sizeof *out);
+    out->passed = 1;
+    if (step < 1 || step > LAB_STEPS)
+        return accel_fail(err, ACCEL_ERR_SPEC, "lab: no step %d (steps are 1..%d)", step,
+                          LAB_STEPS);
+    say(out, "step %d: %s, kind %s%s%s\n", step, lab_step_title(step), s->kind->name,
+        *s->kv ? ":" : "", s->kv);
+    size_t n = sizeof step_scenes / sizeof step_scenes[0];
+    switch (step) {
+    case 1:
+        for (size_t i = 0; i < n && out->passed; i++) check_build(s, step_scenes[i], out, err);
+        break;
+    case 2:
+        for (size_t i = 0; i < n && out->passed; i++) check_traversal(s, step_scenes[i], out, err);
+        break;
+    case 3: {
+        const accel_kind *top = accel_find_kind("instanced");
+        if (!top) {
+            fail(out, "step 3 needs the two-level kind `instanced`, which this build lacks");
+            break;
+        }
+        fail(out, "step 3's check is not written yet");
+        break;
+    }
+    case 4:
+        for (size_t i = 0; i < 2 && out->passed; i++) check_packets(s, step_scenes[i], out, err);
+        break;
+    case 5:
+        check_real_time(s, out, err);
+        break;
+    }
+    return 0;
+}
