@@ -298,6 +298,8 @@ static int make_rays(const options *o, run *r, accel_error *err)
     int rc;
     if (r->from_file) {
         rc = rays_read(o->rays, &r->file_rays, err);
+        if (!rc && r->file_rays.count == 0)
+            rc = accel_fail(err, ACCEL_ERR_RANGE, "%s holds no rays", o->rays);
     } else {
         int mask = 0;
         for (int s = 0; s < r->set_count; s++) mask |= r->bits[s];
