@@ -301,6 +301,10 @@ void accel_trace_occluded(const accel_kind *kind, const void *accel, const accel
  * is one of them; threads <= 1 runs inline). `thread` is in [0, threads). */
 void accel_parallel_for(size_t count, size_t chunk, int threads,
                         void (*fn)(void *ctx, size_t begin, size_t end, int thread), void *ctx);
+/* Items finished by every accel_parallel_for of the process so far (all
+ * callers, never reset): the difference of two readings measures a long
+ * trace's progress (bench/progress.h) without touching its kernels. */
+uint64_t accel_parallel_done(void);
 
 /* ---- the oracle ---------------------------------------------------------- */
 

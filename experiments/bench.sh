@@ -9,7 +9,9 @@ out=build/bench; mkdir -p "$out"
 shared=../shared/scenes
 bunny=$shared/bunny.off
 T="bin/trace --csv --size 512x512 --repeat 5"
-run() { local name=$1; shift; echo "== $name: $*" >&2; $T "$@" | tee -a "$out/$name.csv"; }
+# One header per file (one schema): later runs append their records only.
+append() { local f=$1; if [ -s "$f" ]; then tail -n +2 | tee -a "$f"; else tee -a "$f"; fi; }
+run() { local name=$1; shift; echo "== $name: $*" >&2; $T "$@" | append "$out/$name.csv"; }
 rm -f "$out"/*.csv
 
 # Grid (issue 3): build speed, bytes/triangle, primary and diffuse Mrays/s.
@@ -39,7 +41,7 @@ for k in grid bvh nested_grid; do
   for b in bin bin-nocount; do
     echo "== counters $b $k" >&2
     $b/trace --csv --scene "$bunny" --accel $k --rays primary,diffuse --repeat 9 --no-counters \
-      | sed "s/^csv,/csv-$b,/" | tee -a "$out/counters.csv"
+      | sed "s/^csv,/csv-$b,/" | append "$out/counters.csv"
   done
 done
 echo "bench: CSV in $out/" >&2

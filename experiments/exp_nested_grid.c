@@ -42,6 +42,61 @@ static void run_cfg(exp_ctx *x, const accel_scene *s, const bench_sets *sets, cf
             c->build_ms, c->mb);
 }
 
+/* One scene: the regular grid's lambdas, the hand-set nested grids and
+ * auto; the comparison goes into findings. */
+static void measure_scene(exp_ctx *x, const char *spec, char *findings, size_t fn)
+{
+    static const char *const grid_full[] = {"grid:lambda=1", "grid:lambda=2", "grid:lambda=4",
+                                            "grid:lambda=8", "grid:lambda=16"};
+    static const char *const grid_quick[] = {"grid:lambda=1", "grid:lambda=4"};
+    static const char *const hand_full[] = {
+        "nested_grid",
+        "nested_grid:lambda=0.5",
+        "nested_grid:lambda=2",
+        "nested_grid:sub_lambda=2",
+        "nested_grid:sub_lambda=8",
+        "nested_grid:threshold=4",
+        "nested_grid:threshold=32",
+        "nested_grid:depth=2",
+        "nested_grid:lambda=0.5,sub_lambda=8,threshold=8",
+        "nested_grid:lambda=2,sub_lambda=2,threshold=32,depth=2"};
+    static const char *const hand_quick[] = {"nested_grid", "nested_grid:depth=2"};
+    const char *const *grids = x->quick ? grid_quick : grid_full;
+    const char *const *hands = x->quick ? hand_quick : hand_full;
+    int ng = x->quick ? 2 : 5, nh = x->quick ? 2 : 10;
+    accel_scene s;
+    exp_scene(x, spec, &s);
+    bench_sets sets;
+    exp_sets(x, &s, BENCH_PRIMARY | BENCH_DIFFUSE, &sets);
+    exp_md(x, "\n### %s (%u primitives)\n", s.name, s.live_count);
+    exp_md_table(x, "configuration|ns/ray|cells/ray|prims/ray|build ms|MB|Mrays/s");
+    cfg g[8], h[12], a = {"nested_grid:auto", 0, 0, 0, 0, 0, 0};
+    int bg = -1, bh = -1;
+    for (int i = 0; i < ng; i++) {
+        g[i].spec = grids[i];
+        run_cfg(x, &s, &sets, &g[i]);
+        if (g[i].ok && (bg < 0 || g[i].ns < g[bg].ns)) bg = i;
+    }
+    for (int i = 0; i < nh; i++) {
+        h[i].spec = hands[i];
+        run_cfg(x, &s, &sets, &h[i]);
+        if (h[i].ok && (bh < 0 || h[i].ns < h[bh].ns)) bh = i;
+    }
+    run_cfg(x, &s, &sets, &a);
+    if (bg >= 0 && bh >= 0) {
+        exp_append(findings, fn,
+                   "- %s: best regular grid `%s` %.0f ns/ray; best hand-set nested grid `%s` "
+                   "%.0f ns/ray (%.2fx the grid's speed, %.1f vs %.1f MB)%s",
+                   s.name, g[bg].spec, g[bg].ns, h[bh].spec, h[bh].ns, g[bg].ns / h[bh].ns,
+                   h[bh].mb, g[bg].mb, a.ok ? "" : ".\n");
+        if (a.ok)
+            exp_append(findings, fn, "; `auto` %.0f ns/ray, %+.0f%% from the best hand-set.\n",
+                       a.ns, 100 * (a.ns / h[bh].ns - 1));
+    }
+    bench_sets_free(&sets);
+    scene_free(&s);
+}
+
 int main(int argc, char **argv)
 {
     exp_ctx x;
@@ -71,63 +126,10 @@ int main(int argc, char **argv)
         scenes[scene_count++] = "sphereflake";
         for (int i = 0; i < x.mesh_count && scene_count < 6; i++) scenes[scene_count++] = x.meshes[i];
     }
-    static const char *const grid_full[] = {"grid:lambda=1", "grid:lambda=2", "grid:lambda=4",
-                                            "grid:lambda=8", "grid:lambda=16"};
-    static const char *const grid_quick[] = {"grid:lambda=1", "grid:lambda=4"};
-    static const char *const hand_full[] = {
-        "nested_grid",
-        "nested_grid:lambda=0.5",
-        "nested_grid:lambda=2",
-        "nested_grid:sub_lambda=2",
-        "nested_grid:sub_lambda=8",
-        "nested_grid:threshold=4",
-        "nested_grid:threshold=32",
-        "nested_grid:depth=2",
-        "nested_grid:lambda=0.5,sub_lambda=8,threshold=8",
-        "nested_grid:lambda=2,sub_lambda=2,threshold=32,depth=2"};
-    static const char *const hand_quick[] = {"nested_grid", "nested_grid:depth=2"};
-    const char *const *grids = x.quick ? grid_quick : grid_full;
-    const char *const *hands = x.quick ? hand_quick : hand_full;
-    int ng = x.quick ? 2 : 5, nh = x.quick ? 2 : 10;
     exp_csv(&x, "scene,spec,ns_per_ray,steps_per_ray,prims_per_ray,build_ms,mb\n");
     char findings[4096] = "";
-    for (int si = 0; si < scene_count; si++) {
-        accel_scene s;
-        exp_scene(scenes[si], &s);
-        bench_sets sets;
-        exp_sets(&x, &s, BENCH_PRIMARY | BENCH_DIFFUSE, &sets);
-        exp_md(&x, "\n### %s (%u primitives)\n", s.name, s.live_count);
-        exp_md_table(&x, "configuration|ns/ray|cells/ray|prims/ray|build ms|MB|Mrays/s");
-        cfg g[8], h[12], a = {"nested_grid:auto", 0, 0, 0, 0, 0, 0};
-        int bg = -1, bh = -1;
-        for (int i = 0; i < ng; i++) {
-            g[i].spec = grids[i];
-            run_cfg(&x, &s, &sets, &g[i]);
-            if (g[i].ok && (bg < 0 || g[i].ns < g[bg].ns)) bg = i;
-        }
-        for (int i = 0; i < nh; i++) {
-            h[i].spec = hands[i];
-            run_cfg(&x, &s, &sets, &h[i]);
-            if (h[i].ok && (bh < 0 || h[i].ns < h[bh].ns)) bh = i;
-        }
-        run_cfg(&x, &s, &sets, &a);
-        if (bg >= 0 && bh >= 0) {
-            size_t len = strlen(findings);
-            snprintf(findings + len, sizeof findings - len,
-                     "- %s: best regular grid `%s` %.0f ns/ray; best hand-set nested grid `%s` "
-                     "%.0f ns/ray (%.2fx the grid's speed, %.1f vs %.1f MB)%s",
-                     s.name, g[bg].spec, g[bg].ns, h[bh].spec, h[bh].ns, g[bg].ns / h[bh].ns,
-                     h[bh].mb, g[bg].mb, a.ok ? "" : ".\n");
-            if (a.ok) {
-                len = strlen(findings);
-                snprintf(findings + len, sizeof findings - len,
-                         "; `auto` %.0f ns/ray, %+.0f%% from the best hand-set.\n", a.ns,
-                         100 * (a.ns / h[bh].ns - 1));
-            }
-        }
-        bench_sets_free(&sets);
-        scene_free(&s);
-    }
+    for (int si = 0; si < scene_count; si++)
+        measure_scene(&x, scenes[si], findings, sizeof findings);
     exp_md(&x, "\n**Findings:**\n\n%s", findings);
     return exp_finish(&x);
 }

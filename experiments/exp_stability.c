@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "harness.h"
+#include "bench/cli.h"
 #include "bench/stiff.h"
 
 static void measure_case(exp_ctx *x, stiff_case *c, double *worst_naive, char *worst_what,
@@ -22,7 +23,8 @@ static void measure_case(exp_ctx *x, stiff_case *c, double *worst_naive, char *w
     size_t n = c->rays.count;
     accel_hit *ref = malloc((n ? n : 1) * sizeof *ref);
     accel_hit *h = malloc((n ? n : 1) * sizeof *h);
-    accel_reference_trace(&c->scene, c->rays.rays, ref, n, accel_cpu_count());
+    if (!ref || !h) exit(CLI_EXIT_INTERNAL);
+    exp_reference(x, &c->scene, c->rays.rays, ref, n);
     exp_md(x, "| **%s** (%zu rays) | | | | | | |\n", c->name, n);
     for (size_t k = 0; k < accel_kind_count; k++) {
         const accel_kind *kind = accel_kinds[k];
@@ -39,7 +41,8 @@ static void measure_case(exp_ctx *x, stiff_case *c, double *worst_naive, char *w
                 continue;
             }
             bench_trace_opts o = {.threads = x->threads, .warmup = 1, .repeats = x->repeats,
-                                  .hits = h, .max_ms = 5000};
+                                  .hits = h, .max_ms = 5000, .progress = x->progress,
+                                  .progress_name = spec};
             bench_result r;
             bench_trace(kk, a, &c->rays, 0, &o, &r, &err);
             hits_diff d = hits_compare(ref, h, n);
@@ -49,7 +52,7 @@ static void measure_case(exp_ctx *x, stiff_case *c, double *worst_naive, char *w
             exp_md(x, "| %s | %s | %.0f | %.0f | %.0f | %.0f | %.2f |\n", kind->name,
                    naive ? "naive" : "watertight", d.holes * pm, d.false_hits * pm,
                    d.disagreements * pm, leaks * pm, r.mrays.median);
-            exp_csv(x, "stiff,%s,%s,%s,%zu,%.1f,%.1f,%.1f,%.1f,%.4f\n", c->name, kind->name,
+            exp_csv(x, "stiff,%s,%s,%s,%zu,%.1f,%.1f,%.1f,%.1f,%.4f,,,\n", c->name, kind->name,
                     naive ? "naive" : "watertight", n, d.holes * pm, d.false_hits * pm,
                     d.disagreements * pm, leaks * pm, r.mrays.median);
             double bad = (double)(d.holes + leaks) * pm;
@@ -76,15 +79,14 @@ static void self_intersection(exp_ctx *x, char *finding, size_t fn)
               "point + 1e-4 * normal, t_near = 0. Robust: the integer-ULP offset of Waechter and "
               "Binder (2019), t_near = 0. Counts per million rays, default accelerator.\n");
     exp_md_table(x, "distance d|rays|fixed epsilon 1e-4|robust offset");
-    exp_csv(x, "selfhit,distance,rays,fixed_per_million,robust_per_million\n");
     double worst_fixed = 0, worst_robust = 0;
     for (int i = 0; i < no; i++) {
         accel_scene base, s;
         accel_error err = {0};
-        exp_scene("sphere:segments=24", &base);
+        exp_scene(x, "sphere:segments=24", &base);
         if (scene_transform(&base, 1.0f, v3(offsets[i], offsets[i], offsets[i]), &s, &err)) {
             fprintf(stderr, "exp_stability: %s\n", err.msg);
-            exit(1);
+            exit(cli_exit_of(err.code));
         }
         scene_free(&base);
         bench_sets sets;
@@ -93,8 +95,12 @@ static void self_intersection(exp_ctx *x, char *finding, size_t fn)
         const accel_kind *k;
         void *a;
         accel_build_stats st;
-        if (accel_build_spec(gen, &s, x->threads, &k, &a, &st, &err)) exit(1);
+        if (accel_build_spec(gen, &s, x->threads, &k, &a, &st, &err)) {
+            fprintf(stderr, "exp_stability: %s\n", err.msg);
+            exit(cli_exit_of(err.code));
+        }
         accel_hit *ph = malloc(sets.primary.count * sizeof *ph);
+        if (!ph) exit(CLI_EXIT_INTERNAL);
         accel_trace(k, a, sets.primary.rays, ph, sets.primary.count, x->threads, NULL);
         size_t n = 0, self_fixed = 0, self_robust = 0;
         for (size_t r = 0; r < sets.primary.count; r++) {
@@ -116,7 +122,8 @@ static void self_intersection(exp_ctx *x, char *finding, size_t fn)
         }
         double pm = 1e6 / (double)(n ? n : 1);
         exp_md(x, "| %g | %zu | %.0f | %.0f |\n", offsets[i], n, self_fixed * pm, self_robust * pm);
-        exp_csv(x, "selfhit,%g,%zu,%.1f,%.1f\n", offsets[i], n, self_fixed * pm, self_robust * pm);
+        exp_csv(x, "selfhit,sphere:segments=24,%s,watertight,%zu,,,,,,%g,%.1f,%.1f\n", gen, n,
+                offsets[i], self_fixed * pm, self_robust * pm);
         worst_fixed = fmax(worst_fixed, self_fixed * pm);
         worst_robust = fmax(worst_robust, self_robust * pm);
         free(ph);
@@ -127,6 +134,29 @@ static void self_intersection(exp_ctx *x, char *finding, size_t fn)
     snprintf(finding, fn, "a fixed 1e-4 offset self-intersects up to %.0f rays per million as the "
              "scene moves away from the origin; the robust offset %s.", worst_fixed,
              worst_robust == 0 ? "never does" : "also fails on some rays");
+}
+
+/* Every stiff case (three in the quick budget), then the meshes. */
+static void stiff_cases(exp_ctx *x, double *worst, char *worst_what, size_t wn, int *robust_bad)
+{
+    int count = x->quick ? 3 : stiff_case_count();
+    for (int i = 0; i < count; i++) {
+        stiff_case c;
+        accel_error err = {0};
+        if (stiff_case_make(i, &c, &err)) {
+            exp_md(x, "| case %d | skipped: %s | | | | | |\n", i, err.msg);
+            continue;
+        }
+        measure_case(x, &c, worst, worst_what, wn, robust_bad);
+        stiff_case_free(&c);
+    }
+    for (int m = 0; m < x->mesh_count; m++) {
+        stiff_case c;
+        accel_error err = {0};
+        if (stiff_case_from_scene(x->meshes[m], 0, &c, &err)) continue;
+        measure_case(x, &c, worst, worst_what, wn, robust_bad);
+        stiff_case_free(&c);
+    }
 }
 
 int main(int argc, char **argv)
@@ -144,31 +174,16 @@ int main(int argc, char **argv)
                "rays does each accelerator make with the watertight test (Woop et al. 2013, "
                "default) and with the naive Moller-Trumbore test, and at what speed? The "
                "reference is brute force in double precision.\n");
+    /* One schema for both parts: stiff rows leave the self-intersection
+     * columns empty, selfhit rows the per-case ones. */
     exp_csv(&x, "part,case,kind,triangle_test,rays,holes_pm,false_hits_pm,disagreements_pm,"
-                "leaks_pm,mrays\n");
+                "leaks_pm,mrays,distance,fixed_selfhits_pm,robust_selfhits_pm\n");
     exp_md_table(&x, "kind|triangle test|holes / M rays|false hits / M|disagreements / M|"
                      "leaks / M|Mrays/s");
     double worst = 0;
     char worst_what[256] = "";
     int robust_bad = 0;
-    int count = x.quick ? 3 : stiff_case_count();
-    for (int i = 0; i < count; i++) {
-        stiff_case c;
-        accel_error err = {0};
-        if (stiff_case_make(i, &c, &err)) {
-            exp_md(&x, "| case %d | skipped: %s | | | | | |\n", i, err.msg);
-            continue;
-        }
-        measure_case(&x, &c, &worst, worst_what, sizeof worst_what, &robust_bad);
-        stiff_case_free(&c);
-    }
-    for (int m = 0; m < x.mesh_count; m++) {
-        stiff_case c;
-        accel_error err = {0};
-        if (stiff_case_from_scene(x.meshes[m], 0, &c, &err)) continue;
-        measure_case(&x, &c, &worst, worst_what, sizeof worst_what, &robust_bad);
-        stiff_case_free(&c);
-    }
+    stiff_cases(&x, &worst, worst_what, sizeof worst_what, &robust_bad);
     char self[512];
     self_intersection(&x, self, sizeof self);
     exp_md(&x, "\n**Findings:**\n\n- The watertight kernels of every kind: %s.\n"

@@ -63,6 +63,117 @@ static int fit3(const double *s, const double *p, const double *y, int n, double
     return 1;
 }
 
+/* Fits C_step, C_intersect, C_ray; a negative cost is no cost: refit
+ * without the per-ray constant, and give up if the slopes still come out
+ * negative. Returns whether coef holds a fit. */
+static int fit_costs(const double *st, const double *pr, const double *ns, int n, double coef[3])
+{
+    int fitted = n >= 4 && fit3(st, pr, ns, n, coef);
+    if (fitted && (coef[0] < 0 || coef[1] < 0 || coef[2] < 0)) {
+        double sp = 0, ss = 0, pp = 0, sy = 0, py = 0;
+        for (int i = 0; i < n; i++) {
+            ss += st[i] * st[i], sp += st[i] * pr[i], pp += pr[i] * pr[i];
+            sy += st[i] * ns[i], py += pr[i] * ns[i];
+        }
+        double det = ss * pp - sp * sp;
+        fitted = fabs(det) > 1e-12;
+        if (fitted) {
+            coef[0] = (sy * pp - py * sp) / det;
+            coef[1] = (ss * py - sp * sy) / det;
+            coef[2] = 0;
+            fitted = coef[0] >= 0 && coef[1] >= 0;
+        }
+    }
+    return fitted;
+}
+
+/* One family of configurations on one scene: measure, fit, compare. */
+static void measure_family(exp_ctx *x, const accel_scene *s, const bench_sets *sets,
+                           const family *fam, char *findings, size_t fn)
+{
+    double st[2 * MAX_CFG], pr[2 * MAX_CFG], ns[2 * MAX_CFG];
+    const char *names[2 * MAX_CFG];
+    const char *sets_of[2 * MAX_CFG];
+    int n = 0;
+    char skipped[1024] = "";
+    for (int c = 0; fam->cfg[c]; c++) {
+        exp_measure m;
+        char why[600];
+        if (exp_run(x, fam->cfg[c], s, sets, BENCH_PRIMARY | BENCH_DIFFUSE, &m, why, sizeof why)) {
+            exp_append(skipped, sizeof skipped, "- `%s` skipped: %s\n", fam->cfg[c], why);
+            continue;
+        }
+        for (int r = 0; r < 3; r += 2) {
+            const bench_result *b = &m.res[r];
+            if (!b->rays) continue;
+            st[n] = exp_per_ray(b->counters.steps, b);
+            pr[n] = exp_per_ray(b->counters.prim_tests, b);
+            ns[n] = b->ms.median * 1e6 / (double)b->rays;
+            names[n] = fam->cfg[c];
+            sets_of[n] = r == 0 ? "primary" : "diffuse";
+            n++;
+        }
+    }
+    double coef[3] = {NAN, NAN, NAN};
+    int fitted = fit_costs(st, pr, ns, n, coef);
+    exp_md(x, "\n**%s**: ", fam->kind);
+    if (fitted)
+        exp_md(x, "C_step = %.2f ns, C_intersect = %.2f ns, C_ray = %.1f ns "
+                  "(C_intersect / C_step = %.1f)\n",
+               coef[0], coef[1], coef[2], coef[1] / coef[0]);
+    else
+        exp_md(x, "the model does not fit these measurements (no non-negative "
+                  "C_step, C_intersect explain them: timing noise or memory effects "
+                  "dominate)\n");
+    exp_md_table(x, "configuration|rays|steps/ray|prims/ray|measured ns/ray|"
+                    "predicted ns/ray|error");
+    double worst = 0;
+    for (int i = 0; i < n; i++) {
+        double pred = fitted ? coef[0] * st[i] + coef[1] * pr[i] + coef[2] : NAN;
+        double e = fitted ? (pred - ns[i]) / ns[i] : NAN;
+        if (fitted && fabs(e) > worst) worst = fabs(e);
+        exp_md(x, "| `%s` | %s | %.1f | %.1f | %.0f | %.0f | %+.0f%% |\n", names[i], sets_of[i],
+               st[i], pr[i], ns[i], pred, 100 * e);
+        exp_csv(x, "%s,%s,%s,%s,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.4f\n", s->name, fam->kind,
+                names[i], sets_of[i], ns[i], st[i], pr[i], pred, coef[0], coef[1], coef[2]);
+    }
+    if (skipped[0]) exp_md(x, "\n%s", skipped);
+    if (fitted)
+        exp_append(findings, fn,
+                   "- %s on %s: a step costs %.1f ns, a primitive test %.1f ns (ratio %.1f); "
+                   "the fitted model predicts every configuration within %.0f%%.\n",
+                   fam->kind, s->name, coef[0], coef[1], coef[1] / coef[0], 100 * worst);
+}
+
+/* The lecture's "visualize traversal depth": steps per pixel per kind. */
+static void heatmaps(exp_ctx *x)
+{
+    const char *heat_scenes[2] = {x->quick ? "sphereflake:level=1" : "teapot_stadium:n=12",
+                                  x->quick ? NULL : (x->mesh_count ? x->meshes[0] : "sphereflake")};
+    exp_md(x, "\n### Heatmaps: steps per pixel\n\nEach kind with its default parameters on the "
+              "same primary rays; brighter = more cells stepped / nodes visited.\n");
+    for (int h = 0; h < 2; h++) {
+        if (!heat_scenes[h]) continue;
+        accel_scene s;
+        exp_scene(x, heat_scenes[h], &s);
+        bench_sets sets;
+        exp_sets(x, &s, BENCH_PRIMARY, &sets);
+        for (size_t k = 0; k < accel_kind_count; k++) {
+            const accel_kind *kind = accel_kinds[k];
+            if (!strcmp(kind->name, "brute")) continue; /* every pixel costs N: no picture */
+            char name[128], caption[256], why[600];
+            snprintf(name, sizeof name, "heat_%s_%d", kind->name, h);
+            for (char *c = name; *c; c++)
+                if (*c == ':' || *c == ',' || *c == '=' || *c == '/' || *c == '.') *c = '_';
+            snprintf(caption, sizeof caption, "`%s` on %s", kind->name, s.name);
+            if (exp_heatmap(x, kind->name, &s, &sets, 's', name, caption, why, sizeof why))
+                exp_md(x, "\n`%s` on %s: skipped (%s)\n", kind->name, s.name, why);
+        }
+        bench_sets_free(&sets);
+        scene_free(&s);
+    }
+}
+
 int main(int argc, char **argv)
 {
     exp_ctx x;
@@ -92,117 +203,17 @@ int main(int argc, char **argv)
     char findings[4096] = "";
     for (int si = 0; si < scene_count; si++) {
         accel_scene s;
-        exp_scene(scenes[si], &s);
+        exp_scene(&x, scenes[si], &s);
         bench_sets sets;
         exp_sets(&x, &s, BENCH_PRIMARY | BENCH_DIFFUSE, &sets);
         exp_md(&x, "\n### %s (%u primitives)\n", s.name, s.live_count);
-        for (size_t f = 0; f < sizeof families / sizeof families[0]; f++) {
-            if (!accel_find_kind(families[f].kind)) continue;
-            double st[2 * MAX_CFG], pr[2 * MAX_CFG], ns[2 * MAX_CFG];
-            const char *names[2 * MAX_CFG];
-            const char *sets_of[2 * MAX_CFG];
-            int n = 0;
-            char skipped[1024] = "";
-            for (int c = 0; families[f].cfg[c]; c++) {
-                exp_measure m;
-                char why[600];
-                if (exp_run(&x, families[f].cfg[c], &s, &sets, BENCH_PRIMARY | BENCH_DIFFUSE, &m,
-                            why, sizeof why)) {
-                    size_t len = strlen(skipped);
-                    snprintf(skipped + len, sizeof skipped - len, "- `%s` skipped: %s\n",
-                             families[f].cfg[c], why);
-                    continue;
-                }
-                for (int r = 0; r < 3; r += 2) {
-                    const bench_result *b = &m.res[r];
-                    if (!b->rays) continue;
-                    st[n] = exp_per_ray(b->counters.steps, b);
-                    pr[n] = exp_per_ray(b->counters.prim_tests, b);
-                    ns[n] = b->ms.median * 1e6 / (double)b->rays;
-                    names[n] = families[f].cfg[c];
-                    sets_of[n] = r == 0 ? "primary" : "diffuse";
-                    n++;
-                }
-            }
-            double coef[3] = {NAN, NAN, NAN};
-            int fitted = n >= 4 && fit3(st, pr, ns, n, coef);
-            if (fitted && (coef[0] < 0 || coef[1] < 0 || coef[2] < 0)) {
-                /* A negative cost is no cost: refit without the per-ray
-                 * constant, and give up if the slopes still come out negative. */
-                double sp = 0, ss = 0, pp = 0, sy = 0, py = 0;
-                for (int i = 0; i < n; i++) {
-                    ss += st[i] * st[i], sp += st[i] * pr[i], pp += pr[i] * pr[i];
-                    sy += st[i] * ns[i], py += pr[i] * ns[i];
-                }
-                double det = ss * pp - sp * sp;
-                fitted = fabs(det) > 1e-12;
-                if (fitted) {
-                    coef[0] = (sy * pp - py * sp) / det;
-                    coef[1] = (ss * py - sp * sy) / det;
-                    coef[2] = 0;
-                    fitted = coef[0] >= 0 && coef[1] >= 0;
-                }
-            }
-            exp_md(&x, "\n**%s**: ", families[f].kind);
-            if (fitted)
-                exp_md(&x, "C_step = %.2f ns, C_intersect = %.2f ns, C_ray = %.1f ns "
-                           "(C_intersect / C_step = %.1f)\n",
-                       coef[0], coef[1], coef[2], coef[1] / coef[0]);
-            else
-                exp_md(&x, "the model does not fit these measurements (no non-negative "
-                           "C_step, C_intersect explain them: timing noise or memory effects "
-                           "dominate)\n");
-            exp_md_table(&x, "configuration|rays|steps/ray|prims/ray|measured ns/ray|"
-                             "predicted ns/ray|error");
-            double worst = 0;
-            for (int i = 0; i < n; i++) {
-                double pred = fitted ? coef[0] * st[i] + coef[1] * pr[i] + coef[2] : NAN;
-                double e = fitted ? (pred - ns[i]) / ns[i] : NAN;
-                if (fitted && fabs(e) > worst) worst = fabs(e);
-                exp_md(&x, "| `%s` | %s | %.1f | %.1f | %.0f | %.0f | %+.0f%% |\n", names[i],
-                       sets_of[i], st[i], pr[i], ns[i], pred, 100 * e);
-                exp_csv(&x, "%s,%s,%s,%s,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.4f\n", s.name,
-                        families[f].kind, names[i], sets_of[i], ns[i], st[i], pr[i], pred,
-                        coef[0], coef[1], coef[2]);
-            }
-            if (skipped[0]) exp_md(&x, "\n%s", skipped);
-            if (fitted) {
-                size_t len = strlen(findings);
-                snprintf(findings + len, sizeof findings - len,
-                         "- %s on %s: a step costs %.1f ns, a primitive test %.1f ns (ratio %.1f); "
-                         "the fitted model predicts every configuration within %.0f%%.\n",
-                         families[f].kind, s.name, coef[0], coef[1], coef[1] / coef[0],
-                         100 * worst);
-            }
-        }
+        for (size_t f = 0; f < sizeof families / sizeof families[0]; f++)
+            if (accel_find_kind(families[f].kind))
+                measure_family(&x, &s, &sets, &families[f], findings, sizeof findings);
         bench_sets_free(&sets);
         scene_free(&s);
     }
-    /* The lecture's "visualize traversal depth": steps per pixel per kind. */
-    const char *heat_scenes[2] = {x.quick ? "sphereflake:level=1" : "teapot_stadium:n=12",
-                                  x.quick ? NULL : (x.mesh_count ? x.meshes[0] : "sphereflake")};
-    exp_md(&x, "\n### Heatmaps: steps per pixel\n\nEach kind with its default parameters on the "
-               "same primary rays; brighter = more cells stepped / nodes visited.\n");
-    for (int h = 0; h < 2; h++) {
-        if (!heat_scenes[h]) continue;
-        accel_scene s;
-        exp_scene(heat_scenes[h], &s);
-        bench_sets sets;
-        exp_sets(&x, &s, BENCH_PRIMARY, &sets);
-        for (size_t k = 0; k < accel_kind_count; k++) {
-            const accel_kind *kind = accel_kinds[k];
-            if (!strcmp(kind->name, "brute")) continue; /* every pixel costs N: no picture */
-            char name[128], caption[256], why[600];
-            snprintf(name, sizeof name, "heat_%s_%d", kind->name, h);
-            for (char *c = name; *c; c++)
-                if (*c == ':' || *c == ',' || *c == '=' || *c == '/' || *c == '.') *c = '_';
-            snprintf(caption, sizeof caption, "`%s` on %s", kind->name, s.name);
-            if (exp_heatmap(&x, kind->name, &s, &sets, 's', name, caption, why, sizeof why))
-                exp_md(&x, "\n`%s` on %s: skipped (%s)\n", kind->name, s.name, why);
-        }
-        bench_sets_free(&sets);
-        scene_free(&s);
-    }
+    heatmaps(&x);
     exp_md(&x, "\n**Findings:**\n\n%s", findings);
     exp_md(&x, "\nA step and a test do not cost the same everywhere: the fitted constants "
                "absorb cache behaviour (coherent primary rays against incoherent diffuse ones), "

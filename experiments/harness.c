@@ -4,25 +4,59 @@
  */
 #include <dirent.h>
 #include <stdarg.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 
 #include "harness.h"
+#include "bench/cli.h"
 #include "bench/image.h"
+
+static int opt_mesh(const cli_option *o, void *field, char **v, accel_error *err)
+{
+    exp_ctx *x = (exp_ctx *)((char *)field - offsetof(exp_ctx, meshes));
+    if (x->mesh_count == EXP_MAX_MESHES)
+        return accel_fail(err, ACCEL_ERR_SPEC, "%s: at most %d meshes", o->name, EXP_MAX_MESHES);
+    int rc = scene_spec_check(v[0], err);
+    if (rc) return rc;
+    x->meshes[x->mesh_count++] = v[0];
+    return 0;
+}
+
+static int opt_threads(const cli_option *o, void *field, char **v, accel_error *err)
+{
+    exp_ctx *x = (exp_ctx *)((char *)field - offsetof(exp_ctx, threads));
+    x->threads_given = 1;
+    return cli_int(o, field, v, err);
+}
+
+#define OPT(f) offsetof(exp_ctx, f)
+static const cli_option exp_options[] = {
+    {"--quick", NULL, "smoke-test budget (tiny scenes, 1 repeat)", cli_flag, OPT(quick), 0, 0},
+    {"--out", "DIR", "where <name>.csv and <name>.md go (default experiments/out)", cli_string,
+     OPT(out_dir), 0, 0},
+    {"--threads", "N", "threads of every build, trace and reference (default 1;\n"
+     "exp_threads: the largest count, default every core)", opt_threads, OPT(threads), 1, 256},
+    {"--repeat", "N", "timed passes per measurement (default 5, quick 1)", cli_int, OPT(repeats),
+     1, 100},
+    {"--size", "N", "primary image N x N (default 128, quick 64)", cli_int, OPT(size), 8, 8192},
+    {"--mesh", "FILE", "add a mesh (repeatable; default ../shared/scenes/*.off if present)",
+     opt_mesh, OPT(meshes), 0, 0},
+    {"--no-meshes", NULL, "built-in scenes only", cli_flag, OPT(no_meshes), 0, 0},
+    {"--quiet", NULL, "no progress lines on stderr", cli_flag, OPT(quiet), 0, 0},
+    {"--progress-after", "S", "show progress of phases longer than S seconds (default 2)",
+     cli_double, OPT(progress_after), 0, 1e6},
+    {"--help", NULL, "this text", cli_flag, OPT(help), 0, 0},
+};
+#define OPTION_COUNT (sizeof exp_options / sizeof exp_options[0])
 
 static void usage(const exp_ctx *x, const char *question, const char *extra)
 {
-    printf("usage: %s [options]\n%s\n\n"
-           "  --quick          smoke-test budget (tiny scenes, 1 repeat)\n"
-           "  --out DIR        where <name>.csv and <name>.md go (default experiments/out)\n"
-           "  --threads N      threads for builds and traces (default 1)\n"
-           "  --repeat N       timed passes per measurement (default 5, quick 1)\n"
-           "  --size N         primary image N x N (default 128, quick 64)\n"
-           "  --mesh FILE      add a mesh (repeatable; default ../shared/scenes/*.off if present)\n"
-           "  --no-meshes      built-in scenes only\n"
-           "  --help           this text\n%s",
-           x->name, question, extra ? extra : "");
+    printf("usage: %s [options]\n%s\n\n", x->name, question);
+    cli_help(stdout, exp_options, OPTION_COUNT);
+    printf("%s\n", extra ? extra : "");
+    cli_help_exit_codes(stdout);
 }
 
 static void find_default_meshes(exp_ctx *x)
@@ -62,61 +96,34 @@ void exp_init(exp_ctx *x, int argc, char **argv, const char *name, const char *q
     x->threads = 1;
     x->repeats = -1;
     x->size = -1;
-    int no_meshes = 0, explicit_meshes = 0;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
-        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-            usage(x, question, extra_help);
-            exit(0);
-        } else if (!strcmp(a, "--quick")) {
-            x->quick = 1;
-        } else if (!strcmp(a, "--no-meshes")) {
-            no_meshes = 1;
-        } else if (v && !strcmp(a, "--out")) {
-            x->out_dir = v, i++;
-        } else if (v && !strcmp(a, "--threads")) {
-            x->threads = atoi(v), i++;
-        } else if (v && !strcmp(a, "--repeat")) {
-            x->repeats = atoi(v), i++;
-        } else if (v && !strcmp(a, "--size")) {
-            x->size = atoi(v), i++;
-        } else if (v && !strcmp(a, "--mesh")) {
-            if (x->mesh_count < EXP_MAX_MESHES) x->meshes[x->mesh_count++] = v;
-            explicit_meshes = 1;
-            i++;
-        } else {
-            fprintf(stderr, "%s: unknown or incomplete option '%s' (see --help)\n", name, a);
-            exit(2);
-        }
+    x->progress_after = BENCH_PROGRESS_AFTER_MS / 1e3;
+    accel_error err = {0};
+    if (cli_parse(exp_options, OPTION_COUNT, argc, argv, 1, x, &err)) {
+        fprintf(stderr, "%s: %s\n", name, err.msg);
+        exit(err.code == ACCEL_ERR_IO ? CLI_EXIT_INPUT : CLI_EXIT_USAGE);
     }
-    if (x->threads < 1 || x->threads > 256) {
-        fprintf(stderr, "%s: --threads must be 1..256\n", name);
-        exit(2);
+    if (x->help) {
+        usage(x, question, extra_help);
+        exit(CLI_EXIT_OK);
     }
     if (x->repeats < 0) x->repeats = x->quick ? 1 : 5;
-    if (x->repeats < 1 || x->repeats > 100) {
-        fprintf(stderr, "%s: --repeat must be 1..100\n", name);
-        exit(2);
-    }
     if (x->size < 0) x->size = x->quick ? 64 : 128;
-    if (x->size < 8 || x->size > 8192) {
-        fprintf(stderr, "%s: --size must be 8..8192\n", name);
-        exit(2);
-    }
-    if (no_meshes)
+    if (x->no_meshes)
         x->mesh_count = 0;
-    else if (!explicit_meshes && !x->quick)
+    else if (!x->mesh_count && !x->quick)
         find_default_meshes(x);
     mkdir(x->out_dir, 0777);
     char path[1024];
     snprintf(path, sizeof path, "%s/%s.csv", x->out_dir, name);
-    x->csv = fopen(path, "w");
+    FILE *csv = fopen(path, "w");
     snprintf(path, sizeof path, "%s/%s.md", x->out_dir, name);
     x->md = fopen(path, "w");
-    if (!x->csv || !x->md) {
+    if (!csv || !x->md) {
         fprintf(stderr, "%s: cannot write into %s\n", name, x->out_dir);
-        exit(1);
+        exit(CLI_EXIT_INPUT);
     }
+    csv_open(&x->csv, csv);
+    x->progress = bench_progress_start(x->quiet ? NULL : stderr, name, x->progress_after * 1e3);
     x->t_start = accel_now_ms();
     fprintf(stderr, "%s: %s\n", name, x->quick ? "quick budget" : "full budget");
 }
@@ -127,19 +134,42 @@ int exp_finish(exp_ctx *x)
     exp_md(x, "\n_%s ran in %.1f s (%s budget, %d thread%s, %d timed repeat%s, images %dx%d)._\n",
            x->name, s, x->quick ? "quick" : "full", x->threads, x->threads > 1 ? "s" : "",
            x->repeats, x->repeats > 1 ? "s" : "", x->size, x->size);
-    fclose(x->csv);
+    bench_progress_stop(x->progress);
+    x->progress = NULL;
+    if (x->csv.bad_rows) {
+        fprintf(stderr, "%s: %d CSV record(s) refused, the first: %s\n", x->name, x->csv.bad_rows,
+                x->csv.first_bad);
+        x->status = CLI_EXIT_INTERNAL;
+    }
+    fclose(x->csv.f);
     fclose(x->md);
-    fprintf(stderr, "%s: done in %.1f s\n", x->name, s);
-    return 0;
+    fprintf(stderr, "%s: done in %.1f s%s\n", x->name, s,
+            x->status ? " (with errors, see above)" : "");
+    return x->status;
 }
 
 void exp_csv(exp_ctx *x, const char *fmt, ...)
 {
     va_list ap;
     va_start(ap, fmt);
-    vfprintf(x->csv, fmt, ap);
+    csv_vrow(&x->csv, fmt, ap); /* refusals are counted; exp_finish reports them */
     va_end(ap);
-    fflush(x->csv);
+}
+
+void exp_append(char *buf, size_t n, const char *fmt, ...)
+{
+    size_t len = strlen(buf);
+    if (len >= n) return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(buf + len, n - len, fmt, ap);
+    va_end(ap);
+}
+
+void exp_internal(exp_ctx *x, const char *what, const accel_error *err)
+{
+    fprintf(stderr, "%s: %s: %s\n", x->name, what, err->msg);
+    x->status = CLI_EXIT_INTERNAL;
 }
 
 void exp_md(exp_ctx *x, const char *fmt, ...)
@@ -166,12 +196,19 @@ const char *exp_fmt_timing(char *buf, size_t n, const accel_timing *t, int decim
     return buf;
 }
 
-void exp_scene(const char *spec, accel_scene *s)
+void exp_scene(exp_ctx *x, const char *spec, accel_scene *s)
 {
     accel_error err = {0};
-    if (scene_create(spec, s, &err)) {
-        fprintf(stderr, "experiment: %s\n", err.msg);
-        exit(1);
+    char phase[300];
+    snprintf(phase, sizeof phase, "make scene %s", spec);
+    bench_progress_begin(x->progress, phase, 0, 0);
+    int rc = scene_create(spec, s, &err);
+    bench_progress_end(x->progress);
+    if (rc == 0 && s->live_count == 0)
+        rc = accel_fail(&err, ACCEL_ERR_RANGE, "scene %s has nothing to hit", spec);
+    if (rc) {
+        fprintf(stderr, "%s: %s\n", x->name, err.msg);
+        exit(cli_exit_of(err.code));
     }
 }
 
@@ -179,10 +216,23 @@ void exp_sets(exp_ctx *x, const accel_scene *s, int mask, bench_sets *out)
 {
     accel_error err = {0};
     bench_set_opts o = {NULL, x->size, x->size, 4, 0, 1, x->threads, NULL};
-    if (bench_sets_make(s, &o, mask, out, &err)) {
-        fprintf(stderr, "experiment: ray sets for %s: %s\n", s->name, err.msg);
-        exit(1);
+    bench_progress_begin(x->progress, "make ray sets", 0, 0);
+    int rc = bench_sets_make(s, &o, mask, out, &err);
+    bench_progress_end(x->progress);
+    if (rc) {
+        fprintf(stderr, "%s: ray sets for %s: %s\n", x->name, s->name, err.msg);
+        exit(cli_exit_of(err.code));
     }
+}
+
+void exp_reference(exp_ctx *x, const accel_scene *s, const accel_ray *rays, accel_hit *hits,
+                   size_t count)
+{
+    char phase[200];
+    snprintf(phase, sizeof phase, "reference on %s", s->name);
+    bench_progress_begin(x->progress, phase, (double)count, 1);
+    accel_reference_trace(s, rays, hits, count, x->threads);
+    bench_progress_end(x->progress);
 }
 
 int exp_run(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets *sets, int mask,
@@ -194,19 +244,23 @@ int exp_run(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets
     void *accel;
     int build_reps = x->quick ? 1 : 3;
     if (bench_build(spec, s, x->threads, build_reps, 5000.0, &kind, &accel, &m->build,
-                    &m->build_ms, &err)) {
+                    &m->build_ms, x->progress, &err)) {
         snprintf(why, why_n, "%s", err.msg);
         return 1;
     }
     for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
         if (!(mask & bit) || !(sets->made & bit)) continue;
         int i = exp_set_index(bit);
+        char phase[320];
+        snprintf(phase, sizeof phase, "trace %s with %s", bench_set_name(bit), spec);
         bench_trace_opts o = {.threads = x->threads, .warmup = 1, .repeats = x->repeats,
                               .count_pass = 1, .min_ms = x->quick ? 0.0 : 50.0,
-                              .max_ms = x->quick ? 2000.0 : 10000.0};
+                              .max_ms = x->quick ? 2000.0 : 10000.0,
+                              .progress = x->progress, .progress_name = phase};
         if (bench_trace(kind, accel, bench_sets_get(sets, bit), bench_set_is_occlusion(bit), &o,
                         &m->res[i], &err)) {
             snprintf(why, why_n, "%s", err.msg);
+            if (err.code == ACCEL_ERR_INTERNAL) exp_internal(x, spec, &err);
             kind->destroy(accel);
             return 1;
         }
@@ -251,6 +305,11 @@ int exp_heatmap(exp_ctx *x, const char *spec, const accel_scene *s, const bench_
         c.ray_steps = steps;
         c.ray_prims = prims;
         accel_trace(kind, accel, r->rays, hits, n, x->threads, &c);
+        if (accel_counters_status(&c, &err)) {
+            exp_internal(x, spec, &err);
+            snprintf(why, why_n, "%s", err.msg);
+            goto done;
+        }
         double total = 0;
         for (size_t i = 0; i < n; i++) {
             uint32_t val = what == 's' ? steps[i] : prims[i];
@@ -274,6 +333,7 @@ int exp_heatmap(exp_ctx *x, const char *spec, const accel_scene *s, const bench_
     } else {
         snprintf(why, why_n, "out of memory");
     }
+done:
     free(steps);
     free(prims);
     free(v);

@@ -1,13 +1,19 @@
 /*
  * harness.h - the shared frame of every experiment binary.
  *
- * An experiment answers one question. It parses the common options
- * (--quick, --out DIR, --threads N, --repeat N, --mesh FILE..., --help),
- * measures through bench.h, writes its raw numbers to DIR/<name>.csv and one
- * Markdown section to DIR/<name>.md: the question, a table (medians with
- * min-max, and the hardware-independent counts beside every time), a
- * finding computed from the numbers, and the lecture's claim beside the
+ * An experiment answers one question. It parses the common options (one
+ * table in harness.c drives parsing and --help: --quick, --out DIR,
+ * --threads N, --repeat N, --size N, --mesh FILE..., --quiet, --help),
+ * measures through bench.h, writes its raw numbers to DIR/<name>.csv (RFC
+ * 4180, one schema: the first record is the header) and one Markdown
+ * section to DIR/<name>.md: the question, a table (medians with min-max,
+ * and the hardware-independent counts beside every time), a finding
+ * computed from the numbers, and the lecture's claim beside the
  * measurement. experiments/report.sh stitches the sections into REPORT.md.
+ *
+ * Exit statuses are those of bench/cli.h: 2 for a bad option, 3 for a scene
+ * that cannot be made, 4 when a counted pass broke a traversal invariant or
+ * a CSV record did not fit the header (the run goes on; exp_finish returns 4).
  */
 #ifndef EXP_HARNESS_H
 #define EXP_HARNESS_H
@@ -15,6 +21,7 @@
 #include <stdio.h>
 
 #include "bench/bench.h"
+#include "bench/csv.h"
 #include "scene/scene.h"
 
 #define EXP_MAX_MESHES 16
@@ -23,13 +30,18 @@ typedef struct {
     const char *name;     /* e.g. "exp_sah" */
     int quick;            /* smoke-test budget: tiny scenes, few repeats */
     const char *out_dir;  /* default experiments/out */
-    int threads;          /* trace/build threads (default 1) */
+    int threads;          /* threads of every build, trace and reference (default 1) */
+    int threads_given;    /* --threads was on the command line */
     int repeats;          /* timed passes per measurement */
     int size;             /* primary image size (square) */
     const char *meshes[EXP_MAX_MESHES]; /* extra mesh files (default: the meshes in ../shared/scenes) */
     int mesh_count;
-    FILE *csv;
+    int no_meshes, quiet, help;
+    double progress_after; /* seconds */
     FILE *md;
+    csv_file csv;
+    bench_progress *progress; /* NULL with --quiet */
+    int status;           /* exit status exp_finish returns (CLI_EXIT_*) */
     double t_start;
 } exp_ctx;
 
@@ -37,20 +49,31 @@ typedef struct {
  * --help (0) or a bad option (2): experiments are programs, not library. */
 void exp_init(exp_ctx *x, int argc, char **argv, const char *name, const char *question,
               const char *extra_help);
-/* Closes files, prints the elapsed time. Returns 0. */
+/* Closes files, prints the elapsed time. Returns the exit status: 0, or 4
+ * after a broken invariant or a refused CSV record. */
 int exp_finish(exp_ctx *x);
 
+/* One CSV record: commas of fmt separate fields, %s values are quoted as
+ * RFC 4180 needs; the first call writes the header. */
 void exp_csv(exp_ctx *x, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 void exp_md(exp_ctx *x, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* A Markdown table header: cols separated by '|'. */
 void exp_md_table(exp_ctx *x, const char *cols);
 /* "12.3 (11.9-12.8)": a median with its min-max range. */
 const char *exp_fmt_timing(char *buf, size_t n, const accel_timing *t, int decimals);
+/* Appends a printf-formatted line to a findings buffer. */
+void exp_append(char *buf, size_t n, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 
-/* Loads a scene spec or dies with its error (experiments stop on bad input). */
-void exp_scene(const char *spec, accel_scene *s);
+/* Loads a scene spec or dies with its error (experiments stop on bad
+ * input): exit 3, also for a scene with nothing to hit. */
+void exp_scene(exp_ctx *x, const char *spec, accel_scene *s);
 /* Builds the standard ray sets (mask of bench_set_bit) for s at x->size. */
 void exp_sets(exp_ctx *x, const accel_scene *s, int mask, bench_sets *out);
+/* The double-precision reference with x->threads, shown as a progress phase. */
+void exp_reference(exp_ctx *x, const accel_scene *s, const accel_ray *rays, accel_hit *hits,
+                   size_t count);
+/* Records an internal error (printed; exp_finish returns 4). */
+void exp_internal(exp_ctx *x, const char *what, const accel_error *err);
 
 /* One accelerator configuration measured on one scene and some ray sets. */
 typedef struct {
@@ -61,8 +84,9 @@ typedef struct {
 } exp_measure;
 
 /* Builds spec (repeats per the budget) and traces every set in mask.
- * Returns 0, or prints the error and returns nonzero (the caller reports a
- * skipped configuration with the reason). */
+ * Returns 0, or puts the reason in why and returns nonzero (the caller
+ * reports a skipped configuration). A broken invariant also counts as an
+ * internal error of the run. */
 int exp_run(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets *sets, int mask,
             exp_measure *m, char *why, size_t why_n);
 

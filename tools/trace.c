@@ -6,66 +6,119 @@
  *   trace --scene bunny.off --accel bvh:build=binned --rays primary,diffuse
  *   trace compare A.hits B.hits
  *
- * Run `trace --help` for every option, accelerator and scene parameter.
+ * Run `trace --help` for every option, accelerator, scene parameter and
+ * exit status. Every option and spec is checked before any work starts;
+ * main is a list of named steps: parse, check, load the scene, set the
+ * camera, make the rays, then per accelerator build, trace, check, write.
  */
 #include <math.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "bench/bench.h"
-#include "bench/image.h"
+#include "bench/cli.h"
+#include "bench/csv.h"
+#include "bench/shade.h"
 #include "scene/scene.h"
 
 #define MAX_ACCELS 32
-#define MAX_SETS 8
+#define MAX_SETS 4
 
 typedef struct {
     const char *scene;
     const char *accels[MAX_ACCELS];
     int accel_count;
     const char *rays;
-    int width, height;
-    accel_camera cam;
-    int cam_set[4]; /* eye, look, up, fov given */
+    int size[2]; /* width, height */
+    cli_vec3 eye, look, up;
+    double fov; /* 0: the scene's */
     int threads, repeat, warmup, build_repeat;
-    int counters, check, csv;
-    const char *image, *heatmap_kind, *heatmap, *dump_rays, *dump_hits, *export_obj;
+    int counters, check, csv, quiet, help;
+    double progress_after; /* seconds */
+    const char *image, *heatmap[2], *dump_rays, *dump_hits, *export_obj;
     const char *gen_accel;
     uint64_t seed;
     int ao_samples;
     float ao_radius;
 } options;
 
+static int opt_accel(const cli_option *o, void *field, char **v, accel_error *err)
+{
+    options *opts = (options *)((char *)field - offsetof(options, accels));
+    if (opts->accel_count == MAX_ACCELS)
+        return accel_fail(err, ACCEL_ERR_SPEC, "%s: at most %d accelerators", o->name, MAX_ACCELS);
+    opts->accels[opts->accel_count++] = v[0];
+    return 0;
+}
+
+static int opt_heatmap(const cli_option *o, void *field, char **v, accel_error *err)
+{
+    const char **hm = field;
+    if (strcmp(v[0], "steps") && strcmp(v[0], "prims"))
+        return accel_fail(err, ACCEL_ERR_SPEC, "%s %s: expected steps or prims", o->name, v[0]);
+    hm[0] = v[0], hm[1] = v[1];
+    return 0;
+}
+
+#define OPT(f) offsetof(options, f)
+static const cli_option trace_options[] = {
+    {"--scene", "SPEC", "built-in scene (name:key=value,...) or mesh file (.obj .ply .off)\n"
+     "(default sphereflake)", cli_string, OPT(scene), 0, 0},
+    {"--accel", "SPEC", "accelerator kind:key=value,...; repeat to compare several\n"
+     "(default bvh when registered, else brute)", opt_accel, OPT(accels), 0, 0},
+    {"--rays", "LIST", "comma list of primary,shadow,diffuse,ao, or a .rays file (default primary)",
+     cli_string, OPT(rays), 0, 0},
+    {"--size", "WxH", "image / primary ray grid (default 512x512)", cli_size, OPT(size), 1, 16384},
+    {"--eye", "X,Y,Z", "camera position (default: the scene's camera)", cli_vec, OPT(eye), 0, 0},
+    {"--look", "X,Y,Z", "point the camera looks at", cli_vec, OPT(look), 0, 0},
+    {"--up", "X,Y,Z", "camera up vector (not parallel to the view)", cli_vec, OPT(up), 0, 0},
+    {"--fov", "DEG", "vertical field of view in degrees, (0, 179)", cli_double, OPT(fov), 1e-3, 179},
+    {"--threads", "N", "threads of every phase: builds, traces, ray generation, --check (default 1)",
+     cli_int, OPT(threads), 1, 256},
+    {"--repeat", "N", "timed passes per ray set (default 5)", cli_int, OPT(repeat), 1, 100},
+    {"--warmup", "N", "untimed passes first (default 1)", cli_int, OPT(warmup), 0, 100},
+    {"--build-repeat", "N", "builds timed per accelerator (default 3, up to 10 s)", cli_int,
+     OPT(build_repeat), 1, 64},
+    {"--no-counters", NULL, "skip the counted pass (steps, box and primitive tests)", cli_unflag,
+     OPT(counters), 0, 0},
+    {"--check", NULL, "compare every result against the double-precision reference", cli_flag,
+     OPT(check), 0, 0},
+    {"--image", "F.png", "shaded image of the primary hits (.png or .ppm)", cli_string, OPT(image),
+     0, 0},
+    {"--heatmap", "steps|prims F.png", "cost per pixel with a colour scale (F.<set>.png if several)",
+     opt_heatmap, OPT(heatmap), 0, 0},
+    {"--dump-rays", "F", "write the ray set(s) as FORMATS.md .rays (F.<set>.rays if several)",
+     cli_string, OPT(dump_rays), 0, 0},
+    {"--dump-hits", "F", "write the hits of the last accelerator (F.<set>.hits if several)",
+     cli_string, OPT(dump_hits), 0, 0},
+    {"--export-obj", "F", "write the scene as OBJ (spheres tessellated) and continue", cli_string,
+     OPT(export_obj), 0, 0},
+    {"--csv", NULL, "one RFC 4180 CSV record per measurement on stdout, after a header", cli_flag,
+     OPT(csv), 0, 0},
+    {"--gen-accel", "SPEC", "accelerator that finds the primary hits secondary rays start from\n"
+     "(default bvh, else brute)", cli_string, OPT(gen_accel), 0, 0},
+    {"--seed", "N", "seed of the secondary rays (default 1)", cli_u64, OPT(seed), 0, 0},
+    {"--ao-samples", "N", "ambient occlusion rays per primary hit (default 4)", cli_int,
+     OPT(ao_samples), 1, 4096},
+    {"--ao-radius", "R", "ambient occlusion ray length (default 0: 10% of the scene diagonal)",
+     cli_float, OPT(ao_radius), 0, 1e30},
+    {"--quiet", NULL, "no progress lines on stderr", cli_flag, OPT(quiet), 0, 0},
+    {"--progress-after", "S", "show progress of phases longer than S seconds (default 2)",
+     cli_double, OPT(progress_after), 0, 1e6},
+    {"--help", NULL, "this text", cli_flag, OPT(help), 0, 0},
+};
+#define OPTION_COUNT (sizeof trace_options / sizeof trace_options[0])
+
 static void usage(FILE *f)
 {
-    fprintf(f,
-            "usage: trace [options]\n"
-            "       trace compare REFERENCE.hits OTHER.hits\n"
-            "Builds accelerators on a scene, traces ray sets, reports speed and costs.\n\n"
-            "  --scene SPEC        built-in scene (name:key=value,...) or mesh file (.obj .ply .off)\n"
-            "                      (default sphereflake)\n"
-            "  --accel SPEC        accelerator kind:key=value,...; repeat to compare several\n"
-            "                      (default bvh when registered, else brute)\n"
-            "  --rays LIST         comma list of primary,shadow,diffuse,ao, or a .rays file\n"
-            "                      (default primary)\n"
-            "  --size WxH          image / primary ray grid (default 512x512)\n"
-            "  --eye X,Y,Z --look X,Y,Z --up X,Y,Z --fov DEG   override the scene's camera\n"
-            "  --threads N         trace and build threads (default 1)\n"
-            "  --repeat N          timed passes per ray set (default 5), after --warmup N (1)\n"
-            "  --build-repeat N    builds timed per accelerator (default 3, up to 10 s)\n"
-            "  --no-counters       skip the counted pass (steps, box and primitive tests)\n"
-            "  --check             compare every result against the double-precision reference\n"
-            "  --image F.png       shaded image of the primary hits (.png or .ppm)\n"
-            "  --heatmap steps|prims F.png   cost per pixel with a colour scale\n"
-            "  --dump-rays F       write the ray set(s) in FORMATS.md .rays (F.<set>.rays if several)\n"
-            "  --dump-hits F       write the hits of the last accelerator (F.<set>.hits if several)\n"
-            "  --export-obj F      write the scene as OBJ (spheres tessellated) and continue\n"
-            "  --csv               one machine-readable line per measurement\n"
-            "  --gen-accel SPEC    accelerator that finds the primary hits secondary rays start\n"
-            "                      from (default bvh, else brute)\n"
-            "  --seed N --ao-samples N --ao-radius R   secondary ray generation\n"
-            "  --help              this text\n\nAccelerators:\n");
+    fprintf(f, "usage: trace [options]\n"
+               "       trace compare REFERENCE.hits OTHER.hits\n"
+               "Builds accelerators on a scene, traces ray sets, reports speed and costs.\n\n");
+    cli_help(f, trace_options, OPTION_COUNT);
+    fprintf(f, "\nAccelerators:\n");
     for (size_t i = 0; i < accel_kind_count; i++) {
         const accel_kind *k = accel_kinds[i];
         char buf[4096] = "";
@@ -81,44 +134,67 @@ static void usage(FILE *f)
         accel_params_help(g->params, g->param_count, buf, sizeof buf);
         fprintf(f, "  %s: %s\n%s", g->name, g->summary, buf);
     }
+    fprintf(f, "\n");
+    cli_help_exit_codes(f);
 }
 
-static int parse_vec(const char *s, vec3 *v)
+/* Everything one run holds between its steps. */
+typedef struct {
+    accel_scene scene;
+    accel_camera cam;
+    bench_sets sets;
+    rays_set file_rays;
+    int from_file, set_count, bits[MAX_SETS];
+    const char *set_names[MAX_SETS];
+    bench_progress *progress;
+    csv_file csv;
+    int status; /* the worst exit status so far */
+} run;
+
+static int report(run *r, int code, const char *msg)
 {
-    char *end;
-    float a = strtof(s, &end);
-    if (*end != ',') return 0;
-    float b = strtof(end + 1, &end);
-    if (*end != ',') return 0;
-    float c = strtof(end + 1, &end);
-    if (*end || !isfinite(a) || !isfinite(b) || !isfinite(c)) return 0;
-    *v = v3(a, b, c);
-    return 1;
+    fprintf(stderr, "trace: %s\n", msg);
+    if (code > r->status) r->status = code;
+    return code;
 }
 
-static int parse_int(const char *s, int lo, int hi, int *out)
+static int report_err(run *r, const accel_error *err)
 {
-    char *end;
-    long v = strtol(s, &end, 10);
-    if (!*s || *end || v < lo || v > hi) return 0;
-    *out = (int)v;
-    return 1;
+    return report(r, cli_exit_of(err->code), err->msg);
 }
 
-static int die(const char *fmt, const char *a, const char *b)
+/* The ray sets of --rays: names, or one .rays file that must open. */
+static int parse_ray_sets(const char *list, run *r, accel_error *err)
 {
-    fprintf(stderr, "trace: ");
-    fprintf(stderr, fmt, a, b);
-    fprintf(stderr, "\n");
-    return 2;
+    if (!strstr(list, ".rays")) {
+        int rc = bench_sets_parse(list, r->bits, &r->set_count, err);
+        for (int s = 0; s < r->set_count; s++) r->set_names[s] = bench_set_name(r->bits[s]);
+        return rc;
+    }
+    r->from_file = 1;
+    r->bits[0] = 0;
+    r->set_names[0] = "file";
+    r->set_count = 1;
+    FILE *f = fopen(list, "rb");
+    if (!f) return accel_fail(err, ACCEL_ERR_IO, "%s: cannot open", list);
+    fclose(f);
+    return 0;
 }
 
-static int parse_options(int argc, char **argv, options *o)
+static int has_primary(const run *r)
+{
+    for (int s = 0; s < r->set_count; s++)
+        if (r->bits[s] == BENCH_PRIMARY) return 1;
+    return 0;
+}
+
+/* Step 1: options, defaults, and every check that needs no scene. */
+static int parse_options(int argc, char **argv, options *o, run *r, accel_error *err)
 {
     memset(o, 0, sizeof *o);
     o->scene = "sphereflake";
     o->rays = "primary";
-    o->width = o->height = 512;
+    o->size[0] = o->size[1] = 512;
     o->threads = 1;
     o->repeat = 5;
     o->warmup = 1;
@@ -126,108 +202,338 @@ static int parse_options(int argc, char **argv, options *o)
     o->counters = 1;
     o->seed = 1;
     o->ao_samples = 4;
-    for (int i = 1; i < argc; i++) {
-        const char *a = argv[i];
-        const char *v = i + 1 < argc ? argv[i + 1] : NULL;
-#define NEED_VALUE()                                                         \
-    do {                                                                     \
-        if (!v) return die("option %s needs a value%s", a, "");              \
-        i++;                                                                 \
-    } while (0)
-        if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
-            usage(stdout);
-            exit(0);
-        } else if (!strcmp(a, "--scene")) {
-            NEED_VALUE();
-            o->scene = v;
-        } else if (!strcmp(a, "--accel")) {
-            NEED_VALUE();
-            if (o->accel_count == MAX_ACCELS) return die("at most 32 --accel%s%s", "", "");
-            o->accels[o->accel_count++] = v;
-        } else if (!strcmp(a, "--rays")) {
-            NEED_VALUE();
-            o->rays = v;
-        } else if (!strcmp(a, "--size")) {
-            NEED_VALUE();
-            if (sscanf(v, "%dx%d", &o->width, &o->height) != 2 || o->width < 1 || o->height < 1 ||
-                o->width > 16384 || o->height > 16384)
-                return die("--size %s: expected WxH with 1 <= W, H <= 16384%s", v, "");
-        } else if (!strcmp(a, "--eye") || !strcmp(a, "--look") || !strcmp(a, "--up")) {
-            NEED_VALUE();
-            vec3 *dst = a[2] == 'e' ? &o->cam.eye : a[2] == 'l' ? &o->cam.look_at : &o->cam.up;
-            if (!parse_vec(v, dst)) return die("%s %s: expected X,Y,Z", a, v);
-            o->cam_set[a[2] == 'e' ? 0 : a[2] == 'l' ? 1 : 2] = 1;
-        } else if (!strcmp(a, "--fov")) {
-            NEED_VALUE();
-            char *end;
-            o->cam.fov_deg = strtof(v, &end);
-            if (*end || !(o->cam.fov_deg > 0 && o->cam.fov_deg < 179))
-                return die("--fov %s: expected degrees in (0, 179)%s", v, "");
-            o->cam_set[3] = 1;
-        } else if (!strcmp(a, "--threads")) {
-            NEED_VALUE();
-            if (!parse_int(v, 1, 256, &o->threads)) return die("--threads %s: expected 1..256%s", v, "");
-        } else if (!strcmp(a, "--repeat")) {
-            NEED_VALUE();
-            if (!parse_int(v, 1, 100, &o->repeat)) return die("--repeat %s: expected 1..100%s", v, "");
-        } else if (!strcmp(a, "--warmup")) {
-            NEED_VALUE();
-            if (!parse_int(v, 0, 100, &o->warmup)) return die("--warmup %s: expected 0..100%s", v, "");
-        } else if (!strcmp(a, "--build-repeat")) {
-            NEED_VALUE();
-            if (!parse_int(v, 1, 64, &o->build_repeat))
-                return die("--build-repeat %s: expected 1..64%s", v, "");
-        } else if (!strcmp(a, "--no-counters")) {
-            o->counters = 0;
-        } else if (!strcmp(a, "--check")) {
-            o->check = 1;
-        } else if (!strcmp(a, "--csv")) {
-            o->csv = 1;
-        } else if (!strcmp(a, "--image")) {
-            NEED_VALUE();
-            o->image = v;
-        } else if (!strcmp(a, "--heatmap")) {
-            if (i + 2 >= argc) return die("--heatmap needs steps|prims and a file%s%s", "", "");
-            o->heatmap_kind = argv[++i];
-            o->heatmap = argv[++i];
-            if (strcmp(o->heatmap_kind, "steps") && strcmp(o->heatmap_kind, "prims"))
-                return die("--heatmap %s: expected steps or prims%s", o->heatmap_kind, "");
-        } else if (!strcmp(a, "--dump-rays")) {
-            NEED_VALUE();
-            o->dump_rays = v;
-        } else if (!strcmp(a, "--dump-hits")) {
-            NEED_VALUE();
-            o->dump_hits = v;
-        } else if (!strcmp(a, "--export-obj")) {
-            NEED_VALUE();
-            o->export_obj = v;
-        } else if (!strcmp(a, "--gen-accel")) {
-            NEED_VALUE();
-            o->gen_accel = v;
-        } else if (!strcmp(a, "--seed")) {
-            NEED_VALUE();
-            o->seed = strtoull(v, NULL, 10);
-        } else if (!strcmp(a, "--ao-samples")) {
-            NEED_VALUE();
-            if (!parse_int(v, 1, 4096, &o->ao_samples))
-                return die("--ao-samples %s: expected 1..4096%s", v, "");
-        } else if (!strcmp(a, "--ao-radius")) {
-            NEED_VALUE();
-            o->ao_radius = strtof(v, NULL);
-        } else {
-            return die("unknown option '%s' (see --help)%s", a, "");
-        }
-#undef NEED_VALUE
-    }
+    o->progress_after = BENCH_PROGRESS_AFTER_MS / 1e3;
+    int rc = cli_parse(trace_options, OPTION_COUNT, argc, argv, 1, o, err);
+    if (rc || o->help) return rc;
     if (o->accel_count == 0) o->accels[o->accel_count++] = accel_find_kind("bvh") ? "bvh" : "brute";
+    accel_params p;
+    for (int a = 0; a < o->accel_count; a++)
+        if ((rc = accel_params_parse(o->accels[a], &p, err))) return rc;
+    if (o->gen_accel && (rc = accel_params_parse(o->gen_accel, &p, err))) return rc;
+    if ((rc = scene_spec_check(o->scene, err))) return rc;
+    if ((rc = parse_ray_sets(o->rays, r, err))) return rc;
+    if (o->image && (r->from_file || !has_primary(r)))
+        return accel_fail(err, ACCEL_ERR_SPEC, "--image needs primary rays: add primary to --rays "
+                          "(a .rays file has no pixels)");
+    if (o->heatmap[0] && r->from_file)
+        return accel_fail(err, ACCEL_ERR_SPEC, "--heatmap needs rays made from the camera, not a "
+                          ".rays file (it has no pixels)");
+    int closest = r->from_file;
+    for (int s = 0; s < r->set_count; s++) closest |= !bench_set_is_occlusion(r->bits[s]);
+    if (o->dump_hits && !closest)
+        return accel_fail(err, ACCEL_ERR_SPEC, "--dump-hits: shadow and ao rays are any-hit "
+                          "queries without hits; add primary or diffuse to --rays");
+    if (o->eye.given && o->look.given && v3_len(v3_sub(o->eye.v, o->look.v)) == 0)
+        return accel_fail(err, ACCEL_ERR_SPEC, "--eye and --look are the same point");
+    if (o->up.given && v3_len(o->up.v) == 0)
+        return accel_fail(err, ACCEL_ERR_SPEC, "--up must not be the zero vector");
+    if (o->eye.given && o->look.given && o->up.given) {
+        accel_camera c = {o->eye.v, o->look.v, o->up.v, o->fov > 0 ? (float)o->fov : 45.0f};
+        if ((rc = rays_camera_check(&c, err))) return rc;
+    }
+    if ((rc = cli_check_output("--image", o->image, "png ppm", err)) ||
+        (rc = cli_check_output("--heatmap", o->heatmap[1], r->set_count > 1 ? NULL : "png ppm",
+                           err)) ||
+        (rc = cli_check_output("--dump-rays", o->dump_rays, NULL, err)) ||
+        (rc = cli_check_output("--dump-hits", o->dump_hits, NULL, err)) ||
+        (rc = cli_check_output("--export-obj", o->export_obj, NULL, err)))
+        return rc;
     return 0;
+}
+
+/* Step 2: the scene, which must hold something to hit. */
+static int load_scene(const options *o, run *r, accel_error *err)
+{
+    bench_progress_begin(r->progress, "load scene", 0, 0);
+    double t0 = accel_now_ms();
+    int rc = scene_create(o->scene, &r->scene, err);
+    bench_progress_end(r->progress);
+    if (rc) return rc;
+    const accel_scene *s = &r->scene;
+    if (s->live_count == 0)
+        return accel_fail(err, ACCEL_ERR_RANGE, "scene %s has nothing to hit: %u primitives, %u "
+                          "of them degenerate", s->name, s->prim_count, s->degenerate_count);
+    FILE *info = o->csv ? (o->quiet ? NULL : stderr) : stdout;
+    if (info)
+        fprintf(info, "scene %s: %u primitives (%u triangles, %u spheres), %u degenerate, made in "
+                "%.1f ms\n  bounds (%.6g, %.6g, %.6g) to (%.6g, %.6g, %.6g)\n",
+                s->name, s->prim_count, s->tri_count, s->sphere_count, s->degenerate_count,
+                accel_now_ms() - t0, s->bounds.min.x, s->bounds.min.y, s->bounds.min.z,
+                s->bounds.max.x, s->bounds.max.y, s->bounds.max.z);
+    if (o->export_obj) {
+        if ((rc = scene_export_obj(s, o->export_obj, 24, err))) return rc;
+        if (info) fprintf(info, "exported %s\n", o->export_obj);
+    }
+    return 0;
+}
+
+/* Step 3: the scene's camera with the overrides, which must define a view. */
+static int set_camera(const options *o, run *r, accel_error *err)
+{
+    accel_camera *c = &r->cam;
+    *c = r->scene.camera;
+    if (r->from_file) return 0; /* a .rays file brings its own rays: no view to make */
+    if (o->eye.given) c->eye = o->eye.v;
+    if (o->look.given) c->look_at = o->look.v;
+    if (o->up.given) c->up = o->up.v;
+    if (o->fov > 0) c->fov_deg = (float)o->fov;
+    int rc = rays_camera_check(c, err);
+    if (rc) {
+        /* Options the user gave make a usage error; the scene's own camera an input one. */
+        if (o->eye.given || o->look.given || o->up.given || o->fov > 0) err->code = ACCEL_ERR_SPEC;
+        return rc;
+    }
+    FILE *info = o->csv ? (o->quiet ? NULL : stderr) : stdout;
+    if (info)
+        fprintf(info, "  camera eye (%.6g, %.6g, %.6g) look (%.6g, %.6g, %.6g) up (%.6g, %.6g, "
+                "%.6g) fov %.6g deg, %dx%d\n", c->eye.x, c->eye.y, c->eye.z, c->look_at.x,
+                c->look_at.y, c->look_at.z, c->up.x, c->up.y, c->up.z, c->fov_deg, o->size[0],
+                o->size[1]);
+    return 0;
+}
+
+/* Step 4: the ray sets of the view, or the .rays file; then --dump-rays. */
+static int make_rays(const options *o, run *r, accel_error *err)
+{
+    int rc;
+    if (r->from_file) {
+        rc = rays_read(o->rays, &r->file_rays, err);
+        if (!rc && r->file_rays.count == 0)
+            rc = accel_fail(err, ACCEL_ERR_RANGE, "%s holds no rays", o->rays);
+    } else {
+        int mask = 0;
+        for (int s = 0; s < r->set_count; s++) mask |= r->bits[s];
+        bench_set_opts so = {&r->cam, o->size[0], o->size[1], o->ao_samples, o->ao_radius,
+                             o->seed, o->threads, o->gen_accel};
+        bench_progress_begin(r->progress, "make ray sets", 0, 0);
+        rc = bench_sets_make(&r->scene, &so, mask, &r->sets, err);
+        bench_progress_end(r->progress);
+    }
+    for (int s = 0; !rc && o->dump_rays && s < r->set_count; s++) {
+        const rays_set *rs = r->from_file ? &r->file_rays : bench_sets_get(&r->sets, r->bits[s]);
+        char path[1024];
+        snprintf(path, sizeof path, r->set_count > 1 ? "%s.%s.rays" : "%s", o->dump_rays,
+                 r->set_names[s]);
+        rc = rays_write(path, rs->rays, rs->count, err);
+    }
+    return rc;
+}
+
+/* One ray set traced by one accelerator: its results and measurements. */
+typedef struct {
+    const rays_set *rays;
+    int set, occl;
+    accel_hit *hits;
+    uint8_t *occ;
+    uint32_t *steps, *prims; /* per-ray costs for --heatmap */
+    bench_result br;
+    hits_diff diff;
+    int checked;
+} set_run;
+
+/* The double-precision reference with --threads, compared as hits or as
+ * hit / miss for occlusion queries. */
+static int check_set(const options *o, run *r, set_run *t, accel_error *err)
+{
+    size_t n = t->rays->count;
+    accel_hit *ref = malloc((n ? n : 1) * sizeof *ref);
+    if (!ref) return accel_fail(err, ACCEL_ERR_NOMEM, "out of memory for %zu reference hits", n);
+    char name[96];
+    snprintf(name, sizeof name, "reference for %s", r->set_names[t->set]);
+    bench_progress_begin(r->progress, name, (double)n, 1);
+    accel_reference_trace(&r->scene, t->rays->rays, ref, n, o->threads);
+    bench_progress_end(r->progress);
+    hits_diff d = {0};
+    if (t->occl) {
+        for (size_t i = 0; i < n; i++) {
+            int rh = ref[i].prim != ACCEL_MISS;
+            d.holes += rh && !t->occ[i];
+            d.false_hits += !rh && t->occ[i];
+        }
+    } else {
+        d = hits_compare(ref, t->hits, n);
+    }
+    free(ref);
+    t->diff = d;
+    t->checked = 1;
+    if ((d.holes || d.false_hits || d.disagreements) && r->status < CLI_EXIT_DIFFER)
+        r->status = CLI_EXIT_DIFFER;
+    return 0;
+}
+
+static void print_csv_header(run *r)
+{
+    csv_row(&r->csv, "csv,kind,spec,scene,rayset,rays,hits,threads,build_ms,build_ms_min,"
+            "build_ms_max,bytes,nodes,refs,sah_cost,depth,trace_ms,mrays_median,mrays_min,"
+            "mrays_max,steps_per_ray,empty_per_ray,box_per_ray,prims_per_ray,"
+            "mailbox_skips_per_ray,holes,false_hits,disagreements\n");
+}
+
+static void print_row(const options *o, run *r, const accel_kind *kind, const accel_params *canon,
+                      const accel_build_stats *st, const accel_timing *bt, const set_run *t)
+{
+    const bench_result *br = &t->br;
+    const accel_counters *c = &br->counters;
+    double nr = t->rays->count ? (double)t->rays->count : 1.0;
+    const char *name = r->set_names[t->set];
+    if (o->csv) {
+        char cnt[256] = ",,,,", chk[96] = ",,";
+        if (br->counted)
+            snprintf(cnt, sizeof cnt, "%.4f,%.4f,%.4f,%.4f,%.4f", c->steps / nr,
+                     c->empty_steps / nr, c->box_tests / nr, c->prim_tests / nr,
+                     c->mailbox_skips / nr);
+        if (t->checked)
+            snprintf(chk, sizeof chk, "%zu,%zu,%zu", t->diff.holes, t->diff.false_hits,
+                     t->diff.disagreements);
+        /* cnt and chk are whole runs of numeric fields: spliced into the format. */
+        char fmt[512];
+        snprintf(fmt, sizeof fmt, "csv,%%s,%%s,%%s,%%s,%%zu,%%zu,%%d,%%.4f,%%.4f,%%.4f,%%zu,%%llu,"
+                 "%%llu,%%.6g,%%d,%%.4f,%%.4f,%%.4f,%%.4f,%s,%s\n", cnt, chk);
+        if (csv_row(&r->csv, fmt, kind->name, canon->spec, r->scene.name, name, t->rays->count,
+                    br->hits, o->threads, bt->median, bt->min, bt->max, st->bytes,
+                    (unsigned long long)st->nodes, (unsigned long long)st->refs, st->sah_cost,
+                    st->depth, br->ms.median, br->mrays.median, br->mrays.min, br->mrays.max))
+            report(r, CLI_EXIT_INTERNAL, r->csv.first_bad);
+        return;
+    }
+    printf("  %-8s %9zu rays %9zu %s  %8.3f Mrays/s (min %.3f, max %.3f; %.2f ms)", name,
+           t->rays->count, br->hits, t->occl ? "occluded" : "hit", br->mrays.median,
+           br->mrays.min, br->mrays.max, br->ms.median);
+    if (br->counted)
+        printf("  per ray: %.2f %s, %.2f empty, %.2f box, %.2f prim, %.2f mailbox skips",
+               c->steps / nr, kind->step_name, c->empty_steps / nr, c->box_tests / nr,
+               c->prim_tests / nr, c->mailbox_skips / nr);
+    printf("\n");
+    if (t->checked)
+        printf("    check vs reference: %zu holes, %zu false hits, %zu disagreements\n",
+               t->diff.holes, t->diff.false_hits, t->diff.disagreements);
+}
+
+static int write_heatmap(const options *o, run *r, const set_run *t, accel_error *err)
+{
+    const rays_set *rs = t->rays;
+    size_t n = rs->count;
+    float *v = calloc((size_t)rs->width * rs->height, sizeof *v);
+    if (!v) return accel_fail(err, ACCEL_ERR_NOMEM, "out of memory for a heatmap");
+    const uint32_t *src = !strcmp(o->heatmap[0], "steps") ? t->steps : t->prims;
+    for (size_t i = 0; i < n; i++)
+        if (rs->pixel[i] < (uint32_t)(rs->width * rs->height)) v[rs->pixel[i]] += src[i];
+    char path[1024];
+    snprintf(path, sizeof path, r->set_count > 1 ? "%s.%s.png" : "%s", o->heatmap[1],
+             r->set_names[t->set]);
+    image_rgb img;
+    int rc = image_heatmap(v, rs->width, rs->height, 0, &img, err);
+    if (rc == 0) {
+        rc = image_write(path, &img, err);
+        image_free(&img);
+    }
+    free(v);
+    return rc;
+}
+
+/* The outputs of the last accelerator: --dump-hits, --image, --heatmap. */
+static void write_outputs(const options *o, run *r, const set_run *t)
+{
+    accel_error err = {0};
+    const char *name = r->set_names[t->set];
+    if (o->dump_hits && !t->occl) {
+        char path[1024];
+        snprintf(path, sizeof path, r->set_count > 1 ? "%s.%s.hits" : "%s", o->dump_hits, name);
+        if (hits_write(path, t->hits, t->rays->count, &err)) report_err(r, &err);
+    }
+    if (o->image && r->bits[t->set] == BENCH_PRIMARY) {
+        image_rgb img;
+        if (image_alloc(&img, t->rays->width, t->rays->height, &err) == 0) {
+            bench_shade(&r->scene, t->rays, t->hits, &img);
+            if (image_write(o->image, &img, &err)) report_err(r, &err);
+            image_free(&img);
+        } else {
+            report_err(r, &err);
+        }
+    }
+    if (t->steps && write_heatmap(o, r, t, &err)) report_err(r, &err);
+}
+
+/* Step 6: one ray set on one built accelerator. */
+static void trace_set(const options *o, run *r, int s, int last, const accel_kind *kind,
+                      const void *accel, const accel_params *canon, const accel_build_stats *st,
+                      const accel_timing *bt)
+{
+    accel_error err = {0};
+    set_run t = {0};
+    t.rays = r->from_file ? &r->file_rays : bench_sets_get(&r->sets, r->bits[s]);
+    t.set = s;
+    t.occl = !r->from_file && bench_set_is_occlusion(r->bits[s]);
+    size_t n = t.rays->count, m = n ? n : 1;
+    int heat = o->heatmap[0] && last && t.rays->pixel;
+    t.hits = malloc(m * sizeof *t.hits);
+    t.occ = malloc(m);
+    if (heat) t.steps = calloc(m, sizeof *t.steps), t.prims = calloc(m, sizeof *t.prims);
+    if (!t.hits || !t.occ || (heat && (!t.steps || !t.prims))) {
+        report(r, CLI_EXIT_INTERNAL, "out of memory for the results of a ray set");
+        goto done;
+    }
+    char phase[320];
+    snprintf(phase, sizeof phase, "trace %s with %s", r->set_names[s], canon->spec);
+    bench_trace_opts to = {.threads = o->threads, .warmup = o->warmup, .repeats = o->repeat,
+                           .count_pass = o->counters || heat, .hits = t.hits, .occluded = t.occ,
+                           .ray_steps = t.steps, .ray_prims = t.prims,
+                           .progress = r->progress, .progress_name = phase};
+    int rc = bench_trace(kind, accel, t.rays, t.occl, &to, &t.br, &err);
+    /* A broken invariant of the counted pass leaves the timings valid: they
+     * are printed, then the error is reported. */
+    if (rc && err.code != ACCEL_ERR_INTERNAL) {
+        report_err(r, &err);
+        goto done;
+    }
+    accel_error cerr = {0};
+    if (o->check && check_set(o, r, &t, &cerr)) report_err(r, &cerr);
+    print_row(o, r, kind, canon, st, bt, &t);
+    if (rc) report_err(r, &err);
+    if (last) write_outputs(o, r, &t);
+done:
+    free(t.hits);
+    free(t.occ);
+    free(t.steps);
+    free(t.prims);
+}
+
+/* Step 5: build one accelerator (checked up front), then trace every set. */
+static void run_accel(const options *o, run *r, int a)
+{
+    accel_error err = {0};
+    const accel_kind *kind;
+    void *accel;
+    accel_build_stats st;
+    accel_timing bt;
+    if (bench_build(o->accels[a], &r->scene, o->threads, o->build_repeat, 10000.0, &kind, &accel,
+                    &st, &bt, r->progress, &err)) {
+        report_err(r, &err);
+        return;
+    }
+    accel_params canon;
+    accel_params_parse(o->accels[a], &canon, &err);
+    if (!o->csv) {
+        unsigned live = r->scene.live_count;
+        printf("accel %s: build %.2f ms (min %.2f, max %.2f, %d runs), %.2f Mprims/s, %zu bytes "
+               "(%.1f B/prim), %llu %s", canon.spec, bt.median, bt.min, bt.max, bt.n,
+               bt.median > 0 ? live / (bt.median * 1e3) : 0.0, st.bytes,
+               (double)st.bytes / live, (unsigned long long)st.nodes, kind->step_name);
+        if (!isnan(st.sah_cost) && st.sah_cost != 0) printf(", SAH cost %.2f", st.sah_cost);
+        if (st.depth) printf(", depth %d", st.depth);
+        if (st.res[0]) printf(", res %dx%dx%d", st.res[0], st.res[1], st.res[2]);
+        printf("\n");
+    }
+    for (int s = 0; s < r->set_count; s++)
+        trace_set(o, r, s, a == o->accel_count - 1, kind, accel, &canon, &st, &bt);
+    kind->destroy(accel);
 }
 
 static int cmd_compare(int argc, char **argv)
 {
     if (argc != 4) {
         fprintf(stderr, "usage: trace compare REFERENCE.hits OTHER.hits\n");
-        return 2;
+        return CLI_EXIT_USAGE;
     }
     accel_error err = {0};
     accel_hit *a = NULL, *b = NULL;
@@ -235,12 +541,12 @@ static int cmd_compare(int argc, char **argv)
     if (hits_read(argv[2], &a, &na, &err) || hits_read(argv[3], &b, &nb, &err)) {
         fprintf(stderr, "trace: %s\n", err.msg);
         free(a);
-        return 2;
+        return cli_exit_of(err.code);
     }
     if (na != nb) {
         fprintf(stderr, "trace: %s has %zu hits, %s has %zu\n", argv[2], na, argv[3], nb);
         free(a), free(b);
-        return 2;
+        return CLI_EXIT_INPUT;
     }
     hits_diff d = hits_compare(a, b, na);
     printf("rays %zu  agree %zu  holes %zu  false_hits %zu  disagreements %zu\n", d.rays, d.agree,
@@ -251,278 +557,38 @@ static int cmd_compare(int argc, char **argv)
                a[i].prim, a[i].t, argv[3], b[i].prim, b[i].t);
     }
     free(a), free(b);
-    return d.agree == d.rays ? 0 : 1;
-}
-
-/* File name for a per-set output: F itself for one set, F.<set>.<ext> otherwise. */
-static void set_path(char *out, size_t n, const char *base, const char *set, const char *ext,
-                     int several)
-{
-    if (several)
-        snprintf(out, n, "%s.%s.%s", base, set, ext);
-    else
-        snprintf(out, n, "%s", base);
-}
-
-static void shade(const accel_scene *s, const rays_set *r, const accel_hit *hits, image_rgb *img)
-{
-    for (size_t i = 0; i < r->count; i++) {
-        uint32_t px = r->pixel ? r->pixel[i] : (uint32_t)i;
-        if (px >= (uint32_t)(img->width * img->height)) continue;
-        uint8_t *c = img->rgb + 3 * (size_t)px;
-        vec3 p, n;
-        if (!rays_hit_frame(s, &r->rays[i], &hits[i], &p, &n)) {
-            c[0] = 30, c[1] = 34, c[2] = 48;
-            continue;
-        }
-        vec3 d = v3_norm(v3(r->rays[i].dx, r->rays[i].dy, r->rays[i].dz));
-        vec3 l = v3_norm(v3_sub(s->light, p));
-        float head = fabsf(v3_dot(n, d));
-        float lamb = fmaxf(0.0f, v3_dot(n, l));
-        float k = 0.15f + 0.45f * head + 0.4f * lamb;
-        float base[3] = {0.85f, 0.85f, 0.9f};
-        if (hits[i].prim >= s->tri_count) base[0] = 0.95f, base[1] = 0.75f, base[2] = 0.55f;
-        for (int j = 0; j < 3; j++) c[j] = (uint8_t)fminf(255.0f, 255.0f * k * base[j]);
-    }
-}
-
-static void print_csv_header(void)
-{
-    printf("csv,kind,spec,scene,rayset,rays,hits,threads,build_ms,build_ms_min,build_ms_max,bytes,"
-           "nodes,refs,sah_cost,depth,trace_ms,mrays_median,mrays_min,mrays_max,steps_per_ray,"
-           "empty_per_ray,box_per_ray,prims_per_ray,mailbox_skips_per_ray,holes,false_hits,"
-           "disagreements\n");
+    return d.agree == d.rays ? CLI_EXIT_OK : CLI_EXIT_DIFFER;
 }
 
 int main(int argc, char **argv)
 {
+    /* Lines reach a pipe or file as they are printed, in order with stderr. */
+    setvbuf(stdout, NULL, _IOLBF, 0);
     if (argc > 1 && !strcmp(argv[1], "compare")) return cmd_compare(argc, argv);
     options o;
-    int rc = parse_options(argc, argv, &o);
-    if (rc) return rc;
+    run r = {0};
     accel_error err = {0};
-    accel_scene scene;
-    double t0 = accel_now_ms();
-    if (scene_create(o.scene, &scene, &err)) {
+    if (parse_options(argc, argv, &o, &r, &err)) {
         fprintf(stderr, "trace: %s\n", err.msg);
-        return 1;
+        /* Before any work every fault is the command line's, but a file
+         * that cannot be opened. */
+        return err.code == ACCEL_ERR_IO ? CLI_EXIT_INPUT : CLI_EXIT_USAGE;
     }
-    double load_ms = accel_now_ms() - t0;
-    if (!o.csv)
-        printf("scene %s: %u primitives (%u triangles, %u spheres), %u degenerate, made in %.1f ms\n",
-               scene.name, scene.prim_count, scene.tri_count, scene.sphere_count,
-               scene.degenerate_count, load_ms);
-    if (o.export_obj) {
-        if (scene_export_obj(&scene, o.export_obj, 24, &err)) {
-            fprintf(stderr, "trace: %s\n", err.msg);
-            return 1;
-        }
-        if (!o.csv) printf("exported %s\n", o.export_obj);
+    if (o.help) {
+        usage(stdout);
+        return CLI_EXIT_OK;
     }
-    accel_camera cam = scene.camera;
-    if (o.cam_set[0]) cam.eye = o.cam.eye;
-    if (o.cam_set[1]) cam.look_at = o.cam.look_at;
-    if (o.cam_set[2]) cam.up = o.cam.up;
-    if (o.cam_set[3]) cam.fov_deg = o.cam.fov_deg;
-
-    /* Ray sets: named sets of the view, or one .rays file. */
-    bench_sets sets = {0};
-    rays_set file_rays = {0};
-    int bits[MAX_SETS], set_count = 0;
-    const char *set_names[MAX_SETS];
-    int from_file = strstr(o.rays, ".rays") != NULL;
-    if (from_file) {
-        if (rays_read(o.rays, &file_rays, &err)) {
-            fprintf(stderr, "trace: %s\n", err.msg);
-            return 1;
-        }
-        bits[0] = 0;
-        set_names[0] = "file";
-        set_count = 1;
+    r.progress = bench_progress_start(o.quiet ? NULL : stderr, "trace", o.progress_after * 1e3);
+    csv_open(&r.csv, stdout);
+    if (load_scene(&o, &r, &err) || set_camera(&o, &r, &err) || make_rays(&o, &r, &err)) {
+        report_err(&r, &err);
     } else {
-        char buf[256];
-        snprintf(buf, sizeof buf, "%s", o.rays);
-        int mask = 0;
-        char *save = NULL;
-        for (char *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
-            int bit = bench_set_bit_of(tok);
-            if (!bit) {
-                fprintf(stderr, "trace: unknown ray set '%s'; accepted: primary, shadow, diffuse, "
-                                "ao, or a .rays file\n", tok);
-                return 2;
-            }
-            if (set_count == MAX_SETS || (mask & bit)) continue;
-            mask |= bit;
-            bits[set_count] = bit;
-            set_names[set_count++] = bit == BENCH_PRIMARY   ? "primary"
-                                     : bit == BENCH_SHADOW  ? "shadow"
-                                     : bit == BENCH_DIFFUSE ? "diffuse"
-                                                            : "ao";
-        }
-        bench_set_opts so = {&cam, o.width, o.height, o.ao_samples, o.ao_radius, o.seed,
-                             o.threads, o.gen_accel};
-        if (bench_sets_make(&scene, &so, mask, &sets, &err)) {
-            fprintf(stderr, "trace: %s\n", err.msg);
-            return 1;
-        }
+        if (o.csv) print_csv_header(&r);
+        for (int a = 0; a < o.accel_count; a++) run_accel(&o, &r, a);
     }
-    if (o.dump_rays)
-        for (int s = 0; s < set_count; s++) {
-            const rays_set *r = from_file ? &file_rays : bench_sets_get(&sets, bits[s]);
-            char path[1024];
-            set_path(path, sizeof path, o.dump_rays, set_names[s], "rays", set_count > 1);
-            if (rays_write(path, r->rays, r->count, &err)) {
-                fprintf(stderr, "trace: %s\n", err.msg);
-                return 1;
-            }
-        }
-    if (o.csv) print_csv_header();
-
-    int status = 0;
-    for (int a = 0; a < o.accel_count; a++) {
-        const accel_kind *kind;
-        void *accel;
-        accel_build_stats st;
-        accel_timing bt;
-        if (bench_build(o.accels[a], &scene, o.threads, o.build_repeat, 10000.0, &kind, &accel,
-                        &st, &bt, &err)) {
-            fprintf(stderr, "trace: %s\n", err.msg);
-            status = 1;
-            continue;
-        }
-        accel_params canon;
-        accel_params_parse(o.accels[a], &canon, &err);
-        if (!o.csv) {
-            printf("accel %s: build %.2f ms (min %.2f, max %.2f, %d runs), %.2f Mprims/s, %zu bytes "
-                   "(%.1f B/prim), %llu %s",
-                   canon.spec, bt.median, bt.min, bt.max, bt.n,
-                   bt.median > 0 ? scene.live_count / (bt.median * 1e3) : 0.0, st.bytes,
-                   scene.live_count ? (double)st.bytes / scene.live_count : 0.0,
-                   (unsigned long long)st.nodes, kind->step_name);
-            if (!isnan(st.sah_cost) && st.sah_cost != 0) printf(", SAH cost %.2f", st.sah_cost);
-            if (st.depth) printf(", depth %d", st.depth);
-            if (st.res[0]) printf(", res %dx%dx%d", st.res[0], st.res[1], st.res[2]);
-            printf("\n");
-        }
-        for (int s = 0; s < set_count; s++) {
-            const rays_set *r = from_file ? &file_rays : bench_sets_get(&sets, bits[s]);
-            int occl = !from_file && bench_set_is_occlusion(bits[s]);
-            size_t n = r->count;
-            accel_hit *hits = malloc((n ? n : 1) * sizeof *hits);
-            uint8_t *occ = malloc(n ? n : 1);
-            uint32_t *steps = NULL, *prims = NULL;
-            int want_heat = o.heatmap && a == o.accel_count - 1 && r->pixel;
-            if (want_heat) {
-                steps = calloc(n ? n : 1, sizeof *steps);
-                prims = calloc(n ? n : 1, sizeof *prims);
-            }
-            if (!hits || !occ || (want_heat && (!steps || !prims))) {
-                fprintf(stderr, "trace: out of memory for %zu rays\n", n);
-                return 1;
-            }
-            bench_trace_opts to = {.threads = o.threads, .warmup = o.warmup,
-                                   .repeats = o.repeat, .count_pass = o.counters || want_heat,
-                                   .hits = hits, .occluded = occ, .ray_steps = steps,
-                                   .ray_prims = prims};
-            bench_result br;
-            if (bench_trace(kind, accel, r, occl, &to, &br, &err)) {
-                fprintf(stderr, "trace: %s\n", err.msg);
-                return 1;
-            }
-            hits_diff d = {0};
-            int checked = 0;
-            if (o.check) {
-                accel_hit *ref = malloc((n ? n : 1) * sizeof *ref);
-                if (!ref) return 1;
-                accel_reference_trace(&scene, r->rays, ref, n, accel_cpu_count());
-                if (occl) /* compare occlusion as hit / miss */
-                    for (size_t i = 0; i < n; i++) {
-                        int rh = ref[i].prim != ACCEL_MISS;
-                        if (rh && !occ[i]) d.holes++;
-                        if (!rh && occ[i]) d.false_hits++;
-                    }
-                else
-                    d = hits_compare(ref, hits, n);
-                free(ref);
-                checked = 1;
-                if (d.holes || d.false_hits || d.disagreements) status = 1;
-            }
-            double nr = n ? (double)n : 1.0;
-            const accel_counters *c = &br.counters;
-            if (o.csv) {
-                printf("csv,%s,%s,%s,%s,%zu,%zu,%d,%.4f,%.4f,%.4f,%zu,%llu,%llu,%.6g,%d,%.4f,%.4f,"
-                       "%.4f,%.4f,",
-                       kind->name, canon.spec, scene.name, set_names[s], n, br.hits, o.threads,
-                       bt.median, bt.min, bt.max, st.bytes, (unsigned long long)st.nodes,
-                       (unsigned long long)st.refs, st.sah_cost, st.depth, br.ms.median,
-                       br.mrays.median, br.mrays.min, br.mrays.max);
-                if (br.counted)
-                    printf("%.4f,%.4f,%.4f,%.4f,%.4f,", c->steps / nr, c->empty_steps / nr,
-                           c->box_tests / nr, c->prim_tests / nr, c->mailbox_skips / nr);
-                else
-                    printf(",,,,,");
-                if (checked)
-                    printf("%zu,%zu,%zu\n", d.holes, d.false_hits, d.disagreements);
-                else
-                    printf(",,\n");
-            } else {
-                printf("  %-8s %9zu rays %9zu %s  %8.3f Mrays/s (min %.3f, max %.3f; %.2f ms)", set_names[s],
-                       n, br.hits, occl ? "occluded" : "hit", br.mrays.median, br.mrays.min,
-                       br.mrays.max, br.ms.median);
-                if (br.counted)
-                    printf("  per ray: %.2f %s, %.2f empty, %.2f box, %.2f prim, %.2f mailbox skips",
-                           c->steps / nr, kind->step_name, c->empty_steps / nr, c->box_tests / nr,
-                           c->prim_tests / nr, c->mailbox_skips / nr);
-                printf("\n");
-                if (checked)
-                    printf("    check vs reference: %zu holes, %zu false hits, %zu disagreements\n",
-                           d.holes, d.false_hits, d.disagreements);
-            }
-            if (a == o.accel_count - 1) {
-                if (o.dump_hits && !occl) {
-                    char path[1024];
-                    set_path(path, sizeof path, o.dump_hits, set_names[s], "hits", set_count > 1);
-                    if (hits_write(path, hits, n, &err)) {
-                        fprintf(stderr, "trace: %s\n", err.msg);
-                        return 1;
-                    }
-                }
-                if (o.image && bits[s] == BENCH_PRIMARY) {
-                    image_rgb img;
-                    if (image_alloc(&img, r->width, r->height, &err) == 0) {
-                        shade(&scene, r, hits, &img);
-                        if (image_write(o.image, &img, &err)) status = 1;
-                        image_free(&img);
-                    }
-                    if (status) fprintf(stderr, "trace: %s\n", err.msg);
-                }
-                if (want_heat) {
-                    float *v = calloc((size_t)r->width * r->height, sizeof *v);
-                    uint32_t *src = !strcmp(o.heatmap_kind, "steps") ? steps : prims;
-                    for (size_t i = 0; v && i < n; i++)
-                        if (r->pixel[i] < (uint32_t)(r->width * r->height)) v[r->pixel[i]] += src[i];
-                    image_rgb img;
-                    char path[1024];
-                    set_path(path, sizeof path, o.heatmap, set_names[s], "png", set_count > 1);
-                    if (v && image_heatmap(v, r->width, r->height, 0, &img, &err) == 0) {
-                        if (image_write(path, &img, &err)) {
-                            fprintf(stderr, "trace: %s\n", err.msg);
-                            status = 1;
-                        }
-                        image_free(&img);
-                    }
-                    free(v);
-                }
-            }
-            free(hits);
-            free(occ);
-            free(steps);
-            free(prims);
-        }
-        kind->destroy(accel);
-    }
-    bench_sets_free(&sets);
-    rays_free(&file_rays);
-    scene_free(&scene);
-    return status;
+    bench_progress_stop(r.progress);
+    bench_sets_free(&r.sets);
+    rays_free(&r.file_rays);
+    scene_free(&r.scene);
+    return r.status;
 }

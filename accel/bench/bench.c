@@ -34,6 +34,38 @@ int bench_set_bit_of(const char *name)
     return 0;
 }
 
+const char *bench_set_name(int bit)
+{
+    switch (bit) {
+    case BENCH_PRIMARY: return "primary";
+    case BENCH_SHADOW: return "shadow";
+    case BENCH_DIFFUSE: return "diffuse";
+    case BENCH_AO: return "ao";
+    }
+    return "?";
+}
+
+int bench_sets_parse(const char *list, int bits[4], int *count, accel_error *err)
+{
+    *count = 0;
+    int mask = 0;
+    for (const char *p = list; *p;) {
+        size_t len = strcspn(p, ",");
+        char name[32];
+        snprintf(name, sizeof name, "%.*s", (int)(len < 31 ? len : 31), p);
+        int bit = len < 31 ? bench_set_bit_of(name) : 0;
+        if (!bit)
+            return accel_fail(err, ACCEL_ERR_SPEC, "unknown ray set '%.*s'; accepted: primary, "
+                              "shadow, diffuse, ao, or a .rays file", (int)len, p);
+        if (!(mask & bit)) bits[(*count)++] = bit;
+        mask |= bit;
+        p += len;
+        if (*p) p++;
+    }
+    if (!*count) return accel_fail(err, ACCEL_ERR_SPEC, "'%s' names no ray set", list);
+    return 0;
+}
+
 const rays_set *bench_sets_get(const bench_sets *b, int bit)
 {
     switch (bit) {
@@ -123,6 +155,9 @@ int bench_trace(const accel_kind *kind, const void *accel, const rays_set *rays,
     if (occlusion && !occ) occ = own_occ = malloc(n ? n : 1);
     if ((!occlusion && !hits) || (occlusion && !occ))
         return accel_fail(err, ACCEL_ERR_NOMEM, "out of memory for %zu results", n);
+    int passes = o->warmup + (o->repeats < 1 ? 1 : o->repeats) + (o->count_pass != 0);
+    bench_progress_begin(o->progress, o->progress_name ? o->progress_name : "trace",
+                         (double)passes * (double)n, 1);
     double warm_ms = 0;
     for (int i = 0; i < o->warmup; i++) {
         double t0 = accel_now_ms();
@@ -139,6 +174,8 @@ int bench_trace(const accel_kind *kind, const void *accel, const rays_set *rays,
      * itself is the one sample (n = 1 says so); the caches it warms matter
      * little against seconds of work. */
     int reuse_warmup = o->max_ms > 0 && o->warmup > 0 && warm_ms * 4 > o->max_ms;
+    bench_progress_total(o->progress, (double)(o->warmup + want - reuse_warmup +
+                                               (o->count_pass != 0)) * (double)n);
     double total = 0;
     if (reuse_warmup) samples[reps++] = warm_ms, total = warm_ms;
     while (reps < 100 && (reps < want || (total < o->min_ms && reps < o->repeats * 20))) {
@@ -161,14 +198,15 @@ int bench_trace(const accel_kind *kind, const void *accel, const rays_set *rays,
         out->counters.ray_steps = out->counters.ray_prims = NULL;
         out->counted = 1;
     }
+    bench_progress_end(o->progress);
     free(own_hits);
     free(own_occ);
-    return 0;
+    return out->counted ? accel_counters_status(&out->counters, err) : 0;
 }
 
 int bench_build(const char *spec, const accel_scene *s, int threads, int repeats, double budget_ms,
                 const accel_kind **kind, void **accel, accel_build_stats *stats,
-                accel_timing *timing, accel_error *err)
+                accel_timing *timing, bench_progress *progress, accel_error *err)
 {
     double samples[64];
     int n = 0;
@@ -176,15 +214,27 @@ int bench_build(const char *spec, const accel_scene *s, int threads, int repeats
     *accel = NULL;
     if (repeats < 1) repeats = 1;
     if (repeats > 64) repeats = 64;
+    char name[300];
+    snprintf(name, sizeof name, "build %s", spec);
+    bench_progress_begin(progress, name, repeats, 0);
     while (n < repeats) {
         if (*accel) (*kind)->destroy(*accel);
         *accel = NULL;
         int rc = accel_build_spec(spec, s, threads, kind, accel, stats, err);
-        if (rc) return rc;
+        if (rc) {
+            bench_progress_end(progress);
+            return rc;
+        }
         samples[n++] = stats->ms;
         total += stats->ms;
+        bench_progress_add(progress, 1);
         if (total > budget_ms) break;
+        /* The builds the budget still lets run, at the mean time so far. */
+        double mean = total / n;
+        if (mean > 0 && n + (budget_ms - total) / mean + 1 < repeats)
+            bench_progress_total(progress, n + (int)((budget_ms - total) / mean) + 1);
     }
+    bench_progress_end(progress);
     accel_timing_of(samples, n, timing);
     stats->ms = timing->median;
     return 0;

@@ -8,6 +8,7 @@
 #ifndef ACCEL_BENCH_H
 #define ACCEL_BENCH_H
 
+#include "bench/progress.h"
 #include "rays/rays.h"
 
 typedef struct {
@@ -44,6 +45,11 @@ int bench_sets_make(const accel_scene *s, const bench_set_opts *o, int mask, ben
 void bench_sets_free(bench_sets *b);
 /* Name -> bit ("primary", "shadow", "diffuse", "ao"); 0 if unknown. */
 int bench_set_bit_of(const char *name);
+/* Bit -> name ("?" if none). */
+const char *bench_set_name(int bit);
+/* A comma list of set names: each bit once, in the order given (*count of
+ * them, at most 4). Unknown names and an empty list are ACCEL_ERR_SPEC. */
+int bench_sets_parse(const char *list, int bits[4], int *count, accel_error *err);
 const rays_set *bench_sets_get(const bench_sets *b, int bit);
 /* shadow and ao rays are any-hit (occluded) queries. */
 static inline int bench_set_is_occlusion(int bit) { return bit == BENCH_SHADOW || bit == BENCH_AO; }
@@ -67,18 +73,23 @@ typedef struct {
     accel_hit *hits;   /* optional: closest-hit results (ray count entries) */
     uint8_t *occluded; /* optional: any-hit results */
     uint32_t *ray_steps, *ray_prims; /* optional per-ray costs from the counted pass */
+    bench_progress *progress;        /* optional: shows the passes as phase progress_name */
+    const char *progress_name;
 } bench_trace_opts;
 
-/* Times `kind` on `rays`; occlusion selects the any-hit query. */
+/* Times `kind` on `rays`; occlusion selects the any-hit query. When the
+ * counted pass saw a broken invariant (accel_counters_status), *out is
+ * still filled and the ACCEL_ERR_INTERNAL is returned. */
 int bench_trace(const accel_kind *kind, const void *accel, const rays_set *rays, int occlusion,
                 const bench_trace_opts *o, bench_result *out, accel_error *err);
 
 /* Builds spec `repeats` times (at least once; stops repeating once the
  * builds took more than budget_ms in total) and keeps the last structure.
- * build->ms holds the median build time; *timing all of them. */
+ * build->ms holds the median build time; *timing all of them. progress
+ * (may be NULL) shows the builds as the phase "build <spec>". */
 int bench_build(const char *spec, const accel_scene *s, int threads, int repeats, double budget_ms,
                 const accel_kind **kind, void **accel, accel_build_stats *stats,
-                accel_timing *timing, accel_error *err);
+                accel_timing *timing, bench_progress *progress, accel_error *err);
 
 /* Machine, compiler, flags and commit, for reports (one line each). */
 void bench_machine_info(char *cpu, size_t cpu_n, int *cores);

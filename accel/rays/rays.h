@@ -25,7 +25,13 @@ typedef struct {
 
 void rays_free(rays_set *r);
 
-/* Pinhole camera rays, W x H, in 8x8 tiles; t range [0, inf]. */
+/* 0, or ACCEL_ERR_RANGE naming the fault of a camera that defines no view:
+ * non-finite vectors, a field of view outside (0, 180) degrees, eye == look,
+ * a zero up vector, or up parallel to the view direction. */
+int rays_camera_check(const accel_camera *cam, accel_error *err);
+
+/* Pinhole camera rays, W x H, in 8x8 tiles; t range [0, inf]. Fails on a
+ * camera rays_camera_check refuses. */
 int rays_primary(const accel_camera *cam, int width, int height, rays_set *out, accel_error *err);
 
 /* Hit point, geometric normal facing the incoming ray, and the robustly

@@ -2,6 +2,7 @@
  * load.c - a scene from a spec: a built-in generator ("sphereflake:level=3")
  * or a mesh file, dispatched to its loader by extension.
  */
+#include <errno.h>
 #include <stdio.h>
 #include <string.h>
 #include <strings.h>
@@ -38,39 +39,32 @@ int scene_load_file(const char *path, accel_scene *s, accel_error *err)
     return rc;
 }
 
-int scene_create(const char *spec, accel_scene *s, accel_error *err)
+/* The generator named by spec's part before ':' (NULL if none); *args is
+ * the text after the ':' ("" without one). */
+static const scene_generator *find_generator(const char *spec, const char **args)
 {
-    memset(s, 0, sizeof *s);
-    char name[64];
     const char *colon = strchr(spec, ':');
     size_t nlen = colon ? (size_t)(colon - spec) : strlen(spec);
-    if (nlen < sizeof name) {
-        memcpy(name, spec, nlen);
-        name[nlen] = 0;
-        for (size_t i = 0; i < scene_generator_count; i++) {
-            const scene_generator *g = scene_generators[i];
-            if (strcmp(g->name, name) != 0) continue;
-            double num[ACCEL_MAX_PARAMS];
-            char str[ACCEL_MAX_PARAMS][64];
-            unsigned char given[ACCEL_MAX_PARAMS];
-            char what[96];
-            snprintf(what, sizeof what, "scene %s", g->name);
-            int rc = accel_parse_kv(what, colon ? colon + 1 : "", g->params, g->param_count, num,
-                                    str, given, err);
-            if (rc) return rc;
-            scene_builder b = {0};
-            accel_camera cam;
-            vec3 light;
-            rc = g->generate(num, &b, &cam, &light, err);
-            if (rc == 0) rc = scene_finish(&b, spec, s, err);
-            scene_builder_free(&b);
-            if (rc) return rc;
-            s->camera = cam;
-            s->light = light;
-            return 0;
-        }
+    *args = colon ? colon + 1 : "";
+    for (size_t i = 0; i < scene_generator_count; i++) {
+        const scene_generator *g = scene_generators[i];
+        if (strlen(g->name) == nlen && !strncmp(g->name, spec, nlen)) return g;
     }
-    if (strchr(spec, '.')) return scene_load_file(spec, s, err);
+    return NULL;
+}
+
+static int parse_generator_args(const scene_generator *g, const char *args, double *num,
+                                accel_error *err)
+{
+    char str[ACCEL_MAX_PARAMS][64];
+    unsigned char given[ACCEL_MAX_PARAMS];
+    char what[96];
+    snprintf(what, sizeof what, "scene %s", g->name);
+    return accel_parse_kv(what, args, g->params, g->param_count, num, str, given, err);
+}
+
+static int unknown_scene(const char *spec, accel_error *err)
+{
     char names[512] = "";
     for (size_t i = 0; i < scene_generator_count; i++) {
         size_t len = strlen(names);
@@ -81,3 +75,45 @@ int scene_create(const char *spec, accel_scene *s, accel_error *err)
                       spec, names);
 }
 
+int scene_spec_check(const char *spec, accel_error *err)
+{
+    const char *args;
+    const scene_generator *g = find_generator(spec, &args);
+    if (g) {
+        double num[ACCEL_MAX_PARAMS];
+        return parse_generator_args(g, args, num, err);
+    }
+    if (!strchr(spec, '.')) return unknown_scene(spec, err);
+    const char *ext = extension(spec);
+    if (strcasecmp(ext, "obj") && strcasecmp(ext, "ply") && strcasecmp(ext, "off"))
+        return accel_fail(err, ACCEL_ERR_SPEC,
+                          "%s: unknown mesh format '.%s' (accepted: .obj, .ply, .off)", spec, ext);
+    FILE *f = fopen(spec, "rb");
+    if (!f) return accel_fail(err, ACCEL_ERR_IO, "%s: cannot open: %s", spec, strerror(errno));
+    fclose(f);
+    return 0;
+}
+
+int scene_create(const char *spec, accel_scene *s, accel_error *err)
+{
+    memset(s, 0, sizeof *s);
+    const char *args;
+    const scene_generator *g = find_generator(spec, &args);
+    if (g) {
+        double num[ACCEL_MAX_PARAMS];
+        int rc = parse_generator_args(g, args, num, err);
+        if (rc) return rc;
+        scene_builder b = {0};
+        accel_camera cam;
+        vec3 light;
+        rc = g->generate(num, &b, &cam, &light, err);
+        if (rc == 0) rc = scene_finish(&b, spec, s, err);
+        scene_builder_free(&b);
+        if (rc) return rc;
+        s->camera = cam;
+        s->light = light;
+        return 0;
+    }
+    if (strchr(spec, '.')) return scene_load_file(spec, s, err);
+    return unknown_scene(spec, err);
+}

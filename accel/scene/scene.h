@@ -76,6 +76,9 @@ extern const size_t scene_generator_count;
 
 /* Creates a scene from a spec: a built-in name (with parameters) or a file. */
 int scene_create(const char *spec, accel_scene *s, accel_error *err);
+/* Checks a spec without making the scene: a built-in's name and parameters,
+ * or a file's extension and that it opens. Tools call it before any work. */
+int scene_spec_check(const char *spec, accel_error *err);
 
 /* Writes the scene as OBJ (spheres tessellated, `segments` around). */
 int scene_export_obj(const accel_scene *s, const char *path, int segments, accel_error *err);
