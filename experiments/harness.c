@@ -21,6 +21,7 @@ static void usage(const exp_ctx *x, const char *question, const char *extra)
            "  --size N         primary image N x N (default 128, quick 64)\n"
            "  --mesh FILE      add a mesh (repeatable; default ../shared/scenes/*.off if present)\n"
            "  --no-meshes      built-in scenes only\n"
+           "  --heat-scale S   heatmap scale: auto (default), max=N, log, e.g. log,max=200\n"
            "  --help           this text\n%s",
            x->name, question, extra ? extra : "");
 }
@@ -80,6 +81,13 @@ void exp_init(exp_ctx *x, int argc, char **argv, const char *name, const char *q
             x->repeats = atoi(v), i++;
         } else if (v && !strcmp(a, "--size")) {
             x->size = atoi(v), i++;
+        } else if (v && !strcmp(a, "--heat-scale")) {
+            accel_error e = {0};
+            if (image_heat_scale_parse(v, &x->heat_scale, &e)) {
+                fprintf(stderr, "%s: %s\n", name, e.msg);
+                exit(2);
+            }
+            i++;
         } else if (v && !strcmp(a, "--mesh")) {
             if (x->mesh_count < EXP_MAX_MESHES) x->meshes[x->mesh_count++] = v;
             explicit_meshes = 1;
@@ -258,17 +266,21 @@ int exp_heatmap(exp_ctx *x, const char *spec, const accel_scene *s, const bench_
             total += val;
         }
         image_rgb img;
-        char path[1024];
+        char path[1024], title[256], scale[96];
+        const char *unit = what == 's' ? kind->step_name : "primitive tests";
         snprintf(path, sizeof path, "%s/%s.png", x->out_dir, image_name);
-        if (image_heatmap(v, r->width, r->height, 0, &img, &err) == 0) {
+        snprintf(title, sizeof title, "%s: %s%s per ray", spec, unit, what == 's' ? " visited" : "");
+        snprintf(scale, sizeof scale, "%s colour scale from 0 to %s",
+                 x->heat_scale.log ? "logarithmic" : "linear",
+                 x->heat_scale.max > 0 ? "a fixed maximum" : "the image's maximum");
+        if (image_heatmap(v, r->width, r->height, &x->heat_scale, title, &img, &err) == 0) {
             rc = image_write(path, &img, &err);
             image_free(&img);
         }
         if (rc == 0)
-            exp_md(x, "\n%s (mean %.1f %s per ray; colour scale from 0 to the maximum, printed "
-                      "under the image):\n\n<!-- image: %s -->\n",
-                   caption, n ? total / (double)n : 0.0,
-                   what == 's' ? kind->step_name : "primitive tests", image_name);
+            exp_md(x, "\n%s (mean %.1f %s per ray; %s, printed under the image):\n\n"
+                      "<!-- image: %s -->\n",
+                   caption, n ? total / (double)n : 0.0, unit, scale, image_name);
         else
             snprintf(why, why_n, "%s", err.msg);
     } else {

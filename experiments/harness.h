@@ -2,7 +2,8 @@
  * harness.h - the shared frame of every experiment binary.
  *
  * An experiment answers one question. It parses the common options
- * (--quick, --out DIR, --threads N, --repeat N, --mesh FILE..., --help),
+ * (--quick, --out DIR, --threads N, --repeat N, --mesh FILE..., --heat-scale SPEC,
+ * --help),
  * measures through bench.h, writes its raw numbers to DIR/<name>.csv and one
  * Markdown section to DIR/<name>.md: the question, a table (medians with
  * min-max, and the hardware-independent counts beside every time), a
@@ -15,6 +16,7 @@
 #include <stdio.h>
 
 #include "bench/bench.h"
+#include "bench/image.h"
 #include "scene/scene.h"
 
 #define EXP_MAX_MESHES 16
@@ -28,6 +30,7 @@ typedef struct {
     int size;             /* primary image size (square) */
     const char *meshes[EXP_MAX_MESHES]; /* extra mesh files (default: the meshes in ../shared/scenes) */
     int mesh_count;
+    image_heat_scale heat_scale; /* --heat-scale: colours of exp_heatmap images */
     FILE *csv;
     FILE *md;
     double t_start;

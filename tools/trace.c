@@ -35,6 +35,7 @@ typedef struct {
     uint64_t seed;
     int ao_samples;
     float ao_radius;
+    image_heat_scale heat_scale;
 } options;
 
 static void usage(FILE *f)
@@ -58,6 +59,8 @@ static void usage(FILE *f)
             "  --check             compare every result against the double-precision reference\n"
             "  --image F.png       shaded image of the primary hits (.png or .ppm)\n"
             "  --heatmap steps|prims F.png   cost per pixel with a colour scale\n"
+            "  --heat-scale SPEC   heatmap scale: auto (0..image max, default), max=N (fixed,\n"
+            "                      so images compare), log (log(1+v)); e.g. log,max=200\n"
             "  --dump-rays F       write the ray set(s) in FORMATS.md .rays (F.<set>.rays if several)\n"
             "  --dump-hits F       write the hits of the last accelerator (F.<set>.hits if several)\n"
             "  --export-obj F      write the scene as OBJ (spheres tessellated) and continue\n"
@@ -192,6 +195,10 @@ static int parse_options(int argc, char **argv, options *o)
             o->heatmap = argv[++i];
             if (strcmp(o->heatmap_kind, "steps") && strcmp(o->heatmap_kind, "prims"))
                 return die("--heatmap %s: expected steps or prims%s", o->heatmap_kind, "");
+        } else if (!strcmp(a, "--heat-scale")) {
+            NEED_VALUE();
+            accel_error e = {0};
+            if (image_heat_scale_parse(v, &o->heat_scale, &e)) return die("%s%s", e.msg, "");
         } else if (!strcmp(a, "--dump-rays")) {
             NEED_VALUE();
             o->dump_rays = v;
@@ -502,9 +509,13 @@ int main(int argc, char **argv)
                     for (size_t i = 0; v && i < n; i++)
                         if (r->pixel[i] < (uint32_t)(r->width * r->height)) v[r->pixel[i]] += src[i];
                     image_rgb img;
-                    char path[1024];
+                    char path[1024], title[256];
                     set_path(path, sizeof path, o.heatmap, set_names[s], "png", set_count > 1);
-                    if (v && image_heatmap(v, r->width, r->height, 0, &img, &err) == 0) {
+                    snprintf(title, sizeof title, "%s: %s%s per ray", o.accels[a],
+                             src == steps ? kind->step_name : "primitive tests",
+                             src == steps ? " visited" : "");
+                    if (v && image_heatmap(v, r->width, r->height, &o.heat_scale, title, &img,
+                                           &err) == 0) {
                         if (image_write(path, &img, &err)) {
                             fprintf(stderr, "trace: %s\n", err.msg);
                             status = 1;
