@@ -257,6 +257,7 @@ int test_png_decode(const uint8_t *png, size_t n, int *width, int *height, uint8
                 return (int)fail(msg, msg_n, "IHDR not 8-bit RGB non-interlaced (%dx%d)", w, h);
             }
         } else if (!memcmp(type, "IDAT", 4)) {
+            st->idat_chunks++;
             memcpy(z + zn, data, len);
             zn += len;
         } else if (!memcmp(type, "IEND", 4)) {

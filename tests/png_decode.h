@@ -19,6 +19,7 @@ typedef struct {
     unsigned max_dist;  /* the farthest one, bytes */
     unsigned max_len;   /* the longest one, bytes */
     size_t filters[5];  /* PNG rows by filter type */
+    size_t idat_chunks;
 } png_stats;
 
 /* Inflates a raw deflate stream into out (capacity cap). Returns the

@@ -29,6 +29,7 @@
 #define LL_CODES 286      /* literal/length alphabet in use (286, 287 never occur) */
 #define D_CODES 30
 #define CL_CODES 19
+#define SEGMENT ((size_t)1 << 30) /* input bytes matched with one position numbering */
 
 /* RFC 1951 section 3.2.5: base value and extra bits of each length and distance code. */
 static const uint16_t len_base[29] = {3,  4,  5,  6,  7,  8,  9,  10, 11,  13,  15,  17,  19,  23, 27,
@@ -479,7 +480,6 @@ int image_zlib_compress(const uint8_t *in, size_t n, int level, uint8_t **out, s
     if (level < 0 || level > 9) return accel_fail(err, ACCEL_ERR_RANGE, "zlib level %d not in 0..9", level);
     deflater *z = malloc(sizeof *z);
     if (!z) return accel_fail(err, ACCEL_ERR_NOMEM, "out of memory for the compressor");
-    memset(z->head, 0xff, sizeof z->head);
     memset(z->ll_freq, 0, sizeof z->ll_freq);
     memset(z->d_freq, 0, sizeof z->d_freq);
     z->in = in, z->n = n;
@@ -499,7 +499,14 @@ int image_zlib_compress(const uint8_t *in, size_t n, int level, uint8_t **out, s
             ok = reserve(&z->w, n + 5 * (n / 65535 + 1) + 8);
             if (ok) put_stored(z, 0, n, 1);
         } else {
-            ok = compress_lz77(z) && flush_block(z, n, 1);
+            /* Positions are int32: inputs past SEGMENT bytes are matched in
+             * segments (no match crosses a boundary; the stream is one). */
+            for (size_t seg = 0; ok && (seg < n || seg == 0); seg += SEGMENT) {
+                size_t seg_n = n - seg < SEGMENT ? n - seg : SEGMENT;
+                z->in = in + seg, z->n = seg_n, z->block_start = 0;
+                memset(z->head, 0xff, sizeof z->head);
+                ok = compress_lz77(z) && flush_block(z, seg_n, seg + seg_n == n);
+            }
         }
     }
     if (ok) ok = reserve(&z->w, 8);

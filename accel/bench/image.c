@@ -11,6 +11,8 @@
 
 #include "bench/image.h"
 
+#define IDAT_MAX ((size_t)1 << 20) /* bytes of compressed data per IDAT chunk */
+
 int image_alloc(image_rgb *img, int width, int height, accel_error *err)
 {
     img->rgb = NULL;
@@ -141,7 +143,9 @@ int image_png_encode(const image_rgb *img, int level, uint8_t **png, size_t *png
     int rc = image_zlib_compress(raw, raw_n, level, &z, &z_n, err);
     free(raw);
     if (rc) return rc;
-    uint8_t *out = malloc(8 + 25 + 12 + z_n + 12);
+    /* IDAT split in chunks of at most IDAT_MAX bytes (a chunk length must stay below 2^31). */
+    size_t idat_count = z_n ? (z_n + IDAT_MAX - 1) / IDAT_MAX : 1;
+    uint8_t *out = malloc(8 + 25 + 12 * idat_count + z_n + 12);
     if (!out) {
         free(z);
         return accel_fail(err, ACCEL_ERR_NOMEM, "out of memory for a %zu-byte PNG", z_n);
@@ -154,7 +158,8 @@ int image_png_encode(const image_rgb *img, int level, uint8_t **png, size_t *png
     size_t k = 8;
     memcpy(out, sig, 8);
     put_chunk(out, &k, "IHDR", ihdr, 13);
-    put_chunk(out, &k, "IDAT", z, z_n);
+    for (size_t off = 0; off < z_n; off += IDAT_MAX)
+        put_chunk(out, &k, "IDAT", z + off, z_n - off < IDAT_MAX ? z_n - off : IDAT_MAX);
     put_chunk(out, &k, "IEND", NULL, 0);
     free(z);
     *png = out;
