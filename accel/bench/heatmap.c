@@ -249,10 +249,10 @@ int image_heatmap(const float *values, int width, int height, const image_heat_s
     if (!(sc.max > 0)) sc.max = top > 0 ? top : 1;
     /* Legend geometry: text scale s, title lines, bar, tick marks, labels. */
     int s = width >= 400 ? 2 : 1, line = 9 * s, pad = 3 * s;
-    char full[256], lines[4][128];
+    char full[256], lines[8][128];
     snprintf(full, sizeof full, "%s%s%s", title ? title : "", title && *title && sc.log ? ", " : "",
              sc.log ? "log scale" : "");
-    int title_lines = wrap_text(full, (width - 2) / (6 * s), lines, 4);
+    int title_lines = wrap_text(full, (width - 2) / (6 * s), lines, 8);
     int bar_y = height + pad + title_lines * line + (title_lines ? s : 0), bar_h = 5 * s;
     int tick_h = 2 * s, label_y = bar_y + bar_h + tick_h + s;
     int legend = label_y + line + pad - height;
