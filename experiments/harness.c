@@ -269,7 +269,7 @@ int exp_heatmap(exp_ctx *x, const char *spec, const accel_scene *s, const bench_
         char path[1024], title[256], scale[96];
         const char *unit = what == 's' ? kind->step_name : "primitive tests";
         snprintf(path, sizeof path, "%s/%s.png", x->out_dir, image_name);
-        snprintf(title, sizeof title, "%s: %s%s per ray", spec, unit, what == 's' ? " visited" : "");
+        image_heat_title(title, sizeof title, spec, kind, what != 's');
         snprintf(scale, sizeof scale, "%s colour scale from 0 to %s",
                  x->heat_scale.log ? "logarithmic" : "linear",
                  x->heat_scale.max > 0 ? "a fixed maximum" : "the image's maximum");

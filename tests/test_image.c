@@ -418,3 +418,16 @@ TEST(image_png_decoder_rejects_corruption)
     free(png);
     image_free(&img);
 }
+
+TEST(image_heat_title_names_the_unit)
+{
+    char t[128];
+    for (size_t i = 0; i < accel_kind_count; i++) {
+        const accel_kind *k = accel_kinds[i];
+        image_heat_title(t, sizeof t, k->name, k, 0);
+        const char *want = !strcmp(k->step_name, "cells") ? "cells stepped per ray" : "nodes visited per ray";
+        CHECKF(!strncmp(t, k->name, strlen(k->name)) && strstr(t, want), "%s: '%s'", k->name, t);
+        image_heat_title(t, sizeof t, k->name, k, 1);
+        CHECKF(strstr(t, ": primitive tests per ray") != NULL, "%s: '%s'", k->name, t);
+    }
+}

@@ -511,9 +511,7 @@ int main(int argc, char **argv)
                     image_rgb img;
                     char path[1024], title[256];
                     set_path(path, sizeof path, o.heatmap, set_names[s], "png", set_count > 1);
-                    snprintf(title, sizeof title, "%s: %s%s per ray", o.accels[a],
-                             src == steps ? kind->step_name : "primitive tests",
-                             src == steps ? " visited" : "");
+                    image_heat_title(title, sizeof title, o.accels[a], kind, src == prims);
                     if (v && image_heatmap(v, r->width, r->height, &o.heat_scale, title, &img,
                                            &err) == 0) {
                         if (image_write(path, &img, &err)) {

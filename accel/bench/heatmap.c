@@ -189,6 +189,15 @@ float image_heat_position(const image_heat_scale *sc, float v)
     return x < 1.0f ? x : 1.0f;
 }
 
+void image_heat_title(char *buf, size_t n, const char *spec, const accel_kind *kind, int prims)
+{
+    if (prims)
+        snprintf(buf, n, "%s: primitive tests per ray", spec);
+    else
+        snprintf(buf, n, "%s: %s %s per ray", spec, kind->step_name,
+                 strcmp(kind->step_name, "cells") ? "visited" : "stepped");
+}
+
 /* A tick label: integers as such, other values with 3 significant digits. */
 static void format_value(char *buf, size_t n, double v, int clipped)
 {

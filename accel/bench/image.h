@@ -67,6 +67,11 @@ float image_heat_position(const image_heat_scale *sc, float v);
 int image_heatmap(const float *values, int width, int height, const image_heat_scale *scale,
                   const char *title, image_rgb *out, accel_error *err);
 
+/* A heatmap title in the project's vocabulary: "SPEC: nodes visited per
+ * ray" (trees), "SPEC: cells stepped per ray" (grids, kind->step_name
+ * "cells"), "SPEC: primitive tests per ray" (prims != 0). */
+void image_heat_title(char *buf, size_t n, const char *spec, const accel_kind *kind, int prims);
+
 /* Draws printable ASCII at (x, y) (top-left), 5x7 glyphs in 6x8 cells,
  * scaled by s; pixels outside the image are skipped. */
 void image_text(image_rgb *img, int x, int y, int s, const char *text, const uint8_t rgb[3]);
