@@ -32,6 +32,12 @@ static int opt_threads(const cli_option *o, void *field, char **v, accel_error *
 }
 
 #define OPT(f) offsetof(exp_ctx, f)
+static int opt_heat_scale(const cli_option *o, void *field, char **v, accel_error *err)
+{
+    (void)o;
+    return image_heat_scale_parse(v[0], field, err);
+}
+
 static const cli_option exp_options[] = {
     {"--quick", NULL, "smoke-test budget (tiny scenes, 1 repeat)", cli_flag, OPT(quick), 0, 0},
     {"--out", "DIR", "where <name>.csv and <name>.md go (default experiments/out)", cli_string,
@@ -44,6 +50,8 @@ static const cli_option exp_options[] = {
     {"--mesh", "FILE", "add a mesh (repeatable; default ../shared/scenes/*.off if present)",
      opt_mesh, OPT(meshes), 0, 0},
     {"--no-meshes", NULL, "built-in scenes only", cli_flag, OPT(no_meshes), 0, 0},
+    {"--heat-scale", "SPEC", "heatmap scale: auto (default), max=N, log, e.g. log,max=200",
+     opt_heat_scale, OPT(heat_scale), 0, 0},
     {"--quiet", NULL, "no progress lines on stderr", cli_flag, OPT(quiet), 0, 0},
     {"--progress-after", "S", "show progress of phases longer than S seconds (default 2)",
      cli_double, OPT(progress_after), 0, 1e6},
@@ -317,17 +325,21 @@ int exp_heatmap(exp_ctx *x, const char *spec, const accel_scene *s, const bench_
             total += val;
         }
         image_rgb img;
-        char path[1024];
+        char path[1024], title[256], scale[96];
+        const char *unit = what == 's' ? kind->step_name : "primitive tests";
         snprintf(path, sizeof path, "%s/%s.png", x->out_dir, image_name);
-        if (image_heatmap(v, r->width, r->height, 0, &img, &err) == 0) {
+        image_heat_title(title, sizeof title, spec, kind, what != 's');
+        snprintf(scale, sizeof scale, "%s colour scale from 0 to %s",
+                 x->heat_scale.log ? "logarithmic" : "linear",
+                 x->heat_scale.max > 0 ? "a fixed maximum" : "the image's maximum");
+        if (image_heatmap(v, r->width, r->height, &x->heat_scale, title, &img, &err) == 0) {
             rc = image_write(path, &img, &err);
             image_free(&img);
         }
         if (rc == 0)
-            exp_md(x, "\n%s (mean %.1f %s per ray; colour scale from 0 to the maximum, printed "
-                      "under the image):\n\n<!-- image: %s -->\n",
-                   caption, n ? total / (double)n : 0.0,
-                   what == 's' ? kind->step_name : "primitive tests", image_name);
+            exp_md(x, "\n%s (mean %.1f %s per ray; %s, printed under the image):\n\n"
+                      "<!-- image: %s -->\n",
+                   caption, n ? total / (double)n : 0.0, unit, scale, image_name);
         else
             snprintf(why, why_n, "%s", err.msg);
     } else {

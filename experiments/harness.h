@@ -3,7 +3,8 @@
  *
  * An experiment answers one question. It parses the common options (one
  * table in harness.c drives parsing and --help: --quick, --out DIR,
- * --threads N, --repeat N, --size N, --mesh FILE..., --quiet, --help),
+ * --threads N, --repeat N, --size N, --mesh FILE..., --heat-scale SPEC,
+ * --quiet, --help),
  * measures through bench.h, writes its raw numbers to DIR/<name>.csv (RFC
  * 4180, one schema: the first record is the header) and one Markdown
  * section to DIR/<name>.md: the question, a table (medians with min-max,
@@ -22,6 +23,7 @@
 
 #include "bench/bench.h"
 #include "bench/csv.h"
+#include "bench/image.h"
 #include "scene/scene.h"
 
 #define EXP_MAX_MESHES 16
@@ -38,6 +40,7 @@ typedef struct {
     int mesh_count;
     int no_meshes, quiet, help;
     double progress_after; /* seconds */
+    image_heat_scale heat_scale; /* --heat-scale: colours of exp_heatmap images */
     FILE *md;
     csv_file csv;
     bench_progress *progress; /* NULL with --quiet */

@@ -262,7 +262,9 @@ static void write_depth_view(const lab_subject *s, const char *scene, const uint
     snprintf(path, sizeof path, "%s/step2_depth_%s.png", s->out_dir, scene);
     for (char *p = path + strlen(s->out_dir) + 1; *p; p++)
         if (*p == ':' || *p == '=' || *p == ',') *p = '_';
-    if (image_heatmap(v, w, h, vmax, &img, &err) == 0 && image_write(path, &img, &err) == 0)
+    char title[128];
+    snprintf(title, sizeof title, "%s: nodes visited per ray (the depth view)", s->kind->name);
+    if (image_heatmap(v, w, h, NULL, title, &img, &err) == 0 && image_write(path, &img, &err) == 0)
         say(r, "       depth view (nodes visited per pixel, white = %.0f): %s\n", vmax, path);
     image_free(&img);
     free(v);

@@ -239,61 +239,6 @@ TEST(core_ray_hit_files_round_trip)
     CHECK(rays_read("build/does_not_exist.rays", &in, &err) == ACCEL_ERR_IO);
 }
 
-TEST(core_png_stored_deflate)
-{
-    accel_error err = {0};
-    image_rgb img;
-    CHECK(image_alloc(&img, 300, 250, &err) == 0); /* > 65535 bytes: several stored blocks */
-    for (size_t i = 0; i < (size_t)300 * 250 * 3; i++) img.rgb[i] = (uint8_t)(i * 31 + 7);
-    const char *path = "build/test_image.png";
-    CHECK(image_write_png(path, &img, &err) == 0);
-    FILE *f = fopen(path, "rb");
-    static uint8_t buf[1 << 20];
-    size_t n = f ? fread(buf, 1, sizeof buf, f) : 0;
-    if (f) fclose(f);
-    CHECK(n > 8 && memcmp(buf, "\x89PNG\r\n\x1a\n", 8) == 0);
-    /* Walk the chunks, check each CRC, gather IDAT, inflate the stored blocks. */
-    size_t off = 8, zn = 0;
-    static uint8_t z[1 << 20];
-    int crc_ok = 1, ended = 0;
-    while (off + 12 <= n) {
-        uint32_t len = (uint32_t)buf[off] << 24 | buf[off + 1] << 16 | buf[off + 2] << 8 | buf[off + 3];
-        uint32_t crc = (uint32_t)buf[off + 8 + len] << 24 | buf[off + 9 + len] << 16 |
-                       buf[off + 10 + len] << 8 | buf[off + 11 + len];
-        if (image_crc32(buf + off + 4, len + 4, 0) != crc) crc_ok = 0;
-        if (!memcmp(buf + off + 4, "IDAT", 4)) {
-            memcpy(z + zn, buf + off + 8, len);
-            zn += len;
-        }
-        if (!memcmp(buf + off + 4, "IEND", 4)) ended = 1;
-        off += 12 + len;
-    }
-    CHECK(crc_ok && ended);
-    static uint8_t raw[1 << 20];
-    size_t rn = 0, k = 2;
-    int final = 0;
-    while (!final && k + 5 <= zn) {
-        final = z[k] & 1;
-        size_t len = z[k + 1] | z[k + 2] << 8;
-        CHECK((uint16_t)~len == (uint16_t)(z[k + 3] | z[k + 4] << 8));
-        memcpy(raw + rn, z + k + 5, len);
-        rn += len;
-        k += 5 + len;
-    }
-    CHECK(rn == (size_t)250 * (300 * 3 + 1));
-    uint32_t ad = (uint32_t)z[k] << 24 | z[k + 1] << 16 | z[k + 2] << 8 | z[k + 3];
-    CHECK(ad == image_adler32(raw, rn));
-    int pixels_ok = 1;
-    for (int y = 0; y < 250; y++)
-        if (raw[(size_t)y * 901] != 0 ||
-            memcmp(raw + (size_t)y * 901 + 1, img.rgb + (size_t)y * 900, 900) != 0)
-            pixels_ok = 0;
-    CHECK(pixels_ok);
-    image_free(&img);
-    CHECK(image_adler32((const uint8_t *)"Wikipedia", 9) == 0x11E60398u); /* known value */
-    CHECK(image_crc32((const uint8_t *)"123456789", 9, 0) == 0xCBF43926u); /* CRC-32 check value */
-}
-
 TEST(core_compare_rule)
 {
     accel_hit a = {10.0f, 1, 0, 0}, b = {10.0005f, 2, 0, 0}, c = {10.01f, 2, 0, 0};

@@ -43,6 +43,7 @@ typedef struct {
     uint64_t seed;
     int ao_samples;
     float ao_radius;
+    image_heat_scale heat_scale;
 } options;
 
 static int opt_accel(const cli_option *o, void *field, char **v, accel_error *err)
@@ -52,6 +53,12 @@ static int opt_accel(const cli_option *o, void *field, char **v, accel_error *er
         return accel_fail(err, ACCEL_ERR_SPEC, "%s: at most %d accelerators", o->name, MAX_ACCELS);
     opts->accels[opts->accel_count++] = v[0];
     return 0;
+}
+
+static int opt_heat_scale(const cli_option *o, void *field, char **v, accel_error *err)
+{
+    (void)o;
+    return image_heat_scale_parse(v[0], field, err);
 }
 
 static int opt_heatmap(const cli_option *o, void *field, char **v, accel_error *err)
@@ -90,6 +97,8 @@ static const cli_option trace_options[] = {
      0, 0},
     {"--heatmap", "steps|prims F.png", "cost per pixel with a colour scale (F.<set>.png if several)",
      opt_heatmap, OPT(heatmap), 0, 0},
+    {"--heat-scale", "SPEC", "heatmap scale: auto (0..image max, default), max=N (fixed, so\n"
+     "images compare), log (log(1+v)); e.g. log,max=200", opt_heat_scale, OPT(heat_scale), 0, 0},
     {"--dump-rays", "F", "write the ray set(s) as FORMATS.md .rays (F.<set>.rays if several)",
      cli_string, OPT(dump_rays), 0, 0},
     {"--dump-hits", "F", "write the hits of the last accelerator (F.<set>.hits if several)",
@@ -409,7 +418,8 @@ static void print_row(const options *o, run *r, const accel_kind *kind, const ac
                t->diff.holes, t->diff.false_hits, t->diff.disagreements);
 }
 
-static int write_heatmap(const options *o, run *r, const set_run *t, accel_error *err)
+static int write_heatmap(const options *o, run *r, const set_run *t, const accel_kind *kind,
+                         const char *spec, accel_error *err)
 {
     const rays_set *rs = t->rays;
     size_t n = rs->count;
@@ -422,7 +432,9 @@ static int write_heatmap(const options *o, run *r, const set_run *t, accel_error
     snprintf(path, sizeof path, r->set_count > 1 ? "%s.%s.png" : "%s", o->heatmap[1],
              r->set_names[t->set]);
     image_rgb img;
-    int rc = image_heatmap(v, rs->width, rs->height, 0, &img, err);
+    char title[256];
+    image_heat_title(title, sizeof title, spec, kind, src == t->prims);
+    int rc = image_heatmap(v, rs->width, rs->height, &o->heat_scale, title, &img, err);
     if (rc == 0) {
         rc = image_write(path, &img, err);
         image_free(&img);
@@ -432,7 +444,8 @@ static int write_heatmap(const options *o, run *r, const set_run *t, accel_error
 }
 
 /* The outputs of the last accelerator: --dump-hits, --image, --heatmap. */
-static void write_outputs(const options *o, run *r, const set_run *t)
+static void write_outputs(const options *o, run *r, const set_run *t, const accel_kind *kind,
+                          const char *spec)
 {
     accel_error err = {0};
     const char *name = r->set_names[t->set];
@@ -451,7 +464,7 @@ static void write_outputs(const options *o, run *r, const set_run *t)
             report_err(r, &err);
         }
     }
-    if (t->steps && write_heatmap(o, r, t, &err)) report_err(r, &err);
+    if (t->steps && write_heatmap(o, r, t, kind, spec, &err)) report_err(r, &err);
 }
 
 /* Step 6: one ray set on one built accelerator. */
@@ -490,7 +503,7 @@ static void trace_set(const options *o, run *r, int s, int last, const accel_kin
     if (o->check && check_set(o, r, &t, &cerr)) report_err(r, &cerr);
     print_row(o, r, kind, canon, st, bt, &t);
     if (rc) report_err(r, &err);
-    if (last) write_outputs(o, r, &t);
+    if (last) write_outputs(o, r, &t, kind, canon->spec);
 done:
     free(t.hits);
     free(t.occ);
