@@ -44,6 +44,10 @@
 #include "accel.h"
 #include "core/prim.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Largest resolution along one axis (cells); keeps cell indices exact in
  * float and the per-axis plane tables small. */
 #define GRID_MAX_AXIS_RES 65536
@@ -283,5 +287,9 @@ static inline __attribute__((always_inline)) int grid_dda_step(grid_dda *d)
     if (d->t_next[1] < d->t_next[2]) return grid_dda_advance(d, 1);
     return grid_dda_advance(d, 2);
 }
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

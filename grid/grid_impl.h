@@ -7,6 +7,10 @@
 
 #include "grid.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct {
     /* The live primitives, copied in the order of the Morton code of their
      * centroids (or in scene order with reorder=0): local ids 0..T-1 are
@@ -27,5 +31,9 @@ void grid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, s
                     accel_counters *counters);
 void grid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                    accel_counters *counters);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -8,6 +8,10 @@
 
 #include "ngrid.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct {
     const accel_scene *scene;
     ngrid_node *nodes;   /* node_count grids, breadth-first, top first */
@@ -77,5 +81,9 @@ void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, 
                      accel_counters *counters);
 void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                     accel_counters *counters);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -10,6 +10,10 @@
 
 #include "rays/rays.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct {
     double median, min, max;
     int n;
@@ -83,5 +87,9 @@ int bench_build(const char *spec, const accel_scene *s, int threads, int repeats
 /* Machine, compiler, flags and commit, for reports (one line each). */
 void bench_machine_info(char *cpu, size_t cpu_n, int *cores);
 const char *bench_compiler(void);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

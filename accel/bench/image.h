@@ -11,6 +11,10 @@
 
 #include "accel.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct {
     int width, height;
     uint8_t *rgb; /* width*height*3 bytes, row-major, top row first */
@@ -38,5 +42,9 @@ void image_text(image_rgb *img, int x, int y, int s, const char *text, const uin
 /* CRC-32 (PNG) and Adler-32 (zlib), exposed for tests. */
 uint32_t image_crc32(const uint8_t *data, size_t n, uint32_t crc);
 uint32_t image_adler32(const uint8_t *data, size_t n);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif
