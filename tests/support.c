@@ -66,7 +66,8 @@ int test_make_scene(const char *spec, accel_scene *s)
     return rc == 0;
 }
 
-static int by_path(const void *a, const void *b)
+/* qsort order of fixed-size name buffers. */
+static int by_name(const void *a, const void *b)
 {
     return strcmp((const char *)a, (const char *)b);
 }
@@ -96,7 +97,65 @@ int test_shared_files(const char *exts, char (*paths)[512], int max)
         snprintf(paths[count++], 512, "%s/%s", dir, e->d_name);
     }
     closedir(d);
-    qsort(paths, (size_t)count, sizeof paths[0], by_path);
+    qsort(paths, (size_t)count, sizeof paths[0], by_name);
+    return count;
+}
+
+/* The NOT_BACKENDS list of sources.mk as " a b c " (0 when absent). */
+static int read_not_backends(char *out, size_t size)
+{
+    FILE *f = fopen("sources.mk", "r");
+    if (!f) return 0;
+    char line[1024];
+    int found = 0;
+    while (fgets(line, sizeof line, f)) {
+        if (strncmp(line, "NOT_BACKENDS", 12)) continue;
+        const char *eq = strstr(line, ":=");
+        if (!eq) continue;
+        snprintf(out, size, " %s ", eq + 2);
+        for (char *p = out; *p; p++)
+            if (*p == '\n' || *p == '\t') *p = ' ';
+        found = 1;
+    }
+    fclose(f);
+    return found;
+}
+
+static int has_c_file(const char *dir)
+{
+    DIR *d = opendir(dir);
+    if (!d) return 0;
+    struct dirent *e;
+    int found = 0;
+    while (!found && (e = readdir(d))) {
+        size_t n = strlen(e->d_name);
+        found = n > 2 && !strcmp(e->d_name + n - 2, ".c");
+    }
+    closedir(d);
+    return found;
+}
+
+int test_backend_folders(char (*names)[256], int max)
+{
+    char not_backends[1024];
+    if (!read_not_backends(not_backends, sizeof not_backends)) {
+        test_fail(__FILE__, __LINE__,
+                  "sources.mk: no NOT_BACKENDS line (run from the repository root)");
+        return -1;
+    }
+    DIR *d = opendir(".");
+    if (!d) return 0;
+    int count = 0;
+    struct dirent *e;
+    while ((e = readdir(d)) && count < max) {
+        if (e->d_name[0] == '.') continue;
+        char key[300];
+        snprintf(key, sizeof key, " %s ", e->d_name);
+        if (strstr(not_backends, key) || !has_c_file(e->d_name)) continue;
+        snprintf(names[count++], 256, "%s", e->d_name);
+    }
+    closedir(d);
+    qsort(names, (size_t)count, sizeof names[0], by_name);
     return count;
 }
 

@@ -57,6 +57,12 @@ int test_make_scene(const char *spec, accel_scene *s);
  * caller then skips). */
 int test_shared_files(const char *exts, char (*paths)[512], int max);
 
+/* The backend folders as sources.mk defines them: every top-level folder
+ * holding .c files, less its NOT_BACKENDS list; sorted, at most max.
+ * Returns the count, or -1 (a failed check) when sources.mk has no
+ * NOT_BACKENDS line (the tests run from the repository root). */
+int test_backend_folders(char (*names)[256], int max);
+
 /* A whole file, NUL-terminated (its size in *size when size is not NULL);
  * NULL when it cannot be read. */
 char *test_read_file(const char *path, size_t *size);
