@@ -142,6 +142,12 @@ typedef struct {
 void grid_count_pass(const grid_frame *f, const accel_scene *s, const uint32_t *prims,
                      uint32_t prim_count, grid_overlap mode, uint32_t *counts, int threads);
 
+/* The number of references the passes would make, without any cell array:
+ * the same membership test, totalled. Stops counting once the total
+ * exceeds stop_above (the result is then only known to be above it). */
+uint64_t grid_count_refs(const grid_frame *f, const accel_scene *s, const uint32_t *prims,
+                         uint32_t prim_count, grid_overlap mode, uint64_t stop_above);
+
 /* Prefix sum: turns counts a[0..n-1] into exclusive offsets and sets a[n] to
  * the total (*total). Fails, leaving a[] untouched, when the total does not
  * fit a uint32. */

@@ -113,6 +113,88 @@ TEST(ngrid_params_refused)
     scene_free(&s);
 }
 
+/*
+ * Fine fixed sub-grids (sub_res=256, 16.7M cells each) over a few
+ * primitives per cell. Over a 2,000-triangle soup every one of them would
+ * copy its triangles more than 8 times over and is dropped: the plan counts
+ * their references ahead instead of building them (138 s before, all
+ * dropped in the end), and the result is the grid without them. Over many
+ * small clusters they would all be kept: the level is refused before
+ * anything is built, by memory, or by the 32-bit cell index when max_mb
+ * allows it, with the same message for any thread count.
+ */
+TEST(ngrid_fine_sub_res_fast_or_refused)
+{
+    accel_scene soup;
+    if (test_make_scene("soup:tris=2000", &soup)) {
+        accel_build_stats fine, flat;
+        void *a;
+        accel_error err = {0};
+        double t0 = accel_now_ms();
+        int rc = test_ngrid_build("nested_grid:sub_res=256,threshold=1", &soup, 2, &a, &fine, &err);
+        double ms = accel_now_ms() - t0;
+        CHECKF(rc == 0, "sub_res=256 on the soup: %s", err.msg);
+        if (rc == 0) accel_kind_nested_grid.destroy(a);
+        CHECKF(ms < 20000, "sub_res=256 on the soup built in %.0f ms", ms);
+        test_note("sub_res=256,threshold=1 on a 2000-triangle soup: %.0f ms", ms);
+        if (test_ngrid_build("nested_grid:depth=1", &soup, 1, &a, &flat, &err) == 0) {
+            CHECKF(rc == 0 && fine.depth == 1 && fine.nodes == flat.nodes &&
+                       fine.bytes == flat.bytes,
+                   "sub_res=256: depth %d, %llu cells, %zu bytes; depth=1: %llu cells, %zu bytes",
+                   fine.depth, (unsigned long long)fine.nodes, fine.bytes,
+                   (unsigned long long)flat.nodes, flat.bytes);
+            accel_kind_nested_grid.destroy(a);
+        }
+        /* Coarser: some sub-grids kept, and the walk through them right. */
+        test_rays r = {0};
+        test_rays_random(&r, soup.bounds, 2000);
+        accel_build_stats kept;
+        test_check_spec(&soup, "nested_grid:sub_res=64,threshold=1", r.rays, r.count, NULL, &kept,
+                        NULL);
+        CHECKF(kept.depth == 2, "sub_res=64: depth %d", kept.depth);
+        test_rays_free(&r);
+        scene_free(&soup);
+    }
+    /* 300 clusters of 30 tiny triangles, about one per top cell. */
+    scene_builder b = {0};
+    box3 all = {{0, 0, 0}, {100, 100, 100}};
+    for (int c = 0; c < 300; c++) {
+        vec3 centre = test_rand_point(all);
+        for (int i = 0; i < 30; i++) {
+            vec3 p = v3_add(centre, v3(test_rand_in(-0.1f, 0.1f), test_rand_in(-0.1f, 0.1f),
+                                       test_rand_in(-0.1f, 0.1f)));
+            test_add_tri(&b, p, v3_add(p, v3(0.001f, 0, 0)), v3_add(p, v3(0, 0.001f, 0.0005f)));
+        }
+    }
+    accel_scene s;
+    if (!test_finish(&b, "clusters", &s)) return;
+    static const char *const specs[] = {"nested_grid:sub_res=256,threshold=1,max_mb=256",
+                                        "nested_grid:sub_res=256,threshold=1,max_mb=1048576"};
+    static const char *const why[] = {"max_mb", "32-bit"};
+    for (int k = 0; k < 2; k++) {
+        char first[sizeof ((accel_error *)0)->msg] = "";
+        for (int threads = 1; threads <= 2; threads++) {
+            accel_build_stats st;
+            void *a;
+            accel_error err = {0};
+            double t0 = accel_now_ms();
+            int rc = test_ngrid_build(specs[k], &s, threads, &a, &st, &err);
+            double ms = accel_now_ms() - t0;
+            if (rc == 0) accel_kind_nested_grid.destroy(a);
+            CHECKF(rc == ACCEL_ERR_RANGE && strstr(err.msg, "refused before building") &&
+                       strstr(err.msg, why[k]) && ms < 5000,
+                   "%s, %d threads: rc %d after %.0f ms, '%s'", specs[k], threads, rc, ms,
+                   err.msg);
+            if (threads == 1)
+                snprintf(first, sizeof first, "%s", err.msg);
+            else
+                CHECKF(!strcmp(first, err.msg), "%s: 2 threads say '%s', 1 '%s'", specs[k],
+                       err.msg, first);
+        }
+    }
+    scene_free(&s);
+}
+
 /* ---- structure ------------------------------------------------------------------- */
 
 TEST(ngrid_depth1_is_the_regular_grid)
