@@ -172,7 +172,7 @@ TEST(ngrid_fine_sub_res_fast_or_refused)
                                         "nested_grid:sub_res=256,threshold=1,max_mb=1048576"};
     static const char *const why[] = {"max_mb", "32-bit"};
     for (int k = 0; k < 2; k++) {
-        char first[sizeof ((accel_error *)0)->msg] = "";
+        char first[sizeof((accel_error *)0)->msg] = "";
         for (int threads = 1; threads <= 2; threads++) {
             accel_build_stats st;
             void *a;
@@ -183,13 +183,12 @@ TEST(ngrid_fine_sub_res_fast_or_refused)
             if (rc == 0) accel_kind_nested_grid.destroy(a);
             CHECKF(rc == ACCEL_ERR_RANGE && strstr(err.msg, "refused before building") &&
                        strstr(err.msg, why[k]) && ms < 5000,
-                   "%s, %d threads: rc %d after %.0f ms, '%s'", specs[k], threads, rc, ms,
-                   err.msg);
+                   "%s, %d threads: rc %d after %.0f ms, '%s'", specs[k], threads, rc, ms, err.msg);
             if (threads == 1)
                 snprintf(first, sizeof first, "%s", err.msg);
             else
-                CHECKF(!strcmp(first, err.msg), "%s: 2 threads say '%s', 1 '%s'", specs[k],
-                       err.msg, first);
+                CHECKF(!strcmp(first, err.msg), "%s: 2 threads say '%s', 1 '%s'", specs[k], err.msg,
+                       first);
         }
     }
     scene_free(&s);
