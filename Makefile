@@ -1,7 +1,8 @@
 # gridbvh - see README.md.
 #   make            optimized library, tools and experiments (bin/)
-#   make test       the test suite (T=word: tests whose name contains it;
-#                   KINDS=grid,bvh: only these accelerator kinds)
+#   make test       the test suite (T=word: tests whose name contains it, e.g.
+#                   T=conformance_grid; T=--list names them; KINDS=grid,bvh: only
+#                   these accelerator kinds; a T or KINDS matching nothing fails)
 #   make report     runs every experiment and rewrites REPORT.md (QUICK=1: smoke run)
 #   make sanitize   the test suite under AddressSanitizer + UBSan
 #   make fuzz       libFuzzer targets for the loaders (clang)
@@ -66,6 +67,11 @@ $(BIN)/exp_%: $(BUILD)/experiments/exp_%.o $(EXP_OBJ) $(LIB)
 $(BIN)/lab: $(BUILD)/lab/lab.o $(BUILD)/lab/check.o $(LIB)
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $^ -o $@ $(LDLIBS)
+
+# The header test compiles every header as C and C++ and links a C++
+# program against this build's library, with this build's link flags.
+$(BUILD)/tests/test_headers.o: ALL_CFLAGS += -DTEST_CC='"$(CC)"' -DTEST_CXX='"$(CXX)"' \
+    -DTEST_LIB='"$(LIB)"' -DTEST_LDLIBS='"$(LDLIBS)"'
 
 $(BIN)/run_tests: $(TEST_OBJ) $(LIB)
 	@mkdir -p $(BIN)

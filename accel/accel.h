@@ -19,10 +19,15 @@
 #ifndef ACCEL_ACCEL_H
 #define ACCEL_ACCEL_H
 
+#include <assert.h>
 #include <stddef.h>
 #include <stdint.h>
 
 #include "core/geom.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 /* ---- rays and hits: exactly the FORMATS.md records ---------------------- */
 
@@ -37,8 +42,8 @@ typedef struct {
     float u, v;    /* barycentric weights of the 2nd and 3rd vertex */
 } accel_hit;
 
-_Static_assert(sizeof(accel_ray) == 32, "accel_ray must be the 32-byte FORMATS.md record");
-_Static_assert(sizeof(accel_hit) == 16, "accel_hit must be the 16-byte FORMATS.md record");
+static_assert(sizeof(accel_ray) == 32, "accel_ray must be the 32-byte FORMATS.md record");
+static_assert(sizeof(accel_hit) == 16, "accel_hit must be the 16-byte FORMATS.md record");
 
 #define ACCEL_MISS 0xFFFFFFFFu
 
@@ -342,5 +347,9 @@ void accel_oracle_free(accel_oracle *oracle);
 double accel_now_ms(void);
 /* Number of usable cores. */
 int accel_cpu_count(void);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -22,7 +22,12 @@
 #ifndef BVH_BUILD_COMMON_H
 #define BVH_BUILD_COMMON_H
 
+#include <assert.h>
 #include "bvh_node.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 /* A primitive reference: the box and the scene id, 32 bytes like a node so
  * that the partition passes stream whole cache lines. */
@@ -33,7 +38,7 @@ typedef struct {
     uint32_t pad;
 } bvh_ref;
 
-_Static_assert(sizeof(bvh_ref) == 32, "bvh_ref is one half cache line");
+static_assert(sizeof(bvh_ref) == 32, "bvh_ref is one half cache line");
 
 typedef enum { BVH_BUILD_BINNED = 0, BVH_BUILD_SAH, BVH_BUILD_MID, BVH_BUILD_MEDIAN } bvh_builder;
 
@@ -184,5 +189,9 @@ void bvh_release(bvh *b);
 bvh_node *bvh_alloc_nodes(size_t n);
 /* malloc(n * size) with the product checked (NULL on overflow); n = 0 allocates one byte. */
 void *bvh_alloc_array(size_t n, size_t size);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

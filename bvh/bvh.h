@@ -22,6 +22,10 @@
 #include "accel.h"
 #include "bvh_node.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 extern const accel_kind accel_kind_bvh;
 
 /* The node pool of a built bvh (node 0 is the root; node 1 is padding) and
@@ -41,5 +45,9 @@ double bvh_sah_cost(const bvh_node *nodes, uint32_t node_count, double ct, doubl
  * bvh_load returns an accel usable with accel_kind_bvh. */
 int bvh_save(const void *accel, const char *path, accel_error *err);
 int bvh_load(const char *path, void **accel_out, accel_error *err);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -28,11 +28,16 @@
 #ifndef BVH_BVH_NODE_H
 #define BVH_BVH_NODE_H
 
+#include <assert.h>
 #include <stddef.h>
 #include <stdint.h>
 
 #include "core/prim.h"
 #include "core/variant.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 typedef struct {
     float bmin[3];
@@ -41,10 +46,10 @@ typedef struct {
     uint32_t count;
 } bvh_node;
 
-_Static_assert(sizeof(bvh_node) == 32, "bvh_node must be the lecture's 32-byte node");
-_Static_assert(offsetof(bvh_node, left_first) == 12, "left_first follows bmin");
-_Static_assert(offsetof(bvh_node, bmax) == 16, "bmax starts the second 16 bytes");
-_Static_assert(offsetof(bvh_node, count) == 28, "count closes the node");
+static_assert(sizeof(bvh_node) == 32, "bvh_node must be the lecture's 32-byte node");
+static_assert(offsetof(bvh_node, left_first) == 12, "left_first follows bmin");
+static_assert(offsetof(bvh_node, bmax) == 16, "bmax starts the second 16 bytes");
+static_assert(offsetof(bvh_node, count) == 28, "count closes the node");
 
 /* Index of bmax[0] in the node seen as 8 floats: the slab test picks a
  * plane as ((const float *)node)[axis + (near or far offset)]. */
@@ -188,5 +193,9 @@ void bvh_packet_intersect(const bvh *b, const accel_ray *rays, accel_hit *hits, 
                           accel_counters *c);
 void bvh_packet_occluded(const bvh *b, const accel_ray *rays, uint8_t *occ, size_t count,
                          accel_counters *c);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

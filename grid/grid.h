@@ -24,6 +24,10 @@
 #include "accel.h"
 #include "grid_core.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Default cells per primitive, from the sweep reported in grid/README.md. */
 #define GRID_DEFAULT_LAMBDA 8
 
@@ -41,5 +45,9 @@ typedef struct {
 
 /* Fills *v from an accelerator built by accel_kind_grid. */
 void grid_get_view(const void *accel, grid_view *v);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -203,7 +203,7 @@ void grid_cell_box(const grid_frame *f, int x, int y, int z, double lo[3], doubl
 
 /* ---- membership ------------------------------------------------------------- */
 
-typedef enum { VISIT_COUNT, VISIT_FILL } visit_kind;
+typedef enum { VISIT_COUNT, VISIT_FILL, VISIT_TALLY } visit_kind;
 
 /* min/max as compare-and-select (fmin/fmax are library calls without fast-math). */
 static inline double dmin(double a, double b) { return b < a ? b : a; }
@@ -236,6 +236,10 @@ static inline __attribute__((always_inline)) void
 emit_cell(const grid_frame *f, int x, int y, int z, uint32_t prim, visit_kind kind, int atomic,
           uint32_t *offsets, uint32_t *refs)
 {
+    if (kind == VISIT_TALLY) { /* offsets holds one 64-bit total */
+        ++*(uint64_t *)(void *)offsets;
+        return;
+    }
     uint32_t cell = (uint32_t)x + f->stride[1] * (uint32_t)y + f->stride[2] * (uint32_t)z;
     if (kind == VISIT_COUNT) {
         if (atomic)
@@ -366,6 +370,15 @@ static void run_pass(const grid_frame *f, const accel_scene *s, const uint32_t *
     }
     pass_job j = {f, s, prims, mode, offsets, refs, kind};
     accel_parallel_for(prim_count, GRID_PASS_CHUNK, threads, pass_chunk, &j);
+}
+
+uint64_t grid_count_refs(const grid_frame *f, const accel_scene *s, const uint32_t *prims,
+                         uint32_t prim_count, grid_overlap mode, uint64_t stop_above)
+{
+    uint64_t total = 0;
+    for (uint32_t i = 0; i < prim_count && total <= stop_above; i++)
+        visit_prim(f, s, PRIM_AT(prims, i), mode, VISIT_TALLY, 0, (uint32_t *)(void *)&total, NULL);
+    return total;
 }
 
 void grid_count_pass(const grid_frame *f, const accel_scene *s, const uint32_t *prims,

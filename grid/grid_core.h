@@ -44,6 +44,10 @@
 #include "accel.h"
 #include "core/prim.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Largest resolution along one axis (cells); keeps cell indices exact in
  * float and the per-axis plane tables small. */
 #define GRID_MAX_AXIS_RES 65536
@@ -137,6 +141,12 @@ typedef struct {
  * one entry per cell). With threads > 1 the increments are atomic. */
 void grid_count_pass(const grid_frame *f, const accel_scene *s, const uint32_t *prims,
                      uint32_t prim_count, grid_overlap mode, uint32_t *counts, int threads);
+
+/* The number of references the passes would make, without any cell array:
+ * the same membership test, totalled. Stops counting once the total
+ * exceeds stop_above (the result is then only known to be above it). */
+uint64_t grid_count_refs(const grid_frame *f, const accel_scene *s, const uint32_t *prims,
+                         uint32_t prim_count, grid_overlap mode, uint64_t stop_above);
 
 /* Prefix sum: turns counts a[0..n-1] into exclusive offsets and sets a[n] to
  * the total (*total). Fails, leaving a[] untouched, when the total does not
@@ -283,5 +293,9 @@ static inline __attribute__((always_inline)) int grid_dda_step(grid_dda *d)
     if (d->t_next[1] < d->t_next[2]) return grid_dda_advance(d, 1);
     return grid_dda_advance(d, 2);
 }
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -7,6 +7,10 @@
 
 #include "grid.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct {
     /* The primitive store (accel.h): the live primitives copied in Morton
      * order (reorder=1) or scene order; cells hold local ids, and
@@ -25,5 +29,9 @@ void grid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, s
                     accel_counters *counters);
 void grid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                    accel_counters *counters);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

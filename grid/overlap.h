@@ -28,6 +28,10 @@
 
 #include <math.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Relative slack on every separation test (far above double rounding, far
  * below any distance a float scene can express). */
 #define ACCEL_OVERLAP_SLACK 1e-12
@@ -211,5 +215,9 @@ static inline int accel_overlap_sphere_surface_box(const float *sphere, const do
     double inner = r - slack;
     return inner <= 0.0 || far2 >= inner * inner;
 }
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

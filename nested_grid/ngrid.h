@@ -36,6 +36,10 @@
 #include "accel.h"
 #include "grid/grid_core.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Most levels a nested grid has, the top included (accel_counters has one
  * level_steps entry per level). */
 #define NGRID_MAX_LEVELS 4
@@ -97,5 +101,9 @@ double ngrid_expected_cells(const grid_frame *f);
 /* Probability that a random line crossing f's box crosses one given cell:
  * area(cell)/area(box), the same for every cell of a uniform grid. */
 double ngrid_cell_probability(const grid_frame *f);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -8,6 +8,10 @@
 
 #include "ngrid.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct {
     /* The primitive store (accel.h): lists hold its local ids, and
      * store.scene_id maps a hit back to the scene's id. */
@@ -74,10 +78,61 @@ int ngrid_auto_sub_res(const accel_scene *s, box3 box, const float parent_pad[3]
                        const uint32_t *prims, uint32_t prim_count, grid_overlap mode, int deeper,
                        const ngrid_costs *m, double max_bytes, int res[3], accel_error *err);
 
+/* ---- the build's grids (ngrid_build.c, ngrid_level.c) ----------------------------- */
+
+/* One grid under construction. */
+typedef struct {
+    int level;
+    uint32_t parent_cell;   /* linear cell index in the parent grid */
+    grid_frame frame;
+    float *planes;          /* storage behind frame.planes */
+    grid_cells cells;
+    uint32_t first_child;   /* children: grids[first_child .. +child_count), by cell */
+    uint32_t child_count;
+} ngrid_bgrid;
+
+/* The build's parameters and every grid built so far. */
+typedef struct {
+    const accel_scene *scene;
+    grid_overlap mode;
+    int is_auto, lookahead, depth, sub_res;
+    double sub_lambda;
+    uint32_t threshold;
+    ngrid_costs costs;
+    double max_bytes;
+    ngrid_bgrid **grids; /* breadth-first */
+    uint32_t grid_count, grid_cap;
+    double bytes;        /* offsets, references and planes of every grid so far */
+    uint64_t cells;      /* cells of every grid so far */
+} ngrid_builder;
+
+static inline uint32_t ngrid_cell_prims(const ngrid_bgrid *g, uint32_t cell)
+{
+    return g->cells.offsets[cell + 1] - g->cells.offsets[cell];
+}
+
+/* A grid with its frame over box at resolution res (cells not built). */
+int ngrid_bgrid_new(box3 box, const int res[3], int level, ngrid_bgrid **out, accel_error *err);
+void ngrid_bgrid_free(ngrid_bgrid *g);
+/* Offsets, references and planes of a built grid. */
+double ngrid_bgrid_bytes(const ngrid_bgrid *g);
+/* Appends a built grid to b (its bytes and cells counted). */
+int ngrid_push_grid(ngrid_builder *b, ngrid_bgrid *g, accel_error *err);
+/* Puts "nested_grid: <context>: " before a message from the grid API. */
+int ngrid_wrap_error(accel_error *err, int rc, const char *context);
+/* Plans, checks and builds the sub-grids of grids[begin, end), all of one
+ * level (ngrid_level.c). */
+int ngrid_build_level(ngrid_builder *b, uint32_t begin, uint32_t end, int threads,
+                      accel_error *err);
+
 /* Traversal entry points (ngrid_trace.c). */
 void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
                      accel_counters *counters);
 void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                     accel_counters *counters);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -1,15 +1,21 @@
 /*
  * test.h - a tiny test harness: TEST(name) registers a test (no central
- * list to edit), CHECK records a failure and continues. Output ends with
- * "N passed, N failed"; `bin/run_tests FILTER` runs the tests whose name
- * contains FILTER (make test T=FILTER).
+ * list to edit), TEST_PER_KIND(prefix) one test per registered accelerator
+ * kind, CHECK records a failure and continues. Output ends with "N passed,
+ * N failed"; `bin/run_tests FILTER` runs the tests whose name contains
+ * FILTER (make test T=FILTER), `bin/run_tests --list` lists them.
  */
 #ifndef TESTS_TEST_H
 #define TESTS_TEST_H
 
 #include <stdio.h>
 
+#include "accel.h"
+
 void test_register(const char *name, void (*fn)(void));
+/* Registers fn as one test per kind of accel_kinds[] (main.c expands it
+ * when it starts), named prefix_<kind>: a new kind gets its own tests. */
+void test_register_per_kind(const char *prefix, void (*fn)(const accel_kind *kind));
 /* Records a failed check of the running test (prints file:line: message). */
 void test_fail(const char *file, int line, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)));
@@ -20,6 +26,16 @@ void test_note(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
     static void name(void);                                                              \
     __attribute__((constructor)) static void test_reg_##name(void) { test_register(#name, name); } \
     static void name(void)
+
+/* TEST_PER_KIND(conformance) { ... kind ... } defines conformance_brute,
+ * conformance_bvh, ...: `make test T=conformance_grid` runs grid's only. */
+#define TEST_PER_KIND(prefix)                                                            \
+    static void prefix(const accel_kind *kind);                                          \
+    __attribute__((constructor)) static void test_reg_##prefix(void)                     \
+    {                                                                                    \
+        test_register_per_kind(#prefix, prefix);                                         \
+    }                                                                                    \
+    static void prefix(const accel_kind *kind)
 
 #define CHECK(cond)                                                                      \
     do {                                                                                 \
@@ -32,7 +48,8 @@ void test_note(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
     } while (0)
 
 /* Whether the suites should run kind `name`: all, unless the environment
- * variable KINDS lists kinds (comma-separated), e.g. make test KINDS=grid. */
+ * variable KINDS lists kinds (comma-separated), e.g. make test KINDS=grid.
+ * run_tests refuses a KINDS naming no registered kind before any test runs. */
 int test_kind_selected(const char *name);
 
 /* Path of ../shared/scenes relative to the repository (NULL when absent). */

@@ -17,15 +17,7 @@
 #include "scene/builtin.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
-#include "test.h"
-
-static int make(const char *spec, accel_scene *s)
-{
-    accel_error err = {0};
-    int rc = scene_create(spec, s, &err);
-    CHECKF(rc == 0, "%s: %s", spec, err.msg);
-    return rc;
-}
+#include "support.h"
 
 /* ---- builds, counts, determinism ----------------------------------------- */
 
@@ -35,7 +27,7 @@ TEST(scenes_small_specs_build)
     for (size_t i = 0; i < scene_generator_count; i++) {
         const scene_generator *g = scene_generators[i];
         accel_scene s;
-        if (make(g->small_spec, &s)) continue;
+        if (!test_make_scene(g->small_spec, &s)) continue;
         CHECKF(s.prim_count >= 500 && s.prim_count <= 20000, "%s: %u primitives", g->small_spec,
                s.prim_count);
         CHECKF(s.degenerate_count == 0, "%s: %u degenerate", g->small_spec, s.degenerate_count);
@@ -52,7 +44,7 @@ TEST(scenes_default_sizes)
 {
     for (size_t i = 0; i < scene_generator_count; i++) {
         accel_scene s;
-        if (make(scene_generators[i]->name, &s)) continue;
+        if (!test_make_scene(scene_generators[i]->name, &s)) continue;
         CHECKF(s.prim_count >= 5000 && s.prim_count <= 250000, "%s: %u primitives",
                scene_generators[i]->name, s.prim_count);
         scene_free(&s);
@@ -62,7 +54,7 @@ TEST(scenes_default_sizes)
 static void check_counts(const char *spec, uint32_t tris, uint32_t spheres)
 {
     accel_scene s;
-    if (make(spec, &s)) return;
+    if (!test_make_scene(spec, &s)) return;
     CHECKF(s.tri_count == tris && s.sphere_count == spheres,
            "%s: %u triangles and %u spheres, expected %u and %u", spec, s.tri_count,
            s.sphere_count, tris, spheres);
@@ -123,8 +115,8 @@ TEST(scenes_deterministic)
     for (size_t i = 0; i < scene_generator_count; i++) {
         const char *spec = scene_generators[i]->small_spec;
         accel_scene a, b;
-        if (make(spec, &a)) continue;
-        if (make(spec, &b) == 0) {
+        if (!test_make_scene(spec, &a)) continue;
+        if (test_make_scene(spec, &b)) {
             CHECKF(same_scene(&a, &b), "%s: two builds differ", spec);
             CHECK(memcmp(&a.camera, &b.camera, sizeof a.camera) == 0);
             scene_free(&b);
@@ -133,8 +125,8 @@ TEST(scenes_deterministic)
     }
     /* The seed is a real parameter: another seed, other triangles. */
     accel_scene a, b;
-    if (make("soup:tris=100,seed=1", &a)) return;
-    if (make("soup:tris=100,seed=2", &b) == 0) {
+    if (!test_make_scene("soup:tris=100,seed=1", &a)) return;
+    if (test_make_scene("soup:tris=100,seed=2", &b)) {
         CHECK(!same_scene(&a, &b));
         scene_free(&b);
     }
@@ -193,7 +185,7 @@ static size_t bad_edges(const accel_scene *s, uint32_t first, uint32_t count,
 static void check_closed(const char *spec, uint32_t first)
 {
     accel_scene s;
-    if (make(spec, &s)) return;
+    if (!test_make_scene(spec, &s)) return;
     size_t bad = bad_edges(&s, first, s.tri_count - first, NULL);
     CHECKF(bad == 0, "%s: %zu edges not matched by a reversed twin", spec, bad);
     scene_free(&s);
@@ -217,7 +209,7 @@ TEST(scenes_closed_meshes)
 
     /* A broken mesh must be caught: drop one triangle of the cube. */
     accel_scene s;
-    if (make("cube:n=2", &s) == 0) {
+    if (test_make_scene("cube:n=2", &s)) {
         CHECK(bad_edges(&s, 1, s.tri_count - 1, NULL) == 3);
         scene_free(&s);
     }
@@ -230,7 +222,7 @@ TEST(scenes_closed_meshes_face_outwards)
     const char *specs[] = {"cube:n=3", "sphere:segments=4", "sphere:tess=uv,segments=8"};
     for (size_t i = 0; i < sizeof specs / sizeof specs[0]; i++) {
         accel_scene s;
-        if (make(specs[i], &s)) continue;
+        if (!test_make_scene(specs[i], &s)) continue;
         uint32_t inward = 0;
         for (uint32_t t = 0; t < s.tri_count; t++) {
             const float *p = s.tris + 9 * (size_t)t;
@@ -256,7 +248,7 @@ TEST(scenes_mount_terrain_watertight)
         char spec[64];
         snprintf(spec, sizeof spec, "mount:level=%d", level);
         accel_scene s;
-        if (make(spec, &s)) continue;
+        if (!test_make_scene(spec, &s)) continue;
         CHECKF(bad_edges(&s, 0, s.tri_count, on_square_boundary) == 0, "%s", spec);
         size_t border = bad_edges(&s, 0, s.tri_count, NULL);
         CHECKF(border == 4u << level, "%s: %zu border edges", spec, border);
@@ -280,7 +272,7 @@ TEST(scenes_teapot_patches_meet)
         char spec[64];
         snprintf(spec, sizeof spec, "teapot_stadium:n=%d,stadium=3,tiers=0", n);
         accel_scene s;
-        if (make(spec, &s)) continue;
+        if (!test_make_scene(spec, &s)) continue;
         /* Build the subset: patches are emitted in order, 2n^2 triangles each
          * (n fewer for the collapsed lid and bottom patches). */
         uint32_t per = 2u * n * n, first_bottom = 28 * per - 4 * n;
@@ -361,7 +353,7 @@ TEST(scenes_default_views_hit)
     for (size_t i = 0; i < scene_generator_count; i++) {
         const scene_generator *g = scene_generators[i];
         accel_scene s;
-        if (make(g->name, &s)) continue;
+        if (!test_make_scene(g->name, &s)) continue;
         rays_set r = {0};
         accel_error err;
         if (rays_primary(&s.camera, 16, 16, &r, &err) == 0) {
@@ -421,7 +413,7 @@ TEST(scenes_spd_published_eye_hits)
     };
     for (size_t i = 0; i < sizeof spd / sizeof spd[0]; i++) {
         accel_scene s;
-        if (make(spd[i].spec, &s)) continue;
+        if (!test_make_scene(spd[i].spec, &s)) continue;
         double want = spd[i].hits / (513.0 * 513.0), got = spd_corner_hits(&s, 8);
         CHECKF(fabs(got - want) <= 0.05 * want, "%s: %.4f of eye rays hit, the SPD has %.4f",
                spd[i].spec, got, want);
@@ -493,7 +485,7 @@ TEST(scenes_obj_round_trip)
     for (size_t i = 0; i < scene_generator_count; i++) {
         const scene_generator *g = scene_generators[i];
         accel_scene s, back;
-        if (make(g->small_spec, &s)) continue;
+        if (!test_make_scene(g->small_spec, &s)) continue;
         if (export_and_load(&s, 8, &back) == 0) {
             if (s.sphere_count == 0) {
                 /* %.9g text reads back to the same floats. */

@@ -14,7 +14,7 @@
 #include <string.h>
 
 #include "bench/stiff.h"
-#include "test.h"
+#include "support.h"
 
 typedef struct {
     size_t rays, holes, false_hits, disagreements, leaks, occ_bad;
@@ -36,24 +36,20 @@ static void run_spec(const stiff_case *c, const accel_hit *ref, const char *spec
     }
     size_t n = c->rays.count;
     accel_hit *h = malloc((n ? n : 1) * sizeof *h);
-    uint8_t *occ = malloc(n ? n : 1);
-    /* Counted: the step bounds are checked in counted runs only
-     * (core/variant.h), so a traversal loop is caught here, not hung in. */
-    accel_counters cnt = {0}, cnt_occ = {0};
-    accel_trace(kind, accel, c->rays.rays, h, n, 2, &cnt);
-    accel_trace_occluded(kind, accel, c->rays.rays, occ, n, 2, &cnt_occ);
-    accel_error broken = {0};
-    if (accel_counters_status(&cnt, &broken) || accel_counters_status(&cnt_occ, &broken))
-        test_fail(__FILE__, __LINE__, "%s on %s: %s", spec, c->name, broken.msg);
-    hits_diff d = hits_compare(ref, h, n);
+    if (!h) {
+        test_fail(__FILE__, __LINE__, "out of memory");
+        *build_failed = 1;
+        kind->destroy(accel);
+        return;
+    }
+    test_diff d = test_trace_diff(kind, accel, c->rays.rays, n, ref, 2, h, NULL);
     t->rays = n;
     t->holes = d.holes;
     t->false_hits = d.false_hits;
     t->disagreements = d.disagreements;
+    t->occ_bad = d.occ_bad;
     for (size_t i = c->leak_begin; i < n; i++) t->leaks += h[i].prim == ACCEL_MISS;
-    for (size_t i = 0; i < n; i++) t->occ_bad += occ[i] != (ref[i].prim != ACCEL_MISS);
     free(h);
-    free(occ);
     kind->destroy(accel);
     double ms = accel_now_ms() - t0;
     if (ms > 2000) test_note("slow: %s on %s took %.0f ms", spec, c->name, ms);
@@ -69,8 +65,11 @@ TEST(stability_stiff_cases)
             continue;
         }
         size_t n = c.rays.count;
-        accel_hit *ref = malloc((n ? n : 1) * sizeof *ref);
-        accel_reference_trace(&c.scene, c.rays.rays, ref, n, accel_cpu_count());
+        accel_hit *ref = test_oracle_hits(&c.scene, c.rays.rays, n, TEST_ORACLE_REFERENCE);
+        if (!ref) {
+            stiff_case_free(&c);
+            continue;
+        }
         /* The case itself: the reference must not leak either. */
         size_t ref_leaks = 0;
         for (size_t i = c.leak_begin; i < n; i++) ref_leaks += ref[i].prim == ACCEL_MISS;
@@ -134,14 +133,18 @@ TEST(stability_shared_meshes_vertex_rays)
             continue;
         }
         size_t n = c.rays.count;
-        accel_hit *ref = malloc((n ? n : 1) * sizeof *ref);
-        accel_reference_trace(&c.scene, c.rays.rays, ref, n, accel_cpu_count());
+        accel_hit *ref = test_oracle_hits(&c.scene, c.rays.rays, n, TEST_ORACLE_REFERENCE);
+        if (!ref) {
+            stiff_case_free(&c);
+            continue;
+        }
         for (size_t k = 0; k < accel_kind_count; k++) {
             if (!strcmp(accel_kinds[k]->name, "brute")) continue; /* the reference's twin */
             if (!test_kind_selected(accel_kinds[k]->name)) continue;
             for (int naive = 0; naive < 2; naive++) {
                 char spec[128];
-                snprintf(spec, sizeof spec, "%s%s", accel_kinds[k]->name, naive ? ":tri=naive" : "");
+                snprintf(spec, sizeof spec, "%s%s", accel_kinds[k]->name,
+                         naive ? ":tri=naive" : "");
                 tally t;
                 int failed = 0;
                 run_spec(&c, ref, spec, &t, &failed);
@@ -149,12 +152,14 @@ TEST(stability_shared_meshes_vertex_rays)
                 size_t bad = t.holes + t.false_hits + t.disagreements + t.occ_bad;
                 if (naive)
                     test_note("%s on %s: %zu rays, per million: %.0f holes, %.0f false hits, "
-                              "%.0f disagreements", spec, meshes[m], n, 1e6 * t.holes / n,
-                              1e6 * t.false_hits / n, 1e6 * t.disagreements / n);
+                              "%.0f disagreements",
+                              spec, meshes[m], n, 1e6 * t.holes / n, 1e6 * t.false_hits / n,
+                              1e6 * t.disagreements / n);
                 else
-                    CHECKF(bad == 0, "%s on %s: %zu holes, %zu false hits, %zu disagreements, "
-                           "%zu occluded mismatches of %zu rays", spec, meshes[m], t.holes,
-                           t.false_hits, t.disagreements, t.occ_bad, n);
+                    CHECKF(bad == 0,
+                           "%s on %s: %zu holes, %zu false hits, %zu disagreements, "
+                           "%zu occluded mismatches of %zu rays",
+                           spec, meshes[m], t.holes, t.false_hits, t.disagreements, t.occ_bad, n);
             }
         }
         free(ref);

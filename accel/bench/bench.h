@@ -11,6 +11,10 @@
 #include "bench/progress.h"
 #include "rays/rays.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct {
     double median, min, max;
     int n;
@@ -94,5 +98,9 @@ int bench_build(const char *spec, const accel_scene *s, int threads, int repeats
 /* Machine, compiler, flags and commit, for reports (one line each). */
 void bench_machine_info(char *cpu, size_t cpu_n, int *cores);
 const char *bench_compiler(void);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -15,6 +15,10 @@
 
 #include "rays/rays.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct {
     char name[96];
     char what[160];          /* one line: what the case probes */
@@ -38,5 +42,9 @@ void stiff_case_free(stiff_case *c);
  * deterministic random live triangles (appends to *r, growing it). */
 int stiff_add_vertex_rays(const accel_scene *s, vec3 eye, size_t count, uint64_t seed,
                           rays_set *r, accel_error *err);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -17,6 +17,10 @@
 #include <math.h>
 #include <stdint.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct { float x, y, z; } vec3;
 typedef struct { vec3 min, max; } box3;
 
@@ -109,5 +113,9 @@ static inline int box3_slab(const float *lo, const float *hi, vec3 org, vec3 inv
     *t_entry = t0;
     return t0 <= t1 + fabsf(t1) * ACCEL_SLAB_PAD;
 }
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

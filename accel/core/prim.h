@@ -20,6 +20,10 @@
 #include "core/geom.h"
 #include "accel.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Per-ray constants every kernel needs, computed once per ray. */
 typedef struct {
     vec3 org, dir, inv_dir;
@@ -328,5 +332,9 @@ static inline int accel_prim_hit(const accel_scene *s, uint32_t prim, const acce
     const float *tri = s->tris + 9 * (size_t)prim;
     return naive ? accel_tri_naive(p, tri, t, u, v) : accel_tri_watertight(p, tri, t, u, v);
 }
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

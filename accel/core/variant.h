@@ -32,6 +32,10 @@
 
 #include "accel.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* The flags a kernel copy is specialized on. */
 enum {
     ACCEL_V_NAIVE = 1u,   /* tri=naive: Moller-Trumbore instead of watertight */
@@ -109,5 +113,9 @@ static inline void accel_run_kernel(const accel_kernel_table *t, const void *acc
 #define ACCEL_STEP_BOUND_BROKEN(c, steps, bound)                                            \
     ((c) != NULL && (uint64_t)(steps) > (uint64_t)(bound) &&                                \
      accel_counters_note_broken((c), __FILE__, __LINE__, (uint64_t)(bound)))
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -16,6 +16,10 @@
 
 #include "accel.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct {
     accel_ray *rays;
     uint32_t *pixel; /* pixel index (y*width + x) of each ray, or NULL */
@@ -77,5 +81,9 @@ typedef struct {
 int hits_agree(const accel_hit *a, const accel_hit *b);
 /* Compares b against the reference a over n rays. */
 hits_diff hits_compare(const accel_hit *a, const accel_hit *b, size_t n);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -14,6 +14,10 @@
 
 #include "scene/scene.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* The largest scene scene_finish accepts (ids are uint32, 0xFFFFFFFF = miss).
  * Generators check their primitive count against it before allocating. */
 #define SCENE_BUILTIN_MAX_PRIMS 0xFFFFFFFEull
@@ -101,5 +105,9 @@ int scene_teapot_add(scene_builder *b, int n, accel_error *err);
 extern const scene_generator scene_gen_sphereflake; /* spd.c */
 extern const scene_generator scene_gen_tetra;       /* spd.c */
 extern const scene_generator scene_gen_mount;       /* spd.c */
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

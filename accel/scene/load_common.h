@@ -30,6 +30,10 @@
 #include "accel.h"
 #include "scene/scene.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* A cursor over a text buffer, with the 1-based number of the line it is on. */
 typedef struct {
     const char *name; /* file name for messages */
@@ -143,5 +147,9 @@ static inline int load_add_tri(scene_builder *b, const float *v, size_t a, size_
     return scene_builder_add_tri(b, v3_load(v + 3 * a), v3_load(v + 3 * c), v3_load(v + 3 * d),
                                  err);
 }
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -14,6 +14,10 @@
 
 #include "accel.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* ---- construction (used by loaders and generators) ----------------------- */
 
 /* Growable triangle/sphere lists used while a scene is generated or loaded. */
@@ -87,5 +91,9 @@ int scene_export_obj(const accel_scene *s, const char *path, int segments, accel
  * cases: far from the origin, tiny, huge). The camera moves along. */
 int scene_transform(const accel_scene *s, float scale, vec3 offset, accel_scene *out,
                     accel_error *err);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif
