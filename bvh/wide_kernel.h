@@ -61,7 +61,7 @@ WK(trace_ray)(const bvh_wide *w, const accel_ray *ray, accel_hit *hit_out, uint8
     accel_hit hit = accel_hit_miss();
     uint32_t steps = 0, boxes = 0, prims = 0;
     accel_ray_prep p;
-    if (w->root != WIDE_EMPTY && accel_prep_ray(ray, &p)) {
+    if (w->root != WIDE_EMPTY && wide_prep_ray(ray, &p)) {
         /* Set up the slab test: origin, 1/dir and the row of each axis's
          * near and far plane, picked by the direction's sign bit. */
         NF ox = NV(set1)(p.org.x), oy = NV(set1)(p.org.y), oz = NV(set1)(p.org.z);
