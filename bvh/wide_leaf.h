@@ -73,7 +73,7 @@ static inline void WL(lane_gather)(const LBLOCK *blk, int lane, float *out)
  * naive test), in lane order. Returns 1 when one of them hit. */
 static inline __attribute__((always_inline)) int
 WL(lanes_scalar)(const LBLOCK *blk, int mask, const accel_ray_prep *p, float *t, float *u, float *v,
-                 uint32_t *id, uint32_t tri_count, int naive, int any_hit)
+                 uint32_t *id, uint32_t tri_count, int naive, int has_spheres, int any_hit)
 {
     int hit = 0;
     while (mask) {
@@ -82,7 +82,7 @@ WL(lanes_scalar)(const LBLOCK *blk, int mask, const accel_ray_prep *p, float *t,
         float prim[9];
         WL(lane_gather)(blk, lane, prim);
         int h;
-        if (blk->id[lane] >= tri_count)
+        if (has_spheres && blk->id[lane] >= tri_count)
             h = accel_sphere_hit(p, prim, t, u, v);
         else if (naive)
             h = accel_tri_naive(p, prim, t, u, v);
@@ -111,7 +111,7 @@ WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_pr
     int spheres = 0;
     if (has_spheres)
         for (int lane = 0; lane < WIDE_LB; lane++) spheres |= (blk->id[lane] >= tri_count) << lane;
-    if (naive) return WL(lanes_scalar)(blk, all, p, t, u, v, id, tri_count, 1, any_hit);
+    if (naive) return WL(lanes_scalar)(blk, all, p, t, u, v, id, tri_count, 1, has_spheres, any_hit);
 
     /* Vertices relative to the origin, on the permuted axes. */
     const float *v0 = blk->v[0][0], *v1 = blk->v[1][0], *v2 = blk->v[2][0];
@@ -192,11 +192,11 @@ WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_pr
         }
     }
     /* Uncertain lanes in double, then the spheres, with the t found so far. */
-    if (unsure && WL(lanes_scalar)(blk, unsure, p, t, u, v, id, tri_count, 0, any_hit)) {
+    if (unsure && WL(lanes_scalar)(blk, unsure, p, t, u, v, id, tri_count, 0, 0, any_hit)) {
         if (any_hit) return 1;
         hit = 1;
     }
-    if (has_spheres && spheres && WL(lanes_scalar)(blk, spheres, p, t, u, v, id, tri_count, 0, any_hit))
+    if (has_spheres && spheres && WL(lanes_scalar)(blk, spheres, p, t, u, v, id, tri_count, 0, 1, any_hit))
         hit = 1;
     return hit;
 }
