@@ -53,129 +53,139 @@
 #define KNODE WK_JOIN(wide_node, WIDE_NW)
 #define KBLOCK WK_JOIN(wide_block, WIDE_LB)
 
-static inline __attribute__((always_inline)) void
-WK(trace_ray)(const bvh_wide *w, const accel_ray *ray, accel_hit *hit_out, uint8_t *occ_out,
-              accel_counters *c, size_t ray_idx, unsigned flags, int any_hit)
+/* Per-ray constants of the slab test: origin, 1/dir, and the float offset
+ * of each axis's near and far plane row, picked by the direction's sign. */
+typedef struct {
+    NF ox, oy, oz, ix, iy, iz, t_near;
+    int nx, fx, ny, fy, nz, fz;
+} WK(node_ray);
+
+WIDE_INLINE void WK(node_setup)(WK(node_ray) *r, const accel_ray_prep *p)
+{
+    r->ox = NV(set1)(p->org.x), r->oy = NV(set1)(p->org.y), r->oz = NV(set1)(p->org.z);
+    r->ix = NV(set1)(p->inv_dir.x), r->iy = NV(set1)(p->inv_dir.y), r->iz = NV(set1)(p->inv_dir.z);
+    r->t_near = NV(set1)(p->t_near);
+    r->nx = (0 + p->neg[0]) * WIDE_NW, r->fx = (1 - p->neg[0]) * WIDE_NW;
+    r->ny = (2 + p->neg[1]) * WIDE_NW, r->fy = (3 - p->neg[1]) * WIDE_NW;
+    r->nz = (4 + p->neg[2]) * WIDE_NW, r->fz = (5 - p->neg[2]) * WIDE_NW;
+}
+
+/*
+ * One interior node: all children's boxes at once, then the hit children
+ * near to far. Sets *ref to the child to visit next and returns 1, or
+ * returns 0 when no child is hit (the caller pops).
+ */
+WIDE_INLINE int WK(visit_node)(const KNODE *n, const WK(node_ray) *r, float t, uint32_t *ref,
+                               wide_stack_entry *stack, int *sp_io)
+{
+    const float *b = n->box[0];
+    NF t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->nx), r->ox), r->ix), r->t_near);
+    t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->ny), r->oy), r->iy), t0);
+    t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->nz), r->oz), r->iz), t0);
+    NF t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fx), r->ox), r->ix), NV(set1)(t));
+    t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fy), r->oy), r->iy), t1);
+    t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fz), r->oz), r->iz), t1);
+    NF far = NV(add)(t1, NV(mul)(NV(abs)(t1), NV(set1)(ACCEL_SLAB_PAD)));
+    unsigned mask = (unsigned)NV(mask)(NV(le)(t0, far));
+    if (!mask) return 0;
+    unsigned i = (unsigned)__builtin_ctz(mask);
+    mask &= mask - 1;
+    if (!mask) { /* one hit child: enter it */
+        *ref = n->child[i];
+        return 1;
+    }
+    float te[WIDE_NW] __attribute__((aligned(32)));
+    NV(store)(te, t0);
+    unsigned j = (unsigned)__builtin_ctz(mask);
+    mask &= mask - 1;
+    int sp = *sp_io;
+    if (!mask) { /* two: enter the nearer, push the farther */
+        int swap = te[j] < te[i];
+        unsigned near = swap ? j : i, far_i = swap ? i : j;
+        stack[sp].ref = n->child[far_i];
+        stack[sp].t_entry = te[far_i];
+        *sp_io = sp + 1;
+        *ref = n->child[near];
+        return 1;
+    }
+    /* Three or more: push all, sort the run far to near (insertion sort),
+     * enter the nearest. */
+    int base = sp;
+    stack[sp].ref = n->child[i], stack[sp].t_entry = te[i], sp++;
+    stack[sp].ref = n->child[j], stack[sp].t_entry = te[j], sp++;
+    do {
+        unsigned k = (unsigned)__builtin_ctz(mask);
+        mask &= mask - 1;
+        stack[sp].ref = n->child[k], stack[sp].t_entry = te[k], sp++;
+    } while (mask);
+    for (int a = base + 1; a < sp; a++) {
+        wide_stack_entry e = stack[a];
+        int k = a;
+        while (k > base && stack[k - 1].t_entry < e.t_entry) {
+            stack[k] = stack[k - 1];
+            k--;
+        }
+        stack[k] = e;
+    }
+    *ref = stack[--sp].ref;
+    *sp_io = sp;
+    return 1;
+}
+
+/* One leaf: its blocks are consecutive. Returns 1 when any_hit found a hit. */
+WIDE_INLINE int WK(visit_leaf)(const bvh_wide *w, uint32_t ref, const KL(wide_leaf_ray) *lr,
+                               const accel_ray_prep *p, float *t, float *u, float *v,
+                               uint32_t *hit_id, uint32_t *prims, int counted, unsigned flags,
+                               int any_hit)
 {
     const int naive = (flags & ACCEL_V_NAIVE) != 0, has_spheres = (flags & ACCEL_V_SPHERES) != 0;
-    accel_hit hit = accel_hit_miss();
-    uint32_t steps = 0, boxes = 0, prims = 0;
-    accel_ray_prep p;
-    if (w->root != WIDE_EMPTY && wide_prep_ray(ray, &p)) {
-        /* Set up the slab test: origin, 1/dir and the row of each axis's
-         * near and far plane, picked by the direction's sign bit. */
-        NF ox = NV(set1)(p.org.x), oy = NV(set1)(p.org.y), oz = NV(set1)(p.org.z);
-        NF ix = NV(set1)(p.inv_dir.x), iy = NV(set1)(p.inv_dir.y), iz = NV(set1)(p.inv_dir.z);
-        NF t_near = NV(set1)(p.t_near), pad = NV(set1)(ACCEL_SLAB_PAD);
-        const int nx = (0 + p.neg[0]) * WIDE_NW, fx = (1 - p.neg[0]) * WIDE_NW;
-        const int ny = (2 + p.neg[1]) * WIDE_NW, fy = (3 - p.neg[1]) * WIDE_NW;
-        const int nz = (4 + p.neg[2]) * WIDE_NW, fz = (5 - p.neg[2]) * WIDE_NW;
-        KL(wide_leaf_ray) lr;
-        KL(leaf_setup)(&lr, &p);
-        const KNODE *nodes = w->nodes;
-        const KBLOCK *blocks = w->blocks;
-        float t = p.t_far;
-        uint32_t hit_id = ACCEL_MISS;
-        wide_stack_entry stack[WIDE_STACK(WIDE_NW)];
-        int sp = 0;
-        uint32_t ref = w->root;
-        for (;;) {
-            steps++;
-            if (ACCEL_STEP_BOUND_BROKEN(c, steps, w->step_bound)) break;
-            if (!(ref & WIDE_LEAF)) {
-                /* Interior: all children's boxes at once. */
-                const KNODE *n = &nodes[ref];
-                const float *b = n->box[0];
-                NF t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + nx), ox), ix), t_near);
-                t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + ny), oy), iy), t0);
-                t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + nz), oz), iz), t0);
-                NF t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + fx), ox), ix), NV(set1)(t));
-                t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + fy), oy), iy), t1);
-                t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + fz), oz), iz), t1);
-                unsigned mask = (unsigned)NV(mask)(NV(le)(t0, NV(add)(t1, NV(mul)(NV(abs)(t1), pad))));
-                boxes += WIDE_NW;
-                if (mask) {
-                    unsigned i = (unsigned)__builtin_ctz(mask);
-                    mask &= mask - 1;
-                    if (!mask) { /* one hit child: enter it */
-                        ref = n->child[i];
-                        continue;
-                    }
-                    float te[WIDE_NW] __attribute__((aligned(32)));
-                    NV(store)(te, t0);
-                    unsigned j = (unsigned)__builtin_ctz(mask);
-                    mask &= mask - 1;
-                    if (!mask) { /* two: enter the nearer, push the farther */
-                        int swap = te[j] < te[i];
-                        unsigned near = swap ? j : i, far = swap ? i : j;
-                        stack[sp].ref = n->child[far];
-                        stack[sp].t_entry = te[far];
-                        sp++;
-                        ref = n->child[near];
-                        continue;
-                    }
-                    /* Three or more: push all, sort the run far to near
-                     * (insertion sort), enter the nearest. */
-                    int base = sp;
-                    stack[sp].ref = n->child[i], stack[sp].t_entry = te[i], sp++;
-                    stack[sp].ref = n->child[j], stack[sp].t_entry = te[j], sp++;
-                    do {
-                        unsigned k = (unsigned)__builtin_ctz(mask);
-                        mask &= mask - 1;
-                        stack[sp].ref = n->child[k], stack[sp].t_entry = te[k], sp++;
-                    } while (mask);
-                    for (int a = base + 1; a < sp; a++) {
-                        wide_stack_entry e = stack[a];
-                        int k = a;
-                        while (k > base && stack[k - 1].t_entry < e.t_entry) {
-                            stack[k] = stack[k - 1];
-                            k--;
-                        }
-                        stack[k] = e;
-                    }
-                    ref = stack[--sp].ref;
-                    continue;
-                }
-            } else {
-                /* Leaf: its blocks are consecutive. */
-                const KBLOCK *blk = &blocks[wide_leaf_first(ref)];
-                uint32_t nb = wide_leaf_blocks(ref);
-                for (uint32_t k = 0; k < nb; k++) {
-                    if (c) {
-                        prims++;
-                        for (int lane = 1; lane < WIDE_LB; lane++)
-                            prims += blk[k].id[lane] != blk[k].id[lane - 1];
-                    }
-                    if (KL(leaf_block)(&blk[k], &lr, &p, &t, &hit.u, &hit.v, &hit_id, w->tri_count,
-                                       naive, has_spheres, any_hit) &&
-                        any_hit) {
-                        hit_id = 0; /* occluded: which primitive does not matter */
-                        goto done;
-                    }
-                }
-            }
-            /* Pop the next entry that can still hold a closer hit. */
-            for (;;) {
-                if (sp == 0) goto done;
-                sp--;
-                if (bvh_entry_before(stack[sp].t_entry, t)) {
-                    ref = stack[sp].ref;
-                    break;
-                }
-            }
+    const KBLOCK *blk = (const KBLOCK *)w->blocks + wide_leaf_first(ref);
+    uint32_t nb = wide_leaf_blocks(ref);
+    for (uint32_t k = 0; k < nb; k++) {
+        if (counted) {
+            (*prims)++;
+            for (int lane = 1; lane < WIDE_LB; lane++) *prims += blk[k].id[lane] != blk[k].id[lane - 1];
         }
-    done:
-        if (hit_id != ACCEL_MISS) {
-            hit.t = t;
-            hit.prim = hit_id;
-        } else {
-            hit.u = hit.v = 0.0f;
+        if (KL(leaf_block)(&blk[k], lr, p, t, u, v, hit_id, w->tri_count, naive, has_spheres, any_hit) &&
+            any_hit) {
+            *hit_id = 0; /* occluded: which primitive does not matter */
+            return 1;
         }
     }
+    return 0;
+}
+
+/* Pops the next entry that can still hold a hit closer than t into *ref;
+ * 0 when the stack is exhausted. */
+WIDE_INLINE int WK(pop)(const wide_stack_entry *stack, int *sp_io, float t, uint32_t *ref)
+{
+    int sp = *sp_io;
+    while (sp > 0) {
+        sp--;
+        if (bvh_entry_before(stack[sp].t_entry, t)) {
+            *ref = stack[sp].ref;
+            *sp_io = sp;
+            return 1;
+        }
+    }
+    *sp_io = 0;
+    return 0;
+}
+
+/* Writes a ray's answer and its counts. */
+WIDE_INLINE void WK(finish)(accel_hit hit, uint32_t hit_id, float t, void *out, accel_counters *c,
+                            size_t ray_idx, uint32_t steps, uint32_t boxes, uint32_t prims, int any_hit)
+{
+    if (hit_id != ACCEL_MISS) {
+        hit.t = t;
+        hit.prim = hit_id;
+    } else {
+        hit = accel_hit_miss();
+    }
     if (any_hit)
-        occ_out[ray_idx] = hit.prim != ACCEL_MISS;
+        ((uint8_t *)out)[ray_idx] = hit.prim != ACCEL_MISS;
     else
-        hit_out[ray_idx] = hit;
+        ((accel_hit *)out)[ray_idx] = hit;
     if (c) {
         c->rays++;
         c->steps += steps;
@@ -186,20 +196,144 @@ WK(trace_ray)(const bvh_wide *w, const accel_ray *ray, accel_hit *hit_out, uint8
     }
 }
 
-static inline __attribute__((always_inline)) void
-WK(wide_closest)(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
-                 unsigned flags)
+/* One ray from root to answer. */
+WIDE_INLINE void WK(trace_ray)(const bvh_wide *w, const accel_ray *ray, void *out, accel_counters *c,
+                               size_t ray_idx, unsigned flags, int any_hit)
 {
-    for (size_t i = 0; i < count; i++)
-        WK(trace_ray)(a, &rays[i], out, NULL, c, i, flags, 0);
+    accel_hit hit = accel_hit_miss();
+    uint32_t steps = 0, boxes = 0, prims = 0, hit_id = ACCEL_MISS;
+    float t = INFINITY;
+    accel_ray_prep p;
+    if (w->root != WIDE_EMPTY && wide_prep_ray(ray, &p)) {
+        WK(node_ray) nr;
+        WK(node_setup)(&nr, &p);
+        KL(wide_leaf_ray) lr;
+        KL(leaf_setup)(&lr, &p);
+        const KNODE *nodes = w->nodes;
+        wide_stack_entry stack[WIDE_STACK(WIDE_NW)];
+        int sp = 0;
+        uint32_t ref = w->root;
+        t = p.t_far;
+        for (;;) {
+            steps++;
+            if (ACCEL_STEP_BOUND_BROKEN(c, steps, w->step_bound)) break;
+            if (!(ref & WIDE_LEAF)) {
+                boxes += WIDE_NW;
+                if (WK(visit_node)(&nodes[ref], &nr, t, &ref, stack, &sp)) continue;
+            } else if (WK(visit_leaf)(w, ref, &lr, &p, &t, &hit.u, &hit.v, &hit_id, &prims, c != NULL,
+                                      flags, any_hit)) {
+                break;
+            }
+            if (!WK(pop)(stack, &sp, t, &ref)) break;
+        }
+    }
+    WK(finish)(hit, hit_id, t, out, c, ray_idx, steps, boxes, prims, any_hit);
 }
 
-static inline __attribute__((always_inline)) void
-WK(wide_any)(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
-             unsigned flags)
+/*
+ * Two rays in flight per thread (interleave=2): each ray is traversed
+ * exactly as above, on its own stack, but the loop advances both by one
+ * node or leaf per iteration, so the out-of-order core overlaps one ray's
+ * dependent loads and compares with the other's. When a ray is done, its
+ * slot takes the next ray of the batch. Answers are identical to the
+ * one-ray loop (each ray's own sequence of visits is unchanged).
+ */
+typedef struct {
+    WK(node_ray) nr;
+    KL(wide_leaf_ray) lr;
+    accel_ray_prep p;
+    accel_hit hit;
+    float t;
+    uint32_t hit_id, ref, steps, boxes, prims;
+    int sp;
+    size_t ray_idx;
+    wide_stack_entry stack[WIDE_STACK(WIDE_NW)];
+} WK(slot);
+
+/* Starts rays from *next on until one needs traversal (rays that cannot
+ * hit anything are answered at once). Returns 0 when the batch is done. */
+WIDE_INLINE int WK(slot_start)(WK(slot) *s, const bvh_wide *w, const accel_ray *rays, size_t count,
+                               size_t *next, void *out, accel_counters *c, int any_hit)
 {
-    for (size_t i = 0; i < count; i++)
-        WK(trace_ray)(a, &rays[i], NULL, out, c, i, flags, 1);
+    while (*next < count) {
+        size_t i = (*next)++;
+        if (w->root != WIDE_EMPTY && wide_prep_ray(&rays[i], &s->p)) {
+            WK(node_setup)(&s->nr, &s->p);
+            KL(leaf_setup)(&s->lr, &s->p);
+            s->hit = accel_hit_miss();
+            s->t = s->p.t_far;
+            s->hit_id = ACCEL_MISS;
+            s->ref = w->root;
+            s->steps = s->boxes = s->prims = 0;
+            s->sp = 0;
+            s->ray_idx = i;
+            return 1;
+        }
+        WK(finish)(accel_hit_miss(), ACCEL_MISS, INFINITY, out, c, i, 0, 0, 0, any_hit);
+    }
+    return 0;
+}
+
+/* One node or leaf of a slot's ray; returns 0 when the ray is done. */
+WIDE_INLINE int WK(slot_step)(WK(slot) *s, const bvh_wide *w, accel_counters *c, unsigned flags,
+                              int any_hit)
+{
+    s->steps++;
+    if (ACCEL_STEP_BOUND_BROKEN(c, s->steps, w->step_bound)) return 0;
+    if (!(s->ref & WIDE_LEAF)) {
+        s->boxes += WIDE_NW;
+        if (WK(visit_node)((const KNODE *)w->nodes + s->ref, &s->nr, s->t, &s->ref, s->stack, &s->sp))
+            return 1;
+    } else if (WK(visit_leaf)(w, s->ref, &s->lr, &s->p, &s->t, &s->hit.u, &s->hit.v, &s->hit_id,
+                              &s->prims, c != NULL, flags, any_hit)) {
+        return 0;
+    }
+    return WK(pop)(s->stack, &s->sp, s->t, &s->ref);
+}
+
+WIDE_INLINE void WK(slot_finish)(WK(slot) *s, void *out, accel_counters *c, int any_hit)
+{
+    WK(finish)(s->hit, s->hit_id, s->t, out, c, s->ray_idx, s->steps, s->boxes, s->prims, any_hit);
+}
+
+WIDE_INLINE void WK(trace_pair)(const bvh_wide *w, const accel_ray *rays, void *out, size_t count,
+                                accel_counters *c, unsigned flags, int any_hit)
+{
+    WK(slot) s[2];
+    size_t next = 0;
+    int a0 = WK(slot_start)(&s[0], w, rays, count, &next, out, c, any_hit);
+    int a1 = WK(slot_start)(&s[1], w, rays, count, &next, out, c, any_hit);
+    while (a0 | a1) {
+        if (a0 && !WK(slot_step)(&s[0], w, c, flags, any_hit)) {
+            WK(slot_finish)(&s[0], out, c, any_hit);
+            a0 = WK(slot_start)(&s[0], w, rays, count, &next, out, c, any_hit);
+        }
+        if (a1 && !WK(slot_step)(&s[1], w, c, flags, any_hit)) {
+            WK(slot_finish)(&s[1], out, c, any_hit);
+            a1 = WK(slot_start)(&s[1], w, rays, count, &next, out, c, any_hit);
+        }
+    }
+}
+
+/* The kernels of the variant tables: ACCEL_V_OPT selects interleave=2. */
+WIDE_INLINE void WK(wide_closest)(const void *a, const accel_ray *rays, void *out, size_t count,
+                                  accel_counters *c, unsigned flags)
+{
+    if (flags & ACCEL_V_OPT) {
+        WK(trace_pair)(a, rays, out, count, c, flags, 0);
+        return;
+    }
+    for (size_t i = 0; i < count; i++) WK(trace_ray)(a, &rays[i], out, c, i, flags, 0);
+}
+
+WIDE_INLINE void WK(wide_any)(const void *a, const accel_ray *rays, void *out, size_t count,
+                              accel_counters *c, unsigned flags)
+{
+    if (flags & ACCEL_V_OPT) {
+        WK(trace_pair)(a, rays, out, count, c, flags, 1);
+        return;
+    }
+    for (size_t i = 0; i < count; i++) WK(trace_ray)(a, &rays[i], out, c, i, flags, 1);
 }
 
 #undef WK_CAT_

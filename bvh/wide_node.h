@@ -111,7 +111,7 @@ typedef struct {
 typedef struct bvh_wide {
     int width;            /* children per node: 4 or 8 */
     int block;            /* primitives per leaf block: 4 or 8 */
-    int order;            /* ordering of hit children (WIDE_ORDER_*) */
+    int interleave;       /* rays in flight per thread: 1 or 2 */
     uint32_t root;        /* reference of the root, WIDE_EMPTY for an empty scene */
     uint32_t node_count;  /* wide nodes */
     uint32_t leaf_count;  /* leaves */
@@ -124,14 +124,11 @@ typedef struct bvh_wide {
     void *blocks;         /* wide_block4 or wide_block8, 64-byte aligned */
 } bvh_wide;
 
-/* Ordering of the hit children (parameter order=). */
-enum { WIDE_ORDER_SORT = 0 };
-
 struct bvh;
 /* Collapses the built binary tree of b into b->wide (width 4 or 8, leaf
  * blocks of `block` primitives) and frees the binary pools, which the wide
  * kernels do not use. Fills stats->nodes, leaves and depth. */
-int bvh_wide_build(struct bvh *b, int width, int block, int order, int threads,
+int bvh_wide_build(struct bvh *b, int width, int block, int interleave, int threads,
                    accel_build_stats *stats, accel_error *err);
 /* Bytes held by the wide tree (nodes, blocks, the struct itself). */
 size_t bvh_wide_memory(const bvh_wide *w);

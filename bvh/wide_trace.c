@@ -49,7 +49,7 @@ static const accel_kernel_table *const tables[2][2][2] = {
 static unsigned kernel_flags(const bvh_wide *w, int naive, int has_spheres)
 {
     return (naive ? ACCEL_V_NAIVE : 0u) | (has_spheres ? ACCEL_V_SPHERES : 0u) |
-           (w->order ? ACCEL_V_OPT : 0u);
+           (w->interleave == 2 ? ACCEL_V_OPT : 0u);
 }
 
 void bvh_wide_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hits, size_t count,
