@@ -59,6 +59,37 @@ static uint32_t *node_children(collapse_ctx *x, uint32_t idx)
     return (uint32_t *)(node_rows(x, idx) + 6 * x->width);
 }
 
+/* The octant orders of a node's k used children (see wide_node.h):
+ * children sorted by the projection of their box centre on each octant's
+ * diagonal, nearest first (ties by slot); unused slots rank last. */
+static void set_perm(collapse_ctx *x, uint32_t idx, int k)
+{
+    const int w = x->width;
+    const float *rows = node_rows(x, idx);
+    uint32_t *perm = node_children(x, idx) + w;
+    for (int r = 0; r < w; r++) perm[r] = 0;
+    for (int o = 0; o < 8; o++) {
+        double key[8];
+        int order[8];
+        for (int i = 0; i < w; i++) {
+            key[i] = 0.0;
+            for (int axis = 0; axis < 3; axis++) {
+                double c = 0.5 * rows[(2 * axis) * w + i] + 0.5 * rows[(2 * axis + 1) * w + i];
+                key[i] += (o >> axis & 1) ? -c : c;
+            }
+            order[i] = i;
+        }
+        for (int a = 1; a < w; a++) /* insertion sort: used slots by key, unused last */
+            for (int b = a; b > 0; b--) {
+                int p = order[b - 1], q = order[b];
+                int q_first = p >= k ? (q < k || q < p) : (q < k && (key[q] < key[p] || (key[q] == key[p] && q < p)));
+                if (!q_first) break;
+                order[b - 1] = q, order[b] = p;
+            }
+        for (int r = 0; r < w; r++) perm[r] |= (uint32_t)order[r] << (3 * o);
+    }
+}
+
 /* A binary node that becomes a leaf: a binary leaf, or a subtree that fits
  * one block. */
 static int is_leaf(const collapse_ctx *x, uint32_t n)
@@ -133,6 +164,7 @@ static uint32_t collapse(collapse_ctx *x, uint32_t n, int level)
             child[i] = WIDE_EMPTY;
         }
     }
+    set_perm(x, idx, k);
     /* Children after their parent, each subtree in one run. */
     for (int i = 0; i < k; i++) {
         uint32_t ref = collapse(x, set[i], level + 1);
@@ -278,7 +310,7 @@ static int collapse_tree(const bvh *b, bvh_wide *w, int threads, accel_error *er
     return rc;
 }
 
-int bvh_wide_build(bvh *b, int width, int block, int interleave, int threads, accel_build_stats *stats,
+int bvh_wide_build(bvh *b, int width, int block, int interleave, int order, int threads, accel_build_stats *stats,
                    accel_error *err)
 {
     bvh_wide *w = calloc(1, sizeof *w);
@@ -286,6 +318,7 @@ int bvh_wide_build(bvh *b, int width, int block, int interleave, int threads, ac
     w->width = width;
     w->block = block;
     w->interleave = interleave;
+    w->order = order;
     w->tri_count = b->tri_count;
     w->prim_count = b->prim_count;
     w->root = WIDE_EMPTY;

@@ -231,6 +231,118 @@ WIDE_INLINE void WK(trace_ray)(const bvh_wide *w, const accel_ray *ray, void *ou
 }
 
 /*
+ * order=octant: one interior node with its children in the node's
+ * precomputed order for the ray's octant (bits `shift`.. of perm[]). The
+ * hit children are compress-stored onto the stack farthest first, with
+ * one branch on "none" and one on "exactly one" instead of the per-count
+ * branches and the sort of visit_node; the nearest is then entered.
+ */
+WIDE_INLINE int WK(visit_node_oct)(const KNODE *n, const WK(node_ray) *r, float t, uint32_t *ref,
+                                   uint32_t *sref, float *st, int *sp_io, int shift)
+{
+    const float *b = n->box[0];
+    NF t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->nx), r->ox), r->ix), r->t_near);
+    t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->ny), r->oy), r->iy), t0);
+    t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->nz), r->oz), r->iz), t0);
+    NF t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fx), r->ox), r->ix), NV(set1)(t));
+    t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fy), r->oy), r->iy), t1);
+    t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fz), r->oz), r->iz), t1);
+    NF hit = NV(le)(t0, NV(add)(t1, NV(mul)(NV(abs)(t1), NV(set1)(ACCEL_SLAB_PAD))));
+    unsigned mask = (unsigned)NV(mask)(hit);
+    if (!mask) return 0;
+    if (!(mask & (mask - 1))) {
+        *ref = n->child[__builtin_ctz(mask)];
+        return 1;
+    }
+    int sp = *sp_io;
+#if WIDE_AVX && WIDE_NW == 8
+    /* rank -> child lane for this octant; hit bits in rank order; the
+     * ranks of the hits, farthest first (the compress table); composed,
+     * the child lane of each stack slot. */
+    __m256i perm = _mm256_and_si256(_mm256_srl_epi32(_mm256_load_si256((const __m256i *)n->perm),
+                                                     _mm_cvtsi32_si128(shift)),
+                                    _mm256_set1_epi32(7));
+    unsigned ranked = (unsigned)_mm256_movemask_ps(_mm256_permutevar8x32_ps(hit, perm));
+    __m256i sel = _mm256_and_si256(_mm256_srlv_epi32(_mm256_set1_epi32((int)wide_compress_lut[ranked]),
+                                                     _mm256_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28)),
+                                   _mm256_set1_epi32(15));
+    __m256i lane = _mm256_permutevar8x32_epi32(perm, sel);
+    _mm256_storeu_si256((__m256i *)(sref + sp),
+                        _mm256_permutevar8x32_epi32(_mm256_load_si256((const __m256i *)n->child), lane));
+    _mm256_storeu_ps(st + sp, _mm256_permutevar8x32_ps(t0, lane));
+    sp += __builtin_popcount(mask);
+#else
+    float te[WIDE_NW] __attribute__((aligned(32)));
+    NV(store)(te, t0);
+    for (int rank = WIDE_NW - 1; rank >= 0; rank--) {
+        unsigned l = (n->perm[rank] >> shift) & 7u;
+        if (mask >> l & 1u) sref[sp] = n->child[l], st[sp] = te[l], sp++;
+    }
+#endif
+    *ref = sref[--sp];
+    *sp_io = sp;
+    return 1;
+}
+
+/* One ray with order=octant. */
+WIDE_INLINE void WK(trace_ray_oct)(const bvh_wide *w, const accel_ray *ray, void *out, accel_counters *c,
+                                   size_t ray_idx, unsigned flags, int any_hit)
+{
+    accel_hit hit = accel_hit_miss();
+    uint32_t steps = 0, boxes = 0, prims = 0, hit_id = ACCEL_MISS;
+    float t = INFINITY;
+    accel_ray_prep p;
+    if (w->root != WIDE_EMPTY && wide_prep_ray(ray, &p)) {
+        WK(node_ray) nr;
+        WK(node_setup)(&nr, &p);
+        KL(wide_leaf_ray) lr;
+        KL(leaf_setup)(&lr, &p);
+        const KNODE *nodes = w->nodes;
+        /* W slack: a node stores all W lanes at the top of the stack */
+        uint32_t sref[WIDE_STACK(WIDE_NW) + WIDE_NW];
+        float st[WIDE_STACK(WIDE_NW) + WIDE_NW];
+        int sp = 0, shift = 3 * (p.neg[0] | p.neg[1] << 1 | p.neg[2] << 2);
+        uint32_t ref = w->root;
+        t = p.t_far;
+        for (;;) {
+            steps++;
+            if (ACCEL_STEP_BOUND_BROKEN(c, steps, w->step_bound)) break;
+            if (!(ref & WIDE_LEAF)) {
+                boxes += WIDE_NW;
+                if (WK(visit_node_oct)(&nodes[ref], &nr, t, &ref, sref, st, &sp, shift)) continue;
+            } else if (WK(visit_leaf)(w, ref, &lr, &p, &t, &hit.u, &hit.v, &hit_id, &prims, c != NULL,
+                                      flags, any_hit)) {
+                break;
+            }
+            /* Pop the next entry that can still hold a closer hit. */
+            int more = 0;
+            while (sp > 0) {
+                sp--;
+                if (bvh_entry_before(st[sp], t)) {
+                    ref = sref[sp];
+                    more = 1;
+                    break;
+                }
+            }
+            if (!more) break;
+        }
+    }
+    WK(finish)(hit, hit_id, t, out, c, ray_idx, steps, boxes, prims, any_hit);
+}
+
+WIDE_INLINE void WK(wide_closest_oct)(const void *a, const accel_ray *rays, void *out, size_t count,
+                                      accel_counters *c, unsigned flags)
+{
+    for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 0);
+}
+
+WIDE_INLINE void WK(wide_any_oct)(const void *a, const accel_ray *rays, void *out, size_t count,
+                                  accel_counters *c, unsigned flags)
+{
+    for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 1);
+}
+
+/*
  * Two rays in flight per thread (interleave=2): each ray is traversed
  * exactly as above, on its own stack, but the loop advances both by one
  * node or leaf per iteration, so the out-of-order core overlaps one ray's

@@ -12,11 +12,18 @@
  *   width 8 (256 bytes, 4 cache lines, 64-byte aligned)
  *     offset   0  float box[6][8]   192 bytes: rows lo_x, hi_x, lo_y, hi_y, lo_z, hi_z
  *     offset 192  uint32 child[8]    32 bytes: child references (below)
- *     offset 224  uint32 pad[8]      32 bytes: unused, keeps nodes on cache lines
+ *     offset 224  uint32 perm[8]     32 bytes: child order per ray octant (below)
  *   width 4 (128 bytes, 2 cache lines)
  *     offset   0  float box[6][4]    96 bytes
  *     offset  96  uint32 child[4]    16 bytes
- *     offset 112  uint32 pad[4]      16 bytes
+ *     offset 112  uint32 perm[4]     16 bytes
+ *
+ * perm serves order=octant: for each of the 8 octants of ray directions
+ * (o = sign bits of x, y, z), bits 3o..3o+2 of perm[r] name the child of
+ * rank r when the children are sorted by their box centres along the
+ * octant's diagonal direction (nearest first), the precomputed order of
+ * Fuetterling et al., "Accelerated Single Ray Tracing for Wide Vector
+ * Units", HPG 2017.
  *
  * An unused child slot has the empty box lo = +inf, hi = -inf, which the
  * slab test rejects for every ray (its far distance is -inf or NaN).
@@ -52,13 +59,13 @@
 typedef struct {
     float box[6][8];
     uint32_t child[8];
-    uint32_t pad[8];
+    uint32_t perm[8];
 } wide_node8;
 
 typedef struct {
     float box[6][4];
     uint32_t child[4];
-    uint32_t pad[4];
+    uint32_t perm[4];
 } wide_node4;
 
 typedef struct {
@@ -107,11 +114,17 @@ typedef struct {
     float t_entry;
 } wide_stack_entry;
 
+/* Ordering of the hit children (parameter order=): per-ray entry
+ * distances with branches on the hit count, or the node's precomputed
+ * octant order with a compress-store onto the stack. */
+enum { WIDE_ORDER_DIST = 0, WIDE_ORDER_OCTANT = 1 };
+
 /* The wide form of a built bvh (bvh.wide). Immutable after the build. */
 typedef struct bvh_wide {
     int width;            /* children per node: 4 or 8 */
     int block;            /* primitives per leaf block: 4 or 8 */
     int interleave;       /* rays in flight per thread: 1 or 2 */
+    int order;            /* WIDE_ORDER_*: how hit children are ordered */
     uint32_t root;        /* reference of the root, WIDE_EMPTY for an empty scene */
     uint32_t node_count;  /* wide nodes */
     uint32_t leaf_count;  /* leaves */
@@ -128,7 +141,7 @@ struct bvh;
 /* Collapses the built binary tree of b into b->wide (width 4 or 8, leaf
  * blocks of `block` primitives) and frees the binary pools, which the wide
  * kernels do not use. Fills stats->nodes, leaves and depth. */
-int bvh_wide_build(struct bvh *b, int width, int block, int interleave, int threads,
+int bvh_wide_build(struct bvh *b, int width, int block, int interleave, int order, int threads,
                    accel_build_stats *stats, accel_error *err);
 /* Bytes held by the wide tree (nodes, blocks, the struct itself). */
 size_t bvh_wide_memory(const bvh_wide *w);

@@ -206,6 +206,25 @@ static inline int wide_prep_ray(const accel_ray *r, accel_ray_prep *p)
 #endif
 }
 
+/*
+ * Compress-store table: for an 8-bit mask m, entry m lists the positions
+ * of its set bits from the highest to the lowest, 4 bits each, in the low
+ * nibbles first (entry 0b00100110 = 0x125: positions 5, 2, 1). Built by
+ * the preprocessor: the position j of a set bit goes to nibble
+ * popcount(m >> (j + 1)), the number of set bits above it.
+ */
+#define WIDE_POP8(x) (((x) & 1) + ((x) >> 1 & 1) + ((x) >> 2 & 1) + ((x) >> 3 & 1) + \
+                      ((x) >> 4 & 1) + ((x) >> 5 & 1) + ((x) >> 6 & 1) + ((x) >> 7 & 1))
+#define WIDE_LUT_BIT(m, j) (((m) >> (j) & 1u) * ((uint32_t)(j) << (4 * WIDE_POP8((m) >> ((j) + 1)))))
+#define WIDE_LUT(m) (WIDE_LUT_BIT(m, 0) | WIDE_LUT_BIT(m, 1) | WIDE_LUT_BIT(m, 2) | WIDE_LUT_BIT(m, 3) | \
+                     WIDE_LUT_BIT(m, 4) | WIDE_LUT_BIT(m, 5) | WIDE_LUT_BIT(m, 6) | WIDE_LUT_BIT(m, 7))
+#define WIDE_LUT4(m) WIDE_LUT(m), WIDE_LUT((m) + 1), WIDE_LUT((m) + 2), WIDE_LUT((m) + 3)
+#define WIDE_LUT16(m) WIDE_LUT4(m), WIDE_LUT4((m) + 4), WIDE_LUT4((m) + 8), WIDE_LUT4((m) + 12)
+#define WIDE_LUT64(m) WIDE_LUT16(m), WIDE_LUT16((m) + 16), WIDE_LUT16((m) + 32), WIDE_LUT16((m) + 48)
+static const uint32_t wide_compress_lut[256] = {WIDE_LUT64(0u), WIDE_LUT64(64u), WIDE_LUT64(128u),
+                                                WIDE_LUT64(192u)};
+_Static_assert(WIDE_LUT(0x26u) == 0x125u, "compress table: positions 5, 2, 1");
+
 /* fN_op for a width given as a macro: WIDE_V(8, mul) is f8_mul. */
 #define WIDE_V_(n, op) f##n##_##op
 #define WIDE_V(n, op) WIDE_V_(n, op)
