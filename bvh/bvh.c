@@ -37,13 +37,11 @@ static const accel_param_def bvh_params[] = {
      "width=4|8: primitives per SIMD leaf block (auto = 4)"},
     {"order", ACCEL_PARAM_ENUM, "dist", 0, 0, "dist|octant",
      "width=4|8: hit children sorted by entry distance per ray, or in the node's octant order (compress-store)"},
-    {"interleave", ACCEL_PARAM_ENUM, "1", 0, 0, "1|2",
-     "width=4|8: rays traversed together per thread, each on its own stack (count)"},
 };
 #define BVH_PARAM_COUNT (sizeof bvh_params / sizeof bvh_params[0])
 
 typedef struct {
-    int width, block, interleave, order; /* width 2: the binary tree */
+    int width, block, order; /* width 2: the binary tree */
 } wide_opts;
 
 static int options_from_params(const accel_params *p, bvh_build_opts *o, int *traverse,
@@ -65,13 +63,9 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: frustum=1 needs traverse=packet");
     wo->width = atoi(accel_param_str(p, "width"));
     wo->block = accel_param_num(p, "block") == 0 ? 4 : atoi(accel_param_str(p, "block"));
-    wo->interleave = atoi(accel_param_str(p, "interleave"));
     wo->order = (int)accel_param_num(p, "order");
-    if (wo->width == 2 && (accel_param_given(p, "block") || accel_param_given(p, "interleave") ||
-                           accel_param_given(p, "order")))
-        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: block, order and interleave apply to width=4|8 only");
-    if (wo->interleave == 2 && wo->order == WIDE_ORDER_OCTANT)
-        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: interleave=2 needs order=dist");
+    if (wo->width == 2 && (accel_param_given(p, "block") || accel_param_given(p, "order")))
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: block and order apply to width=4|8 only");
     if (wo->width > 2 && *traverse == BVH_TRAVERSE_PACKET)
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: traverse=packet needs width=2");
     return 0;
@@ -98,14 +92,14 @@ static int bvh_kind_build(const accel_scene *scene, const accel_params *params, 
 {
     bvh_build_opts opts;
     int traverse, frustum;
-    wide_opts wo = {2, 4, 1, 0};
+    wide_opts wo = {2, 4, 0};
     int rc = options_from_params(params, &opts, &traverse, &frustum, &wo, err);
     if (rc) return rc;
     bvh *b = calloc(1, sizeof *b);
     if (!b) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory");
     rc = bvh_build_run(scene, &opts, threads, b, stats, err);
     if (rc == 0 && wo.width > 2) {
-        rc = bvh_wide_build(b, wo.width, wo.block, wo.interleave, wo.order, threads < 1 ? 1 : threads, stats, err);
+        rc = bvh_wide_build(b, wo.width, wo.block, wo.order, threads < 1 ? 1 : threads, stats, err);
         if (rc) bvh_release(b);
     }
     if (rc) {
@@ -167,8 +161,6 @@ static const char *const bvh_variants[] = {
     "width=8,leaf=1",
     "width=4,build=sah,leaf=256,ct=0",
     "width=8,build=median",
-    "width=8,interleave=2",
-    "width=4,block=8,interleave=2",
     "width=8,order=octant",
     "width=4,block=8,order=octant",
     NULL,

@@ -310,14 +310,13 @@ static int collapse_tree(const bvh *b, bvh_wide *w, int threads, accel_error *er
     return rc;
 }
 
-int bvh_wide_build(bvh *b, int width, int block, int interleave, int order, int threads, accel_build_stats *stats,
+int bvh_wide_build(bvh *b, int width, int block, int order, int threads, accel_build_stats *stats,
                    accel_error *err)
 {
     bvh_wide *w = calloc(1, sizeof *w);
     if (!w) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory");
     w->width = width;
     w->block = block;
-    w->interleave = interleave;
     w->order = order;
     w->tri_count = b->tri_count;
     w->prim_count = b->prim_count;

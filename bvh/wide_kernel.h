@@ -330,122 +330,23 @@ WIDE_INLINE void WK(trace_ray_oct)(const bvh_wide *w, const accel_ray *ray, void
     WK(finish)(hit, hit_id, t, out, c, ray_idx, steps, boxes, prims, any_hit);
 }
 
-WIDE_INLINE void WK(wide_closest_oct)(const void *a, const accel_ray *rays, void *out, size_t count,
-                                      accel_counters *c, unsigned flags)
-{
-    for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 0);
-}
-
-WIDE_INLINE void WK(wide_any_oct)(const void *a, const accel_ray *rays, void *out, size_t count,
-                                  accel_counters *c, unsigned flags)
-{
-    for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 1);
-}
-
-/*
- * Two rays in flight per thread (interleave=2): each ray is traversed
- * exactly as above, on its own stack, but the loop advances both by one
- * node or leaf per iteration, so the out-of-order core overlaps one ray's
- * dependent loads and compares with the other's. When a ray is done, its
- * slot takes the next ray of the batch. Answers are identical to the
- * one-ray loop (each ray's own sequence of visits is unchanged).
- */
-typedef struct {
-    WK(node_ray) nr;
-    KL(wide_leaf_ray) lr;
-    accel_ray_prep p;
-    accel_hit hit;
-    float t;
-    uint32_t hit_id, ref, steps, boxes, prims;
-    int sp;
-    size_t ray_idx;
-    wide_stack_entry stack[WIDE_STACK(WIDE_NW)];
-} WK(slot);
-
-/* Starts rays from *next on until one needs traversal (rays that cannot
- * hit anything are answered at once). Returns 0 when the batch is done. */
-WIDE_INLINE int WK(slot_start)(WK(slot) *s, const bvh_wide *w, const accel_ray *rays, size_t count,
-                               size_t *next, void *out, accel_counters *c, int any_hit)
-{
-    while (*next < count) {
-        size_t i = (*next)++;
-        if (w->root != WIDE_EMPTY && wide_prep_ray(&rays[i], &s->p)) {
-            WK(node_setup)(&s->nr, &s->p);
-            KL(leaf_setup)(&s->lr, &s->p);
-            s->hit = accel_hit_miss();
-            s->t = s->p.t_far;
-            s->hit_id = ACCEL_MISS;
-            s->ref = w->root;
-            s->steps = s->boxes = s->prims = 0;
-            s->sp = 0;
-            s->ray_idx = i;
-            return 1;
-        }
-        WK(finish)(accel_hit_miss(), ACCEL_MISS, INFINITY, out, c, i, 0, 0, 0, any_hit);
-    }
-    return 0;
-}
-
-/* One node or leaf of a slot's ray; returns 0 when the ray is done. */
-WIDE_INLINE int WK(slot_step)(WK(slot) *s, const bvh_wide *w, accel_counters *c, unsigned flags,
-                              int any_hit)
-{
-    s->steps++;
-    if (ACCEL_STEP_BOUND_BROKEN(c, s->steps, w->step_bound)) return 0;
-    if (!(s->ref & WIDE_LEAF)) {
-        s->boxes += WIDE_NW;
-        if (WK(visit_node)((const KNODE *)w->nodes + s->ref, &s->nr, s->t, &s->ref, s->stack, &s->sp))
-            return 1;
-    } else if (WK(visit_leaf)(w, s->ref, &s->lr, &s->p, &s->t, &s->hit.u, &s->hit.v, &s->hit_id,
-                              &s->prims, c != NULL, flags, any_hit)) {
-        return 0;
-    }
-    return WK(pop)(s->stack, &s->sp, s->t, &s->ref);
-}
-
-WIDE_INLINE void WK(slot_finish)(WK(slot) *s, void *out, accel_counters *c, int any_hit)
-{
-    WK(finish)(s->hit, s->hit_id, s->t, out, c, s->ray_idx, s->steps, s->boxes, s->prims, any_hit);
-}
-
-WIDE_INLINE void WK(trace_pair)(const bvh_wide *w, const accel_ray *rays, void *out, size_t count,
-                                accel_counters *c, unsigned flags, int any_hit)
-{
-    WK(slot) s[2];
-    size_t next = 0;
-    int a0 = WK(slot_start)(&s[0], w, rays, count, &next, out, c, any_hit);
-    int a1 = WK(slot_start)(&s[1], w, rays, count, &next, out, c, any_hit);
-    while (a0 | a1) {
-        if (a0 && !WK(slot_step)(&s[0], w, c, flags, any_hit)) {
-            WK(slot_finish)(&s[0], out, c, any_hit);
-            a0 = WK(slot_start)(&s[0], w, rays, count, &next, out, c, any_hit);
-        }
-        if (a1 && !WK(slot_step)(&s[1], w, c, flags, any_hit)) {
-            WK(slot_finish)(&s[1], out, c, any_hit);
-            a1 = WK(slot_start)(&s[1], w, rays, count, &next, out, c, any_hit);
-        }
-    }
-}
-
-/* The kernels of the variant tables: ACCEL_V_OPT selects interleave=2. */
+/* The kernels of the variant tables; ACCEL_V_OPT selects order=octant. */
 WIDE_INLINE void WK(wide_closest)(const void *a, const accel_ray *rays, void *out, size_t count,
                                   accel_counters *c, unsigned flags)
 {
-    if (flags & ACCEL_V_OPT) {
-        WK(trace_pair)(a, rays, out, count, c, flags, 0);
-        return;
-    }
-    for (size_t i = 0; i < count; i++) WK(trace_ray)(a, &rays[i], out, c, i, flags, 0);
+    if (flags & ACCEL_V_OPT)
+        for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 0);
+    else
+        for (size_t i = 0; i < count; i++) WK(trace_ray)(a, &rays[i], out, c, i, flags, 0);
 }
 
 WIDE_INLINE void WK(wide_any)(const void *a, const accel_ray *rays, void *out, size_t count,
                               accel_counters *c, unsigned flags)
 {
-    if (flags & ACCEL_V_OPT) {
-        WK(trace_pair)(a, rays, out, count, c, flags, 1);
-        return;
-    }
-    for (size_t i = 0; i < count; i++) WK(trace_ray)(a, &rays[i], out, c, i, flags, 1);
+    if (flags & ACCEL_V_OPT)
+        for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 1);
+    else
+        for (size_t i = 0; i < count; i++) WK(trace_ray)(a, &rays[i], out, c, i, flags, 1);
 }
 
 #undef WK_CAT_

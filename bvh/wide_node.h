@@ -123,7 +123,6 @@ enum { WIDE_ORDER_DIST = 0, WIDE_ORDER_OCTANT = 1 };
 typedef struct bvh_wide {
     int width;            /* children per node: 4 or 8 */
     int block;            /* primitives per leaf block: 4 or 8 */
-    int interleave;       /* rays in flight per thread: 1 or 2 */
     int order;            /* WIDE_ORDER_*: how hit children are ordered */
     uint32_t root;        /* reference of the root, WIDE_EMPTY for an empty scene */
     uint32_t node_count;  /* wide nodes */
@@ -141,7 +140,7 @@ struct bvh;
 /* Collapses the built binary tree of b into b->wide (width 4 or 8, leaf
  * blocks of `block` primitives) and frees the binary pools, which the wide
  * kernels do not use. Fills stats->nodes, leaves and depth. */
-int bvh_wide_build(struct bvh *b, int width, int block, int interleave, int order, int threads,
+int bvh_wide_build(struct bvh *b, int width, int block, int order, int threads,
                    accel_build_stats *stats, accel_error *err);
 /* Bytes held by the wide tree (nodes, blocks, the struct itself). */
 size_t bvh_wide_memory(const bvh_wide *w);

@@ -39,39 +39,29 @@ ACCEL_KERNEL_TABLE(any_4_4, wide_any_4_4)
 ACCEL_KERNEL_TABLE(any_4_8, wide_any_4_8)
 ACCEL_KERNEL_TABLE(any_8_4, wide_any_8_4)
 ACCEL_KERNEL_TABLE(any_8_8, wide_any_8_8)
-ACCEL_KERNEL_TABLE(closest_oct_4_4, wide_closest_oct_4_4)
-ACCEL_KERNEL_TABLE(closest_oct_4_8, wide_closest_oct_4_8)
-ACCEL_KERNEL_TABLE(closest_oct_8_4, wide_closest_oct_8_4)
-ACCEL_KERNEL_TABLE(closest_oct_8_8, wide_closest_oct_8_8)
-ACCEL_KERNEL_TABLE(any_oct_4_4, wide_any_oct_4_4)
-ACCEL_KERNEL_TABLE(any_oct_4_8, wide_any_oct_4_8)
-ACCEL_KERNEL_TABLE(any_oct_8_4, wide_any_oct_8_4)
-ACCEL_KERNEL_TABLE(any_oct_8_8, wide_any_oct_8_8)
 
-/* [order octant][any hit][width 8][block 8] */
-static const accel_kernel_table *const tables[2][2][2][2] = {
-    {{{&closest_4_4, &closest_4_8}, {&closest_8_4, &closest_8_8}},
-     {{&any_4_4, &any_4_8}, {&any_8_4, &any_8_8}}},
-    {{{&closest_oct_4_4, &closest_oct_4_8}, {&closest_oct_8_4, &closest_oct_8_8}},
-     {{&any_oct_4_4, &any_oct_4_8}, {&any_oct_8_4, &any_oct_8_8}}},
+/* [any hit][width 8][block 8] */
+static const accel_kernel_table *const tables[2][2][2] = {
+    {{&closest_4_4, &closest_4_8}, {&closest_8_4, &closest_8_8}},
+    {{&any_4_4, &any_4_8}, {&any_8_4, &any_8_8}},
 };
 
 static unsigned kernel_flags(const bvh_wide *w, int naive, int has_spheres)
 {
     return (naive ? ACCEL_V_NAIVE : 0u) | (has_spheres ? ACCEL_V_SPHERES : 0u) |
-           (w->interleave == 2 ? ACCEL_V_OPT : 0u);
+           (w->order == WIDE_ORDER_OCTANT ? ACCEL_V_OPT : 0u);
 }
 
 void bvh_wide_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hits, size_t count,
                         accel_counters *c, int naive, int has_spheres)
 {
-    accel_run_kernel(tables[w->order][0][w->width == 8][w->block == 8], w, rays, hits, count, c,
+    accel_run_kernel(tables[0][w->width == 8][w->block == 8], w, rays, hits, count, c,
                      kernel_flags(w, naive, has_spheres));
 }
 
 void bvh_wide_occluded(const bvh_wide *w, const accel_ray *rays, uint8_t *occ, size_t count,
                        accel_counters *c, int naive, int has_spheres)
 {
-    accel_run_kernel(tables[w->order][1][w->width == 8][w->block == 8], w, rays, occ, count, c,
+    accel_run_kernel(tables[1][w->width == 8][w->block == 8], w, rays, occ, count, c,
                      kernel_flags(w, naive, has_spheres));
 }

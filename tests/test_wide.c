@@ -243,6 +243,28 @@ static void walk(walk_ctx *x, uint32_t ref, int level, const float *parent_rows,
         walk(x, child[i], level + 1, rows, i);
     }
     CHECKF(used >= 2, "%s: node %u has %d children", x->spec, ref, used);
+    /* order=octant: per octant, the ranks are a permutation of the slots,
+     * used slots first, each octant's nearest-first order along its diagonal */
+    const uint32_t *perm = child + w->width;
+    for (int o = 0; o < 8; o++) {
+        unsigned seen = 0;
+        double prev = -INFINITY;
+        for (int r = 0; r < w->width; r++) {
+            unsigned l = (perm[r] >> (3 * o)) & 7u;
+            CHECKF(l < (unsigned)w->width && !(seen >> l & 1u), "%s: octant %d: bad permutation", x->spec, o);
+            seen |= 1u << l;
+            int is_used = child[l] != WIDE_EMPTY;
+            CHECKF(is_used == (r < used), "%s: octant %d: unused slot ranked before a used one", x->spec, o);
+            if (!is_used || l >= (unsigned)w->width) continue;
+            double key = 0;
+            for (int axis = 0; axis < 3; axis++) {
+                double cen = 0.5 * rows[(2 * axis) * w->width + l] + 0.5 * rows[(2 * axis + 1) * w->width + l];
+                key += (o >> axis & 1) ? -cen : cen;
+            }
+            CHECKF(key >= prev, "%s: octant %d: children not sorted along the diagonal", x->spec, o);
+            prev = key;
+        }
+    }
 }
 
 static void check_wide(const accel_scene *s, const char *spec)
@@ -292,7 +314,8 @@ TEST(wide_tree_invariants)
                                          "cube:n=4"};
     static const char *const specs[] = {"bvh:width=4", "bvh:width=8", "bvh:width=4,block=8",
                                         "bvh:width=8,block=8", "bvh:width=8,leaf=1",
-                                        "bvh:width=4,ct=0,leaf=256", "bvh:width=8,build=median"};
+                                        "bvh:width=4,ct=0,leaf=256", "bvh:width=8,build=median",
+                                        "bvh:width=8,order=octant"};
     for (size_t i = 0; i < sizeof scenes / sizeof *scenes; i++) {
         accel_scene s;
         accel_error err = {0};

@@ -17,8 +17,9 @@
 #include "test.h"
 
 static const char *const wide_specs[] = {"bvh:width=4", "bvh:width=8", "bvh:width=4,block=8",
-                                         "bvh:width=8,block=8"};
-#define WIDE_SPEC_COUNT 4
+                                         "bvh:width=8,block=8", "bvh:width=8,order=octant",
+                                         "bvh:width=4,block=8,order=octant"};
+#define WIDE_SPEC_COUNT 6
 
 typedef struct {
     const char *name;
