@@ -34,8 +34,8 @@ static const accel_param_def bvh_params[] = {
     {"width", ACCEL_PARAM_ENUM, "2", 0, 0, "2|4|8",
      "children per node: 2 = the lecture's binary tree; 4, 8 = collapsed SIMD nodes (wide_build.c)"},
     {"block", ACCEL_PARAM_ENUM, "auto", 0, 0, "auto|4|8",
-     "width=4|8: primitives per SIMD leaf block (auto = 4)"},
-    {"order", ACCEL_PARAM_ENUM, "dist", 0, 0, "dist|octant",
+     "width=4|8: primitives per SIMD leaf block (auto: 8, or 4 when the scene has spheres)"},
+    {"order", ACCEL_PARAM_ENUM, "octant", 0, 0, "dist|octant",
      "width=4|8: hit children sorted by entry distance per ray, or in the node's octant order (compress-store)"},
 };
 #define BVH_PARAM_COUNT (sizeof bvh_params / sizeof bvh_params[0])
@@ -62,7 +62,7 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
     if (*frustum && *traverse != BVH_TRAVERSE_PACKET)
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: frustum=1 needs traverse=packet");
     wo->width = atoi(accel_param_str(p, "width"));
-    wo->block = accel_param_num(p, "block") == 0 ? 4 : atoi(accel_param_str(p, "block"));
+    wo->block = atoi(accel_param_str(p, "block")); /* 0 for auto, set by the build */
     wo->order = (int)accel_param_num(p, "order");
     if (wo->width == 2 && (accel_param_given(p, "block") || accel_param_given(p, "order")))
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: block and order apply to width=4|8 only");
@@ -92,12 +92,13 @@ static int bvh_kind_build(const accel_scene *scene, const accel_params *params, 
 {
     bvh_build_opts opts;
     int traverse, frustum;
-    wide_opts wo = {2, 4, 0};
+    wide_opts wo = {2, 4, 1};
     int rc = options_from_params(params, &opts, &traverse, &frustum, &wo, err);
     if (rc) return rc;
     bvh *b = calloc(1, sizeof *b);
     if (!b) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory");
     rc = bvh_build_run(scene, &opts, threads, b, stats, err);
+    if (wo.block == 0) wo.block = scene->sphere_count ? 4 : 8;
     if (rc == 0 && wo.width > 2) {
         rc = bvh_wide_build(b, wo.width, wo.block, wo.order, threads < 1 ? 1 : threads, stats, err);
         if (rc) bvh_release(b);
@@ -156,13 +157,13 @@ static const char *const bvh_variants[] = {
     "build=median,traverse=packet,frustum=1",
     "width=4",
     "width=8",
-    "width=4,block=8",
-    "width=8,block=8",
+    "width=4,block=4",
+    "width=8,block=4",
     "width=8,leaf=1",
     "width=4,build=sah,leaf=256,ct=0",
     "width=8,build=median",
-    "width=8,order=octant",
-    "width=4,block=8,order=octant",
+    "width=8,order=dist",
+    "width=4,block=8,order=dist",
     NULL,
 };
 

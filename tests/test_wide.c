@@ -312,10 +312,10 @@ TEST(wide_tree_invariants)
 {
     static const char *const scenes[] = {"soup:tris=4000", "sphereflake:level=2", "slivers:tris=2000,slivers=100",
                                          "cube:n=4"};
-    static const char *const specs[] = {"bvh:width=4", "bvh:width=8", "bvh:width=4,block=8",
-                                        "bvh:width=8,block=8", "bvh:width=8,leaf=1",
+    static const char *const specs[] = {"bvh:width=4", "bvh:width=8", "bvh:width=4,block=4",
+                                        "bvh:width=8,block=4", "bvh:width=8,leaf=1",
                                         "bvh:width=4,ct=0,leaf=256", "bvh:width=8,build=median",
-                                        "bvh:width=8,order=octant"};
+                                        "bvh:width=8,order=dist"};
     for (size_t i = 0; i < sizeof scenes / sizeof *scenes; i++) {
         accel_scene s;
         accel_error err = {0};

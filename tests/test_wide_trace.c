@@ -16,9 +16,9 @@
 #include "scene/scene.h"
 #include "test.h"
 
-static const char *const wide_specs[] = {"bvh:width=4", "bvh:width=8", "bvh:width=4,block=8",
-                                         "bvh:width=8,block=8", "bvh:width=8,order=octant",
-                                         "bvh:width=4,block=8,order=octant"};
+static const char *const wide_specs[] = {"bvh:width=4", "bvh:width=8", "bvh:width=4,block=4",
+                                         "bvh:width=8,block=4", "bvh:width=8,order=dist",
+                                         "bvh:width=4,block=4,order=dist"};
 #define WIDE_SPEC_COUNT 6
 
 typedef struct {
