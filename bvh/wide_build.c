@@ -38,6 +38,7 @@ typedef struct {
 typedef struct {
     const bvh_node *bin;
     const uint32_t *sub_first, *sub_count; /* per binary node: its subtree's slots */
+    const float *area;    /* per binary node: half surface area */
     int width, block;
     float *node_box;      /* row 0 of node 0; a node is node_floats floats */
     size_t node_floats;
@@ -61,32 +62,31 @@ static uint32_t *node_children(collapse_ctx *x, uint32_t idx)
 
 /* The octant orders of a node's k used children (see wide_node.h):
  * children sorted by the projection of their box centre on each octant's
- * diagonal, nearest first (ties by slot); unused slots rank last. */
+ * diagonal, nearest first (ties by slot); unused slots rank last. The
+ * opposite octant (7 - o) gets the reverse order of the used slots. */
 static void set_perm(collapse_ctx *x, uint32_t idx, int k)
 {
     const int w = x->width;
     const float *rows = node_rows(x, idx);
     uint32_t *perm = node_children(x, idx) + w;
+    float cen[8][3];
+    for (int i = 0; i < k; i++)
+        for (int axis = 0; axis < 3; axis++)
+            cen[i][axis] = 0.5f * rows[(2 * axis) * w + i] + 0.5f * rows[(2 * axis + 1) * w + i];
     for (int r = 0; r < w; r++) perm[r] = 0;
-    for (int o = 0; o < 8; o++) {
-        double key[8];
+    for (int o = 0; o < 4; o++) {
+        float key[8];
         int order[8];
-        for (int i = 0; i < w; i++) {
-            key[i] = 0.0;
-            for (int axis = 0; axis < 3; axis++) {
-                double c = 0.5 * rows[(2 * axis) * w + i] + 0.5 * rows[(2 * axis + 1) * w + i];
-                key[i] += (o >> axis & 1) ? -c : c;
-            }
-            order[i] = i;
+        for (int i = 0; i < k; i++) {
+            key[i] = (o & 1 ? -cen[i][0] : cen[i][0]) + (o & 2 ? -cen[i][1] : cen[i][1]) + cen[i][2];
+            int b = i; /* insertion: stable, so ties keep slot order */
+            while (b > 0 && key[order[b - 1]] > key[i]) order[b] = order[b - 1], b--;
+            order[b] = i;
         }
-        for (int a = 1; a < w; a++) /* insertion sort: used slots by key, unused last */
-            for (int b = a; b > 0; b--) {
-                int p = order[b - 1], q = order[b];
-                int q_first = p >= k ? (q < k || q < p) : (q < k && (key[q] < key[p] || (key[q] == key[p] && q < p)));
-                if (!q_first) break;
-                order[b - 1] = q, order[b] = p;
-            }
-        for (int r = 0; r < w; r++) perm[r] |= (uint32_t)order[r] << (3 * o);
+        for (int r = 0; r < w; r++) {
+            int fwd = r < k ? order[r] : r, rev = r < k ? order[k - 1 - r] : r;
+            perm[r] |= (uint32_t)fwd << (3 * o) | (uint32_t)rev << (3 * (7 - o));
+        }
     }
 }
 
@@ -130,11 +130,10 @@ static uint32_t collapse(collapse_ctx *x, uint32_t n, int level)
     set[1] = set[0] + 1;
     while (k < x->width) {
         int best = -1;
-        double best_area = -1.0;
+        float best_area = -1.0f;
         for (int i = 0; i < k; i++) {
             if (is_leaf(x, set[i])) continue;
-            double a = bvh_half_area(bvh_node_box(&x->bin[set[i]]));
-            if (a > best_area) best_area = a, best = i;
+            if (x->area[set[i]] > best_area) best_area = x->area[set[i]], best = i;
         }
         if (best < 0) break;
         uint32_t m = set[best];
@@ -249,13 +248,15 @@ static int collapse_tree(const bvh *b, bvh_wide *w, int threads, accel_error *er
 {
     const uint32_t nc = b->node_count;
     const bvh_node *bin = b->nodes;
-    uint32_t *sub = bvh_alloc_array(nc, 2 * sizeof(uint32_t));
+    uint32_t *sub = bvh_alloc_array(nc, 3 * sizeof(uint32_t));
     if (!sub) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for the collapse");
     uint32_t *sub_first = sub, *sub_count = sub + nc;
+    float *area = (float *)(sub + 2 * (size_t)nc);
     /* Children come after their parent, so one backward pass gives every
      * subtree's run of slots. Node 1 is padding. */
     uint32_t interior = 0, leaves = 0;
     for (uint32_t i = nc; i-- > 0;) {
+        area[i] = (float)bvh_half_area(bvh_node_box(&bin[i]));
         if (i == 1 && nc > 1) {
             sub_first[i] = sub_count[i] = 0;
         } else if (bin[i].count) {
@@ -269,7 +270,7 @@ static int collapse_tree(const bvh *b, bvh_wide *w, int threads, accel_error *er
     }
     collapse_ctx x;
     memset(&x, 0, sizeof x);
-    x.bin = bin, x.sub_first = sub_first, x.sub_count = sub_count;
+    x.bin = bin, x.sub_first = sub_first, x.sub_count = sub_count, x.area = area;
     x.width = w->width, x.block = w->block;
     x.node_floats = node_size(w->width) / sizeof(float);
     /* A wide node has at least two children, so there are fewer wide nodes

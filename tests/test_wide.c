@@ -248,7 +248,7 @@ static void walk(walk_ctx *x, uint32_t ref, int level, const float *parent_rows,
     const uint32_t *perm = child + w->width;
     for (int o = 0; o < 8; o++) {
         unsigned seen = 0;
-        double prev = -INFINITY;
+        float prev = -INFINITY;
         for (int r = 0; r < w->width; r++) {
             unsigned l = (perm[r] >> (3 * o)) & 7u;
             CHECKF(l < (unsigned)w->width && !(seen >> l & 1u), "%s: octant %d: bad permutation", x->spec, o);
@@ -256,11 +256,12 @@ static void walk(walk_ctx *x, uint32_t ref, int level, const float *parent_rows,
             int is_used = child[l] != WIDE_EMPTY;
             CHECKF(is_used == (r < used), "%s: octant %d: unused slot ranked before a used one", x->spec, o);
             if (!is_used || l >= (unsigned)w->width) continue;
-            double key = 0;
+            float c3[3]; /* the builder's float arithmetic, in its order */
             for (int axis = 0; axis < 3; axis++) {
-                double cen = 0.5 * rows[(2 * axis) * w->width + l] + 0.5 * rows[(2 * axis + 1) * w->width + l];
-                key += (o >> axis & 1) ? -cen : cen;
+                c3[axis] = 0.5f * rows[(2 * axis) * w->width + l] + 0.5f * rows[(2 * axis + 1) * w->width + l];
+                if (o >> axis & 1) c3[axis] = -c3[axis];
             }
+            float key = c3[0] + c3[1] + c3[2];
             CHECKF(key >= prev, "%s: octant %d: children not sorted along the diagonal", x->spec, o);
             prev = key;
         }
