@@ -66,8 +66,8 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
     wo->order = (int)accel_param_num(p, "order");
     if (wo->width == 2 && (accel_param_given(p, "block") || accel_param_given(p, "order")))
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: block and order apply to width=4|8 only");
-    if (wo->width > 2 && *traverse == BVH_TRAVERSE_PACKET)
-        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: traverse=packet needs width=2");
+    if (wo->width > 2 && *frustum)
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: frustum applies to width=2 (wide packets always use it)");
     return 0;
 }
 
@@ -101,6 +101,7 @@ static int bvh_kind_build(const accel_scene *scene, const accel_params *params, 
     if (wo.block == 0) wo.block = scene->sphere_count ? 4 : 8;
     if (rc == 0 && wo.width > 2) {
         rc = bvh_wide_build(b, wo.width, wo.block, wo.order, threads < 1 ? 1 : threads, stats, err);
+        if (rc == 0) b->wide->packets = traverse == BVH_TRAVERSE_PACKET;
         if (rc) bvh_release(b);
     }
     if (rc) {
@@ -164,6 +165,8 @@ static const char *const bvh_variants[] = {
     "width=8,build=median",
     "width=8,order=dist",
     "width=4,block=8,order=dist",
+    "width=8,traverse=packet",
+    "width=4,block=4,traverse=packet",
     NULL,
 };
 

@@ -285,14 +285,15 @@ WIDE_INLINE int WK(visit_node_oct)(const KNODE *n, const WK(node_ray) *r, float 
 }
 
 /* One ray with order=octant. */
-WIDE_INLINE void WK(trace_ray_oct)(const bvh_wide *w, const accel_ray *ray, void *out, accel_counters *c,
-                                   size_t ray_idx, unsigned flags, int any_hit)
+/* One prepared ray (p == NULL: a ray that cannot hit) with order=octant. */
+WIDE_INLINE void WK(trace_prepped_oct)(const bvh_wide *w, const accel_ray_prep *pp, void *out,
+                                       accel_counters *c, size_t ray_idx, unsigned flags, int any_hit)
 {
     accel_hit hit = accel_hit_miss();
     uint32_t steps = 0, boxes = 0, prims = 0, hit_id = ACCEL_MISS;
     float t = INFINITY;
-    accel_ray_prep p;
-    if (w->root != WIDE_EMPTY && wide_prep_ray(ray, &p)) {
+    if (pp && w->root != WIDE_EMPTY) {
+        const accel_ray_prep p = *pp;
         WK(node_ray) nr;
         WK(node_setup)(&nr, &p);
         KL(wide_leaf_ray) lr;
@@ -328,6 +329,14 @@ WIDE_INLINE void WK(trace_ray_oct)(const bvh_wide *w, const accel_ray *ray, void
         }
     }
     WK(finish)(hit, hit_id, t, out, c, ray_idx, steps, boxes, prims, any_hit);
+}
+
+WIDE_INLINE void WK(trace_ray_oct)(const bvh_wide *w, const accel_ray *ray, void *out, accel_counters *c,
+                                   size_t ray_idx, unsigned flags, int any_hit)
+{
+    accel_ray_prep p;
+    int ok = w->root != WIDE_EMPTY && wide_prep_ray(ray, &p);
+    WK(trace_prepped_oct)(w, ok ? &p : NULL, out, c, ray_idx, flags, any_hit);
 }
 
 /* The kernels of the variant tables; ACCEL_V_OPT selects order=octant. */

@@ -124,6 +124,7 @@ typedef struct bvh_wide {
     int width;            /* children per node: 4 or 8 */
     int block;            /* primitives per leaf block: 4 or 8 */
     int order;            /* WIDE_ORDER_*: how hit children are ordered */
+    int packets;          /* traverse=packet: 64-ray packets (wide_packet.h) */
     uint32_t root;        /* reference of the root, WIDE_EMPTY for an empty scene */
     uint32_t node_count;  /* wide nodes */
     uint32_t leaf_count;  /* leaves */

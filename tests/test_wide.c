@@ -361,7 +361,7 @@ TEST(wide_collapse_merges_levels)
 
 TEST(wide_spec_errors)
 {
-    static const char *const bad[] = {"bvh:block=8", "bvh:width=4,traverse=packet", "bvh:width=3",
+    static const char *const bad[] = {"bvh:block=8", "bvh:width=4,traverse=packet,frustum=1", "bvh:width=3",
                                       "bvh:width=8,block=2"};
     accel_scene s;
     accel_error err = {0};

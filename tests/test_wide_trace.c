@@ -18,8 +18,9 @@
 
 static const char *const wide_specs[] = {"bvh:width=4", "bvh:width=8", "bvh:width=4,block=4",
                                          "bvh:width=8,block=4", "bvh:width=8,order=dist",
-                                         "bvh:width=4,block=4,order=dist"};
-#define WIDE_SPEC_COUNT 6
+                                         "bvh:width=4,block=4,order=dist", "bvh:width=8,traverse=packet",
+                                         "bvh:width=4,block=4,traverse=packet"};
+#define WIDE_SPEC_COUNT 8
 
 typedef struct {
     const char *name;
