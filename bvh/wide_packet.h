@@ -35,10 +35,9 @@
  * from `first` on; packet_box_tests counts the frustum tests (W boxes each).
  */
 #ifndef WIDE_NW
-#define WIDE_NW 8
+#define WIDE_NW 4
 #endif
-#ifndef WIDE_LB
-#define WIDE_LB 8
+#ifndef WIDE_LB /* alone: the pieces for width 4 (or WIDE_NW), blocks of 4 */
 #include "wide_kernel.h"
 #endif
 #include "wide_node.h"
