@@ -13,6 +13,7 @@
 
 #include "build_common.h"
 #include "bvh.h"
+#include "wide_node.h"
 
 static const accel_param_def bvh_params[] = {
     {"build", ACCEL_PARAM_ENUM, "binned", 0, 0, "binned|sah|mid|median",
@@ -30,11 +31,21 @@ static const accel_param_def bvh_params[] = {
      "single rays, or packets of 64 consecutive rays (8x8 tiles)"},
     {"frustum", ACCEL_PARAM_BOOL, "0", 0, 1, NULL,
      "traverse=packet: interval-arithmetic early-out per node (0/1)"},
+    {"width", ACCEL_PARAM_ENUM, "2", 0, 0, "2|4|8",
+     "children per node: 2 = the lecture's binary tree; 4, 8 = collapsed SIMD nodes (wide_build.c)"},
+    {"block", ACCEL_PARAM_ENUM, "auto", 0, 0, "auto|4|8",
+     "width=4|8: primitives per SIMD leaf block (auto: 8, or 4 when the scene has spheres)"},
+    {"order", ACCEL_PARAM_ENUM, "octant", 0, 0, "dist|octant",
+     "width=4|8: hit children sorted by entry distance per ray, or in the node's octant order (compress-store)"},
 };
 #define BVH_PARAM_COUNT (sizeof bvh_params / sizeof bvh_params[0])
 
+typedef struct {
+    int width, block, order; /* width 2: the binary tree */
+} wide_opts;
+
 static int options_from_params(const accel_params *p, bvh_build_opts *o, int *traverse,
-                               int *frustum, accel_error *err)
+                               int *frustum, wide_opts *wo, accel_error *err)
 {
     o->builder = (bvh_builder)(int)accel_param_num(p, "build");
     o->bins = (int)accel_param_num(p, "bins");
@@ -51,12 +62,20 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
                           accel_param_str(p, "build"));
     if (*frustum && *traverse != BVH_TRAVERSE_PACKET)
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: frustum=1 needs traverse=packet");
+    wo->width = atoi(accel_param_str(p, "width"));
+    wo->block = atoi(accel_param_str(p, "block")); /* 0 for auto, set by the build */
+    wo->order = (int)accel_param_num(p, "order");
+    if (wo->width == 2 && (accel_param_given(p, "block") || accel_param_given(p, "order")))
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: block and order apply to width=4|8 only");
+    if (wo->width > 2 && *frustum)
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: frustum applies to width=2 (wide packets always use it)");
     return 0;
 }
 
 static size_t bvh_memory(const void *a)
 {
     const bvh *b = a;
+    if (b->wide) return sizeof *b + bvh_wide_memory(b->wide);
     return sizeof *b + (size_t)b->node_count * sizeof(bvh_node) +
            (size_t)b->prim_count * (BVH_SLOT_FLOATS * sizeof(float) + sizeof(uint32_t));
 }
@@ -64,6 +83,7 @@ static size_t bvh_memory(const void *a)
 static void bvh_destroy(void *a)
 {
     if (!a) return;
+    bvh_wide_free(((bvh *)a)->wide);
     bvh_release(a);
     free(a);
 }
@@ -73,11 +93,18 @@ static int bvh_kind_build(const accel_scene *scene, const accel_params *params, 
 {
     bvh_build_opts opts;
     int traverse, frustum;
-    int rc = options_from_params(params, &opts, &traverse, &frustum, err);
+    wide_opts wo = {2, 4, 1};
+    int rc = options_from_params(params, &opts, &traverse, &frustum, &wo, err);
     if (rc) return rc;
     bvh *b = calloc(1, sizeof *b);
     if (!b) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory");
     rc = bvh_build_run(scene, &opts, threads, b, stats, err);
+    if (wo.block == 0) wo.block = scene->sphere_count ? 4 : 8;
+    if (rc == 0 && wo.width > 2) {
+        rc = bvh_wide_build(b, wo.width, wo.block, wo.order, threads < 1 ? 1 : threads, stats, err);
+        if (rc == 0) b->wide->packets = traverse == BVH_TRAVERSE_PACKET;
+        if (rc) bvh_release(b);
+    }
     if (rc) {
         free(b);
         return rc;
@@ -95,7 +122,9 @@ static void bvh_intersect(const void *a, const accel_ray *rays, accel_hit *hits,
 {
     const bvh *b = a;
     c = ACCEL_COUNTERS_ON(c);
-    if (b->traverse == BVH_TRAVERSE_PACKET)
+    if (b->wide)
+        bvh_wide_intersect(b->wide, rays, hits, count, c, b->naive, b->has_spheres);
+    else if (b->traverse == BVH_TRAVERSE_PACKET)
         bvh_packet_intersect(b, rays, hits, count, c);
     else
         bvh_trace_intersect(b, rays, hits, count, c);
@@ -106,7 +135,9 @@ static void bvh_occluded(const void *a, const accel_ray *rays, uint8_t *occ, siz
 {
     const bvh *b = a;
     c = ACCEL_COUNTERS_ON(c);
-    if (b->traverse == BVH_TRAVERSE_PACKET)
+    if (b->wide)
+        bvh_wide_occluded(b->wide, rays, occ, count, c, b->naive, b->has_spheres);
+    else if (b->traverse == BVH_TRAVERSE_PACKET)
         bvh_packet_occluded(b, rays, occ, count, c);
     else
         bvh_trace_occluded(b, rays, occ, count, c);
@@ -126,6 +157,17 @@ static const char *const bvh_variants[] = {
     "traverse=packet",
     "traverse=packet,frustum=1",
     "build=median,traverse=packet,frustum=1",
+    "width=4",
+    "width=8",
+    "width=4,block=4",
+    "width=8,block=4",
+    "width=8,leaf=1",
+    "width=4,build=sah,leaf=256,ct=0",
+    "width=8,build=median",
+    "width=8,order=dist",
+    "width=4,block=8,order=dist",
+    "width=8,traverse=packet",
+    "width=4,block=4,traverse=packet",
     NULL,
 };
 

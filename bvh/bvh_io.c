@@ -38,6 +38,8 @@ static int host_little_endian(void)
 int bvh_save(const void *accel, const char *path, accel_error *err)
 {
     const bvh *b = accel;
+    if (b->wide)
+        return accel_fail(err, ACCEL_ERR_SPEC, "%s: only binary trees (width=2) can be saved", path);
     if (!host_little_endian())
         return accel_fail(err, ACCEL_ERR_IO, "%s: bvh files are little-endian; this host is not", path);
     FILE *f = fopen(path, "wb");

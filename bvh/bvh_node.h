@@ -98,6 +98,7 @@ typedef struct bvh {
     int traverse;         /* BVH_TRAVERSE_* */
     int frustum;          /* packets: interval-arithmetic early-out */
     int depth;            /* levels of the tree (a lone leaf is 1) */
+    struct bvh_wide *wide; /* width=4|8: the collapsed tree (wide_node.h), else NULL */
 } bvh;
 
 /* ---- pieces of the traversal kernels -------------------------------------- */

@@ -1,0 +1,342 @@
+/*
+ * wide_build.c - the wide BVH (`bvh:width=4|8`): the binary SAH tree
+ * collapsed into 4- or 8-wide nodes, and the leaves packed into SoA blocks
+ * of 4 or 8 primitives (layout in wide_node.h). Both passes run inside
+ * the kind's build, so they are part of the build time it reports.
+ *
+ * Collapse (Wald et al., "Embree", SIGGRAPH 2014, section 4.2; Pinto,
+ * "Fast BVH construction and refit", 2010): a wide node made at binary
+ * node n starts from n's two children and repeatedly opens (replaces by
+ * its two children) the interior child of largest surface area, until it
+ * has W children or none can be opened. Opening the largest box first
+ * removes the most expected node visits per opening under the SAH: a
+ * child is visited with probability proportional to its area, so the
+ * largest one is the costliest to leave as a separate level. Every binary
+ * subtree of at most B primitives becomes one leaf (one block): a block
+ * test costs about what one box test costs, so under the SAH such a
+ * subtree is never worth a node of its own (its node visit plus at least
+ * one block test against one block test). Larger binary leaves keep their
+ * primitives (one leaf of several blocks).
+ *
+ * Nodes are numbered in depth-first order (a node before its children, a
+ * child's subtree before its next sibling's), leaves' blocks in the order
+ * the collapse reaches them, so a depth-first walk streams memory forward.
+ * Node and block indices depend only on the binary tree, so the wide tree
+ * is as deterministic as the binary one (identical for any thread count).
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "build_common.h"
+#include "wide_node.h"
+
+/* A leaf to pack: its primitive slots in the binary tree's leaf order. */
+typedef struct {
+    uint32_t first_slot, count, first_block;
+} leaf_job;
+
+typedef struct {
+    const bvh_node *bin;
+    const uint32_t *sub_first, *sub_count; /* per binary node: its subtree's slots */
+    const float *area;    /* per binary node: half surface area */
+    int width, block;
+    float *node_box;      /* row 0 of node 0; a node is node_floats floats */
+    size_t node_floats;
+    uint32_t node_count, node_cap;
+    leaf_job *leaves;
+    uint32_t leaf_count, leaf_cap;
+    uint32_t block_count;
+    int depth;
+    const char *failure;  /* set when a limit of the layout is exceeded */
+} collapse_ctx;
+
+static float *node_rows(collapse_ctx *x, uint32_t idx)
+{
+    return x->node_box + x->node_floats * idx;
+}
+
+static uint32_t *node_children(collapse_ctx *x, uint32_t idx)
+{
+    return (uint32_t *)(node_rows(x, idx) + 6 * x->width);
+}
+
+/* The octant orders of a node's k used children (see wide_node.h):
+ * children sorted by the projection of their box centre on each octant's
+ * diagonal, nearest first (ties by slot); unused slots rank last. The
+ * opposite octant (7 - o) gets the reverse order of the used slots. */
+static void set_perm(collapse_ctx *x, uint32_t idx, int k)
+{
+    const int w = x->width;
+    const float *rows = node_rows(x, idx);
+    uint32_t *perm = node_children(x, idx) + w;
+    float cen[8][3];
+    for (int i = 0; i < k; i++)
+        for (int axis = 0; axis < 3; axis++)
+            cen[i][axis] = 0.5f * rows[(2 * axis) * w + i] + 0.5f * rows[(2 * axis + 1) * w + i];
+    for (int r = 0; r < w; r++) perm[r] = 0;
+    for (int o = 0; o < 4; o++) {
+        float key[8];
+        int order[8];
+        for (int i = 0; i < k; i++) {
+            key[i] = (o & 1 ? -cen[i][0] : cen[i][0]) + (o & 2 ? -cen[i][1] : cen[i][1]) + cen[i][2];
+            int b = i; /* insertion: stable, so ties keep slot order */
+            while (b > 0 && key[order[b - 1]] > key[i]) order[b] = order[b - 1], b--;
+            order[b] = i;
+        }
+        for (int r = 0; r < w; r++) {
+            int fwd = r < k ? order[r] : r, rev = r < k ? order[k - 1 - r] : r;
+            perm[r] |= (uint32_t)fwd << (3 * o) | (uint32_t)rev << (3 * (7 - o));
+        }
+    }
+}
+
+/* A binary node that becomes a leaf: a binary leaf, or a subtree that fits
+ * one block. */
+static int is_leaf(const collapse_ctx *x, uint32_t n)
+{
+    return x->bin[n].count > 0 || x->sub_count[n] <= (uint32_t)x->block;
+}
+
+static uint32_t make_leaf(collapse_ctx *x, uint32_t n)
+{
+    uint32_t count = x->sub_count[n];
+    uint32_t blocks = (count + (uint32_t)x->block - 1) / (uint32_t)x->block;
+    if (blocks > WIDE_LEAF_MAX_BLOCKS) {
+        x->failure = "a leaf needs more than 64 blocks";
+        return WIDE_EMPTY;
+    }
+    if (x->block_count + blocks > WIDE_MAX_BLOCKS || x->leaf_count >= x->leaf_cap) {
+        x->failure = "more than 2^25 leaf blocks";
+        return WIDE_EMPTY;
+    }
+    leaf_job *j = &x->leaves[x->leaf_count++];
+    j->first_slot = x->sub_first[n];
+    j->count = count;
+    j->first_block = x->block_count;
+    x->block_count += blocks;
+    return wide_leaf_ref(j->first_block, blocks);
+}
+
+/* The wide node made at binary node n (or its leaf), at wide level `level`. */
+static uint32_t collapse(collapse_ctx *x, uint32_t n, int level)
+{
+    if (level > x->depth) x->depth = level;
+    if (x->failure) return WIDE_EMPTY;
+    if (is_leaf(x, n)) return make_leaf(x, n);
+    /* Open the interior child of largest area until the node is full. */
+    uint32_t set[8];
+    int k = 2;
+    set[0] = x->bin[n].left_first;
+    set[1] = set[0] + 1;
+    while (k < x->width) {
+        int best = -1;
+        float best_area = -1.0f;
+        for (int i = 0; i < k; i++) {
+            if (is_leaf(x, set[i])) continue;
+            if (x->area[set[i]] > best_area) best_area = x->area[set[i]], best = i;
+        }
+        if (best < 0) break;
+        uint32_t m = set[best];
+        set[best] = x->bin[m].left_first;
+        set[k++] = x->bin[m].left_first + 1;
+    }
+    if (x->node_count >= x->node_cap) {
+        x->failure = "node pool overflow";
+        return WIDE_EMPTY;
+    }
+    uint32_t idx = x->node_count++;
+    const int w = x->width;
+    for (int i = 0; i < w; i++) {
+        float *rows = node_rows(x, idx);
+        uint32_t *child = node_children(x, idx);
+        if (i < k) {
+            const bvh_node *c = &x->bin[set[i]];
+            for (int axis = 0; axis < 3; axis++) {
+                rows[(2 * axis) * w + i] = c->bmin[axis];
+                rows[(2 * axis + 1) * w + i] = c->bmax[axis];
+            }
+        } else {
+            for (int axis = 0; axis < 3; axis++) {
+                rows[(2 * axis) * w + i] = INFINITY;
+                rows[(2 * axis + 1) * w + i] = -INFINITY;
+            }
+            child[i] = WIDE_EMPTY;
+        }
+    }
+    set_perm(x, idx, k);
+    /* Children after their parent, each subtree in one run. */
+    for (int i = 0; i < k; i++) {
+        uint32_t ref = collapse(x, set[i], level + 1);
+        node_children(x, idx)[i] = ref;
+    }
+    return idx;
+}
+
+typedef struct {
+    const bvh *b;
+    bvh_wide *w;
+    const leaf_job *leaves;
+} pack_job;
+
+/* One lane of a block from slot s (9 floats: a triangle, or a sphere's 4
+ * followed by zeros). */
+static void put_lane(float *v, int block, int lane, const float *slot)
+{
+    for (int vtx = 0; vtx < 3; vtx++)
+        for (int axis = 0; axis < 3; axis++)
+            v[(3 * vtx + axis) * block + lane] = slot[3 * vtx + axis];
+}
+
+/* Leaves to SoA blocks; the last block of a leaf is padded with copies of
+ * the leaf's last primitive. */
+static void pack_chunk(void *p, size_t begin, size_t end, int thread)
+{
+    (void)thread;
+    pack_job *j = p;
+    const int bs = j->w->block;
+    for (size_t l = begin; l < end; l++) {
+        const leaf_job *leaf = &j->leaves[l];
+        uint32_t blocks = (leaf->count + (uint32_t)bs - 1) / (uint32_t)bs;
+        for (uint32_t k = 0; k < blocks; k++) {
+            uint32_t bi = leaf->first_block + k;
+            float *v;
+            uint32_t *id;
+            if (bs == 8) {
+                wide_block8 *blk = (wide_block8 *)j->w->blocks + bi;
+                v = blk->v[0][0], id = blk->id;
+            } else {
+                wide_block4 *blk = (wide_block4 *)j->w->blocks + bi;
+                v = blk->v[0][0], id = blk->id;
+            }
+            for (int lane = 0; lane < bs; lane++) {
+                uint32_t i = k * (uint32_t)bs + (uint32_t)lane;
+                uint32_t slot = leaf->first_slot + (i < leaf->count ? i : leaf->count - 1);
+                put_lane(v, bs, lane, j->b->prim_data + (size_t)BVH_SLOT_FLOATS * slot);
+                id[lane] = j->b->prim_ids[slot];
+            }
+        }
+    }
+}
+
+static size_t node_size(int width) { return width == 8 ? sizeof(wide_node8) : sizeof(wide_node4); }
+static size_t block_size(int block) { return block == 8 ? sizeof(wide_block8) : sizeof(wide_block4); }
+
+static void *alloc_aligned(size_t n, size_t size)
+{
+    if (n == 0) n = 1;
+    if (n > SIZE_MAX / size) return NULL;
+    void *p = NULL;
+    return posix_memalign(&p, BVH_NODE_ALIGN, n * size) == 0 ? p : NULL;
+}
+
+size_t bvh_wide_memory(const bvh_wide *w)
+{
+    return sizeof *w + (size_t)w->node_count * node_size(w->width) +
+           (size_t)w->block_count * block_size(w->block);
+}
+
+void bvh_wide_free(bvh_wide *w)
+{
+    if (!w) return;
+    free(w->nodes);
+    free(w->blocks);
+    free(w);
+}
+
+/* Collapses b's binary tree; fills w (nodes, blocks, counts, root). */
+static int collapse_tree(const bvh *b, bvh_wide *w, int threads, accel_error *err)
+{
+    const uint32_t nc = b->node_count;
+    const bvh_node *bin = b->nodes;
+    uint32_t *sub = bvh_alloc_array(nc, 3 * sizeof(uint32_t));
+    if (!sub) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for the collapse");
+    uint32_t *sub_first = sub, *sub_count = sub + nc;
+    float *area = (float *)(sub + 2 * (size_t)nc);
+    /* Children come after their parent, so one backward pass gives every
+     * subtree's run of slots. Node 1 is padding. */
+    uint32_t interior = 0, leaves = 0;
+    for (uint32_t i = nc; i-- > 0;) {
+        area[i] = (float)bvh_half_area(bvh_node_box(&bin[i]));
+        if (i == 1 && nc > 1) {
+            sub_first[i] = sub_count[i] = 0;
+        } else if (bin[i].count) {
+            sub_first[i] = bin[i].left_first, sub_count[i] = bin[i].count;
+            leaves++;
+        } else {
+            uint32_t l = bin[i].left_first;
+            sub_first[i] = sub_first[l], sub_count[i] = sub_count[l] + sub_count[l + 1];
+            interior++;
+        }
+    }
+    collapse_ctx x;
+    memset(&x, 0, sizeof x);
+    x.bin = bin, x.sub_first = sub_first, x.sub_count = sub_count, x.area = area;
+    x.width = w->width, x.block = w->block;
+    x.node_floats = node_size(w->width) / sizeof(float);
+    /* A wide node has at least two children, so there are fewer wide nodes
+     * than binary interior nodes, and fewer leaves than binary leaves. */
+    x.node_cap = interior > 0 ? interior : 1;
+    x.leaf_cap = leaves;
+    x.node_box = alloc_aligned(x.node_cap, node_size(w->width));
+    x.leaves = bvh_alloc_array(x.leaf_cap, sizeof(leaf_job));
+    int rc = 0;
+    if (!x.node_box || !x.leaves) {
+        rc = accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for %u wide nodes", x.node_cap);
+    } else {
+        w->root = collapse(&x, 0, 1);
+        if (x.failure)
+            rc = accel_fail(err, ACCEL_ERR_RANGE, "bvh: width=%d,block=%d: %s", w->width, w->block,
+                            x.failure);
+    }
+    if (rc == 0) {
+        /* Keep exactly the nodes used, aligned. */
+        w->nodes = alloc_aligned(x.node_count, node_size(w->width));
+        w->blocks = alloc_aligned(x.block_count, block_size(w->block));
+        if (!w->nodes || !w->blocks) {
+            rc = accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for %u leaf blocks",
+                            x.block_count);
+        } else {
+            memcpy(w->nodes, x.node_box, (size_t)x.node_count * node_size(w->width));
+            w->node_count = x.node_count;
+            w->leaf_count = x.leaf_count;
+            w->block_count = x.block_count;
+            w->depth = x.depth;
+            pack_job job = {b, w, x.leaves};
+            accel_parallel_for(x.leaf_count, 1024, threads, pack_chunk, &job);
+        }
+    }
+    free(x.node_box);
+    free(x.leaves);
+    free(sub);
+    return rc;
+}
+
+int bvh_wide_build(bvh *b, int width, int block, int order, int threads, accel_build_stats *stats,
+                   accel_error *err)
+{
+    bvh_wide *w = calloc(1, sizeof *w);
+    if (!w) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory");
+    w->width = width;
+    w->block = block;
+    w->order = order;
+    w->tri_count = b->tri_count;
+    w->prim_count = b->prim_count;
+    w->root = WIDE_EMPTY;
+    if (b->node_count > 0) {
+        int rc = collapse_tree(b, w, threads, err);
+        if (rc) {
+            bvh_wide_free(w);
+            return rc;
+        }
+    }
+    w->step_bound = w->node_count + w->leaf_count;
+    /* The wide kernels never read the binary pools. */
+    bvh_release(b);
+    b->node_count = 0;
+    b->depth = w->depth;
+    b->wide = w;
+    stats->nodes = w->node_count;
+    stats->leaves = w->leaf_count;
+    stats->depth = w->depth;
+    return 0;
+}

@@ -1,0 +1,372 @@
+/*
+ * wide_kernel.h - single-ray traversal of a wide BVH with WIDE_NW (4 or 8)
+ * children per node and leaf blocks of WIDE_LB (4 or 8) primitives:
+ * closest hit and any hit.
+ *
+ * A template: wide_trace.c includes it once per (WIDE_NW, WIDE_LB) pair
+ * after wide_leaf.h for WIDE_LB (4 and 4 when included alone). It defines
+ * the always-inline kernels wide_closest_<NW>_<LB> and wide_any_<NW>_<LB>
+ * in the form core/variant.h's ACCEL_KERNEL_TABLE expects.
+ *
+ * The loop follows Embree's single-ray BVH4/BVH8 traversal (Wald et al.,
+ * "Embree: A Kernel Framework for Efficient CPU Ray Tracing", SIGGRAPH
+ * 2014) and the stack discipline of Aila and Laine (HPG 2009):
+ *  - one ray against all W child boxes with the robust slab test of
+ *    bvh_slab (Ize 2013) lane by lane: the same subtractions, products,
+ *    NaN-dropping min/max and 2*gamma(3) padding of the far distance, so a
+ *    wide node accepts exactly the boxes the binary kernel would;
+ *  - the hit children visited near to far: one hit child is entered
+ *    directly; of two, the nearer is entered and the farther pushed with
+ *    its entry distance; three or more are pushed, sorted by entry distance
+ *    (insertion sort on at most 8 entries, the nearest on top) and the top
+ *    popped;
+ *  - leaves are children like nodes (pushed and ordered by distance);
+ *  - a popped entry whose entry distance lies beyond the closest hit found
+ *    since it was pushed is dropped unvisited;
+ *  - any hit returns at the first hit.
+ * Counters (steps = nodes and leaves visited, box tests = W per node,
+ * primitive tests = primitives of the blocks tested) and the step bound
+ * (ACCEL_STEP_BOUND_BROKEN: a ray visits each node and leaf at most once)
+ * exist in the counted copy only.
+ */
+#ifndef WIDE_NW
+#define WIDE_NW 4
+#endif
+#ifndef WIDE_LB
+#define WIDE_LB 4
+#include "wide_leaf.h"
+#endif
+#include "core/variant.h"
+#include "wide_node.h"
+#include "wide_simd.h"
+
+#define WK_CAT_(a, b, c) a##_##b##_##c
+#define WK_CAT(a, b, c) WK_CAT_(a, b, c)
+#define WK(name) WK_CAT(name, WIDE_NW, WIDE_LB)
+#define WL2_(a, b) a##_##b
+#define WL2(a, b) WL2_(a, b)
+#define KL(name) WL2(name, WIDE_LB)
+#define NV(op) WIDE_V(WIDE_NW, op)
+#define NF WIDE_T(WIDE_NW)
+#define WK_JOIN_(a, b) a##b
+#define WK_JOIN(a, b) WK_JOIN_(a, b)
+#define KNODE WK_JOIN(wide_node, WIDE_NW)
+#define KBLOCK WK_JOIN(wide_block, WIDE_LB)
+
+/* Per-ray constants of the slab test: origin, 1/dir, and the float offset
+ * of each axis's near and far plane row, picked by the direction's sign. */
+typedef struct {
+    NF ox, oy, oz, ix, iy, iz, t_near;
+    int nx, fx, ny, fy, nz, fz;
+} WK(node_ray);
+
+WIDE_INLINE void WK(node_setup)(WK(node_ray) *r, const accel_ray_prep *p)
+{
+    r->ox = NV(set1)(p->org.x), r->oy = NV(set1)(p->org.y), r->oz = NV(set1)(p->org.z);
+    r->ix = NV(set1)(p->inv_dir.x), r->iy = NV(set1)(p->inv_dir.y), r->iz = NV(set1)(p->inv_dir.z);
+    r->t_near = NV(set1)(p->t_near);
+    r->nx = (0 + p->neg[0]) * WIDE_NW, r->fx = (1 - p->neg[0]) * WIDE_NW;
+    r->ny = (2 + p->neg[1]) * WIDE_NW, r->fy = (3 - p->neg[1]) * WIDE_NW;
+    r->nz = (4 + p->neg[2]) * WIDE_NW, r->fz = (5 - p->neg[2]) * WIDE_NW;
+}
+
+/*
+ * One interior node: all children's boxes at once, then the hit children
+ * near to far. Sets *ref to the child to visit next and returns 1, or
+ * returns 0 when no child is hit (the caller pops).
+ */
+WIDE_INLINE int WK(visit_node)(const KNODE *n, const WK(node_ray) *r, float t, uint32_t *ref,
+                               wide_stack_entry *stack, int *sp_io)
+{
+    const float *b = n->box[0];
+    NF t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->nx), r->ox), r->ix), r->t_near);
+    t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->ny), r->oy), r->iy), t0);
+    t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->nz), r->oz), r->iz), t0);
+    NF t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fx), r->ox), r->ix), NV(set1)(t));
+    t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fy), r->oy), r->iy), t1);
+    t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fz), r->oz), r->iz), t1);
+    NF far = NV(add)(t1, NV(mul)(NV(abs)(t1), NV(set1)(ACCEL_SLAB_PAD)));
+    unsigned mask = (unsigned)NV(mask)(NV(le)(t0, far));
+    if (!mask) return 0;
+    unsigned i = (unsigned)__builtin_ctz(mask);
+    mask &= mask - 1;
+    if (!mask) { /* one hit child: enter it */
+        *ref = n->child[i];
+        return 1;
+    }
+    float te[WIDE_NW] __attribute__((aligned(32)));
+    NV(store)(te, t0);
+    unsigned j = (unsigned)__builtin_ctz(mask);
+    mask &= mask - 1;
+    int sp = *sp_io;
+    if (!mask) { /* two: enter the nearer, push the farther */
+        int swap = te[j] < te[i];
+        unsigned near = swap ? j : i, far_i = swap ? i : j;
+        stack[sp].ref = n->child[far_i];
+        stack[sp].t_entry = te[far_i];
+        *sp_io = sp + 1;
+        *ref = n->child[near];
+        return 1;
+    }
+    /* Three or more: push all, sort the run far to near (insertion sort),
+     * enter the nearest. */
+    int base = sp;
+    stack[sp].ref = n->child[i], stack[sp].t_entry = te[i], sp++;
+    stack[sp].ref = n->child[j], stack[sp].t_entry = te[j], sp++;
+    do {
+        unsigned k = (unsigned)__builtin_ctz(mask);
+        mask &= mask - 1;
+        stack[sp].ref = n->child[k], stack[sp].t_entry = te[k], sp++;
+    } while (mask);
+    for (int a = base + 1; a < sp; a++) {
+        wide_stack_entry e = stack[a];
+        int k = a;
+        while (k > base && stack[k - 1].t_entry < e.t_entry) {
+            stack[k] = stack[k - 1];
+            k--;
+        }
+        stack[k] = e;
+    }
+    *ref = stack[--sp].ref;
+    *sp_io = sp;
+    return 1;
+}
+
+/* One leaf: its blocks are consecutive. Returns 1 when any_hit found a hit. */
+WIDE_INLINE int WK(visit_leaf)(const bvh_wide *w, uint32_t ref, const KL(wide_leaf_ray) *lr,
+                               const accel_ray_prep *p, float *t, float *u, float *v,
+                               uint32_t *hit_id, uint32_t *prims, int counted, unsigned flags,
+                               int any_hit)
+{
+    const int naive = (flags & ACCEL_V_NAIVE) != 0, has_spheres = (flags & ACCEL_V_SPHERES) != 0;
+    const KBLOCK *blk = (const KBLOCK *)w->blocks + wide_leaf_first(ref);
+    uint32_t nb = wide_leaf_blocks(ref);
+    for (uint32_t k = 0; k < nb; k++) {
+        if (counted) {
+            (*prims)++;
+            for (int lane = 1; lane < WIDE_LB; lane++) *prims += blk[k].id[lane] != blk[k].id[lane - 1];
+        }
+        if (KL(leaf_block)(&blk[k], lr, p, t, u, v, hit_id, w->tri_count, naive, has_spheres, any_hit) &&
+            any_hit) {
+            *hit_id = 0; /* occluded: which primitive does not matter */
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Pops the next entry that can still hold a hit closer than t into *ref;
+ * 0 when the stack is exhausted. */
+WIDE_INLINE int WK(pop)(const wide_stack_entry *stack, int *sp_io, float t, uint32_t *ref)
+{
+    int sp = *sp_io;
+    while (sp > 0) {
+        sp--;
+        if (bvh_entry_before(stack[sp].t_entry, t)) {
+            *ref = stack[sp].ref;
+            *sp_io = sp;
+            return 1;
+        }
+    }
+    *sp_io = 0;
+    return 0;
+}
+
+/* Writes a ray's answer and its counts. */
+WIDE_INLINE void WK(finish)(accel_hit hit, uint32_t hit_id, float t, void *out, accel_counters *c,
+                            size_t ray_idx, uint32_t steps, uint32_t boxes, uint32_t prims, int any_hit)
+{
+    if (hit_id != ACCEL_MISS) {
+        hit.t = t;
+        hit.prim = hit_id;
+    } else {
+        hit = accel_hit_miss();
+    }
+    if (any_hit)
+        ((uint8_t *)out)[ray_idx] = hit.prim != ACCEL_MISS;
+    else
+        ((accel_hit *)out)[ray_idx] = hit;
+    if (c) {
+        c->rays++;
+        c->steps += steps;
+        c->box_tests += boxes;
+        c->prim_tests += prims;
+        if (c->ray_steps) c->ray_steps[ray_idx] = steps;
+        if (c->ray_prims) c->ray_prims[ray_idx] = prims;
+    }
+}
+
+/* One ray from root to answer. */
+WIDE_INLINE void WK(trace_ray)(const bvh_wide *w, const accel_ray *ray, void *out, accel_counters *c,
+                               size_t ray_idx, unsigned flags, int any_hit)
+{
+    accel_hit hit = accel_hit_miss();
+    uint32_t steps = 0, boxes = 0, prims = 0, hit_id = ACCEL_MISS;
+    float t = INFINITY;
+    accel_ray_prep p;
+    if (w->root != WIDE_EMPTY && wide_prep_ray(ray, &p)) {
+        WK(node_ray) nr;
+        WK(node_setup)(&nr, &p);
+        KL(wide_leaf_ray) lr;
+        KL(leaf_setup)(&lr, &p);
+        const KNODE *nodes = w->nodes;
+        wide_stack_entry stack[WIDE_STACK(WIDE_NW)];
+        int sp = 0;
+        uint32_t ref = w->root;
+        t = p.t_far;
+        for (;;) {
+            steps++;
+            if (ACCEL_STEP_BOUND_BROKEN(c, steps, w->step_bound)) break;
+            if (!(ref & WIDE_LEAF)) {
+                boxes += WIDE_NW;
+                if (WK(visit_node)(&nodes[ref], &nr, t, &ref, stack, &sp)) continue;
+            } else if (WK(visit_leaf)(w, ref, &lr, &p, &t, &hit.u, &hit.v, &hit_id, &prims, c != NULL,
+                                      flags, any_hit)) {
+                break;
+            }
+            if (!WK(pop)(stack, &sp, t, &ref)) break;
+        }
+    }
+    WK(finish)(hit, hit_id, t, out, c, ray_idx, steps, boxes, prims, any_hit);
+}
+
+/*
+ * order=octant: one interior node with its children in the node's
+ * precomputed order for the ray's octant (bits `shift`.. of perm[]). The
+ * hit children are compress-stored onto the stack farthest first, with
+ * one branch on "none" and one on "exactly one" instead of the per-count
+ * branches and the sort of visit_node; the nearest is then entered.
+ */
+WIDE_INLINE int WK(visit_node_oct)(const KNODE *n, const WK(node_ray) *r, float t, uint32_t *ref,
+                                   uint32_t *sref, float *st, int *sp_io, int shift)
+{
+    const float *b = n->box[0];
+    NF t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->nx), r->ox), r->ix), r->t_near);
+    t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->ny), r->oy), r->iy), t0);
+    t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->nz), r->oz), r->iz), t0);
+    NF t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fx), r->ox), r->ix), NV(set1)(t));
+    t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fy), r->oy), r->iy), t1);
+    t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fz), r->oz), r->iz), t1);
+    NF hit = NV(le)(t0, NV(add)(t1, NV(mul)(NV(abs)(t1), NV(set1)(ACCEL_SLAB_PAD))));
+    unsigned mask = (unsigned)NV(mask)(hit);
+    if (!mask) return 0;
+    if (!(mask & (mask - 1))) {
+        *ref = n->child[__builtin_ctz(mask)];
+        return 1;
+    }
+    int sp = *sp_io;
+#if WIDE_AVX && WIDE_NW == 8
+    /* rank -> child lane for this octant; hit bits in rank order; the
+     * ranks of the hits, farthest first (the compress table); composed,
+     * the child lane of each stack slot. */
+    __m256i perm = _mm256_and_si256(_mm256_srl_epi32(_mm256_load_si256((const __m256i *)n->perm),
+                                                     _mm_cvtsi32_si128(shift)),
+                                    _mm256_set1_epi32(7));
+    unsigned ranked = (unsigned)_mm256_movemask_ps(_mm256_permutevar8x32_ps(hit, perm));
+    __m256i sel = _mm256_and_si256(_mm256_srlv_epi32(_mm256_set1_epi32((int)wide_compress_lut[ranked]),
+                                                     _mm256_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28)),
+                                   _mm256_set1_epi32(15));
+    __m256i lane = _mm256_permutevar8x32_epi32(perm, sel);
+    _mm256_storeu_si256((__m256i *)(sref + sp),
+                        _mm256_permutevar8x32_epi32(_mm256_load_si256((const __m256i *)n->child), lane));
+    _mm256_storeu_ps(st + sp, _mm256_permutevar8x32_ps(t0, lane));
+    sp += __builtin_popcount(mask);
+#else
+    float te[WIDE_NW] __attribute__((aligned(32)));
+    NV(store)(te, t0);
+    for (int rank = WIDE_NW - 1; rank >= 0; rank--) {
+        unsigned l = (n->perm[rank] >> shift) & 7u;
+        if (mask >> l & 1u) sref[sp] = n->child[l], st[sp] = te[l], sp++;
+    }
+#endif
+    *ref = sref[--sp];
+    *sp_io = sp;
+    return 1;
+}
+
+/* One ray with order=octant. */
+/* One prepared ray (p == NULL: a ray that cannot hit) with order=octant. */
+WIDE_INLINE void WK(trace_prepped_oct)(const bvh_wide *w, const accel_ray_prep *pp, void *out,
+                                       accel_counters *c, size_t ray_idx, unsigned flags, int any_hit)
+{
+    accel_hit hit = accel_hit_miss();
+    uint32_t steps = 0, boxes = 0, prims = 0, hit_id = ACCEL_MISS;
+    float t = INFINITY;
+    if (pp && w->root != WIDE_EMPTY) {
+        const accel_ray_prep p = *pp;
+        WK(node_ray) nr;
+        WK(node_setup)(&nr, &p);
+        KL(wide_leaf_ray) lr;
+        KL(leaf_setup)(&lr, &p);
+        const KNODE *nodes = w->nodes;
+        /* W slack: a node stores all W lanes at the top of the stack */
+        uint32_t sref[WIDE_STACK(WIDE_NW) + WIDE_NW];
+        float st[WIDE_STACK(WIDE_NW) + WIDE_NW];
+        int sp = 0, shift = 3 * (p.neg[0] | p.neg[1] << 1 | p.neg[2] << 2);
+        uint32_t ref = w->root;
+        t = p.t_far;
+        for (;;) {
+            steps++;
+            if (ACCEL_STEP_BOUND_BROKEN(c, steps, w->step_bound)) break;
+            if (!(ref & WIDE_LEAF)) {
+                boxes += WIDE_NW;
+                if (WK(visit_node_oct)(&nodes[ref], &nr, t, &ref, sref, st, &sp, shift)) continue;
+            } else if (WK(visit_leaf)(w, ref, &lr, &p, &t, &hit.u, &hit.v, &hit_id, &prims, c != NULL,
+                                      flags, any_hit)) {
+                break;
+            }
+            /* Pop the next entry that can still hold a closer hit. */
+            int more = 0;
+            while (sp > 0) {
+                sp--;
+                if (bvh_entry_before(st[sp], t)) {
+                    ref = sref[sp];
+                    more = 1;
+                    break;
+                }
+            }
+            if (!more) break;
+        }
+    }
+    WK(finish)(hit, hit_id, t, out, c, ray_idx, steps, boxes, prims, any_hit);
+}
+
+WIDE_INLINE void WK(trace_ray_oct)(const bvh_wide *w, const accel_ray *ray, void *out, accel_counters *c,
+                                   size_t ray_idx, unsigned flags, int any_hit)
+{
+    accel_ray_prep p;
+    int ok = w->root != WIDE_EMPTY && wide_prep_ray(ray, &p);
+    WK(trace_prepped_oct)(w, ok ? &p : NULL, out, c, ray_idx, flags, any_hit);
+}
+
+/* The kernels of the variant tables; ACCEL_V_OPT selects order=octant. */
+WIDE_INLINE void WK(wide_closest)(const void *a, const accel_ray *rays, void *out, size_t count,
+                                  accel_counters *c, unsigned flags)
+{
+    if (flags & ACCEL_V_OPT)
+        for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 0);
+    else
+        for (size_t i = 0; i < count; i++) WK(trace_ray)(a, &rays[i], out, c, i, flags, 0);
+}
+
+WIDE_INLINE void WK(wide_any)(const void *a, const accel_ray *rays, void *out, size_t count,
+                              accel_counters *c, unsigned flags)
+{
+    if (flags & ACCEL_V_OPT)
+        for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 1);
+    else
+        for (size_t i = 0; i < count; i++) WK(trace_ray)(a, &rays[i], out, c, i, flags, 1);
+}
+
+#undef WK_CAT_
+#undef WK_CAT
+#undef WK
+#undef WL2_
+#undef WL2
+#undef KL
+#undef NV
+#undef NF
+#undef KNODE
+#undef KBLOCK
+#undef WK_JOIN_
+#undef WK_JOIN

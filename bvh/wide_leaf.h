@@ -1,0 +1,211 @@
+/*
+ * wide_leaf.h - one ray against a leaf block of WIDE_LB (4 or 8) primitives:
+ * the watertight test of Woop, Benthin and Wald ("Watertight Ray/Triangle
+ * Intersection", JCGT 2(1), 2013) on all lanes at once, with this project's
+ * exact fallback.
+ *
+ * A template: wide_trace.c includes it once per block width, with WIDE_LB
+ * defined (4 when included alone). It defines wide_leaf_ray_<LB>,
+ * leaf_setup_<LB>() and leaf_block_<LB>().
+ *
+ * Every lane computes exactly what accel_tri_watertight (core/prim.h)
+ * computes, with the same operations in the same order and no fused
+ * multiply-add: the shear, the edge functions U, V, W, their error bounds,
+ * the scaled distance T and its bound. Each lane then falls in one of
+ * three classes, decided as the scalar test decides it:
+ *   - sure miss: an edge function is surely negative and another surely
+ *     positive, or T lies surely outside [t_near, t] * det;
+ *   - sure hit: all edge functions surely of one sign and T surely inside;
+ *   - uncertain: anything else, NaN included. These lanes are redone one by
+ *     one with accel_tri_fallback, the double-precision test the oracle
+ *     itself runs, after the sure hits have lowered t, exactly as the
+ *     scalar test would redo them.
+ * So a block answers what the scalar test, run on its primitives in turn,
+ * would answer: the same hits, possibly a different one among primitives
+ * hit at the same distance (a tie the FORMATS.md rule accepts).
+ * Spheres (lanes with id >= tri_count) go through the scalar sphere test.
+ */
+#include "wide_node.h"
+#include "wide_simd.h"
+
+#ifndef WIDE_LB
+#define WIDE_LB 4
+#endif
+
+#define WL_CAT_(a, b) a##_##b
+#define WL_CAT(a, b) WL_CAT_(a, b)
+#define WL(name) WL_CAT(name, WIDE_LB)
+#define LV(op) WIDE_V(WIDE_LB, op)
+#define LF WIDE_T(WIDE_LB)
+#define WL_JOIN_(a, b) a##b
+#define WL_JOIN(a, b) WL_JOIN_(a, b)
+#define LBLOCK WL_JOIN(wide_block, WIDE_LB)
+
+/* Per-ray constants of the leaf test (broadcast once per ray). */
+typedef struct {
+    LF okx, oky, okz;    /* origin on the permuted axes */
+    LF sx, sy, sz;       /* shear constants */
+    LF sxa, sya;         /* their magnitudes */
+    LF t_near;
+    int ofs_x, ofs_y, ofs_z; /* row offsets of kx, ky, kz within a vertex */
+} WL(wide_leaf_ray);
+
+WIDE_INLINE void WL(leaf_setup)(WL(wide_leaf_ray) *r, const accel_ray_prep *p)
+{
+    r->okx = LV(set1)(v3_idx(p->org, p->kx));
+    r->oky = LV(set1)(v3_idx(p->org, p->ky));
+    r->okz = LV(set1)(v3_idx(p->org, p->kz));
+    r->sx = LV(set1)(p->sx), r->sy = LV(set1)(p->sy), r->sz = LV(set1)(p->sz);
+    r->sxa = LV(set1)(fabsf(p->sx)), r->sya = LV(set1)(fabsf(p->sy));
+    r->t_near = LV(set1)(p->t_near);
+    r->ofs_x = p->kx * WIDE_LB, r->ofs_y = p->ky * WIDE_LB, r->ofs_z = p->kz * WIDE_LB;
+}
+
+/* Lane `lane` of a block as the 9 (triangle) or 4 (sphere) floats of the
+ * scalar tests. */
+static inline void WL(lane_gather)(const LBLOCK *blk, int lane, float *out)
+{
+    for (int vtx = 0; vtx < 3; vtx++)
+        for (int axis = 0; axis < 3; axis++) out[3 * vtx + axis] = blk->v[vtx][axis][lane];
+}
+
+/* Scalar tests of the lanes in `mask` (fallback triangles, spheres or the
+ * naive test), in lane order. Returns 1 when one of them hit. */
+static inline __attribute__((always_inline)) int
+WL(lanes_scalar)(const LBLOCK *blk, int mask, const accel_ray_prep *p, float *t, float *u, float *v,
+                 uint32_t *id, uint32_t tri_count, int naive, int has_spheres, int any_hit)
+{
+    int hit = 0;
+    while (mask) {
+        int lane = __builtin_ctz((unsigned)mask);
+        mask &= mask - 1;
+        float prim[9];
+        WL(lane_gather)(blk, lane, prim);
+        int h;
+        if (has_spheres && blk->id[lane] >= tri_count)
+            h = accel_sphere_hit(p, prim, t, u, v);
+        else if (naive)
+            h = accel_tri_naive(p, prim, t, u, v);
+        else
+            h = accel_tri_fallback(p, prim, t, u, v);
+        if (h) {
+            *id = blk->id[lane];
+            hit = 1;
+            if (any_hit) return 1;
+        }
+    }
+    return hit;
+}
+
+/*
+ * Intersects one block. On a hit closer than *t (within [t_near, *t])
+ * updates *t, *u, *v, *id and returns 1; with any_hit it returns 1 at the
+ * first hit found. has_spheres and naive are constants in every copy.
+ */
+static inline __attribute__((always_inline)) int
+WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_prep *p, float *t,
+               float *u, float *v, uint32_t *id, uint32_t tri_count, int naive, int has_spheres,
+               int any_hit)
+{
+    const int all = (1 << WIDE_LB) - 1;
+    int spheres = 0;
+    if (has_spheres)
+        for (int lane = 0; lane < WIDE_LB; lane++) spheres |= (blk->id[lane] >= tri_count) << lane;
+    if (naive) return WL(lanes_scalar)(blk, all, p, t, u, v, id, tri_count, 1, has_spheres, any_hit);
+
+    /* Vertices relative to the origin, on the permuted axes. */
+    const float *v0 = blk->v[0][0], *v1 = blk->v[1][0], *v2 = blk->v[2][0];
+    LF ax_ = LV(sub)(LV(load)(v0 + r->ofs_x), r->okx), ay_ = LV(sub)(LV(load)(v0 + r->ofs_y), r->oky);
+    LF az_ = LV(sub)(LV(load)(v0 + r->ofs_z), r->okz);
+    LF bx_ = LV(sub)(LV(load)(v1 + r->ofs_x), r->okx), by_ = LV(sub)(LV(load)(v1 + r->ofs_y), r->oky);
+    LF bz_ = LV(sub)(LV(load)(v1 + r->ofs_z), r->okz);
+    LF cx_ = LV(sub)(LV(load)(v2 + r->ofs_x), r->okx), cy_ = LV(sub)(LV(load)(v2 + r->ofs_y), r->oky);
+    LF cz_ = LV(sub)(LV(load)(v2 + r->ofs_z), r->okz);
+    /* Shear and the edge functions. */
+    LF ax = LV(sub)(ax_, LV(mul)(r->sx, az_)), ay = LV(sub)(ay_, LV(mul)(r->sy, az_));
+    LF bx = LV(sub)(bx_, LV(mul)(r->sx, bz_)), by = LV(sub)(by_, LV(mul)(r->sy, bz_));
+    LF cx = LV(sub)(cx_, LV(mul)(r->sx, cz_)), cy = LV(sub)(cy_, LV(mul)(r->sy, cz_));
+    LF U = LV(sub)(LV(mul)(cx, by), LV(mul)(cy, bx));
+    LF V = LV(sub)(LV(mul)(ax, cy), LV(mul)(ay, cx));
+    LF W = LV(sub)(LV(mul)(bx, ay), LV(mul)(by, ax));
+    /* Their error bounds (ACCEL_EDGE_FILTER, as in accel_tri_watertight). */
+    LF aaz = LV(abs)(az_), abz = LV(abs)(bz_), acz = LV(abs)(cz_);
+    LF max_ = LV(add)(LV(abs)(ax_), LV(mul)(r->sxa, aaz)), may_ = LV(add)(LV(abs)(ay_), LV(mul)(r->sya, aaz));
+    LF mbx_ = LV(add)(LV(abs)(bx_), LV(mul)(r->sxa, abz)), mby_ = LV(add)(LV(abs)(by_), LV(mul)(r->sya, abz));
+    LF mcx_ = LV(add)(LV(abs)(cx_), LV(mul)(r->sxa, acz)), mcy_ = LV(add)(LV(abs)(cy_), LV(mul)(r->sya, acz));
+    LF filter = LV(set1)(ACCEL_EDGE_FILTER);
+    LF eu = LV(mul)(filter, LV(add)(LV(mul)(mcx_, mby_), LV(mul)(mcy_, mbx_)));
+    LF ev = LV(mul)(filter, LV(add)(LV(mul)(max_, mcy_), LV(mul)(may_, mcx_)));
+    LF ew = LV(mul)(filter, LV(add)(LV(mul)(mbx_, may_), LV(mul)(mby_, max_)));
+    LF zero = LV(set1)(0.0f);
+    LF neu = LV(sub)(zero, eu), nev = LV(sub)(zero, ev), new_ = LV(sub)(zero, ew);
+    LF sure_neg = LV(or)(LV(or)(LV(lt)(U, neu), LV(lt)(V, nev)), LV(lt)(W, new_));
+    LF sure_pos = LV(or)(LV(or)(LV(gt)(U, eu), LV(gt)(V, ev)), LV(gt)(W, ew));
+    LF edge_ok = LV(and)(LV(and)(LV(gt)(LV(abs)(U), eu), LV(gt)(LV(abs)(V), ev)), LV(gt)(LV(abs)(W), ew));
+    int miss = LV(mask)(LV(and)(sure_neg, sure_pos)) | spheres;
+    int ok = LV(mask)(edge_ok) & ~miss;
+    int unsure = all & ~miss & ~LV(mask)(edge_ok);
+    int hit = 0;
+    if (ok) {
+        /* det and T, and T's bound; compared against [t_near, t] * |det|. */
+        LF det = LV(add)(LV(add)(U, V), W);
+        LF zaz = LV(mul)(r->sz, az_), zbz = LV(mul)(r->sz, bz_), zcz = LV(mul)(r->sz, cz_);
+        LF T = LV(add)(LV(add)(LV(mul)(U, zaz), LV(mul)(V, zbz)), LV(mul)(W, zcz));
+        LF sgn = LV(signs)(det);
+        det = LV(xor)(det, sgn);
+        T = LV(xor)(T, sgn);
+        LF za = LV(abs)(zaz), zb = LV(abs)(zbz), zc = LV(abs)(zcz);
+        LF sum = LV(add)(LV(add)(LV(mul)(LV(abs)(U), za), LV(mul)(LV(abs)(V), zb)), LV(mul)(LV(abs)(W), zc));
+        LF et = LV(add)(LV(add)(LV(add)(LV(mul)(filter, sum), LV(mul)(eu, za)), LV(mul)(ev, zb)),
+                        LV(mul)(ew, zc));
+        LF lo = LV(mul)(r->t_near, det), hi = LV(mul)(LV(set1)(*t), det);
+        LF t_out = LV(or)(LV(lt)(T, LV(sub)(lo, et)), LV(gt)(T, LV(add)(hi, et)));
+        LF t_in = LV(and)(LV(gt)(T, LV(add)(lo, et)), LV(lt)(T, LV(sub)(hi, et)));
+        /* The same classes as vector masks (sure_v) and as bits. */
+        LF sure_v = LV(and)(LV(andnot)(t_out, LV(andnot)(LV(and)(sure_neg, sure_pos), edge_ok)), t_in);
+        int live = ok & ~LV(mask)(t_out);
+        int sure = live & LV(mask)(t_in);
+        unsure |= live & ~sure;
+        if (sure) {
+            if (any_hit) return 1;
+            /* The nearest sure hit; ties go to the lowest lane. */
+            LF rcp = LV(div)(LV(set1)(1.0f), det);
+            LF tt = LV(mul)(T, rcp);
+            LF masked = LV(blend)(LV(set1)(INFINITY), tt, sure_v);
+            if (has_spheres && spheres) {
+                float lane_t[WIDE_LB] __attribute__((aligned(32)));
+                LV(store)(lane_t, masked);
+                for (int lane = 0; lane < WIDE_LB; lane++)
+                    if (spheres >> lane & 1) lane_t[lane] = INFINITY;
+                masked = LV(load)(lane_t);
+            }
+            float t_min = LV(hmin)(masked);
+            int lane = __builtin_ctz((unsigned)(LV(mask)(LV(le)(masked, LV(set1)(t_min))) & sure));
+            float lane_u[WIDE_LB] __attribute__((aligned(32))), lane_v[WIDE_LB] __attribute__((aligned(32)));
+            LV(store)(lane_u, LV(mul)(LV(xor)(V, sgn), rcp));
+            LV(store)(lane_v, LV(mul)(LV(xor)(W, sgn), rcp));
+            *t = t_min;
+            *u = lane_u[lane];
+            *v = lane_v[lane];
+            *id = blk->id[lane];
+            hit = 1;
+        }
+    }
+    /* Uncertain lanes in double, then the spheres, with the t found so far. */
+    if (unsure && WL(lanes_scalar)(blk, unsure, p, t, u, v, id, tri_count, 0, 0, any_hit)) {
+        if (any_hit) return 1;
+        hit = 1;
+    }
+    if (has_spheres && spheres && WL(lanes_scalar)(blk, spheres, p, t, u, v, id, tri_count, 0, 1, any_hit))
+        hit = 1;
+    return hit;
+}
+
+#undef WL_CAT_
+#undef WL_CAT
+#undef WL
+#undef LV
+#undef LF
+#undef LBLOCK
+#undef WL_JOIN_
+#undef WL_JOIN

@@ -1,0 +1,156 @@
+/*
+ * wide_node.h - the memory layout of the wide BVHs (`bvh:width=4|8`),
+ * shared by the collapse (wide_build.c) and the kernels (wide_trace.c,
+ * wide_kernel.h, wide_leaf.h). Internal to bvh/.
+ *
+ * A wide node holds the boxes of its up to W children in SoA form, one row
+ * of W floats per box plane, so that one ray meets all W boxes in one
+ * sequence of W-lane vector instructions (the layout of Embree's BVH4/BVH8
+ * nodes; Wald et al., "Embree: A Kernel Framework for Efficient CPU Ray
+ * Tracing", SIGGRAPH 2014):
+ *
+ *   width 8 (256 bytes, 4 cache lines, 64-byte aligned)
+ *     offset   0  float box[6][8]   192 bytes: rows lo_x, hi_x, lo_y, hi_y, lo_z, hi_z
+ *     offset 192  uint32 child[8]    32 bytes: child references (below)
+ *     offset 224  uint32 perm[8]     32 bytes: child order per ray octant (below)
+ *   width 4 (128 bytes, 2 cache lines)
+ *     offset   0  float box[6][4]    96 bytes
+ *     offset  96  uint32 child[4]    16 bytes
+ *     offset 112  uint32 perm[4]     16 bytes
+ *
+ * perm serves order=octant: for each of the 8 octants of ray directions
+ * (o = sign bits of x, y, z), bits 3o..3o+2 of perm[r] name the child of
+ * rank r when the children are sorted by their box centres along the
+ * octant's diagonal direction (nearest first), the precomputed order of
+ * Fuetterling et al., "Accelerated Single Ray Tracing for Wide Vector
+ * Units", HPG 2017.
+ *
+ * An unused child slot has the empty box lo = +inf, hi = -inf, which the
+ * slab test rejects for every ray (its far distance is -inf or NaN).
+ *
+ * A child reference is a node index (bit 31 clear) or a leaf (bit 31 set):
+ *
+ *   bit 31      1
+ *   bits 25..30 number of leaf blocks - 1 (1..64 blocks)
+ *   bits  0..24 first leaf block (at most 2^25 blocks in a tree)
+ *
+ * A leaf block holds B = 4 or 8 primitives in SoA form, the three vertices'
+ * coordinates as rows of B floats, followed by the B scene ids:
+ *
+ *   block of 4 (160 bytes)  float v[3][3][4] 144 bytes, uint32 id[4] 16 bytes
+ *   block of 8 (320 bytes)  float v[3][3][8] 288 bytes, uint32 id[8] 32 bytes
+ *
+ * v[vertex][axis][lane], so the watertight test (Woop et al. 2013) reads
+ * the rows of the ray's permuted axes kx, ky, kz by offset, exactly as the
+ * scalar test picks components. A sphere lane holds its centre in vertex 0
+ * and its radius in v[1][0]; its id (>= the scene's tri_count) marks it.
+ * A leaf's last block is padded with copies of its last primitive: a
+ * duplicate lane answers like its original (same t, same id), so the
+ * kernels need no lane mask.
+ */
+#ifndef BVH_WIDE_NODE_H
+#define BVH_WIDE_NODE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "bvh_node.h"
+
+typedef struct {
+    float box[6][8];
+    uint32_t child[8];
+    uint32_t perm[8];
+} wide_node8;
+
+typedef struct {
+    float box[6][4];
+    uint32_t child[4];
+    uint32_t perm[4];
+} wide_node4;
+
+typedef struct {
+    float v[3][3][8];
+    uint32_t id[8];
+} wide_block8;
+
+typedef struct {
+    float v[3][3][4];
+    uint32_t id[4];
+} wide_block4;
+
+_Static_assert(sizeof(wide_node8) == 256, "an 8-wide node is four cache lines");
+_Static_assert(offsetof(wide_node8, child) == 192, "child references follow the 6 box rows");
+_Static_assert(sizeof(wide_node4) == 128, "a 4-wide node is two cache lines");
+_Static_assert(offsetof(wide_node4, child) == 96, "child references follow the 6 box rows");
+_Static_assert(sizeof(wide_block8) == 320, "a block of 8 is 36 + 4 bytes per primitive");
+_Static_assert(sizeof(wide_block4) == 160, "a block of 4 is 36 + 4 bytes per primitive");
+_Static_assert(offsetof(wide_block8, id) == 288 && offsetof(wide_block4, id) == 144,
+               "ids follow the vertex rows");
+
+/* Child references. */
+#define WIDE_LEAF 0x80000000u
+#define WIDE_LEAF_SHIFT 25
+#define WIDE_LEAF_MAX_BLOCKS 64u              /* blocks in one leaf */
+#define WIDE_MAX_BLOCKS (1u << WIDE_LEAF_SHIFT) /* blocks in one tree */
+#define WIDE_EMPTY 0xFFFFFFFFu                /* no tree (empty scene); also unused slots */
+
+static inline uint32_t wide_leaf_ref(uint32_t first_block, uint32_t blocks)
+{
+    return WIDE_LEAF | (blocks - 1) << WIDE_LEAF_SHIFT | first_block;
+}
+static inline uint32_t wide_leaf_first(uint32_t ref) { return ref & (WIDE_MAX_BLOCKS - 1); }
+static inline uint32_t wide_leaf_blocks(uint32_t ref)
+{
+    return ((ref & ~WIDE_LEAF) >> WIDE_LEAF_SHIFT) + 1;
+}
+
+/* The collapsed tree is never deeper than the binary one (BVH_MAX_DEPTH
+ * levels), and a node pushes at most W-1 entries, so a traversal stack of
+ * WIDE_STACK entries cannot overflow. */
+#define WIDE_STACK(w) (BVH_MAX_DEPTH * ((w) - 1) + 1)
+
+typedef struct {
+    uint32_t ref;
+    float t_entry;
+} wide_stack_entry;
+
+/* Ordering of the hit children (parameter order=): per-ray entry
+ * distances with branches on the hit count, or the node's precomputed
+ * octant order with a compress-store onto the stack. */
+enum { WIDE_ORDER_DIST = 0, WIDE_ORDER_OCTANT = 1 };
+
+/* The wide form of a built bvh (bvh.wide). Immutable after the build. */
+typedef struct bvh_wide {
+    int width;            /* children per node: 4 or 8 */
+    int block;            /* primitives per leaf block: 4 or 8 */
+    int order;            /* WIDE_ORDER_*: how hit children are ordered */
+    int packets;          /* traverse=packet: 64-ray packets (wide_packet.h) */
+    uint32_t root;        /* reference of the root, WIDE_EMPTY for an empty scene */
+    uint32_t node_count;  /* wide nodes */
+    uint32_t leaf_count;  /* leaves */
+    uint32_t block_count; /* leaf blocks */
+    uint32_t prim_count;  /* primitives stored (not counting padding lanes) */
+    uint32_t tri_count;   /* scene ids >= tri_count are spheres */
+    uint32_t step_bound;  /* nodes + leaves: a ray visits each at most once */
+    int depth;            /* levels of wide nodes and leaves (a lone leaf is 1) */
+    void *nodes;          /* wide_node4 or wide_node8, 64-byte aligned */
+    void *blocks;         /* wide_block4 or wide_block8, 64-byte aligned */
+} bvh_wide;
+
+struct bvh;
+/* Collapses the built binary tree of b into b->wide (width 4 or 8, leaf
+ * blocks of `block` primitives) and frees the binary pools, which the wide
+ * kernels do not use. Fills stats->nodes, leaves and depth. */
+int bvh_wide_build(struct bvh *b, int width, int block, int order, int threads,
+                   accel_build_stats *stats, accel_error *err);
+/* Bytes held by the wide tree (nodes, blocks, the struct itself). */
+size_t bvh_wide_memory(const bvh_wide *w);
+void bvh_wide_free(bvh_wide *w);
+
+/* Kernels (wide_trace.c). */
+void bvh_wide_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hits, size_t count,
+                        accel_counters *c, int naive, int has_spheres);
+void bvh_wide_occluded(const bvh_wide *w, const accel_ray *rays, uint8_t *occ, size_t count,
+                       accel_counters *c, int naive, int has_spheres);
+
+#endif

@@ -1,0 +1,305 @@
+/*
+ * wide_packet.h - 64-ray packets over a wide BVH (traverse=packet with
+ * width=4|8): the coherent mode for primary and shadow rays.
+ *
+ * A template: wide_packet.c includes it once per (WIDE_NW, WIDE_LB) pair
+ * after wide_kernel.h for the same pair, whose single-ray kernel it falls
+ * back to. It defines wide_pclosest_<NW>_<LB> and wide_pany_<NW>_<LB>.
+ *
+ * A packet is 64 consecutive rays (8x8 screen tiles in the primary sets),
+ * stored as arrays so that one child box is tested against 8 rays per AVX
+ * sequence, with exactly the operations of the single-ray slab test lane
+ * by lane (a ray accepts exactly the boxes it would accept alone). The
+ * packet walks the tree together, each stack entry carrying `first`, the
+ * first ray that hit the entry's box (rays before it missed the box, and
+ * boxes nest), as in bvh_packet.c (Wald, Boulos and Shirley 2007). At a
+ * node:
+ *   1. a frustum test bounds, by interval arithmetic over the packet's
+ *      origins and reciprocal directions, every ray's slab entry and exit
+ *      for all W children at once (one W-lane sequence; Boulos, Wald and
+ *      Shirley, UUCS-06-010, 2006; the large-packet traversal of
+ *      Fuetterling et al., JCGT 4(4), 2015, tests frusta against wide
+ *      nodes the same way). Rounding is monotone, so the bounds enclose
+ *      each ray's own float values: a child no ray can hit is dropped;
+ *   2. for each remaining child, the groups of 8 rays from `first` on are
+ *      tested until one ray hits: it is the child's `first`;
+ *   3. the hit children are pushed in the node's octant order (all rays of
+ *      a packet share the octant), farthest first.
+ * At a leaf, the rays from `first` on that hit the leaf's box (groups of
+ * 8 again) run the single-ray leaf test (wide_leaf.h) on its blocks. With
+ * any hit, an occluded ray leaves the packet. A packet whose valid rays do
+ * not share one octant, or has a zero direction component (no finite
+ * interval), is traced ray by ray with the single-ray kernel instead.
+ *
+ * Counters: steps and box tests per packet visit are charged to the rays
+ * from `first` on; packet_box_tests counts the frustum tests (W boxes each).
+ */
+#ifndef WIDE_NW
+#define WIDE_NW 4
+#endif
+#ifndef WIDE_LB /* alone: the pieces for width 4 (or WIDE_NW), blocks of 4 */
+#include "wide_kernel.h"
+#endif
+#include "wide_node.h"
+#include "wide_simd.h"
+
+#ifndef BVH_WIDE_PACKET_TYPES
+#define BVH_WIDE_PACKET_TYPES
+#define WP_RAYS 64
+typedef struct {
+    float ox[WP_RAYS], oy[WP_RAYS], oz[WP_RAYS], ix[WP_RAYS], iy[WP_RAYS], iz[WP_RAYS];
+    float tn[WP_RAYS], t[WP_RAYS], u[WP_RAYS], v[WP_RAYS];
+    uint32_t id[WP_RAYS], steps[WP_RAYS], prims[WP_RAYS];
+    accel_ray_prep p[WP_RAYS];
+    uint64_t alive; /* valid rays still looking for a hit */
+    int octant;
+    float o_lo[3], o_hi[3], i_lo[3], i_hi[3], tn_min, t_max;
+} wide_packet;
+
+typedef struct {
+    uint32_t ref, first;   /* reference; first ray that hit its box */
+    uint32_t parent, lane; /* where its box is (a leaf's box culls rays) */
+} wide_packet_entry;
+
+/* Rays from `first` on as a mask of group g (8 rays). */
+static inline unsigned wp_range(uint64_t alive, unsigned g, unsigned first)
+{
+    uint64_t from = first >= WP_RAYS ? 0 : ~(uint64_t)0 << first;
+    return (unsigned)((alive & from) >> (8 * g)) & 0xFFu;
+}
+#endif
+
+#define PK_CAT_(a, b, c) a##_##b##_##c
+#define PK_CAT(a, b, c) PK_CAT_(a, b, c)
+#define PK(name) PK_CAT(name, WIDE_NW, WIDE_LB)
+#define PKL__(a, b) a##_##b
+#define PKL_(a, b) PKL__(a, b)
+#define PKL(name) PKL_(name, WIDE_LB)
+#define PV(op) WIDE_V(WIDE_NW, op)
+#define PF WIDE_T(WIDE_NW)
+#define PK_JOIN_(a, b) a##b
+#define PK_JOIN(a, b) PK_JOIN_(a, b)
+#define PNODE PK_JOIN(wide_node, WIDE_NW)
+#define PBLOCK PK_JOIN(wide_block, WIDE_LB)
+
+/* Rays of group g (mask `m` of candidates) that hit child `lane` of a node
+ * whose box rows are `rows`: the single-ray slab test on 8 rays at once. */
+WIDE_INLINE unsigned PK(group_hits)(const wide_packet *pk, unsigned g, unsigned m, const float *rows,
+                                    unsigned lane)
+{
+    const int o = pk->octant;
+    const float nx = rows[(0 + (o & 1)) * WIDE_NW + lane], fx = rows[(1 - (o & 1)) * WIDE_NW + lane];
+    const float ny = rows[(2 + (o >> 1 & 1)) * WIDE_NW + lane], fy = rows[(3 - (o >> 1 & 1)) * WIDE_NW + lane];
+    const float nz = rows[(4 + (o >> 2 & 1)) * WIDE_NW + lane], fz = rows[(5 - (o >> 2 & 1)) * WIDE_NW + lane];
+    const unsigned r = 8 * g;
+    f8 ox = f8_load(pk->ox + r), oy = f8_load(pk->oy + r), oz = f8_load(pk->oz + r);
+    f8 ix = f8_load(pk->ix + r), iy = f8_load(pk->iy + r), iz = f8_load(pk->iz + r);
+    f8 t0 = f8_max(f8_mul(f8_sub(f8_set1(nx), ox), ix), f8_load(pk->tn + r));
+    t0 = f8_max(f8_mul(f8_sub(f8_set1(ny), oy), iy), t0);
+    t0 = f8_max(f8_mul(f8_sub(f8_set1(nz), oz), iz), t0);
+    f8 t1 = f8_min(f8_mul(f8_sub(f8_set1(fx), ox), ix), f8_load(pk->t + r));
+    t1 = f8_min(f8_mul(f8_sub(f8_set1(fy), oy), iy), t1);
+    t1 = f8_min(f8_mul(f8_sub(f8_set1(fz), oz), iz), t1);
+    f8 far = f8_add(t1, f8_mul(f8_abs(t1), f8_set1(ACCEL_SLAB_PAD)));
+    return (unsigned)f8_mask(f8_le(t0, far)) & m;
+}
+
+/* The first ray from `first` on that hits the child, or WP_RAYS. */
+WIDE_INLINE unsigned PK(first_hit)(const wide_packet *pk, unsigned first, const float *rows,
+                                   unsigned lane, uint32_t *tests)
+{
+    for (unsigned g = first / 8; g < WP_RAYS / 8; g++) {
+        unsigned m = wp_range(pk->alive, g, first);
+        if (!m) continue;
+        (*tests)++;
+        unsigned h = PK(group_hits)(pk, g, m, rows, lane);
+        if (h) return 8 * g + (unsigned)__builtin_ctz(h);
+    }
+    return WP_RAYS;
+}
+
+/* Children that some ray may hit, by interval arithmetic (see above). */
+WIDE_INLINE unsigned PK(frustum)(const wide_packet *pk, const float *rows)
+{
+    const int o = pk->octant;
+    PF t0 = PV(set1)(pk->tn_min), t1 = PV(set1)(pk->t_max);
+    for (int a = 0; a < 3; a++) {
+        int neg = o >> a & 1;
+        PF nr = PV(load)(rows + (2 * a + neg) * WIDE_NW), fr = PV(load)(rows + (2 * a + 1 - neg) * WIDE_NW);
+        PF olo = PV(set1)(pk->o_lo[a]), ohi = PV(set1)(pk->o_hi[a]);
+        PF ilo = PV(set1)(pk->i_lo[a]), ihi = PV(set1)(pk->i_hi[a]);
+        PF d0 = PV(sub)(nr, ohi), d1 = PV(sub)(nr, olo), e0 = PV(sub)(fr, ohi), e1 = PV(sub)(fr, olo);
+        PF lo = PV(min)(PV(min)(PV(mul)(d0, ilo), PV(mul)(d0, ihi)), PV(min)(PV(mul)(d1, ilo), PV(mul)(d1, ihi)));
+        PF hi = PV(max)(PV(max)(PV(mul)(e0, ilo), PV(mul)(e0, ihi)), PV(max)(PV(mul)(e1, ilo), PV(mul)(e1, ihi)));
+        t0 = PV(max)(lo, t0);
+        t1 = PV(min)(hi, t1);
+    }
+    PF far = PV(add)(t1, PV(mul)(PV(abs)(t1), PV(set1)(ACCEL_SLAB_PAD)));
+    return (unsigned)PV(mask)(PV(le)(t0, far));
+}
+
+/* Loads rays [0, n) into the packet; returns 0 when the packet cannot be
+ * traced as one (mixed octants or a zero direction component). */
+WIDE_INLINE int PK(packet_load)(wide_packet *pk, const bvh_wide *w, const accel_ray *rays, unsigned n)
+{
+    pk->alive = 0;
+    pk->octant = -1;
+    int ok = 1;
+    for (unsigned r = 0; r < WP_RAYS; r++) {
+        accel_ray_prep *p = &pk->p[r];
+        int valid = r < n && w->root != WIDE_EMPTY && wide_prep_ray(&rays[r], p);
+        pk->id[r] = ACCEL_MISS, pk->u[r] = pk->v[r] = 0.0f, pk->steps[r] = pk->prims[r] = 0;
+        if (!valid) { /* dead: an empty t range misses every box */
+            pk->ox[r] = pk->oy[r] = pk->oz[r] = 0.0f, pk->ix[r] = pk->iy[r] = pk->iz[r] = 1.0f;
+            pk->tn[r] = INFINITY, pk->t[r] = -INFINITY;
+            continue;
+        }
+        pk->ox[r] = p->org.x, pk->oy[r] = p->org.y, pk->oz[r] = p->org.z;
+        pk->ix[r] = p->inv_dir.x, pk->iy[r] = p->inv_dir.y, pk->iz[r] = p->inv_dir.z;
+        pk->tn[r] = p->t_near, pk->t[r] = p->t_far;
+        int oct = p->neg[0] | p->neg[1] << 1 | p->neg[2] << 2;
+        const float o3[3] = {p->org.x, p->org.y, p->org.z}, i3[3] = {p->inv_dir.x, p->inv_dir.y, p->inv_dir.z};
+        if (!pk->alive) {
+            pk->octant = oct;
+            for (int a = 0; a < 3; a++) pk->o_lo[a] = pk->o_hi[a] = o3[a], pk->i_lo[a] = pk->i_hi[a] = i3[a];
+            pk->tn_min = p->t_near, pk->t_max = p->t_far;
+        }
+        ok &= oct == pk->octant && isfinite(i3[0]) && isfinite(i3[1]) && isfinite(i3[2]);
+        for (int a = 0; a < 3; a++) {
+            pk->o_lo[a] = minf(pk->o_lo[a], o3[a]), pk->o_hi[a] = maxf(pk->o_hi[a], o3[a]);
+            pk->i_lo[a] = minf(pk->i_lo[a], i3[a]), pk->i_hi[a] = maxf(pk->i_hi[a], i3[a]);
+        }
+        pk->tn_min = minf(pk->tn_min, p->t_near), pk->t_max = maxf(pk->t_max, p->t_far);
+        pk->alive |= (uint64_t)1 << r;
+    }
+    return ok;
+}
+
+/* Charges one visit to the rays from `first` on. */
+WIDE_INLINE void PK(charge)(wide_packet *pk, unsigned first)
+{
+    uint64_t m = pk->alive & (first >= WP_RAYS ? 0 : ~(uint64_t)0 << first);
+    while (m) {
+        pk->steps[__builtin_ctzll(m)]++;
+        m &= m - 1;
+    }
+}
+
+/* The packet from the root to every ray's answer. */
+WIDE_INLINE void PK(packet_trace)(wide_packet *pk, const bvh_wide *w, accel_counters *c, unsigned flags,
+                                  int any_hit)
+{
+    const int naive = (flags & ACCEL_V_NAIVE) != 0, has_spheres = (flags & ACCEL_V_SPHERES) != 0;
+    const PNODE *nodes = w->nodes;
+    const PBLOCK *blocks = w->blocks;
+    const int shift = 3 * pk->octant;
+    wide_packet_entry stack[WIDE_STACK(WIDE_NW)];
+    int sp = 0;
+    uint32_t visits = 0, tests = 0;
+    if (!pk->alive) return;
+    stack[sp++] = (wide_packet_entry){w->root, (uint32_t)__builtin_ctzll(pk->alive), WIDE_EMPTY, 0};
+    while (sp > 0 && pk->alive) {
+        wide_packet_entry e = stack[--sp];
+        visits++;
+        if (ACCEL_STEP_BOUND_BROKEN(c, visits, w->step_bound)) break;
+        if (c) PK(charge)(pk, e.first);
+        if (!(e.ref & WIDE_LEAF)) {
+            const PNODE *n = &nodes[e.ref];
+            const float *rows = n->box[0];
+            unsigned cand = PK(frustum)(pk, rows);
+            if (c) c->packet_box_tests += WIDE_NW;
+            uint32_t first_of[WIDE_NW];
+            unsigned hit = 0;
+            while (cand) {
+                unsigned l = (unsigned)__builtin_ctz(cand);
+                cand &= cand - 1;
+                first_of[l] = PK(first_hit)(pk, e.first, rows, l, &tests);
+                if (first_of[l] < WP_RAYS) hit |= 1u << l;
+            }
+            for (int rank = WIDE_NW - 1; rank >= 0; rank--) { /* farthest first */
+                unsigned l = (n->perm[rank] >> shift) & 7u;
+                if (hit >> l & 1u) stack[sp++] = (wide_packet_entry){n->child[l], first_of[l], e.ref, l};
+            }
+            continue;
+        }
+        /* Leaf: the rays from `first` on that hit its box. */
+        const PBLOCK *blk = &blocks[wide_leaf_first(e.ref)];
+        uint32_t nb = wide_leaf_blocks(e.ref);
+        const float *prow = e.parent == WIDE_EMPTY ? NULL : nodes[e.parent].box[0];
+        for (unsigned g = e.first / 8; g < WP_RAYS / 8; g++) {
+            unsigned m = wp_range(pk->alive, g, e.first);
+            if (!m) continue;
+            if (prow) {
+                tests++;
+                m = PK(group_hits)(pk, g, m, prow, e.lane);
+            }
+            while (m) {
+                unsigned r = 8 * g + (unsigned)__builtin_ctz(m);
+                m &= m - 1;
+                PKL(wide_leaf_ray) lr;
+                PKL(leaf_setup)(&lr, &pk->p[r]);
+                for (uint32_t k = 0; k < nb; k++) {
+                    if (c) {
+                        pk->prims[r]++;
+                        for (int q = 1; q < WIDE_LB; q++) pk->prims[r] += blk[k].id[q] != blk[k].id[q - 1];
+                    }
+                    if (PKL(leaf_block)(&blk[k], &lr, &pk->p[r], &pk->t[r], &pk->u[r], &pk->v[r], &pk->id[r],
+                                        w->tri_count, naive, has_spheres, any_hit) && any_hit) {
+                        pk->id[r] = 0;
+                        pk->alive &= ~((uint64_t)1 << r);
+                        break;
+                    }
+                }
+            }
+        }
+    }
+    if (c) c->box_tests += 8 * (uint64_t)tests;
+}
+
+WIDE_INLINE void PK(packet_batch)(const void *a, const accel_ray *rays, void *out, size_t count,
+                                  accel_counters *c, unsigned flags, int any_hit)
+{
+    const bvh_wide *w = a;
+    wide_packet pk;
+    for (size_t base = 0; base < count; base += WP_RAYS) {
+        unsigned n = count - base < WP_RAYS ? (unsigned)(count - base) : WP_RAYS;
+        if (!PK(packet_load)(&pk, w, rays + base, n)) { /* ray by ray, already prepared */
+            for (unsigned r = 0; r < n; r++)
+                PK_CAT(trace_prepped_oct, WIDE_NW, WIDE_LB)(w, pk.alive >> r & 1 ? &pk.p[r] : NULL, out, c,
+                                                            base + r, flags, any_hit);
+            continue;
+        }
+        PK(packet_trace)(&pk, w, c, flags, any_hit);
+        for (unsigned r = 0; r < n; r++) {
+            accel_hit h = accel_hit_miss();
+            if (pk.id[r] != ACCEL_MISS) h.t = pk.t[r], h.prim = pk.id[r], h.u = pk.u[r], h.v = pk.v[r];
+            PK_CAT(finish, WIDE_NW, WIDE_LB)(h, pk.id[r], pk.t[r], out, c, base + r, pk.steps[r], 0,
+                                             pk.prims[r], any_hit);
+        }
+    }
+}
+
+WIDE_INLINE void PK(wide_pclosest)(const void *a, const accel_ray *rays, void *out, size_t count,
+                                   accel_counters *c, unsigned flags)
+{
+    PK(packet_batch)(a, rays, out, count, c, flags, 0);
+}
+
+WIDE_INLINE void PK(wide_pany)(const void *a, const accel_ray *rays, void *out, size_t count,
+                               accel_counters *c, unsigned flags)
+{
+    PK(packet_batch)(a, rays, out, count, c, flags, 1);
+}
+
+#undef PK_CAT_
+#undef PK_CAT
+#undef PK
+#undef PKL__
+#undef PKL_
+#undef PKL
+#undef PV
+#undef PF
+#undef PK_JOIN_
+#undef PK_JOIN
+#undef PNODE
+#undef PBLOCK

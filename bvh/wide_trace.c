@@ -1,0 +1,81 @@
+/*
+ * wide_trace.c - the wide BVH's batch entries: one kernel table
+ * (core/variant.h) per width, block size and query, each compiled from the
+ * templates wide_leaf.h (the SIMD watertight leaf test) and wide_kernel.h
+ * (the traversal).
+ */
+#include "wide_node.h"
+
+#define WIDE_LB 4
+#include "wide_leaf.h"
+#undef WIDE_LB
+#define WIDE_LB 8
+#include "wide_leaf.h"
+#undef WIDE_LB
+
+#define WIDE_NW 4
+#define WIDE_LB 4
+#include "wide_kernel.h"
+#include "wide_packet.h"
+#undef WIDE_LB
+#define WIDE_LB 8
+#include "wide_kernel.h"
+#include "wide_packet.h"
+#undef WIDE_LB
+#undef WIDE_NW
+
+#define WIDE_NW 8
+#define WIDE_LB 4
+#include "wide_kernel.h"
+#include "wide_packet.h"
+#undef WIDE_LB
+#define WIDE_LB 8
+#include "wide_kernel.h"
+#include "wide_packet.h"
+#undef WIDE_LB
+#undef WIDE_NW
+
+ACCEL_KERNEL_TABLE(closest_4_4, wide_closest_4_4)
+ACCEL_KERNEL_TABLE(closest_4_8, wide_closest_4_8)
+ACCEL_KERNEL_TABLE(closest_8_4, wide_closest_8_4)
+ACCEL_KERNEL_TABLE(closest_8_8, wide_closest_8_8)
+ACCEL_KERNEL_TABLE(any_4_4, wide_any_4_4)
+ACCEL_KERNEL_TABLE(any_4_8, wide_any_4_8)
+ACCEL_KERNEL_TABLE(any_8_4, wide_any_8_4)
+ACCEL_KERNEL_TABLE(any_8_8, wide_any_8_8)
+ACCEL_KERNEL_TABLE(pclosest_4_4, wide_pclosest_4_4)
+ACCEL_KERNEL_TABLE(pclosest_4_8, wide_pclosest_4_8)
+ACCEL_KERNEL_TABLE(pclosest_8_4, wide_pclosest_8_4)
+ACCEL_KERNEL_TABLE(pclosest_8_8, wide_pclosest_8_8)
+ACCEL_KERNEL_TABLE(pany_4_4, wide_pany_4_4)
+ACCEL_KERNEL_TABLE(pany_4_8, wide_pany_4_8)
+ACCEL_KERNEL_TABLE(pany_8_4, wide_pany_8_4)
+ACCEL_KERNEL_TABLE(pany_8_8, wide_pany_8_8)
+
+/* [packets][any hit][width 8][block 8] */
+static const accel_kernel_table *const tables[2][2][2][2] = {
+    {{{&closest_4_4, &closest_4_8}, {&closest_8_4, &closest_8_8}},
+     {{&any_4_4, &any_4_8}, {&any_8_4, &any_8_8}}},
+    {{{&pclosest_4_4, &pclosest_4_8}, {&pclosest_8_4, &pclosest_8_8}},
+     {{&pany_4_4, &pany_4_8}, {&pany_8_4, &pany_8_8}}},
+};
+
+static unsigned kernel_flags(const bvh_wide *w, int naive, int has_spheres)
+{
+    return (naive ? ACCEL_V_NAIVE : 0u) | (has_spheres ? ACCEL_V_SPHERES : 0u) |
+           (w->order == WIDE_ORDER_OCTANT ? ACCEL_V_OPT : 0u);
+}
+
+void bvh_wide_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hits, size_t count,
+                        accel_counters *c, int naive, int has_spheres)
+{
+    accel_run_kernel(tables[w->packets][0][w->width == 8][w->block == 8], w, rays, hits, count, c,
+                     kernel_flags(w, naive, has_spheres));
+}
+
+void bvh_wide_occluded(const bvh_wide *w, const accel_ray *rays, uint8_t *occ, size_t count,
+                       accel_counters *c, int naive, int has_spheres)
+{
+    accel_run_kernel(tables[w->packets][1][w->width == 8][w->block == 8], w, rays, occ, count, c,
+                     kernel_flags(w, naive, has_spheres));
+}
