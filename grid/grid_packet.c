@@ -145,7 +145,10 @@ test_prim(const accel_scene *s, grid_packet *pk, packet_count *cn, accel_counter
         if (!accel_prim_hit(s, prim, &pk->prep[l], &pk->t[l], &pk->u[l], &pk->v[l], naive, spheres))
             continue;
         pk->prim[l] = prim;
-        if (any_hit) retire(pk, cn, l, c);
+        if (any_hit)
+            retire(pk, cn, l, c);
+        else
+            grid_packet_hit_end(pk, l);
     }
 }
 
@@ -200,10 +203,12 @@ packet_walk(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counte
                 }
             }
         }
-        const double z_out = f->planes[K][pk->kstep > 0 ? k + 1 : k];
-        for (uint64_t m = grid_packet_leaving(pk, z_out); m; m &= m - 1)
-            retire(pk, cn, __builtin_ctzll(m), c);
-        if (!pk->active) return;
+        const double w_out = pk->kstep * (double)f->planes[K][pk->kstep > 0 ? k + 1 : k];
+        if (w_out >= pk->w_next) {
+            for (uint64_t m = grid_packet_leaving(pk, w_out); m; m &= m - 1)
+                retire(pk, cn, __builtin_ctzll(m), c);
+            if (!pk->active) return;
+        }
     }
 }
 

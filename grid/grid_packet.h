@@ -46,8 +46,10 @@ typedef struct {
     /* The slice walk along axis K (axis[0]); u = coordinates on axis[1],
      * axis[2] as u = u0 + s (z - z0). */
     _Alignas(32) double ok[GRID_PACKET_SIZE];     /* origin on K */
-    _Alignas(32) double inv_k[GRID_PACKET_SIZE];  /* 1 / d_K */
-    _Alignas(32) double t_stop[GRID_PACKET_SIZE]; /* box exit or t_far, widened */
+    /* w = kstep * z, the coordinate that grows along the walk. w_end: the
+     * ray needs no slice beyond it: the nearest of its box exit (or t_far)
+     * and its nearest hit so far, widened by their rounding. */
+    _Alignas(32) double w_end[GRID_PACKET_SIZE];
     _Alignas(32) double zr[GRID_PACKET_SIZE];     /* where the ray starts on K, - z0, widened back */
     _Alignas(32) double u0[2][GRID_PACKET_SIZE];
     _Alignas(32) double s[2][GRID_PACKET_SIZE];
@@ -67,11 +69,23 @@ typedef struct {
     int kstep;        /* +1 / -1: direction of the walk along K */
     int k_start;      /* first slice */
     double z0;        /* the grid's entry plane on K */
+    double w_next;    /* min of w_end over the active rays */
+    const double *dk; /* dx, dy or dz: the rays' K components */
     /* Bounds over `bounded`. */
     double u0_lo[2], u0_hi[2], s_lo[2], s_hi[2], umag_max[2];
     double d_lo[3], d_hi[3], m_lo[3], m_hi[3], emag_max, omag_max;
     int common;       /* all of them start at ref (M = 0) */
 } grid_packet;
+
+#if GRID_PACKET_AVX
+/* All-ones lanes for the low 4 bits of `bits`. */
+static inline __m256d grid_packet_lanes(uint64_t bits)
+{
+    const __m256i sel = _mm256_setr_epi64x(1, 2, 4, 8);
+    const __m256i b = _mm256_and_si256(_mm256_set1_epi64x((long long)bits), sel);
+    return _mm256_castsi256_pd(_mm256_cmpeq_epi64(b, sel));
+}
+#endif
 
 enum { GRID_PACKET_EMPTY, GRID_PACKET_WALK, GRID_PACKET_SINGLE };
 

@@ -192,30 +192,52 @@ static inline uint64_t grid_packet_sphere_filter(const grid_packet *pk, const fl
     return keep & pk->active;
 }
 
-/* Active rays that leave slice k across plane z_out: their nearest hit lies
- * at or before it (t <= t_exit), or they have left the box or passed
- * t_far (t_exit > t_stop). */
-static inline uint64_t grid_packet_leaving(const grid_packet *pk, double z_out)
+/* Active rays that need no slice beyond w_out (w = kstep * z): their
+ * nearest hit, box exit or t_far lies at or before it. Also refreshes
+ * w_next over the rays that stay. */
+static inline uint64_t grid_packet_leaving(grid_packet *pk, double w_out)
 {
     uint64_t out = 0;
+    double next = INFINITY;
+#if GRID_PACKET_AVX
+    const __m256d w = _mm256_set1_pd(w_out);
+    __m256d nx = _mm256_set1_pd(INFINITY);
+#endif
     for (uint64_t a = pk->active; a;) {
         const int o = 4 * (__builtin_ctzll(a) >> 2);
         a &= ~((uint64_t)0xF << o);
 #if GRID_PACKET_AVX
-        const __m256d tx = _mm256_mul_pd(_mm256_sub_pd(_mm256_set1_pd(z_out), _mm256_load_pd(pk->ok + o)),
-                                         _mm256_load_pd(pk->inv_k + o));
-        const __m256d tb = _mm256_cvtps_pd(_mm_loadu_ps(pk->t + o));
-        const __m256d m = _mm256_or_pd(_mm256_cmp_pd(tb, tx, _CMP_LE_OQ),
-                                       _mm256_cmp_pd(tx, _mm256_load_pd(pk->t_stop + o), _CMP_GT_OQ));
-        out |= (uint64_t)_mm256_movemask_pd(m) << o;
+        const __m256d e = _mm256_load_pd(pk->w_end + o), le = _mm256_cmp_pd(e, w, _CMP_LE_OQ);
+        out |= (uint64_t)_mm256_movemask_pd(le) << o;
+        const __m256d stay = _mm256_andnot_pd(le, grid_packet_lanes(pk->active >> o));
+        nx = _mm256_min_pd(nx, _mm256_blendv_pd(_mm256_set1_pd(INFINITY), e, stay));
 #else
         for (int l = o; l < o + 4; l++) {
-            const double tx = (z_out - pk->ok[l]) * pk->inv_k[l];
-            out |= (uint64_t)((double)pk->t[l] <= tx || tx > pk->t_stop[l]) << l;
+            const int on = (int)(pk->active >> l & 1);
+            out |= (uint64_t)(pk->w_end[l] <= w_out) << l;
+            next = on && pk->w_end[l] > w_out && pk->w_end[l] < next ? pk->w_end[l] : next;
         }
 #endif
     }
-    return out & pk->active;
+    out &= pk->active;
+#if GRID_PACKET_AVX
+    double b[4];
+    _mm256_storeu_pd(b, nx);
+    next = b[0] < b[1] ? b[0] : b[1];
+    next = next < b[2] ? next : b[2];
+    next = next < b[3] ? next : b[3];
+#endif
+    pk->w_next = next;
+    return out;
+}
+
+/* After a hit of ray l at its nearest t: the ray needs no slice past it. */
+static inline void grid_packet_hit_end(grid_packet *pk, int l)
+{
+    const double t = pk->t[l], ok = pk->ok[l], dz = t * pk->dk[l];
+    const double w = pk->kstep * (ok + dz) + GRID_PACKET_REL * (fabs(ok) + fabs(dz));
+    if (w < pk->w_end[l]) pk->w_end[l] = w;
+    if (w < pk->w_next) pk->w_next = w;
 }
 
 #endif

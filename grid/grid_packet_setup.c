@@ -209,7 +209,6 @@ int grid_packet_setup(const grid_accel *g, grid_packet *pk, const accel_ray *ray
         const double ok = rf.o[K][i], dk = rf.d[K][i], te = rf.te[i];
         const double ik = 1.0 / dk, dzk = z0 - ok;
         pk->ok[i] = ok;
-        pk->inv_k[i] = ik;
         const double s1 = rf.d[a1][i] * ik, s2 = rf.d[a2][i] * ik;
         const double o1 = rf.o[a1][i], o2 = rf.o[a2][i];
         pk->s[0][i] = s1, pk->s[1][i] = s2;
@@ -228,12 +227,16 @@ int grid_packet_setup(const grid_accel *g, grid_packet *pk, const accel_ray *ray
             const double t = (far - rf.o[a][i]) * (double)rf.inv[a][i];
             t_out = t < t_out ? t : t_out;
         }
-        pk->t_stop[i] = t_out + GRID_PACKET_REL_F * fabs(t_out);
+        const double t_stop = t_out + GRID_PACKET_REL_F * fabs(t_out);
+        pk->w_end[i] = dir * (ok + t_stop * dk) + GRID_PACKET_REL * (fabs(ok) + fabs(t_stop * dk));
     }
+    pk->dk = K == 0 ? pk->dx : (K == 1 ? pk->dy : pk->dz);
+    pk->w_next = INFINITY;
     double z_first = dir > 0 ? INFINITY : -INFINITY;
     for (uint64_t m = pk->live; m; m &= m - 1) {
-        const double z = pk->zr[__builtin_ctzll(m)];
-        z_first = dir > 0 ? dmin(z_first, z) : dmax(z_first, z);
+        const int i = __builtin_ctzll(m);
+        z_first = dir > 0 ? dmin(z_first, pk->zr[i]) : dmax(z_first, pk->zr[i]);
+        pk->w_next = dmin(pk->w_next, pk->w_end[i]);
     }
     pk->k_start = slice_of(f, K, z0 + z_first, dir);
     pk->active = pk->live;
@@ -241,30 +244,56 @@ int grid_packet_setup(const grid_accel *g, grid_packet *pk, const accel_ray *ray
     return GRID_PACKET_WALK;
 }
 
+#if GRID_PACKET_AVX
+static inline double hmin(__m256d v)
+{
+    __m128d h = _mm_min_pd(_mm256_castpd256_pd128(v), _mm256_extractf128_pd(v, 1));
+    return _mm_cvtsd_f64(_mm_min_sd(h, _mm_unpackhi_pd(h, h)));
+}
+
+static inline double hmax(__m256d v)
+{
+    __m128d h = _mm_max_pd(_mm256_castpd256_pd128(v), _mm256_extractf128_pd(v, 1));
+    return _mm_cvtsd_f64(_mm_max_sd(h, _mm_unpackhi_pd(h, h)));
+}
+#endif
+
 void grid_packet_bound(grid_packet *pk)
 {
+    enum { N = 10, NM = 4 };
     const uint64_t act = pk->active;
     pk->bounded = act;
-    double lo[10], hi[10], mag[4] = {0.0, 0.0, 0.0, 0.0};
-    for (int q = 0; q < 10; q++) lo[q] = INFINITY, hi[q] = -INFINITY;
-    const double *const arr[10] = {pk->u0[0], pk->u0[1], pk->s[0], pk->s[1], pk->dx,
-                                   pk->dy,    pk->dz,    pk->mx,   pk->my,   pk->mz};
-    const double *const mags[4] = {pk->umag[0], pk->umag[1], pk->emag, pk->omag};
-    for (int q = 0; q < 10; q++) {
-        double l = INFINITY, h = -INFINITY;
-        for (int i = 0; i < P; i++) {
-            const int on = (int)(act >> i & 1);
-            const double x = arr[q][i];
-            l = dmin(l, on ? x : INFINITY);
-            h = dmax(h, on ? x : -INFINITY);
+    const double *const arr[N] = {pk->u0[0], pk->u0[1], pk->s[0], pk->s[1], pk->dx,
+                                  pk->dy,    pk->dz,    pk->mx,   pk->my,   pk->mz};
+    const double *const mags[NM] = {pk->umag[0], pk->umag[1], pk->emag, pk->omag};
+    double lo[N], hi[N], mag[NM];
+#if GRID_PACKET_AVX
+    const __m256d inf = _mm256_set1_pd(INFINITY), ninf = _mm256_set1_pd(-INFINITY);
+    __m256d l[N], h[N], g[NM];
+    for (int q = 0; q < N; q++) l[q] = inf, h[q] = ninf;
+    for (int q = 0; q < NM; q++) g[q] = _mm256_setzero_pd();
+    for (uint64_t a = act; a;) {
+        const int o = 4 * (__builtin_ctzll(a) >> 2);
+        a &= ~((uint64_t)0xF << o);
+        const __m256d m = grid_packet_lanes(act >> o);
+        for (int q = 0; q < N; q++) {
+            const __m256d x = _mm256_load_pd(arr[q] + o);
+            l[q] = _mm256_min_pd(l[q], _mm256_blendv_pd(inf, x, m));
+            h[q] = _mm256_max_pd(h[q], _mm256_blendv_pd(ninf, x, m));
         }
-        lo[q] = l, hi[q] = h;
+        for (int q = 0; q < NM; q++) g[q] = _mm256_max_pd(g[q], _mm256_and_pd(_mm256_load_pd(mags[q] + o), m));
     }
-    for (int q = 0; q < 4; q++) {
-        double h = 0.0;
-        for (int i = 0; i < P; i++) h = dmax(h, act >> i & 1 ? mags[q][i] : 0.0);
-        mag[q] = h;
+    for (int q = 0; q < N; q++) lo[q] = hmin(l[q]), hi[q] = hmax(h[q]);
+    for (int q = 0; q < NM; q++) mag[q] = hmax(g[q]);
+#else
+    for (int q = 0; q < N; q++) lo[q] = INFINITY, hi[q] = -INFINITY;
+    for (int q = 0; q < NM; q++) mag[q] = 0.0;
+    for (uint64_t a = act; a; a &= a - 1) {
+        const int i = __builtin_ctzll(a);
+        for (int q = 0; q < N; q++) lo[q] = dmin(lo[q], arr[q][i]), hi[q] = dmax(hi[q], arr[q][i]);
+        for (int q = 0; q < NM; q++) mag[q] = dmax(mag[q], mags[q][i]);
     }
+#endif
     for (int j = 0; j < 2; j++) {
         pk->u0_lo[j] = lo[j], pk->u0_hi[j] = hi[j];
         pk->s_lo[j] = lo[2 + j], pk->s_hi[j] = hi[2 + j];
@@ -298,15 +327,6 @@ static inline int cell_span(const grid_frame *f, int a, double ulo, double uhi, 
     return i0 <= i1;
 }
 
-#if GRID_PACKET_AVX
-static inline __m256d lane_mask(uint64_t bits)
-{
-    const __m256i sel = _mm256_setr_epi64x(1, 2, 4, 8);
-    __m256i b = _mm256_and_si256(_mm256_set1_epi64x((long long)bits), sel);
-    return _mm256_castsi256_pd(_mm256_cmpeq_epi64(b, sel));
-}
-#endif
-
 /* Hull on a1, a2 of the active rays' segments in the slice between z_a and
  * z_b (relative to z0, z_a on the entry side): each ray from where it
  * enters the slice or starts; rays that start beyond the slice left out. */
@@ -330,7 +350,7 @@ static void ray_hull(const grid_packet *pk, double z_a, double z_b, double lo[2]
             z = _mm256_min_pd(za, zr);
             in = _mm256_cmp_pd(zr, zb, _CMP_GE_OQ);
         }
-        in = _mm256_and_pd(in, lane_mask(pk->active >> o));
+        in = _mm256_and_pd(in, grid_packet_lanes(pk->active >> o));
         for (int j = 0; j < 2; j++) {
             __m256d u0 = _mm256_load_pd(pk->u0[j] + o), s = _mm256_load_pd(pk->s[j] + o);
             __m256d ua = _mm256_fmadd_pd(s, z, u0), ub = _mm256_fmadd_pd(s, zb, u0);
