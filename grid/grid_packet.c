@@ -165,41 +165,52 @@ packet_walk(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counte
     if (mailbox) memset(mail, 0xFF, sizeof mail); /* ACCEL_MISS: no primitive */
     uint32_t slices = 0;
     DBG(dbg.walked++);
-    for (int k = pk->k_start; k >= 0 && k < nk; k += pk->kstep) {
+    /* The next slice's range is taken one slice ahead (over the rays
+     * active then, a superset: still conservative), so that its cell
+     * offsets can be fetched while this slice's primitives are tested. */
+    int lo[2], hi[2], nlo[2], nhi[2];
+    int have = grid_packet_span(f, pk, pk->k_start, lo, hi);
+    for (int k = pk->k_start; k >= 0 && k < nk;) {
         slices++;
         DBG(dbg.slices++);
         if (ACCEL_STEP_BOUND_BROKEN(c, slices, nk)) return;
-        /* Tighter bounds once a quarter of the rays have stopped. */
-        if (4 * __builtin_popcountll(pk->active) <= 3 * __builtin_popcountll(pk->bounded))
-            grid_packet_bound(pk);
-        int lo[2], hi[2];
-        if (grid_packet_span(f, pk, k, lo, hi)) {
-            for (int j = lo[1]; j <= hi[1]; j++) {
-                const uint32_t row = (uint32_t)k * f->stride[K] + (uint32_t)j * st2;
-                for (int i = lo[0]; i <= hi[0]; i++) {
-                    const uint32_t cell = row + (uint32_t)i * st1;
-                    uint32_t r = offsets[cell];
-                    const uint32_t end = offsets[cell + 1];
-                    DBG(dbg.cells++);
-                    if (c) {
-                        cn->visits++;
-                        cn->empty += r == end;
-                    }
-                    for (; r < end; r++) {
-                        const uint32_t prim = refs[r];
-                        DBG(dbg.refs++);
-                        if (mailbox) {
-                            uint32_t *slot = &mail[prim & (GRID_PACKET_MAIL - 1)];
-                            if (*slot == prim) {
-                                DBG(dbg.skips++);
-                                if (c) cn->skips++;
-                                continue;
-                            }
-                            *slot = prim;
+        const int kn = k + pk->kstep;
+        int next = 0;
+        if (kn >= 0 && kn < nk) {
+            /* Tighter bounds once a quarter of the rays have stopped. */
+            if (4 * __builtin_popcountll(pk->active) <= 3 * __builtin_popcountll(pk->bounded))
+                grid_packet_bound(pk);
+            next = grid_packet_span(f, pk, kn, nlo, nhi);
+            for (int j = nlo[1]; next && j <= nhi[1]; j++)
+                for (int i = nlo[0]; i <= nhi[0]; i++)
+                    __builtin_prefetch(&offsets[(uint32_t)kn * f->stride[K] + (uint32_t)j * st2 +
+                                                (uint32_t)i * st1]);
+        }
+        for (int j = lo[1]; have && j <= hi[1]; j++) {
+            const uint32_t row = (uint32_t)k * f->stride[K] + (uint32_t)j * st2;
+            for (int i = lo[0]; i <= hi[0]; i++) {
+                const uint32_t cell = row + (uint32_t)i * st1;
+                uint32_t r = offsets[cell];
+                const uint32_t end = offsets[cell + 1];
+                DBG(dbg.cells++);
+                if (c) {
+                    cn->visits++;
+                    cn->empty += r == end;
+                }
+                for (; r < end; r++) {
+                    const uint32_t prim = refs[r];
+                    DBG(dbg.refs++);
+                    if (mailbox) {
+                        uint32_t *slot = &mail[prim & (GRID_PACKET_MAIL - 1)];
+                        if (*slot == prim) {
+                            DBG(dbg.skips++);
+                            if (c) cn->skips++;
+                            continue;
                         }
-                        test_prim(s, pk, cn, c, prim, naive, spheres, any_hit);
-                        if (any_hit && !pk->active) return;
+                        *slot = prim;
                     }
+                    test_prim(s, pk, cn, c, prim, naive, spheres, any_hit);
+                    if (any_hit && !pk->active) return;
                 }
             }
         }
@@ -209,6 +220,9 @@ packet_walk(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counte
                 retire(pk, cn, __builtin_ctzll(m), c);
             if (!pk->active) return;
         }
+        k = kn;
+        have = next;
+        lo[0] = nlo[0], lo[1] = nlo[1], hi[0] = nhi[0], hi[1] = nhi[1];
     }
 }
 
@@ -257,6 +271,8 @@ packet_batch(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_
     packet_count cn;
     for (size_t base = 0; base < count; base += P) {
         const uint32_t n = (uint32_t)(count - base < P ? count - base : P);
+        for (size_t i = base + P; i < base + 2 * P && i < count; i += 2)
+            __builtin_prefetch(&rays[i]); /* the next packet: 2 rays per cache line */
         const int mode = grid_packet_setup(g, &pk, rays + base, n);
         DBG(dbg.packets++);
         DBG(dbg.single += mode == GRID_PACKET_SINGLE);

@@ -73,6 +73,10 @@ typedef struct {
     const double *dk; /* dx, dy or dz: the rays' K components */
     /* Bounds over `bounded`. */
     double u0_lo[2], u0_hi[2], s_lo[2], s_hi[2], umag_max[2];
+    /* Rounding margins of the slice ranges and of the envelope cull (their
+     * magnitudes bounded over the grid box: |z - z0| <= zext on K, |u| <=
+     * umax[j] on axis[1 + j]). */
+    double pad_span[2], pad_env[2], zext, umax[2], pad_cell[2];
     double d_lo[3], d_hi[3], m_lo[3], m_hi[3], emag_max, omag_max;
     int common;       /* all of them start at ref (M = 0) */
 } grid_packet;

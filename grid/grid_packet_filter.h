@@ -51,14 +51,13 @@ static inline int grid_packet_tri_outside(const grid_packet *pk, const float *tr
     const int K = pk->axis[0];
     for (int j = 0; j < 2; j++) {
         const int a = pk->axis[1 + j];
-        const double sm = fabs(pk->s_lo[j]) > fabs(pk->s_hi[j]) ? fabs(pk->s_lo[j]) : fabs(pk->s_hi[j]);
+        const double lo = pk->u0_lo[j] - pk->pad_env[j], hi = pk->u0_hi[j] + pk->pad_env[j];
         int below = 1, above = 1;
         for (int k = 0; k < 3 && (below || above); k++) {
             const double dz = (double)tri[3 * k + K] - pk->z0, u = tri[3 * k + a];
             const double p = pk->s_lo[j] * dz, q = pk->s_hi[j] * dz;
-            const double pad = GRID_PACKET_REL * (pk->umag_max[j] + sm * fabs(dz) + fabs(u));
-            below &= u < pk->u0_lo[j] + (p < q ? p : q) - pad;
-            above &= u > pk->u0_hi[j] + (p > q ? p : q) + pad;
+            below &= u < lo + (p < q ? p : q);
+            above &= u > hi + (p > q ? p : q);
         }
         if (below || above) return 1;
     }

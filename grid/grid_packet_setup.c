@@ -191,6 +191,12 @@ int grid_packet_setup(const grid_accel *g, grid_packet *pk, const accel_ray *ray
     for (int a = 0; a < 3; a++) pk->ref[a] = rf.o[a][first];
     const double z0 = f->planes[K][dir > 0 ? 0 : f->res[K]];
     pk->z0 = z0;
+    pk->zext = (double)f->planes[K][f->res[K]] - (double)f->planes[K][0];
+    for (int j = 0; j < 2; j++) {
+        const int a = pk->axis[1 + j];
+        pk->umax[j] = dmax(fabs((double)f->lo[a]), fabs((double)f->hi[a])) + f->pad[a];
+        pk->pad_cell[j] = f->pad[a];
+    }
     const double rx = pk->ref[0], ry = pk->ref[1], rz = pk->ref[2], pad_k = f->pad[K];
     const double lo[3] = {f->lo[0], f->lo[1], f->lo[2]}, hi[3] = {f->hi[0], f->hi[1], f->hi[2]};
     /* Every lane: dead ones hold zeros (and infinities and NaNs derived
@@ -306,6 +312,15 @@ void grid_packet_bound(grid_packet *pk)
     pk->emag_max = mag[2];
     pk->omag_max = mag[3];
     pk->common = pk->omag_max == 0.0;
+    /* Rounding of u0 (scale umag), of s (2 u) and of the products and sums
+     * of a slice range or an envelope: far below GRID_PACKET_REL of these
+     * bounds on their magnitudes. The slice ranges add 1/1024 of a cell. */
+    for (int j = 0; j < 2; j++) {
+        const double sz = dmax(fabs(pk->s_lo[j]), fabs(pk->s_hi[j])) * pk->zext;
+        const double u0 = dmax(fabs(pk->u0_lo[j]), fabs(pk->u0_hi[j]));
+        pk->pad_env[j] = GRID_PACKET_REL * (pk->umag_max[j] + sz + pk->umax[j]);
+        pk->pad_span[j] = pk->pad_cell[j] + GRID_PACKET_REL * (pk->umag_max[j] + 3.0 * sz + 2.0 * u0);
+    }
 }
 
 /* Cells [*lo, *hi] of axis a whose closed boxes cover [ulo, uhi]; 0 when
@@ -400,15 +415,9 @@ int grid_packet_span(const grid_frame *f, const grid_packet *pk, int k, int lo[2
     } else {
         ray_hull(pk, z_a, z_b, ulo, uhi);
     }
-    const double zm = dmax(fabs(z_a), fabs(z_b));
     for (int j = 0; j < 2; j++) {
-        const int a = pk->axis[1 + j];
-        /* Rounding of u0 (scale umag), of s (2 u) and of the products and
-         * sums: far below GRID_PACKET_REL of these magnitudes. */
-        const double sm = dmax(fabs(pk->s_lo[j]), fabs(pk->s_hi[j]));
-        const double pad = f->pad[a] + GRID_PACKET_REL * (pk->umag_max[j] + sm * zm +
-                                                          fabs(ulo[j]) + fabs(uhi[j]));
-        if (!cell_span(f, a, ulo[j] - pad, uhi[j] + pad, &lo[j], &hi[j])) return 0;
+        const double pad = pk->pad_span[j];
+        if (!cell_span(f, pk->axis[1 + j], ulo[j] - pad, uhi[j] + pad, &lo[j], &hi[j])) return 0;
     }
     return 1;
 }
