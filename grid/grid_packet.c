@@ -71,6 +71,24 @@
  */
 #include <string.h>
 
+#ifdef GP_DEBUG
+#include <stdio.h>
+#include <stdlib.h>
+#include "grid_packet.h"
+static struct { unsigned long long packets, walked, single, slices, cells, refs, skips, sliceout, outside, culled, evals, exact; } dbg;
+__attribute__((destructor)) static void dbg_print(void)
+{
+    double w = dbg.walked ? (double)dbg.walked : 1.0;
+    fprintf(stderr, "packets %llu walked %llu single %llu | per walked packet: slices %.1f cells %.1f refs %.1f skips %.1f sliceout %.1f outside %.1f culled %.1f evals %.1f exact %.1f\n",
+            dbg.packets, dbg.walked, dbg.single, dbg.slices / w, dbg.cells / w, dbg.refs / w, dbg.skips / w, dbg.sliceout / w, dbg.outside / w, dbg.culled / w, dbg.evals / w, dbg.exact / w);
+}
+#define DBG(x) (x)
+#define DBG_EVAL() (dbg.evals++)
+#else
+#define DBG(x) ((void)0)
+#define DBG_EVAL() ((void)0)
+#endif
+
 #include "grid_packet_filter.h"
 
 #define P GRID_PACKET_SIZE
@@ -78,20 +96,6 @@
 
 _Static_assert(P == 64, "the active-ray mask is one uint64_t");
 
-#ifdef GP_DEBUG
-#include <stdio.h>
-#include <stdlib.h>
-static struct { unsigned long long packets, walked, single, slices, cells, refs, skips, outside, culled, evals, exact; } dbg;
-__attribute__((destructor)) static void dbg_print(void)
-{
-    double w = dbg.walked ? (double)dbg.walked : 1.0;
-    fprintf(stderr, "packets %llu walked %llu single %llu | per walked packet: slices %.1f cells %.1f refs %.1f skips %.1f outside %.1f culled %.1f evals %.1f exact %.1f\n",
-            dbg.packets, dbg.walked, dbg.single, dbg.slices / w, dbg.cells / w, dbg.refs / w, dbg.skips / w, dbg.outside / w, dbg.culled / w, dbg.evals / w, dbg.exact / w);
-}
-#define DBG(x) (x)
-#else
-#define DBG(x) ((void)0)
-#endif
 
 /* Counted runs: packet totals so far, and each ray's share when it stops. */
 typedef struct {
@@ -116,8 +120,12 @@ test_prim(const accel_scene *s, grid_packet *pk, packet_count *cn, accel_counter
 {
     uint64_t cand;
     if (spheres && prim >= s->tri_count) {
-        cand = grid_packet_sphere_filter(pk, s->spheres + 4 * (size_t)(prim - s->tri_count),
-                                         &cn->evals);
+        const float *sph = s->spheres + 4 * (size_t)(prim - s->tri_count);
+        if (grid_packet_sphere_outside(pk, sph)) {
+            DBG(dbg.outside++);
+            return;
+        }
+        cand = grid_packet_sphere_filter(pk, sph, &cn->evals);
     } else if (naive) {
         cand = pk->active; /* no error analysis of Moller-Trumbore to filter by */
     } else {
@@ -169,7 +177,8 @@ packet_walk(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counte
      * active then, a superset: still conservative), so that its cell
      * offsets can be fetched while this slice's primitives are tested. */
     int lo[2], hi[2], nlo[2], nhi[2];
-    int have = grid_packet_span(f, pk, pk->k_start, lo, hi);
+    double hull[2][2], nhull[2][2];
+    int have = grid_packet_span(f, pk, pk->k_start, lo, hi, hull);
     for (int k = pk->k_start; k >= 0 && k < nk;) {
         slices++;
         DBG(dbg.slices++);
@@ -180,7 +189,7 @@ packet_walk(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counte
             /* Tighter bounds once a quarter of the rays have stopped. */
             if (4 * __builtin_popcountll(pk->active) <= 3 * __builtin_popcountll(pk->bounded))
                 grid_packet_bound(pk);
-            next = grid_packet_span(f, pk, kn, nlo, nhi);
+            next = grid_packet_span(f, pk, kn, nlo, nhi, nhull);
             for (int j = nlo[1]; next && j <= nhi[1]; j++)
                 for (int i = nlo[0]; i <= nhi[0]; i++)
                     __builtin_prefetch(&offsets[(uint32_t)kn * f->stride[K] + (uint32_t)j * st2 +
@@ -200,15 +209,19 @@ packet_walk(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counte
                 for (; r < end; r++) {
                     const uint32_t prim = refs[r];
                     DBG(dbg.refs++);
-                    if (mailbox) {
-                        uint32_t *slot = &mail[prim & (GRID_PACKET_MAIL - 1)];
-                        if (*slot == prim) {
-                            DBG(dbg.skips++);
-                            if (c) cn->skips++;
-                            continue;
-                        }
-                        *slot = prim;
+                    uint32_t *slot = &mail[prim & (GRID_PACKET_MAIL - 1)];
+                    if (mailbox && *slot == prim) {
+                        DBG(dbg.skips++);
+                        if (c) cn->skips++;
+                        continue;
                     }
+                    /* Out of every ray's reach in this slice: left out of
+                     * the mailbox, so that a later slice looks again. */
+                    if (!naive && grid_packet_slice_outside(pk, s, prim, spheres, hull)) {
+                        DBG(dbg.sliceout++);
+                        continue;
+                    }
+                    if (mailbox) *slot = prim;
                     test_prim(s, pk, cn, c, prim, naive, spheres, any_hit);
                     if (any_hit && !pk->active) return;
                 }
@@ -222,7 +235,7 @@ packet_walk(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counte
         }
         k = kn;
         have = next;
-        lo[0] = nlo[0], lo[1] = nlo[1], hi[0] = nhi[0], hi[1] = nhi[1];
+        memcpy(lo, nlo, sizeof lo), memcpy(hi, nhi, sizeof hi), memcpy(hull, nhull, sizeof hull);
     }
 }
 

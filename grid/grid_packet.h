@@ -105,8 +105,10 @@ int grid_packet_setup(const grid_accel *g, grid_packet *pk, const accel_ray *ray
 void grid_packet_bound(grid_packet *pk);
 
 /* Cells [lo[j], hi[j]] on axis[1 + j] that slice k can touch: every point
- * of every active ray within the slice lies in them (rounding included,
- * plus 1/1024 of a cell). Returns 0 when the range misses the grid. */
-int grid_packet_span(const grid_frame *f, const grid_packet *pk, int k, int lo[2], int hi[2]);
+ * of every active ray within the slice has its coordinate on axis[1 + j] in
+ * [hull[j][0], hull[j][1]] (rounding included, plus 1/1024 of a cell), and
+ * lies in those cells. Returns 0 when the range misses the grid. */
+int grid_packet_span(const grid_frame *f, const grid_packet *pk, int k, int lo[2], int hi[2],
+                     double hull[2][2]);
 
 #endif

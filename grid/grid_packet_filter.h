@@ -10,6 +10,10 @@
 
 #include "grid_packet.h"
 
+#ifndef DBG_EVAL
+#define DBG_EVAL() ((void)0)
+#endif
+
 /* A triangle seen from the packet: per edge AB, BC, CA the Pluecker
  * moments A'xB' (A' = A - ref) and the edge vectors B - A. */
 typedef struct {
@@ -64,6 +68,56 @@ static inline int grid_packet_tri_outside(const grid_packet *pk, const float *tr
     return 0;
 }
 
+/* The same for a sphere (centre c, radius r): its bounding box lies below L
+ * or above H over its extent on K (L concave, H convex: their extremes over
+ * an interval of z are at its ends). The exact test accepts lines passing
+ * up to sqrt(64 u (r^2 + |O - c|^2)) beyond r (see the sphere filter), so
+ * the box is widened by 2^-19 (r + |c - ref|_1 + |O - ref|_1). */
+static inline int grid_packet_sphere_outside(const grid_packet *pk, const float *sph)
+{
+    const int K = pk->axis[0];
+    const double cr = fabs(sph[0] - pk->ref[0]) + fabs(sph[1] - pk->ref[1]) + fabs(sph[2] - pk->ref[2]);
+    const double r = sph[3] + 0x1p-19 * (sph[3] + cr + pk->omag_max);
+    const double z_a = (double)sph[K] - r - pk->z0, z_b = (double)sph[K] + r - pk->z0;
+    for (int j = 0; j < 2; j++) {
+        const double u = sph[pk->axis[1 + j]];
+        const double pa = pk->s_lo[j] * z_a, qa = pk->s_hi[j] * z_a;
+        const double pb = pk->s_lo[j] * z_b, qb = pk->s_hi[j] * z_b;
+        const double lo = pk->u0_lo[j] - pk->pad_env[j], hi = pk->u0_hi[j] + pk->pad_env[j];
+        const double l = lo + (pa < qa ? pa : qa), l2 = lo + (pb < qb ? pb : qb);
+        const double h = hi + (pa > qa ? pa : qa), h2 = hi + (pb > qb ? pb : qb);
+        if (u + r < (l < l2 ? l : l2) || u - r > (h > h2 ? h : h2)) return 1;
+    }
+    return 0;
+}
+
+/* 1 when no active ray can meet the primitive within the current slice:
+ * its bounding box misses the slice's hull on a1 or a2 (spheres widened as
+ * in grid_packet_sphere_outside). */
+static inline int grid_packet_slice_outside(const grid_packet *pk, const accel_scene *s,
+                                            uint32_t prim, int spheres, const double hull[2][2])
+{
+    if (spheres && prim >= s->tri_count) {
+        const float *sph = s->spheres + 4 * (size_t)(prim - s->tri_count);
+        const double cr = fabs(sph[0] - pk->ref[0]) + fabs(sph[1] - pk->ref[1]) + fabs(sph[2] - pk->ref[2]);
+        const double r = sph[3] + 0x1p-19 * (sph[3] + cr + pk->omag_max);
+        for (int j = 0; j < 2; j++) {
+            const double u = sph[pk->axis[1 + j]];
+            if (u + r < hull[j][0] || u - r > hull[j][1]) return 1;
+        }
+        return 0;
+    }
+    const float *tri = s->tris + 9 * (size_t)prim;
+    for (int j = 0; j < 2; j++) {
+        const int a = pk->axis[1 + j];
+        const float u0 = tri[a], u1 = tri[3 + a], u2 = tri[6 + a];
+        const float lo = u0 < u1 ? (u0 < u2 ? u0 : u2) : (u1 < u2 ? u1 : u2);
+        const float hi = u0 > u1 ? (u0 > u2 ? u0 : u2) : (u1 > u2 ? u1 : u2);
+        if (hi < hull[j][0] || lo > hull[j][1]) return 1;
+    }
+    return 0;
+}
+
 /* 1 when no ray of `bounded` can hit the triangle: interval bounds of the
  * three edge products over the packet's boxes of D and M, one below -E and
  * one above E (E the largest per-ray margin, doubled for the interval
@@ -108,6 +162,7 @@ static inline uint64_t grid_packet_tri_filter(const grid_packet *pk, const grid_
         const int o = 4 * (__builtin_ctzll(a) >> 2);
         a &= ~((uint64_t)0xF << o);
         (*evals)++;
+        DBG_EVAL();
 #if GRID_PACKET_AVX
         const __m256d dx = _mm256_load_pd(pk->dx + o), dy = _mm256_load_pd(pk->dy + o),
                       dz = _mm256_load_pd(pk->dz + o);
@@ -164,6 +219,7 @@ static inline uint64_t grid_packet_sphere_filter(const grid_packet *pk, const fl
         const int o = 4 * (__builtin_ctzll(a) >> 2);
         a &= ~((uint64_t)0xF << o);
         (*evals)++;
+        DBG_EVAL();
 #if GRID_PACKET_AVX
         const __m256d dx = _mm256_load_pd(pk->dx + o), dy = _mm256_load_pd(pk->dy + o),
                       dz = _mm256_load_pd(pk->dz + o);

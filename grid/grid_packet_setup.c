@@ -398,7 +398,8 @@ static void ray_hull(const grid_packet *pk, double z_a, double z_b, double lo[2]
 /* Interval arithmetic over the packet when every ray starts at ref (the
  * hull of the lines is then exactly u0 + s * [z_k - z0, z_k+1 - z0]), else
  * the hull of the rays' own segments. */
-int grid_packet_span(const grid_frame *f, const grid_packet *pk, int k, int lo[2], int hi[2])
+int grid_packet_span(const grid_frame *f, const grid_packet *pk, int k, int lo[2], int hi[2],
+                     double hull[2][2])
 {
     const int K = pk->axis[0];
     const int in_k = pk->kstep > 0 ? k : k + 1;
@@ -416,8 +417,9 @@ int grid_packet_span(const grid_frame *f, const grid_packet *pk, int k, int lo[2
         ray_hull(pk, z_a, z_b, ulo, uhi);
     }
     for (int j = 0; j < 2; j++) {
-        const double pad = pk->pad_span[j];
-        if (!cell_span(f, pk->axis[1 + j], ulo[j] - pad, uhi[j] + pad, &lo[j], &hi[j])) return 0;
+        hull[j][0] = ulo[j] - pk->pad_span[j];
+        hull[j][1] = uhi[j] + pk->pad_span[j];
+        if (!cell_span(f, pk->axis[1 + j], hull[j][0], hull[j][1], &lo[j], &hi[j])) return 0;
     }
     return 1;
 }
