@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "grid_impl.h"
+#include "grid_packet.h"
 
 #define STR_(x) #x
 #define STR(x) STR_(x)
@@ -37,6 +37,7 @@ static void grid_destroy(void *a)
     if (!g) return;
     grid_cells_free(&g->cells);
     free(g->planes);
+    free(g->macro);
     accel_prim_store_free(&g->store);
     free(g);
 }
@@ -46,7 +47,8 @@ static size_t grid_memory(const void *a)
     const grid_accel *g = a;
     return sizeof *g + (size_t)(g->cells.cell_count + 1) * sizeof(uint32_t) +
            (size_t)g->cells.ref_count * sizeof(uint32_t) +
-           grid_plane_count(g->frame.res) * sizeof(float) + accel_prim_store_bytes(&g->store);
+           grid_plane_count(g->frame.res) * sizeof(float) + accel_prim_store_bytes(&g->store) +
+           (g->macro ? (size_t)g->macro_res[0] * g->macro_res[1] * g->macro_res[2] : 0);
 }
 
 static int grid_build(const accel_scene *scene, const accel_params *params, int threads,
@@ -87,6 +89,11 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
     rc = grid_cells_build(&g->frame, &g->store.prims, NULL, g->store.prims.prim_count, mode, threads,
                           max_bytes, &g->cells, err);
     if (rc) {
+        grid_destroy(g);
+        return rc;
+    }
+
+    if (g->traverse == GRID_TRAVERSE_PACKET && (rc = grid_macro_build(g, err))) {
         grid_destroy(g);
         return rc;
     }

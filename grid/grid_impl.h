@@ -20,7 +20,12 @@ typedef struct {
     int mailbox;        /* mailbox=1 */
     int has_spheres;
     int traverse;       /* GRID_TRAVERSE_SINGLE / GRID_TRAVERSE_PACKET */
+    uint8_t *macro;     /* traverse=packet: occupancy of GRID_MACRO^3 blocks of cells */
+    int macro_res[3];
 } grid_accel;
+
+/* Cells per macro cell and axis (traverse=packet skips empty layers). */
+#define GRID_MACRO 4
 
 /* Traversal modes (parameter traverse=). */
 enum { GRID_TRAVERSE_SINGLE = 0, GRID_TRAVERSE_PACKET = 1 };

@@ -75,12 +75,12 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include "grid_packet.h"
-static struct { unsigned long long packets, walked, single, slices, cells, refs, skips, sliceout, outside, culled, evals, exact; } dbg;
+static struct { unsigned long long packets, walked, single, slices, cells, refs, skips, skipped_layers, sliceout, outside, culled, evals, exact; } dbg;
 __attribute__((destructor)) static void dbg_print(void)
 {
     double w = dbg.walked ? (double)dbg.walked : 1.0;
-    fprintf(stderr, "packets %llu walked %llu single %llu | per walked packet: slices %.1f cells %.1f refs %.1f skips %.1f sliceout %.1f outside %.1f culled %.1f evals %.1f exact %.1f\n",
-            dbg.packets, dbg.walked, dbg.single, dbg.slices / w, dbg.cells / w, dbg.refs / w, dbg.skips / w, dbg.sliceout / w, dbg.outside / w, dbg.culled / w, dbg.evals / w, dbg.exact / w);
+    fprintf(stderr, "packets %llu walked %llu single %llu | per walked packet: slices %.1f skipped_layers %.1f cells %.1f refs %.1f skips %.1f sliceout %.1f outside %.1f culled %.1f evals %.1f exact %.1f\n",
+            dbg.packets, dbg.walked, dbg.single, dbg.slices / w, dbg.skipped_layers / w, dbg.cells / w, dbg.refs / w, dbg.skips / w, dbg.sliceout / w, dbg.outside / w, dbg.culled / w, dbg.evals / w, dbg.exact / w);
 }
 #define DBG(x) (x)
 #define DBG_EVAL() (dbg.evals++)
@@ -160,82 +160,103 @@ test_prim(const accel_scene *s, grid_packet *pk, packet_count *cn, accel_counter
     }
 }
 
+/* Tests the primitives of slice k's cells [lo, hi] against the packet.
+ * Returns 0 when an any-hit packet has no active ray left. */
+static inline __attribute__((always_inline)) int
+walk_slice(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counters *c, uint32_t *mail,
+           int k, const int lo[2], const int hi[2], const double hull[2][2], int naive, int spheres,
+           int mailbox, int any_hit)
+{
+    const grid_frame *f = &g->frame;
+    const accel_scene *s = &g->store.prims;
+    const uint32_t *offsets = g->cells.offsets, *refs = g->cells.refs;
+    const uint32_t st1 = f->stride[pk->axis[1]], st2 = f->stride[pk->axis[2]];
+    for (int j = lo[1]; j <= hi[1]; j++) {
+        const uint32_t row = (uint32_t)k * f->stride[pk->axis[0]] + (uint32_t)j * st2;
+        for (int i = lo[0]; i <= hi[0]; i++) {
+            const uint32_t cell = row + (uint32_t)i * st1;
+            uint32_t r = offsets[cell];
+            const uint32_t end = offsets[cell + 1];
+            DBG(dbg.cells++);
+            if (c) {
+                cn->visits++;
+                cn->empty += r == end;
+            }
+            for (; r < end; r++) {
+                const uint32_t prim = refs[r];
+                DBG(dbg.refs++);
+                uint32_t *slot = &mail[prim & (GRID_PACKET_MAIL - 1)];
+                if (mailbox && *slot == prim) {
+                    DBG(dbg.skips++);
+                    if (c) cn->skips++;
+                    continue;
+                }
+                /* Out of every ray's reach in this slice: left out of the
+                 * mailbox, so that a later slice looks again. */
+                if (!naive && grid_packet_slice_outside(pk, s, prim, spheres, hull)) {
+                    DBG(dbg.sliceout++);
+                    continue;
+                }
+                if (mailbox) *slot = prim;
+                test_prim(s, pk, cn, c, prim, naive, spheres, any_hit);
+                if (any_hit && !pk->active) return 0;
+            }
+        }
+    }
+    return 1;
+}
+
+/* Retires the rays that need nothing past slice k; 0 when none is left. */
+static inline int leave_slice(const grid_frame *f, grid_packet *pk, packet_count *cn,
+                              const accel_counters *c, int k)
+{
+    const double w_out = pk->kstep * (double)f->planes[pk->axis[0]][pk->kstep > 0 ? k + 1 : k];
+    if (w_out >= pk->w_next)
+        for (uint64_t m = grid_packet_leaving(pk, w_out); m; m &= m - 1)
+            retire(pk, cn, __builtin_ctzll(m), c);
+    return pk->active != 0;
+}
+
 static inline __attribute__((always_inline)) void
 packet_walk(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counters *c, int naive,
             int spheres, int mailbox, int any_hit)
 {
     const grid_frame *f = &g->frame;
-    const accel_scene *s = &g->store.prims;
-    const uint32_t *offsets = g->cells.offsets, *refs = g->cells.refs;
-    const int K = pk->axis[0], nk = f->res[K];
-    const uint32_t st1 = f->stride[pk->axis[1]], st2 = f->stride[pk->axis[2]];
+    const int K = pk->axis[0], nk = f->res[K], M = GRID_MACRO;
     uint32_t mail[GRID_PACKET_MAIL];
     if (mailbox) memset(mail, 0xFF, sizeof mail); /* ACCEL_MISS: no primitive */
     uint32_t slices = 0;
     DBG(dbg.walked++);
-    /* The next slice's range is taken one slice ahead (over the rays
-     * active then, a superset: still conservative), so that its cell
-     * offsets can be fetched while this slice's primitives are tested. */
-    int lo[2], hi[2], nlo[2], nhi[2];
-    double hull[2][2], nhull[2][2];
-    int have = grid_packet_span(f, pk, pk->k_start, lo, hi, hull);
     for (int k = pk->k_start; k >= 0 && k < nk;) {
-        slices++;
-        DBG(dbg.slices++);
-        if (ACCEL_STEP_BOUND_BROKEN(c, slices, nk)) return;
-        const int kn = k + pk->kstep;
-        int next = 0;
-        if (kn >= 0 && kn < nk) {
-            /* Tighter bounds once a quarter of the rays have stopped. */
-            if (4 * __builtin_popcountll(pk->active) <= 3 * __builtin_popcountll(pk->bounded))
-                grid_packet_bound(pk);
-            next = grid_packet_span(f, pk, kn, nlo, nhi, nhull);
-            for (int j = nlo[1]; next && j <= nhi[1]; j++)
-                for (int i = nlo[0]; i <= nhi[0]; i++)
-                    __builtin_prefetch(&offsets[(uint32_t)kn * f->stride[K] + (uint32_t)j * st2 +
-                                                (uint32_t)i * st1]);
+        /* The slices left in this layer of macro cells, in walk order. */
+        const int layer = k / M;
+        int k_end = pk->kstep > 0 ? (layer + 1) * M - 1 : layer * M;
+        k_end = k_end < nk ? k_end : nk - 1;
+        int lo[2], hi[2];
+        double hull[2][2];
+        /* Tighter bounds once a quarter of the rays have stopped. */
+        if (4 * __builtin_popcountll(pk->active) <= 3 * __builtin_popcountll(pk->bounded))
+            grid_packet_bound(pk);
+        if (k_end != k && (!grid_packet_span(f, pk, k, k_end, lo, hi, hull) ||
+                           !grid_macro_any(g, K, pk->axis[1], pk->axis[2], layer, lo, hi))) {
+            DBG(dbg.skipped_layers++);
+            slices += (uint32_t)(pk->kstep * (k_end - k) + 1);
+            if (ACCEL_STEP_BOUND_BROKEN(c, slices, nk)) return;
+            if (!leave_slice(f, pk, cn, c, k_end)) return;
+            k = k_end + pk->kstep;
+            continue;
         }
-        for (int j = lo[1]; have && j <= hi[1]; j++) {
-            const uint32_t row = (uint32_t)k * f->stride[K] + (uint32_t)j * st2;
-            for (int i = lo[0]; i <= hi[0]; i++) {
-                const uint32_t cell = row + (uint32_t)i * st1;
-                uint32_t r = offsets[cell];
-                const uint32_t end = offsets[cell + 1];
-                DBG(dbg.cells++);
-                if (c) {
-                    cn->visits++;
-                    cn->empty += r == end;
-                }
-                for (; r < end; r++) {
-                    const uint32_t prim = refs[r];
-                    DBG(dbg.refs++);
-                    uint32_t *slot = &mail[prim & (GRID_PACKET_MAIL - 1)];
-                    if (mailbox && *slot == prim) {
-                        DBG(dbg.skips++);
-                        if (c) cn->skips++;
-                        continue;
-                    }
-                    /* Out of every ray's reach in this slice: left out of
-                     * the mailbox, so that a later slice looks again. */
-                    if (!naive && grid_packet_slice_outside(pk, s, prim, spheres, hull)) {
-                        DBG(dbg.sliceout++);
-                        continue;
-                    }
-                    if (mailbox) *slot = prim;
-                    test_prim(s, pk, cn, c, prim, naive, spheres, any_hit);
-                    if (any_hit && !pk->active) return;
-                }
-            }
+        for (;; k += pk->kstep) {
+            slices++;
+            DBG(dbg.slices++);
+            if (ACCEL_STEP_BOUND_BROKEN(c, slices, nk)) return;
+            if (grid_packet_span(f, pk, k, k, lo, hi, hull) &&
+                !walk_slice(g, pk, cn, c, mail, k, lo, hi, hull, naive, spheres, mailbox, any_hit))
+                return;
+            if (!leave_slice(f, pk, cn, c, k)) return;
+            if (k == k_end) break;
         }
-        const double w_out = pk->kstep * (double)f->planes[K][pk->kstep > 0 ? k + 1 : k];
-        if (w_out >= pk->w_next) {
-            for (uint64_t m = grid_packet_leaving(pk, w_out); m; m &= m - 1)
-                retire(pk, cn, __builtin_ctzll(m), c);
-            if (!pk->active) return;
-        }
-        k = kn;
-        have = next;
-        memcpy(lo, nlo, sizeof lo), memcpy(hi, nhi, sizeof hi), memcpy(hull, nhull, sizeof hull);
+        k += pk->kstep;
     }
 }
 

@@ -8,6 +8,7 @@
  * AVX2 path runs box3_slab's float operations lane by lane on 8 rays, so
  * it accepts the same rays. Everything else is computed in double.
  */
+#include <stdlib.h>
 #include <string.h>
 
 #include "grid_packet.h"
@@ -398,13 +399,12 @@ static void ray_hull(const grid_packet *pk, double z_a, double z_b, double lo[2]
 /* Interval arithmetic over the packet when every ray starts at ref (the
  * hull of the lines is then exactly u0 + s * [z_k - z0, z_k+1 - z0]), else
  * the hull of the rays' own segments. */
-int grid_packet_span(const grid_frame *f, const grid_packet *pk, int k, int lo[2], int hi[2],
-                     double hull[2][2])
+int grid_packet_span(const grid_frame *f, const grid_packet *pk, int k, int k_end, int lo[2],
+                     int hi[2], double hull[2][2])
 {
     const int K = pk->axis[0];
-    const int in_k = pk->kstep > 0 ? k : k + 1;
-    const double z_a = (double)f->planes[K][in_k] - pk->z0;
-    const double z_b = (double)f->planes[K][2 * k + 1 - in_k] - pk->z0;
+    const double z_a = (double)f->planes[K][pk->kstep > 0 ? k : k + 1] - pk->z0;
+    const double z_b = (double)f->planes[K][pk->kstep > 0 ? k_end + 1 : k_end] - pk->z0;
     double ulo[2], uhi[2];
     if (pk->common) {
         for (int j = 0; j < 2; j++) {
@@ -422,4 +422,37 @@ int grid_packet_span(const grid_frame *f, const grid_packet *pk, int k, int lo[2
         if (!cell_span(f, pk->axis[1 + j], hull[j][0], hull[j][1], &lo[j], &hi[j])) return 0;
     }
     return 1;
+}
+
+int grid_macro_build(grid_accel *g, accel_error *err)
+{
+    const grid_frame *f = &g->frame;
+    const int M = GRID_MACRO;
+    uint64_t n = 1;
+    for (int a = 0; a < 3; a++) {
+        g->macro_res[a] = (f->res[a] + M - 1) / M;
+        n *= (uint64_t)g->macro_res[a];
+    }
+    g->macro = calloc(n, 1);
+    if (!g->macro) return accel_fail(err, ACCEL_ERR_NOMEM, "grid: out of memory for macro cells");
+    for (int z = 0; z < f->res[2]; z++)
+        for (int y = 0; y < f->res[1]; y++)
+            for (int x = 0; x < f->res[0]; x++) {
+                const uint64_t c = (uint64_t)x + (uint64_t)f->stride[1] * y + (uint64_t)f->stride[2] * z;
+                if (g->cells.offsets[c] != g->cells.offsets[c + 1])
+                    g->macro[x / M + (size_t)g->macro_res[0] * (y / M + (size_t)g->macro_res[1] * (z / M))] = 1;
+            }
+    return ACCEL_OK;
+}
+
+int grid_macro_any(const grid_accel *g, int K, int a1, int a2, int layer, const int lo[2],
+                   const int hi[2])
+{
+    const int M = GRID_MACRO;
+    size_t st[3];
+    st[0] = 1, st[1] = (size_t)g->macro_res[0], st[2] = st[1] * (size_t)g->macro_res[1];
+    for (int j = lo[1] / M; j <= hi[1] / M; j++)
+        for (int i = lo[0] / M; i <= hi[0] / M; i++)
+            if (g->macro[(size_t)layer * st[K] + (size_t)j * st[a2] + (size_t)i * st[a1]]) return 1;
+    return 0;
 }
