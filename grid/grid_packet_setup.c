@@ -164,6 +164,40 @@ static uint64_t live_rays(const grid_accel *g, const accel_ray *rays, uint32_t n
     return live;
 }
 
+/* Largest 1-norm of (O - p) x D / |D|_1 over the live rays: how far p is
+ * from the packet's lines. */
+static double line_spread(const grid_packet *pk, const ray_floats *rf, const double p[3])
+{
+    double m = 0.0;
+    for (uint64_t b = pk->live; b; b &= b - 1) {
+        const int i = __builtin_ctzll(b);
+        const double q[3] = {rf->o[0][i] - p[0], rf->o[1][i] - p[1], rf->o[2][i] - p[2]};
+        const double d[3] = {rf->d[0][i], rf->d[1][i], rf->d[2][i]};
+        const double x = fabs(q[1] * d[2] - q[2] * d[1]) + fabs(q[2] * d[0] - q[0] * d[2]) +
+                         fabs(q[0] * d[1] - q[1] * d[0]);
+        m = dmax(m, x / (fabs(d[0]) + fabs(d[1]) + fabs(d[2])));
+    }
+    return m;
+}
+
+/* The packet's reference point: the first live origin, or, when the rays
+ * end (finite t_far) nearer to each other's lines than they start (shadow
+ * rays converging on a light), the first live ray's end. Moments and the
+ * coordinates u0 are taken there, so that a packet of rays through one
+ * point (a camera, a light) has nearly equal u0 and moments near zero: its
+ * interval bounds are then nearly the hull of its rays. */
+static void choose_ref(grid_packet *pk, const ray_floats *rf, int first)
+{
+    for (int a = 0; a < 3; a++) pk->ref[a] = rf->o[a][first];
+    const double tf = rf->tf[first];
+    if (!isfinite(tf)) return;
+    const double spread = line_spread(pk, rf, pk->ref);
+    if (spread == 0.0) return;
+    double end[3];
+    for (int a = 0; a < 3; a++) end[a] = rf->o[a][first] + tf * rf->d[a][first];
+    if (line_spread(pk, rf, end) < 0.5 * spread) memcpy(pk->ref, end, sizeof end);
+}
+
 int grid_packet_setup(const grid_accel *g, grid_packet *pk, const accel_ray *rays, uint32_t n)
 {
     const grid_frame *f = &g->frame;
@@ -189,10 +223,10 @@ int grid_packet_setup(const grid_accel *g, grid_packet *pk, const accel_ray *ray
     pk->axis[0] = K, pk->axis[1] = a1, pk->axis[2] = a2;
     pk->kstep = dir;
     const int first = __builtin_ctzll(pk->live);
-    for (int a = 0; a < 3; a++) pk->ref[a] = rf.o[a][first];
-    const double z0 = f->planes[K][dir > 0 ? 0 : f->res[K]];
+    choose_ref(pk, &rf, first);
+    const double z0 = pk->ref[K];
     pk->z0 = z0;
-    pk->zext = (double)f->planes[K][f->res[K]] - (double)f->planes[K][0];
+    pk->zext = dmax(fabs((double)f->planes[K][0] - z0), fabs((double)f->planes[K][f->res[K]] - z0));
     for (int j = 0; j < 2; j++) {
         const int a = pk->axis[1 + j];
         pk->umax[j] = dmax(fabs((double)f->lo[a]), fabs((double)f->hi[a])) + f->pad[a];
