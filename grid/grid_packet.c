@@ -71,23 +71,6 @@
  */
 #include <string.h>
 
-#ifdef GP_DEBUG
-#include <stdio.h>
-#include <stdlib.h>
-#include "grid_packet.h"
-static struct { unsigned long long packets, walked, single, slices, cells, refs, skips, skipped_layers, sliceout, outside, culled, evals, exact; } dbg;
-__attribute__((destructor)) static void dbg_print(void)
-{
-    double w = dbg.walked ? (double)dbg.walked : 1.0;
-    fprintf(stderr, "packets %llu walked %llu single %llu | per walked packet: slices %.1f skipped_layers %.1f cells %.1f refs %.1f skips %.1f sliceout %.1f outside %.1f culled %.1f evals %.1f exact %.1f\n",
-            dbg.packets, dbg.walked, dbg.single, dbg.slices / w, dbg.skipped_layers / w, dbg.cells / w, dbg.refs / w, dbg.skips / w, dbg.sliceout / w, dbg.outside / w, dbg.culled / w, dbg.evals / w, dbg.exact / w);
-}
-#define DBG(x) (x)
-#define DBG_EVAL() (dbg.evals++)
-#else
-#define DBG(x) ((void)0)
-#define DBG_EVAL() ((void)0)
-#endif
 
 #include "grid_packet_filter.h"
 
@@ -121,31 +104,21 @@ test_prim(const accel_scene *s, grid_packet *pk, packet_count *cn, accel_counter
     uint64_t cand;
     if (spheres && prim >= s->tri_count) {
         const float *sph = s->spheres + 4 * (size_t)(prim - s->tri_count);
-        if (grid_packet_sphere_outside(pk, sph)) {
-            DBG(dbg.outside++);
-            return;
-        }
+        if (grid_packet_sphere_outside(pk, sph)) return;
         cand = grid_packet_sphere_filter(pk, sph, &cn->evals);
     } else if (naive) {
         cand = pk->active; /* no error analysis of Moller-Trumbore to filter by */
     } else {
         const float *tri = s->tris + 9 * (size_t)prim;
-        if (grid_packet_tri_outside(pk, tri)) {
-            DBG(dbg.outside++);
-            return;
-        }
+        if (grid_packet_tri_outside(pk, tri)) return;
         grid_packet_tri t;
         grid_packet_tri_prepare(pk, tri, &t);
-        if (grid_packet_tri_culled(pk, &t)) {
-            DBG(dbg.culled++);
-            return;
-        }
+        if (grid_packet_tri_culled(pk, &t)) return;
         cand = grid_packet_tri_filter(pk, &t, &cn->evals);
     }
     for (; cand; cand &= cand - 1) {
         const int l = __builtin_ctzll(cand);
         if (c) cn->r_tests[l]++;
-        DBG(dbg.exact++);
         if (!(pk->prepped >> l & 1)) {
             accel_prep_ray(&pk->rays[l], &pk->prep[l]); /* live: accepted */
             pk->prepped |= (uint64_t)1 << l;
@@ -177,24 +150,20 @@ walk_slice(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counter
             const uint32_t cell = row + (uint32_t)i * st1;
             uint32_t r = offsets[cell];
             const uint32_t end = offsets[cell + 1];
-            DBG(dbg.cells++);
             if (c) {
                 cn->visits++;
                 cn->empty += r == end;
             }
             for (; r < end; r++) {
                 const uint32_t prim = refs[r];
-                DBG(dbg.refs++);
                 uint32_t *slot = &mail[prim & (GRID_PACKET_MAIL - 1)];
                 if (mailbox && *slot == prim) {
-                    DBG(dbg.skips++);
                     if (c) cn->skips++;
                     continue;
                 }
                 /* Out of every ray's reach in this slice: left out of the
                  * mailbox, so that a later slice looks again. */
                 if (!naive && grid_packet_slice_outside(pk, s, prim, spheres, hull)) {
-                    DBG(dbg.sliceout++);
                     continue;
                 }
                 if (mailbox) *slot = prim;
@@ -226,7 +195,6 @@ packet_walk(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counte
     uint32_t mail[GRID_PACKET_MAIL];
     if (mailbox) memset(mail, 0xFF, sizeof mail); /* ACCEL_MISS: no primitive */
     uint32_t slices = 0;
-    DBG(dbg.walked++);
     for (int k = pk->k_start; k >= 0 && k < nk;) {
         /* The slices left in this layer of macro cells, in walk order. */
         const int layer = k / M;
@@ -239,7 +207,6 @@ packet_walk(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counte
             grid_packet_bound(pk);
         if (k_end != k && (!grid_packet_span(f, pk, k, k_end, lo, hi, hull) ||
                            !grid_macro_any(g, K, pk->axis[1], pk->axis[2], layer, lo, hi))) {
-            DBG(dbg.skipped_layers++);
             slices += (uint32_t)(pk->kstep * (k_end - k) + 1);
             if (ACCEL_STEP_BOUND_BROKEN(c, slices, nk)) return;
             if (!leave_slice(f, pk, cn, c, k_end)) return;
@@ -248,7 +215,6 @@ packet_walk(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counte
         }
         for (;; k += pk->kstep) {
             slices++;
-            DBG(dbg.slices++);
             if (ACCEL_STEP_BOUND_BROKEN(c, slices, nk)) return;
             if (grid_packet_span(f, pk, k, k, lo, hi, hull) &&
                 !walk_slice(g, pk, cn, c, mail, k, lo, hi, hull, naive, spheres, mailbox, any_hit))
@@ -308,8 +274,6 @@ packet_batch(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_
         for (size_t i = base + P; i < base + 2 * P && i < count; i += 2)
             __builtin_prefetch(&rays[i]); /* the next packet: 2 rays per cache line */
         const int mode = grid_packet_setup(g, &pk, rays + base, n);
-        DBG(dbg.packets++);
-        DBG(dbg.single += mode == GRID_PACKET_SINGLE);
         if (mode == GRID_PACKET_SINGLE) {
             trace_single(g, rays + base, hits ? hits + base : NULL, occ ? occ + base : NULL, n, c,
                          base);

@@ -10,10 +10,6 @@
 
 #include "grid_packet.h"
 
-#ifndef DBG_EVAL
-#define DBG_EVAL() ((void)0)
-#endif
-
 /* A triangle seen from the packet: per edge AB, BC, CA the Pluecker
  * moments A'xB' (A' = A - ref) and the edge vectors B - A. */
 typedef struct {
@@ -162,7 +158,6 @@ static inline uint64_t grid_packet_tri_filter(const grid_packet *pk, const grid_
         const int o = 4 * (__builtin_ctzll(a) >> 2);
         a &= ~((uint64_t)0xF << o);
         (*evals)++;
-        DBG_EVAL();
 #if GRID_PACKET_AVX
         const __m256d dx = _mm256_load_pd(pk->dx + o), dy = _mm256_load_pd(pk->dy + o),
                       dz = _mm256_load_pd(pk->dz + o);
@@ -219,7 +214,6 @@ static inline uint64_t grid_packet_sphere_filter(const grid_packet *pk, const fl
         const int o = 4 * (__builtin_ctzll(a) >> 2);
         a &= ~((uint64_t)0xF << o);
         (*evals)++;
-        DBG_EVAL();
 #if GRID_PACKET_AVX
         const __m256d dx = _mm256_load_pd(pk->dx + o), dy = _mm256_load_pd(pk->dy + o),
                       dz = _mm256_load_pd(pk->dz + o);
