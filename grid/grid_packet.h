@@ -31,6 +31,13 @@
  * and exit of a ray: relative error below 2^-22). */
 #define GRID_PACKET_REL_F 0x1p-20
 
+/* Widest range of cells (per axis) a packet may sweep in a slice: wider
+ * packets are traced ray by ray (a performance choice, not a correctness
+ * one; measured in grid/README.md). */
+#ifndef GRID_PACKET_MAX_CELLS
+#define GRID_PACKET_MAX_CELLS 16.0
+#endif
+
 typedef struct {
     /* Filter data; dead lanes hold harmless values and are masked by
      * `active` wherever they are read. */

@@ -282,6 +282,14 @@ int grid_packet_setup(const grid_accel *g, grid_packet *pk, const accel_ray *ray
     pk->k_start = slice_of(f, K, z0 + z_first, dir);
     pk->active = pk->live;
     grid_packet_bound(pk);
+    /* An incoherent packet (diffuse bounces that happen to share a sign)
+     * would sweep wide ranges of cells: the single-ray kernel does better.
+     * The widest range it could take within the grid, in cells: */
+    for (int j = 0; j < 2; j++) {
+        const int a = pk->axis[1 + j];
+        const double w = pk->u0_hi[j] - pk->u0_lo[j] + (pk->s_hi[j] - pk->s_lo[j]) * pk->zext;
+        if (w * f->inv_cell[a] > GRID_PACKET_MAX_CELLS) return GRID_PACKET_SINGLE;
+    }
     return GRID_PACKET_WALK;
 }
 
