@@ -6,71 +6,82 @@
  * A packet is up to 64 consecutive rays of the batch (the primary ray sets
  * emit 8x8 screen tiles in that order). When every live ray's direction has
  * the same sign on the packet's dominant axis K (the largest component of
- * the mean direction) the packet walks the grid slice by slice along K:
- *   1. the slice's cell range on the other two axes (a1, a2) is bounded by
- *      interval arithmetic in double: every ray is written as
- *      u(z) = u0 + s (z - z0), u0 its coordinate on the packet's start
- *      plane z0, s = d_u / d_K; over the packet u0 and s lie in intervals,
- *      so over the slice [z_k, z_k+1] u lies in u0 + s * [z_k - z0,
- *      z_k+1 - z0], widened by its rounding bound and 1/1024 of a cell;
- *   2. every primitive of those cells is tested once per packet (a
- *      per-packet mailbox) against the rays still active: a whole-packet
- *      interval cull, then a 4-ray AVX2 filter in double, then the exact
- *      test accel_prim_hit (core/prim.h) on the rays the filter keeps;
- *   3. after the slice a ray stops once its nearest hit lies at or before
- *      the distance where it leaves the slice, or it has left the grid box
- *      or passed t_far. The packet ends when no ray is active or the slices
- *      run out.
- * Packets that do not qualify (mixed signs on K, a zero K component) are
- * traced by the single-ray kernel (grid_trace.c).
+ * the mean direction) the packet walks the grid slice by slice along K
+ * (grid_packet_setup.c prepares it; else the single-ray kernel of
+ * grid_trace.c traces it, as it does packets too incoherent to pay):
+ *   1. Range. Every ray is the line u(z) = u0 + s (z - z0) on the other two
+ *      axes a1, a2 (s = d_u / d_K, z0 the K coordinate of the packet's
+ *      reference point: a common origin or the point shadow rays converge
+ *      on). The cells a slice can touch are bounded in double, by interval
+ *      arithmetic over the packet (u0 and s in intervals) when the rays
+ *      share their origin, else by the hull of each ray's own segment in the
+ *      slice; widened by a bound on the rounding and 1/1024 of a cell.
+ *   2. Empty space. A layer of GRID_MACRO slices whose range covers only
+ *      empty macro cells (blocks of GRID_MACRO^3 cells) is skipped whole.
+ *   3. Tests. Each primitive of the range's cells, unless the per-packet
+ *      mailbox holds it: dropped for this slice when its box misses the
+ *      slice's range (then not entered in the mailbox: a later slice looks
+ *      again); otherwise entered, and dropped for the packet when it lies
+ *      beyond the envelope of the packet's lines or an interval bound of
+ *      the edge products puts it outside every line; else the 4-ray AVX2
+ *      filter in double keeps the rays that may hit it, and each of those
+ *      gets the exact test accel_prim_hit (core/prim.h), keeping the
+ *      nearest hit (any hit: the ray stops at its first).
+ *   4. Stop. After a slice a ray stops once its nearest hit lies at or
+ *      before the plane where it leaves the slice, or its box exit or t_far
+ *      does (all three widened by their rounding); the packet ends when no
+ *      ray is active or the slices run out.
  *
- * Why the result is the single-ray grid's (and the oracle's). Let a ray's
- * exact test accept primitive q at t (the nearest such t). The point p of
- * the real ray at t lies on q and in the grid box, in some slice k and some
- * cell c of it; q belongs to c (membership is conservative, grid_core.h).
- * The ray is active during slice k: it stops earlier only with a hit at or
- * before its exit from an earlier slice (a hit no farther than p), or past
- * its box exit or t_far (both beyond t). p's coordinates on a1, a2 lie in
- * the slice's range (step 1 bounds every point of every ray in the slice,
- * rounding included), so c is visited while the ray is active, and q is
- * tested against the ray then or was tested earlier (the mailbox skips a
- * primitive only once it has been tested against every ray active at that
- * time, and rays never become active again). Filters only ever drop a
- * (ray, primitive) pair the exact test would reject (below). Every test is
- * the exact test keeping the nearest, so the ray ends with the nearest hit;
- * ties between primitives at equal t may resolve to another primitive, as
- * in any change of test order. Any hit: the same argument for the first hit.
+ * Why the result is the single-ray grid's and the reference's. Let the
+ * exact test accept primitive q for a ray at t, the nearest such t. The
+ * point p of the real ray at t lies on q (up to the exact test's own
+ * rounding, far below the 1/1024-cell membership padding) inside the grid
+ * box, in some slice k and cell c; q belongs to c (conservative membership,
+ * grid_core.h), so c's macro cell is not empty. The ray is still active in
+ * slice k: it stops earlier only with a hit no farther than p, or beyond its
+ * box exit or t_far, which lie beyond p. p lies within slice k's range
+ * (step 1 bounds every point of every active ray in the slice), so slice k
+ * is not skipped, c is visited, and q's box, which holds p, meets the
+ * range. So q is tested against the ray in slice k, unless the mailbox
+ * holds it: it then was tested, or shown out of reach of every line, for
+ * every ray active at that time, the ray among them (rays never become
+ * active again). The filters and culls only drop pairs the exact test would
+ * reject (below). Hence the ray ends with the nearest hit; between
+ * primitives hit at equal t another one may win, as with any other test
+ * order (the suites accept the same t).
  *
- * The filters (triangles). With R the packet's first live origin, O' = O-R,
+ * The filters (triangles). With R the packet's reference point, O' = O-R,
  * M = O' x D, A' = A-R, etc., the triple product D.((A-O)x(B-O)) of edge AB
- * is S_AB = D.(A'xB') + M.(B-A) (Pluecker form; for primary rays M = 0).
- * The exact test's edge functions U, V, W equal these three triple products
- * divided by the ray's K component (a factor common to the three), and it
- * accepts only when they have no strictly mixed signs: in its float path
- * because its error filter (ACCEL_EDGE_FILTER) proves the signs, in its
- * double path with U, V, W within 20 u |D|_1 |A-O|_1 |B-O|_1 of the real
- * values (u = 2^-53; |sx|, |sy| <= 1). Our S computed in double is within
- * about 30 u |D|_1 (Rt + |O'|_1)^2 of the real value (Rt: the largest
- * 1-norm of A', B', C'). Both are below E = 2^-40 |D|_1 (Rt + |O'|_1)^2
- * (2^-40 = 8192 u), so a lane with some S < -E and some S > E is a pair
- * the exact test rejects: the filter is conservative. The whole-packet cull
- * bounds S over the packet's boxes of D and M (interval products, whose
- * rounding is below the same margin) and drops the primitive when some
- * edge's bound is below -E_max and another's above E_max. Spheres: the
- * exact test accepts only when the real squared distance of the centre to
- * the line is at most r^2 + 64 u (r^2 + |O-C|^2); the filter drops a lane
- * when |(C-O) x D|^2 > |D|^2 (r^2 + 2^-38 (r + |C'|_1 + |O'|_1)^2). With
- * tri=naive (no error analysis to rely on) every active ray gets the test.
+ * is S_AB = D.(A'xB') + M.(B-A) (Pluecker form; M = 0 when every ray
+ * starts at R). The exact test's edge functions U, V, W are these three
+ * triple products divided by the ray's dominant component (a factor common
+ * to the three), and it accepts only when they have no strictly mixed
+ * signs: in its float path because its error filter (ACCEL_EDGE_FILTER)
+ * proves the signs, in its double path with U, V, W within
+ * 20 u |D|_1 |A-O|_1 |B-O|_1 of the real values (u = 2^-53; the shear
+ * factors are at most 1). Our S in double is within about
+ * 30 u |D|_1 (Rt + |O'|_1)^2 of the real value (Rt: the largest 1-norm of
+ * A', B', C'). Both are below E = 2^-40 |D|_1 (Rt + |O'|_1)^2 (2^-40 =
+ * 8192 u), so a lane with some S < -E and another S > E is a pair the
+ * exact test rejects: the filter is conservative. The edge cull bounds S
+ * over the packet's boxes of D and M (interval products, rounding below the
+ * same margin) against the largest E. The envelope and slice culls compare
+ * coordinates, with margins over the rounding of u0, s and their products.
+ * Spheres: the exact test accepts only when the real squared distance of
+ * the centre to the line is at most r^2 + 64 u (r^2 + |O-C|^2); the filter
+ * drops a lane when |(C-O) x D|^2 > |D|^2 (r^2 + 2^-38 (r + |C'|_1 +
+ * |O'|_1)^2), and the culls widen the sphere's box accordingly. With
+ * tri=naive (no error bound to rely on) triangles get no cull or filter.
  *
  * Counters (counted runs): steps / empty_steps = cells the packet visits,
  * counted once for every ray active at the visit (per ray, as the bvh's
  * packet kernel counts node visits; ray_steps likewise); prim_tests = exact
  * tests; mailbox_skips = references skipped, per active ray; box_tests = 1
  * per ray (the grid box); packet_box_tests = 4-ray filter evaluations.
- * The step bound is res[K] slices per packet (ACCEL_STEP_BOUND_BROKEN).
+ * Packets traced by the single-ray kernel count as in grid_trace.c. The
+ * step bound is res[K] slices per packet (ACCEL_STEP_BOUND_BROKEN).
  */
 #include <string.h>
-
 
 #include "grid_packet_filter.h"
 
@@ -78,7 +89,6 @@
 #define GRID_PACKET_MAIL 256 /* per-packet mailbox entries (power of two) */
 
 _Static_assert(P == 64, "the active-ray mask is one uint64_t");
-
 
 /* Counted runs: packet totals so far, and each ray's share when it stops. */
 typedef struct {
@@ -136,9 +146,9 @@ test_prim(const accel_scene *s, grid_packet *pk, packet_count *cn, accel_counter
 /* Tests the primitives of slice k's cells [lo, hi] against the packet.
  * Returns 0 when an any-hit packet has no active ray left. */
 static inline __attribute__((always_inline)) int
-walk_slice(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counters *c, uint32_t *mail,
-           int k, const int lo[2], const int hi[2], const double hull[2][2], int naive, int spheres,
-           int mailbox, int any_hit)
+walk_slice(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counters *c,
+           uint32_t *mail, int k, const int lo[2], const int hi[2], const double hull[2][2],
+           int naive, int spheres, int mailbox, int any_hit)
 {
     const grid_frame *f = &g->frame;
     const accel_scene *s = &g->store.prims;
@@ -163,9 +173,7 @@ walk_slice(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counter
                 }
                 /* Out of every ray's reach in this slice: left out of the
                  * mailbox, so that a later slice looks again. */
-                if (!naive && grid_packet_slice_outside(pk, s, prim, spheres, hull)) {
-                    continue;
-                }
+                if (!naive && grid_packet_slice_outside(pk, s, prim, spheres, hull)) continue;
                 if (mailbox) *slot = prim;
                 test_prim(s, pk, cn, c, prim, naive, spheres, any_hit);
                 if (any_hit && !pk->active) return 0;
@@ -280,7 +288,8 @@ packet_batch(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_
             continue;
         }
         if (c) memset(&cn, 0, sizeof cn);
-        if (mode == GRID_PACKET_WALK) packet_walk(g, &pk, &cn, c, naive, spheres, mailbox, occ != NULL);
+        if (mode == GRID_PACKET_WALK)
+            packet_walk(g, &pk, &cn, c, naive, spheres, mailbox, occ != NULL);
         for (uint32_t i = 0; i < n; i++) {
             const uint32_t prim = pk.prim[i];
             if (occ) {
