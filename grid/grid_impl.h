@@ -1,6 +1,6 @@
 /*
  * grid_impl.h - the built grid, shared by the builder (grid_build.c) and
- * the traversal (grid_trace.c). Private to grid/.
+ * the traversals (grid_trace.c, grid_packet.c). Private to grid/.
  */
 #ifndef GRID_GRID_IMPL_H
 #define GRID_GRID_IMPL_H
@@ -25,7 +25,9 @@ typedef struct {
 } grid_accel;
 
 /* Cells per macro cell and axis (traverse=packet skips empty layers). */
+#ifndef GRID_MACRO
 #define GRID_MACRO 4
+#endif
 
 /* Traversal modes (parameter traverse=). */
 enum { GRID_TRAVERSE_SINGLE = 0, GRID_TRAVERSE_PACKET = 1 };
