@@ -134,7 +134,7 @@ static void check_all_variants(const accel_scene *s, const accel_ray *rays, size
 {
     char spec[256];
     for (const char *const *v = accel_kind_grid.variants; *v; v++) {
-        if (!strcmp(*v, "tri=naive")) continue; /* not watertight: the conformance suite's business */
+        if (strstr(*v, "tri=naive")) continue; /* not watertight: the conformance suite's business */
         snprintf(spec, sizeof spec, "grid%s%s", **v ? ":" : "", *v);
         check_spec(s, spec, rays, n, label);
     }
