@@ -75,7 +75,7 @@ typedef struct {
     int axis[3];      /* K, a1, a2 */
     int kstep;        /* +1 / -1: direction of the walk along K */
     int k_start;      /* first slice */
-    double z0;        /* the grid's entry plane on K */
+    double z0;        /* ref[K]: the coordinate u0 is taken at */
     double w_next;    /* min of w_end over the active rays */
     const double *dk; /* dx, dy or dz: the rays' K components */
     /* Bounds over `bounded`. */

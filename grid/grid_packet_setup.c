@@ -264,7 +264,7 @@ int grid_packet_setup(const grid_accel *g, grid_packet *pk, const accel_ray *ray
          * direction component gives inf or NaN, which the minimum skips. */
         double t_out = rf.tf[i];
         for (int a = 0; a < 3; a++) {
-            const double far = rf.d[a][i] < 0.0f || signbit(rf.d[a][i]) ? lo[a] : hi[a];
+            const double far = signbit(rf.d[a][i]) ? lo[a] : hi[a];
             const double t = (far - rf.o[a][i]) * (double)rf.inv[a][i];
             t_out = t < t_out ? t : t_out;
         }
