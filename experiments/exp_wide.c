@@ -91,7 +91,7 @@ int main(int argc, char **argv)
     static const int set_bits[3] = {BENCH_PRIMARY, BENCH_SHADOW, BENCH_DIFFUSE};
     for (int si = 0; si < scene_count; si++) {
         accel_scene s;
-        exp_scene(scenes[si], &s);
+        exp_scene(&x, scenes[si], &s);
         bench_set_opts so = {NULL, w, h, 1, 0.0f, 1, 1, NULL};
         bench_sets sets;
         accel_error err = {0};

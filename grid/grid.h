@@ -16,6 +16,9 @@
  *   mailbox  0/1: test a primitive spanning several cells once per ray
  *   reorder  0/1: copy the primitives in Morton order of their centroids
  *   max_mb   memory limit for offsets + references, MiB (larger is refused)
+ *   traverse single | packet: the 3D-DDA per ray, or coherent grid traversal
+ *            of 64-ray packets slice by slice (grid_packet.c; the mailbox
+ *            is then per packet)
  *   tri      watertight | naive (common to all kinds)
  */
 #ifndef GRID_GRID_H

@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "grid_impl.h"
+#include "grid_packet.h"
 
 #define STR_(x) #x
 #define STR(x) STR_(x)
@@ -26,6 +26,9 @@ static const accel_param_def grid_params[] = {
      "test a primitive spanning several cells once per ray (16-entry per-ray cache)"},
     {"max_mb", ACCEL_PARAM_FLOAT, "4096", 1.0, 1048576.0, NULL,
      "memory limit for cell offsets + references, MiB: larger grids are refused"},
+    {"traverse", ACCEL_PARAM_ENUM, "single", 0, 0, "single|packet",
+     "single rays (3D-DDA), or coherent grid traversal of 64 consecutive rays (8x8 tiles) "
+     "slice by slice"},
 };
 
 static void grid_destroy(void *a)
@@ -34,6 +37,7 @@ static void grid_destroy(void *a)
     if (!g) return;
     grid_cells_free(&g->cells);
     free(g->planes);
+    free(g->macro);
     accel_prim_store_free(&g->store);
     free(g);
 }
@@ -43,7 +47,8 @@ static size_t grid_memory(const void *a)
     const grid_accel *g = a;
     return sizeof *g + (size_t)(g->cells.cell_count + 1) * sizeof(uint32_t) +
            (size_t)g->cells.ref_count * sizeof(uint32_t) +
-           grid_plane_count(g->frame.res) * sizeof(float) + accel_prim_store_bytes(&g->store);
+           grid_plane_count(g->frame.res) * sizeof(float) + accel_prim_store_bytes(&g->store) +
+           (g->macro ? (size_t)g->macro_res[0] * g->macro_res[1] * g->macro_res[2] : 0);
 }
 
 static int grid_build(const accel_scene *scene, const accel_params *params, int threads,
@@ -65,6 +70,8 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
     if (!g) return accel_fail(err, ACCEL_ERR_NOMEM, "grid: out of memory");
     g->naive = params->naive;
     g->mailbox = accel_param_num(params, "mailbox") != 0.0;
+    g->traverse = (int)accel_param_num(params, "traverse") == 1 ? GRID_TRAVERSE_PACKET
+                                                                 : GRID_TRAVERSE_SINGLE;
     g->has_spheres = scene->sphere_count > 0;
     g->planes = malloc(grid_plane_count(res) * sizeof *g->planes);
     if (!g->planes) {
@@ -82,6 +89,11 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
     rc = grid_cells_build(&g->frame, &g->store.prims, NULL, g->store.prims.prim_count, mode, threads,
                           max_bytes, &g->cells, err);
     if (rc) {
+        grid_destroy(g);
+        return rc;
+    }
+
+    if (g->traverse == GRID_TRAVERSE_PACKET && (rc = grid_macro_build(g, err))) {
         grid_destroy(g);
         return rc;
     }
@@ -111,12 +123,36 @@ void grid_get_view(const void *accel, grid_view *v)
     v->ref_count = g->cells.ref_count;
 }
 
+/* The batch entries: single rays or packets (grid_packet.c). */
+static void grid_trace_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
+                                 size_t count, accel_counters *counters)
+{
+    const grid_accel *g = accel;
+    if (g->traverse == GRID_TRAVERSE_PACKET)
+        grid_packet_intersect(accel, rays, hits, count, counters);
+    else
+        grid_intersect(accel, rays, hits, count, counters);
+}
+
+static void grid_trace_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded,
+                                size_t count, accel_counters *counters)
+{
+    const grid_accel *g = accel;
+    if (g->traverse == GRID_TRAVERSE_PACKET)
+        grid_packet_occluded(accel, rays, occluded, count, counters);
+    else
+        grid_occluded(accel, rays, occluded, count, counters);
+}
+
 /* The conformance suite runs each: defaults, a single cell (the brute force
  * limit), a very fine grid, bounding-box membership, no mailbox, the naive
- * triangle test, and the two ends of the density range. */
+ * triangle test, the two ends of the density range, and the packet
+ * traversal with and without its mailbox, on a fine and a flat grid. */
 static const char *const grid_variants[] = {
     "", "res=1", "res=128", "res=7x1x13", "overlap=bbox", "mailbox=0", "tri=naive",
-    "lambda=0.05", "lambda=64", "overlap=bbox,mailbox=0", "reorder=0", NULL,
+    "lambda=0.05", "lambda=64", "overlap=bbox,mailbox=0", "reorder=0", "traverse=packet",
+    "traverse=packet,mailbox=0", "traverse=packet,res=128", "traverse=packet,res=7x1x13",
+    "traverse=packet,tri=naive", NULL,
 };
 
 const accel_kind accel_kind_grid = {
@@ -127,8 +163,8 @@ const accel_kind accel_kind_grid = {
     .param_count = sizeof grid_params / sizeof grid_params[0],
     .variants = grid_variants,
     .build = grid_build,
-    .intersect = grid_intersect,
-    .occluded = grid_occluded,
+    .intersect = grid_trace_intersect,
+    .occluded = grid_trace_occluded,
     .memory = grid_memory,
     .destroy = grid_destroy,
 };

@@ -1,10 +1,11 @@
 /*
  * grid_impl.h - the built grid, shared by the builder (grid_build.c) and
- * the traversal (grid_trace.c). Private to grid/.
+ * the traversals (grid_trace.c, grid_packet.c). Private to grid/.
  */
 #ifndef GRID_GRID_IMPL_H
 #define GRID_GRID_IMPL_H
 
+#include "core/variant.h"
 #include "grid.h"
 
 #ifdef __cplusplus
@@ -22,13 +23,38 @@ typedef struct {
     int naive;          /* tri=naive */
     int mailbox;        /* mailbox=1 */
     int has_spheres;
+    int traverse;       /* GRID_TRAVERSE_SINGLE / GRID_TRAVERSE_PACKET */
+    uint8_t *macro;     /* traverse=packet: occupancy of GRID_MACRO^3 blocks of cells */
+    int macro_res[3];
 } grid_accel;
 
-/* Traversal entry points (grid_trace.c). */
+/* Cells per macro cell and axis (traverse=packet skips empty layers). */
+#ifndef GRID_MACRO
+#define GRID_MACRO 4
+#endif
+
+/* Traversal modes (parameter traverse=). */
+enum { GRID_TRAVERSE_SINGLE = 0, GRID_TRAVERSE_PACKET = 1 };
+
+/* The kernel-variant flags of a built grid (core/variant.h). */
+static inline unsigned grid_variant_flags(const grid_accel *g)
+{
+    return (g->naive ? ACCEL_V_NAIVE : 0u) | (g->has_spheres ? ACCEL_V_SPHERES : 0u) |
+           (g->mailbox ? ACCEL_V_OPT : 0u);
+}
+
+/* Single-ray traversal (grid_trace.c). */
 void grid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
                     accel_counters *counters);
 void grid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                    accel_counters *counters);
+
+/* Coherent grid traversal, 64-ray packets (grid_packet.c); packets that
+ * do not qualify go to the single-ray kernels above. */
+void grid_packet_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
+                           size_t count, accel_counters *counters);
+void grid_packet_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded,
+                          size_t count, accel_counters *counters);
 
 #ifdef __cplusplus
 }

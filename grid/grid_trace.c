@@ -122,20 +122,14 @@ grid_occ_kernel(const void *a, const accel_ray *rays, void *out, size_t count, a
 ACCEL_KERNEL_TABLE(grid_hit_table, grid_hit_kernel)
 ACCEL_KERNEL_TABLE(grid_occ_table, grid_occ_kernel)
 
-static unsigned grid_flags(const grid_accel *g)
-{
-    return (g->naive ? ACCEL_V_NAIVE : 0u) | (g->has_spheres ? ACCEL_V_SPHERES : 0u) |
-           (g->mailbox ? ACCEL_V_OPT : 0u);
-}
-
 void grid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
                     accel_counters *counters)
 {
-    accel_run_kernel(&grid_hit_table, accel, rays, hits, count, counters, grid_flags(accel));
+    accel_run_kernel(&grid_hit_table, accel, rays, hits, count, counters, grid_variant_flags(accel));
 }
 
 void grid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                    accel_counters *counters)
 {
-    accel_run_kernel(&grid_occ_table, accel, rays, occluded, count, counters, grid_flags(accel));
+    accel_run_kernel(&grid_occ_table, accel, rays, occluded, count, counters, grid_variant_flags(accel));
 }
