@@ -6,6 +6,7 @@
 #define GRID_GRID_IMPL_H
 
 #include "grid.h"
+#include "grid_skip.h"
 
 typedef struct {
     /* The primitive store (accel.h): the live primitives copied in Morton
@@ -18,6 +19,14 @@ typedef struct {
     int naive;          /* tri=naive */
     int mailbox;        /* mailbox=1 */
     int has_spheres;
+    /* Empty-space skipping (grid_skip.h): skip=cloud keeps one distance
+     * byte per cell, skip=macro one empty flag per block of 2^macro_shift
+     * cells per axis (macro_res blocks per axis). */
+    grid_skip_mode skip;
+    uint8_t *skip_dist;  /* cloud: cell_count bytes */
+    uint8_t *macro_empty;/* macro: macro_res[0]*[1]*[2] bytes */
+    int macro_shift;
+    int macro_res[3];
 } grid_accel;
 
 /* Traversal entry points (grid_trace.c). */

@@ -17,9 +17,13 @@
  * several consecutive cells is found in it and skipped; a collision only
  * costs a repeated test, never a wrong answer.
  *
+ * Empty-space skipping (skip=cloud|macro, grid_skip.h): in an empty cell
+ * inside a known box of empty cells, the walk jumps to where the ray leaves
+ * the box, re-locating its cell on the same plane distances.
+ *
  * Kernels are written once (grid_kernel) and compiled into one variant
- * table per query (core/variant.h): spheres, naive triangles and mailbox
- * (ACCEL_V_OPT) as constants. The uncounted copies contain no counting code
+ * table per query and skipping mode (core/variant.h): spheres, naive
+ * triangles and mailbox (ACCEL_V_OPT) as constants. The uncounted copies contain no counting code
  * and no step-bound check; counted runs check the bound nx+ny+nz+3 cells.
  */
 #include <string.h>
@@ -30,9 +34,37 @@
 /* Entries of the per-ray mailbox (power of two). */
 #define GRID_MAILBOX 16
 
+/* In an empty cell: the box of empty cells around it that skipping knows
+ * (grid_skip.h), as inclusive cell ranges; 0 when it is not worth a jump. */
+static inline __attribute__((always_inline)) int
+skip_box(const grid_accel *g, const grid_dda *d, grid_skip_mode skip, int lo[3], int hi[3])
+{
+    const grid_frame *f = &g->frame;
+    if (skip == GRID_SKIP_CLOUD) {
+        int r = (int)g->skip_dist[d->cell] - 1; /* every cell within r is empty */
+        if (r < GRID_SKIP_MIN_RADIUS) return 0;
+        for (int a = 0; a < 3; a++) {
+            lo[a] = d->idx[a] - r > 0 ? d->idx[a] - r : 0;
+            hi[a] = d->idx[a] + r < f->res[a] - 1 ? d->idx[a] + r : f->res[a] - 1;
+        }
+        return 1;
+    }
+    const int sh = g->macro_shift;
+    size_t m = (size_t)(d->idx[0] >> sh) +
+               (size_t)g->macro_res[0] *
+                   ((size_t)(d->idx[1] >> sh) + (size_t)g->macro_res[1] * (size_t)(d->idx[2] >> sh));
+    if (!g->macro_empty[m]) return 0;
+    for (int a = 0; a < 3; a++) {
+        lo[a] = d->idx[a] >> sh << sh;
+        hi[a] = lo[a] + (1 << sh) - 1 < f->res[a] - 1 ? lo[a] + (1 << sh) - 1 : f->res[a] - 1;
+    }
+    return 1;
+}
+
 static inline __attribute__((always_inline)) void
 grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
-            size_t count, accel_counters *c, int naive, int spheres, int mailbox)
+            size_t count, accel_counters *c, int naive, int spheres, int mailbox,
+            grid_skip_mode skip)
 {
     const accel_scene *s = &g->store.prims;
     const grid_frame *f = &g->frame;
@@ -62,6 +94,14 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
                 if (ACCEL_STEP_BOUND_BROKEN(c, steps, bound)) break;
                 uint32_t k = offsets[d.cell], end = offsets[d.cell + 1];
                 if (c && k == end) empty++;
+                if (skip != GRID_SKIP_NONE && k == end) {
+                    /* Jump out of a box of empty cells (grid_skip.h). */
+                    int lo[3], hi[3];
+                    if (skip_box(g, &d, skip, lo, hi)) {
+                        if (!grid_dda_leave_box(&d, f, &p, lo, hi, t)) break;
+                        continue;
+                    }
+                }
                 for (; k < end; k++) {
                     uint32_t prim = refs[k];
                     if (mailbox) {
@@ -103,24 +143,33 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
     }
 }
 
-static inline __attribute__((always_inline)) void
-grid_hit_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
-                unsigned f)
-{
-    grid_kernel(a, rays, out, NULL, count, c, (f & ACCEL_V_NAIVE) != 0,
-                (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0);
-}
+/* One table per query and skipping mode (the mode is a constant in each). */
+#define GRID_KERNELS(NAME, SKIP)                                                            \
+    static inline __attribute__((always_inline)) void NAME##_hit_kernel(                    \
+        const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,   \
+        unsigned f)                                                                         \
+    {                                                                                       \
+        grid_kernel(a, rays, out, NULL, count, c, (f & ACCEL_V_NAIVE) != 0,                 \
+                    (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0, SKIP);              \
+    }                                                                                       \
+    static inline __attribute__((always_inline)) void NAME##_occ_kernel(                    \
+        const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,   \
+        unsigned f)                                                                         \
+    {                                                                                       \
+        grid_kernel(a, rays, NULL, out, count, c, (f & ACCEL_V_NAIVE) != 0,                 \
+                    (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0, SKIP);              \
+    }                                                                                       \
+    ACCEL_KERNEL_TABLE(NAME##_hit_table, NAME##_hit_kernel)                                 \
+    ACCEL_KERNEL_TABLE(NAME##_occ_table, NAME##_occ_kernel)
 
-static inline __attribute__((always_inline)) void
-grid_occ_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
-                unsigned f)
-{
-    grid_kernel(a, rays, NULL, out, count, c, (f & ACCEL_V_NAIVE) != 0,
-                (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0);
-}
+GRID_KERNELS(grid, GRID_SKIP_NONE)
+GRID_KERNELS(grid_cloud, GRID_SKIP_CLOUD)
+GRID_KERNELS(grid_macro, GRID_SKIP_MACRO)
 
-ACCEL_KERNEL_TABLE(grid_hit_table, grid_hit_kernel)
-ACCEL_KERNEL_TABLE(grid_occ_table, grid_occ_kernel)
+static const accel_kernel_table *const grid_hit_tables[3] = {
+    &grid_hit_table, &grid_cloud_hit_table, &grid_macro_hit_table};
+static const accel_kernel_table *const grid_occ_tables[3] = {
+    &grid_occ_table, &grid_cloud_occ_table, &grid_macro_occ_table};
 
 static unsigned grid_flags(const grid_accel *g)
 {
@@ -131,11 +180,14 @@ static unsigned grid_flags(const grid_accel *g)
 void grid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
                     accel_counters *counters)
 {
-    accel_run_kernel(&grid_hit_table, accel, rays, hits, count, counters, grid_flags(accel));
+    const grid_accel *g = accel;
+    accel_run_kernel(grid_hit_tables[g->skip], accel, rays, hits, count, counters, grid_flags(g));
 }
 
 void grid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                    accel_counters *counters)
 {
-    accel_run_kernel(&grid_occ_table, accel, rays, occluded, count, counters, grid_flags(accel));
+    const grid_accel *g = accel;
+    accel_run_kernel(grid_occ_tables[g->skip], accel, rays, occluded, count, counters,
+                     grid_flags(g));
 }
