@@ -28,6 +28,8 @@ static const accel_param_def grid_params[] = {
      "memory limit for cell offsets + references, MiB: larger grids are refused"},
     {"skip", ACCEL_PARAM_ENUM, "none", 0, 0, "none|cloud|macro",
      "empty-space skipping: none, proximity clouds (1 byte/cell), macro cells (see macro)"},
+    {"skip_min", ACCEL_PARAM_INT, "1", 1, 254, NULL,
+     "skip=cloud: smallest radius worth a jump (cells; a jump costs about two steps)"},
     {"macro", ACCEL_PARAM_INT, "4", 2, 64, NULL,
      "skip=macro: cells per macro cell along each axis, a power of two"},
 };
@@ -109,6 +111,7 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
     g->mailbox = accel_param_num(params, "mailbox") != 0.0;
     g->has_spheres = scene->sphere_count > 0;
     g->skip = (grid_skip_mode)(int)accel_param_num(params, "skip");
+    g->skip_min = (int)accel_param_num(params, "skip_min");
     int macro = (int)accel_param_num(params, "macro");
     while ((1 << g->macro_shift) < macro) g->macro_shift++;
     if ((1 << g->macro_shift) != macro) {

@@ -25,6 +25,7 @@ typedef struct {
     grid_skip_mode skip;
     uint8_t *skip_dist;  /* cloud: cell_count bytes */
     uint8_t *macro_empty;/* macro: macro_res[0]*[1]*[2] bytes */
+    int skip_min;        /* cloud: smallest radius jumped (cells) */
     int macro_shift;
     int macro_res[3];
 } grid_accel;

@@ -48,12 +48,6 @@ typedef enum {
 
 /* Largest stored distance (cells): the byte's range. */
 #define GRID_SKIP_CAP 255
-/* Smallest box radius (cells) worth a jump: a jump costs about two DDA steps
- * (the far planes, then a located cell per axis), so a box of radius 1 is
- * taken only when it saves at least that (measured in grid/README.md). */
-#ifndef GRID_SKIP_MIN_RADIUS
-#define GRID_SKIP_MIN_RADIUS 1
-#endif
 
 /*
  * Per-cell Chebyshev distance to the nearest non-empty cell of `cells`,
@@ -78,67 +72,75 @@ static inline void grid_skip_macro_res(const int res[3], int shift, int mres[3])
  * axis, the last block per axis clipped to the grid) is empty. */
 void grid_skip_macro(const grid_frame *f, const uint32_t *offsets, int shift, uint8_t *empty);
 
+/* Distance at which the ray crosses the far plane of the box on axis a
+ * (+inf on an axis it does not move along); *far gets the box's last cell
+ * index along the ray on that axis. */
+static inline __attribute__((always_inline)) double
+grid_box_far_t(const grid_dda *d, const grid_frame *f, int a, const int lo[3], const int hi[3],
+               int *far)
+{
+    if (d->step[a] > 0) {
+        *far = hi[a];
+        return grid_plane_t(d, a, f->planes[a][hi[a] + 1]);
+    }
+    *far = lo[a];
+    return d->step[a] < 0 ? grid_plane_t(d, a, f->planes[a][lo[a]]) : INFINITY;
+}
+
+/* Puts axis a of the walk in the cell it occupies at t_exit (grid_dda_init's
+ * rule: entry plane crossed at or before t_exit, exit plane after), given
+ * the box's far plane distance t_far and last cell `far` on that axis.
+ * Returns 0 when that cell is outside the grid. */
+static inline __attribute__((always_inline)) int
+grid_dda_settle(grid_dda *d, const grid_frame *f, int a, double t_exit, double t_far, int far)
+{
+    const int step = d->step[a];
+    if (step == 0) return 1;
+    const float *pl = f->planes[a];
+    int i = d->idx[a];
+    double t = d->t_next[a];
+    if (t_far == t_exit) {
+        i = far + step; /* the box's far plane is crossed at t_exit */
+        if (i == d->out[a]) return 0;
+        t = grid_plane_t(d, a, pl[step > 0 ? i + 1 : i]);
+    } else {
+        /* Inside the box on this axis: cross the planes the walk itself
+         * crosses by t_exit (t_far > t_exit bounds the loop by the box),
+         * each one DDA step along this axis without the cell lookups. */
+        while (t <= t_exit) {
+            i += step;
+            t = grid_plane_t(d, a, pl[step > 0 ? i + 1 : i]);
+        }
+    }
+    d->cell += (uint32_t)(i - d->idx[a]) * f->stride[a];
+    d->idx[a] = i;
+    d->t_next[a] = t;
+    return 1;
+}
+
 /*
- * Moves the walk of the prepared ray p out of the box of cells lo[a]..hi[a]
- * (inclusive; it holds the current cell and only empty cells): to the cell
- * the DDA occupies at the distance t_exit where the ray leaves the box.
+ * Moves the walk out of the box of cells lo[a]..hi[a] (inclusive; it holds
+ * the current cell and only empty cells): to the cell the DDA occupies at
+ * the distance t_exit where the ray leaves the box.
  * Returns 0 when the walk is over: the ray ends (t_end, the nearest hit or
- * t_far) at or before t_exit, or leaves the grid there.
+ * t_far) at or before t_exit, or leaves the grid there. Written axis by
+ * axis with constant axes, so that the walk's state stays in registers.
  */
 static inline __attribute__((always_inline)) int
-grid_dda_leave_box(grid_dda *d, const grid_frame *f, const accel_ray_prep *p, const int lo[3],
-                   const int hi[3], double t_end)
+grid_dda_leave_box(grid_dda *d, const grid_frame *f, const int lo[3], const int hi[3],
+                   double t_end)
 {
-    const float dir[3] = {p->dir.x, p->dir.y, p->dir.z};
-    double t_far[3];
-    int far[3];
-    double t_exit = INFINITY;
-    for (int a = 0; a < 3; a++) {
-        t_far[a] = INFINITY;
-        far[a] = d->idx[a];
-        if (d->step[a] > 0) {
-            far[a] = hi[a];
-            t_far[a] = grid_plane_t(d, a, f->planes[a][hi[a] + 1]);
-        } else if (d->step[a] < 0) {
-            far[a] = lo[a];
-            t_far[a] = grid_plane_t(d, a, f->planes[a][lo[a]]);
-        }
-        t_exit = t_far[a] < t_exit ? t_far[a] : t_exit;
-    }
+    int far0, far1, far2;
+    double t0 = grid_box_far_t(d, f, 0, lo, hi, &far0);
+    double t1 = grid_box_far_t(d, f, 1, lo, hi, &far1);
+    double t2 = grid_box_far_t(d, f, 2, lo, hi, &far2);
+    double t_exit = t0 < t1 ? t0 : t1;
+    t_exit = t_exit < t2 ? t_exit : t2;
     if (t_exit >= t_end) return 0;
-    /* Leaving through the grid's own boundary (also at a tie with an inner
-     * face): nothing of the grid lies beyond. */
-    for (int a = 0; a < 3; a++)
-        if (t_far[a] == t_exit && far[a] + d->step[a] == d->out[a]) return 0;
-    uint32_t cell = 0;
-    for (int a = 0; a < 3; a++) {
-        int i = d->idx[a];
-        if (d->step[a] != 0) {
-            const float *pl = f->planes[a];
-            if (t_far[a] == t_exit) {
-                i = far[a] + d->step[a]; /* its far plane is crossed at t_exit */
-            } else {
-                /* Between the current cell and the box's far face: guess
-                 * from the position, then settle on the plane distances. */
-                double g = (d->org[a] + t_exit * dir[a] - f->lo[a]) * f->inv_cell[a];
-                int near = d->idx[a], fa = far[a];
-                int glo = near < fa ? near : fa, ghi = near < fa ? fa : near;
-                i = g >= ghi ? ghi : (g > glo ? (int)g : glo);
-                if (d->step[a] > 0) {
-                    while (i > near && grid_plane_t(d, a, pl[i]) > t_exit) i--;
-                    while (i < fa && grid_plane_t(d, a, pl[i + 1]) <= t_exit) i++;
-                } else {
-                    while (i < near && grid_plane_t(d, a, pl[i + 1]) > t_exit) i++;
-                    while (i > fa && grid_plane_t(d, a, pl[i]) <= t_exit) i--;
-                }
-            }
-            d->idx[a] = i;
-            d->t_next[a] = grid_plane_t(d, a, pl[d->step[a] > 0 ? i + 1 : i]);
-        }
-        cell += (uint32_t)i * f->stride[a];
-    }
-    d->cell = cell;
-    return 1;
+    /* Leaving through the grid's own boundary on any axis (also at a tie
+     * with an inner face): nothing of the grid lies beyond. */
+    return grid_dda_settle(d, f, 0, t_exit, t0, far0) & grid_dda_settle(d, f, 1, t_exit, t1, far1) &
+           grid_dda_settle(d, f, 2, t_exit, t2, far2);
 }
 
 #endif
