@@ -20,10 +20,14 @@
  *
  * Spec parameters (`irregular_grid:key=value,...`):
  *   top_lambda  top grid: cells per primitive (n_i = d_i*cbrt(lambda*N/V))
- *   sub_lambda  octree depth of a top cell: log2 of the largest axis of the
- *               grid the rule gives for sub_lambda on the cell's count
+ *   sub_lambda  octree density: cells per primitive the resolution rule aims
+ *               at within a top cell (see split)
  *   max_depth   deepest octree level (the virtual lattice is the top grid
  *               times 2^depth per axis, at most 65536 voxels per axis)
+ *   split       local | cell: split every octree node holding at least
+ *               8/sub_lambda primitives while the split separates them
+ *               (local, default), or every non-empty node down to a depth
+ *               set per top cell (cell, the paper's rule)
  *   subdivide   0/1: step 1 (0: the top grid's cells alone)
  *   merge       0/1: step 2
  *   alpha       merge passes go on while they remove at least 1-alpha of the cells
@@ -42,8 +46,8 @@
 /* Defaults, from the sweeps in irregular_grid/README.md. */
 #define IGRID_DEFAULT_TOP_LAMBDA 0.12
 #define IGRID_DEFAULT_SUB_LAMBDA 2.4
-#define IGRID_DEFAULT_MAX_DEPTH 5
-#define IGRID_MAX_DEPTH 8
+#define IGRID_DEFAULT_MAX_DEPTH 12
+#define IGRID_MAX_DEPTH 16
 #define IGRID_DEFAULT_ALPHA 0.995
 #define IGRID_DEFAULT_EXPAND 3
 
@@ -93,6 +97,7 @@ typedef struct {
     const uint32_t *refs;     /* local primitive ids */
     uint64_t ref_count;
     const uint32_t *prim_id;  /* local id -> scene primitive id */
+    uint32_t prim_count;      /* local ids: the scene's live primitives */
 } igrid_view;
 
 void igrid_get_view(const void *accel, igrid_view *v);

@@ -33,6 +33,15 @@
 #define STR_(x) #x
 #define STR(x) STR_(x)
 
+/* split=local, default: a split whose octants hold more than this many
+ * references per primitive of the node duplicates more than it separates: primitives
+ * as large as the node (a mesh's triangles around a shared vertex, where
+ * the count never drops), crossing or coincident ones. One that leaves
+ * every primitive in one octant is kept: it carves empty space around a
+ * cluster (the teapot in the stadium). */
+#ifndef IGRID_SPLIT_GUARD
+#define IGRID_SPLIT_GUARD 2.0
+#endif
 /* Top cells per work item of the subdivision. */
 #define IGRID_CHUNK 64
 
@@ -40,11 +49,18 @@ static const accel_param_def igrid_params[] = {
     {"top_lambda", ACCEL_PARAM_FLOAT, STR(IGRID_DEFAULT_TOP_LAMBDA), 0.0001, 100.0, NULL,
      "top grid: cells per primitive, n_i = d_i*cbrt(lambda*N/V)"},
     {"sub_lambda", ACCEL_PARAM_FLOAT, STR(IGRID_DEFAULT_SUB_LAMBDA), 0.001, 1000.0, NULL,
-     "octree depth of a top cell: log2 of the largest axis the rule gives on its own count"},
+     "octree density: cells per primitive the resolution rule aims at (see split)"},
     {"max_depth", ACCEL_PARAM_INT, STR(IGRID_DEFAULT_MAX_DEPTH), 0, IGRID_MAX_DEPTH, NULL,
-     "deepest octree level (levels; the lattice is the top grid times 2^depth per axis)"},
+     "deepest octree level (levels; the lattice is the top grid times 2^depth per axis, at "
+     "most 65536)"},
+    {"split", ACCEL_PARAM_ENUM, "local", 0, 0, "local|cell",
+     "octree: split every node holding at least 8/sub_lambda primitives (local), or every "
+     "non-empty node down to its top cell's depth (cell, the paper)"},
     {"subdivide", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
      "step 1: octree subdivision of the top cells (0: top cells only)"},
+    {"split_ratio", ACCEL_PARAM_FLOAT, STR(IGRID_SPLIT_GUARD), 1.0, 8.0, NULL,
+     "split=local: a split is undone when its octants hold more than this many references per "
+     "primitive of the node"},
     {"merge", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
      "step 2: merge neighbouring cells while the surface-area cost does not grow"},
     {"alpha", ACCEL_PARAM_FLOAT, STR(IGRID_DEFAULT_ALPHA), 0.0, 1.0, NULL,
@@ -110,7 +126,10 @@ typedef struct {
     const grid_cells *top;
     const int *top_res;
     const uint8_t *depth;    /* per top cell */
-    int shift;
+    int shift;               /* lattice depth the job builds on */
+    int local;               /* split=local: the per-node rule (else every non-empty node) */
+    double split_min;        /* split=local: smallest count worth a split, 8 / sub_lambda */
+    double split_ratio;      /* split=local: most references per primitive after a split */
     chunk_out *out;          /* per chunk */
     double max_bytes;
     uint64_t used;           /* bytes of lists and entries so far (atomic) */
@@ -162,7 +181,8 @@ static uint32_t emit_leaf(split_job *j, chunk_out *o, const int v0[3], int size,
 static uint32_t split_node(split_job *j, chunk_out *o, const int v0[3], int size,
                            const uint32_t *ids, uint32_t n, int depth_left)
 {
-    if (depth_left == 0 || n == 0 || o->failed) return emit_leaf(j, o, v0, size, ids, n);
+    if (depth_left == 0 || n == 0 || o->failed || (j->local && n < j->split_min))
+        return emit_leaf(j, o, v0, size, ids, n);
     grid_frame f;
     float planes[9];
     const int two[3] = {2, 2, 2};
@@ -174,6 +194,11 @@ static uint32_t split_node(split_job *j, chunk_out *o, const int v0[3], int size
     if (rc) {
         o->failed = rc == ACCEL_ERR_NOMEM ? ACCEL_ERR_NOMEM : ACCEL_ERR_RANGE;
         return 0;
+    }
+    if (j->local && (double)kids.ref_count > j->split_ratio * n) {
+        /* The octants share most primitives: splitting separates nothing. */
+        grid_cells_free(&kids);
+        return emit_leaf(j, o, v0, size, ids, n);
     }
     size_t group = o->node_len;
     if (!grow((void **)&o->nodes, &o->node_cap, group + 8, sizeof *o->nodes)) {
@@ -276,6 +301,47 @@ static int gather(chunk_out *out, size_t chunks, uint64_t top_cells, igrid_bcell
     return ACCEL_OK;
 }
 
+/* split=cell, the paper's rule: the octree depth of top cell c (index in
+ * frame f) holding n primitives is log2 of the largest axis of the grid the
+ * resolution rule gives for sub_lambda on the cell's box and count. */
+static int cell_depth(const grid_frame *f, uint32_t n, uint64_t c, double sub_lambda)
+{
+    if (n == 0) return 0;
+    const uint64_t tx = (uint64_t)f->res[0], ty = (uint64_t)f->res[1];
+    const int idx[3] = {(int)(c % tx), (int)(c / tx % ty), (int)(c / (tx * ty))};
+    box3 cell = {{f->planes[0][idx[0]], f->planes[1][idx[1]], f->planes[2][idx[2]]},
+                 {f->planes[0][idx[0] + 1], f->planes[1][idx[1] + 1], f->planes[2][idx[2] + 1]}};
+    int r[3];
+    grid_resolution(cell, n, sub_lambda, r);
+    int m = r[0] > r[1] ? r[0] : r[1];
+    return ceil_log2(m > r[2] ? m : r[2]);
+}
+
+/* Depth actually reached: the lattice shrinks to it (every box coordinate
+ * is then a multiple of 2^(shift - used)), with the same planes. */
+static void shrink_lattice(igrid_accel *g, igrid_bcells *b, int shift)
+{
+    int smallest = 1 << shift;
+    for (uint32_t c = 0; c < b->count; c++) {
+        int size = b->box[c][3] - b->box[c][0];
+        smallest = size < smallest ? size : smallest;
+    }
+    int drop = 0;
+    while ((1 << (drop + 1)) <= smallest) drop++;
+    if (drop == 0) return;
+    for (uint32_t c = 0; c < b->count; c++)
+        for (int k = 0; k < 6; k++) b->box[c][k] >>= drop;
+    /* The octree keeps its shape: only shift changes. */
+    float pad[3] = {g->frame.pad[0], g->frame.pad[1], g->frame.pad[2]};
+    box3 box = {{g->frame.lo[0], g->frame.lo[1], g->frame.lo[2]},
+                {g->frame.hi[0], g->frame.hi[1], g->frame.hi[2]}};
+    int v[3];
+    for (int a = 0; a < 3; a++) v[a] = g->top_res[a] << (shift - drop);
+    grid_frame_init(&g->frame, box, v, g->planes);
+    for (int a = 0; a < 3; a++) g->frame.pad[a] = pad[a]; /* the padding the lists were built with */
+    b->shift = g->shift = shift - drop;
+}
+
 /* Steps 1-3: top grid, depths, lattice, top lists, octrees. Fills g's frame
  * and b. */
 static int subdivide(igrid_accel *g, const accel_params *params, int threads, double max_bytes,
@@ -294,60 +360,49 @@ static int subdivide(igrid_accel *g, const accel_params *params, int threads, do
         while (max_depth > 0 && ((int64_t)t[a] << max_depth) > GRID_MAX_AXIS_RES) max_depth--;
     uint8_t *depth = calloc(top_cells, 1);
     float *top_planes = malloc(grid_plane_count(t) * sizeof *top_planes);
-    uint32_t *counts = calloc(top_cells + 1, sizeof *counts);
-    if (!depth || !top_planes || !counts) {
-        free(depth), free(top_planes), free(counts);
+    if (!depth || !top_planes) {
+        free(depth), free(top_planes);
         return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory for the top grid");
     }
-    /* Depth per top cell from its count (membership padded as a top grid's:
-     * only an estimate, the lists come later on the lattice). */
-    int shift = 0;
-    if (max_depth > 0) {
-        grid_frame f;
-        grid_frame_init(&f, box, t, top_planes);
-        grid_count_pass(&f, s, NULL, s->prim_count, GRID_OVERLAP_EXACT, counts, threads);
-        double sub_lambda = accel_param_num(params, "sub_lambda");
-        for (uint64_t c = 0; c < top_cells; c++) {
-            if (!counts[c]) continue;
-            int x = (int)(c % (uint64_t)t[0]), y = (int)(c / (uint64_t)t[0] % (uint64_t)t[1]);
-            int z = (int)(c / ((uint64_t)t[0] * t[1]));
-            box3 cb = {{f.planes[0][x], f.planes[1][y], f.planes[2][z]},
-                       {f.planes[0][x + 1], f.planes[1][y + 1], f.planes[2][z + 1]}};
-            int r[3];
-            grid_resolution(cb, counts[c], sub_lambda, r);
-            int m = r[0] > r[1] ? r[0] : r[1];
-            m = m > r[2] ? m : r[2];
-            int d = ceil_log2(m);
-            depth[c] = (uint8_t)(d < max_depth ? d : max_depth);
-            shift = depth[c] > shift ? depth[c] : shift;
-        }
-    }
-    free(counts);
-    /* The lattice, and the top grid on it. */
-    int v[3] = {t[0] << shift, t[1] << shift, t[2] << shift};
-    g->planes = malloc(grid_plane_count(v) * sizeof *g->planes);
-    if (!g->planes) {
-        free(depth), free(top_planes);
-        return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory for the lattice");
-    }
-    grid_frame_init(&g->frame, box, v, g->planes);
-    grid_frame top_frame;
-    const int zero[3] = {0, 0, 0};
-    sub_frame(&g->frame, zero, 1 << shift, t, &top_frame, top_planes);
+    /* The top grid's lists, padded by 1/1024 of a top cell: a superset of
+     * what the lattice's finer padding would give (membership only has to
+     * be conservative), on planes that are the lattice's own: ext*k/n in
+     * double does not change when k and n are scaled by 2^shift. */
+    grid_frame f;
+    grid_frame_init(&f, box, t, top_planes);
     grid_cells top;
-    rc = grid_cells_build(&top_frame, s, NULL, s->prim_count, GRID_OVERLAP_EXACT, threads, max_bytes,
-                          &top, err);
+    rc = grid_cells_build(&f, s, NULL, s->prim_count, GRID_OVERLAP_EXACT, threads, max_bytes, &top,
+                          err);
     if (rc) {
         free(depth), free(top_planes);
         return rc;
     }
+    /* The depth of every top cell: the paper's rule (split=cell), or the
+     * deepest lattice allowed, the per-node rule deciding (split=local). */
+    int shift = 0;
+    const int local = (int)accel_param_num(params, "split") == 0;
+    const double sub_lambda = accel_param_num(params, "sub_lambda");
+    for (uint64_t c = 0; c < top_cells && max_depth > 0; c++) {
+        uint32_t n = top.offsets[c + 1] - top.offsets[c];
+        int d = local ? (n ? max_depth : 0) : cell_depth(&f, n, c, sub_lambda);
+        depth[c] = (uint8_t)(d < max_depth ? d : max_depth);
+        shift = depth[c] > shift ? depth[c] : shift;
+    }
+    int v[3] = {t[0] << shift, t[1] << shift, t[2] << shift};
+    g->planes = malloc(grid_plane_count(v) * sizeof *g->planes);
+    if (!g->planes) {
+        grid_cells_free(&top), free(depth), free(top_planes);
+        return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory for the lattice");
+    }
+    grid_frame_init(&g->frame, box, v, g->planes);
     size_t chunks = (size_t)((top_cells + IGRID_CHUNK - 1) / IGRID_CHUNK);
     chunk_out *out = calloc(chunks ? chunks : 1, sizeof *out);
     if (!out) {
         grid_cells_free(&top), free(depth), free(top_planes);
         return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory");
     }
-    split_job j = {&g->frame, s, &top, t, depth, shift, out, max_bytes,
+    split_job j = {&g->frame, s, &top, t, depth, shift, local, 8.0 / sub_lambda,
+                   accel_param_num(params, "split_ratio"), out, max_bytes,
                    (uint64_t)(top.cell_count + 1) * 4};
     accel_parallel_for(top_cells, IGRID_CHUNK, threads, split_chunk, &j);
     int failed = 0;
@@ -364,6 +419,7 @@ static int subdivide(igrid_accel *g, const accel_params *params, int threads, do
         b->shift = g->shift = shift;
         b->frame = &g->frame;
         rc = gather(out, chunks, top_cells, b, err);
+        if (!rc) shrink_lattice(g, b, shift);
     }
     for (size_t k = 0; k < chunks; k++) chunk_free(&out[k]);
     free(out);
@@ -457,8 +513,8 @@ static int igrid_build(const accel_scene *scene, const accel_params *params, int
         rc = igrid_merge(&b, accel_param_num(params, "alpha"), accel_param_num(params, "ct"), err);
     if (!rc) {
         memcpy(b.exit, b.box, (size_t)b.count * sizeof *b.box);
-        igrid_expand(&b, (int)accel_param_num(params, "expand"));
-        rc = flatten(g, &b, err);
+        rc = igrid_expand(&b, (int)accel_param_num(params, "expand"), err);
+        if (!rc) rc = flatten(g, &b, err);
     }
     igrid_bcells_free(&b);
     if (!rc && (double)igrid_memory(g) - accel_prim_store_bytes(&g->store) > max_bytes)
@@ -497,6 +553,7 @@ void igrid_get_view(const void *accel, igrid_view *v)
     v->refs = g->refs;
     v->ref_count = g->ref_count;
     v->prim_id = g->store.scene_id;
+    v->prim_count = g->store.prims.prim_count;
 }
 
 /* The suites run each: defaults, each step alone and each left out, a

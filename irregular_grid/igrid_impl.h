@@ -73,8 +73,9 @@ int igrid_merge(igrid_bcells *b, double alpha, double ct, accel_error *err);
  * (empty neighbours always are). Invariant: every voxel of a cell's exit
  * box belongs to a cell whose references are a subset of its own, so a
  * ray inside the exit box meets no primitive the cell did not test.
+ * Returns ACCEL_ERR_NOMEM or 0.
  */
-void igrid_expand(igrid_bcells *b, int passes);
+int igrid_expand(igrid_bcells *b, int passes, accel_error *err);
 
 /* Traversal entry points (igrid_trace.c). */
 void igrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,

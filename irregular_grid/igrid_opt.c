@@ -54,8 +54,9 @@ static void union_write(const uint32_t *p, uint32_t n, const uint32_t *q, uint32
  * One pass along `axis`: every live cell not yet merged in this pass is
  * merged with its neighbour across its high face when that neighbour has
  * the same cross-section, was not merged in this pass either, and the cost
- * test passes. fwd[n] records where a merged-away cell went. Returns the
- * number of merges, or -1 when out of memory.
+ * test passes. fwd[n] records where a merged-away cell went (the map is
+ * renumbered once per round, by compact()). Returns the number of merges,
+ * or -1 when out of memory.
  */
 static long merge_pass(igrid_bcells *b, int axis, double ct, uint8_t *alive, uint8_t *busy,
                        uint32_t *fwd)
@@ -73,7 +74,8 @@ static long merge_pass(igrid_bcells *b, int axis, double ct, uint8_t *alive, uin
         v[a1] = bc[a1];
         v[a2] = bc[a2];
         uint32_t n = igrid_bcell_at(b, v[0], v[1], v[2]);
-        if (!alive[n] || busy[n]) continue;
+        while (!alive[n]) n = fwd[n]; /* merged earlier in this round */
+        if (busy[n]) continue;
         const int32_t *bn = b->box[n];
         if (bn[axis] != bc[3 + axis] || bn[a1] != bc[a1] || bn[3 + a1] != bc[3 + a1] ||
             bn[a2] != bc[a2] || bn[3 + a2] != bc[3 + a2])
@@ -130,7 +132,7 @@ static void compact(igrid_bcells *b, const uint8_t *alive, const uint32_t *fwd, 
         uint32_t e = b->map[i];
         if (e & 1u) continue;
         uint32_t c = e >> 1;
-        while (!alive[c]) c = fwd[c]; /* one pass merges each cell once: short chains */
+        while (!alive[c]) c = fwd[c]; /* a cell merges once per pass: at most 3 links */
         b->map[i] = new_id[c] << 1;
     }
     b->count = k;
@@ -149,15 +151,17 @@ int igrid_merge(igrid_bcells *b, double alpha, double ct, accel_error *err)
     }
     for (;;) {
         uint32_t before = b->count;
+        long merges = 0;
+        memset(alive, 1, b->count);
         for (int axis = 0; axis < 3; axis++) {
-            memset(alive, 1, b->count);
             long m = merge_pass(b, axis, ct, alive, busy, fwd);
             if (m < 0) {
                 rc = accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory for the merge");
                 goto done;
             }
-            if (m > 0) compact(b, alive, fwd, new_id);
+            merges += m;
         }
+        if (merges > 0) compact(b, alive, fwd, new_id);
         /* Another round while this one removed at least 1-alpha of the cells. */
         if (!((double)b->count < alpha * before)) break;
     }
@@ -219,18 +223,32 @@ static int face_growth(const igrid_bcells *b, uint32_t c, int axis, int hi)
     return d;
 }
 
-void igrid_expand(igrid_bcells *b, int passes)
+/* A face that could not grow once is not tried again (bit 2*axis + hi of
+ * blocked[c]): its neighbours could only let it grow if their own exit
+ * boxes grew over the one that blocked it, a gain too rare for a whole
+ * face walk per pass. */
+int igrid_expand(igrid_bcells *b, int passes, accel_error *err)
 {
+    if (passes == 0 || b->count == 0) return ACCEL_OK;
+    uint8_t *blocked = calloc(b->count, 1);
+    if (!blocked) return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory");
     for (int p = 0; p < passes; p++) {
         int grown = 0;
         for (int axis = 0; axis < 3; axis++)
-            for (uint32_t c = 0; c < b->count; c++) {
-                int lo = face_growth(b, c, axis, 0);
-                b->exit[c][axis] -= lo;
-                int hi = face_growth(b, c, axis, 1);
-                b->exit[c][3 + axis] += hi;
-                grown |= lo | hi;
-            }
+            for (uint32_t c = 0; c < b->count; c++)
+                for (int hi = 0; hi < 2; hi++) {
+                    uint8_t bit = (uint8_t)(1u << (2 * axis + hi));
+                    if (blocked[c] & bit) continue;
+                    int d = face_growth(b, c, axis, hi);
+                    if (!d) blocked[c] |= bit;
+                    if (hi)
+                        b->exit[c][3 + axis] += d;
+                    else
+                        b->exit[c][axis] -= d;
+                    grown |= d;
+                }
         if (!grown) break;
     }
+    free(blocked);
+    return ACCEL_OK;
 }
