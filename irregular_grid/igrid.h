@@ -24,10 +24,12 @@
  *               at within a top cell (see split)
  *   max_depth   deepest octree level (the virtual lattice is the top grid
  *               times 2^depth per axis, at most 65536 voxels per axis)
- *   split       local | cell: split every octree node holding at least
- *               8/sub_lambda primitives while the split separates them
- *               (local, default), or every non-empty node down to a depth
- *               set per top cell (cell, the paper's rule)
+ *   split       adaptive | cell: every non-empty octree node is split down to
+ *               a depth set per top cell by the rule on its count (cell, the
+ *               paper); adaptive goes on below it with nodes holding at
+ *               least split_min primitives while a split separates them
+ *   split_ratio adaptive: a split is undone when its octants hold more than
+ *               this many references per primitive of the node
  *   subdivide   0/1: step 1 (0: the top grid's cells alone)
  *   merge       0/1: step 2
  *   alpha       merge passes go on while they remove at least 1-alpha of the cells
@@ -50,6 +52,7 @@
 #define IGRID_MAX_DEPTH 16
 #define IGRID_DEFAULT_ALPHA 0.995
 #define IGRID_DEFAULT_EXPAND 3
+#define IGRID_DEFAULT_SPLIT_MIN 16
 
 extern const accel_kind accel_kind_irregular_grid;
 

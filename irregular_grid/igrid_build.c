@@ -33,8 +33,9 @@
 #define STR_(x) #x
 #define STR(x) STR_(x)
 
-/* split=local, default: a split whose octants hold more than this many
- * references per primitive of the node duplicates more than it separates: primitives
+/* split=adaptive, below the paper's depth: a split whose octants hold more
+ * than this many references per primitive of the node duplicates more
+ * than it separates: primitives
  * as large as the node (a mesh's triangles around a shared vertex, where
  * the count never drops), crossing or coincident ones. One that leaves
  * every primitive in one octant is kept: it carves empty space around a
@@ -53,14 +54,17 @@ static const accel_param_def igrid_params[] = {
     {"max_depth", ACCEL_PARAM_INT, STR(IGRID_DEFAULT_MAX_DEPTH), 0, IGRID_MAX_DEPTH, NULL,
      "deepest octree level (levels; the lattice is the top grid times 2^depth per axis, at "
      "most 65536)"},
-    {"split", ACCEL_PARAM_ENUM, "local", 0, 0, "local|cell",
-     "octree: split every node holding at least 8/sub_lambda primitives (local), or every "
-     "non-empty node down to its top cell's depth (cell, the paper)"},
+    {"split", ACCEL_PARAM_ENUM, "adaptive", 0, 0, "adaptive|cell",
+     "octree: every non-empty node down to its top cell's depth (cell, the paper), and below it "
+     "nodes holding at least split_min primitives while a split separates them (adaptive)"},
     {"subdivide", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
      "step 1: octree subdivision of the top cells (0: top cells only)"},
+    {"split_min", ACCEL_PARAM_INT, STR(IGRID_DEFAULT_SPLIT_MIN), 1, 1000000, NULL,
+     "split=adaptive: below the paper's depth, only nodes holding at least this many primitives "
+     "are split"},
     {"split_ratio", ACCEL_PARAM_FLOAT, STR(IGRID_SPLIT_GUARD), 1.0, 8.0, NULL,
-     "split=local: a split is undone when its octants hold more than this many references per "
-     "primitive of the node"},
+     "split=adaptive: below the paper's depth, a split is undone when its octants hold more than "
+     "this many references per primitive of the node"},
     {"merge", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
      "step 2: merge neighbouring cells while the surface-area cost does not grow"},
     {"alpha", ACCEL_PARAM_FLOAT, STR(IGRID_DEFAULT_ALPHA), 0.0, 1.0, NULL,
@@ -127,9 +131,9 @@ typedef struct {
     const int *top_res;
     const uint8_t *depth;    /* per top cell */
     int shift;               /* lattice depth the job builds on */
-    int local;               /* split=local: the per-node rule (else every non-empty node) */
-    double split_min;        /* split=local: smallest count worth a split, 8 / sub_lambda */
-    double split_ratio;      /* split=local: most references per primitive after a split */
+    int adaptive;            /* split=adaptive: the per-node rule below the paper's depth */
+    double split_min;        /* split=adaptive: smallest count worth a split below that depth */
+    double split_ratio;      /* split=adaptive: most references per primitive after a split */
     chunk_out *out;          /* per chunk */
     double max_bytes;
     uint64_t used;           /* bytes of lists and entries so far (atomic) */
@@ -177,11 +181,14 @@ static uint32_t emit_leaf(split_job *j, chunk_out *o, const int v0[3], int size,
 }
 
 /* The entry of the node of `size` voxels per axis at v0 holding ids[0..n):
- * a leaf, or an inner node whose octants are split in turn. */
+ * a leaf, or an inner node whose octants are split in turn. `must` levels
+ * remain down to the paper's depth, `depth_left` down to the lattice. */
 static uint32_t split_node(split_job *j, chunk_out *o, const int v0[3], int size,
-                           const uint32_t *ids, uint32_t n, int depth_left)
+                           const uint32_t *ids, uint32_t n, int must, int depth_left)
 {
-    if (depth_left == 0 || n == 0 || o->failed || (j->local && n < j->split_min))
+    const int optional = must <= 0;
+    if (depth_left == 0 || n == 0 || o->failed ||
+        (optional && (!j->adaptive || n < j->split_min)))
         return emit_leaf(j, o, v0, size, ids, n);
     grid_frame f;
     float planes[9];
@@ -195,7 +202,7 @@ static uint32_t split_node(split_job *j, chunk_out *o, const int v0[3], int size
         o->failed = rc == ACCEL_ERR_NOMEM ? ACCEL_ERR_NOMEM : ACCEL_ERR_RANGE;
         return 0;
     }
-    if (j->local && (double)kids.ref_count > j->split_ratio * n) {
+    if (optional && (double)kids.ref_count > j->split_ratio * n) {
         /* The octants share most primitives: splitting separates nothing. */
         grid_cells_free(&kids);
         return emit_leaf(j, o, v0, size, ids, n);
@@ -212,7 +219,8 @@ static uint32_t split_node(split_job *j, chunk_out *o, const int v0[3], int size
         int c0[3] = {v0[0] + (k & 1) * half, v0[1] + ((k >> 1) & 1) * half,
                      v0[2] + ((k >> 2) & 1) * half};
         uint32_t begin = kids.offsets[k], end = kids.offsets[k + 1];
-        uint32_t e = split_node(j, o, c0, half, kids.refs + begin, end - begin, depth_left - 1);
+        uint32_t e =
+            split_node(j, o, c0, half, kids.refs + begin, end - begin, must - 1, depth_left - 1);
         o->nodes[group + (size_t)k] = e; /* o->nodes may have moved: index, no pointer */
     }
     grid_cells_free(&kids);
@@ -234,8 +242,8 @@ static void split_chunk(void *ctx, size_t begin, size_t end, int thread)
         int v0[3] = {(int)(c % (size_t)tx) << j->shift, (int)(c / (size_t)tx % (size_t)ty) << j->shift,
                      (int)(c / ((size_t)tx * ty)) << j->shift};
         uint32_t b = j->top->offsets[c], e = j->top->offsets[c + 1];
-        o->roots[c - begin] =
-            split_node(j, o, v0, 1 << j->shift, j->top->refs + b, e - b, j->depth[c]);
+        o->roots[c - begin] = split_node(j, o, v0, 1 << j->shift, j->top->refs + b, e - b,
+                                         j->depth[c], j->shift);
     }
 }
 
@@ -377,17 +385,19 @@ static int subdivide(igrid_accel *g, const accel_params *params, int threads, do
         free(depth), free(top_planes);
         return rc;
     }
-    /* The depth of every top cell: the paper's rule (split=cell), or the
-     * deepest lattice allowed, the per-node rule deciding (split=local). */
-    int shift = 0;
-    const int local = (int)accel_param_num(params, "split") == 0;
+    /* The paper's depth of every top cell; the lattice is as deep as the
+     * deepest (split=cell) or as max_depth allows (split=adaptive). */
+    int shift = 0, any = 0;
+    const int adaptive = (int)accel_param_num(params, "split") == 0;
     const double sub_lambda = accel_param_num(params, "sub_lambda");
     for (uint64_t c = 0; c < top_cells && max_depth > 0; c++) {
         uint32_t n = top.offsets[c + 1] - top.offsets[c];
-        int d = local ? (n ? max_depth : 0) : cell_depth(&f, n, c, sub_lambda);
+        int d = cell_depth(&f, n, c, sub_lambda);
         depth[c] = (uint8_t)(d < max_depth ? d : max_depth);
         shift = depth[c] > shift ? depth[c] : shift;
+        any |= n > 0;
     }
+    if (adaptive && any) shift = max_depth;
     int v[3] = {t[0] << shift, t[1] << shift, t[2] << shift};
     g->planes = malloc(grid_plane_count(v) * sizeof *g->planes);
     if (!g->planes) {
@@ -401,7 +411,7 @@ static int subdivide(igrid_accel *g, const accel_params *params, int threads, do
         grid_cells_free(&top), free(depth), free(top_planes);
         return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory");
     }
-    split_job j = {&g->frame, s, &top, t, depth, shift, local, 8.0 / sub_lambda,
+    split_job j = {&g->frame, s, &top, t, depth, shift, adaptive, accel_param_num(params, "split_min"),
                    accel_param_num(params, "split_ratio"), out, max_bytes,
                    (uint64_t)(top.cell_count + 1) * 4};
     accel_parallel_for(top_cells, IGRID_CHUNK, threads, split_chunk, &j);
