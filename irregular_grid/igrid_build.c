@@ -41,7 +41,7 @@
  * every primitive in one octant is kept: it carves empty space around a
  * cluster (the teapot in the stadium). */
 #ifndef IGRID_SPLIT_GUARD
-#define IGRID_SPLIT_GUARD 2.0
+#define IGRID_SPLIT_GUARD 3.0
 #endif
 /* Top cells per work item of the subdivision. */
 #define IGRID_CHUNK 64
@@ -578,7 +578,7 @@ static const char *const igrid_variants[] = {
     "expand=0",
     "top_lambda=0.0001",
     "top_lambda=2,max_depth=2",
-    "sub_lambda=64,max_depth=8,expand=1",
+    "sub_lambda=20,max_depth=8,expand=1",
     "mailbox=0",
     NULL,
 };
