@@ -174,7 +174,7 @@ static uint32_t emit_leaf(split_job *j, chunk_out *o, const int v0[3], int size,
         o->box[o->leaf_len][3 + a] = v0[a] + size;
     }
     o->leaf_off[o->leaf_len] = (uint32_t)o->ref_len;
-    memcpy(o->refs + o->ref_len, ids, (size_t)n * sizeof *ids);
+    if (n) memcpy(o->refs + o->ref_len, ids, (size_t)n * sizeof *ids);
     o->ref_len += n;
     o->leaf_off[o->leaf_len + 1] = (uint32_t)o->ref_len;
     return (uint32_t)(o->leaf_len++) << 1;
@@ -300,7 +300,7 @@ static int gather(chunk_out *out, size_t chunks, uint64_t top_cells, igrid_bcell
             b->list[leaf_base + l] = b->pool + ref_base + o->leaf_off[l];
             b->len[leaf_base + l] = o->leaf_off[l + 1] - o->leaf_off[l];
         }
-        memcpy(b->pool + ref_base, o->refs, o->ref_len * sizeof *o->refs);
+        if (o->ref_len) memcpy(b->pool + ref_base, o->refs, o->ref_len * sizeof *o->refs);
         top += roots;
         node_base += o->node_len;
         leaf_base += o->leaf_len;
@@ -473,7 +473,7 @@ static int flatten(igrid_accel *g, igrid_bcells *b, accel_error *err)
             cell->hi[a] = b->exit[c][3 + a];
         }
         cell->begin = (uint32_t)at;
-        memcpy(g->refs + at, b->list[c], (size_t)b->len[c] * sizeof *g->refs);
+        if (b->len[c]) memcpy(g->refs + at, b->list[c], (size_t)b->len[c] * sizeof *g->refs);
         at += b->len[c];
         cell->end = (uint32_t)at;
     }
