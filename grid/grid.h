@@ -15,7 +15,10 @@
  *            or by bounding box only
  *   mailbox  0/1: test a primitive spanning several cells once per ray
  *   reorder  0/1: copy the primitives in Morton order of their centroids
- *   max_mb   memory limit for offsets + references, MiB (larger is refused)
+ *   max_mb   memory limit for offsets + references (+ skip table), MiB (larger is refused)
+ *   skip     none | cloud | macro: empty-space skipping (grid_skip.h)
+ *   skip_min cloud: smallest box radius worth a jump, cells
+ *   macro    macro: cells per macro cell along each axis (power of two)
  *   traverse single | packet: the 3D-DDA per ray, or coherent grid traversal
  *            of 64-ray packets slice by slice (grid_packet.c; the mailbox
  *            is then per packet)

@@ -29,6 +29,12 @@ static const accel_param_def grid_params[] = {
     {"traverse", ACCEL_PARAM_ENUM, "single", 0, 0, "single|packet",
      "single rays (3D-DDA), or coherent grid traversal of 64 consecutive rays (8x8 tiles) "
      "slice by slice"},
+    {"skip", ACCEL_PARAM_ENUM, "none", 0, 0, "none|cloud|macro",
+     "empty-space skipping: none, proximity clouds (1 byte/cell), macro cells (see macro)"},
+    {"skip_min", ACCEL_PARAM_INT, "1", 1, 254, NULL,
+     "skip=cloud: smallest radius worth a jump (cells; a jump costs about two steps)"},
+    {"macro", ACCEL_PARAM_INT, "4", 2, 64, NULL,
+     "skip=macro: cells per macro cell along each axis, a power of two"},
 };
 
 static void grid_destroy(void *a)
@@ -36,16 +42,54 @@ static void grid_destroy(void *a)
     grid_accel *g = a;
     if (!g) return;
     grid_cells_free(&g->cells);
+    free(g->skip_dist);
+    free(g->macro_empty);
     free(g->planes);
     free(g->macro);
     accel_prim_store_free(&g->store);
     free(g);
 }
 
+/* Bytes of the skipping tables of mode `skip` over res[] cells. */
+static size_t skip_bytes(grid_skip_mode skip, const int res[3], int macro_shift)
+{
+    if (skip == GRID_SKIP_CLOUD) return (size_t)res[0] * res[1] * res[2];
+    if (skip != GRID_SKIP_MACRO) return 0;
+    int mres[3];
+    grid_skip_macro_res(res, macro_shift, mres);
+    return (size_t)mres[0] * mres[1] * mres[2];
+}
+
+/* Builds the skipping tables of g->skip over the built cells, within
+ * max_bytes for cells and tables together. */
+static int build_skip(grid_accel *g, int threads, double max_bytes, accel_error *err)
+{
+    if (g->skip == GRID_SKIP_NONE) return ACCEL_OK;
+    size_t bytes = skip_bytes(g->skip, g->frame.res, g->macro_shift);
+    double total = ((double)g->cells.cell_count + 1.0 + (double)g->cells.ref_count) * 4.0 + bytes;
+    if (total > max_bytes)
+        return accel_fail(err, ACCEL_ERR_RANGE,
+                          "grid: cells, references and the skip=%s table need %.1f MiB, above the "
+                          "limit of %.1f MiB (lower lambda or res, or raise max_mb)",
+                          g->skip == GRID_SKIP_CLOUD ? "cloud" : "macro", total / 1048576.0,
+                          max_bytes / 1048576.0);
+    uint8_t *table = malloc(bytes ? bytes : 1);
+    if (!table) return accel_fail(err, ACCEL_ERR_NOMEM, "grid: out of memory for the skip table");
+    if (g->skip == GRID_SKIP_CLOUD) {
+        g->skip_dist = table;
+        return grid_skip_cloud(&g->frame, g->cells.offsets, table, threads, err);
+    }
+    g->macro_empty = table;
+    grid_skip_macro_res(g->frame.res, g->macro_shift, g->macro_res);
+    grid_skip_macro(&g->frame, g->cells.offsets, g->macro_shift, table);
+    return ACCEL_OK;
+}
+
 static size_t grid_memory(const void *a)
 {
     const grid_accel *g = a;
-    return sizeof *g + (size_t)(g->cells.cell_count + 1) * sizeof(uint32_t) +
+    return sizeof *g + skip_bytes(g->skip, g->frame.res, g->macro_shift) +
+           (size_t)(g->cells.cell_count + 1) * sizeof(uint32_t) +
            (size_t)g->cells.ref_count * sizeof(uint32_t) +
            grid_plane_count(g->frame.res) * sizeof(float) + accel_prim_store_bytes(&g->store) +
            (g->macro ? (size_t)g->macro_res[0] * g->macro_res[1] * g->macro_res[2] : 0);
@@ -73,6 +117,16 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
     g->traverse = (int)accel_param_num(params, "traverse") == 1 ? GRID_TRAVERSE_PACKET
                                                                  : GRID_TRAVERSE_SINGLE;
     g->has_spheres = scene->sphere_count > 0;
+    g->skip = (grid_skip_mode)(int)accel_param_num(params, "skip");
+    g->skip_min = (int)accel_param_num(params, "skip_min");
+    int macro = (int)accel_param_num(params, "macro");
+    while ((1 << g->macro_shift) < macro) g->macro_shift++;
+    if ((1 << g->macro_shift) != macro) {
+        grid_destroy(g);
+        return accel_fail(err, ACCEL_ERR_RANGE,
+                          "grid: macro=%d: cells per macro cell must be a power of two in [2, 64]",
+                          macro);
+    }
     g->planes = malloc(grid_plane_count(res) * sizeof *g->planes);
     if (!g->planes) {
         grid_destroy(g);
@@ -88,6 +142,7 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
                                                                       : GRID_OVERLAP_EXACT;
     rc = grid_cells_build(&g->frame, &g->store.prims, NULL, g->store.prims.prim_count, mode, threads,
                           max_bytes, &g->cells, err);
+    if (!rc) rc = build_skip(g, threads, max_bytes, err);
     if (rc) {
         grid_destroy(g);
         return rc;
@@ -146,13 +201,15 @@ static void grid_trace_occluded(const void *accel, const accel_ray *rays, uint8_
 
 /* The conformance suite runs each: defaults, a single cell (the brute force
  * limit), a very fine grid, bounding-box membership, no mailbox, the naive
- * triangle test, the two ends of the density range, and the packet
- * traversal with and without its mailbox, on a fine and a flat grid. */
+ * triangle test, the two ends of the density range, empty-space skipping
+ * (both kinds, on coarse, flat and fine grids), and the packet traversal
+ * with and without its mailbox, on a fine and a flat grid. */
 static const char *const grid_variants[] = {
     "", "res=1", "res=128", "res=7x1x13", "overlap=bbox", "mailbox=0", "tri=naive",
-    "lambda=0.05", "lambda=64", "overlap=bbox,mailbox=0", "reorder=0", "traverse=packet",
-    "traverse=packet,mailbox=0", "traverse=packet,res=128", "traverse=packet,res=7x1x13",
-    "traverse=packet,tri=naive", NULL,
+    "lambda=0.05", "lambda=64", "overlap=bbox,mailbox=0", "reorder=0", "skip=cloud",
+    "skip=cloud,res=7x1x13", "skip=cloud,lambda=64,mailbox=0", "skip=macro", "skip=macro,macro=2",
+    "skip=macro,lambda=64,macro=8", "traverse=packet", "traverse=packet,mailbox=0",
+    "traverse=packet,res=128", "traverse=packet,res=7x1x13", "traverse=packet,tri=naive", NULL,
 };
 
 const accel_kind accel_kind_grid = {

@@ -7,6 +7,7 @@
 
 #include "core/variant.h"
 #include "grid.h"
+#include "grid_skip.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -25,6 +26,14 @@ typedef struct {
     int has_spheres;
     int traverse;       /* GRID_TRAVERSE_SINGLE / GRID_TRAVERSE_PACKET */
     uint8_t *macro;     /* traverse=packet: occupancy of GRID_MACRO^3 blocks of cells */
+    /* Empty-space skipping (grid_skip.h): skip=cloud keeps one distance
+     * byte per cell, skip=macro one empty flag per block of 2^macro_shift
+     * cells per axis (macro_res blocks per axis). */
+    grid_skip_mode skip;
+    uint8_t *skip_dist;  /* cloud: cell_count bytes */
+    uint8_t *macro_empty;/* macro: macro_res[0]*[1]*[2] bytes */
+    int skip_min;        /* cloud: smallest radius jumped (cells) */
+    int macro_shift;
     int macro_res[3];
 } grid_accel;
 

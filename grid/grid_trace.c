@@ -17,119 +17,45 @@
  * several consecutive cells is found in it and skipped; a collision only
  * costs a repeated test, never a wrong answer.
  *
- * Kernels are written once (grid_kernel) and compiled into one variant
- * table per query (core/variant.h): spheres, naive triangles and mailbox
- * (ACCEL_V_OPT) as constants. The uncounted copies contain no counting code
- * and no step-bound check; counted runs check the bound nx+ny+nz+3 cells.
+ * Empty-space skipping (skip=cloud|macro, grid_skip.h): in an empty cell
+ * inside a known box of empty cells, the walk jumps to where the ray leaves
+ * the box, re-locating its cell on the same plane distances.
+ *
+ * Kernels are written once (grid_kernel, in grid_kernel.h) and compiled
+ * into one variant table per query and skipping mode (core/variant.h):
+ * spheres, naive triangles and mailbox (ACCEL_V_OPT) as constants. The
+ * uncounted copies contain no counting code and no step-bound check;
+ * counted runs check the bound nx+ny+nz+3 cells.
  */
-#include <string.h>
+#include "grid_kernel.h"
 
-#include "core/variant.h"
-#include "grid_impl.h"
+GRID_KERNELS(grid, GRID_SKIP_NONE)
 
-/* Entries of the per-ray mailbox (power of two). */
-#define GRID_MAILBOX 16
-
-static inline __attribute__((always_inline)) void
-grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
-            size_t count, accel_counters *c, int naive, int spheres, int mailbox)
+/* The table of g's skipping mode; query 0: closest hit, 1: any hit. */
+static const accel_kernel_table *grid_table(const grid_accel *g, int query)
 {
-    const accel_scene *s = &g->store.prims;
-    const grid_frame *f = &g->frame;
-    const uint32_t *offsets = g->cells.offsets;
-    const uint32_t *refs = g->cells.refs;
-    const uint64_t bound = (uint64_t)f->res[0] + f->res[1] + f->res[2] + 3;
-    for (size_t i = 0; i < count; i++) {
-        accel_ray_prep p;
-        accel_hit h = accel_hit_miss();
-        uint32_t steps = 0, empty = 0, tests = 0, skips = 0, boxes = 0;
-        float t_entry; /* unused: grid_dda_init recomputes it in double */
-        int live = accel_prep_ray(&rays[i], &p) && g->cells.ref_count > 0;
-        if (live) {
-            boxes = 1;
-            live = box3_slab(f->lo, f->hi, p.org, p.inv_dir, p.neg, p.t_near, p.t_far, &t_entry);
-        }
-        if (live) {
-            /* Set up 3D DDA for the ray. */
-            grid_dda d;
-            grid_dda_init(&d, f, &p, p.t_near);
-            uint32_t mail[GRID_MAILBOX];
-            if (mailbox) memset(mail, 0xFF, sizeof mail); /* ACCEL_MISS: no primitive */
-            float t = p.t_far, u = 0.0f, v = 0.0f;
-            /* Walk the ray through the cells. */
-            for (;;) {
-                if (c) steps++;
-                if (ACCEL_STEP_BOUND_BROKEN(c, steps, bound)) break;
-                uint32_t k = offsets[d.cell], end = offsets[d.cell + 1];
-                if (c && k == end) empty++;
-                for (; k < end; k++) {
-                    uint32_t prim = refs[k];
-                    if (mailbox) {
-                        uint32_t *slot = &mail[prim & (GRID_MAILBOX - 1)];
-                        if (*slot == prim) {
-                            if (c) skips++;
-                            continue;
-                        }
-                        *slot = prim;
-                    }
-                    if (c) tests++;
-                    if (accel_prim_hit(s, prim, &p, &t, &u, &v, naive, spheres)) {
-                        h.t = t, h.u = u, h.v = v, h.prim = prim; /* local id until done */
-                        if (occ) goto done;
-                    }
-                }
-                /* A hit (or the ray's end) before this cell's exit: nothing
-                 * in a later cell can be nearer. */
-                if (grid_dda_exit(&d) >= t) break;
-                if (!grid_dda_step(&d)) break;
-            }
-        }
-    done:
-        if (h.prim != ACCEL_MISS) h.prim = g->store.scene_id[h.prim];
-        if (occ)
-            occ[i] = h.prim != ACCEL_MISS;
-        else
-            hits[i] = h;
-        if (c) {
-            c->rays++;
-            c->steps += steps;
-            c->empty_steps += empty;
-            c->prim_tests += tests;
-            c->mailbox_skips += skips;
-            c->box_tests += boxes;
-            if (c->ray_steps) c->ray_steps[i] = steps;
-            if (c->ray_prims) c->ray_prims[i] = tests;
-        }
-    }
+    if (g->skip == GRID_SKIP_CLOUD) return grid_cloud_tables[query];
+    if (g->skip == GRID_SKIP_MACRO) return grid_macro_tables[query];
+    return query ? &grid_occ_table : &grid_hit_table;
 }
 
-static inline __attribute__((always_inline)) void
-grid_hit_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
-                unsigned f)
+static unsigned grid_flags(const grid_accel *g)
 {
-    grid_kernel(a, rays, out, NULL, count, c, (f & ACCEL_V_NAIVE) != 0,
-                (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0);
+    return (g->naive ? ACCEL_V_NAIVE : 0u) | (g->has_spheres ? ACCEL_V_SPHERES : 0u) |
+           (g->mailbox ? ACCEL_V_OPT : 0u);
 }
-
-static inline __attribute__((always_inline)) void
-grid_occ_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
-                unsigned f)
-{
-    grid_kernel(a, rays, NULL, out, count, c, (f & ACCEL_V_NAIVE) != 0,
-                (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0);
-}
-
-ACCEL_KERNEL_TABLE(grid_hit_table, grid_hit_kernel)
-ACCEL_KERNEL_TABLE(grid_occ_table, grid_occ_kernel)
 
 void grid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
                     accel_counters *counters)
 {
-    accel_run_kernel(&grid_hit_table, accel, rays, hits, count, counters, grid_variant_flags(accel));
+    const grid_accel *g = accel;
+    accel_run_kernel(grid_table(g, 0), accel, rays, hits, count, counters, grid_flags(g));
 }
 
 void grid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                    accel_counters *counters)
 {
-    accel_run_kernel(&grid_occ_table, accel, rays, occluded, count, counters, grid_variant_flags(accel));
+    const grid_accel *g = accel;
+    accel_run_kernel(grid_table(g, 1), accel, rays, occluded, count, counters,
+                     grid_flags(g));
 }

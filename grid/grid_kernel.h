@@ -1,0 +1,178 @@
+/*
+ * grid_kernel.h - the one traversal kernel of the `grid` kind (closest hit
+ * and any hit, every skipping mode), private to grid/. Described in
+ * grid_trace.c. GRID_KERNELS(NAME, SKIP) compiles it into the variant
+ * tables NAME_hit_table and NAME_occ_table (core/variant.h) for one
+ * skipping mode.
+ *
+ * Each skipping mode's tables live in their own translation unit
+ * (grid_trace.c, grid_trace_cloud.c, grid_trace_macro.c): GCC's inlining
+ * budget is per unit, and three modes' copies in one unit pushed the
+ * sphere test out of line in all of them, the plain walk's included (+16%
+ * instructions on sphereflake, callgrind).
+ */
+#ifndef GRID_GRID_KERNEL_H
+#define GRID_GRID_KERNEL_H
+
+#include <string.h>
+
+#include "core/variant.h"
+#include "grid_impl.h"
+
+/* Entries of the per-ray mailbox (power of two). */
+#define GRID_MAILBOX 16
+
+/* In an empty cell: the box of empty cells around it that skipping knows
+ * (grid_skip.h), as inclusive cell ranges; 0 when it is not worth a jump. */
+static inline __attribute__((always_inline)) int
+skip_box(const grid_accel *g, const grid_dda *d, grid_skip_mode skip, int lo[3], int hi[3])
+{
+    const grid_frame *f = &g->frame;
+    if (skip == GRID_SKIP_CLOUD) {
+        int r = (int)g->skip_dist[d->cell] - 1; /* every cell within r is empty */
+        if (r < g->skip_min) return 0;
+        for (int a = 0; a < 3; a++) {
+            lo[a] = d->idx[a] - r > 0 ? d->idx[a] - r : 0;
+            hi[a] = d->idx[a] + r < f->res[a] - 1 ? d->idx[a] + r : f->res[a] - 1;
+        }
+        return 1;
+    }
+    const int sh = g->macro_shift;
+    size_t m = (size_t)(d->idx[0] >> sh) +
+               (size_t)g->macro_res[0] *
+                   ((size_t)(d->idx[1] >> sh) + (size_t)g->macro_res[1] * (size_t)(d->idx[2] >> sh));
+    if (!g->macro_empty[m]) return 0;
+    for (int a = 0; a < 3; a++) {
+        lo[a] = d->idx[a] >> sh << sh;
+        hi[a] = lo[a] + (1 << sh) - 1 < f->res[a] - 1 ? lo[a] + (1 << sh) - 1 : f->res[a] - 1;
+    }
+    return 1;
+}
+
+/* The jump from an empty cell: 1 after a jump or when none is worth it
+ * (*moved says which), 0 when the walk is over. */
+static inline __attribute__((always_inline)) int
+skip_jump(const grid_accel *g, grid_dda *d, double t_end, grid_skip_mode skip, int *moved)
+{
+    int lo[3], hi[3];
+    *moved = skip_box(g, d, skip, lo, hi);
+    if (!*moved) return 1;
+    return grid_dda_leave_box(d, &g->frame, lo, hi, t_end);
+}
+
+/* The same out of line, for the copies that test spheres: inlined there it
+ * pushes the sphere test out of line instead (GCC's growth limits), which
+ * costs more (+24% instructions on sphereflake, callgrind) than the call. */
+static __attribute__((noinline)) int skip_jump_call(const grid_accel *g, grid_dda *d, double t_end,
+                                                    grid_skip_mode skip, int *moved)
+{
+    return skip_jump(g, d, t_end, skip, moved);
+}
+
+static inline __attribute__((always_inline)) void
+grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
+            size_t count, accel_counters *c, int naive, int spheres, int mailbox,
+            grid_skip_mode skip)
+{
+    const accel_scene *s = &g->store.prims;
+    const grid_frame *f = &g->frame;
+    const uint32_t *offsets = g->cells.offsets;
+    const uint32_t *refs = g->cells.refs;
+    const uint64_t bound = (uint64_t)f->res[0] + f->res[1] + f->res[2] + 3;
+    for (size_t i = 0; i < count; i++) {
+        accel_ray_prep p;
+        accel_hit h = accel_hit_miss();
+        uint32_t steps = 0, empty = 0, tests = 0, skips = 0, boxes = 0;
+        float t_entry; /* unused: grid_dda_init recomputes it in double */
+        int live = accel_prep_ray(&rays[i], &p) && g->cells.ref_count > 0;
+        if (live) {
+            boxes = 1;
+            live = box3_slab(f->lo, f->hi, p.org, p.inv_dir, p.neg, p.t_near, p.t_far, &t_entry);
+        }
+        if (live) {
+            /* Set up 3D DDA for the ray. */
+            grid_dda d;
+            grid_dda_init(&d, f, &p, p.t_near);
+            uint32_t mail[GRID_MAILBOX];
+            if (mailbox) memset(mail, 0xFF, sizeof mail); /* ACCEL_MISS: no primitive */
+            float t = p.t_far, u = 0.0f, v = 0.0f;
+            /* Walk the ray through the cells. */
+            for (;;) {
+                if (c) steps++;
+                if (ACCEL_STEP_BOUND_BROKEN(c, steps, bound)) break;
+                uint32_t k = offsets[d.cell], end = offsets[d.cell + 1];
+                if (c && k == end) empty++;
+                if (skip != GRID_SKIP_NONE && k == end) {
+                    /* Jump out of a box of empty cells (grid_skip.h). */
+                    int moved;
+                    if (!(spheres ? skip_jump_call(g, &d, t, skip, &moved)
+                                  : skip_jump(g, &d, t, skip, &moved)))
+                        break;
+                    if (moved) continue;
+                }
+                for (; k < end; k++) {
+                    uint32_t prim = refs[k];
+                    if (mailbox) {
+                        uint32_t *slot = &mail[prim & (GRID_MAILBOX - 1)];
+                        if (*slot == prim) {
+                            if (c) skips++;
+                            continue;
+                        }
+                        *slot = prim;
+                    }
+                    if (c) tests++;
+                    if (accel_prim_hit(s, prim, &p, &t, &u, &v, naive, spheres)) {
+                        h.t = t, h.u = u, h.v = v, h.prim = prim; /* local id until done */
+                        if (occ) goto done;
+                    }
+                }
+                /* A hit (or the ray's end) before this cell's exit: nothing
+                 * in a later cell can be nearer. */
+                if (grid_dda_exit(&d) >= t) break;
+                if (!grid_dda_step(&d)) break;
+            }
+        }
+    done:
+        if (h.prim != ACCEL_MISS) h.prim = g->store.scene_id[h.prim];
+        if (occ)
+            occ[i] = h.prim != ACCEL_MISS;
+        else
+            hits[i] = h;
+        if (c) {
+            c->rays++;
+            c->steps += steps;
+            c->empty_steps += empty;
+            c->prim_tests += tests;
+            c->mailbox_skips += skips;
+            c->box_tests += boxes;
+            if (c->ray_steps) c->ray_steps[i] = steps;
+            if (c->ray_prims) c->ray_prims[i] = tests;
+        }
+    }
+}
+
+/* Tables per query for one skipping mode (a constant in each copy). */
+#define GRID_KERNELS(NAME, SKIP)                                                            \
+    static inline __attribute__((always_inline)) void NAME##_hit_kernel(                  \
+        const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,   \
+        unsigned f)                                                                         \
+    {                                                                                       \
+        grid_kernel(a, rays, out, NULL, count, c, (f & ACCEL_V_NAIVE) != 0,                 \
+                    (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0, SKIP);              \
+    }                                                                                       \
+    static inline __attribute__((always_inline)) void NAME##_occ_kernel(                  \
+        const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,   \
+        unsigned f)                                                                         \
+    {                                                                                       \
+        grid_kernel(a, rays, NULL, out, count, c, (f & ACCEL_V_NAIVE) != 0,                 \
+                    (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0, SKIP);              \
+    }                                                                                       \
+    ACCEL_KERNEL_TABLE(NAME##_hit_table, NAME##_hit_kernel)                                 \
+    ACCEL_KERNEL_TABLE(NAME##_occ_table, NAME##_occ_kernel)
+
+/* The skipping modes' tables (grid_trace_cloud.c, grid_trace_macro.c):
+ * [0] closest hit, [1] any hit. */
+extern const accel_kernel_table *const grid_cloud_tables[2];
+extern const accel_kernel_table *const grid_macro_tables[2];
+
+#endif

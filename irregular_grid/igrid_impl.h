@@ -1,0 +1,86 @@
+/*
+ * igrid_impl.h - the built irregular grid and the build's internal
+ * interface, shared by igrid_build.c (subdivision, flattening), igrid_opt.c
+ * (merge, expansion) and igrid_trace.c. Private to irregular_grid/.
+ */
+#ifndef IRREGULAR_GRID_IGRID_IMPL_H
+#define IRREGULAR_GRID_IGRID_IMPL_H
+
+#include "igrid.h"
+
+typedef struct {
+    /* The primitive store (accel.h): cells hold its local ids. */
+    accel_prim_store store;
+    grid_frame frame;    /* the virtual lattice */
+    float *planes;       /* storage behind frame.planes */
+    int top_res[3], shift;
+    uint32_t *map;       /* voxel map (igrid.h) */
+    uint64_t map_len;
+    igrid_cell *cells;
+    uint32_t cell_count;
+    uint32_t *refs;
+    uint64_t ref_count;
+    uint64_t step_bound; /* most cells one ray can visit: voxels per axis summed, + 3 */
+    int naive, mailbox, has_spheres;
+} igrid_accel;
+
+/*
+ * The cells while they are built: original boxes (voxels lo..hi-1, the
+ * voxels the map sends to the cell), exit boxes, and one sorted reference
+ * list per cell (pointing into a pool, or owned once a merge made it).
+ * The map's leaves hold cell ids throughout.
+ */
+typedef struct {
+    const grid_frame *frame; /* virtual lattice */
+    int top_res[3], shift;
+    uint32_t *map;
+    uint64_t map_len;
+    uint32_t count;          /* cells */
+    int32_t (*box)[6];       /* original box: lo[3], hi[3] */
+    int32_t (*exit)[6];      /* exit box (expansion grows it) */
+    uint32_t **list;         /* sorted local primitive ids */
+    uint32_t *len;
+    uint8_t *owned;          /* list[c] was malloc'd by a merge */
+    uint32_t *pool;          /* the subdivision's lists */
+} igrid_bcells;
+
+static inline uint32_t igrid_bcell_at(const igrid_bcells *b, int x, int y, int z)
+{
+    return igrid_lookup(b->map, b->top_res, b->shift, x, y, z);
+}
+
+/* Frees everything b owns (map included, unless moved out: set to NULL). */
+void igrid_bcells_free(igrid_bcells *b);
+
+/*
+ * Step 2, merge (igrid_opt.c): passes along x, y, z merge a cell with its
+ * neighbour across the high face when both have the same cross-section and
+ * the surface-area cost does not grow:
+ *   A(union) * (|refs union| + ct) <= A(c1) * (|refs c1| + ct) + A(c2) * (|refs c2| + ct),
+ * A the half surface area in world units. Each cell merges at most once per
+ * axis pass (greedy in cell order: deterministic); passes repeat while they
+ * remove at least 1-alpha of the cells. The map's leaves are renumbered.
+ * A merged list is never longer than the two it replaces, so the merge
+ * needs no memory check. Returns ACCEL_ERR_NOMEM or 0.
+ */
+int igrid_merge(igrid_bcells *b, double alpha, double ct, accel_error *err);
+
+/*
+ * Step 3, expansion (igrid_opt.c): `passes` rounds over the six faces of
+ * every cell's exit box; a face moves outwards by the largest depth that
+ * stays inside every neighbouring cell across it (their exit boxes), when
+ * each of those neighbours' primitives is a subset of the cell's own
+ * (empty neighbours always are). Invariant: every voxel of a cell's exit
+ * box belongs to a cell whose references are a subset of its own, so a
+ * ray inside the exit box meets no primitive the cell did not test.
+ * Returns ACCEL_ERR_NOMEM or 0.
+ */
+int igrid_expand(igrid_bcells *b, int passes, accel_error *err);
+
+/* Traversal entry points (igrid_trace.c). */
+void igrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
+                     accel_counters *counters);
+void igrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
+                    accel_counters *counters);
+
+#endif
