@@ -1,6 +1,7 @@
 /*
  * load.c - a scene from a spec: a built-in generator ("sphereflake:level=3")
- * or a mesh file, dispatched to its loader by extension.
+ * or a file, dispatched to its loader by extension (.obj, .ply, .off, and
+ * .scene for scenes of many meshes, load_scene.c).
  */
 #include <stdio.h>
 #include <string.h>
@@ -21,6 +22,7 @@ int scene_load_file(const char *path, accel_scene *s, accel_error *err)
     scene_builder b = {0};
     const char *ext = extension(path);
     int rc;
+    if (!strcasecmp(ext, "scene")) return scene_load_scene(path, s, err);
     if (!strcasecmp(ext, "obj"))
         rc = scene_load_obj(path, &b, err);
     else if (!strcasecmp(ext, "ply"))
@@ -29,7 +31,8 @@ int scene_load_file(const char *path, accel_scene *s, accel_error *err)
         rc = scene_load_off(path, &b, err);
     else
         rc = accel_fail(err, ACCEL_ERR_SPEC,
-                        "%s: unknown mesh format '.%s' (accepted: .obj, .ply, .off)", path, ext);
+                        "%s: unknown file format '.%s' (accepted: .obj, .ply, .off, .scene)",
+                        path, ext);
     if (rc == 0) {
         const char *slash = strrchr(path, '/');
         rc = scene_finish(&b, slash ? slash + 1 : path, s, err);
@@ -77,7 +80,7 @@ int scene_create(const char *spec, accel_scene *s, accel_error *err)
         snprintf(names + len, sizeof names - len, "%s%s", i ? ", " : "", scene_generators[i]->name);
     }
     return accel_fail(err, ACCEL_ERR_SPEC,
-                      "unknown scene '%s': give a mesh file (.obj, .ply, .off) or one of: %s",
+                      "unknown scene '%s': give a file (.obj, .ply, .off, .scene) or one of: %s",
                       spec, names);
 }
 

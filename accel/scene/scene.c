@@ -13,6 +13,7 @@
 #include <string.h>
 #include <strings.h>
 
+#include "scene/compose.h"
 #include "scene/scene.h"
 
 #define SCENE_MAX_PRIMS 0xFFFFFFFEu /* ids are uint32 and 0xFFFFFFFF means miss */
@@ -207,6 +208,10 @@ void scene_free(accel_scene *s)
     free(s->tris);
     free(s->spheres);
     free(s->live);
+    if (s->instances) {
+        scene_instances_free(s->instances);
+        free(s->instances);
+    }
     memset(s, 0, sizeof *s);
 }
 
