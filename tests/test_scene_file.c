@@ -330,3 +330,68 @@ TEST(scene_file_empty_and_comments)
     CHECK(h.prim == 0);
     scene_free(&s);
 }
+
+/* ---- the built-in scenes of many meshes ------------------------------------- */
+
+/* The description matches the flattened triangles bit for bit. */
+static void check_description(const accel_scene *s)
+{
+    const accel_instances *set = s->instances;
+    if (!set) {
+        test_fail(__FILE__, __LINE__, "%s: no instance description", s->name);
+        return;
+    }
+    uint64_t next = 0;
+    size_t bad = 0;
+    for (uint32_t k = 0; k < set->instance_count; k++) {
+        const accel_instance *in = &set->instances[k];
+        const accel_scene *m = &set->meshes[in->mesh];
+        CHECK(in->base == next);
+        next += m->prim_count;
+        for (uint32_t q = 0; q < m->tri_count; q++)
+            for (int c = 0; c < 3; c++) {
+                float w[3];
+                accel_xform_vertex(in->xform, m->tris + 9 * q + 3 * c, w);
+                bad += memcmp(w, s->tris + 9 * ((size_t)in->base + q) + 3 * c, sizeof w) != 0;
+            }
+    }
+    CHECKF(next == s->prim_count && bad == 0, "%s: %llu primitives described, %zu vertices differ",
+           s->name, (unsigned long long)next, bad);
+}
+
+TEST(scene_builtin_multi_meshes)
+{
+    accel_scene a, b, c;
+    accel_error err = {0};
+    if (scene_create("field:instances=40,detail=2", &a, &err)) {
+        test_fail(__FILE__, __LINE__, "%s", err.msg);
+        return;
+    }
+    check_description(&a);
+    CHECK(a.instances->mesh_count == 5 && a.instances->instance_count == 41);
+    /* Some instances are mirrored (negative determinant). */
+    int mirrored = 0;
+    for (uint32_t k = 0; k < a.instances->instance_count; k++)
+        mirrored += scene_xform_det(a.instances->instances[k].xform) < 0;
+    CHECK(mirrored > 0);
+    scene_free(&a);
+    /* animated: a function of the frame; the blob (mesh 3) deforms. */
+    const char *s0 = "animated:frame=0,instances=8,detail=3", *s1 = "animated:frame=30,instances=8,detail=3";
+    if (scene_create(s0, &a, &err) || scene_create(s1, &b, &err) || scene_create(s1, &c, &err)) {
+        test_fail(__FILE__, __LINE__, "%s", err.msg);
+        return;
+    }
+    check_description(&b);
+    CHECK(a.prim_count == b.prim_count && b.prim_count == c.prim_count);
+    CHECK(!memcmp(b.tris, c.tris, 9 * sizeof(float) * b.tri_count));
+    const accel_instances *ia = a.instances, *ib = b.instances;
+    CHECK(memcmp(ia->meshes[3].tris, ib->meshes[3].tris, 9 * sizeof(float) * ib->meshes[3].tri_count));
+    CHECK(!memcmp(ia->meshes[0].tris, ib->meshes[0].tris, 9 * sizeof(float) * ib->meshes[0].tri_count));
+    int moved = 0;
+    for (uint32_t k = 0; k < ib->instance_count; k++)
+        moved += memcmp(ia->instances[k].xform, ib->instances[k].xform, sizeof ia->instances[k].xform) != 0;
+    CHECKF(moved >= (int)ib->instance_count - 1, "%d of %u instances moved", moved, ib->instance_count);
+    scene_free(&a);
+    scene_free(&b);
+    scene_free(&c);
+}

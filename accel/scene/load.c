@@ -8,6 +8,7 @@
 #include <strings.h>
 
 #include "scene/builtin.h"
+#include "scene/compose.h"
 #include "scene/scene.h"
 
 static const char *extension(const char *path)
@@ -61,12 +62,20 @@ int scene_create(const char *spec, accel_scene *s, accel_error *err)
             int rc = accel_parse_kv(what, colon ? colon + 1 : "", g->params, g->param_count, num,
                                     str, given, err);
             if (rc) return rc;
-            scene_builder b = {0};
             accel_camera cam;
             vec3 light;
-            rc = g->generate(num, &b, &cam, &light, err);
-            if (rc == 0) rc = scene_finish(&b, spec, s, err);
-            scene_builder_free(&b);
+            if (g->compose) {
+                scene_compose c;
+                memset(&c, 0, sizeof c);
+                rc = g->compose(num, &c, &cam, &light, err);
+                if (rc == 0) rc = scene_compose_finish(&c, spec, s, err);
+                scene_compose_free(&c);
+            } else {
+                scene_builder b = {0};
+                rc = g->generate(num, &b, &cam, &light, err);
+                if (rc == 0) rc = scene_finish(&b, spec, s, err);
+                scene_builder_free(&b);
+            }
             if (rc) return rc;
             s->camera = cam;
             s->light = light;

@@ -81,6 +81,8 @@ int scene_parse_scene(const char *name, const char *dir, const char *data, size_
 
 /* ---- built-in scenes ----------------------------------------------------- */
 
+struct scene_compose;
+
 typedef struct {
     const char *name;
     const char *summary;
@@ -90,6 +92,11 @@ typedef struct {
     int (*generate)(const double *values, scene_builder *b, accel_camera *cam, vec3 *light,
                     accel_error *err);
     const char *small_spec; /* a spec with a few thousand primitives, for tests */
+    /* Scenes of many meshes set this instead of generate: they fill a
+     * scene_compose (compose.h) with meshes and instances, which is then
+     * flattened, keeping the description in accel_scene.instances. */
+    int (*compose)(const double *values, struct scene_compose *c, accel_camera *cam, vec3 *light,
+                   accel_error *err);
 } scene_generator;
 
 extern const scene_generator *const scene_generators[];
