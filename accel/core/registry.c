@@ -13,12 +13,14 @@ extern const accel_kind accel_kind_brute;
 extern const accel_kind accel_kind_bvh;
 extern const accel_kind accel_kind_grid;
 extern const accel_kind accel_kind_nested_grid;
+extern const accel_kind accel_kind_instanced;
 
 const accel_kind *const accel_kinds[] = {
     &accel_kind_brute,
     &accel_kind_bvh,
     &accel_kind_grid,
     &accel_kind_nested_grid,
+    &accel_kind_instanced,
 };
 const size_t accel_kind_count = sizeof accel_kinds / sizeof accel_kinds[0];
 
