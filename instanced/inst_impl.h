@@ -76,6 +76,7 @@ typedef struct {
     const accel_scene *scene; /* the flattened scene */
     int top, bottom_kind;     /* INST_BVH or INST_GRID */
     int naive, world_flat, spheres;
+    int no_pad;               /* pad=0: boxes not grown (shows what the pad is for) */
     uint32_t bottom_count, item_count;
     inst_bottom *bottoms;
     inst_item *items;

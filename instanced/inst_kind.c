@@ -27,6 +27,9 @@ static const accel_param_def inst_params[] = {
     {"world", ACCEL_PARAM_ENUM, "compute", 0, 0, "compute|flat",
      "world triangles: computed from the mesh by the flattener's expression (a true two-level "
      "structure), or read from the flattened scene (the same bits; for comparison)"},
+    {"pad", ACCEL_PARAM_BOOL, "1", 0, 1, NULL,
+     "grow bottom-level boxes by the flattening's rounding (0: exact object-space boxes, "
+     "which miss world hits near edges: kept to show why the pad is needed)"},
 };
 #define INST_PARAM_COUNT (sizeof inst_params / sizeof inst_params[0])
 
@@ -139,6 +142,7 @@ static int inst_build(const accel_scene *scene, const accel_params *params, int 
     a->bottom_kind = (int)accel_param_num(params, "bottom");
     a->naive = params->naive;
     a->world_flat = (int)accel_param_num(params, "world") == 1;
+    a->no_pad = accel_param_num(params, "pad") == 0.0;
     a->spheres = scene->sphere_count > 0;
     int leaf = (int)accel_param_num(params, "leaf");
     double lambda = accel_param_num(params, "lambda");
@@ -180,7 +184,7 @@ static int inst_build(const accel_scene *scene, const accel_params *params, int 
         double e_world = 0x1p-24 * box_abs_max(in->bounds) +
                          0x1p-50 * (row_norm(in->xform) * box_abs_max(mb) + t_abs);
         it->pad = it->identity ? 0.0 : 2.0 * row_norm(in->inverse) * e_world;
-        double gp = 2.0 * it->pad + 0x1p-20 * (box_abs_max(mb) + 2.0 * it->pad);
+        double gp = a->no_pad ? 0.0 : 2.0 * it->pad + 0x1p-20 * (box_abs_max(mb) + 2.0 * it->pad);
         grid_pad[in->mesh] = fmax(grid_pad[in->mesh], gp);
     }
     for (uint32_t i = 0; rc == 0 && i < a->bottom_count; i++) {

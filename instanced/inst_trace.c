@@ -272,7 +272,7 @@ INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int 
     /* Points that matter lie in the padded box: |t d| <= |o| + B + pad. */
     double reach = oa + b->abs_max + 4.0 * it->pad + 1.0;
     double e_ray = 0x1p-50 * (eo + ed * reach / da);
-    double pad = 2.0 * it->pad + e_ray;
+    double pad = a->no_pad ? 0.0 : 2.0 * it->pad + e_ray;
     /* Clip to the mesh's box grown by the pad. */
     double s0 = r->p.t_near, s1 = r->t;
     for (int i = 0; i < 3; i++) {
@@ -305,7 +305,8 @@ INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int 
      * box's size, not by how far away the ray started. */
     vec3 of = v3((float)(o[0] + s0 * d[0]), (float)(o[1] + s0 * d[1]), (float)(o[2] + s0 * d[2]));
     vec3 df = v3((float)d[0], (float)d[1], (float)d[2]);
-    double pf = pad + 0x1p-20 * (b->abs_max + 2.0 * pad) + 0x1p-50 * (oa + fabs(s0) * da);
+    double pf = a->no_pad ? 0.0
+                          : pad + 0x1p-20 * (b->abs_max + 2.0 * pad) + 0x1p-50 * (oa + fabs(s0) * da);
     walk_bvh(a, it, b, r, of, df, (float)(pf * (1.0 + 0x1p-20)), s0, naive, spheres);
 }
 
