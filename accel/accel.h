@@ -282,6 +282,13 @@ typedef struct {
     int res[3];        /* grids: top-level resolution */
 } accel_build_stats;
 
+/* What a per-frame update (accel_kind.update) did, and how long it took. */
+typedef struct {
+    double bottom_ms;        /* refit or rebuild of the meshes that changed */
+    double top_ms;           /* per-instance data and the top level */
+    uint32_t meshes_refit, meshes_rebuilt;
+} accel_update_stats;
+
 typedef struct accel_kind {
     const char *name;
     const char *summary;       /* one line for --help */
@@ -301,6 +308,15 @@ typedef struct accel_kind {
                      accel_counters *counters);
     size_t (*memory)(const void *accel);
     void (*destroy)(void *accel);
+    /* Optional (NULL: rebuild instead): moves a built structure to the next
+     * frame of an animation. `scene` holds the same meshes and instances
+     * (same counts) as the scene the structure was built on, with new
+     * transforms and vertex positions; the old scene must still be alive
+     * during the call, not after. refit = 1 updates the boxes of a changed
+     * mesh's structure bottom-up, keeping its topology; refit = 0 rebuilds
+     * it. Not reentrant with traversal: no ray may be in flight. */
+    int (*update)(void *accel, const accel_scene *scene, int refit, accel_update_stats *stats,
+                  accel_error *err);
 } accel_kind;
 
 /* registry.c: every kind, one line each. */

@@ -58,6 +58,8 @@ typedef struct {
     box3 box;                /* every vertex of every primitive, object space */
     double box_lo[3], box_hi[3];
     double abs_max;          /* largest |coordinate| of box */
+    double vert_abs_max;     /* largest |coordinate| of any vertex (dead triangles too) */
+    double grid_pad;         /* bottom=grid: how far its boxes were grown */
     inst_bvh bvh;
     inst_grid grid;
 } inst_bottom;
@@ -77,6 +79,8 @@ typedef struct {
     int top, bottom_kind;     /* INST_BVH or INST_GRID */
     int naive, world_flat, spheres;
     int no_pad;               /* pad=0: boxes not grown (shows what the pad is for) */
+    int leaf;                 /* bottom=bvh: largest leaf */
+    double lambda, top_lambda;
     uint32_t bottom_count, item_count;
     inst_bottom *bottoms;
     inst_item *items;
@@ -84,6 +88,17 @@ typedef struct {
     inst_bvh top_bvh;
     inst_grid top_grid;
 } inst_accel;
+
+/* Building blocks (inst_kind.c), shared with the per-frame update (inst_update.c). */
+int inst_set_items(inst_accel *a, const accel_scene *scene, double *grid_pad, accel_error *err);
+int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *err);
+int inst_build_top(inst_accel *a, accel_error *err);
+void inst_fill_stats(const inst_accel *a, accel_build_stats *stats);
+size_t inst_memory(const void *a);
+void inst_destroy(void *a);
+/* accel_kind.update (inst_update.c). */
+int inst_update(void *a, const accel_scene *scene, int refit, accel_update_stats *st,
+                accel_error *err);
 
 void inst_intersect(const void *a, const accel_ray *rays, accel_hit *hits, size_t n,
                     accel_counters *c);

@@ -59,7 +59,7 @@ static double box_abs_max(box3 b)
     return m;
 }
 
-static void inst_destroy(void *p)
+void inst_destroy(void *p)
 {
     inst_accel *a = p;
     if (!a) return;
@@ -85,7 +85,7 @@ static size_t grid_bytes(const inst_grid *g)
     return g->start ? ((size_t)g->cell_count + 1 + (size_t)g->ref_count) * sizeof(uint32_t) : 0;
 }
 
-static size_t inst_memory(const void *p)
+size_t inst_memory(const void *p)
 {
     const inst_accel *a = p;
     size_t bytes = sizeof *a + a->item_count * (sizeof(inst_item) + sizeof(box3)) +
@@ -96,71 +96,71 @@ static size_t inst_memory(const void *p)
     return bytes;
 }
 
-/* The bottom level of one mesh. ids: the primitives to hold (NULL: all
- * triangles 0..tri_count-1); grid_pad: how far boxes grow in the grid. */
-static int build_bottom(inst_accel *a, inst_bottom *b, const uint32_t *ids, uint32_t n,
-                        int leaf, double lambda, double grid_pad, accel_error *err)
+/* The bottom level of mesh i over its primitives (a plain scene: the live
+ * ones), boxes grown by grid_pad in a grid. */
+int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *err)
 {
+    inst_bottom *b = &a->bottoms[i];
+    inst_bvh_free(&b->bvh);
+    inst_grid_free(&b->grid);
     const accel_scene *m = b->mesh;
+    const uint32_t *ids = a->scene->instances ? NULL : m->live;
+    uint32_t n = ids ? m->live_count : m->tri_count;
     box3 *boxes = malloc((n ? n : 1) * sizeof *boxes);
     if (!boxes) return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
     b->box = box3_empty();
-    for (uint32_t i = 0; i < n; i++) {
-        uint32_t id = ids ? ids[i] : i;
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t id = ids ? ids[k] : k;
         if (id < m->tri_count) {
             const float *t = m->tris + 9 * (size_t)id;
             box3 bb = box3_empty();
             for (int c = 0; c < 3; c++) bb = box3_grow(bb, v3_load(t + 3 * c));
-            boxes[i] = bb;
+            boxes[k] = bb;
         } else {
-            boxes[i] = accel_prim_bounds(m, id);
+            boxes[k] = accel_prim_bounds(m, id);
         }
-        b->box = box3_union(b->box, boxes[i]);
+        b->box = box3_union(b->box, boxes[k]);
     }
     const float *lo = &b->box.min.x, *hi = &b->box.max.x;
     for (int k = 0; k < 3; k++) b->box_lo[k] = lo[k], b->box_hi[k] = hi[k];
     b->abs_max = box_abs_max(b->box);
-    int rc = a->bottom_kind == INST_BVH ? inst_bvh_build(boxes, n, leaf, &b->bvh, err)
-                                        : inst_grid_build(boxes, n, lambda, grid_pad, &b->grid, err);
+    /* The DDA's own rounding: a margin far above double error, far below a cell. */
+    b->grid_pad = grid_pad + 0x1p-24 * b->abs_max + 1e-30;
+    int rc = a->bottom_kind == INST_BVH
+                 ? inst_bvh_build(boxes, n, a->leaf, &b->bvh, err)
+                 : inst_grid_build(boxes, n, a->lambda, b->grid_pad, &b->grid, err);
     free(boxes);
     if (rc || !ids) return rc;
     /* Items were box indices: make them primitive ids. */
     uint32_t *items = a->bottom_kind == INST_BVH ? b->bvh.items : b->grid.items;
     uint64_t count = a->bottom_kind == INST_BVH ? b->bvh.item_count : b->grid.ref_count;
-    for (uint64_t i = 0; i < count; i++) items[i] = ids[items[i]];
+    for (uint64_t k = 0; k < count; k++) items[k] = ids[items[k]];
     return 0;
 }
 
-static int inst_build(const accel_scene *scene, const accel_params *params, int threads,
-                      void **out, accel_build_stats *stats, accel_error *err)
+/*
+ * Per-instance data from the scene; grid_pad[i] (if not NULL) gets the
+ * largest pad mesh i's grid needs. The pad is, in object units, how far a
+ * flattened world vertex can be from the exact image of its mesh vertex
+ * (float rounding of the result, and the double rounding of the fused
+ * sum), taken through the inverse, doubled for safety.
+ */
+int inst_set_items(inst_accel *a, const accel_scene *scene, double *grid_pad, accel_error *err)
 {
-    (void)threads;
-    inst_accel *a = calloc(1, sizeof *a);
-    if (!a) return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
-    a->scene = scene;
-    a->top = (int)accel_param_num(params, "top");
-    a->bottom_kind = (int)accel_param_num(params, "bottom");
-    a->naive = params->naive;
-    a->world_flat = (int)accel_param_num(params, "world") == 1;
-    a->no_pad = accel_param_num(params, "pad") == 0.0;
-    a->spheres = scene->sphere_count > 0;
-    int leaf = (int)accel_param_num(params, "leaf");
-    double lambda = accel_param_num(params, "lambda");
     const accel_instances *set = scene->instances;
-    a->bottom_count = set ? set->mesh_count : 1;
-    a->item_count = set ? set->instance_count : 1;
-    a->bottoms = calloc(a->bottom_count ? a->bottom_count : 1, sizeof *a->bottoms);
-    a->items = calloc(a->item_count ? a->item_count : 1, sizeof *a->items);
-    a->item_boxes = calloc(a->item_count ? a->item_count : 1, sizeof *a->item_boxes);
-    double *grid_pad = calloc(a->bottom_count ? a->bottom_count : 1, sizeof *grid_pad);
-    int rc = 0;
-    if (!a->bottoms || !a->items || !a->item_boxes || !grid_pad)
-        rc = accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
-    /* Instances: the pad is, in object units, how far a flattened world
-     * vertex can be from the exact image of its mesh vertex (float rounding
-     * of the result, and the double rounding of the fused sum), taken
-     * through the inverse, doubled for safety. */
-    for (uint32_t k = 0; rc == 0 && k < a->item_count; k++) {
+    a->scene = scene;
+    a->spheres = scene->sphere_count > 0;
+    for (uint32_t i = 0; i < a->bottom_count; i++) {
+        inst_bottom *b = &a->bottoms[i];
+        b->mesh = set ? &set->meshes[i] : scene;
+        /* Every vertex (dead triangles too: their world copies may live). */
+        box3 mb = set ? box3_empty() : scene->bounds;
+        for (size_t v = 0; set && v < 3 * (size_t)b->mesh->tri_count; v++)
+            mb = box3_grow(mb, v3_load(b->mesh->tris + 3 * v));
+        b->vert_abs_max = box_abs_max(mb);
+        if (grid_pad) grid_pad[i] = 0.0;
+    }
+    for (uint32_t k = 0; k < a->item_count; k++) {
         inst_item *it = &a->items[k];
         if (!set) {
             static const double id[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
@@ -171,46 +171,40 @@ static int inst_build(const accel_scene *scene, const accel_params *params, int 
             continue;
         }
         const accel_instance *in = &set->instances[k];
+        if (in->mesh >= a->bottom_count)
+            return accel_fail(err, ACCEL_ERR_INTERNAL, "instanced: instance %u of mesh %u", k,
+                              in->mesh);
         memcpy(it->xform, in->xform, sizeof it->xform);
         memcpy(it->inverse, in->inverse, sizeof it->inverse);
         it->bottom = in->mesh;
         it->base = in->base;
         it->identity = is_identity(in->xform);
         a->item_boxes[k] = in->bounds;
-        const accel_scene *m = &set->meshes[in->mesh];
-        box3 mb = box3_empty();
-        for (size_t i = 0; i < 3 * (size_t)m->tri_count; i++) mb = box3_grow(mb, v3_load(m->tris + 3 * i));
+        double mesh_abs = a->bottoms[in->mesh].vert_abs_max;
         double t_abs = fmax(fabs(in->xform[3]), fmax(fabs(in->xform[7]), fabs(in->xform[11])));
         double e_world = 0x1p-24 * box_abs_max(in->bounds) +
-                         0x1p-50 * (row_norm(in->xform) * box_abs_max(mb) + t_abs);
+                         0x1p-50 * (row_norm(in->xform) * mesh_abs + t_abs);
         it->pad = it->identity ? 0.0 : 2.0 * row_norm(in->inverse) * e_world;
-        double gp = a->no_pad ? 0.0 : 2.0 * it->pad + 0x1p-20 * (box_abs_max(mb) + 2.0 * it->pad);
-        grid_pad[in->mesh] = fmax(grid_pad[in->mesh], gp);
+        double gp = a->no_pad ? 0.0 : 2.0 * it->pad + 0x1p-20 * (mesh_abs + 2.0 * it->pad);
+        if (grid_pad) grid_pad[in->mesh] = fmax(grid_pad[in->mesh], gp);
     }
-    for (uint32_t i = 0; rc == 0 && i < a->bottom_count; i++) {
-        inst_bottom *b = &a->bottoms[i];
-        b->mesh = set ? &set->meshes[i] : scene;
-        double margin = 0x1p-30 * box_abs_max(set ? set->meshes[i].bounds : scene->bounds) + 1e-30;
-        if (set)
-            rc = build_bottom(a, b, NULL, b->mesh->tri_count, leaf, lambda, grid_pad[i] + margin, err);
-        else
-            rc = build_bottom(a, b, scene->live, scene->live_count, leaf, lambda, margin, err);
-    }
-    free(grid_pad);
-    if (rc == 0) {
-        double top_pad = 0.0;
-        for (uint32_t k = 0; k < a->item_count; k++)
-            top_pad = fmax(top_pad, 0x1p-30 * box_abs_max(a->item_boxes[k]));
-        rc = a->top == INST_BVH
-                 ? inst_bvh_build(a->item_boxes, a->item_count, 1, &a->top_bvh, err)
-                 : inst_grid_build(a->item_boxes, a->item_count,
-                                   accel_param_num(params, "top_lambda"), top_pad + 1e-30,
-                                   &a->top_grid, err);
-    }
-    if (rc) {
-        inst_destroy(a);
-        return rc;
-    }
+    return 0;
+}
+
+int inst_build_top(inst_accel *a, accel_error *err)
+{
+    inst_bvh_free(&a->top_bvh);
+    inst_grid_free(&a->top_grid);
+    if (a->top == INST_BVH) return inst_bvh_build(a->item_boxes, a->item_count, 1, &a->top_bvh, err);
+    double top_pad = 0.0;
+    for (uint32_t k = 0; k < a->item_count; k++)
+        top_pad = fmax(top_pad, 0x1p-30 * box_abs_max(a->item_boxes[k]));
+    return inst_grid_build(a->item_boxes, a->item_count, a->top_lambda, top_pad + 1e-30,
+                           &a->top_grid, err);
+}
+
+void inst_fill_stats(const inst_accel *a, accel_build_stats *stats)
+{
     memset(stats, 0, sizeof *stats);
     stats->sah_cost = NAN;
     int bottom_depth = 0;
@@ -225,6 +219,42 @@ static int inst_build(const accel_scene *scene, const accel_params *params, int 
     stats->depth = (a->top == INST_BVH ? a->top_bvh.depth : 1) + bottom_depth;
     for (int k = 0; k < 3; k++) stats->res[k] = a->top_grid.res[k];
     stats->bytes = inst_memory(a);
+}
+
+static int inst_build(const accel_scene *scene, const accel_params *params, int threads,
+                      void **out, accel_build_stats *stats, accel_error *err)
+{
+    (void)threads;
+    inst_accel *a = calloc(1, sizeof *a);
+    if (!a) return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
+    a->top = (int)accel_param_num(params, "top");
+    a->bottom_kind = (int)accel_param_num(params, "bottom");
+    a->naive = params->naive;
+    a->world_flat = (int)accel_param_num(params, "world") == 1;
+    a->no_pad = accel_param_num(params, "pad") == 0.0;
+    a->leaf = (int)accel_param_num(params, "leaf");
+    a->lambda = accel_param_num(params, "lambda");
+    a->top_lambda = accel_param_num(params, "top_lambda");
+    const accel_instances *set = scene->instances;
+    a->bottom_count = set ? set->mesh_count : 1;
+    a->item_count = set ? set->instance_count : 1;
+    a->bottoms = calloc(a->bottom_count ? a->bottom_count : 1, sizeof *a->bottoms);
+    a->items = calloc(a->item_count ? a->item_count : 1, sizeof *a->items);
+    a->item_boxes = calloc(a->item_count ? a->item_count : 1, sizeof *a->item_boxes);
+    double *grid_pad = calloc(a->bottom_count ? a->bottom_count : 1, sizeof *grid_pad);
+    int rc = 0;
+    if (!a->bottoms || !a->items || !a->item_boxes || !grid_pad)
+        rc = accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
+    if (rc == 0) rc = inst_set_items(a, scene, grid_pad, err);
+    for (uint32_t i = 0; rc == 0 && i < a->bottom_count; i++)
+        rc = inst_build_bottom(a, i, grid_pad[i], err);
+    free(grid_pad);
+    if (rc == 0) rc = inst_build_top(a, err);
+    if (rc) {
+        inst_destroy(a);
+        return rc;
+    }
+    inst_fill_stats(a, stats);
     *out = a;
     return 0;
 }
@@ -246,4 +276,5 @@ const accel_kind accel_kind_instanced = {
     .occluded = inst_occluded,
     .memory = inst_memory,
     .destroy = inst_destroy,
+    .update = inst_update,
 };

@@ -252,3 +252,77 @@ TEST(instanced_builtin_multi_meshes)
         scene_free(&s);
     }
 }
+
+/* Frame to frame: refit or rebuild of the deforming blob, top level
+ * rebuilt, exact against the oracle on every frame's flattened scene. */
+TEST(instanced_update_frames)
+{
+    static const char *const specs[] = {"instanced", "instanced:top=grid,bottom=grid"};
+    for (size_t v = 0; v < 2; v++)
+        for (int refit = 0; refit <= 1; refit++) {
+            /* The structure refers to its scene by address: two slots. */
+            accel_scene slot[2];
+            int cur = 0;
+            accel_error err = {0};
+            char spec[128];
+            if (scene_create("animated:frame=0,instances=6,detail=2", &slot[0], &err)) {
+                test_fail(__FILE__, __LINE__, "%s", err.msg);
+                return;
+            }
+            const accel_kind *kind;
+            void *a;
+            accel_build_stats st;
+            if (accel_build_spec(specs[v], &slot[0], 1, &kind, &a, &st, &err)) {
+                test_fail(__FILE__, __LINE__, "%s", err.msg);
+                scene_free(&slot[0]);
+                return;
+            }
+            CHECK(kind->update != NULL);
+            for (int frame = 20; frame <= 60 && kind->update; frame += 40) {
+                accel_scene *next = &slot[1 - cur];
+                snprintf(spec, sizeof spec, "animated:frame=%d,instances=6,detail=2", frame);
+                if (scene_create(spec, next, &err)) break;
+                accel_update_stats us;
+                int rc = kind->update(a, next, refit, &us, &err);
+                CHECKF(rc == 0, "%s", err.msg);
+                scene_free(&slot[cur]);
+                cur = 1 - cur;
+                if (rc) break;
+                const accel_scene *sc = &slot[cur];
+                /* Only the blob changes shape: one mesh refit (bvh) or rebuilt. */
+                CHECKF(v == 1 || us.meshes_refit + us.meshes_rebuilt == 1,
+                       "%s refit=%d frame %d: %u refit, %u rebuilt", specs[v], refit, frame,
+                       us.meshes_refit, us.meshes_rebuilt);
+                CHECK(v == 1 || us.meshes_refit == (uint32_t)refit);
+                ray_list l = {0};
+                make_rays(sc, &l);
+                accel_hit *ref = malloc(l.n * sizeof *ref), *h = malloc(l.n * sizeof *h);
+                accel_reference_trace(sc, l.r, ref, l.n, 2);
+                accel_trace(kind, a, l.r, h, l.n, 1, NULL);
+                hits_diff d = hits_compare(ref, h, l.n);
+                CHECKF(d.holes + d.false_hits + d.disagreements == 0,
+                       "%s refit=%d frame %d: %zu holes %zu false %zu disagreements of %zu",
+                       specs[v], refit, frame, d.holes, d.false_hits, d.disagreements, l.n);
+                free(ref);
+                free(h);
+                free(l.r);
+            }
+            kind->destroy(a);
+            scene_free(&slot[cur]);
+        }
+    /* A plain scene has nothing to update; a changed topology is refused. */
+    accel_scene p, q;
+    accel_error err = {0};
+    const accel_kind *kind;
+    void *a;
+    accel_build_stats st;
+    accel_update_stats us;
+    if (scene_create("animated:frame=0,instances=6,detail=2", &p, &err) == 0 &&
+        scene_create("animated:frame=0,instances=6,detail=3", &q, &err) == 0 &&
+        accel_build_spec("instanced", &p, 1, &kind, &a, &st, &err) == 0) {
+        CHECK(kind->update(a, &q, 1, &us, &err) == ACCEL_ERR_SPEC && strstr(err.msg, "topology"));
+        kind->destroy(a);
+    }
+    scene_free(&p);
+    scene_free(&q);
+}
