@@ -133,7 +133,8 @@ typedef struct accel_instances {
  * applied in double with fused multiply-adds (bit-identical on every
  * compiler and flag set: no contraction choice is left to the compiler),
  * rounded once to float. */
-static inline void accel_xform_vertex(const double *m, const float *p, float *out)
+static inline __attribute__((always_inline)) void accel_xform_vertex(const double *m,
+                                                                   const float *p, float *out)
 {
     for (int r = 0; r < 3; r++) {
         const double *row = m + 4 * r;

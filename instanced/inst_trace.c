@@ -41,6 +41,10 @@ typedef struct {
 
 #define INLINE static inline __attribute__((always_inline))
 
+/* Compare-and-select (libm's fmax is a call: it must order NaNs). */
+INLINE double dmax(double a, double b) { return a > b ? a : b; }
+INLINE double dmin(double a, double b) { return a < b ? a : b; }
+
 /* ---- the world-space decision ------------------------------------------------ */
 
 INLINE void test_prim(const inst_accel *a, const inst_item *it, const accel_scene *mesh,
@@ -242,6 +246,34 @@ INLINE void walk_grid(const inst_accel *a, const inst_item *it, const inst_botto
     } while (dda_step(g, &w));
 }
 
+/* The walks as real functions, flattened: everything they call (the
+ * slab test, the triangle test, the vertex transform) is inlined into
+ * them, which GCC's size limits would otherwise refuse in this kernel. One
+ * call per instance visited; the flags become run-time arguments there. */
+static __attribute__((flatten, noinline)) void
+walk_bvh_flat(const inst_accel *a, const inst_item *it, const inst_bottom *b, ray_state *r,
+              vec3 org, vec3 dir, float pad, double shift, int naive, int spheres)
+{
+    if (naive)
+        walk_bvh(a, it, b, r, org, dir, pad, shift, 1, spheres);
+    else if (spheres)
+        walk_bvh(a, it, b, r, org, dir, pad, shift, 0, 1);
+    else
+        walk_bvh(a, it, b, r, org, dir, pad, shift, 0, 0);
+}
+
+static __attribute__((flatten, noinline)) void
+walk_grid_flat(const inst_accel *a, const inst_item *it, const inst_bottom *b, ray_state *r,
+               const double *o, const double *d, double t0, int naive, int spheres)
+{
+    if (naive)
+        walk_grid(a, it, b, r, o, d, t0, 1, spheres);
+    else if (spheres)
+        walk_grid(a, it, b, r, o, d, t0, 0, 1);
+    else
+        walk_grid(a, it, b, r, o, d, t0, 0, 0);
+}
+
 /* ---- one instance ------------------------------------------------------------- */
 
 INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int spheres)
@@ -250,9 +282,9 @@ INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int 
     const inst_bottom *b = &a->bottoms[it->bottom];
     if (it->identity) {
         if (a->bottom_kind == INST_BVH)
-            walk_bvh(a, it, b, r, r->p.org, r->p.dir, 0.0f, 0.0, naive, spheres);
+            walk_bvh_flat(a, it, b, r, r->p.org, r->p.dir, 0.0f, 0.0, naive, spheres);
         else
-            walk_grid(a, it, b, r, r->o, r->d, r->p.t_near, naive, spheres);
+            walk_grid_flat(a, it, b, r, r->o, r->d, r->p.t_near, naive, spheres);
         return;
     }
     /* The ray in object space, in double, with a bound on its rounding. */
@@ -262,11 +294,11 @@ INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int 
         const double *row = m + 4 * i;
         o[i] = row[0] * r->o[0] + row[1] * r->o[1] + row[2] * r->o[2] + row[3];
         d[i] = row[0] * r->d[0] + row[1] * r->d[1] + row[2] * r->d[2];
-        eo = fmax(eo, fabs(row[0] * r->o[0]) + fabs(row[1] * r->o[1]) + fabs(row[2] * r->o[2]) +
+        eo = dmax(eo, fabs(row[0] * r->o[0]) + fabs(row[1] * r->o[1]) + fabs(row[2] * r->o[2]) +
                           fabs(row[3]));
-        ed = fmax(ed, fabs(row[0] * r->d[0]) + fabs(row[1] * r->d[1]) + fabs(row[2] * r->d[2]));
-        oa = fmax(oa, fabs(o[i]));
-        da = fmax(da, fabs(d[i]));
+        ed = dmax(ed, fabs(row[0] * r->d[0]) + fabs(row[1] * r->d[1]) + fabs(row[2] * r->d[2]));
+        oa = dmax(oa, fabs(o[i]));
+        da = dmax(da, fabs(d[i]));
     }
     if (!(da > 0.0) || !isfinite(oa) || !isfinite(da)) return;
     /* Points that matter lie in the padded box: |t d| <= |o| + B + pad. */
@@ -284,8 +316,8 @@ INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int 
         double t0 = (lo - o[i]) / d[i], t1 = (hi - o[i]) / d[i];
         if (t0 > t1) { double x = t0; t0 = t1; t1 = x; }
         double slack = 0x1p-40 * (fabs(t0) + fabs(t1));
-        s0 = fmax(s0, t0 - slack);
-        s1 = fmin(s1, t1 + slack);
+        s0 = dmax(s0, t0 - slack);
+        s1 = dmin(s1, t1 + slack);
     }
     r->boxes++;
     if (!(s0 <= s1)) return;
@@ -295,10 +327,10 @@ INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int 
          * that (an origin some 2^20 mesh sizes away) tests every triangle. */
         if (e_ray > 0x1p-26 * b->abs_max) {
             for (uint32_t q = 0; q < b->mesh->tri_count && !r->done; q++)
-                test_prim(a, it, b->mesh, q, r, naive, spheres);
+                test_prim(a, it, b->mesh, q, r, naive, 0);
             return;
         }
-        walk_grid(a, it, b, r, o, d, s0, naive, spheres);
+        walk_grid_flat(a, it, b, r, o, d, s0, naive, spheres);
         return;
     }
     /* Float ray from the box entry: its rounding is then bounded by the
@@ -307,7 +339,7 @@ INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int 
     vec3 df = v3((float)d[0], (float)d[1], (float)d[2]);
     double pf = a->no_pad ? 0.0
                           : pad + 0x1p-20 * (b->abs_max + 2.0 * pad) + 0x1p-50 * (oa + fabs(s0) * da);
-    walk_bvh(a, it, b, r, of, df, (float)(pf * (1.0 + 0x1p-20)), s0, naive, spheres);
+    walk_bvh_flat(a, it, b, r, of, df, (float)(pf * (1.0 + 0x1p-20)), s0, naive, spheres);
 }
 
 /* ---- top level ------------------------------------------------------------------ */
