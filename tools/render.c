@@ -28,7 +28,7 @@
 
 typedef struct {
     const char *scene, *accel, *out;
-    int frames, first, step, width, height, threads, verify;
+    int frames, first, step, width, height, threads, verify, counters;
     int mode; /* 0 refit, 1 rebuild (bottom levels), 2 full build */
 } options;
 
@@ -48,20 +48,22 @@ static void usage(FILE *f)
             "  --size WxH        image size (default 800x600)\n"
             "  --threads T       tracing threads (default: every core)\n"
             "  --out PREFIX      write PREFIX_NNNN.png per frame\n"
-            "  --verify          compare each frame with a fresh build (holes, disagreements)\n");
+            "  --verify          compare each frame with a fresh build (holes, disagreements)\n"
+            "  --counters        a counted primary pass per frame (after the timed one): nodes,\n"
+            "                    boxes and primitives per ray, the time-free cost of a refit tree\n");
 }
 
 static int parse(int argc, char **argv, options *o)
 {
-    *o = (options){"animated", "instanced", NULL, 10, 0, 1, 800, 600, accel_cpu_count(), 0, 0};
+    *o = (options){"animated", "instanced", NULL, 10, 0, 1, 800, 600, accel_cpu_count(), 0, 0, 0};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
             usage(stdout);
             exit(0);
         }
-        if (!strcmp(a, "--verify")) {
-            o->verify = 1;
+        if (!strcmp(a, "--verify") || !strcmp(a, "--counters")) {
+            *(a[2] == 'v' ? &o->verify : &o->counters) = 1;
             continue;
         }
         if (!v) {
@@ -213,6 +215,13 @@ int main(int argc, char **argv)
         fps_all[f] = 1000.0 / (total + scene_ms);
         printf("%6d %9.2f %9.2f %9.2f %9.2f %9.2f %9.2f %7.2f %7.2f", frame, scene_ms, bottom_ms,
                top_ms, prim_ms, shadow_ms, total, fps[f], fps_all[f]);
+        if (o.counters) {
+            accel_counters c = {0};
+            accel_trace(kind, accel, prim.rays, hits, prim.count, o.threads, &c);
+            double n = c.rays ? (double)c.rays : 1.0;
+            printf("  per ray: %.2f nodes, %.2f boxes, %.2f prims", c.steps / n, c.box_tests / n,
+                   c.prim_tests / n);
+        }
         if (o.verify) {
             const accel_kind *k2;
             void *fresh;
