@@ -103,7 +103,50 @@ typedef struct accel_scene {
     box3 bounds;             /* of all live primitives */
     accel_camera camera;     /* default view */
     vec3 light;              /* point light for shadow rays */
+    /* Optional, NULL for a plain scene: the meshes and instances this scene
+     * was flattened from (a .scene file, the built-in field and animated
+     * scenes). Owned by the scene (scene_free releases it). Every kind may
+     * ignore it: the arrays above always hold the flattened scene. */
+    struct accel_instances *instances;
 } accel_scene;
+
+/* ---- instanced scenes ----------------------------------------------------
+ * A scene composed of meshes, each placed any number of times (FORMATS.md,
+ * `.scene`). The flattened scene (the accel_scene holding the description)
+ * has, for instance k in order, the primitives of its mesh transformed to
+ * world space, ids base(k) + local id. Its triangles are exactly
+ * accel_xform_vertex of the mesh's vertices: a two-level kind that computes
+ * a world triangle with accel_xform_vertex gets the flattened triangle bit
+ * for bit, and so decides every ray as the oracle on the flattened scene.
+ * Meshes hold triangles only (no spheres). */
+typedef struct {
+    uint32_t mesh;      /* index into accel_instances.meshes */
+    uint32_t base;      /* id of its first primitive in the flattened scene */
+    double xform[12];   /* object -> world, rows of a 3x4 matrix: world = M * (x, y, z, 1) */
+    double inverse[12]; /* world -> object */
+    box3 bounds;        /* world bounds of all its flattened triangles (empty if none) */
+} accel_instance;
+
+typedef struct accel_instances {
+    uint32_t mesh_count;
+    struct accel_scene *meshes; /* object space; local ids 0..prim_count-1 */
+    uint32_t instance_count;
+    accel_instance *instances;
+} accel_instances;
+
+/* The flattener's one expression: each world coordinate is the matrix row
+ * applied in double with fused multiply-adds (bit-identical on every
+ * compiler and flag set: no contraction choice is left to the compiler),
+ * rounded once to float. */
+static inline __attribute__((always_inline)) void accel_xform_vertex(const double *m,
+                                                                   const float *p, float *out)
+{
+    for (int r = 0; r < 3; r++) {
+        const double *row = m + 4 * r;
+        out[r] = (float)fma(row[0], (double)p[0],
+                            fma(row[1], (double)p[1], fma(row[2], (double)p[2], row[3])));
+    }
+}
 
 /* Primitive bounds and centroid (for builders). */
 box3 accel_prim_bounds(const accel_scene *s, uint32_t prim);
@@ -254,6 +297,13 @@ typedef struct {
     int res[3];        /* grids: top-level resolution */
 } accel_build_stats;
 
+/* What a per-frame update (accel_kind.update) did, and how long it took. */
+typedef struct {
+    double bottom_ms;        /* refit or rebuild of the meshes that changed */
+    double top_ms;           /* per-instance data and the top level */
+    uint32_t meshes_refit, meshes_rebuilt;
+} accel_update_stats;
+
 typedef struct accel_kind {
     const char *name;
     const char *summary;       /* one line for --help */
@@ -273,6 +323,15 @@ typedef struct accel_kind {
                      accel_counters *counters);
     size_t (*memory)(const void *accel);
     void (*destroy)(void *accel);
+    /* Optional (NULL: rebuild instead): moves a built structure to the next
+     * frame of an animation. `scene` holds the same meshes and instances
+     * (same counts) as the scene the structure was built on, with new
+     * transforms and vertex positions; the old scene must still be alive
+     * during the call, not after. refit = 1 updates the boxes of a changed
+     * mesh's structure bottom-up, keeping its topology; refit = 0 rebuilds
+     * it. Not reentrant with traversal: no ray may be in flight. */
+    int (*update)(void *accel, const accel_scene *scene, int refit, accel_update_stats *stats,
+                  accel_error *err);
 } accel_kind;
 
 /* registry.c: every kind, one line each. */

@@ -23,7 +23,7 @@
 
 TEST(scenes_small_specs_build)
 {
-    CHECK(scene_generator_count == 8);
+    CHECK(scene_generator_count == 10);
     for (size_t i = 0; i < scene_generator_count; i++) {
         const scene_generator *g = scene_generators[i];
         accel_scene s;

@@ -65,6 +65,24 @@ static inline int accel_prep_ray(const accel_ray *r, accel_ray_prep *p)
     return 1;
 }
 
+/* A triangle with no interior: its edge cross product, computed in double,
+ * is exactly zero. scene_finish
+ * leaves such triangles out of the live list; a kind that makes triangles
+ * on the fly (the two-level kind's world-space copies) applies the same
+ * test, so it never hits one that the flattened scene holds dead. */
+static inline int accel_tri_is_degenerate(const float *t)
+{
+    double e1[3], e2[3];
+    for (int i = 0; i < 3; i++) {
+        e1[i] = (double)t[3 + i] - t[i];
+        e2[i] = (double)t[6 + i] - t[i];
+    }
+    double cx = e1[1] * e2[2] - e1[2] * e2[1];
+    double cy = e1[2] * e2[0] - e1[0] * e2[2];
+    double cz = e1[0] * e2[1] - e1[1] * e2[0];
+    return cx == 0.0 && cy == 0.0 && cz == 0.0;
+}
+
 static inline float v3_idx(vec3 a, int i) { return i == 0 ? a.x : (i == 1 ? a.y : a.z); }
 
 /* ---- double precision: the reference's arithmetic ------------------------

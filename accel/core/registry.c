@@ -14,6 +14,7 @@ extern const accel_kind accel_kind_bvh;
 extern const accel_kind accel_kind_grid;
 extern const accel_kind accel_kind_irregular_grid;
 extern const accel_kind accel_kind_nested_grid;
+extern const accel_kind accel_kind_instanced;
 #ifdef GRIDBVH_LAB
 extern const accel_kind accel_kind_student; /* lab/student.c, in `make lab` builds only */
 #endif
@@ -24,6 +25,7 @@ const accel_kind *const accel_kinds[] = {
     &accel_kind_grid,
     &accel_kind_irregular_grid,
     &accel_kind_nested_grid,
+    &accel_kind_instanced,
 #ifdef GRIDBVH_LAB
     &accel_kind_student,
 #endif

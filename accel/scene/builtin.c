@@ -47,7 +47,7 @@ static int gen_cube(const double *values, scene_builder *b, accel_camera *cam, v
 static const scene_generator gen_cube_def = {
     "cube",
     "closed cube [-1,1]^3, n x n squares per face (watertight: shared vertices bit-identical)",
-    cube_params, sizeof cube_params / sizeof cube_params[0], gen_cube, "cube:n=16",
+    cube_params, sizeof cube_params / sizeof cube_params[0], gen_cube, "cube:n=16", NULL,
 };
 
 enum { SPHERE_SEGMENTS, SPHERE_TESS };
@@ -83,7 +83,7 @@ static int gen_sphere(const double *values, scene_builder *b, accel_camera *cam,
 static const scene_generator gen_sphere_def = {
     "sphere",
     "closed unit sphere mesh (watertight: shared vertices bit-identical)",
-    sphere_params, sizeof sphere_params / sizeof sphere_params[0], gen_sphere, "sphere:segments=16",
+    sphere_params, sizeof sphere_params / sizeof sphere_params[0], gen_sphere, "sphere:segments=16", NULL,
 };
 
 /* ---- soup and slivers: random triangles in the unit cube -------------------- */
@@ -141,7 +141,7 @@ static int gen_soup(const double *values, scene_builder *b, accel_camera *cam, v
 static const scene_generator gen_soup_def = {
     "soup",
     "random small triangles uniformly filling the unit cube",
-    soup_params, sizeof soup_params / sizeof soup_params[0], gen_soup, "soup:tris=3000",
+    soup_params, sizeof soup_params / sizeof soup_params[0], gen_soup, "soup:tris=3000", NULL,
 };
 
 /*
@@ -202,7 +202,7 @@ static const scene_generator gen_slivers_def = {
     "slivers",
     "long thin triangles spanning the unit cube among many small ones (a grid's worst case)",
     sliver_params, sizeof sliver_params / sizeof sliver_params[0], gen_slivers,
-    "slivers:tris=3000,slivers=100",
+    "slivers:tris=3000,slivers=100", NULL,
 };
 
 /* ---- teapot in a stadium ---------------------------------------------------- */
@@ -290,7 +290,7 @@ static const scene_generator gen_teapot_stadium_def = {
     "teapot_stadium",
     "Newell's teapot at the centre of a stadium 1000x its size (the case that defeats grids)",
     stadium_params, sizeof stadium_params / sizeof stadium_params[0], gen_teapot_stadium,
-    "teapot_stadium:n=6,stadium=32,tiers=4",
+    "teapot_stadium:n=6,stadium=32,tiers=4", NULL,
 };
 
 /* ---- the table -------------------------------------------------------------- */
@@ -298,5 +298,6 @@ static const scene_generator gen_teapot_stadium_def = {
 const scene_generator *const scene_generators[] = {
     &scene_gen_sphereflake, &scene_gen_tetra, &scene_gen_mount, &gen_soup_def,
     &gen_teapot_stadium_def, &gen_slivers_def, &gen_cube_def, &gen_sphere_def,
+    &scene_gen_field, &scene_gen_animated,
 };
 const size_t scene_generator_count = sizeof scene_generators / sizeof scene_generators[0];

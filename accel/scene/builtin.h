@@ -105,6 +105,8 @@ int scene_teapot_add(scene_builder *b, int n, accel_error *err);
 extern const scene_generator scene_gen_sphereflake; /* spd.c */
 extern const scene_generator scene_gen_tetra;       /* spd.c */
 extern const scene_generator scene_gen_mount;       /* spd.c */
+extern const scene_generator scene_gen_field;       /* multi.c */
+extern const scene_generator scene_gen_animated;    /* multi.c */
 
 #ifdef __cplusplus
 }

@@ -1,6 +1,7 @@
 /*
  * load.c - a scene from a spec: a built-in generator ("sphereflake:level=3")
- * or a mesh file, dispatched to its loader by extension.
+ * or a file, dispatched to its loader by extension (.obj, .ply, .off, and
+ * .scene for scenes of many meshes, load_scene.c).
  */
 #include <errno.h>
 #include <stdio.h>
@@ -8,6 +9,7 @@
 #include <strings.h>
 
 #include "scene/builtin.h"
+#include "scene/compose.h"
 #include "scene/scene.h"
 
 static const char *extension(const char *path)
@@ -22,6 +24,7 @@ int scene_load_file(const char *path, accel_scene *s, accel_error *err)
     scene_builder b = {0};
     const char *ext = extension(path);
     int rc;
+    if (!strcasecmp(ext, "scene")) return scene_load_scene(path, s, err);
     if (!strcasecmp(ext, "obj"))
         rc = scene_load_obj(path, &b, err);
     else if (!strcasecmp(ext, "ply"))
@@ -30,7 +33,8 @@ int scene_load_file(const char *path, accel_scene *s, accel_error *err)
         rc = scene_load_off(path, &b, err);
     else
         rc = accel_fail(err, ACCEL_ERR_SPEC,
-                        "%s: unknown mesh format '.%s' (accepted: .obj, .ply, .off)", path, ext);
+                        "%s: unknown file format '.%s' (accepted: .obj, .ply, .off, .scene)",
+                        path, ext);
     if (rc == 0) {
         const char *slash = strrchr(path, '/');
         rc = scene_finish(&b, slash ? slash + 1 : path, s, err);
@@ -71,7 +75,7 @@ static int unknown_scene(const char *spec, accel_error *err)
         snprintf(names + len, sizeof names - len, "%s%s", i ? ", " : "", scene_generators[i]->name);
     }
     return accel_fail(err, ACCEL_ERR_SPEC,
-                      "unknown scene '%s': give a mesh file (.obj, .ply, .off) or one of: %s",
+                      "unknown scene '%s': give a file (.obj, .ply, .off, .scene) or one of: %s",
                       spec, names);
 }
 
@@ -85,9 +89,11 @@ int scene_spec_check(const char *spec, accel_error *err)
     }
     if (!strchr(spec, '.')) return unknown_scene(spec, err);
     const char *ext = extension(spec);
-    if (strcasecmp(ext, "obj") && strcasecmp(ext, "ply") && strcasecmp(ext, "off"))
+    if (strcasecmp(ext, "obj") && strcasecmp(ext, "ply") && strcasecmp(ext, "off") &&
+        strcasecmp(ext, "scene"))
         return accel_fail(err, ACCEL_ERR_SPEC,
-                          "%s: unknown mesh format '.%s' (accepted: .obj, .ply, .off)", spec, ext);
+                          "%s: unknown file format '.%s' (accepted: .obj, .ply, .off, .scene)",
+                          spec, ext);
     FILE *f = fopen(spec, "rb");
     if (!f) return accel_fail(err, ACCEL_ERR_IO, "%s: cannot open: %s", spec, strerror(errno));
     fclose(f);
@@ -103,12 +109,20 @@ int scene_create(const char *spec, accel_scene *s, accel_error *err)
         double num[ACCEL_MAX_PARAMS];
         int rc = parse_generator_args(g, args, num, err);
         if (rc) return rc;
-        scene_builder b = {0};
         accel_camera cam;
         vec3 light;
-        rc = g->generate(num, &b, &cam, &light, err);
-        if (rc == 0) rc = scene_finish(&b, spec, s, err);
-        scene_builder_free(&b);
+        if (g->compose) {
+            scene_compose c;
+            memset(&c, 0, sizeof c);
+            rc = g->compose(num, &c, &cam, &light, err);
+            if (rc == 0) rc = scene_compose_finish(&c, spec, s, err);
+            scene_compose_free(&c);
+        } else {
+            scene_builder b = {0};
+            rc = g->generate(num, &b, &cam, &light, err);
+            if (rc == 0) rc = scene_finish(&b, spec, s, err);
+            scene_builder_free(&b);
+        }
         if (rc) return rc;
         s->camera = cam;
         s->light = light;

@@ -13,6 +13,8 @@
 #include <string.h>
 #include <strings.h>
 
+#include "core/prim.h"
+#include "scene/compose.h"
 #include "scene/scene.h"
 
 #define SCENE_MAX_PRIMS 0xFFFFFFFEu /* ids are uint32 and 0xFFFFFFFF means miss */
@@ -76,19 +78,6 @@ void scene_builder_free(scene_builder *b)
     memset(b, 0, sizeof *b);
 }
 
-static int tri_degenerate(const float *t)
-{
-    double e1[3], e2[3];
-    for (int i = 0; i < 3; i++) {
-        e1[i] = (double)t[3 + i] - t[i];
-        e2[i] = (double)t[6 + i] - t[i];
-    }
-    double cx = e1[1] * e2[2] - e1[2] * e2[1];
-    double cy = e1[2] * e2[0] - e1[0] * e2[2];
-    double cz = e1[0] * e2[1] - e1[1] * e2[0];
-    return cx == 0.0 && cy == 0.0 && cz == 0.0;
-}
-
 accel_camera scene_camera_framing(box3 bounds, vec3 from, float fov_deg)
 {
     /* Tightest distance at which all 8 box corners project inside a square
@@ -139,7 +128,7 @@ int scene_finish(scene_builder *b, const char *name, accel_scene *s, accel_error
     for (uint32_t i = 0; i < s->prim_count; i++) {
         int dead;
         if (i < s->tri_count) {
-            dead = tri_degenerate(s->tris + 9 * (size_t)i);
+            dead = accel_tri_is_degenerate(s->tris + 9 * (size_t)i);
         } else {
             float r = s->spheres[4 * (size_t)(i - s->tri_count) + 3];
             dead = !(r > 0.0f) || !isfinite(r);
@@ -207,6 +196,10 @@ void scene_free(accel_scene *s)
     free(s->tris);
     free(s->spheres);
     free(s->live);
+    if (s->instances) {
+        scene_instances_free(s->instances);
+        free(s->instances);
+    }
     memset(s, 0, sizeof *s);
 }
 

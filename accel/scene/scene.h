@@ -62,7 +62,30 @@ int scene_parse_ply(const char *name, const char *data, size_t size, scene_build
 int scene_parse_off(const char *name, const char *data, size_t size, scene_builder *b,
                     accel_error *err);
 
+/* ---- scene files (.scene, FORMATS.md): many meshes, instances ------------- */
+
+/* How a scene file finds its meshes. NULL options (or a NULL load_mesh):
+ * a SOURCE whose name (before ':') is a built-in scene is made by
+ * scene_create, anything else is a mesh file relative to `dir` (a .scene
+ * file cannot be a mesh: scene files do not nest, so they cannot cycle). */
+typedef struct {
+    uint64_t max_prims; /* limit on the flattened scene's primitives (0: the id limit 2^32-2) */
+    int (*load_mesh)(void *ctx, const char *source, const char *dir, accel_scene *mesh,
+                     accel_error *err);
+    void *ctx;
+} scene_file_options;
+
+/* Reads a .scene file: the flattened scene, with its meshes and instances in
+ * s->instances. Every error names the file and the line. */
+int scene_load_scene(const char *path, accel_scene *s, accel_error *err);
+/* The same on a buffer (not NUL-terminated); `name` is used in messages and
+ * `dir` is the folder mesh paths are relative to ("" for the current one). */
+int scene_parse_scene(const char *name, const char *dir, const char *data, size_t size,
+                      const scene_file_options *opt, accel_scene *s, accel_error *err);
+
 /* ---- built-in scenes ----------------------------------------------------- */
+
+struct scene_compose;
 
 typedef struct {
     const char *name;
@@ -73,6 +96,11 @@ typedef struct {
     int (*generate)(const double *values, scene_builder *b, accel_camera *cam, vec3 *light,
                     accel_error *err);
     const char *small_spec; /* a spec with a few thousand primitives, for tests */
+    /* Scenes of many meshes set this instead of generate: they fill a
+     * scene_compose (compose.h) with meshes and instances, which is then
+     * flattened, keeping the description in accel_scene.instances. */
+    int (*compose)(const double *values, struct scene_compose *c, accel_camera *cam, vec3 *light,
+                   accel_error *err);
 } scene_generator;
 
 extern const scene_generator *const scene_generators[];

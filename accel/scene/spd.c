@@ -200,7 +200,7 @@ const scene_generator scene_gen_sphereflake = {
     flake_params,
     sizeof flake_params / sizeof flake_params[0],
     gen_sphereflake,
-    "sphereflake:level=3",
+    "sphereflake:level=3", NULL,
 };
 
 /* ---- tetra (tetra.c) ------------------------------------------------------- */
@@ -271,7 +271,7 @@ const scene_generator scene_gen_tetra = {
     tetra_params,
     sizeof tetra_params / sizeof tetra_params[0],
     gen_tetra,
-    "tetra:level=5",
+    "tetra:level=5", NULL,
 };
 
 /* ---- mount (mount.c) ------------------------------------------------------- */
@@ -434,5 +434,5 @@ const scene_generator scene_gen_mount = {
     mount_params,
     sizeof mount_params / sizeof mount_params[0],
     gen_mount,
-    "mount:level=5",
+    "mount:level=5", NULL,
 };

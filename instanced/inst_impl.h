@@ -1,0 +1,108 @@
+/*
+ * inst_impl.h - internals of the `instanced` kind (see instanced.h and
+ * README.md): the structures over boxes both levels use (a BVH of 32-byte
+ * nodes and a uniform grid), the per-mesh bottom levels, the per-instance
+ * data the traversal reads.
+ */
+#ifndef INSTANCED_INST_IMPL_H
+#define INSTANCED_INST_IMPL_H
+
+#include "accel.h"
+
+/* ---- structures over boxes ----------------------------------------------- */
+
+/* 32 bytes: the box, then either the first child (the second follows it)
+ * or the first item of a leaf. */
+typedef struct {
+    float lo[3];
+    uint32_t index; /* inner: first child; leaf: first item */
+    float hi[3];
+    uint32_t count; /* 0: inner node; else items in the leaf */
+} inst_node;
+_Static_assert(sizeof(inst_node) == 32, "inst_node is 32 bytes");
+
+typedef struct {
+    inst_node *nodes;
+    uint32_t node_count;
+    uint32_t *items; /* item ids, leaf by leaf */
+    uint32_t item_count;
+    int depth;
+} inst_bvh;
+
+/* A uniform grid in double precision (its DDA runs in double). */
+typedef struct {
+    double lo[3], cell[3], inv_cell[3];
+    int res[3];
+    uint32_t *start; /* res[0]*res[1]*res[2] + 1 offsets into items */
+    uint32_t *items;
+    uint64_t ref_count;
+    uint64_t cell_count;
+} inst_grid;
+
+/* Binned SAH (16 bins, Wald 2007) over n boxes; leaves of at most max_leaf. */
+int inst_bvh_build(const box3 *boxes, uint32_t n, int max_leaf, inst_bvh *out, accel_error *err);
+void inst_bvh_free(inst_bvh *b);
+/* A grid of about lambda * n cells over the boxes, each box grown by pad
+ * on every side before the cells it overlaps are listed. */
+int inst_grid_build(const box3 *boxes, uint32_t n, double lambda, double pad, inst_grid *out,
+                    accel_error *err);
+void inst_grid_free(inst_grid *g);
+
+/* ---- the kind ------------------------------------------------------------- */
+
+enum { INST_BVH = 0, INST_GRID = 1 };
+
+/* One per mesh: its bottom level, shared by every instance of the mesh. */
+typedef struct {
+    const accel_scene *mesh; /* object space (the scene itself for a plain scene) */
+    box3 box;                /* every vertex of every primitive, object space */
+    double box_lo[3], box_hi[3];
+    double abs_max;          /* largest |coordinate| of box */
+    double vert_abs_max;     /* largest |coordinate| of any vertex (dead triangles too) */
+    double grid_pad;         /* bottom=grid: how far its boxes were grown */
+    inst_bvh bvh;
+    inst_grid grid;
+} inst_bottom;
+
+/* One per instance: what the traversal reads, packed together. */
+typedef struct {
+    double inverse[12];   /* world -> object */
+    double xform[12];     /* object -> world (for the world triangles) */
+    double pad;           /* object-space distance covering the flattening's rounding */
+    uint32_t bottom;      /* mesh index */
+    uint32_t base;        /* id of its first primitive */
+    int identity;         /* object space == world space: no transform at all */
+} inst_item;
+
+typedef struct {
+    const accel_scene *scene; /* the flattened scene */
+    int top, bottom_kind;     /* INST_BVH or INST_GRID */
+    int naive, world_flat, spheres;
+    int no_pad;               /* pad=0: boxes not grown (shows what the pad is for) */
+    int leaf;                 /* bottom=bvh: largest leaf */
+    double lambda, top_lambda;
+    uint32_t bottom_count, item_count;
+    inst_bottom *bottoms;
+    inst_item *items;
+    box3 *item_boxes;         /* world bounds per instance (top level) */
+    inst_bvh top_bvh;
+    inst_grid top_grid;
+} inst_accel;
+
+/* Building blocks (inst_kind.c), shared with the per-frame update (inst_update.c). */
+int inst_set_items(inst_accel *a, const accel_scene *scene, double *grid_pad, accel_error *err);
+int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *err);
+int inst_build_top(inst_accel *a, accel_error *err);
+void inst_fill_stats(const inst_accel *a, accel_build_stats *stats);
+size_t inst_memory(const void *a);
+void inst_destroy(void *a);
+/* accel_kind.update (inst_update.c). */
+int inst_update(void *a, const accel_scene *scene, int refit, accel_update_stats *st,
+                accel_error *err);
+
+void inst_intersect(const void *a, const accel_ray *rays, accel_hit *hits, size_t n,
+                    accel_counters *c);
+void inst_occluded(const void *a, const accel_ray *rays, uint8_t *occ, size_t n,
+                   accel_counters *c);
+
+#endif

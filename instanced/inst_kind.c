@@ -1,0 +1,280 @@
+/*
+ * inst_kind.c - the `instanced` kind's table, parameters and build: one
+ * bottom level per mesh (object space, shared by all the mesh's
+ * instances), one top level over the instances' world bounds, and the
+ * per-instance data (inverse matrix, the pad that covers the flattening's
+ * rounding). See README.md for why the pads make the result exact.
+ *
+ * A plain scene (no instance description) is one identity instance of
+ * itself: the kind is then a plain BVH or grid over the scene.
+ */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "inst_impl.h"
+#include "instanced.h"
+
+static const accel_param_def inst_params[] = {
+    {"top", ACCEL_PARAM_ENUM, "bvh", 0, 0, "bvh|grid",
+     "top level over the instances' world bounds: binned-SAH BVH or uniform grid"},
+    {"bottom", ACCEL_PARAM_ENUM, "bvh", 0, 0, "bvh|grid",
+     "bottom level per mesh, object space, shared by its instances"},
+    {"leaf", ACCEL_PARAM_INT, "4", 1, 64, NULL, "bottom=bvh: largest leaf (primitives)"},
+    {"lambda", ACCEL_PARAM_FLOAT, "2", 0.01, 64, NULL, "bottom=grid: cells per primitive"},
+    {"top_lambda", ACCEL_PARAM_FLOAT, "2", 0.01, 64, NULL, "top=grid: cells per instance"},
+    {"world", ACCEL_PARAM_ENUM, "compute", 0, 0, "compute|flat",
+     "world triangles: computed from the mesh by the flattener's expression (a true two-level "
+     "structure), or read from the flattened scene (the same bits; for comparison)"},
+    {"pad", ACCEL_PARAM_BOOL, "1", 0, 1, NULL,
+     "grow bottom-level boxes by the flattening's rounding (0: exact object-space boxes, "
+     "which miss world hits near edges: kept to show why the pad is needed)"},
+};
+#define INST_PARAM_COUNT (sizeof inst_params / sizeof inst_params[0])
+
+static int is_identity(const double *m)
+{
+    static const double id[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+    for (int i = 0; i < 12; i++)
+        if (m[i] != id[i]) return 0;
+    return 1;
+}
+
+/* Max row sum of the linear part: |A x|_inf <= norm * |x|_inf. */
+static double row_norm(const double *m)
+{
+    double n = 0.0;
+    for (int r = 0; r < 3; r++)
+        n = fmax(n, fabs(m[4 * r]) + fabs(m[4 * r + 1]) + fabs(m[4 * r + 2]));
+    return n;
+}
+
+static double box_abs_max(box3 b)
+{
+    if (box3_is_empty(b)) return 0.0;
+    double m = 0.0;
+    const float *lo = &b.min.x, *hi = &b.max.x;
+    for (int a = 0; a < 3; a++) m = fmax(m, fmax(fabs(lo[a]), fabs(hi[a])));
+    return m;
+}
+
+void inst_destroy(void *p)
+{
+    inst_accel *a = p;
+    if (!a) return;
+    for (uint32_t i = 0; i < a->bottom_count; i++) {
+        inst_bvh_free(&a->bottoms[i].bvh);
+        inst_grid_free(&a->bottoms[i].grid);
+    }
+    inst_bvh_free(&a->top_bvh);
+    inst_grid_free(&a->top_grid);
+    free(a->bottoms);
+    free(a->items);
+    free(a->item_boxes);
+    free(a);
+}
+
+static size_t bvh_bytes(const inst_bvh *b)
+{
+    return (size_t)b->node_count * sizeof(inst_node) + (size_t)b->item_count * sizeof(uint32_t);
+}
+
+static size_t grid_bytes(const inst_grid *g)
+{
+    return g->start ? ((size_t)g->cell_count + 1 + (size_t)g->ref_count) * sizeof(uint32_t) : 0;
+}
+
+size_t inst_memory(const void *p)
+{
+    const inst_accel *a = p;
+    size_t bytes = sizeof *a + a->item_count * (sizeof(inst_item) + sizeof(box3)) +
+                   a->bottom_count * sizeof(inst_bottom) + bvh_bytes(&a->top_bvh) +
+                   grid_bytes(&a->top_grid);
+    for (uint32_t i = 0; i < a->bottom_count; i++)
+        bytes += bvh_bytes(&a->bottoms[i].bvh) + grid_bytes(&a->bottoms[i].grid);
+    return bytes;
+}
+
+/* The bottom level of mesh i over its primitives (a plain scene: the live
+ * ones), boxes grown by grid_pad in a grid. */
+int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *err)
+{
+    inst_bottom *b = &a->bottoms[i];
+    inst_bvh_free(&b->bvh);
+    inst_grid_free(&b->grid);
+    const accel_scene *m = b->mesh;
+    const uint32_t *ids = a->scene->instances ? NULL : m->live;
+    uint32_t n = ids ? m->live_count : m->tri_count;
+    box3 *boxes = malloc((n ? n : 1) * sizeof *boxes);
+    if (!boxes) return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
+    b->box = box3_empty();
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t id = ids ? ids[k] : k;
+        if (id < m->tri_count) {
+            const float *t = m->tris + 9 * (size_t)id;
+            box3 bb = box3_empty();
+            for (int c = 0; c < 3; c++) bb = box3_grow(bb, v3_load(t + 3 * c));
+            boxes[k] = bb;
+        } else {
+            boxes[k] = accel_prim_bounds(m, id);
+        }
+        b->box = box3_union(b->box, boxes[k]);
+    }
+    const float *lo = &b->box.min.x, *hi = &b->box.max.x;
+    for (int k = 0; k < 3; k++) b->box_lo[k] = lo[k], b->box_hi[k] = hi[k];
+    b->abs_max = box_abs_max(b->box);
+    /* The DDA's own rounding: a margin far above double error, far below a cell. */
+    b->grid_pad = grid_pad + 0x1p-24 * b->abs_max + 1e-30;
+    int rc = a->bottom_kind == INST_BVH
+                 ? inst_bvh_build(boxes, n, a->leaf, &b->bvh, err)
+                 : inst_grid_build(boxes, n, a->lambda, b->grid_pad, &b->grid, err);
+    free(boxes);
+    if (rc || !ids) return rc;
+    /* Items were box indices: make them primitive ids. */
+    uint32_t *items = a->bottom_kind == INST_BVH ? b->bvh.items : b->grid.items;
+    uint64_t count = a->bottom_kind == INST_BVH ? b->bvh.item_count : b->grid.ref_count;
+    for (uint64_t k = 0; k < count; k++) items[k] = ids[items[k]];
+    return 0;
+}
+
+/*
+ * Per-instance data from the scene; grid_pad[i] (if not NULL) gets the
+ * largest pad mesh i's grid needs. The pad is, in object units, how far a
+ * flattened world vertex can be from the exact image of its mesh vertex
+ * (float rounding of the result, and the double rounding of the fused
+ * sum), taken through the inverse, doubled for safety.
+ */
+int inst_set_items(inst_accel *a, const accel_scene *scene, double *grid_pad, accel_error *err)
+{
+    const accel_instances *set = scene->instances;
+    a->scene = scene;
+    a->spheres = scene->sphere_count > 0;
+    for (uint32_t i = 0; i < a->bottom_count; i++) {
+        inst_bottom *b = &a->bottoms[i];
+        b->mesh = set ? &set->meshes[i] : scene;
+        /* Every vertex (dead triangles too: their world copies may live). */
+        box3 mb = set ? box3_empty() : scene->bounds;
+        for (size_t v = 0; set && v < 3 * (size_t)b->mesh->tri_count; v++)
+            mb = box3_grow(mb, v3_load(b->mesh->tris + 3 * v));
+        b->vert_abs_max = box_abs_max(mb);
+        if (grid_pad) grid_pad[i] = 0.0;
+    }
+    for (uint32_t k = 0; k < a->item_count; k++) {
+        inst_item *it = &a->items[k];
+        if (!set) {
+            static const double id[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
+            memcpy(it->xform, id, sizeof id);
+            memcpy(it->inverse, id, sizeof id);
+            it->identity = 1;
+            a->item_boxes[k] = scene->bounds;
+            continue;
+        }
+        const accel_instance *in = &set->instances[k];
+        if (in->mesh >= a->bottom_count)
+            return accel_fail(err, ACCEL_ERR_INTERNAL, "instanced: instance %u of mesh %u", k,
+                              in->mesh);
+        memcpy(it->xform, in->xform, sizeof it->xform);
+        memcpy(it->inverse, in->inverse, sizeof it->inverse);
+        it->bottom = in->mesh;
+        it->base = in->base;
+        it->identity = is_identity(in->xform);
+        a->item_boxes[k] = in->bounds;
+        double mesh_abs = a->bottoms[in->mesh].vert_abs_max;
+        double t_abs = fmax(fabs(in->xform[3]), fmax(fabs(in->xform[7]), fabs(in->xform[11])));
+        double e_world = 0x1p-24 * box_abs_max(in->bounds) +
+                         0x1p-50 * (row_norm(in->xform) * mesh_abs + t_abs);
+        it->pad = it->identity ? 0.0 : 2.0 * row_norm(in->inverse) * e_world;
+        double gp = a->no_pad ? 0.0 : 2.0 * it->pad + 0x1p-20 * (mesh_abs + 2.0 * it->pad);
+        if (grid_pad) grid_pad[in->mesh] = fmax(grid_pad[in->mesh], gp);
+    }
+    return 0;
+}
+
+int inst_build_top(inst_accel *a, accel_error *err)
+{
+    inst_bvh_free(&a->top_bvh);
+    inst_grid_free(&a->top_grid);
+    if (a->top == INST_BVH) return inst_bvh_build(a->item_boxes, a->item_count, 1, &a->top_bvh, err);
+    double top_pad = 0.0;
+    for (uint32_t k = 0; k < a->item_count; k++)
+        top_pad = fmax(top_pad, 0x1p-30 * box_abs_max(a->item_boxes[k]));
+    return inst_grid_build(a->item_boxes, a->item_count, a->top_lambda, top_pad + 1e-30,
+                           &a->top_grid, err);
+}
+
+void inst_fill_stats(const inst_accel *a, accel_build_stats *stats)
+{
+    memset(stats, 0, sizeof *stats);
+    stats->sah_cost = NAN;
+    int bottom_depth = 0;
+    for (uint32_t i = 0; i < a->bottom_count; i++) {
+        const inst_bottom *b = &a->bottoms[i];
+        stats->nodes += a->bottom_kind == INST_BVH ? b->bvh.node_count : b->grid.cell_count;
+        stats->refs += a->bottom_kind == INST_BVH ? b->bvh.item_count : b->grid.ref_count;
+        if (b->bvh.depth > bottom_depth) bottom_depth = b->bvh.depth;
+    }
+    stats->nodes += a->top == INST_BVH ? a->top_bvh.node_count : a->top_grid.cell_count;
+    stats->leaves = a->item_count;
+    stats->depth = (a->top == INST_BVH ? a->top_bvh.depth : 1) + bottom_depth;
+    for (int k = 0; k < 3; k++) stats->res[k] = a->top_grid.res[k];
+    stats->bytes = inst_memory(a);
+}
+
+static int inst_build(const accel_scene *scene, const accel_params *params, int threads,
+                      void **out, accel_build_stats *stats, accel_error *err)
+{
+    (void)threads;
+    inst_accel *a = calloc(1, sizeof *a);
+    if (!a) return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
+    a->top = (int)accel_param_num(params, "top");
+    a->bottom_kind = (int)accel_param_num(params, "bottom");
+    a->naive = params->naive;
+    a->world_flat = (int)accel_param_num(params, "world") == 1;
+    a->no_pad = accel_param_num(params, "pad") == 0.0;
+    a->leaf = (int)accel_param_num(params, "leaf");
+    a->lambda = accel_param_num(params, "lambda");
+    a->top_lambda = accel_param_num(params, "top_lambda");
+    const accel_instances *set = scene->instances;
+    a->bottom_count = set ? set->mesh_count : 1;
+    a->item_count = set ? set->instance_count : 1;
+    a->bottoms = calloc(a->bottom_count ? a->bottom_count : 1, sizeof *a->bottoms);
+    a->items = calloc(a->item_count ? a->item_count : 1, sizeof *a->items);
+    a->item_boxes = calloc(a->item_count ? a->item_count : 1, sizeof *a->item_boxes);
+    double *grid_pad = calloc(a->bottom_count ? a->bottom_count : 1, sizeof *grid_pad);
+    int rc = 0;
+    if (!a->bottoms || !a->items || !a->item_boxes || !grid_pad)
+        rc = accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
+    if (rc == 0) rc = inst_set_items(a, scene, grid_pad, err);
+    for (uint32_t i = 0; rc == 0 && i < a->bottom_count; i++)
+        rc = inst_build_bottom(a, i, grid_pad[i], err);
+    free(grid_pad);
+    if (rc == 0) rc = inst_build_top(a, err);
+    if (rc) {
+        inst_destroy(a);
+        return rc;
+    }
+    inst_fill_stats(a, stats);
+    *out = a;
+    return 0;
+}
+
+static const char *const inst_variants[] = {
+    "", "top=grid", "bottom=grid", "top=grid,bottom=grid", "world=flat,leaf=1", NULL,
+};
+
+const accel_kind accel_kind_instanced = {
+    .name = "instanced",
+    .summary = "two levels: a BVH or grid over instances, a BVH or grid per mesh shared by its "
+               "instances; hits decided on the world-space triangles",
+    .step_name = "nodes",
+    .params = inst_params,
+    .param_count = INST_PARAM_COUNT,
+    .variants = inst_variants,
+    .build = inst_build,
+    .intersect = inst_intersect,
+    .occluded = inst_occluded,
+    .memory = inst_memory,
+    .destroy = inst_destroy,
+    .update = inst_update,
+};

@@ -1,0 +1,491 @@
+/*
+ * inst_trace.c - traversal of the `instanced` kind (see README.md).
+ *
+ * Per ray: the top level (BVH or grid over the instances' world bounds) is
+ * walked in world space, nearest first. For each instance it reaches, the
+ * ray goes to object space in double (the inverse matrix; t is unchanged,
+ * since the map is affine and the direction is not renormalized), then
+ * walks the mesh's shared bottom level with every box grown by a pad. The
+ * pad covers (a) how far the flattened world triangles, rounded to float,
+ * can lie from the exact image of the mesh's triangles, and (b) the
+ * rounding of the object-space ray. So the bottom level is conservative:
+ * it reaches every triangle whose world copy the ray may hit. Each
+ * triangle it reaches is then decided in world space, on the world ray and
+ * the world triangle computed exactly as the flattener computes it
+ * (accel_xform_vertex), with the shared kernels of prim.h: the same test,
+ * on the same floats, as any kind on the flattened scene, hence the same
+ * answer as the oracle.
+ *
+ * An identity instance (and a plain scene, one identity instance of
+ * itself) needs no pad and no transform: its walk is a plain BVH or grid.
+ */
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+#include "core/prim.h"
+#include "core/variant.h"
+#include "inst_impl.h"
+
+#define INST_STACK 128 /* > the deepest tree inst_struct.c builds (48 + 32) */
+#define INST_MAILBOX 8
+
+typedef struct {
+    accel_ray_prep p;   /* world ray for the float kernels */
+    double o[3], d[3];  /* world ray in double */
+    float t, u, v;      /* closest hit so far (t = t_far before any) */
+    uint32_t prim;
+    int any, done;      /* occlusion query; a hit ends it */
+    uint32_t top_steps, bottom_steps, boxes, prims, empties, skips;
+} ray_state;
+
+#define INLINE static inline __attribute__((always_inline))
+
+/* Compare-and-select (libm's fmax is a call: it must order NaNs). */
+INLINE double dmax(double a, double b) { return a > b ? a : b; }
+INLINE double dmin(double a, double b) { return a < b ? a : b; }
+
+/* ---- the world-space decision ------------------------------------------------ */
+
+INLINE void test_prim(const inst_accel *a, const inst_item *it, const accel_scene *mesh,
+                      uint32_t q, ray_state *r, int naive, int spheres)
+{
+    const accel_scene *s = a->scene;
+    uint32_t id = it->base + q;
+    float t = r->t, u = 0.0f, v = 0.0f, w[9];
+    const float *tri;
+    r->prims++;
+    if (spheres && id >= s->tri_count) {
+        /* Only plain scenes hold spheres (meshes of instances cannot). */
+        if (!accel_sphere_hit(&r->p, s->spheres + 4 * (size_t)(id - s->tri_count), &t, &u, &v))
+            return;
+    } else {
+        if (it->identity || a->world_flat) {
+            tri = s->tris + 9 * (size_t)id;
+        } else {
+            const float *m = mesh->tris + 9 * (size_t)q;
+            accel_xform_vertex(it->xform, m, w);
+            accel_xform_vertex(it->xform, m + 3, w + 3);
+            accel_xform_vertex(it->xform, m + 6, w + 6);
+            tri = w;
+        }
+        int hit = naive ? accel_tri_naive(&r->p, tri, &t, &u, &v)
+                        : accel_tri_watertight(&r->p, tri, &t, &u, &v);
+        /* A triangle dead in the flattened scene (no area) is never hit. */
+        if (!hit || accel_tri_is_degenerate(tri)) return;
+    }
+    r->t = t, r->u = u, r->v = v, r->prim = id;
+    if (r->any) r->done = 1;
+}
+
+/* ---- bottom level: BVH ------------------------------------------------------ */
+
+/* Slab test of a node's box grown by pad (Ize 2013's robust float test). */
+INLINE int node_slab(const inst_node *n, float pad, vec3 org, vec3 inv, const int *neg, float lo_t,
+                     float hi_t, float *entry)
+{
+    if (pad == 0.0f) return box3_slab(n->lo, n->hi, org, inv, neg, lo_t, hi_t, entry);
+    float lo[3] = {n->lo[0] - pad, n->lo[1] - pad, n->lo[2] - pad};
+    float hi[3] = {n->hi[0] + pad, n->hi[1] + pad, n->hi[2] + pad};
+    return box3_slab(lo, hi, org, inv, neg, lo_t, hi_t, entry);
+}
+
+/* The ray (org, dir) is the instance's ray shifted by `shift` (object
+ * parameter tau = t - shift); slack widens the t range by a relative
+ * 2^-20 for non-identity instances (the world test decides anyway). */
+INLINE void walk_bvh(const inst_accel *a, const inst_item *it, const inst_bottom *b,
+                     ray_state *r, vec3 org, vec3 dir, float pad, double shift, int naive,
+                     int spheres)
+{
+    const inst_bvh *h = &b->bvh;
+    if (!h->node_count) return;
+    vec3 inv = v3(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
+    int neg[3] = {signbit(dir.x) != 0, signbit(dir.y) != 0, signbit(dir.z) != 0};
+    float slack = it->identity ? 0.0f : 0x1p-20f;
+    float lo_t = (float)((double)r->p.t_near - shift);
+    if (slack != 0.0f) lo_t -= fabsf(lo_t) * slack; /* never 0 * inf */
+    struct { uint32_t node; float entry; } stack[INST_STACK];
+    int sp = 0;
+    uint32_t node = 0;
+    for (;;) {
+        const inst_node *n = &h->nodes[node];
+        r->bottom_steps++;
+        if (n->count) {
+            for (uint32_t i = 0; i < n->count; i++) {
+                test_prim(a, it, b->mesh, h->items[n->index + i], r, naive, spheres);
+                if (r->done) return;
+            }
+        } else {
+            float hi_t = (float)((double)r->t - shift);
+            if (slack != 0.0f) hi_t += fabsf(hi_t) * slack;
+            uint32_t c0 = n->index, c1 = c0 + 1;
+            float e0, e1;
+            int h0 = node_slab(&h->nodes[c0], pad, org, inv, neg, lo_t, hi_t, &e0);
+            int h1 = node_slab(&h->nodes[c1], pad, org, inv, neg, lo_t, hi_t, &e1);
+            r->boxes += 2;
+            if (h0 && h1) {
+                int near0 = e0 <= e1;
+                stack[sp].node = near0 ? c1 : c0;
+                stack[sp++].entry = near0 ? e1 : e0;
+                node = near0 ? c0 : c1;
+                continue;
+            }
+            if (h0 || h1) {
+                node = h0 ? c0 : c1;
+                continue;
+            }
+        }
+        /* Pop, skipping nodes that start beyond the closest hit found since. */
+        for (;;) {
+            if (sp == 0) return;
+            --sp;
+            float hi_t = (float)((double)r->t - shift);
+            if (slack != 0.0f) hi_t += fabsf(hi_t) * slack;
+            if (stack[sp].entry <= hi_t) break;
+        }
+        node = stack[sp].node;
+    }
+}
+
+/* ---- grids: a DDA in double ---------------------------------------------------- */
+
+typedef struct {
+    int cell[3], step[3];
+    double next[3], delta[3];
+    double t_end;
+} dda;
+
+/* Clips [t0, t1] to the grid's box and finds the first cell; 0 if missed. */
+INLINE int dda_start(const inst_grid *g, const double *o, const double *d, double t0, double t1,
+                     dda *w)
+{
+    for (int k = 0; k < 3; k++) {
+        double lo = g->lo[k], hi = g->lo[k] + g->res[k] * g->cell[k];
+        if (d[k] == 0.0) {
+            if (o[k] < lo || o[k] > hi) return 0;
+            continue;
+        }
+        double a = (lo - o[k]) / d[k], b = (hi - o[k]) / d[k];
+        if (a > b) { double x = a; a = b; b = x; }
+        t0 = a > t0 ? a : t0;
+        t1 = b < t1 ? b : t1;
+    }
+    if (!(t0 <= t1)) return 0;
+    w->t_end = t1;
+    for (int k = 0; k < 3; k++) {
+        double p = o[k] + t0 * d[k];
+        double c = floor((p - g->lo[k]) * g->inv_cell[k]);
+        int r = g->res[k] - 1;
+        w->cell[k] = c < 0 ? 0 : c > r ? r : (int)c;
+        if (d[k] == 0.0) {
+            w->step[k] = 0, w->next[k] = INFINITY, w->delta[k] = INFINITY;
+        } else {
+            w->step[k] = d[k] > 0 ? 1 : -1;
+            double plane = g->lo[k] + (w->cell[k] + (d[k] > 0)) * g->cell[k];
+            w->next[k] = (plane - o[k]) / d[k];
+            w->delta[k] = g->cell[k] / fabs(d[k]);
+        }
+    }
+    return 1;
+}
+
+INLINE double dda_exit(const dda *w)
+{
+    double t = w->next[0] < w->next[1] ? w->next[0] : w->next[1];
+    return t < w->next[2] ? t : w->next[2];
+}
+
+/* To the next cell; 0 when the ray leaves the grid or its range. */
+INLINE int dda_step(const inst_grid *g, dda *w)
+{
+    int k = w->next[0] < w->next[1] ? (w->next[0] < w->next[2] ? 0 : 2)
+                                    : (w->next[1] < w->next[2] ? 1 : 2);
+    if (w->next[k] > w->t_end) return 0;
+    w->cell[k] += w->step[k];
+    if (w->cell[k] < 0 || w->cell[k] >= g->res[k]) return 0;
+    w->next[k] += w->delta[k];
+    return 1;
+}
+
+INLINE size_t dda_cell(const inst_grid *g, const dda *w)
+{
+    return ((size_t)w->cell[2] * g->res[1] + w->cell[1]) * g->res[0] + w->cell[0];
+}
+
+/* Seen recently: a direct-mapped cache of item ids (a miss only repeats work). */
+INLINE int mailbox_seen(uint32_t *mb, uint32_t id)
+{
+    uint32_t *slot = &mb[id & (INST_MAILBOX - 1)];
+    if (*slot == id) return 1;
+    *slot = id;
+    return 0;
+}
+
+INLINE void walk_grid(const inst_accel *a, const inst_item *it, const inst_bottom *b, ray_state *r,
+                      const double *o, const double *d, double t0, int naive, int spheres)
+{
+    const inst_grid *g = &b->grid;
+    dda w;
+    if (!dda_start(g, o, d, t0, r->t, &w)) return;
+    uint32_t mb[INST_MAILBOX];
+    memset(mb, 0xFF, sizeof mb);
+    do {
+        size_t cell = dda_cell(g, &w);
+        uint32_t begin = g->start[cell], end = g->start[cell + 1];
+        r->bottom_steps++;
+        r->empties += begin == end;
+        for (uint32_t i = begin; i < end; i++) {
+            if (mailbox_seen(mb, g->items[i])) {
+                r->skips++;
+                continue;
+            }
+            test_prim(a, it, b->mesh, g->items[i], r, naive, spheres);
+            if (r->done) return;
+        }
+        if (r->t <= dda_exit(&w)) return;
+    } while (dda_step(g, &w));
+}
+
+/* The walks as real functions, flattened: everything they call (the
+ * slab test, the triangle test, the vertex transform) is inlined into
+ * them, which GCC's size limits would otherwise refuse in this kernel. One
+ * call per instance visited; the flags become run-time arguments there. */
+static __attribute__((flatten, noinline)) void
+walk_bvh_flat(const inst_accel *a, const inst_item *it, const inst_bottom *b, ray_state *r,
+              vec3 org, vec3 dir, float pad, double shift, int naive, int spheres)
+{
+    if (naive)
+        walk_bvh(a, it, b, r, org, dir, pad, shift, 1, spheres);
+    else if (spheres)
+        walk_bvh(a, it, b, r, org, dir, pad, shift, 0, 1);
+    else
+        walk_bvh(a, it, b, r, org, dir, pad, shift, 0, 0);
+}
+
+static __attribute__((flatten, noinline)) void
+walk_grid_flat(const inst_accel *a, const inst_item *it, const inst_bottom *b, ray_state *r,
+               const double *o, const double *d, double t0, int naive, int spheres)
+{
+    if (naive)
+        walk_grid(a, it, b, r, o, d, t0, 1, spheres);
+    else if (spheres)
+        walk_grid(a, it, b, r, o, d, t0, 0, 1);
+    else
+        walk_grid(a, it, b, r, o, d, t0, 0, 0);
+}
+
+/* ---- one instance ------------------------------------------------------------- */
+
+INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int spheres)
+{
+    const inst_item *it = &a->items[k];
+    const inst_bottom *b = &a->bottoms[it->bottom];
+    if (it->identity) {
+        if (a->bottom_kind == INST_BVH)
+            walk_bvh_flat(a, it, b, r, r->p.org, r->p.dir, 0.0f, 0.0, naive, spheres);
+        else
+            walk_grid_flat(a, it, b, r, r->o, r->d, r->p.t_near, naive, spheres);
+        return;
+    }
+    /* The ray in object space, in double, with a bound on its rounding. */
+    const double *m = it->inverse;
+    double o[3], d[3], eo = 0.0, ed = 0.0, oa = 0.0, da = 0.0;
+    for (int i = 0; i < 3; i++) {
+        const double *row = m + 4 * i;
+        o[i] = row[0] * r->o[0] + row[1] * r->o[1] + row[2] * r->o[2] + row[3];
+        d[i] = row[0] * r->d[0] + row[1] * r->d[1] + row[2] * r->d[2];
+        eo = dmax(eo, fabs(row[0] * r->o[0]) + fabs(row[1] * r->o[1]) + fabs(row[2] * r->o[2]) +
+                          fabs(row[3]));
+        ed = dmax(ed, fabs(row[0] * r->d[0]) + fabs(row[1] * r->d[1]) + fabs(row[2] * r->d[2]));
+        oa = dmax(oa, fabs(o[i]));
+        da = dmax(da, fabs(d[i]));
+    }
+    if (!(da > 0.0) || !isfinite(oa) || !isfinite(da)) return;
+    /* Points that matter lie in the padded box: |t d| <= |o| + B + pad. */
+    double reach = oa + b->abs_max + 4.0 * it->pad + 1.0;
+    double e_ray = 0x1p-50 * (eo + ed * reach / da);
+    double pad = a->no_pad ? 0.0 : 2.0 * it->pad + e_ray;
+    /* Clip to the mesh's box grown by the pad. */
+    double s0 = r->p.t_near, s1 = r->t;
+    for (int i = 0; i < 3; i++) {
+        double lo = b->box_lo[i] - pad, hi = b->box_hi[i] + pad;
+        if (d[i] == 0.0) {
+            if (o[i] < lo || o[i] > hi) return;
+            continue;
+        }
+        double t0 = (lo - o[i]) / d[i], t1 = (hi - o[i]) / d[i];
+        if (t0 > t1) { double x = t0; t0 = t1; t1 = x; }
+        double slack = 0x1p-40 * (fabs(t0) + fabs(t1));
+        s0 = dmax(s0, t0 - slack);
+        s1 = dmin(s1, t1 + slack);
+    }
+    r->boxes++;
+    if (!(s0 <= s1)) return;
+    if (a->bottom_kind == INST_GRID) {
+        /* The grid holds boxes grown by the largest pad of the mesh's
+         * instances plus 2^-24 of its size; a ray known more loosely than
+         * that (an origin some 2^20 mesh sizes away) tests every triangle. */
+        if (e_ray > 0x1p-26 * b->abs_max) {
+            for (uint32_t q = 0; q < b->mesh->tri_count && !r->done; q++)
+                test_prim(a, it, b->mesh, q, r, naive, 0);
+            return;
+        }
+        walk_grid_flat(a, it, b, r, o, d, s0, naive, spheres);
+        return;
+    }
+    /* Float ray from the box entry: its rounding is then bounded by the
+     * box's size, not by how far away the ray started. */
+    vec3 of = v3((float)(o[0] + s0 * d[0]), (float)(o[1] + s0 * d[1]), (float)(o[2] + s0 * d[2]));
+    vec3 df = v3((float)d[0], (float)d[1], (float)d[2]);
+    double pf = a->no_pad ? 0.0
+                          : pad + 0x1p-20 * (b->abs_max + 2.0 * pad) + 0x1p-50 * (oa + fabs(s0) * da);
+    walk_bvh_flat(a, it, b, r, of, df, (float)(pf * (1.0 + 0x1p-20)), s0, naive, spheres);
+}
+
+/* ---- top level ------------------------------------------------------------------ */
+
+INLINE void top_bvh(const inst_accel *a, ray_state *r, int naive, int spheres)
+{
+    const inst_bvh *h = &a->top_bvh;
+    if (!h->node_count) return;
+    struct { uint32_t node; float entry; } stack[INST_STACK];
+    int sp = 0;
+    uint32_t node = 0;
+    float e;
+    r->boxes++;
+    if (!box3_slab(h->nodes[0].lo, h->nodes[0].hi, r->p.org, r->p.inv_dir, r->p.neg, r->p.t_near,
+                   r->t, &e))
+        return;
+    for (;;) {
+        const inst_node *n = &h->nodes[node];
+        r->top_steps++;
+        if (n->count) {
+            for (uint32_t i = 0; i < n->count; i++) {
+                visit(a, h->items[n->index + i], r, naive, spheres);
+                if (r->done) return;
+            }
+        } else {
+            uint32_t c0 = n->index, c1 = c0 + 1;
+            float e0, e1;
+            int h0 = box3_slab(h->nodes[c0].lo, h->nodes[c0].hi, r->p.org, r->p.inv_dir, r->p.neg,
+                               r->p.t_near, r->t, &e0);
+            int h1 = box3_slab(h->nodes[c1].lo, h->nodes[c1].hi, r->p.org, r->p.inv_dir, r->p.neg,
+                               r->p.t_near, r->t, &e1);
+            r->boxes += 2;
+            if (h0 && h1) {
+                int near0 = e0 <= e1;
+                stack[sp].node = near0 ? c1 : c0;
+                stack[sp++].entry = near0 ? e1 : e0;
+                node = near0 ? c0 : c1;
+                continue;
+            }
+            if (h0 || h1) {
+                node = h0 ? c0 : c1;
+                continue;
+            }
+        }
+        do {
+            if (sp == 0) return;
+            --sp;
+        } while (stack[sp].entry > r->t);
+        node = stack[sp].node;
+    }
+}
+
+INLINE void top_grid(const inst_accel *a, ray_state *r, int naive, int spheres)
+{
+    const inst_grid *g = &a->top_grid;
+    dda w;
+    if (!dda_start(g, r->o, r->d, r->p.t_near, r->t, &w)) return;
+    uint32_t mb[INST_MAILBOX];
+    memset(mb, 0xFF, sizeof mb);
+    do {
+        size_t cell = dda_cell(g, &w);
+        uint32_t begin = g->start[cell], end = g->start[cell + 1];
+        r->top_steps++;
+        r->empties += begin == end;
+        for (uint32_t i = begin; i < end; i++) {
+            uint32_t k = g->items[i];
+            if (mailbox_seen(mb, k)) {
+                r->skips++;
+                continue;
+            }
+            float e;
+            r->boxes++;
+            const box3 *bb = &a->item_boxes[k];
+            if (!box3_slab(&bb->min.x, &bb->max.x, r->p.org, r->p.inv_dir, r->p.neg, r->p.t_near,
+                           r->t, &e))
+                continue;
+            visit(a, k, r, naive, spheres);
+            if (r->done) return;
+        }
+        if (r->t <= dda_exit(&w)) return;
+    } while (dda_step(g, &w));
+}
+
+/* ---- batch kernels ------------------------------------------------------------- */
+
+INLINE void kernel(const void *acc, const accel_ray *rays, void *out, size_t count,
+                   accel_counters *c, unsigned flags, int any)
+{
+    const inst_accel *a = acc;
+    int naive = (flags & ACCEL_V_NAIVE) != 0, spheres = (flags & ACCEL_V_SPHERES) != 0;
+    for (size_t i = 0; i < count; i++) {
+        ray_state r;
+        r.prim = ACCEL_MISS;
+        r.any = any, r.done = 0;
+        r.top_steps = r.bottom_steps = r.boxes = r.prims = r.empties = r.skips = 0;
+        r.u = r.v = 0.0f;
+        if (accel_prep_ray(&rays[i], &r.p)) {
+            r.t = r.p.t_far;
+            r.o[0] = r.p.org.x, r.o[1] = r.p.org.y, r.o[2] = r.p.org.z;
+            r.d[0] = r.p.dir.x, r.d[1] = r.p.dir.y, r.d[2] = r.p.dir.z;
+            if (a->top == INST_BVH)
+                top_bvh(a, &r, naive, spheres);
+            else
+                top_grid(a, &r, naive, spheres);
+        }
+        if (any) {
+            ((uint8_t *)out)[i] = r.prim != ACCEL_MISS;
+        } else {
+            accel_hit h = accel_hit_miss();
+            if (r.prim != ACCEL_MISS) h.t = r.t, h.prim = r.prim, h.u = r.u, h.v = r.v;
+            ((accel_hit *)out)[i] = h;
+        }
+        if (c) {
+            uint32_t steps = r.top_steps + r.bottom_steps;
+            c->rays++;
+            c->steps += steps;
+            c->level_steps[0] += r.top_steps;
+            c->level_steps[1] += r.bottom_steps;
+            c->empty_steps += r.empties;
+            c->box_tests += r.boxes;
+            c->prim_tests += r.prims;
+            c->mailbox_skips += r.skips;
+            if (c->ray_steps) c->ray_steps[i] = steps;
+            if (c->ray_prims) c->ray_prims[i] = r.prims;
+        }
+    }
+}
+
+#define CLOSEST_KERNEL(a, r, o, n, c, f) kernel(a, r, o, n, c, f, 0)
+#define ANY_KERNEL(a, r, o, n, c, f) kernel(a, r, o, n, c, f, 1)
+ACCEL_KERNEL_TABLE(inst_closest_table, CLOSEST_KERNEL)
+ACCEL_KERNEL_TABLE(inst_any_table, ANY_KERNEL)
+
+static unsigned flags_of(const inst_accel *a)
+{
+    return (a->naive ? ACCEL_V_NAIVE : 0u) | (a->spheres ? ACCEL_V_SPHERES : 0u);
+}
+
+void inst_intersect(const void *acc, const accel_ray *rays, accel_hit *hits, size_t n,
+                    accel_counters *c)
+{
+    accel_run_kernel(&inst_closest_table, acc, rays, hits, n, c, flags_of(acc));
+}
+
+void inst_occluded(const void *acc, const accel_ray *rays, uint8_t *occ, size_t n,
+                   accel_counters *c)
+{
+    accel_run_kernel(&inst_any_table, acc, rays, occ, n, c, flags_of(acc));
+}
