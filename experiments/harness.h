@@ -3,14 +3,17 @@
  *
  * An experiment answers one question. It parses the common options (one
  * table in harness.c drives parsing and --help: --quick, --out DIR,
- * --threads N, --repeat N, --size N, --mesh FILE..., --heat-scale SPEC,
- * --quiet, --help),
- * measures through bench.h, writes its raw numbers to DIR/<name>.csv (RFC
- * 4180, one schema: the first record is the header) and one Markdown
- * section to DIR/<name>.md: the question, a table (medians with min-max,
- * and the hardware-independent counts beside every time), a finding
- * computed from the numbers, and the lecture's claim beside the
- * measurement. experiments/report.sh stitches the sections into REPORT.md.
+ * --threads N, --repeat N, --size N, --rt-size WxH, --mesh FILE...,
+ * --accel SPEC..., --only-accels, --kinds LIST, --heat-scale SPEC, --quiet,
+ * --help), measures configurations in interleaved rounds (group.h), writes
+ * its raw numbers to DIR/<name>.csv (RFC 4180, one schema: the first
+ * record is the header), one Markdown section to DIR/<name>.md (the
+ * question, the lecture's words, tables of medians with their 95%
+ * intervals and the hardware-independent counts beside every time,
+ * findings computed from the numbers, the section's noise floor), its
+ * verdicts to DIR/<name>.verdicts.csv (claim, verdict, evidence, scenes,
+ * section: claims.h) and what it left out to DIR/<name>.leftout.csv.
+ * experiments/report.sh runs them; bin/mkreport assembles REPORT.md.
  *
  * Exit statuses are those of bench/cli.h: 2 for a bad option, 3 for a scene
  * that cannot be made, 4 when a counted pass broke a traversal invariant or
@@ -25,8 +28,32 @@
 #include "bench/csv.h"
 #include "bench/image.h"
 #include "scene/scene.h"
+#include "claims.h"
+#include "stats.h"
 
 #define EXP_MAX_MESHES 16
+#define EXP_MAX_ACCELS 32
+
+/* Text that grows as it is written: findings are never cut off. */
+typedef struct {
+    char *s;
+    size_t len, cap;
+} exp_text;
+void exp_text_add(exp_text *t, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* The text so far ("" when empty). */
+const char *exp_text_str(const exp_text *t);
+void exp_text_free(exp_text *t);
+
+/* Why a configuration was left out (counted per section for the report). */
+enum {
+    EXP_LEFT_NONE,
+    EXP_LEFT_IDENTICAL, /* the same structure as another configuration */
+    EXP_LEFT_COLLAPSED, /* a structure that degenerates on this scene (seconds per pass) */
+    EXP_LEFT_UNPARSED,  /* a spec this build does not know (a kind or parameter not merged yet) */
+    EXP_LEFT_POINTLESS, /* means nothing here (e.g. brute force at minutes per pass) */
+    EXP_LEFT_FAILED,    /* the build failed (e.g. over its memory limit) */
+    EXP_LEFT_KINDS
+};
 
 typedef struct {
     const char *name;     /* e.g. "exp_sah" */
@@ -36,6 +63,14 @@ typedef struct {
     int threads_given;    /* --threads was on the command line */
     int repeats;          /* timed passes per measurement */
     int size;             /* primary image size (square) */
+    int rt_size[2];       /* the lecture's real-time image (default 800x600) */
+    const char *accels[EXP_MAX_ACCELS]; /* --accel: specs added to the experiment's list */
+    int accel_count;
+    int only_accels;      /* --only-accels: the --accel specs replace the list */
+    const char *kinds;    /* --kinds a,b: only these kinds (NULL: all) */
+    double sample_ms;     /* one timed sample lasts at least this (passes are batched) */
+    double set_budget_ms; /* timed work per configuration and ray set */
+    double build_budget_ms; /* interleaved builds per configuration */
     const char *meshes[EXP_MAX_MESHES]; /* extra mesh files (default: the meshes in ../shared/scenes) */
     int mesh_count;
     int no_meshes, quiet, help;
@@ -46,6 +81,12 @@ typedef struct {
     bench_progress *progress; /* NULL with --quiet */
     int status;           /* exit status exp_finish returns (CLI_EXIT_*) */
     double t_start;
+    double load_start[3];
+    csv_file verdicts;    /* DIR/<name>.verdicts.csv */
+    int verdict_count;
+    int left[EXP_LEFT_KINDS]; /* configurations left out, by reason */
+    double *floors;       /* noise floors of the section's groups */
+    int floor_count, floors_measured;
 } exp_ctx;
 
 /* Parses the common options; `extra_help` is printed under --help. Exits on
@@ -70,8 +111,43 @@ void exp_append(char *buf, size_t n, const char *fmt, ...) __attribute__((format
 /* Loads a scene spec or dies with its error (experiments stop on bad
  * input): exit 3, also for a scene with nothing to hit. */
 void exp_scene(exp_ctx *x, const char *spec, accel_scene *s);
+/* The same for a scene that may not exist in this build (a generator not
+ * merged yet): 0, or nonzero with the reason in why. */
+int exp_scene_try(exp_ctx *x, const char *spec, accel_scene *s, char *why, size_t why_n);
 /* Builds the standard ray sets (mask of bench_set_bit) for s at x->size. */
 void exp_sets(exp_ctx *x, const accel_scene *s, int mask, bench_sets *out);
+/* The same at w x h with ao_samples ambient occlusion rays per hit. */
+void exp_sets_wh(exp_ctx *x, const accel_scene *s, int mask, int w, int h, int ao_samples,
+                 bench_sets *out);
+
+/* A list of specs for one question: the experiment's defaults (or only the
+ * --accel specs with --only-accels) plus the --accel specs whose kind is in
+ * `accept` (a comma list of kind names; NULL: every kind), without the
+ * kinds --kinds leaves out. Specs this build cannot parse stay in the list:
+ * exp_group_add leaves them out with the reason, so the report works before
+ * and after the kinds and parameters it names have landed. */
+typedef struct {
+    const char **spec;
+    int count;
+} exp_list;
+void exp_list_make(exp_ctx *x, const char *const *defaults, int n, const char *accept,
+                   exp_list *out);
+void exp_list_free(exp_list *l);
+/* Whether --kinds lets kind `name` run (always 1 without --kinds). */
+int exp_kind_wanted(const exp_ctx *x, const char *name);
+
+/* One verdict on a claim of claims.h: verdict is EXP_CONFIRMED, EXP_PARTLY,
+ * EXP_REFUTED or EXP_UNTESTABLE; evidence gives the deciding numbers with
+ * their intervals; scenes names where they were measured. A bad claim id or
+ * label is an internal error (exit 4). */
+void exp_verdict(exp_ctx *x, const char *claim, const char *verdict, const char *scenes,
+                 const char *evidence_fmt, ...) __attribute__((format(printf, 5, 6)));
+/* Counts a configuration left out (exp_group does it for its own). */
+void exp_note_left(exp_ctx *x, int why);
+/* Records a group's noise floor (measured: from an A/A control). */
+void exp_note_floor(exp_ctx *x, double floor, int measured);
+/* The section's noise floor so far: the largest of its groups' (EXP_MIN_FLOOR... 5% when none). */
+double exp_section_floor(const exp_ctx *x);
 /* The double-precision reference with x->threads, shown as a progress phase. */
 void exp_reference(exp_ctx *x, const accel_scene *s, const accel_ray *rays, accel_hit *hits,
                    size_t count);

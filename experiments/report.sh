@@ -22,6 +22,7 @@ else
   out=report; report=REPORT.md; flag=""; budget="full"; linkdir="report/"
 fi
 mkdir -p "$out"
+read -r load_start _ < /proc/loadavg || load_start="?"
 # Experiments in the order the report reads them.
 order="exp_step_cost exp_grid_resolution exp_nested_grid exp_sah exp_binning exp_packets exp_threads exp_scaling exp_error_time exp_time_to_image exp_stability"
 start=$(date +%s)
@@ -48,8 +49,7 @@ else
   plots_note="gnuplot is not installed on this machine: the plots were not drawn (their data are the CSV files in $out/, and the .gp scripts beside them draw them: \`apt-get install gnuplot\` then \`make report\`)."
 fi
 
-cpu=$(grep -m1 'model name' /proc/cpuinfo 2>/dev/null | sed 's/.*: //' || echo unknown)
-cores=$(nproc 2>/dev/null || echo "?")
+read -r load_end _ < /proc/loadavg || load_end="?"
 commit=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
 dirty=$(git status --porcelain --untracked-files=no 2>/dev/null | grep -v -e ' REPORT.md' -e ' report/' | head -1 || true)
 [ -n "$dirty" ] && commit="$commit (with uncommitted changes)"
@@ -62,8 +62,9 @@ cc_version=$(${CC:-cc} --version 2>/dev/null | head -1)
   echo
   echo "| | |"
   echo "|---|---|"
-  echo "| machine | $cpu, $cores cores |"
-  echo "| compiler | $cc_version |"
+  if [ -f "$out/machine.md" ]; then cat "$out/machine.md"; else echo "| machine | unknown |"; fi
+  echo "| compiler driver | $cc_version |"
+  echo "| load average | $load_start at the start, $load_end at the end (1 minute) |"
   echo "| flags | \`${GRIDBVH_CFLAGS:-see Makefile}\` |"
   echo "| commit | $commit |"
   echo "| date | $(date -u '+%Y-%m-%d %H:%M UTC') |"
