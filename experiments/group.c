@@ -137,6 +137,7 @@ int exp_group_add(exp_group *g, const char *spec, int threads)
         one_pass(c, bit, r, sc.hits, sc.occ, &t->counters);
         double counted_ms = accel_now_ms() - t0;
         bench_progress_end(x->progress);
+        if (counted_ms > c->counted_ms) c->counted_ms = counted_ms;
         t->counters.ray_steps = t->counters.ray_prims = NULL;
         if (accel_counters_status(&t->counters, &err)) {
             exp_internal(x, spec, &err);
@@ -378,6 +379,23 @@ static double per_ray(const exp_group *g, int c, int mask, int what)
 double exp_group_steps(const exp_group *g, int c, int mask) { return per_ray(g, c, mask, 0); }
 double exp_group_prims(const exp_group *g, int c, int mask) { return per_ray(g, c, mask, 1); }
 double exp_group_boxes(const exp_group *g, int c, int mask) { return per_ray(g, c, mask, 2); }
+
+void exp_group_compare_head(exp_group *g)
+{
+    exp_md(g->x, "\nComparisons (paired rounds; a tie is inside the interval or under the noise "
+                 "floor of %.1f%%):\n", 100 * g->floor);
+    exp_md_table(g->x, "comparison|time change [95% CI]|outcome");
+}
+
+int exp_group_compare(exp_group *g, int c, int base, int mask, char *buf, size_t n)
+{
+    exp_est r = exp_group_speedup(g, c, base, mask);
+    exp_fmt_pct(buf, n, &r);
+    int cmp = exp_ratio_cmp(&r, g->floor);
+    exp_md(g->x, "| `%s` against `%s` | %s | %s |\n", g->cfg[c].spec, g->cfg[base].spec, buf,
+           cmp == 0 ? "a tie" : cmp < 0 ? "faster" : "slower");
+    return cmp;
+}
 
 int exp_group_find(const exp_group *g, const char *spec)
 {

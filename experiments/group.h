@@ -53,6 +53,7 @@ typedef struct {
     char why[640]; /* the reason it was left out */
     int same_as;   /* the configuration with the same structure, or -1 */
     int want;      /* timed rounds */
+    double counted_ms; /* the longest counted pass (a collapsed configuration's only time) */
     exp_trace set[4]; /* indexed by exp_set_index */
 } exp_cfg;
 
@@ -104,6 +105,12 @@ exp_est exp_group_speedup(const exp_group *g, int base, int c, int mask);
 double exp_group_steps(const exp_group *g, int c, int mask);
 double exp_group_prims(const exp_group *g, int c, int mask);
 double exp_group_boxes(const exp_group *g, int c, int mask);
+/* The comparisons table: its header, then one row per comparison
+ * "| `c` against `base` | time +x% [lo, hi] | slower / faster / a tie |".
+ * exp_group_compare puts the change in buf (for findings that quote it)
+ * and returns exp_ratio_cmp of the time ratio (0: a tie). */
+void exp_group_compare_head(exp_group *g);
+int exp_group_compare(exp_group *g, int c, int base, int mask, char *buf, size_t n);
 /* Index of the configuration named spec, or -1. */
 int exp_group_find(const exp_group *g, const char *spec);
 

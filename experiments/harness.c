@@ -396,6 +396,16 @@ void exp_md(exp_ctx *x, const char *fmt, ...)
     fflush(x->md);
 }
 
+void exp_header(exp_ctx *x, const char *title, const char *words, const char *question_fmt, ...)
+{
+    exp_md(x, "## %s (%s)\n\n**Question:** ", title, x->name);
+    va_list ap;
+    va_start(ap, question_fmt);
+    vfprintf(x->md, question_fmt, ap);
+    va_end(ap);
+    exp_md(x, "\n\n**In the lecture's words:** %s\n\n<!-- verdicts -->\n", words);
+}
+
 void exp_md_table(exp_ctx *x, const char *cols)
 {
     int n = 1;

@@ -101,6 +101,10 @@ int exp_finish(exp_ctx *x);
  * RFC 4180 needs; the first call writes the header. */
 void exp_csv(exp_ctx *x, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 void exp_md(exp_ctx *x, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* The section's head: "## title (name)", the question, the lecture's (or
+ * the user's) words, and the place where the report puts the verdicts. */
+void exp_header(exp_ctx *x, const char *title, const char *words, const char *question_fmt, ...)
+    __attribute__((format(printf, 4, 5)));
 /* A Markdown table header: cols separated by '|'. */
 void exp_md_table(exp_ctx *x, const char *cols);
 /* "12.3 (11.9-12.8)": a median with its min-max range. */

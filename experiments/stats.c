@@ -129,6 +129,16 @@ const char *exp_fmt_est(char *buf, size_t n, const exp_est *e, int decimals)
     return buf;
 }
 
+const char *exp_fmt_pct(char *buf, size_t n, const exp_est *r)
+{
+    if (r->n < 2)
+        snprintf(buf, n, "%+.1f%%", 100 * (r->median - 1));
+    else
+        snprintf(buf, n, "%+.1f%% [%+.1f%%, %+.1f%%]", 100 * (r->median - 1), 100 * (r->lo - 1),
+                 100 * (r->hi - 1));
+    return buf;
+}
+
 double exp_est_spread(const exp_est *e)
 {
     return e->median > 0 ? (e->hi - e->lo) / 2 / e->median : 0;
