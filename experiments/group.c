@@ -384,16 +384,36 @@ void exp_group_compare_head(exp_group *g)
 {
     exp_md(g->x, "\nComparisons (paired rounds; a tie is inside the interval or under the noise "
                  "floor of %.1f%%):\n", 100 * g->floor);
-    exp_md_table(g->x, "comparison|time change [95% CI]|outcome");
+    exp_md_table(g->x, "comparison|rays|time change [95% CI]|speed-up [95% CI]|outcome");
 }
 
 int exp_group_compare(exp_group *g, int c, int base, int mask, char *buf, size_t n)
 {
-    exp_est r = exp_group_speedup(g, c, base, mask);
+    exp_est r = exp_group_speedup(g, c, base, mask), sp = exp_est_inv(&r, 1.0);
     exp_fmt_pct(buf, n, &r);
     int cmp = exp_ratio_cmp(&r, g->floor);
-    exp_md(g->x, "| `%s` against `%s` | %s | %s |\n", g->cfg[c].spec, g->cfg[base].spec, buf,
-           cmp == 0 ? "a tie" : cmp < 0 ? "faster" : "slower");
+    char s[96], sets[64] = "";
+    for (int bit = 1; bit <= BENCH_AO; bit <<= 1)
+        if ((mask & g->mask) & bit)
+            snprintf(sets + strlen(sets), sizeof sets - strlen(sets), "%s%s", sets[0] ? "+" : "",
+                     bench_set_name(bit));
+    exp_md(g->x, "| `%s` against `%s` | %s | %s | %s | %s |\n", g->cfg[c].spec, g->cfg[base].spec,
+           sets, buf, exp_fmt_x(s, sizeof s, &sp), cmp == 0 ? "a tie" : cmp < 0 ? "faster" : "slower");
+    return cmp;
+}
+
+int exp_group_compare_build(exp_group *g, int c, int base, char *buf, size_t n)
+{
+    const exp_cfg *a = &g->cfg[c], *b = &g->cfg[base];
+    exp_est r, sp;
+    int m = a->build_ms.n < b->build_ms.n ? a->build_ms.n : b->build_ms.n;
+    exp_est_ratio(a->build_samples, b->build_samples, m, &r);
+    sp = exp_est_inv(&r, 1.0);
+    exp_fmt_pct(buf, n, &r);
+    int cmp = exp_ratio_cmp(&r, g->floor);
+    char s[96];
+    exp_md(g->x, "| `%s` against `%s` | build | %s | %s | %s |\n", a->spec, b->spec, buf,
+           exp_fmt_x(s, sizeof s, &sp), cmp == 0 ? "a tie" : cmp < 0 ? "faster" : "slower");
     return cmp;
 }
 

@@ -111,6 +111,8 @@ double exp_group_boxes(const exp_group *g, int c, int mask);
  * and returns exp_ratio_cmp of the time ratio (0: a tie). */
 void exp_group_compare_head(exp_group *g);
 int exp_group_compare(exp_group *g, int c, int base, int mask, char *buf, size_t n);
+/* The same for build times (paired interleaved build rounds). */
+int exp_group_compare_build(exp_group *g, int c, int base, char *buf, size_t n);
 /* Index of the configuration named spec, or -1. */
 int exp_group_find(const exp_group *g, const char *spec);
 

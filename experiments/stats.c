@@ -139,6 +139,15 @@ const char *exp_fmt_pct(char *buf, size_t n, const exp_est *r)
     return buf;
 }
 
+const char *exp_fmt_x(char *buf, size_t n, const exp_est *e)
+{
+    if (e->n < 2)
+        snprintf(buf, n, "%.2fx", e->median);
+    else
+        snprintf(buf, n, "%.2fx [%.2f, %.2f]", e->median, e->lo, e->hi);
+    return buf;
+}
+
 double exp_est_spread(const exp_est *e)
 {
     return e->median > 0 ? (e->hi - e->lo) / 2 / e->median : 0;

@@ -57,6 +57,8 @@ int exp_ratio_cmp(const exp_est *r, double floor);
 const char *exp_fmt_est(char *buf, size_t n, const exp_est *e, int decimals);
 /* A ratio as a change: "+20.2% [-3.1%, +41.0%]" ("+20.2%" when n < 2). */
 const char *exp_fmt_pct(char *buf, size_t n, const exp_est *ratio);
+/* A factor: "1.84x [1.80, 1.90]" ("1.84x" when n < 2). */
+const char *exp_fmt_x(char *buf, size_t n, const exp_est *e);
 /* The relative half-width of the interval, (hi - lo) / 2 / median. */
 double exp_est_spread(const exp_est *e);
 
