@@ -115,7 +115,9 @@ int exp_cmp(const exp_est *a, const exp_est *b, double floor)
 
 int exp_ratio_cmp(const exp_est *r, double floor)
 {
-    if ((r->lo <= 1.0 && r->hi >= 1.0) || fabs(r->median - 1.0) <= floor) return 0;
+    /* Symmetric in the ratio: 1.25 and 0.8 are the same distance from 1. */
+    if ((r->lo <= 1.0 && r->hi >= 1.0) || (r->median <= 1.0 + floor && r->median * (1.0 + floor) >= 1.0))
+        return 0;
     return r->median < 1.0 ? -1 : 1;
 }
 

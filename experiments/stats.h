@@ -49,8 +49,8 @@ exp_est exp_est_div(const exp_est *a, const exp_est *b);
 int exp_tie(const exp_est *a, const exp_est *b, double floor);
 /* -1 when a is below b, 1 above, 0 a tie (exp_tie). */
 int exp_cmp(const exp_est *a, const exp_est *b, double floor);
-/* A ratio against 1: 0 when its interval holds 1 or |median - 1| < floor,
- * else -1 (below) or 1 (above). */
+/* A ratio against 1: 0 when its interval holds 1 or its median lies in
+ * [1 / (1 + floor), 1 + floor], else -1 (below) or 1 (above). */
 int exp_ratio_cmp(const exp_est *r, double floor);
 
 /* "12.3 [12.1, 12.6]": the median and its interval; "12.3" when n < 2. */
