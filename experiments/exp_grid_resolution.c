@@ -268,8 +268,8 @@ static void verdicts(exp_ctx *x, study *st)
     }
     int n = st->scenes;
     if (best_l >= 0) {
-        const char *v = best_within == n ? EXP_REFUTED : best_within * 2 > n ? EXP_PARTLY
-                                                                            : EXP_CONFIRMED;
+        const char *v = best_within == n ? exp_no_difference(exp_section_floor(x))
+                        : best_within * 2 > n ? EXP_PARTLY : EXP_CONFIRMED;
         exp_text miss = {0};
         for (int si = 0; si < n; si++)
             for (int i = 0; i < st->sc[si].count; i++)

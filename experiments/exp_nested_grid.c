@@ -213,7 +213,8 @@ int main(int argc, char **argv)
     exp_md(&x, "\n**Findings:**\n\n%s", exp_text_str(&st.findings));
     int n = st.d + st.a + st.t;
     if (n)
-        exp_verdict(&x, "nested-tweaking", st.t ? EXP_CONFIRMED : st.a ? EXP_PARTLY : EXP_REFUTED,
+        exp_verdict(&x, "nested-tweaking", st.t ? EXP_CONFIRMED : st.a ? EXP_PARTLY
+                    : exp_no_difference(exp_section_floor(&x)),
                     exp_text_str(&st.scenes), "on %d of %d scenes the defaults tie with the best "
                     "nested grid, on %d more `auto` does, on %d only hand-set parameters reach it "
                     "(time against the best: %s)", st.d, n, st.a, st.t, exp_text_str(&st.tweak_ev));
@@ -221,7 +222,8 @@ int main(int argc, char **argv)
         exp_verdict(&x, "nested-tweaking", EXP_UNTESTABLE, "-", "no hand-set configuration ran");
     if (st.nonuniform)
         exp_verdict(&x, "nested-adapts", st.adapts == st.nonuniform ? EXP_CONFIRMED
-                    : st.adapts ? EXP_PARTLY : EXP_REFUTED, exp_text_str(&st.scenes),
+                    : st.adapts ? EXP_PARTLY : exp_no_difference(exp_section_floor(&x)),
+                    exp_text_str(&st.scenes),
                     "the best nested grid beats the best regular grid outside the noise on %d of "
                     "%d non-uniform scenes (time against the grid: %s)", st.adapts,
                     st.nonuniform, exp_text_str(&st.adapt_ev));

@@ -200,7 +200,8 @@ int main(int argc, char **argv)
                "intervals):\n\n%s", exp_text_str(&st.findings));
     if (st.scenes)
         exp_verdict(&x, "sah-2x", st.holds == st.scenes ? EXP_CONFIRMED
-                    : st.holds + st.partly ? EXP_PARTLY : EXP_REFUTED, exp_text_str(&st.names),
+                    : st.holds + st.partly ? EXP_PARTLY : exp_no_difference(exp_section_floor(&x)),
+                    exp_text_str(&st.names),
                     "full-sweep SAH over the pure median split: 2x on every ray set on %d of %d "
                     "scenes, a smaller or set-dependent gain on %d, none on %d (%s)", st.holds,
                     st.scenes, st.partly, st.none, exp_text_str(&st.ev));
@@ -208,7 +209,8 @@ int main(int argc, char **argv)
         exp_verdict(&x, "sah-2x", EXP_UNTESTABLE, "-", "the SAH or the pure median tree was not built");
     if (st.build_scenes)
         exp_verdict(&x, "sah-build-slower", st.build_much == st.build_scenes ? EXP_CONFIRMED
-                    : st.build_slower ? EXP_PARTLY : EXP_REFUTED, exp_text_str(&st.names),
+                    : st.build_slower ? EXP_PARTLY : exp_no_difference(exp_section_floor(&x)),
+                    exp_text_str(&st.names),
                     "the full sweep builds at least 2x slower than the pure median split on %d of "
                     "%d scenes, slower on %d (build time ratio: %s)", st.build_much,
                     st.build_scenes, st.build_slower, exp_text_str(&st.build_ev));

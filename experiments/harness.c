@@ -342,6 +342,11 @@ void exp_verdict(exp_ctx *x, const char *claim, const char *verdict, const char 
     x->verdict_count++;
 }
 
+const char *exp_no_difference(double floor)
+{
+    return floor <= EXP_NOISY ? EXP_REFUTED : EXP_UNTESTABLE;
+}
+
 void exp_note_left(exp_ctx *x, int why)
 {
     if (why > 0 && why < EXP_LEFT_KINDS) x->left[why]++;

@@ -146,6 +146,11 @@ int exp_kind_wanted(const exp_ctx *x, const char *name);
  * label is an internal error (exit 4). */
 void exp_verdict(exp_ctx *x, const char *claim, const char *verdict, const char *scenes,
                  const char *evidence_fmt, ...) __attribute__((format(printf, 5, 6)));
+/* The verdict for a claim that comes out as "no difference": refuted when
+ * the noise floor could have shown the effect (floor <= EXP_NOISY),
+ * otherwise not testable (the run was too noisy to tell). */
+#define EXP_NOISY 0.25
+const char *exp_no_difference(double floor);
 /* Counts a configuration left out (exp_group does it for its own). */
 void exp_note_left(exp_ctx *x, int why);
 /* Records a group's noise floor (measured: from an A/A control). */
