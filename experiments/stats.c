@@ -123,7 +123,7 @@ int exp_ratio_cmp(const exp_est *r, double floor)
 
 const char *exp_fmt_est(char *buf, size_t n, const exp_est *e, int decimals)
 {
-    if (e->n < 2)
+    if (e->n < 2 || !(e->hi > e->lo))
         snprintf(buf, n, "%.*f", decimals, e->median);
     else
         snprintf(buf, n, "%.*f [%.*f, %.*f]", decimals, e->median, decimals, e->lo, decimals,
@@ -133,7 +133,7 @@ const char *exp_fmt_est(char *buf, size_t n, const exp_est *e, int decimals)
 
 const char *exp_fmt_pct(char *buf, size_t n, const exp_est *r)
 {
-    if (r->n < 2)
+    if (r->n < 2 || !(r->hi > r->lo))
         snprintf(buf, n, "%+.1f%%", 100 * (r->median - 1));
     else
         snprintf(buf, n, "%+.1f%% [%+.1f%%, %+.1f%%]", 100 * (r->median - 1), 100 * (r->lo - 1),
@@ -143,7 +143,7 @@ const char *exp_fmt_pct(char *buf, size_t n, const exp_est *r)
 
 const char *exp_fmt_x(char *buf, size_t n, const exp_est *e)
 {
-    if (e->n < 2)
+    if (e->n < 2 || !(e->hi > e->lo))
         snprintf(buf, n, "%.2fx", e->median);
     else
         snprintf(buf, n, "%.2fx [%.2f, %.2f]", e->median, e->lo, e->hi);
