@@ -29,7 +29,7 @@ typedef struct {
 } series;
 
 typedef struct {
-    int sub_yes, sub_n;
+    int sub_yes, sub_no, sub_n;
     exp_text sub_ev, findings, cliffs;
     int brute_done;
     exp_est brute_slope;
@@ -130,6 +130,7 @@ static void family(exp_ctx *x, study *st, int f, const exp_list *list)
         } else if (q->pts >= 3) {
             st->sub_n++;
             st->sub_yes += kt.hi < 1.0;
+            st->sub_no += kt.lo >= 1.0;
             exp_text_add(&st->sub_ev, "%s%s on %s N^%s", st->sub_ev.len ? "; " : "", q->spec,
                          names[f], b);
         }
@@ -173,7 +174,8 @@ int main(int argc, char **argv)
         exp_verdict(&x, "brute-cost", EXP_UNTESTABLE, "-", "brute force was not measured at two sizes");
     if (st.sub_n)
         exp_verdict(&x, "accel-sublinear", st.sub_yes == st.sub_n ? EXP_CONFIRMED
-                    : st.sub_yes ? EXP_PARTLY : EXP_REFUTED, "soup, teapot_stadium",
+                    : st.sub_yes ? EXP_PARTLY : st.sub_no ? EXP_REFUTED : EXP_UNTESTABLE,
+                    "soup, teapot_stadium",
                     "%d of %d structure and scene series grow as N^k with k's interval below 1 "
                     "(%s)%s", st.sub_yes, st.sub_n, exp_text_str(&st.sub_ev),
                     st.cliffs.len ? "; cliffs: see the findings" : "");
