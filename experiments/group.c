@@ -60,6 +60,12 @@ static int same_structure(const exp_cfg *a, const exp_cfg *b, int mask)
         p->depth != q->depth || memcmp(p->res, q->res, sizeof p->res) ||
         !((isnan(p->sah_cost) && isnan(q->sah_cost)) || p->sah_cost == q->sah_cost))
         return 0;
+    /* Kernel choices that change answers or layout but not the counts. */
+    accel_params pa, pb;
+    accel_error err;
+    if (accel_params_parse(a->spec, &pa, &err) || accel_params_parse(b->spec, &pb, &err) ||
+        pa.naive != pb.naive || pa.reorder != pb.reorder)
+        return 0;
     for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
         if (!(mask & bit)) continue;
         const accel_counters *u = &a->set[exp_set_index(bit)].counters;
