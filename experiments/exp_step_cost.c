@@ -221,7 +221,7 @@ int main(int argc, char **argv)
                "incoherent diffuse ones), so one set of constants per kind and scene is the "
                "model's best case; the worst error above is what it costs to use it.\n");
     const char *v = !t.fits ? EXP_UNTESTABLE : t.good == t.fits ? EXP_CONFIRMED
-                    : t.good == 0 ? EXP_REFUTED : EXP_PARTLY;
+                    : t.good == 0 ? exp_no_difference(exp_section_floor(&x)) : EXP_PARTLY;
     exp_verdict(&x, "cost-model", v, exp_text_str(&t.scenes),
                 "%d of %d fits predict every configuration within %.0f%% (%s); %d famil%s not "
                 "fittable", t.good, t.fits, 100 * GOOD_FIT, exp_text_str(&t.evidence), t.unfit,

@@ -376,16 +376,6 @@ void exp_csv(exp_ctx *x, const char *fmt, ...)
     va_end(ap);
 }
 
-void exp_append(char *buf, size_t n, const char *fmt, ...)
-{
-    size_t len = strlen(buf);
-    if (len >= n) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(buf + len, n - len, fmt, ap);
-    va_end(ap);
-}
-
 void exp_internal(exp_ctx *x, const char *what, const accel_error *err)
 {
     fprintf(stderr, "%s: %s: %s\n", x->name, what, err->msg);
@@ -418,12 +408,6 @@ void exp_md_table(exp_ctx *x, const char *cols)
     exp_md(x, "\n| %s |\n|", cols);
     for (int i = 0; i < n; i++) exp_md(x, "---|");
     exp_md(x, "\n");
-}
-
-const char *exp_fmt_timing(char *buf, size_t n, const accel_timing *t, int decimals)
-{
-    snprintf(buf, n, "%.*f (%.*f-%.*f)", decimals, t->median, decimals, t->min, decimals, t->max);
-    return buf;
 }
 
 void exp_scene(exp_ctx *x, const char *spec, accel_scene *s)
@@ -485,54 +469,6 @@ void exp_reference(exp_ctx *x, const accel_scene *s, const accel_ray *rays, acce
     bench_progress_begin(x->progress, phase, (double)count, 1);
     accel_reference_trace(s, rays, hits, count, x->threads);
     bench_progress_end(x->progress);
-}
-
-int exp_run(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets *sets, int mask,
-            exp_measure *m, char *why, size_t why_n)
-{
-    memset(m, 0, sizeof *m);
-    accel_error err = {0};
-    const accel_kind *kind;
-    void *accel;
-    int build_reps = x->quick ? 1 : 3;
-    if (bench_build(spec, s, x->threads, build_reps, 5000.0, &kind, &accel, &m->build,
-                    &m->build_ms, x->progress, &err)) {
-        snprintf(why, why_n, "%s", err.msg);
-        return 1;
-    }
-    for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
-        if (!(mask & bit) || !(sets->made & bit)) continue;
-        int i = exp_set_index(bit);
-        char phase[320];
-        snprintf(phase, sizeof phase, "trace %s with %s", bench_set_name(bit), spec);
-        bench_trace_opts o = {.threads = x->threads, .warmup = 1, .repeats = x->repeats,
-                              .count_pass = 1, .min_ms = x->quick ? 0.0 : 50.0,
-                              .max_ms = x->quick ? 2000.0 : 10000.0,
-                              .progress = x->progress, .progress_name = phase};
-        if (bench_trace(kind, accel, bench_sets_get(sets, bit), bench_set_is_occlusion(bit), &o,
-                        &m->res[i], &err)) {
-            snprintf(why, why_n, "%s", err.msg);
-            if (err.code == ACCEL_ERR_INTERNAL) exp_internal(x, spec, &err);
-            kind->destroy(accel);
-            return 1;
-        }
-        m->have[i] = 1;
-    }
-    kind->destroy(accel);
-    return 0;
-}
-
-void exp_plot(exp_ctx *x, const char *plot_name, const char *script)
-{
-    char path[1024];
-    snprintf(path, sizeof path, "%s/%s.gp", x->out_dir, plot_name);
-    FILE *f = fopen(path, "w");
-    if (!f) return;
-    fprintf(f, "set terminal png size 800,500 noenhanced\nset output '%s/%s.png'\n"
-               "csv = '%s/%s.csv'\nset datafile separator ','\nset key outside\nset grid\n%s\n",
-            x->out_dir, plot_name, x->out_dir, x->name, script);
-    fclose(f);
-    exp_md(x, "\n<!-- plot: %s -->\n", plot_name);
 }
 
 int exp_heatmap(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets *sets,

@@ -107,11 +107,6 @@ void exp_header(exp_ctx *x, const char *title, const char *words, const char *qu
     __attribute__((format(printf, 4, 5)));
 /* A Markdown table header: cols separated by '|'. */
 void exp_md_table(exp_ctx *x, const char *cols);
-/* "12.3 (11.9-12.8)": a median with its min-max range. */
-const char *exp_fmt_timing(char *buf, size_t n, const accel_timing *t, int decimals);
-/* Appends a printf-formatted line to a findings buffer. */
-void exp_append(char *buf, size_t n, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
-
 /* Loads a scene spec or dies with its error (experiments stop on bad
  * input): exit 3, also for a scene with nothing to hit. */
 void exp_scene(exp_ctx *x, const char *spec, accel_scene *s);
@@ -163,21 +158,6 @@ void exp_reference(exp_ctx *x, const accel_scene *s, const accel_ray *rays, acce
 /* Records an internal error (printed; exp_finish returns 4). */
 void exp_internal(exp_ctx *x, const char *what, const accel_error *err);
 
-/* One accelerator configuration measured on one scene and some ray sets. */
-typedef struct {
-    accel_build_stats build;
-    accel_timing build_ms;
-    bench_result res[4]; /* indexed by set: 0 primary, 1 shadow, 2 diffuse, 3 ao */
-    int have[4];
-} exp_measure;
-
-/* Builds spec (repeats per the budget) and traces every set in mask.
- * Returns 0, or puts the reason in why and returns nonzero (the caller
- * reports a skipped configuration). A broken invariant also counts as an
- * internal error of the run. */
-int exp_run(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets *sets, int mask,
-            exp_measure *m, char *why, size_t why_n);
-
 static inline int exp_set_index(int bit)
 {
     return bit == BENCH_PRIMARY ? 0 : bit == BENCH_SHADOW ? 1 : bit == BENCH_DIFFUSE ? 2 : 3;
@@ -188,10 +168,6 @@ static inline double exp_per_ray(uint64_t v, const bench_result *r)
 {
     return r->rays ? (double)v / (double)r->rays : 0.0;
 }
-
-/* Writes DIR/<plot_name>.gp drawing DIR/<plot_name>.png; the script may use
- * the variable `csv` (this experiment's CSV). report.sh runs it when gnuplot exists. */
-void exp_plot(exp_ctx *x, const char *plot_name, const char *script);
 
 /* Traces the primary rays of `sets` with spec on s in a counted pass and
  * writes DIR/<image_name>.png: steps (what='s') or primitive tests ('p')
