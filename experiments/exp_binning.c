@@ -18,6 +18,7 @@
 #include <string.h>
 
 #include "group.h"
+#include "svg.h"
 
 #define MASK (BENCH_PRIMARY | BENCH_DIFFUSE)
 #define FRAME_MS (1000.0 / 30.0)
@@ -85,6 +86,27 @@ static void bins_against_quality(exp_ctx *x, exp_text *findings)
             chosen = c;
     }
     exp_group_note(&g);
+    svg_plot pl;
+    svg_plot_init(&pl, "Binned SAH: build time against tree quality", "build ms",
+                  "SAH cost (lower: better tree)");
+    pl.log_x = 1;
+    for (int axes = 1; axes <= 3; axes += 2) {
+        double bx[16], by[16], lo[16], hi[16];
+        int k = 0;
+        for (int c = 1; c < g.count && k < 16; c++) {
+            char tag[16];
+            snprintf(tag, sizeof tag, "axes=%d", axes);
+            if (!g.cfg[c].ok || !strstr(g.cfg[c].spec, tag)) continue;
+            bx[k] = g.cfg[c].build_ms.median, by[k] = lo[k] = hi[k] = g.cfg[c].build.sah_cost;
+            k++;
+        }
+        svg_add(&pl, axes == 1 ? "binned, longest axis" : "binned, 3 axes",
+                bx, by, lo, hi, k, SVG_LINE | SVG_POINTS);
+    }
+    double rx = g.cfg[0].build_ms.median, ry = ref_sah;
+    svg_add(&pl, "full sweep (reference)", &rx, &ry, NULL, NULL, 1, SVG_POINTS);
+    exp_svg(x, &pl, "binning_quality", "Build time against SAH cost, one point per bin count "
+            "(more bins: right and down)");
     exp_group_compare_head(&g);
     if (chosen >= 0) {
         char t[128], b[128];

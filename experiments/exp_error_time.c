@@ -24,6 +24,7 @@
 #include <string.h>
 
 #include "group.h"
+#include "svg.h"
 #include "bench/cli.h"
 #include "bench/stiff.h"
 
@@ -181,6 +182,14 @@ static void error_against_time(exp_ctx *x, study *st)
         free(occ);
         bench_sets_free(&one);
     }
+    svg_plot pl;
+    svg_plot_init(&pl, "Ambient occlusion: image error against time (build + trace)",
+                  "ms (build + trace)", "RMSE against the converged image");
+    pl.log_x = pl.log_y = 1;
+    for (int c = 0; c < list.count && c < MAX_KINDS; c++)
+        if (ok[c]) svg_add(&pl, list.spec[c], total[c], err_v, NULL, NULL, levels, SVG_LINE | SVG_POINTS);
+    exp_svg(x, &pl, "error_time", "Error against time, one point per sample count (1, 2, 4, ... "
+            "samples per pixel)");
     exp_est slope;
     exp_loglog_slope(spp_v, err_v, levels, &slope, NULL);
     char sl[96];

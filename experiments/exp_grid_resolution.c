@@ -23,6 +23,7 @@
 #include <string.h>
 
 #include "group.h"
+#include "svg.h"
 
 #define MASK (BENCH_PRIMARY | BENCH_DIFFUSE)
 #define MAX_SCENES 12
@@ -128,6 +129,40 @@ static void region_test(const study *st, const exp_group *g, scene_result *r)
     (void)cfgs;
 }
 
+static void sweep_plot(exp_ctx *x, const study *st, const exp_group *g, int si, const char *scene)
+{
+    double lx[64], ly[64], lo[64], hi[64], mx[64], my[64];
+    int n = 0;
+    for (int c = 0; c < g->count && n < 64; c++) {
+        double l = lambda_of(g->cfg[c].spec);
+        if (!g->cfg[c].ok || l <= 0) continue;
+        exp_est e = exp_group_ns(g, c, MASK);
+        lx[n] = mx[n] = l, ly[n] = e.median, lo[n] = e.lo, hi[n] = e.hi;
+        my[n] = st->calibrated ? model_ns(st, exp_group_steps(g, c, MASK), exp_group_prims(g, c, MASK))
+                               : 0;
+        n++;
+    }
+    if (n < 2) return;
+    for (int i = 1; i < n; i++) /* by lambda: the default joins the sweep at its place */
+        for (int j = i; j > 0 && lx[j - 1] > lx[j]; j--) {
+            double *arr[6] = {lx, ly, lo, hi, mx, my};
+            for (int a = 0; a < 6; a++) {
+                double t = arr[a][j];
+                arr[a][j] = arr[a][j - 1], arr[a][j - 1] = t;
+            }
+        }
+    char title[256], name[64];
+    snprintf(title, sizeof title, "Grid resolution on %s: ns per ray against lambda", scene);
+    snprintf(name, sizeof name, "grid_res_%d", si);
+    svg_plot p;
+    svg_plot_init(&p, title, "lambda (cells per primitive)", "ns per ray (primary + diffuse)");
+    p.log_x = 1, p.log_y = 1;
+    svg_add(&p, "measured", lx, ly, lo, hi, n, SVG_LINE | SVG_POINTS);
+    if (st->calibrated) svg_add(&p, "cost model", mx, my, NULL, NULL, n, SVG_DASHED);
+    exp_svg(x, &p, name, "Measured time (medians with 95% intervals) and the cost model "
+            "calibrated on the first scene (dashed), against lambda");
+}
+
 static void measure_scene(exp_ctx *x, study *st, int si, const char *spec, const exp_list *extra)
 {
     static const double full_l[] = {0.0625, 0.25, 0.5, 1, 2, 4, 8, 16, 32, 64, 128, 256};
@@ -220,6 +255,7 @@ static void measure_scene(exp_ctx *x, study *st, int si, const char *spec, const
                       "choose %d different lambdas.\n", REGIONS, REGIONS, 100 * r->region_gain,
                    r->region_lambdas);
     }
+    sweep_plot(x, st, &g, si, s.name);
     if (si == 1 || (x->quick && si == 0)) {
         char why[600], name[64], cap[256];
         const char *const heat[] = {"grid:lambda=0.5", "grid:lambda=32"};

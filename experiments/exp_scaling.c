@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "group.h"
+#include "svg.h"
 
 #define MASK (BENCH_PRIMARY | BENCH_DIFFUSE)
 #define MAX_SPECS 24
@@ -23,7 +24,7 @@
 typedef struct {
     const char *spec;
     int pts;
-    double n[MAX_SIZES], build[MAX_SIZES], ns[MAX_SIZES], last_pass_ms;
+    double n[MAX_SIZES], build[MAX_SIZES], ns[MAX_SIZES], lo[MAX_SIZES], hi[MAX_SIZES], last_pass_ms;
     int stopped; /* left out at a size: larger sizes are not tried */
     char stop_why[800];
 } series;
@@ -101,6 +102,7 @@ static void family(exp_ctx *x, study *st, int f, const exp_list *list)
                     exp_group_steps(&g, idx[k], MASK), exp_group_prims(&g, idx[k], MASK));
             series *q = &se[k];
             q->n[q->pts] = s.live_count, q->build[q->pts] = cf->build_ms.median, q->ns[q->pts] = e.median;
+            q->lo[q->pts] = e.lo, q->hi[q->pts] = e.hi;
             q->last_pass_ms = cf->counted_ms;
             if (q->pts && q->ns[q->pts] > 3 * q->ns[q->pts - 1] * pow(q->n[q->pts] / q->n[q->pts - 1], 0.5))
                 exp_text_add(&st->cliffs, "- `%s` on %s: %.0f ns per ray at %.0f triangles, %.0f at "
@@ -112,6 +114,26 @@ static void family(exp_ctx *x, study *st, int f, const exp_list *list)
         bench_sets_free(&sets);
         scene_free(&s);
     }
+    svg_plot pl;
+    char title[128], name[64];
+    snprintf(title, sizeof title, "Scaling on %s: ns per ray against triangles", names[f]);
+    svg_plot_init(&pl, title, "triangles", "ns per ray (primary + diffuse)");
+    pl.log_x = pl.log_y = 1;
+    for (int k = 0; k < ns; k++) {
+        series *q = &se[k];
+        if (q->pts < 2) continue;
+        exp_est kt;
+        double a, fx[2] = {q->n[0], q->n[q->pts - 1]}, fy[2];
+        exp_loglog_slope(q->n, q->ns, q->pts, &kt, &a);
+        fy[0] = exp(a) * pow(fx[0], kt.median), fy[1] = exp(a) * pow(fx[1], kt.median);
+        char fit[200];
+        snprintf(fit, sizeof fit, "%s fit N^%.2f", q->spec, kt.median);
+        svg_add(&pl, q->spec, q->n, q->ns, q->lo, q->hi, q->pts, SVG_POINTS);
+        svg_add(&pl, fit, fx, fy, NULL, NULL, 2, SVG_DASHED);
+    }
+    snprintf(name, sizeof name, "scaling_%s", names[f]);
+    exp_svg(x, &pl, name, "Time per ray against the triangle count (medians with 95% intervals; "
+            "dashed: the least-squares power law)");
     exp_md(x, "\nGrowth exponents (least squares on the log-log points, 95%% t-interval):\n");
     exp_md_table(x, "configuration|triangles|build time ~ N^k|trace time per ray ~ N^k");
     for (int k = 0; k < ns; k++) {

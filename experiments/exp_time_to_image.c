@@ -18,6 +18,7 @@
 #include <string.h>
 
 #include "group.h"
+#include "svg.h"
 
 #define MASK (BENCH_PRIMARY | BENCH_DIFFUSE)
 #define FRAME_1080P 2073600.0
@@ -85,6 +86,19 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
                 B[c].median + FRAME_1080P / R[c].median);
     }
     exp_group_note(&g);
+    svg_plot pl;
+    char title[256], pname[64];
+    snprintf(title, sizeof title, "Time to n rays on %s (build + n / rate)", s.name);
+    svg_plot_init(&pl, title, "rays traced", "ms");
+    pl.log_x = pl.log_y = 1;
+    for (int c = 0; c < n; c++) {
+        if (!ok[c]) continue;
+        double rx[13], ry[13];
+        for (int k = 0; k < 13; k++) rx[k] = pow(10, 3 + 0.5 * k), ry[k] = B[c].median + rx[k] / R[c].median;
+        svg_add(&pl, g.cfg[c].spec, rx, ry, NULL, NULL, 13, SVG_LINE);
+    }
+    snprintf(pname, sizeof pname, "time_to_image_%d", st->scenes);
+    exp_svg(x, &pl, pname, "Build plus trace time against the number of rays");
     /* The lower envelope, crossing only where the rates differ outside the noise. */
     int cur = -1;
     for (int c = 0; c < n; c++)

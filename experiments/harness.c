@@ -12,6 +12,7 @@
 
 #include "harness.h"
 #include "machine.h"
+#include "svg.h"
 #include "bench/cli.h"
 #include "bench/image.h"
 
@@ -469,6 +470,17 @@ void exp_reference(exp_ctx *x, const accel_scene *s, const accel_ray *rays, acce
     bench_progress_begin(x->progress, phase, (double)count, 1);
     accel_reference_trace(s, rays, hits, count, x->threads);
     bench_progress_end(x->progress);
+}
+
+void exp_svg(exp_ctx *x, void *plot, const char *name, const char *caption)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s.svg", x->out_dir, name);
+    if (svg_write(plot, path) == 0)
+        exp_md(x, "\n%s:\n\n<!-- plot: %s -->\n", caption, name);
+    else
+        exp_md(x, "\n(plot %s not written: cannot write %s)\n", name, path);
+    svg_free(plot);
 }
 
 int exp_heatmap(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets *sets,

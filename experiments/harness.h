@@ -169,6 +169,10 @@ static inline double exp_per_ray(uint64_t v, const bench_result *r)
     return r->rays ? (double)v / (double)r->rays : 0.0;
 }
 
+/* Writes the svg_plot (svg.h) `plot` to DIR/<name>.svg and places it in the
+ * section with its caption (mkreport links it); frees the plot. */
+void exp_svg(exp_ctx *x, void *plot, const char *name, const char *caption);
+
 /* Traces the primary rays of `sets` with spec on s in a counted pass and
  * writes DIR/<image_name>.png: steps (what='s') or primitive tests ('p')
  * per pixel with a colour scale; adds the image to the Markdown section.
