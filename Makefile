@@ -36,7 +36,8 @@ EXP_LIB  := $(filter-out experiments/exp_%.c experiments/mkreport.c,$(wildcard e
 EXP_BINS := $(patsubst experiments/%.c,$(BIN)/%,$(wildcard experiments/exp_*.c))
 # The lab's checks and its untouched starter kind are part of the tests
 # (tests/test_lab.c: every check passes on the project and fails on the starter).
-TEST_SRC := $(wildcard tests/*.c) lab/check.c lab/starter.c
+TEST_SRC := $(wildcard tests/*.c) lab/check.c lab/starter.c \
+            experiments/claims.c experiments/stats.c experiments/svg.c
 
 .PHONY: all test report sanitize fuzz clean bench lab FORCE
 all: $(TOOLS) $(EXP_BINS) $(BIN)/mkreport $(BIN)/run_tests

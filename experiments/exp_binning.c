@@ -114,8 +114,8 @@ static void bins_against_quality(exp_ctx *x, exp_text *findings)
         int bc = exp_group_compare_build(&g, chosen, 0, b, sizeof b);
         double se = 100 * (g.cfg[chosen].build.sah_cost / ref_sah - 1);
         exp_text_add(findings, "- %s: `%s`, the cheapest longest-axis configuration whose trees "
-                     "trace as fast as the full sweep's (time %s, a tie), build time %s, SAH "
-                     "cost %+.1f%%.\n", s.name, g.cfg[chosen].spec, t, b, se);
+                     "trace as fast as the full sweep's (time %s), build time %s, SAH cost "
+                     "%+.1f%%.\n", s.name, g.cfg[chosen].spec, t, b, se);
         exp_verdict(x, "binned-quality", bc < 0 ? EXP_CONFIRMED : EXP_PARTLY, s.name,
                     "`%s` traces as fast as the full sweep (time %s), build time %s against it "
                     "(SAH cost %+.1f%%)", g.cfg[chosen].spec, t, b, se);

@@ -234,8 +234,9 @@ static void measure_scene(exp_ctx *x, study *st, int si, const char *spec, const
         int hit = pick == best || exp_ratio_cmp(&ex, g.floor) == 0 || ex.median - 1 <= WITHIN;
         st->model_hits += hit;
         st->model_scenes++;
-        char e[96];
+        char e[128];
         exp_fmt_pct(e, sizeof e, &ex);
+        if (exp_ratio_cmp(&ex, g.floor) == 0) strcat(e, " (a tie)");
         exp_md(x, "\nMeasured best: `%s`. The model picks `%s`%s%s%s.\n", g.cfg[best].spec,
                g.cfg[pick].spec, pick == best ? " (the same)" : ": ", pick == best ? "" : e,
                pick == best ? "" : hit ? " against the best (a hit: tied or within 5%)"

@@ -92,11 +92,12 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
         exp_fmt_pct(coh, sizeof coh, &r1);
         exp_fmt_pct(inc, sizeof inc, &r2);
         int cmp = exp_ratio_cmp(&r1, g.floor);
+        if (cmp == 0) strcat(coh, " (a tie)");
+        if (exp_ratio_cmp(&r2, g.floor) == 0) strcat(inc, " (a tie)");
         st->scenes++;
         st->yes += cmp < 0;
         exp_text_add(&st->findings, "- %s: `%s` against single rays: time %s on primary+shadow "
-                     "rays (%s), %s on diffuse+ao.\n", s.name, g.cfg[best].spec, coh,
-                     cmp < 0 ? "faster" : cmp > 0 ? "slower" : "a tie", inc);
+                     "rays, %s on diffuse+ao.\n", s.name, g.cfg[best].spec, coh, inc);
         exp_text_add(&st->ev, "%s%s %s", st->ev.len ? "; " : "", s.name, coh);
     }
     exp_group_free(&g);

@@ -313,6 +313,10 @@ int main(int argc, char **argv)
     stiff_cases(&x, &st, &list);
     if (st.clean.len) exp_md(&x, "\nCases with nothing to report (folded):\n\n%s", exp_text_str(&st.clean));
     if (st.left.len) exp_md(&x, "\nLeft out:\n\n%s", exp_text_str(&st.left));
+    exp_md(&x, "\nThe watertight kernels over all cases: %llu rays, %llu case%s with any hole, false "
+               "hit, disagreement or leak; pooled, a rate of zero is below %.1f per million "
+               "(95%%).\n", (unsigned long long)st.robust_rays, (unsigned long long)st.robust_bad_cases,
+           st.robust_bad_cases == 1 ? "" : "s", 1e6 * exp_binom_upper(0, st.robust_rays));
     exp_md(&x, "\n### Speed on the stiff cases (watertight, Mrays/s, interleaved rounds)\n");
     exp_md_table(&x, "case|Mrays/s per configuration|fastest / slowest (brute aside)");
     exp_md(&x, "%s", exp_text_str(&st.speeds));

@@ -405,6 +405,7 @@ int exp_group_compare(exp_group *g, int c, int base, int mask, char *buf, size_t
                      bench_set_name(bit));
     exp_md(g->x, "| `%s` against `%s` | %s | %s | %s | %s |\n", g->cfg[c].spec, g->cfg[base].spec,
            sets, buf, exp_fmt_x(s, sizeof s, &sp), cmp == 0 ? "a tie" : cmp < 0 ? "faster" : "slower");
+    if (cmp == 0) snprintf(buf + strlen(buf), n - strlen(buf), " (a tie)");
     return cmp;
 }
 
@@ -420,6 +421,7 @@ int exp_group_compare_build(exp_group *g, int c, int base, char *buf, size_t n)
     char s[96];
     exp_md(g->x, "| `%s` against `%s` | build | %s | %s | %s |\n", a->spec, b->spec, buf,
            exp_fmt_x(s, sizeof s, &sp), cmp == 0 ? "a tie" : cmp < 0 ? "faster" : "slower");
+    if (cmp == 0) snprintf(buf + strlen(buf), n - strlen(buf), " (a tie)");
     return cmp;
 }
 

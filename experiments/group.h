@@ -107,8 +107,9 @@ double exp_group_prims(const exp_group *g, int c, int mask);
 double exp_group_boxes(const exp_group *g, int c, int mask);
 /* The comparisons table: its header, then one row per comparison
  * "| `c` against `base` | time +x% [lo, hi] | slower / faster / a tie |".
- * exp_group_compare puts the change in buf (for findings that quote it)
- * and returns exp_ratio_cmp of the time ratio (0: a tie). */
+ * exp_group_compare puts the change in buf (for findings that quote it,
+ * with " (a tie)" after it when it is one) and returns exp_ratio_cmp of
+ * the time ratio (0: a tie). */
 void exp_group_compare_head(exp_group *g);
 int exp_group_compare(exp_group *g, int c, int base, int mask, char *buf, size_t n);
 /* The same for build times (paired interleaved build rounds). */

@@ -172,7 +172,7 @@ void exp_machine_markdown(const exp_machine *m, char *buf, size_t n)
     else
         snprintf(mhz, sizeof mhz, "%.0f MHz (no frequency scaling exposed)", m->mhz);
     snprintf(buf, n,
-             "| CPU | %s |\n"
+             "| machine | %s |\n"
              "| clock | %s |\n"
              "| cores | %d logical CPUs: %d core%s on %d socket%s, %d thread%s per core%s |\n"
              "| caches (cpu0) | %s |\n"

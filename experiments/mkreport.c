@@ -143,7 +143,7 @@ static void summary(FILE *f)
         const exp_claim *cl = &exp_claims[c];
         int lines;
         const char *v = combined(cl->id, &lines);
-        fprintf(f, "| %d | **%s**: %s | %s | ", c + 1, cl->topic, cl->words, cl->source);
+        fprintf(f, "| %d | **%s** (`%s`): %s | %s | ", c + 1, cl->topic, cl->id, cl->words, cl->source);
         if (!strcmp(cl->id, "leave-out")) {
             int total = left[0] + left[1] + left[2] + left[3] + left[4];
             fprintf(f, "%s | %d configurations left out, each with its reason in its section: "
