@@ -231,7 +231,7 @@ static void triangles_at_30hz(exp_ctx *x, exp_text *findings)
         exp_text_add(findings, "- The lecture's builder at its fastest here, `%s`, builds %d "
                      "triangles in %s ms on 1 thread and %s ms on %d.\n", g.cfg[best].spec, tris,
                      b1, bm, maxt);
-        exp_verdict(x, "binned-30hz", x->quick ? EXP_UNTESTABLE : v, sc,
+        exp_verdict(x, "binned-30hz", x->quick ? EXP_UNTESTABLE : exp_slow_verdict(x, v), sc,
                     "%s`%s` (the fastest longest-axis builder here) builds %d triangles in %s ms "
                     "on 1 thread, %s ms on %d, against a 33.3 ms frame", x->quick ? "(quick "
                     "budget: 20k triangles, not the claim's size) " : "", g.cfg[best].spec, tris,

@@ -46,13 +46,7 @@ typedef struct {
 /* The best configuration among [lo, hi) whose spec starts with prefix. */
 static int best_of(const exp_group *g, const char *prefix, int lo, int hi)
 {
-    int best = -1;
-    for (int c = lo; c < hi; c++) {
-        if (!g->cfg[c].ok || strncmp(g->cfg[c].spec, prefix, strlen(prefix))) continue;
-        if (best < 0 || exp_group_ns(g, c, MASK).median < exp_group_ns(g, best, MASK).median)
-            best = c;
-    }
-    return best;
+    return exp_group_best(g, MASK, lo, hi, prefix);
 }
 
 /* c against b: "+12.0% [...]" of time, and whether they tie. */
@@ -130,8 +124,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
         if (bg >= 0) {
             int cmp = exp_group_compare(&g, bn, bg, MASK, a, sizeof a);
             exp_text_add(&st->findings, "- %s: the best nested grid `%s` against the best regular "
-                         "grid `%s`: time %s%s.\n", s.name, g.cfg[bn].spec, g.cfg[bg].spec,
-                         a, cmp == 0 ? " (a tie)" : "");
+                         "grid `%s`: time %s.\n", s.name, g.cfg[bn].spec, g.cfg[bg].spec, a);
             if (nonuniform) {
                 st->nonuniform++;
                 st->adapts += cmp < 0;

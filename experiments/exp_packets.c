@@ -129,6 +129,7 @@ int main(int argc, char **argv)
         scenes[scene_count++] = "sphereflake";
         scenes[scene_count++] = "teapot_stadium";
     }
+    if (!x.quick) x.set_budget_ms = 800; /* 800x600 passes: fewer, longer rounds */
     exp_csv(&x, "scene,spec,rayset,rays,mrays,mrays_lo,mrays_hi,speedup,speedup_lo,speedup_hi,"
                 "steps_per_ray,box_per_ray,prims_per_ray\n");
     exp_list list;

@@ -52,7 +52,12 @@ static double crossing(const exp_est *ba, const exp_est *ra, const exp_est *bb, 
 static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_list *list)
 {
     accel_scene s;
-    exp_scene(x, spec, &s);
+    char why[600];
+    if (exp_scene_try(x, spec, &s, why, sizeof why)) { /* a scene generator not merged yet */
+        exp_md(x, "\nLeft out: scene `%s` (not in this build: %s).\n", spec, why);
+        exp_note_left(x, EXP_LEFT_UNPARSED);
+        return;
+    }
     bench_sets sets;
     exp_sets(x, &s, MASK, &sets);
     exp_md(x, "\n### %s (%u primitives)\n", s.name, s.live_count);
@@ -172,7 +177,8 @@ int main(int argc, char **argv)
         scenes[scene_count++] = "soup:tris=300000";
         scenes[scene_count++] = "teapot_stadium";
         scenes[scene_count++] = "sphereflake";
-        for (int i = 0; i < x.mesh_count && scene_count < 8; i++) scenes[scene_count++] = x.meshes[i];
+        for (int i = 0; i < x.mesh_count && scene_count < 7; i++) scenes[scene_count++] = x.meshes[i];
+        scenes[scene_count++] = "field"; /* many meshes at many scales, when this build has it */
     }
     exp_csv(&x, "scene,spec,build_ms,build_lo,build_hi,mrays,mrays_lo,mrays_hi,ms_one_image,"
                 "ms_100_images,ms_1080p_frame\n");

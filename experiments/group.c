@@ -82,7 +82,8 @@ static void leave_out(exp_group *g, exp_cfg *c, int why_kind)
 {
     c->ok = 0;
     c->left = why_kind;
-    exp_note_left(g->x, why_kind);
+    /* A spec this build lacks counts once per section, however many scenes. */
+    if (why_kind != EXP_LEFT_UNPARSED || exp_note_unparsed(g->x, c->spec)) exp_note_left(g->x, why_kind);
     if (c->accel) c->kind->destroy(c->accel);
     c->accel = NULL;
 }
@@ -274,6 +275,11 @@ void exp_group_run(exp_group *g)
     bench_progress_end(x->progress);
     free(sc.hits), free(sc.occ);
     g->rounds = most;
+    for (int c = 0; c < g->count; c++) {
+        if (!g->cfg[c].ok) continue;
+        if (!x->rounds_hi || g->cfg[c].want < x->rounds_lo) x->rounds_lo = g->cfg[c].want;
+        if (g->cfg[c].want > x->rounds_hi) x->rounds_hi = g->cfg[c].want;
+    }
     for (int c = 0; c < g->count; c++)
         for (int i = 0; i < 4; i++)
             if (g->cfg[c].ok && g->cfg[c].set[i].have)
@@ -423,6 +429,25 @@ int exp_group_compare_build(exp_group *g, int c, int base, char *buf, size_t n)
            exp_fmt_x(s, sizeof s, &sp), cmp == 0 ? "a tie" : cmp < 0 ? "faster" : "slower");
     if (cmp == 0) snprintf(buf + strlen(buf), n - strlen(buf), " (a tie)");
     return cmp;
+}
+
+int exp_group_best(const exp_group *g, int mask, int lo, int hi, const char *prefix)
+{
+    int best = -1;
+    size_t pl = strlen(prefix);
+    for (int c = lo; c < hi && c < g->count; c++)
+        if (g->cfg[c].ok && !strncmp(g->cfg[c].spec, prefix, pl) &&
+            (best < 0 || exp_group_ns(g, c, mask).median < exp_group_ns(g, best, mask).median))
+            best = c;
+    if (best < 0) return -1;
+    int refined = best;
+    double low = 1.0;
+    for (int c = lo; c < hi && c < g->count; c++) {
+        if (!g->cfg[c].ok || c == best || strncmp(g->cfg[c].spec, prefix, pl)) continue;
+        exp_est r = exp_group_speedup(g, c, best, mask);
+        if (r.n && r.median < low) low = r.median, refined = c;
+    }
+    return refined;
 }
 
 int exp_group_find(const exp_group *g, const char *spec)

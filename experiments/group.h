@@ -114,6 +114,11 @@ void exp_group_compare_head(exp_group *g);
 int exp_group_compare(exp_group *g, int c, int base, int mask, char *buf, size_t n);
 /* The same for build times (paired interleaved build rounds). */
 int exp_group_compare_build(exp_group *g, int c, int base, char *buf, size_t n);
+/* The fastest configuration over mask among those of [lo, hi) whose spec
+ * starts with prefix ("" for all): the lowest median time, then the one
+ * with the lowest paired ratio against it, so that "the best" never loses a
+ * paired comparison to another candidate. -1 when none was measured. */
+int exp_group_best(const exp_group *g, int mask, int lo, int hi, const char *prefix);
 /* Index of the configuration named spec, or -1. */
 int exp_group_find(const exp_group *g, const char *spec);
 

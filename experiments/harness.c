@@ -8,6 +8,7 @@
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 
 #include "harness.h"
@@ -212,12 +213,18 @@ int exp_finish(exp_ctx *x)
     }
     double load_end[3];
     exp_loadavg(load_end);
-    exp_md(x, "\n_%s ran in %.1f s (%s budget, %d thread%s, up to %d interleaved rounds, "
-              "samples of at least %.0f ms, images %dx%d and %dx%d; load average %.2f at the "
-              "start, %.2f at the end)._\n",
-           x->name, s, x->quick ? "quick" : "full", x->threads, x->threads > 1 ? "s" : "",
-           x->repeats, x->sample_ms, x->size, x->size, x->rt_size[0], x->rt_size[1],
-           x->load_start[0], load_end[0]);
+    struct rusage ru;
+    double cpu = 0;
+    if (getrusage(RUSAGE_SELF, &ru) == 0)
+        cpu = (double)ru.ru_utime.tv_sec + ru.ru_utime.tv_usec / 1e6 + (double)ru.ru_stime.tv_sec +
+              ru.ru_stime.tv_usec / 1e6;
+    exp_md(x, "\n_%s ran in %.1f s, %.1f s of CPU time (%s budget, %d thread%s unless a table says otherwise; "
+              "%d to %d interleaved timed rounds per configuration (at most %d; fewer for slow "
+              "passes), samples of at least %.0f ms; images %dx%d and %dx%d; load average %.2f "
+              "at the start, %.2f at the end)._\n",
+           x->name, s, cpu, x->quick ? "quick" : "full", x->threads, x->threads > 1 ? "s" : "",
+           x->rounds_lo, x->rounds_hi, x->repeats, x->sample_ms, x->size, x->size, x->rt_size[0],
+           x->rt_size[1], x->load_start[0], load_end[0]);
     bench_progress_stop(x->progress);
     x->progress = NULL;
     if (x->csv.bad_rows || x->verdicts.bad_rows) {
@@ -232,7 +239,8 @@ int exp_finish(exp_ctx *x)
     fclose(x->verdicts.f);
     fclose(x->md);
     free(x->floors);
-    fprintf(stderr, "%s: done in %.1f s%s\n", x->name, s,
+    exp_text_free(&x->unparsed);
+    fprintf(stderr, "%s: done in %.1f s (%.1f s CPU)%s\n", x->name, s, cpu,
             x->status ? " (with errors, see above)" : "");
     return x->status;
 }
@@ -346,6 +354,20 @@ void exp_verdict(exp_ctx *x, const char *claim, const char *verdict, const char 
 const char *exp_no_difference(double floor)
 {
     return floor <= EXP_NOISY ? EXP_REFUTED : EXP_UNTESTABLE;
+}
+
+int exp_note_unparsed(exp_ctx *x, const char *spec)
+{
+    char line[300];
+    snprintf(line, sizeof line, "\n%s\n", spec);
+    if (strstr(exp_text_str(&x->unparsed), line)) return 0;
+    exp_text_add(&x->unparsed, "%s%s\n", x->unparsed.len ? "" : "\n", spec);
+    return 1;
+}
+
+const char *exp_slow_verdict(const exp_ctx *x, const char *verdict)
+{
+    return !strcmp(verdict, EXP_REFUTED) && x->load_start[0] >= 1.0 ? EXP_UNTESTABLE : verdict;
 }
 
 void exp_note_left(exp_ctx *x, int why)

@@ -85,6 +85,8 @@ typedef struct {
     csv_file verdicts;    /* DIR/<name>.verdicts.csv */
     int verdict_count;
     int left[EXP_LEFT_KINDS]; /* configurations left out, by reason */
+    exp_text unparsed;    /* specs not in this build, one per line */
+    int rounds_lo, rounds_hi; /* timed rounds per configuration over the section */
     double *floors;       /* noise floors of the section's groups */
     int floor_count, floors_measured;
 } exp_ctx;
@@ -146,6 +148,12 @@ void exp_verdict(exp_ctx *x, const char *claim, const char *verdict, const char 
  * otherwise not testable (the run was too noisy to tell). */
 #define EXP_NOISY 0.25
 const char *exp_no_difference(double floor);
+/* For a verdict that says "too slow": on a busy machine (a load average of
+ * 1 or more at the start) a refutation is not testable here, since the
+ * measured times are upper bounds of a quiet machine's. */
+const char *exp_slow_verdict(const exp_ctx *x, const char *verdict);
+/* 1 the first time spec is reported as not in this build in this section. */
+int exp_note_unparsed(exp_ctx *x, const char *spec);
 /* Counts a configuration left out (exp_group does it for its own). */
 void exp_note_left(exp_ctx *x, int why);
 /* Records a group's noise floor (measured: from an A/A control). */
