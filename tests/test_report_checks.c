@@ -22,7 +22,9 @@
 #include "experiments/stats.h"
 #include "experiments/svg.h"
 
+#ifndef DIR_OUT
 #define DIR_OUT "build/quick-report"
+#endif
 
 static time_t process_start;
 __attribute__((constructor)) static void note_start(void) { process_start = time(NULL); }
