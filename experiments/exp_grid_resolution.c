@@ -400,7 +400,7 @@ int main(int argc, char **argv)
                 "model_ns,build_ms,mb\n");
     exp_list extra;
     exp_list_make(&x, NULL, 0, "grid", &extra);
-    if (x.only_accels) extra.count = 0; /* the sweep is the question; extra specs join it */
+    /* The lambda sweep is the question itself: --accel grid specs join it. */
     for (int si = 0; si < scene_count; si++) measure_scene(&x, st, si, scenes[si], &extra);
     verdicts(&x, st);
     exp_md(&x, "\n**Findings:**\n\n%s", exp_text_str(&st->findings));
