@@ -25,7 +25,8 @@ else
   out=report; report=REPORT.md; flag=""; budget="full"; links="report/"
 fi
 mkdir -p "$out"
-rm -f "$out"/*.md "$out"/*.csv "$out"/*.svg
+# A whole run starts clean (no section of an earlier run survives); --only keeps the others.
+[ -n "$only" ] || rm -f "$out"/*.md "$out"/*.csv "$out"/*.svg "$out"/*.gp
 extra=()
 [ -n "${KINDS:-}" ] && extra+=(--kinds "$KINDS")
 for spec in ${ACCEL:-}; do extra+=(--accel "$spec"); done
