@@ -94,7 +94,14 @@ static void measure_case(exp_ctx *x, study *st, stiff_case *c, const exp_list *l
     exp_group_init(&g, x, &c->scene, &one, BENCH_PRIMARY);
     g.collapse_ms = x->quick ? 500 : 3000;
     for (int i = 0; i < list->count; i++) {
-        if (!strcmp(list->spec[i], "brute") && c->scene.live_count > 20000) continue;
+        if (!strncmp(list->spec[i], "brute", 5) && (!list->spec[i][5] || list->spec[i][5] == ':') &&
+            c->scene.live_count > 20000) {
+            if (!strcmp(list->spec[i], "brute"))
+                exp_text_add(&st->left, "- %s: `brute` (%u primitives against every ray: minutes "
+                             "per pass; both tests).\n", c->name, c->scene.live_count);
+            exp_note_left(x, EXP_LEFT_POINTLESS);
+            continue;
+        }
         exp_group_add(&g, list->spec[i], 0);
     }
     exp_group_run(&g);
@@ -172,8 +179,9 @@ static void measure_case(exp_ctx *x, study *st, stiff_case *c, const exp_list *l
     for (int k = 0; k < g.count; k++)
         if (g.cfg[k].left && (g.cfg[k].left != EXP_LEFT_UNPARSED ||
                               (st->cases == 1 && !strstr(g.cfg[k].spec, "tri=naive"))))
-            exp_text_add(&st->left, "- %s`%s` (%s).\n", g.cfg[k].left == EXP_LEFT_UNPARSED ? ""
-                         : c->name, g.cfg[k].spec, g.cfg[k].why);
+            exp_text_add(&st->left, "- %s%s`%s` (%s).\n", g.cfg[k].left == EXP_LEFT_UNPARSED ? ""
+                         : c->name, g.cfg[k].left == EXP_LEFT_UNPARSED ? "" : ": ", g.cfg[k].spec,
+                         g.cfg[k].why);
     exp_group_free(&g);
     free(ref);
     free(h);
