@@ -3,7 +3,8 @@
 #   make test       the test suite (T=word: tests whose name contains it, e.g.
 #                   T=conformance_grid; T=--list names them; KINDS=grid,bvh: only
 #                   these accelerator kinds; a T or KINDS matching nothing fails)
-#   make report     runs every experiment and rewrites REPORT.md (QUICK=1: smoke run)
+#   make report     runs every experiment and rewrites REPORT.md (QUICK=1: smoke run;
+#                   KINDS=grid,bvh: only these kinds; ACCEL="bvh:width=4 ...": add specs)
 #   make sanitize   the test suite under AddressSanitizer + UBSan
 #   make fuzz       libFuzzer targets for the loaders (clang)
 CC      ?= cc
@@ -32,14 +33,15 @@ DEPFLAGS  = -MMD -MP
 FLAGS_STAMP := $(BUILD)/.flags
 
 TOOLS    := $(patsubst tools/%.c,$(BIN)/%,$(wildcard tools/*.c))
-EXP_LIB  := $(filter-out experiments/exp_%.c,$(wildcard experiments/*.c))
+EXP_LIB  := $(filter-out experiments/exp_%.c experiments/mkreport.c,$(wildcard experiments/*.c))
 EXP_BINS := $(patsubst experiments/%.c,$(BIN)/%,$(wildcard experiments/exp_*.c))
 # The lab's checks and its untouched starter kind are part of the tests
 # (tests/test_lab.c: every check passes on the project and fails on the starter).
-TEST_SRC := $(wildcard tests/*.c) lab/check.c lab/starter.c
+TEST_SRC := $(wildcard tests/*.c) lab/check.c lab/starter.c \
+            experiments/claims.c experiments/stats.c experiments/svg.c
 
 .PHONY: all test report sanitize fuzz clean bench lab FORCE
-all: $(TOOLS) $(EXP_BINS) $(BIN)/run_tests
+all: $(TOOLS) $(EXP_BINS) $(BIN)/mkreport $(BIN)/run_tests
 
 $(FLAGS_STAMP): FORCE
 	@mkdir -p $(dir $@)
@@ -64,6 +66,10 @@ $(BIN)/exp_%: $(BUILD)/experiments/exp_%.o $(EXP_OBJ) $(LIB)
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $< $(EXP_OBJ) $(LIB) -o $@ $(LDLIBS)
 
+$(BIN)/mkreport: $(BUILD)/experiments/mkreport.o $(BUILD)/experiments/claims.o
+	@mkdir -p $(BIN)
+	$(CC) $(ALL_CFLAGS) $^ -o $@ $(LDLIBS)
+
 $(BIN)/lab: $(BUILD)/lab/lab.o $(BUILD)/lab/check.o $(LIB)
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $^ -o $@ $(LDLIBS)
@@ -85,7 +91,8 @@ test: all
 	./$(BIN)/run_tests $(T)
 
 report: all
-	GRIDBVH_CFLAGS="$(ALL_CFLAGS)" CC="$(CC)" ./experiments/report.sh $(if $(QUICK),--quick,)
+	GRIDBVH_CFLAGS="$(ALL_CFLAGS)" CC="$(CC)" KINDS="$(KINDS)" ACCEL="$(ACCEL)" \
+	  ./experiments/report.sh $(if $(QUICK),--quick,)
 
 bench: all
 	./experiments/bench.sh

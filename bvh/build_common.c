@@ -40,6 +40,7 @@ void *bvh_alloc_array(size_t n, size_t size)
 int bvh_split_pays(const bvh_build *ctx, const bvh_task *t, double split_sum)
 {
     if (t->count > (uint32_t)ctx->opts.max_leaf) return 1;
+    if (ctx->opts.term_none) return 0;
     double area = bvh_half_area(t->bounds);
     if (!(area > 0.0)) return 0;
     double leaf = (double)ctx->opts.ci * t->count;

@@ -48,6 +48,7 @@ typedef struct {
     int axes;      /* binned: 1 (largest centroid extent) or 3 */
     int max_leaf;  /* most primitives a leaf may hold */
     float ct, ci;  /* SAH: cost of a node visit and of a primitive test (one unit) */
+    int term_none; /* term=none: split every node over max_leaf, never stop by the SAH rule */
     int reorder;       /* common parameter: Morton-ordered primitive store */
 } bvh_build_opts;
 
@@ -140,7 +141,8 @@ static inline int bvh_task_forced(const bvh_task *t)
  * 1990; Wald 2007, eq. 1): a split into parts costing `split_sum` =
  * A_L*N_L + A_R*N_R (half areas) is worth its node visit when
  *   ct + ci * split_sum / A_node  <  ci * N.
- * A task larger than max_leaf is always split. */
+ * A task larger than max_leaf is always split; with term=none (the
+ * lecture's lab: split until a leaf is small enough) nothing else is. */
 int bvh_split_pays(const bvh_build *ctx, const bvh_task *t, double split_sum);
 
 /* A_L*N_L + A_R*N_R of a split (half areas), for bvh_split_pays. */

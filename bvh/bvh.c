@@ -27,6 +27,9 @@ static const accel_param_def bvh_params[] = {
      "SAH cost of a node visit (same time unit as ci)"},
     {"ci", ACCEL_PARAM_FLOAT, "1", 1e-6, 1e6, NULL,
      "SAH cost of a primitive test (same time unit as ct)"},
+    {"term", ACCEL_PARAM_ENUM, "sah", 0, 0, "sah|none",
+     "leaf rule: sah (a leaf once splitting does not pay, at most `leaf` primitives) or none "
+     "(split every node over `leaf`, as the lecture's lab does)"},
     {"traverse", ACCEL_PARAM_ENUM, "single", 0, 0, "single|packet",
      "single rays, or packets of 64 consecutive rays (8x8 tiles)"},
     {"frustum", ACCEL_PARAM_BOOL, "0", 0, 1, NULL,
@@ -53,6 +56,7 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
     o->max_leaf = (int)accel_param_num(p, "leaf");
     o->ct = (float)accel_param_num(p, "ct");
     o->ci = (float)accel_param_num(p, "ci");
+    o->term_none = (int)accel_param_num(p, "term") == 1;
     o->reorder = p->reorder;
     *traverse = (int)accel_param_num(p, "traverse");
     *frustum = (int)accel_param_num(p, "frustum");
@@ -168,6 +172,7 @@ static const char *const bvh_variants[] = {
     "width=4,block=8,order=dist",
     "width=8,traverse=packet",
     "width=4,block=4,traverse=packet",
+    "build=median,term=none,leaf=4",
     NULL,
 };
 

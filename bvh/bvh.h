@@ -8,6 +8,8 @@
  *   bvh:build=sah                     exact SAH, full sweep on all three axes
  *   bvh:build=mid | build=median      spatial / object median of the longest axis
  *   bvh:leaf=4,ct=1,ci=1              leaf size bound and SAH costs
+ *   bvh:build=median,term=none,leaf=4 the lecture's pure median split: no SAH
+ *                                     termination, leaves of at most 4
  *   bvh:traverse=packet,frustum=1     64-ray packets with an interval early-out
  *
  * `bin/trace --help` lists every parameter with its unit and range;

@@ -1,222 +1,338 @@
 /*
  * exp_error_time - error against run time.
  *
- * (a) Ambient occlusion images at 1, 2, 4, ... samples per pixel: RMSE
- *     against a converged image (many more samples, another seed) against
- *     the wall time of tracing them, per accelerator; and which accelerator
- *     reaches the lowest error within a fixed time budget (build included).
+ * (a) Ambient occlusion of sphereflake at 1, 2, 4, ... samples per pixel:
+ *     RMSE of the unoccluded fraction against a converged image, against
+ *     the time of building and tracing, per structure (every structure of
+ *     one sample count in interleaved rounds). The converged image has 64
+ *     times the largest sample count (traced in batches, other seeds), and
+ *     its own binomial noise is subtracted from the squared error (both
+ *     images are unbiased estimates of the same fractions, so
+ *     E[(X - R)^2] = Var X + Var R); its remaining noise is stated beside
+ *     the errors. The time budget is the median structure's time at a
+ *     quarter of the largest sample count, so that it binds: the faster
+ *     structures fit more samples into it than the slower ones.
  * (b) Holes and disagreements against the double-precision reference
- *     against Mrays/s, for the watertight and the naive (Moller-Trumbore)
- *     triangle tests of every kind, on rays aimed exactly at mesh vertices
- *     and edge midpoints of a closed mesh plus ordinary primary rays.
+ *     against speed, for the watertight and the naive (Moller-Trumbore)
+ *     triangle tests of every kind (interleaved rounds), on rays aimed
+ *     exactly at vertices and edge midpoints of a closed mesh: what the
+ *     robust test costs in speed, and what the naive one costs in holes
+ *     (with the 95% binomial bound when it makes none).
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "harness.h"
+#include "group.h"
+#include "svg.h"
 #include "bench/cli.h"
+#include "bench/stiff.h"
 
-/* Fraction of unoccluded AO rays per pixel. */
-static void ao_image(const rays_set *ao, const uint8_t *occ, int samples, double *img, int pixels)
+#define MAX_KINDS 16
+#define MAX_LEVELS 10
+
+typedef struct {
+    int slope_ok, budget_ok, robust_ok, robust_n;
+    exp_text ev, findings;
+} study;
+
+/* Adds the unoccluded fraction of every pixel's AO rays to sum, count. */
+static void ao_accumulate(const rays_set *ao, const uint8_t *occ, double *sum, double *cnt)
 {
-    for (int i = 0; i < pixels; i++) img[i] = -1;
-    double *sum = calloc((size_t)pixels, sizeof *sum);
-    int *cnt = calloc((size_t)pixels, sizeof *cnt);
-    for (size_t i = 0; sum && cnt && i < ao->count; i++) {
-        uint32_t p = ao->pixel[i];
-        sum[p] += occ[i] ? 0.0 : 1.0;
-        cnt[p]++;
+    for (size_t i = 0; i < ao->count; i++) {
+        sum[ao->pixel[i]] += occ[i] ? 0.0 : 1.0;
+        cnt[ao->pixel[i]] += 1;
     }
-    for (int i = 0; sum && cnt && i < pixels; i++)
-        if (cnt[i]) img[i] = sum[i] / cnt[i];
-    (void)samples;
-    free(sum);
-    free(cnt);
 }
 
-static double rmse(const double *a, const double *b, int n)
-{
-    double s = 0;
-    int m = 0;
-    for (int i = 0; i < n; i++) {
-        if (a[i] < 0 || b[i] < 0) continue;
-        s += (a[i] - b[i]) * (a[i] - b[i]);
-        m++;
-    }
-    return m ? sqrt(s / m) : 0;
-}
-
-/* Rays from the camera eye aimed exactly at vertices and at edge midpoints. */
-static void stiff_rays(const accel_scene *s, rays_set *out, size_t want)
-{
-    memset(out, 0, sizeof *out);
-    out->rays = malloc(want * sizeof *out->rays);
-    if (!out->rays || s->tri_count == 0) return;
-    vec3 eye = s->camera.eye;
-    size_t k = 0;
-    for (size_t i = 0; i < want; i++) {
-        uint32_t prim = s->live[(size_t)(rays_rand(11, i, 0) * s->live_count)];
-        if (prim >= s->tri_count) continue;
-        const float *t = s->tris + 9 * (size_t)prim;
-        int c = (int)(rays_rand(11, i, 1) * 3);
-        vec3 a = v3_load(t + 3 * c), b = v3_load(t + 3 * ((c + 1) % 3));
-        vec3 target = (i & 1) ? v3_scale(v3_add(a, b), 0.5f) : a;
-        vec3 d = v3_sub(target, eye);
-        accel_ray r = {eye.x, eye.y, eye.z, 0, d.x, d.y, d.z, INFINITY};
-        out->rays[k++] = r;
-    }
-    out->count = k;
-}
-
-/* The converged AO image: ref_spp samples with another seed, traced once
- * with the generator structure. */
-static void converged_image(exp_ctx *x, const accel_scene *s, const bench_sets *base, int ref_spp,
-                            double *ref_img, int pixels)
+static void ao_rays(exp_ctx *x, const accel_scene *s, const bench_sets *base, int spp,
+                    uint64_t seed, rays_set *out)
 {
     accel_error err = {0};
-    rays_set ref_ao;
-    if (rays_ao(s, &base->primary, base->primary_hits, ref_spp,
-                0.1f * v3_len(box3_extent(s->bounds)), 999, &ref_ao, &err)) {
-        fprintf(stderr, "exp_error_time: %s\n", err.msg);
+    if (rays_ao(s, &base->primary, base->primary_hits, spp, 0.1f * v3_len(box3_extent(s->bounds)),
+                seed, out, &err)) {
+        fprintf(stderr, "%s: %s\n", x->name, err.msg);
         exit(cli_exit_of(err.code));
     }
+}
+
+/* The converged image in batches of 64 samples: fraction and its variance. */
+static double converged(exp_ctx *x, const accel_scene *s, const bench_sets *base, int ref_spp,
+                        double *ref, double *ref_var, int pixels)
+{
+    double *sum = calloc((size_t)pixels, sizeof *sum), *cnt = calloc((size_t)pixels, sizeof *cnt);
     const accel_kind *k;
     void *a;
     accel_build_stats st;
-    const char *gen = accel_find_kind("bvh") ? "bvh" : "brute";
-    if (accel_build_spec(gen, s, x->threads, &k, &a, &st, &err)) {
-        fprintf(stderr, "exp_error_time: %s\n", err.msg);
-        exit(cli_exit_of(err.code));
+    accel_error err = {0};
+    if (!sum || !cnt || accel_build_spec(accel_find_kind("bvh") ? "bvh" : "brute", s, x->threads,
+                                         &k, &a, &st, &err)) {
+        fprintf(stderr, "%s: converged image: %s\n", x->name, err.msg[0] ? err.msg : "out of memory");
+        exit(CLI_EXIT_INTERNAL);
     }
-    uint8_t *occ = malloc(ref_ao.count ? ref_ao.count : 1);
-    if (!occ) exit(CLI_EXIT_INTERNAL);
-    bench_progress_begin(x->progress, "converged AO image", (double)ref_ao.count, 1);
-    accel_trace_occluded(k, a, ref_ao.rays, occ, ref_ao.count, x->threads, NULL);
+    int batch = ref_spp < 64 ? ref_spp : 64;
+    bench_progress_begin(x->progress, "converged AO image", ref_spp / batch, 0);
+    for (int b = 0; b < ref_spp / batch; b++) {
+        rays_set ao;
+        ao_rays(x, s, base, batch, 1000 + (uint64_t)b, &ao);
+        uint8_t *occ = malloc(ao.count ? ao.count : 1);
+        if (!occ) exit(CLI_EXIT_INTERNAL);
+        accel_trace_occluded(k, a, ao.rays, occ, ao.count, x->threads, NULL);
+        ao_accumulate(&ao, occ, sum, cnt);
+        free(occ);
+        rays_free(&ao);
+        bench_progress_add(x->progress, 1);
+    }
     bench_progress_end(x->progress);
-    ao_image(&ref_ao, occ, ref_spp, ref_img, pixels);
-    free(occ);
     k->destroy(a);
-    rays_free(&ref_ao);
+    double noise = 0;
+    int m = 0;
+    for (int i = 0; i < pixels; i++) {
+        ref[i] = cnt[i] > 0 ? sum[i] / cnt[i] : -1;
+        ref_var[i] = cnt[i] > 1 ? ref[i] * (1 - ref[i]) / cnt[i] : 0;
+        if (cnt[i] > 0) noise += ref_var[i], m++;
+    }
+    free(sum);
+    free(cnt);
+    return m ? sqrt(noise / m) : 0;
 }
 
-/* (a) RMSE against samples per pixel and time, per accelerator. */
-static void error_against_time(exp_ctx *x, const accel_scene *s, const bench_sets *base,
-                               const double *ref_img, double *img, int pixels)
+/* RMSE of one image against the converged one, its noise subtracted. */
+static double image_rmse(const rays_set *ao, const uint8_t *occ, const double *ref,
+                         const double *ref_var, int pixels)
 {
-    accel_error err = {0};
-    int max_spp = x->quick ? 4 : 64;
-    double budget_ms = x->quick ? 50 : 500;
-    char best_line[512] = "";
-    double best_err = INFINITY;
-    exp_md_table(x, "kind|spp|rays|trace ms|build ms|RMSE");
-    for (size_t kk = 0; kk < accel_kind_count; kk++) {
-        const accel_kind *kind = accel_kinds[kk];
-        if (!strcmp(kind->name, "brute") && !x->quick) {
-            exp_md(x, "| brute | skipped: %u primitives x %zu rays per sample is minutes of "
-                      "O(N*M) work | | | | |\n", s->live_count, base->primary.count);
-            continue;
-        }
-        const accel_kind *k;
-        void *a;
-        accel_build_stats st;
-        accel_timing bt;
-        if (bench_build(kind->name, s, x->threads, x->quick ? 1 : 3, 3000, &k, &a, &st, &bt,
-                        x->progress, &err)) {
-            exp_md(x, "| %s | skipped: %s | | | | |\n", kind->name, err.msg);
-            continue;
-        }
-        double err_in_budget = NAN;
-        int spp_in_budget = 0;
-        for (int spp = 1; spp <= max_spp; spp *= 2) {
-            rays_set ao;
-            if (rays_ao(s, &base->primary, base->primary_hits, spp,
-                        0.1f * v3_len(box3_extent(s->bounds)), 5, &ao, &err))
-                break;
-            uint8_t *occ = malloc(ao.count ? ao.count : 1);
-            bench_trace_opts o = {.threads = x->threads, .warmup = 1, .repeats = x->repeats,
-                                  .occluded = occ, .progress = x->progress,
-                                  .progress_name = "trace ao"};
-            bench_result r;
-            bench_trace(k, a, &ao, 1, &o, &r, &err);
-            ao_image(&ao, occ, spp, img, pixels);
-            double e = rmse(img, ref_img, pixels);
-            double total = bt.median + r.ms.median;
-            if (total <= budget_ms) err_in_budget = e, spp_in_budget = spp;
-            exp_md(x, "| %s | %d | %zu | %.1f | %.1f | %.4f |\n", kind->name, spp, ao.count,
-                   r.ms.median, bt.median, e);
-            exp_csv(x, "ao,%s,%s,%d,%zu,%.4f,%.4f,%.4f,%.6f,,,%.4f\n", s->name, kind->name, spp,
-                    ao.count, r.ms.median, bt.median, total, e, r.mrays.median);
-            free(occ);
-            rays_free(&ao);
-        }
-        if (spp_in_budget && err_in_budget < best_err) {
-            best_err = err_in_budget;
-            snprintf(best_line, sizeof best_line,
-                     "within %.0f ms (build + trace), %s reaches the lowest error: RMSE %.4f at "
-                     "%d samples per pixel.", budget_ms, kind->name, err_in_budget, spp_in_budget);
-        }
-        k->destroy(a);
+    double *sum = calloc((size_t)pixels, sizeof *sum), *cnt = calloc((size_t)pixels, sizeof *cnt);
+    if (!sum || !cnt) exit(CLI_EXIT_INTERNAL);
+    ao_accumulate(ao, occ, sum, cnt);
+    double se = 0;
+    int m = 0;
+    for (int i = 0; i < pixels; i++) {
+        if (cnt[i] == 0 || ref[i] < 0) continue;
+        double d = sum[i] / cnt[i] - ref[i];
+        se += d * d - ref_var[i];
+        m++;
     }
-    exp_md(x, "\n**Finding (a):** %s\n", best_line[0] ? best_line
-                                                       : "no accelerator fits the time budget.");
-    exp_md(x, "\nRMSE falls as 1/sqrt(spp) for every accelerator alike (they trace the same "
-              "rays to the same answers); what differs is the time per sample, so the fastest "
-              "tracer after its build wins any fixed budget.\n");
+    free(sum);
+    free(cnt);
+    return m && se > 0 ? sqrt(se / m) : 0;
+}
+
+static void error_against_time(exp_ctx *x, study *st)
+{
+    accel_scene s;
+    exp_scene(x, x->quick ? "sphereflake:level=1" : "sphereflake", &s);
+    int max_spp = x->quick ? 4 : 64, ref_spp = 64 * max_spp, pixels = x->size * x->size;
+    bench_sets base;
+    exp_sets(x, &s, BENCH_PRIMARY, &base);
+    base.primary_hits = malloc(base.primary.count * sizeof *base.primary_hits);
+    double *ref = malloc((size_t)pixels * sizeof *ref), *var = malloc((size_t)pixels * sizeof *var);
+    if (!base.primary_hits || !ref || !var) exit(CLI_EXIT_INTERNAL);
+    accel_reference_trace(&s, base.primary.rays, base.primary_hits, base.primary.count, x->threads);
+    double ref_noise = converged(x, &s, &base, ref_spp, ref, var, pixels);
+    exp_md(x, "\n### (a) Ambient occlusion of %s at %dx%d: error against time\n\nThe converged "
+              "image has %d samples per pixel; its own noise, %.4f RMSE, is subtracted from the "
+              "squared errors below.\n", s.name, x->size, x->size, ref_spp, ref_noise);
+    const char *names[MAX_KINDS];
+    int nk = 0;
+    for (size_t k = 0; k < accel_kind_count && nk < MAX_KINDS; k++)
+        if (strcmp(accel_kinds[k]->name, "brute") || x->quick) names[nk++] = accel_kinds[k]->name;
+    exp_list list;
+    exp_list_make(x, names, nk, NULL, &list);
+    if (!x->quick) {
+        exp_md(x, "\nLeft out: `brute` (%u primitives against every AO ray: minutes per sample "
+                  "count, and the same answers).\n", s.live_count);
+        exp_note_left(x, EXP_LEFT_POINTLESS);
+    }
+    double spp_v[MAX_LEVELS], err_v[MAX_LEVELS], total[MAX_KINDS][MAX_LEVELS], hi[MAX_KINDS][MAX_LEVELS];
+    int levels = 0, ok[MAX_KINDS] = {0};
+    exp_md_table(x, "spp|rays|RMSE|configuration|trace ms [95% CI]|build ms|total ms");
+    for (int spp = 1; spp <= max_spp && levels < MAX_LEVELS; spp *= 2, levels++) {
+        bench_sets one = {0};
+        ao_rays(x, &s, &base, spp, 5, &one.ao);
+        one.made = BENCH_AO;
+        uint8_t *occ = malloc(one.ao.count ? one.ao.count : 1);
+        exp_group g;
+        exp_group_init(&g, x, &s, &one, BENCH_AO);
+        for (int i = 0; i < list.count && i < MAX_KINDS; i++) exp_group_add(&g, list.spec[i], 0);
+        exp_group_run(&g);
+        int first = -1;
+        for (int c = 0; c < g.count; c++)
+            if (g.cfg[c].ok && first < 0) first = c;
+        if (first >= 0 && occ)
+            accel_trace_occluded(g.cfg[first].kind, g.cfg[first].accel, one.ao.rays, occ,
+                                 one.ao.count, x->threads, NULL);
+        double e = first >= 0 ? image_rmse(&one.ao, occ, ref, var, pixels) : 0;
+        spp_v[levels] = spp, err_v[levels] = e;
+        for (int c = 0; c < g.count && c < MAX_KINDS; c++) {
+            const exp_cfg *cf = &g.cfg[c];
+            if (!cf->ok) continue;
+            ok[c] = 1;
+            exp_est t = cf->set[3].ms;
+            total[c][levels] = t.median + cf->build_ms.median;
+            hi[c][levels] = t.hi + cf->build_ms.hi;
+            char tt[96];
+            exp_md(x, "| %d | %zu | %.4f | `%s` | %s | %.1f | %.1f |\n", spp, one.ao.count, e,
+                   cf->spec, exp_fmt_est(tt, sizeof tt, &t, 1), cf->build_ms.median, total[c][levels]);
+            exp_csv(x, "ao,%s,%s,%d,%zu,%.4f,%.4f,%.4f,%.4f,%.4f,%.6f,,,,\n", s.name, cf->spec,
+                    spp, one.ao.count, t.median, t.lo, t.hi, cf->build_ms.median,
+                    total[c][levels], e);
+        }
+        if (levels == 0) exp_group_note(&g);
+        exp_group_free(&g);
+        free(occ);
+        bench_sets_free(&one);
+    }
+    svg_plot pl;
+    svg_plot_init(&pl, "Ambient occlusion: image error against time (build + trace)",
+                  "ms (build + trace)", "RMSE against the converged image");
+    pl.log_x = pl.log_y = 1;
+    for (int c = 0; c < list.count && c < MAX_KINDS; c++)
+        if (ok[c]) svg_add(&pl, list.spec[c], total[c], err_v, NULL, NULL, levels, SVG_LINE | SVG_POINTS);
+    exp_svg(x, &pl, "error_time", "Error against time, one point per sample count (1, 2, 4, ... "
+            "samples per pixel)");
+    exp_est slope;
+    exp_loglog_slope(spp_v, err_v, levels, &slope, NULL);
+    char sl[96];
+    exp_fmt_est(sl, sizeof sl, &slope, 3);
+    exp_md(x, "\nRMSE against samples per pixel: slope %s on log-log axes (Monte Carlo: -0.5). The "
+              "converged image's remaining noise is %.4f, %.0f%% of the smallest error measured.\n",
+           sl, ref_noise, err_v[levels - 1] > 0 ? 100 * ref_noise / err_v[levels - 1] : 0.0);
+    st->slope_ok = slope.n >= 2 && ((slope.lo <= -0.5 && slope.hi >= -0.5) || fabs(slope.median + 0.5) <= 0.05);
+    /* The budget: the median structure's total at a quarter of the largest count. */
+    int q = levels >= 3 ? levels - 3 : 0, nok = 0;
+    double totals[MAX_KINDS];
+    for (int c = 0; c < list.count && c < MAX_KINDS; c++)
+        if (ok[c]) totals[nok++] = total[c][q];
+    exp_est med;
+    exp_est_of(totals, nok, &med);
+    double budget = med.median;
+    exp_md(x, "\n#### Within a budget of %.1f ms (build + trace: the median structure's time at %d "
+              "samples per pixel)\n", budget, (int)spp_v[q]);
+    exp_md_table(x, "configuration|most samples per pixel within the budget|RMSE there|its total ms");
+    int best_spp = 0, winners = 0, fewest = 1 << 30;
+    exp_text win = {0};
+    for (int c = 0; c < list.count && c < MAX_KINDS; c++) {
+        if (!ok[c]) continue;
+        int fit = -1;
+        for (int l = 0; l < levels; l++)
+            if (hi[c][l] <= budget) fit = l; /* surely within: the interval's top end */
+        char e[32] = "none fits", t[32] = "";
+        if (fit >= 0) {
+            snprintf(e, sizeof e, "%.4f", err_v[fit]);
+            snprintf(t, sizeof t, "%.1f", total[c][fit]);
+        }
+        exp_md(x, "| `%s` | %d | %s | %s |\n", list.spec[c], fit >= 0 ? (int)spp_v[fit] : 0, e, t);
+        int spp = fit >= 0 ? (int)spp_v[fit] : 0;
+        fewest = spp < fewest ? spp : fewest;
+        if (spp > best_spp) {
+            best_spp = spp, winners = 0;
+            exp_text_free(&win);
+        }
+        if (spp == best_spp) winners++, exp_text_add(&win, "%s`%s`", win.len ? ", " : "", list.spec[c]);
+    }
+    st->budget_ok = best_spp > fewest;
+    if (winners > 1)
+        exp_text_add(&st->findings, "- Within %.1f ms, %s tie: each fits %d samples per pixel "
+                     "(the same rays, the same error).\n", budget, exp_text_str(&win), best_spp);
+    else if (winners == 1)
+        exp_text_add(&st->findings, "- Within %.1f ms, %s fits the most samples per pixel (%d) "
+                     "and so reaches the lowest error%s.\n", budget, exp_text_str(&win), best_spp,
+                     st->budget_ok ? "" : " (every structure fits as many: the budget does not bind)");
+    exp_text_add(&st->ev, "RMSE ~ spp^%s; within %.1f ms the most samples (%d) fit %s%s", sl,
+                 budget, best_spp, exp_text_str(&win), winners > 1 ? " (a tie)" : "");
+    exp_text_free(&win);
+    exp_list_free(&list);
+    free(ref), free(var);
+    bench_sets_free(&base);
+    scene_free(&s);
+}
+
+static const char *naive_of(const char *spec, char *buf, size_t n)
+{
+    snprintf(buf, n, "%s%stri=naive", spec, strchr(spec, ':') ? "," : ":");
+    return buf;
 }
 
 /* (b) Holes and disagreements against speed, watertight and naive. */
-static void robustness_against_speed(exp_ctx *x)
+static void robustness_against_speed(exp_ctx *x, study *st)
 {
-    accel_error err = {0};
-    const char *closed = "sphere"; /* a closed mesh: every ray at it crosses the surface */
     accel_scene cs;
-    exp_scene(x, closed, &cs);
-    rays_set stiff;
-    stiff_rays(&cs, &stiff, x->quick ? 2000 : 100000);
-    accel_hit *ref = malloc((stiff.count ? stiff.count : 1) * sizeof *ref);
-    if (!ref) exit(CLI_EXIT_INTERNAL);
-    exp_reference(x, &cs, stiff.rays, ref, stiff.count);
-    exp_md(x, "\n**Question (b):** on %zu rays aimed exactly at vertices and edge midpoints of "
-              "`%s` (%u triangles), how many holes (reference hits, tracer misses) and "
-              "disagreements per million rays does each kernel make, and how fast is it?\n",
-           stiff.count, cs.name, cs.live_count);
-    exp_md_table(x, "kind|triangle test|Mrays/s|holes per million|disagreements per million");
-    char worst[512] = "";
-    double worst_holes = -1;
-    for (size_t kk = 0; kk < accel_kind_count; kk++)
-        for (int naive = 0; naive < 2; naive++) {
-            char spec[128];
-            snprintf(spec, sizeof spec, "%s%s", accel_kinds[kk]->name, naive ? ":tri=naive" : "");
-            if (!strcmp(accel_kinds[kk]->name, "brute") && cs.live_count > 20000) continue;
-            const accel_kind *k;
-            void *a;
-            accel_build_stats st;
-            if (accel_build_spec(spec, &cs, x->threads, &k, &a, &st, &err)) continue;
-            accel_hit *h = malloc((stiff.count ? stiff.count : 1) * sizeof *h);
-            bench_trace_opts o = {.threads = x->threads, .warmup = 1, .repeats = x->repeats,
-                                  .hits = h, .progress = x->progress, .progress_name = spec};
-            bench_result r;
-            bench_trace(k, a, &stiff, 0, &o, &r, &err);
-            hits_diff d = hits_compare(ref, h, stiff.count);
-            double hpm = 1e6 * d.holes / (double)(stiff.count ? stiff.count : 1);
-            double dpm = 1e6 * (d.disagreements + d.false_hits) / (double)(stiff.count ? stiff.count : 1);
-            exp_md(x, "| %s | %s | %.2f | %.0f | %.0f |\n", k->name,
-                   naive ? "naive (Moller-Trumbore)" : "watertight", r.mrays.median, hpm, dpm);
-            exp_csv(x, "robust,%s,%s,,%zu,%.4f,,,,%.2f,%.2f,%.4f\n", cs.name, spec, stiff.count,
-                    r.ms.median, hpm, dpm, r.mrays.median);
-            if (naive && hpm > worst_holes) {
-                worst_holes = hpm;
-                snprintf(worst, sizeof worst, "the naive test leaks up to %.0f holes per million "
-                         "such rays (%s)", hpm, k->name);
-            }
-            free(h);
-            k->destroy(a);
+    exp_scene(x, "sphere", &cs);
+    bench_sets one = {0};
+    accel_error err = {0};
+    size_t want = x->quick ? 2000 : 100000;
+    if (stiff_add_vertex_rays(&cs, cs.camera.eye, want / 2, 11, &one.primary, &err)) {
+        fprintf(stderr, "%s: %s\n", x->name, err.msg);
+        exit(cli_exit_of(err.code));
+    }
+    one.made = BENCH_PRIMARY;
+    size_t n = one.primary.count;
+    accel_hit *ref = malloc((n ? n : 1) * sizeof *ref), *h = malloc((n ? n : 1) * sizeof *h);
+    if (!ref || !h) exit(CLI_EXIT_INTERNAL);
+    exp_reference(x, &cs, one.primary.rays, ref, n);
+    exp_md(x, "\n### (b) Robust and naive triangle tests on %zu rays aimed exactly at vertices and "
+              "edge midpoints of `%s` (%u triangles)\n", n, cs.name, cs.live_count);
+    const char *names[2 * MAX_KINDS];
+    char bufs[MAX_KINDS][128];
+    int nk = 0;
+    for (size_t k = 0; k < accel_kind_count && nk < 2 * MAX_KINDS - 1; k++) {
+        if (!strcmp(accel_kinds[k]->name, "brute") && !x->quick) continue;
+        names[nk++] = accel_kinds[k]->name;
+        names[nk] = naive_of(accel_kinds[k]->name, bufs[nk / 2], sizeof bufs[0]);
+        nk++;
+    }
+    if (!x->quick) {
+        exp_md(x, "\nLeft out: `brute` (%u triangles against %zu rays: minutes per pass).\n",
+               cs.live_count, n);
+        exp_note_left(x, EXP_LEFT_POINTLESS);
+    }
+    exp_list list;
+    exp_list_make(x, names, nk, NULL, &list);
+    exp_group g;
+    exp_group_init(&g, x, &cs, &one, BENCH_PRIMARY);
+    for (int i = 0; i < list.count; i++) exp_group_add(&g, list.spec[i], 0);
+    exp_group_run(&g);
+    exp_md_table(x, "configuration|Mrays/s [95% CI]|holes per million (95% upper bound)|"
+                 "disagreements per million (95% upper bound)");
+    for (int c = 0; c < g.count; c++) {
+        const exp_cfg *cf = &g.cfg[c];
+        if (!cf->ok) continue;
+        accel_trace(cf->kind, cf->accel, one.primary.rays, h, n, x->threads, NULL);
+        hits_diff d = hits_compare(ref, h, n);
+        size_t dis = d.disagreements + d.false_hits;
+        exp_est m = exp_group_mrays(&g, c, BENCH_PRIMARY);
+        char mt[96], hb[64], db[64];
+        snprintf(hb, sizeof hb, "%.0f (< %.0f)", 1e6 * d.holes / n, 1e6 * exp_binom_upper(d.holes, n));
+        snprintf(db, sizeof db, "%.0f (< %.0f)", 1e6 * dis / n, 1e6 * exp_binom_upper(dis, n));
+        exp_md(x, "| `%s` | %s | %s | %s |\n", cf->spec, exp_fmt_est(mt, sizeof mt, &m, 2), hb, db);
+        exp_csv(x, "robust,%s,%s,,%zu,,,,,,,%.2f,%.2f,%.2f,%.4f\n", cs.name, cf->spec, n,
+                1e6 * d.holes / n, 1e6 * exp_binom_upper(d.holes, n), 1e6 * dis / n, m.median);
+        if (!strstr(cf->spec, "tri=naive")) {
+            st->robust_n++;
+            st->robust_ok += d.holes == 0 && dis == 0;
         }
-    exp_md(x, "\n**Finding (b):** %s; the watertight rows are the robust defaults.\n",
-           worst[0] ? worst : "no naive kernel was measured");
-    free(ref);
-    rays_free(&stiff);
+    }
+    exp_group_note(&g);
+    exp_group_compare_head(&g);
+    exp_text cost = {0};
+    for (int c = 0; c < g.count; c++) {
+        char nb[300], pc[128];
+        if (!g.cfg[c].ok || strstr(g.cfg[c].spec, "tri=naive")) continue;
+        int nv = exp_group_find(&g, naive_of(g.cfg[c].spec, nb, sizeof nb));
+        if (nv < 0 || !g.cfg[nv].ok) continue;
+        exp_group_compare(&g, c, nv, BENCH_PRIMARY, pc, sizeof pc);
+        exp_text_add(&cost, "%s`%s` %s", cost.len ? ", " : "", g.cfg[c].spec, pc);
+    }
+    exp_text_add(&st->findings, "- The watertight test against the naive one, time: %s; holes of "
+                 "the watertight kernels: %s.\n", exp_text_str(&cost),
+                 st->robust_ok == st->robust_n ? "none" : "some (see the table)");
+    exp_text_add(&st->ev, "; watertight kernels without holes %d of %d, their time against naive: %s",
+                 st->robust_ok, st->robust_n, exp_text_str(&cost));
+    exp_text_free(&cost);
+    exp_group_free(&g);
+    exp_list_free(&list);
+    free(ref), free(h);
+    bench_sets_free(&one);
     scene_free(&cs);
 }
 
@@ -224,36 +340,25 @@ int main(int argc, char **argv)
 {
     exp_ctx x;
     exp_init(&x, argc, argv, "exp_error_time",
-             "Which accelerator reaches the lowest image error in a fixed time, and what do "
+             "Which structure reaches the lowest image error in a fixed time, and what do "
              "naive kernels trade in holes for their speed?",
              NULL);
-    const char *scene_spec = x.quick ? "sphereflake:level=1" : "sphereflake";
-    accel_scene s;
-    exp_scene(&x, scene_spec, &s);
-    int ref_spp = x.quick ? 16 : 256;
-    int pixels = x.size * x.size;
-    exp_md(&x, "## Error against run time (exp_error_time)\n\n"
-               "**Question (a):** ambient occlusion of `%s` at %dx%d: how does the image error "
-               "(RMSE of the unoccluded fraction against a %d-sample converged image with "
-               "another seed) fall with samples per pixel and time, per accelerator; which one "
-               "gives the lowest error within a fixed time, build included?\n",
-               s.name, x.size, x.size, ref_spp);
-    exp_csv(&x, "part,scene,spec,spp,rays,trace_ms,build_ms,total_ms,rmse,holes_per_million,"
-                "disagreements_per_million,mrays\n");
-    bench_sets base;
-    exp_sets(&x, &s, BENCH_PRIMARY | BENCH_SHADOW, &base);
-    double *ref_img = malloc((size_t)pixels * sizeof *ref_img);
-    double *img = malloc((size_t)pixels * sizeof *img);
-    if (!ref_img || !img) {
-        fprintf(stderr, "exp_error_time: out of memory\n");
-        return CLI_EXIT_INTERNAL;
-    }
-    converged_image(&x, &s, &base, ref_spp, ref_img, pixels);
-    error_against_time(&x, &s, &base, ref_img, img, pixels);
-    robustness_against_speed(&x);
-    free(ref_img);
-    free(img);
-    bench_sets_free(&base);
-    scene_free(&s);
+    exp_header(&x, "Error against run time", "the user's request: \"error against run time\"",
+               "(a) how does the error of an ambient occlusion image fall with samples per pixel "
+               "and with time, build included, per structure, and which reaches the lowest error "
+               "within a time budget that binds? (b) what does the robust (watertight) triangle "
+               "test cost in speed, and the naive one in holes?");
+    exp_csv(&x, "part,scene,spec,spp,rays,trace_ms,trace_lo,trace_hi,build_ms,total_ms,rmse,"
+                "holes_per_million,holes_upper_pm,disagreements_per_million,mrays\n");
+    study st = {0};
+    error_against_time(&x, &st);
+    robustness_against_speed(&x, &st);
+    exp_md(&x, "\n**Findings:**\n\n%s", exp_text_str(&st.findings));
+    int good = st.slope_ok + st.budget_ok + (st.robust_n && st.robust_ok == st.robust_n);
+    exp_verdict(&x, "error-time", good == 3 ? EXP_CONFIRMED : good ? EXP_PARTLY : EXP_REFUTED,
+                x.quick ? "sphereflake:level=1, sphere" : "sphereflake, sphere", "%s",
+                exp_text_str(&st.ev));
+    exp_text_free(&st.findings);
+    exp_text_free(&st.ev);
     return exp_finish(&x);
 }

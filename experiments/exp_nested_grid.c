@@ -3,96 +3,166 @@
  * be removed?
  *
  * On a uniform scene (soup) and non-uniform ones (teapot in a stadium,
- * sphereflake, scanned meshes): the regular grid at its best lambda (a
- * sweep), the nested grid over a set of hand-set parameters, and the nested
- * grid's `auto` mode (cost-model driven). The lecture says nested grids
- * adapt to local complexity "but resolutions still require manual tweaking".
+ * sphereflake, scanned meshes), in interleaved rounds: the regular grid
+ * swept over lambda = 1..256 (its best, with ties, is the grid's answer),
+ * the nested grid at its defaults, at hand-set parameters and in its
+ * `auto` mode (cost-model driven), and BVHs for scale. The lecture says
+ * nested grids adapt to local complexity "but resolutions still require
+ * manual tweaking": the first is tested against the best regular grid on
+ * the non-uniform scenes, the second by asking whether the defaults or
+ * `auto` tie with the best hand-set configuration.
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "harness.h"
+#include "group.h"
+
+#define MASK (BENCH_PRIMARY | BENCH_DIFFUSE)
+
+/* The nested grid's hand-set parameters (the default first); then the
+ * configurations that set it in context. Specs this build lacks (the
+ * irregular grid, empty-space skipping) are left out with their reason. */
+static const char *const hand_full[] = {
+    "nested_grid",
+    "nested_grid:lambda=0.5",
+    "nested_grid:lambda=8",
+    "nested_grid:sub_lambda=2",
+    "nested_grid:sub_lambda=16",
+    "nested_grid:threshold=4",
+    "nested_grid:threshold=32",
+    "nested_grid:depth=2",
+    "nested_grid:lambda=0.5,sub_lambda=8,threshold=8",
+    "nested_grid:lambda=8,sub_lambda=2,threshold=32,depth=2"};
+static const char *const hand_quick[] = {"nested_grid", "nested_grid:depth=2"};
+static const char *const others[] = {"nested_grid:auto", "bvh", "bvh:build=sah", "irregular_grid",
+                                     "grid:skip=macro", "grid:skip=cloud"};
 
 typedef struct {
-    const char *spec;
-    double ns, build_ms, mb, steps, prims;
-    int ok;
-} cfg;
+    int d, a, t, adapts, nonuniform;
+    exp_text tweak_ev, adapt_ev, findings, scenes;
+} study;
 
-static void run_cfg(exp_ctx *x, const accel_scene *s, const bench_sets *sets, cfg *c)
+/* The best configuration among [lo, hi) whose spec starts with prefix. */
+static int best_of(const exp_group *g, const char *prefix, int lo, int hi)
 {
-    exp_measure m;
-    char why[600];
-    c->ok = 0;
-    if (exp_run(x, c->spec, s, sets, BENCH_PRIMARY | BENCH_DIFFUSE, &m, why, sizeof why)) {
-        exp_md(x, "| `%s` | skipped: %s | | | | | |\n", c->spec, why);
-        return;
-    }
-    double rays = (double)(m.res[0].rays + m.res[2].rays);
-    c->ns = (m.res[0].ms.median + m.res[2].ms.median) * 1e6 / rays;
-    c->build_ms = m.build_ms.median;
-    c->mb = m.build.bytes / 1048576.0;
-    c->steps = (double)(m.res[0].counters.steps + m.res[2].counters.steps) / rays;
-    c->prims = (double)(m.res[0].counters.prim_tests + m.res[2].counters.prim_tests) / rays;
-    c->ok = 1;
-    exp_md(x, "| `%s` | %.0f | %.1f | %.1f | %.1f | %.1f | %.2f |\n", c->spec, c->ns, c->steps,
-           c->prims, c->build_ms, c->mb, 1e3 / c->ns);
-    exp_csv(x, "%s,%s,%.3f,%.3f,%.3f,%.4f,%.4f\n", s->name, c->spec, c->ns, c->steps, c->prims,
-            c->build_ms, c->mb);
+    return exp_group_best(g, MASK, lo, hi, prefix);
 }
 
-/* One scene: the regular grid's lambdas, the hand-set nested grids and
- * auto; the comparison goes into findings. */
-static void measure_scene(exp_ctx *x, const char *spec, char *findings, size_t fn)
+/* c against b: "+12.0% [...]" of time, and whether they tie. */
+static int vs(const exp_group *g, int c, int b, char *buf, size_t n)
 {
-    static const char *const grid_full[] = {"grid:lambda=1", "grid:lambda=2", "grid:lambda=4",
-                                            "grid:lambda=8", "grid:lambda=16"};
-    static const char *const grid_quick[] = {"grid:lambda=1", "grid:lambda=4"};
-    static const char *const hand_full[] = {
-        "nested_grid",
-        "nested_grid:lambda=0.5",
-        "nested_grid:lambda=2",
-        "nested_grid:sub_lambda=2",
-        "nested_grid:sub_lambda=8",
-        "nested_grid:threshold=4",
-        "nested_grid:threshold=32",
-        "nested_grid:depth=2",
-        "nested_grid:lambda=0.5,sub_lambda=8,threshold=8",
-        "nested_grid:lambda=2,sub_lambda=2,threshold=32,depth=2"};
-    static const char *const hand_quick[] = {"nested_grid", "nested_grid:depth=2"};
-    const char *const *grids = x->quick ? grid_quick : grid_full;
+    exp_est r = exp_group_speedup(g, c, b, MASK);
+    exp_fmt_pct(buf, n, &r);
+    return exp_ratio_cmp(&r, g->floor);
+}
+
+static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_list *ctx_specs)
+{
+    static const double lambdas_full[] = {1, 2, 4, 8, 16, 32, 64, 128, 256};
+    static const double lambdas_quick[] = {1, 8, 64};
+    const double *ls = x->quick ? lambdas_quick : lambdas_full;
+    int nl = x->quick ? 3 : 9;
     const char *const *hands = x->quick ? hand_quick : hand_full;
-    int ng = x->quick ? 2 : 5, nh = x->quick ? 2 : 10;
+    int nh = x->quick ? 2 : 10;
     accel_scene s;
     exp_scene(x, spec, &s);
     bench_sets sets;
-    exp_sets(x, &s, BENCH_PRIMARY | BENCH_DIFFUSE, &sets);
+    exp_sets(x, &s, MASK, &sets);
     exp_md(x, "\n### %s (%u primitives)\n", s.name, s.live_count);
-    exp_md_table(x, "configuration|ns/ray|cells/ray|prims/ray|build ms|MB|Mrays/s");
-    cfg g[8], h[12], a = {"nested_grid:auto", 0, 0, 0, 0, 0, 0};
-    int bg = -1, bh = -1;
-    for (int i = 0; i < ng; i++) {
-        g[i].spec = grids[i];
-        run_cfg(x, &s, &sets, &g[i]);
-        if (g[i].ok && (bg < 0 || g[i].ns < g[bg].ns)) bg = i;
+    exp_group g;
+    exp_group_init(&g, x, &s, &sets, MASK);
+    g.collapse_ms = x->quick ? 500 : 1500;
+    int hand_lo = 0;
+    if (exp_kind_wanted(x, "nested_grid"))
+        for (int i = 0; i < nh; i++) exp_group_add(&g, hands[i], 0);
+    int hand_hi = g.count;
+    if (exp_kind_wanted(x, "grid"))
+        for (int i = 0; i < nl; i++) {
+            char sp[64];
+            snprintf(sp, sizeof sp, "grid:lambda=%g", ls[i]);
+            exp_group_add(&g, sp, 0);
+        }
+    int grid_hi = g.count;
+    for (int i = 0; i < ctx_specs->count; i++) exp_group_add(&g, ctx_specs->spec[i], 0);
+    exp_group_run(&g);
+    int all = best_of(&g, "", 0, g.count);
+    exp_md_table(x, "configuration|ns/ray [95% CI]|vs the scene's best|cells or nodes/ray|"
+                    "prims/ray|build ms|MB");
+    for (int c = 0; c < g.count && all >= 0; c++) {
+        const exp_cfg *cf = &g.cfg[c];
+        if (!cf->ok) continue;
+        exp_est e = exp_group_ns(&g, c, MASK);
+        char m[96], v[128];
+        exp_fmt_est(m, sizeof m, &e, 0);
+        if (c == all)
+            snprintf(v, sizeof v, "best");
+        else if (vs(&g, c, all, v, sizeof v) == 0)
+            strcat(v, " (tie)");
+        exp_md(x, "| `%s` | %s | %s | %.1f | %.1f | %.1f | %.1f |\n", cf->spec, m, v,
+               exp_group_steps(&g, c, MASK), exp_group_prims(&g, c, MASK), cf->build_ms.median,
+               cf->build.bytes / 1048576.0);
+        exp_csv(x, "%s,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f\n", s.name, cf->spec, e.median,
+                e.lo, e.hi, exp_group_steps(&g, c, MASK), exp_group_prims(&g, c, MASK),
+                cf->build_ms.median, cf->build.bytes / 1048576.0);
     }
-    for (int i = 0; i < nh; i++) {
-        h[i].spec = hands[i];
-        run_cfg(x, &s, &sets, &h[i]);
-        if (h[i].ok && (bh < 0 || h[i].ns < h[bh].ns)) bh = i;
+    exp_group_note(&g);
+    exp_text_add(&st->scenes, "%s%s", st->scenes.len ? ", " : "", s.name);
+    int bg = best_of(&g, "grid:lambda=", hand_hi, grid_hi), bh = best_of(&g, "", hand_lo, hand_hi);
+    int au = exp_group_find(&g, "nested_grid:auto"), df = hand_hi > hand_lo ? hand_lo : -1;
+    if (au >= 0 && !g.cfg[au].ok) au = -1;
+    if (df >= 0 && !g.cfg[df].ok) df = -1;
+    int nonuniform = strncmp(s.name, "soup", 4) != 0;
+    char a[128], b[128];
+    int bv = best_of(&g, "bvh", grid_hi, g.count);
+    exp_group_compare_head(&g);
+    /* Adapts: the best nested grid (hand-set or auto) against the best regular grid. */
+    int bn = bh;
+    if (au >= 0 && (bn < 0 || exp_group_ns(&g, au, MASK).median < exp_group_ns(&g, bn, MASK).median))
+        bn = au;
+    if (bn >= 0) {
+        if (bg >= 0) {
+            int cmp = exp_group_compare(&g, bn, bg, MASK, a, sizeof a);
+            exp_text_add(&st->findings, "- %s: the best nested grid `%s` against the best regular "
+                         "grid `%s`: time %s.\n", s.name, g.cfg[bn].spec, g.cfg[bg].spec, a);
+            if (nonuniform) {
+                st->nonuniform++;
+                st->adapts += cmp < 0;
+                exp_text_add(&st->adapt_ev, "%s%s %s", st->adapt_ev.len ? "; " : "", s.name, a);
+            }
+        } else if (nonuniform) {
+            /* Every regular grid collapsed: a nested grid that ran adapts. */
+            st->nonuniform++, st->adapts++;
+            exp_text_add(&st->findings, "- %s: every regular grid collapsed (left out above); "
+                         "the nested grid `%s` traces normally.\n", s.name, g.cfg[bn].spec);
+            exp_text_add(&st->adapt_ev, "%s%s: every regular grid collapsed", st->adapt_ev.len ? "; " : "",
+                         s.name);
+        }
     }
-    run_cfg(x, &s, &sets, &a);
-    if (bg >= 0 && bh >= 0) {
-        exp_append(findings, fn,
-                   "- %s: best regular grid `%s` %.0f ns/ray; best hand-set nested grid `%s` "
-                   "%.0f ns/ray (%.2fx the grid's speed, %.1f vs %.1f MB)%s",
-                   s.name, g[bg].spec, g[bg].ns, h[bh].spec, h[bh].ns, g[bg].ns / h[bh].ns,
-                   h[bh].mb, g[bg].mb, a.ok ? "" : ".\n");
-        if (a.ok)
-            exp_append(findings, fn, "; `auto` %.0f ns/ray, %+.0f%% from the best hand-set.\n",
-                       a.ns, 100 * (a.ns / h[bh].ns - 1));
+    /* Tweaking: the defaults and auto against the best nested grid of all
+     * (hand-set or auto), ties included. */
+    if (bn >= 0 && df >= 0) {
+        int dcmp = df == bn ? 0 : exp_group_compare(&g, df, bn, MASK, a, sizeof a);
+        int acmp = au >= 0 ? (au == bn ? 0 : exp_group_compare(&g, au, bn, MASK, b, sizeof b)) : 1;
+        const char *cls;
+        if (dcmp == 0)
+            st->d++, cls = "the defaults tie with the best: no tweaking needed";
+        else if (acmp == 0)
+            st->a++, cls = "the defaults lose; `auto` finds the best without a hand";
+        else
+            st->t++, cls = "only a hand-set configuration reaches the best";
+        exp_text_add(&st->findings, "- %s: the best nested grid is `%s`; time of the defaults %s, "
+                     "of `auto` %s: %s.\n", s.name, g.cfg[bn].spec, df == bn ? "(the same)" : a,
+                     au < 0 ? "(not measured)" : au == bn ? "(the same)" : b, cls);
+        exp_text_add(&st->tweak_ev, "%s%s: defaults %s, auto %s", st->tweak_ev.len ? "; " : "",
+                     s.name, df == bn ? "best" : a, au < 0 ? "n/a" : au == bn ? "best" : b);
     }
+    if (bv >= 0 && bn >= 0) {
+        exp_group_compare(&g, bv, bn, MASK, a, sizeof a);
+        exp_text_add(&st->findings, "- %s: `%s` against the best nested grid: time %s.\n",
+                     s.name, g.cfg[bv].spec, a);
+    }
+    exp_group_free(&g);
     bench_sets_free(&sets);
     scene_free(&s);
 }
@@ -101,19 +171,21 @@ int main(int argc, char **argv)
 {
     exp_ctx x;
     exp_init(&x, argc, argv, "exp_nested_grid",
-             "Does a nested grid beat the best regular grid on non-uniform scenes, and does its "
-             "auto mode find good parameters?",
+             "Does a nested grid beat the best regular grid on non-uniform scenes, and does it "
+             "still need hand-set parameters?",
              NULL);
-    exp_md(&x, "## Nested grids (exp_nested_grid)\n\n"
-               "**Question:** on uniform and non-uniform scenes, how does the nested grid compare "
-               "with the regular grid at its best lambda, and how close does `nested_grid:auto` "
-               "(resolutions and subdivision chosen by the cost model) come to the best "
-               "hand-set parameters? ns per ray over %dx%d primary plus one diffuse bounce.\n\n"
-               "**Lecture's claim:** a nested grid adapts to local scene complexity, \"but "
-               "resolutions still require manual tweaking\".\n",
-               x.size, x.size);
-    if (!accel_find_kind("nested_grid") || !accel_find_kind("grid")) {
-        exp_md(&x, "\nSkipped: `grid` and `nested_grid` must both be registered.\n");
+    exp_header(&x, "Nested grids",
+               "a nested grid \"adapts to local scene complexity, but resolutions still require "
+               "manual tweaking\"",
+               "on uniform and non-uniform scenes, how does the nested grid compare with the "
+               "regular grid at its best lambda (swept to 256), do its defaults or its `auto` mode "
+               "(resolutions chosen by the cost model) tie with the best hand-set parameters, and "
+               "where do BVHs stand? ns per ray over %dx%d primary rays plus one diffuse bounce, "
+               "every configuration of a scene in interleaved rounds; \"vs the scene's best\" is "
+               "the paired ratio of times.", x.size, x.size);
+    if (!accel_find_kind("nested_grid") || !exp_kind_wanted(&x, "nested_grid")) {
+        exp_md(&x, "\nLeft out: no `nested_grid` kind in this run.\n");
+        exp_verdict(&x, "nested-tweaking", EXP_UNTESTABLE, "-", "no nested_grid kind in this run");
         return exp_finish(&x);
     }
     const char *scenes[8];
@@ -122,14 +194,39 @@ int main(int argc, char **argv)
         scenes[scene_count++] = "teapot_stadium:n=4,stadium=32,tiers=4";
     } else {
         scenes[scene_count++] = "soup:tris=200000";
-        scenes[scene_count++] = "teapot_stadium:n=16"; /* 16k teapot triangles: the full one makes each grid pass take seconds */
+        scenes[scene_count++] = "teapot_stadium:n=16";
         scenes[scene_count++] = "sphereflake";
-        for (int i = 0; i < x.mesh_count && scene_count < 6; i++) scenes[scene_count++] = x.meshes[i];
+        for (int i = 0; i < x.mesh_count && scene_count < 5; i++) scenes[scene_count++] = x.meshes[i];
     }
-    exp_csv(&x, "scene,spec,ns_per_ray,steps_per_ray,prims_per_ray,build_ms,mb\n");
-    char findings[4096] = "";
-    for (int si = 0; si < scene_count; si++)
-        measure_scene(&x, scenes[si], findings, sizeof findings);
-    exp_md(&x, "\n**Findings:**\n\n%s", findings);
+    exp_csv(&x, "scene,spec,ns_per_ray,ns_lo,ns_hi,steps_per_ray,prims_per_ray,build_ms,mb\n");
+    exp_list ctx;
+    exp_list_make(&x, others, (int)(sizeof others / sizeof others[0]), NULL, &ctx);
+    study st = {0};
+    for (int si = 0; si < scene_count; si++) measure_scene(&x, &st, scenes[si], &ctx);
+    exp_md(&x, "\n**Findings:**\n\n%s", exp_text_str(&st.findings));
+    int n = st.d + st.a + st.t;
+    if (n)
+        exp_verdict(&x, "nested-tweaking", st.t ? EXP_CONFIRMED : st.a ? EXP_PARTLY
+                    : exp_no_difference(exp_section_floor(&x)),
+                    exp_text_str(&st.scenes), "on %d of %d scenes the defaults tie with the best "
+                    "nested grid, on %d more `auto` does, on %d only hand-set parameters reach it "
+                    "(time against the best: %s)", st.d, n, st.a, st.t, exp_text_str(&st.tweak_ev));
+    else
+        exp_verdict(&x, "nested-tweaking", EXP_UNTESTABLE, "-", "no hand-set configuration ran");
+    if (st.nonuniform)
+        exp_verdict(&x, "nested-adapts", st.adapts == st.nonuniform ? EXP_CONFIRMED
+                    : st.adapts ? EXP_PARTLY : exp_no_difference(exp_section_floor(&x)),
+                    exp_text_str(&st.scenes),
+                    "the best nested grid beats the best regular grid outside the noise on %d of "
+                    "%d non-uniform scenes (time against the grid: %s)", st.adapts,
+                    st.nonuniform, exp_text_str(&st.adapt_ev));
+    else
+        exp_verdict(&x, "nested-adapts", EXP_UNTESTABLE, "-",
+                    "no non-uniform scene with both a nested and a regular grid in this run");
+    exp_text_free(&st.findings);
+    exp_text_free(&st.tweak_ev);
+    exp_text_free(&st.adapt_ev);
+    exp_text_free(&st.scenes);
+    exp_list_free(&ctx);
     return exp_finish(&x);
 }

@@ -1,116 +1,164 @@
 /*
  * exp_scaling - how does each accelerator's cost grow with the triangle count?
  *
- * For every registered kind (default parameters) on `soup` (uniform) and
- * `teapot_stadium` (non-uniform) from ~1k triangles up to what the budget
- * allows: build time, memory per triangle, Mrays/s on primary and diffuse
- * rays, steps and primitive tests per ray. The growth exponent k of
- * cost ~ N^k is fitted by least squares on the log-log points.
+ * For every registered kind (default parameters; --accel specs join) on
+ * `soup` (uniform) and `teapot_stadium` (non-uniform), from a few hundred
+ * triangles up to a million or what the budget allows, all kinds of one
+ * size in interleaved rounds: build time, memory per triangle, ns per ray
+ * on primary plus diffuse rays, steps and primitive tests per ray. The
+ * growth exponent k of cost ~ N^k is fitted on the log-log points with
+ * its 95% t-interval. The lecture: primary rays cost O(N*M) without
+ * acceleration; a structure reduces M.
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "harness.h"
+#include "group.h"
+#include "svg.h"
+
+#define MASK (BENCH_PRIMARY | BENCH_DIFFUSE)
+#define MAX_SPECS 24
+#define MAX_SIZES 8
 
 typedef struct {
-    double n, build_ms, trace_us_per_ray;
-} point;
+    const char *spec;
+    int pts;
+    double n[MAX_SIZES], build[MAX_SIZES], ns[MAX_SIZES], lo[MAX_SIZES], hi[MAX_SIZES], last_pass_ms;
+    int stopped; /* left out at a size: larger sizes are not tried */
+    char stop_why[800];
+} series;
 
-/* Least-squares slope of log(y) against log(x). */
-static double loglog_slope(const double *x, const double *y, int n)
+typedef struct {
+    int sub_yes, sub_no, sub_n;
+    exp_text sub_ev, findings, cliffs;
+    int brute_done;
+    exp_est brute_slope;
+} study;
+
+static void family(exp_ctx *x, study *st, int f, const exp_list *list)
 {
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    int m = 0;
-    for (int i = 0; i < n; i++) {
-        if (!(x[i] > 0 && y[i] > 0)) continue;
-        double lx = log(x[i]), ly = log(y[i]);
-        sx += lx, sy += ly, sxx += lx * lx, sxy += lx * ly;
-        m++;
-    }
-    if (m < 2) return NAN;
-    return (m * sxy - sx * sy) / (m * sxx - sx * sx);
-}
-
-/* Scene families: printf patterns taking the size parameter; the teapot's
- * n gives 64n^2 - 8n triangles (plus a fixed stadium). */
-static const char *const families[][2] = {{"soup", "soup:tris=%d"},
-                                          {"teapot_stadium", "teapot_stadium:n=%d"}};
-#define FAMILY_COUNT 2
-
-/* One kind on one size of a family: a table row and a CSV record. Returns
- * 0 and fills its point, or 1 when the kind could not be measured. */
-static int measure_size(exp_ctx *x, int f, const accel_kind *kind, const char *spec,
-                        double *tris, double *build_ms, double *trace_ms)
-{
-    accel_scene s;
-    exp_scene(x, spec, &s);
-    bench_sets sets;
-    exp_sets(x, &s, BENCH_PRIMARY | BENCH_DIFFUSE, &sets);
-    exp_measure m;
-    char why[600];
-    int rc = exp_run(x, kind->name, &s, &sets, BENCH_PRIMARY | BENCH_DIFFUSE, &m, why, sizeof why);
-    if (rc) {
-        exp_md(x, "| %s | %u | skipped: %s | | | | | | | | |\n", kind->name, s.live_count, why);
-    } else {
-        const bench_result *p = &m.res[0], *d = &m.res[2];
-        char bt[64], pm[64], dm[64];
-        exp_md(x, "| %s | %u | %s | %.1f | %.0f | %s | %.1f | %.1f | %s | %.1f | %.1f |\n",
-               kind->name, s.live_count, exp_fmt_timing(bt, sizeof bt, &m.build_ms, 1),
-               m.build.bytes / 1048576.0, (double)m.build.bytes / s.live_count,
-               exp_fmt_timing(pm, sizeof pm, &p->mrays, 2), exp_per_ray(p->counters.steps, p),
-               exp_per_ray(p->counters.prim_tests, p), exp_fmt_timing(dm, sizeof dm, &d->mrays, 2),
-               exp_per_ray(d->counters.steps, d), exp_per_ray(d->counters.prim_tests, d));
-        exp_csv(x, "%s,%s,%s,%u,%.4f,%.4f,%.4f,%zu,%.2f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.3f,%.3f,"
-                   "%.3f,%.3f\n",
-                families[f][0], kind->name, kind->name, s.live_count, m.build_ms.median,
-                m.build_ms.min, m.build_ms.max, m.build.bytes,
-                (double)m.build.bytes / s.live_count, p->mrays.median, p->mrays.min,
-                p->mrays.max, d->mrays.median, d->mrays.min, d->mrays.max,
-                exp_per_ray(p->counters.steps, p), exp_per_ray(p->counters.prim_tests, p),
-                exp_per_ray(d->counters.steps, d), exp_per_ray(d->counters.prim_tests, d));
-        *tris = s.live_count;
-        *build_ms = m.build_ms.median;
-        *trace_ms = p->ms.median + d->ms.median;
-    }
-    bench_sets_free(&sets);
-    scene_free(&s);
-    return rc;
-}
-
-/* One kind over the sizes of family f, then its growth exponents. */
-static void measure_kind(exp_ctx *x, int f, const accel_kind *kind, char *findings, size_t fn)
-{
-    static const int full_sizes[] = {1000, 4000, 16000, 64000, 256000, 1000000};
-    static const int quick_sizes[] = {1000, 4000};
+    static const char *const names[2] = {"soup", "teapot_stadium"};
+    static const int soup_full[] = {250, 1000, 4000, 16000, 64000, 256000, 1000000};
     static const int teapot_full[] = {4, 8, 16, 32, 64, 128};
-    const int *sizes = x->quick ? quick_sizes : full_sizes;
-    int size_count = x->quick ? 2 : (int)(sizeof full_sizes / sizeof full_sizes[0]);
-    double xs[16], build[16], trace[16];
-    int pts = 0;
-    double last_trace_ms = 0;
-    for (int si = 0; si < size_count; si++) {
-        char spec[128];
-        snprintf(spec, sizeof spec, families[f][1], f == 1 ? teapot_full[si] : sizes[si]);
-        /* brute costs N*M: skip sizes whose predicted time exceeds the budget. */
-        if (pts > 0 && last_trace_ms * 4 > (x->quick ? 500 : 4000)) {
-            exp_md(x, "| %s | next size | skipped: predicted %.0f s per pass (4x the "
-                      "triangles, O(N) per ray) | | | | | | | | |\n",
-                   kind->name, last_trace_ms * 4 / 1e3);
-            break;
+    static const int soup_quick[] = {250, 1000, 4000}, teapot_quick[] = {2, 8};
+    const int *sizes = f == 0 ? (x->quick ? soup_quick : soup_full) : (x->quick ? teapot_quick : teapot_full);
+    int nsz = f == 0 ? (x->quick ? 3 : 7) : (x->quick ? 2 : 6);
+    double limit_ms = x->quick ? 300 : 4000; /* the longest pass worth a size */
+    series se[MAX_SPECS] = {{0}};
+    int ns = list->count < MAX_SPECS ? list->count : MAX_SPECS;
+    for (int k = 0; k < ns; k++) se[k].spec = list->spec[k];
+    exp_md(x, "\n### %s\n", names[f]);
+    exp_md_table(x, "configuration|triangles|build ms [95% CI]|MB|B/tri|ns/ray [95% CI]|"
+                    "steps/ray|prims/ray");
+    for (int z = 0; z < nsz; z++) {
+        char spec[64];
+        snprintf(spec, sizeof spec, f == 0 ? "soup:tris=%d"
+                                  : x->quick ? "teapot_stadium:n=%d,stadium=32,tiers=4"
+                                             : "teapot_stadium:n=%d", sizes[z]);
+        accel_scene s;
+        exp_scene(x, spec, &s);
+        bench_sets sets;
+        exp_sets(x, &s, MASK, &sets);
+        exp_group g;
+        exp_group_init(&g, x, &s, &sets, MASK);
+        g.collapse_ms = limit_ms;
+        int idx[MAX_SPECS];
+        for (int k = 0; k < ns; k++) {
+            idx[k] = -1;
+            if (se[k].stopped) continue;
+            /* O(N) per ray: the next size's pass from the last one's. */
+            double ratio = z ? (double)s.live_count / se[k].n[se[k].pts ? se[k].pts - 1 : 0] : 1;
+            if (se[k].pts && se[k].last_pass_ms * ratio > limit_ms && !strcmp(se[k].spec, "brute")) {
+                snprintf(se[k].stop_why, sizeof se[k].stop_why, "from %u triangles on: a pass "
+                         "would take about %.0f s (O(N) per ray)", s.live_count,
+                         se[k].last_pass_ms * ratio / 1e3);
+                se[k].stopped = 1;
+                exp_note_left(x, EXP_LEFT_POINTLESS);
+                continue;
+            }
+            idx[k] = exp_group_add(&g, se[k].spec, 0);
         }
-        if (measure_size(x, f, kind, spec, &xs[pts], &build[pts], &trace[pts])) break;
-        last_trace_ms = trace[pts];
-        pts++;
+        exp_group_run(&g);
+        for (int k = 0; k < ns; k++) {
+            if (idx[k] < 0) continue;
+            const exp_cfg *cf = &g.cfg[idx[k]];
+            if (!cf->ok) {
+                snprintf(se[k].stop_why, sizeof se[k].stop_why, "from %u triangles on: %s",
+                         s.live_count, cf->why);
+                se[k].stopped = 1;
+                continue;
+            }
+            exp_est e = exp_group_ns(&g, idx[k], MASK);
+            char b[96], t[96];
+            exp_md(x, "| `%s` | %u | %s | %.1f | %.0f | %s | %.1f | %.1f |\n", cf->spec,
+                   s.live_count, exp_fmt_est(b, sizeof b, &cf->build_ms, 1),
+                   cf->build.bytes / 1048576.0, (double)cf->build.bytes / s.live_count,
+                   exp_fmt_est(t, sizeof t, &e, 0), exp_group_steps(&g, idx[k], MASK),
+                   exp_group_prims(&g, idx[k], MASK));
+            exp_csv(x, "%s,%s,%u,%.4f,%.4f,%.4f,%zu,%.2f,%.3f,%.3f,%.3f,%.3f,%.3f\n", names[f],
+                    cf->spec, s.live_count, cf->build_ms.median, cf->build_ms.lo, cf->build_ms.hi,
+                    cf->build.bytes, (double)cf->build.bytes / s.live_count, e.median, e.lo, e.hi,
+                    exp_group_steps(&g, idx[k], MASK), exp_group_prims(&g, idx[k], MASK));
+            series *q = &se[k];
+            q->n[q->pts] = s.live_count, q->build[q->pts] = cf->build_ms.median, q->ns[q->pts] = e.median;
+            q->lo[q->pts] = e.lo, q->hi[q->pts] = e.hi;
+            q->last_pass_ms = cf->counted_ms;
+            if (q->pts && q->ns[q->pts] > 3 * q->ns[q->pts - 1] * pow(q->n[q->pts] / q->n[q->pts - 1], 0.5))
+                exp_text_add(&st->cliffs, "- `%s` on %s: %.0f ns per ray at %.0f triangles, %.0f at "
+                             "%.0f: a cliff, not a growth law.\n", q->spec, names[f],
+                             q->ns[q->pts - 1], q->n[q->pts - 1], q->ns[q->pts], q->n[q->pts]);
+            q->pts++;
+        }
+        exp_group_free(&g);
+        bench_sets_free(&sets);
+        scene_free(&s);
     }
-    if (pts >= 2) {
-        double kb = loglog_slope(xs, build, pts), kt = loglog_slope(xs, trace, pts);
-        exp_append(findings, fn,
-                   "- %s on %s: build time grows as N^%.2f, trace time per ray as N^%.2f "
-                   "(%.0f to %.0f triangles).\n",
-                   kind->name, families[f][0], isnan(kb) ? 0 : kb, isnan(kt) ? 0 : kt, xs[0],
-                   xs[pts - 1]);
+    svg_plot pl;
+    char title[128], name[64];
+    snprintf(title, sizeof title, "Scaling on %s: ns per ray against triangles", names[f]);
+    svg_plot_init(&pl, title, "triangles", "ns per ray (primary + diffuse)");
+    pl.log_x = pl.log_y = 1;
+    for (int k = 0; k < ns; k++) {
+        series *q = &se[k];
+        if (q->pts < 2) continue;
+        exp_est kt;
+        double a, fx[2] = {q->n[0], q->n[q->pts - 1]}, fy[2];
+        exp_loglog_slope(q->n, q->ns, q->pts, &kt, &a);
+        fy[0] = exp(a) * pow(fx[0], kt.median), fy[1] = exp(a) * pow(fx[1], kt.median);
+        char fit[200];
+        snprintf(fit, sizeof fit, "%s fit N^%.2f", q->spec, kt.median);
+        svg_add(&pl, q->spec, q->n, q->ns, q->lo, q->hi, q->pts, SVG_POINTS);
+        svg_add(&pl, fit, fx, fy, NULL, NULL, 2, SVG_DASHED);
     }
+    snprintf(name, sizeof name, "scaling_%s", names[f]);
+    exp_svg(x, &pl, name, "Time per ray against the triangle count (medians with 95% intervals; "
+            "dashed: the least-squares power law)");
+    exp_md(x, "\nGrowth exponents (least squares on the log-log points, 95%% t-interval):\n");
+    exp_md_table(x, "configuration|triangles|build time ~ N^k|trace time per ray ~ N^k");
+    for (int k = 0; k < ns; k++) {
+        series *q = &se[k];
+        if (q->pts < 2) continue;
+        exp_est kb, kt;
+        exp_loglog_slope(q->n, q->build, q->pts, &kb, NULL);
+        exp_loglog_slope(q->n, q->ns, q->pts, &kt, NULL);
+        char a[96], b[96];
+        exp_md(x, "| `%s` | %.0f to %.0f | %s | %s |\n", q->spec, q->n[0], q->n[q->pts - 1],
+               exp_fmt_est(a, sizeof a, &kb, 2), exp_fmt_est(b, sizeof b, &kt, 2));
+        exp_text_add(&st->findings, "- `%s` on %s: build time grows as N^%s, trace time per ray as "
+                     "N^%s.\n", q->spec, names[f], a, b);
+        if (!strcmp(q->spec, "brute")) {
+            if (f == 0) st->brute_done = 1, st->brute_slope = kt;
+        } else if (q->pts >= 3) {
+            st->sub_n++;
+            st->sub_yes += kt.hi < 1.0;
+            st->sub_no += kt.lo >= 1.0;
+            exp_text_add(&st->sub_ev, "%s%s on %s N^%s", st->sub_ev.len ? "; " : "", q->spec,
+                         names[f], b);
+        }
+    }
+    for (int k = 0; k < ns; k++)
+        if (se[k].stopped) exp_md(x, "\nLeft out: `%s` %s.\n", se[k].spec, se[k].stop_why);
 }
 
 int main(int argc, char **argv)
@@ -120,31 +168,42 @@ int main(int argc, char **argv)
              "How do build time, memory and trace time grow with the triangle count, per "
              "accelerator?",
              NULL);
-    exp_md(&x, "## Scaling with scene size (exp_scaling)\n\n"
-               "**Question:** how do build time, memory and trace time grow with the number of "
-               "triangles, for each accelerator? Scenes: `soup` (uniform random triangles) and "
-               "`teapot_stadium` (a teapot in a stadium: non-uniform), default parameters of "
-               "every kind, %dx%d primary rays and one diffuse bounce.\n",
-               x.size, x.size);
-    exp_csv(&x, "scene,kind,spec,tris,build_ms,build_ms_min,build_ms_max,bytes,bytes_per_tri,"
-                "primary_mrays,primary_mrays_min,primary_mrays_max,diffuse_mrays,diffuse_mrays_min,"
-                "diffuse_mrays_max,primary_steps,primary_prims,diffuse_steps,diffuse_prims\n");
-    char findings[4096] = "";
-    for (int f = 0; f < FAMILY_COUNT; f++) {
-        exp_md(&x, "\n### %s\n", families[f][0]);
-        exp_md_table(&x, "kind|triangles|build ms|MB|B/tri|primary Mrays/s|steps/ray|prims/ray|"
-                         "diffuse Mrays/s|steps/ray|prims/ray");
-        for (size_t k = 0; k < accel_kind_count; k++)
-            measure_kind(&x, f, accel_kinds[k], findings, sizeof findings);
-    }
-    exp_md(&x, "\n**Findings** (least-squares exponents of the log-log points):\n\n%s", findings);
-    exp_md(&x, "\nA structure whose trace cost grows as N^0.1-0.3 is doing its job "
-               "(ideal: log N); brute force grows as N^1. Build costs near N^1 (grids) or "
-               "N log N (sorting builders) are expected.\n");
-    exp_plot(&x, "exp_scaling",
-             "set logscale xy\nset xlabel 'triangles'\nset ylabel 'primary Mrays/s'\n"
-             "plot for [k in 'brute grid nested_grid bvh'] csv "
-             "using ($4):(strcol(2) eq k && strcol(1) eq 'soup' ? $10 : 1/0) with linespoints "
-             "title k");
+    exp_header(&x, "Scaling with scene size", "\"Primary rays cost O(N\xc2\xb7M) without "
+               "acceleration\"; structures \"reduce M\"",
+               "how do build time, memory and trace time per ray grow with the number of "
+               "triangles M, for each accelerator? Scenes: `soup` (uniform random triangles) and "
+               "`teapot_stadium` (a teapot in a stadium: non-uniform), default parameters of every "
+               "kind, %dx%d primary rays and one diffuse bounce, all kinds of one size in "
+               "interleaved rounds.", x.size, x.size);
+    exp_csv(&x, "scene,spec,tris,build_ms,build_lo,build_hi,bytes,bytes_per_tri,ns_per_ray,ns_lo,"
+                "ns_hi,steps_per_ray,prims_per_ray\n");
+    const char *kinds[MAX_SPECS];
+    int nk = 0;
+    for (size_t k = 0; k < accel_kind_count && nk < MAX_SPECS; k++) kinds[nk++] = accel_kinds[k]->name;
+    exp_list list;
+    exp_list_make(&x, kinds, nk, NULL, &list);
+    study st = {0};
+    for (int f = 0; f < 2; f++) family(&x, &st, f, &list);
+    exp_md(&x, "\n**Findings:**\n\n%s%s", exp_text_str(&st.findings), exp_text_str(&st.cliffs));
+    exp_md(&x, "\nA structure whose trace cost grows as N^0.1-0.3 is doing its job (ideal: log N); "
+               "brute force grows as N^1.\n");
+    char b[96];
+    if (st.brute_done)
+        exp_verdict(&x, "brute-cost", (st.brute_slope.lo <= 1 && st.brute_slope.hi >= 1) ||
+                    fabs(st.brute_slope.median - 1) <= 0.15 ? EXP_CONFIRMED : EXP_PARTLY, "soup",
+                    "brute force's time per ray grows as N^%s", exp_fmt_est(b, sizeof b, &st.brute_slope, 2));
+    else
+        exp_verdict(&x, "brute-cost", EXP_UNTESTABLE, "-", "brute force was not measured at two sizes");
+    if (st.sub_n)
+        exp_verdict(&x, "accel-sublinear", st.sub_yes == st.sub_n ? EXP_CONFIRMED
+                    : st.sub_yes ? EXP_PARTLY : st.sub_no ? EXP_REFUTED : EXP_UNTESTABLE,
+                    "soup, teapot_stadium",
+                    "%d of %d structure and scene series grow as N^k with k's interval below 1 "
+                    "(%s)%s", st.sub_yes, st.sub_n, exp_text_str(&st.sub_ev),
+                    st.cliffs.len ? "; cliffs: see the findings" : "");
+    exp_text_free(&st.findings);
+    exp_text_free(&st.cliffs);
+    exp_text_free(&st.sub_ev);
+    exp_list_free(&list);
     return exp_finish(&x);
 }

@@ -2,72 +2,155 @@
  * exp_time_to_image - build plus trace time against the number of rays.
  *
  * A structure that is slower to build but faster to trace wins once enough
- * rays are traced. With build time B and trace rate R (rays/s, measured on a
- * primary+diffuse mix), the time to trace n rays is B + n/R; two structures
- * cross at n* = (B2 - B1) / (1/R1 - 1/R2). The contenders: the regular
- * grid, binned SAH and full-sweep SAH BVHs (when registered).
+ * rays are traced. With build time B and trace rate R (rays per ms on a
+ * primary+diffuse mix, every structure of a scene in interleaved rounds),
+ * the time to trace n rays is B + n/R. The fastest way to n rays is the
+ * lower envelope of these lines: from n = 0 the structure that builds
+ * fastest, then, at each crossing n* = (B2 - B1) / (1/R1 - 1/R2), one that
+ * traces faster. A crossing counts only when the two rates differ outside
+ * the noise; its interval comes from the ends of the build and rate
+ * intervals. Contenders: the regular grid, the nested grid, binned,
+ * full-sweep and middle-split BVHs, and (when this build has them) grids
+ * with empty-space skipping, the irregular grid and wide BVHs.
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "harness.h"
+#include "group.h"
+#include "svg.h"
 
-#define MAX_CONFIGS 8
+#define MASK (BENCH_PRIMARY | BENCH_DIFFUSE)
+#define FRAME_1080P 2073600.0
 
-/* One scene: every configuration measured, then the crossovers of every pair. */
-static void measure_scene(exp_ctx *x, const char *spec, const char *const *configs,
-                          int config_count, char *findings, size_t fn)
+static const char *const wanted[] = {"grid", "nested_grid", "bvh:build=binned", "bvh:build=sah",
+                                     "bvh:build=mid", "grid:skip=macro", "irregular_grid",
+                                     "bvh:width=4", "bvh:width=8"};
+
+typedef struct {
+    int scenes, with_cross;
+    exp_text ev, findings, names;
+} study;
+
+/* The crossing of a (faster builder) and b (faster tracer) from the ends
+ * of their intervals: lo, hi (INFINITY when an end never crosses). */
+static double crossing(const exp_est *ba, const exp_est *ra, const exp_est *bb, const exp_est *rb,
+                       double *lo, double *hi)
+{
+    double n = (bb->median - ba->median) / (1 / ra->median - 1 / rb->median);
+    *lo = INFINITY, *hi = 0;
+    for (int k = 0; k < 16; k++) {
+        double b1 = k & 1 ? ba->hi : ba->lo, b2 = k & 2 ? bb->hi : bb->lo;
+        double r1 = k & 4 ? ra->hi : ra->lo, r2 = k & 8 ? rb->hi : rb->lo;
+        double d = 1 / r1 - 1 / r2, v = d > 0 ? (b2 - b1) / d : INFINITY;
+        if (v < 0) v = 0;
+        *lo = fmin(*lo, v), *hi = fmax(*hi, v);
+    }
+    return n < 0 ? 0 : n;
+}
+
+static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_list *list)
 {
     accel_scene s;
-    exp_scene(x, spec, &s);
-    bench_sets sets;
-    exp_sets(x, &s, BENCH_PRIMARY | BENCH_DIFFUSE, &sets);
-    exp_md(x, "\n### %s (%u primitives)\n", s.name, s.live_count);
-    exp_md_table(x, "structure|build ms|Mrays/s (primary+diffuse)|time for 1M rays, ms|"
-                    "for 100M rays, ms");
-    double B[MAX_CONFIGS], R[MAX_CONFIGS];
-    int ok[MAX_CONFIGS] = {0};
-    for (int c = 0; c < config_count; c++) {
-        exp_measure m;
-        char why[600];
-        if (exp_run(x, configs[c], &s, &sets, BENCH_PRIMARY | BENCH_DIFFUSE, &m, why, sizeof why)) {
-            exp_md(x, "| %s | skipped: %s | | | |\n", configs[c], why);
-            continue;
-        }
-        double rays = (double)(m.res[0].rays + m.res[2].rays);
-        double ms = m.res[0].ms.median + m.res[2].ms.median;
-        B[c] = m.build_ms.median;
-        R[c] = ms > 0 ? rays / (ms * 1e-3) : INFINITY; /* rays per second */
-        ok[c] = 1;
-        char bt[64];
-        exp_md(x, "| %s | %s | %.2f | %.0f | %.0f |\n", configs[c],
-               exp_fmt_timing(bt, sizeof bt, &m.build_ms, 1), R[c] / 1e6, B[c] + 1e9 / R[c],
-               B[c] + 1e11 / R[c]);
-        exp_csv(x, "%s,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n", s.name, configs[c], B[c],
-                m.build_ms.min, m.build_ms.max, R[c] / 1e6, B[c] + 1e9 / R[c], B[c] + 1e11 / R[c]);
+    char why[600];
+    if (exp_scene_try(x, spec, &s, why, sizeof why)) { /* a scene generator not merged yet */
+        exp_md(x, "\nLeft out: scene `%s` (not in this build: %s).\n", spec, why);
+        exp_note_left(x, EXP_LEFT_UNPARSED);
+        return;
     }
-    exp_md(x, "\nCrossovers (the faster-tracing structure wins beyond n* rays):\n\n");
-    for (int a = 0; a < config_count; a++)
-        for (int b = a + 1; b < config_count; b++) {
-            if (!ok[a] || !ok[b]) continue;
-            /* Let f be the faster builder, g the faster tracer. */
-            int f = B[a] <= B[b] ? a : b, g = f == a ? b : a;
-            char line[512];
-            if (R[g] <= R[f]) {
-                snprintf(line, sizeof line, "- %s builds faster and traces at least as fast "
-                         "as %s: it wins at every ray count.\n", configs[f], configs[g]);
-            } else {
-                double n = (B[g] - B[f]) / 1e3 / (1.0 / R[f] - 1.0 / R[g]);
-                snprintf(line, sizeof line, "- %s overtakes %s after %.3g rays (%.2f %dx%d "
-                         "images of primary+diffuse rays, %.2f 1080p primary frames).\n",
-                         configs[g], configs[f], n,
-                         n / (double)(sets.primary.count + sets.diffuse.count), x->size, x->size,
-                         n / 2073600.0);
-            }
-            exp_md(x, "%s", line);
-            exp_append(findings, fn, "- %s: %s", s.name, line + 2);
+    bench_sets sets;
+    exp_sets(x, &s, MASK, &sets);
+    exp_md(x, "\n### %s (%u primitives)\n", s.name, s.live_count);
+    exp_text_add(&st->names, "%s%s", st->names.len ? ", " : "", s.name);
+    exp_group g;
+    exp_group_init(&g, x, &s, &sets, MASK);
+    g.collapse_ms = x->quick ? 500 : 3000;
+    for (int i = 0; i < list->count; i++) exp_group_add(&g, list->spec[i], 0);
+    exp_group_run(&g);
+    double image = (double)(sets.primary.count + sets.diffuse.count);
+    exp_md_table(x, "structure|build ms [95% CI]|Mrays/s [95% CI]|ms for one image|"
+                    "for 100 images|for one 1080p frame");
+    exp_est B[64], R[64];
+    int ok[64] = {0}, n = g.count < 64 ? g.count : 64;
+    for (int c = 0; c < n; c++) {
+        const exp_cfg *cf = &g.cfg[c];
+        if (!cf->ok) continue;
+        ok[c] = 1;
+        B[c] = cf->build_ms;
+        R[c] = exp_group_mrays(&g, c, MASK); /* Mrays/s = rays per microsecond = 1e3 rays/ms */
+        R[c] = exp_est_scale(&R[c], 1e3);    /* rays per ms */
+        char b[96], r[96];
+        exp_est mr = exp_est_scale(&R[c], 1e-3);
+        exp_md(x, "| `%s` | %s | %s | %.1f | %.0f | %.1f |\n", cf->spec,
+               exp_fmt_est(b, sizeof b, &B[c], 1), exp_fmt_est(r, sizeof r, &mr, 2),
+               B[c].median + image / R[c].median, B[c].median + 100 * image / R[c].median,
+               B[c].median + FRAME_1080P / R[c].median);
+        exp_csv(x, "%s,%s,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.3f,%.3f,%.3f\n", s.name, cf->spec,
+                B[c].median, B[c].lo, B[c].hi, mr.median, mr.lo, mr.hi,
+                B[c].median + image / R[c].median, B[c].median + 100 * image / R[c].median,
+                B[c].median + FRAME_1080P / R[c].median);
+    }
+    exp_group_note(&g);
+    svg_plot pl;
+    char title[256], pname[64];
+    snprintf(title, sizeof title, "Time to n rays on %s (build + n / rate)", s.name);
+    svg_plot_init(&pl, title, "rays traced", "ms");
+    pl.log_x = pl.log_y = 1;
+    for (int c = 0; c < n; c++) {
+        if (!ok[c]) continue;
+        double rx[13], ry[13];
+        for (int k = 0; k < 13; k++) rx[k] = pow(10, 3 + 0.5 * k), ry[k] = B[c].median + rx[k] / R[c].median;
+        svg_add(&pl, g.cfg[c].spec, rx, ry, NULL, NULL, 13, SVG_LINE);
+    }
+    snprintf(pname, sizeof pname, "time_to_image_%d", st->scenes);
+    exp_svg(x, &pl, pname, "Build plus trace time against the number of rays");
+    /* The lower envelope, crossing only where the rates differ outside the noise. */
+    int cur = -1;
+    for (int c = 0; c < n; c++)
+        if (ok[c] && (cur < 0 || exp_cmp(&B[c], &B[cur], g.floor) < 0 ||
+                      (exp_cmp(&B[c], &B[cur], g.floor) == 0 && R[c].median > R[cur].median)))
+            cur = c;
+    if (cur < 0) goto done;
+    exp_md(x, "\nThe fastest way to n rays (lower envelope of build + n / rate; a crossing "
+              "counts when the rates differ outside the noise floor of %.1f%%):\n\n", 100 * g.floor);
+    exp_text line = {0};
+    exp_text_add(&line, "from 0 rays `%s`", g.cfg[cur].spec);
+    int tied = 0;
+    for (int c = 0; c < n; c++) tied += ok[c] && c != cur && exp_cmp(&B[c], &B[cur], g.floor) == 0;
+    if (tied)
+        exp_md(x, "- from 0 rays: `%s` (its build ties with %d other%s within the noise; it traces "
+                  "fastest of them)\n", g.cfg[cur].spec, tied, tied > 1 ? "s" : "");
+    else
+        exp_md(x, "- from 0 rays: `%s` (builds fastest)\n", g.cfg[cur].spec);
+    double at = 0;
+    int crosses = 0;
+    for (;;) {
+        int next = -1;
+        double best_n = INFINITY, blo = 0, bhi = 0;
+        for (int c = 0; c < n; c++) {
+            if (!ok[c] || c == cur || exp_cmp(&R[c], &R[cur], g.floor) <= 0) continue;
+            double lo, hi, v = crossing(&B[cur], &R[cur], &B[c], &R[c], &lo, &hi);
+            if (v >= at && v < best_n) best_n = v, next = c, blo = lo, bhi = hi;
         }
+        if (next < 0) break;
+        char range[96];
+        if (isinf(bhi))
+            snprintf(range, sizeof range, "[%.3g, never within the intervals]", blo);
+        else
+            snprintf(range, sizeof range, "[%.3g, %.3g]", blo, bhi);
+        exp_md(x, "- from %.3g rays %s (%.2f images of %dx%d primary+diffuse rays, %.3f 1080p "
+                  "frames): `%s`\n", best_n, range, best_n / image, x->size, x->size,
+               best_n / FRAME_1080P, g.cfg[next].spec);
+        exp_text_add(&line, ", from %.3g rays %s `%s`", best_n, range, g.cfg[next].spec);
+        at = best_n, cur = next, crosses++;
+    }
+    st->scenes++;
+    st->with_cross += crosses > 0;
+    exp_text_add(&st->findings, "- %s: %s.\n", s.name, exp_text_str(&line));
+    exp_text_add(&st->ev, "%s%s: %s", st->ev.len ? "; " : "", s.name, exp_text_str(&line));
+    exp_text_free(&line);
+done:
+    exp_group_free(&g);
     bench_sets_free(&sets);
     scene_free(&s);
 }
@@ -79,15 +162,13 @@ int main(int argc, char **argv)
              "At how many rays does a slower-to-build, faster-to-trace structure overtake a "
              "faster-to-build one?",
              NULL);
-    static const char *const wanted[] = {"grid", "nested_grid", "bvh:build=binned",
-                                         "bvh:build=sah", "bvh:build=mid"};
-    const char *configs[MAX_CONFIGS];
-    int config_count = 0;
-    for (size_t i = 0; i < sizeof wanted / sizeof wanted[0]; i++) {
-        accel_params p;
-        accel_error err;
-        if (accel_params_parse(wanted[i], &p, &err) == 0) configs[config_count++] = wanted[i];
-    }
+    exp_header(&x, "Time to image", "\"SAH will double performance, but construction becomes "
+               "much slower\": when does a slower build pay?",
+               "counting build time, how many rays must be traced before a structure that is "
+               "slower to build but faster to trace pays off? Build time B and trace rate R "
+               "(primary plus diffuse rays, %dx%d image) with their intervals, every structure of a "
+               "scene in interleaved rounds; time(n) = B + n/R. One 1080p frame is 2.07M primary "
+               "rays.", x.size, x.size);
     const char *scenes[8];
     int scene_count = 0;
     if (x.quick) {
@@ -96,20 +177,25 @@ int main(int argc, char **argv)
         scenes[scene_count++] = "soup:tris=300000";
         scenes[scene_count++] = "teapot_stadium";
         scenes[scene_count++] = "sphereflake";
-        for (int i = 0; i < x.mesh_count && scene_count < 8; i++) scenes[scene_count++] = x.meshes[i];
+        for (int i = 0; i < x.mesh_count && scene_count < 7; i++) scenes[scene_count++] = x.meshes[i];
+        scenes[scene_count++] = "field"; /* many meshes at many scales, when this build has it */
     }
-    exp_md(&x, "## Time to image (exp_time_to_image)\n\n"
-               "**Question:** counting build time, how many rays must be traced before a "
-               "structure that is slower to build but faster to trace pays off? Trace rate R is "
-               "measured on primary plus diffuse rays (%dx%d image); time(n) = build + n/R; two "
-               "structures cross at n* = (B2 - B1) / (1/R1 - 1/R2). One 1080p frame is 2.07M "
-               "primary rays.\n",
-               x.size, x.size);
-    exp_csv(&x, "scene,spec,build_ms,build_ms_min,build_ms_max,mrays_mix,time_1M_rays_ms,"
-                "time_100M_rays_ms\n");
-    char findings[4096] = "";
-    for (int si = 0; si < scene_count; si++)
-        measure_scene(&x, scenes[si], configs, config_count, findings, sizeof findings);
-    exp_md(&x, "\n**Findings:**\n\n%s", findings);
+    exp_csv(&x, "scene,spec,build_ms,build_lo,build_hi,mrays,mrays_lo,mrays_hi,ms_one_image,"
+                "ms_100_images,ms_1080p_frame\n");
+    exp_list list;
+    exp_list_make(&x, wanted, (int)(sizeof wanted / sizeof wanted[0]), NULL, &list);
+    study st = {0};
+    for (int si = 0; si < scene_count; si++) measure_scene(&x, &st, scenes[si], &list);
+    exp_md(&x, "\n**Findings** (the fastest structure for each range of ray counts):\n\n%s",
+           exp_text_str(&st.findings));
+    if (st.scenes)
+        exp_verdict(&x, "build-pays-off", st.with_cross == st.scenes ? EXP_CONFIRMED
+                    : st.with_cross ? EXP_PARTLY : exp_no_difference(exp_section_floor(&x)),
+                    exp_text_str(&st.names), "a slower build pays off after a crossing on %d of %d "
+                    "scenes (%s)", st.with_cross, st.scenes, exp_text_str(&st.ev));
+    exp_text_free(&st.findings);
+    exp_text_free(&st.ev);
+    exp_text_free(&st.names);
+    exp_list_free(&list);
     return exp_finish(&x);
 }

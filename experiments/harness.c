@@ -3,13 +3,17 @@
  * experiment binary (see harness.h).
  */
 #include <dirent.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 
 #include "harness.h"
+#include "machine.h"
+#include "svg.h"
 #include "bench/cli.h"
 #include "bench/image.h"
 
@@ -31,6 +35,17 @@ static int opt_threads(const cli_option *o, void *field, char **v, accel_error *
     return cli_int(o, field, v, err);
 }
 
+static int opt_accel(const cli_option *o, void *field, char **v, accel_error *err)
+{
+    exp_ctx *x = (exp_ctx *)((char *)field - offsetof(exp_ctx, accels));
+    if (x->accel_count == EXP_MAX_ACCELS)
+        return accel_fail(err, ACCEL_ERR_SPEC, "%s: at most %d specs", o->name, EXP_MAX_ACCELS);
+    /* Not parsed here: a spec of a kind this build lacks is left out with
+     * its reason by the experiment, not refused. */
+    x->accels[x->accel_count++] = v[0];
+    return 0;
+}
+
 #define OPT(f) offsetof(exp_ctx, f)
 static int opt_heat_scale(const cli_option *o, void *field, char **v, accel_error *err)
 {
@@ -44,9 +59,18 @@ static const cli_option exp_options[] = {
      OPT(out_dir), 0, 0},
     {"--threads", "N", "threads of every build, trace and reference (default 1;\n"
      "exp_threads: the largest count, default every core)", opt_threads, OPT(threads), 1, 256},
-    {"--repeat", "N", "timed passes per measurement (default 5, quick 1)", cli_int, OPT(repeats),
-     1, 100},
+    {"--repeat", "N", "interleaved timed rounds per configuration (default 7, quick 3)", cli_int,
+     OPT(repeats), 1, EXP_MAX_SAMPLES},
     {"--size", "N", "primary image N x N (default 128, quick 64)", cli_int, OPT(size), 8, 8192},
+    {"--rt-size", "WxH", "image of the lecture's real-time claims (default 800x600, quick 160x120)",
+     cli_size, OPT(rt_size), 8, 8192},
+    {"--accel", "SPEC", "add SPEC to the experiment's configurations (repeatable; specs of kinds\n"
+     "the experiment does not compare are ignored, specs this build lacks are left out)",
+     opt_accel, OPT(accels), 0, 0},
+    {"--only-accels", NULL, "the --accel specs replace the experiment's own list", cli_flag,
+     OPT(only_accels), 0, 0},
+    {"--kinds", "LIST", "only these kinds, e.g. grid,bvh (make report KINDS=...)", cli_string,
+     OPT(kinds), 0, 0},
     {"--mesh", "FILE", "add a mesh (repeatable; default ../shared/scenes/*.off if present)",
      opt_mesh, OPT(meshes), 0, 0},
     {"--no-meshes", NULL, "built-in scenes only", cli_flag, OPT(no_meshes), 0, 0},
@@ -114,8 +138,12 @@ void exp_init(exp_ctx *x, int argc, char **argv, const char *name, const char *q
         usage(x, question, extra_help);
         exit(CLI_EXIT_OK);
     }
-    if (x->repeats < 0) x->repeats = x->quick ? 1 : 5;
+    if (x->repeats < 0) x->repeats = x->quick ? 3 : 7;
     if (x->size < 0) x->size = x->quick ? 64 : 128;
+    if (x->rt_size[0] <= 0) x->rt_size[0] = x->quick ? 160 : 800, x->rt_size[1] = x->quick ? 120 : 600;
+    x->sample_ms = x->quick ? 2.0 : 20.0;
+    x->set_budget_ms = x->quick ? 100.0 : 1500.0;
+    x->build_budget_ms = x->quick ? 100.0 : 2000.0;
     if (x->no_meshes)
         x->mesh_count = 0;
     else if (!x->mesh_count && !x->quick)
@@ -126,34 +154,241 @@ void exp_init(exp_ctx *x, int argc, char **argv, const char *name, const char *q
     FILE *csv = fopen(path, "w");
     snprintf(path, sizeof path, "%s/%s.md", x->out_dir, name);
     x->md = fopen(path, "w");
-    if (!csv || !x->md) {
+    snprintf(path, sizeof path, "%s/%s.verdicts.csv", x->out_dir, name);
+    FILE *vf = fopen(path, "w");
+    if (!csv || !x->md || !vf) {
         fprintf(stderr, "%s: cannot write into %s\n", name, x->out_dir);
         exit(CLI_EXIT_INPUT);
     }
     csv_open(&x->csv, csv);
+    csv_open(&x->verdicts, vf);
+    csv_row(&x->verdicts, "claim,verdict,evidence,scenes,section\n");
+    exp_loadavg(x->load_start);
     x->progress = bench_progress_start(x->quiet ? NULL : stderr, name, x->progress_after * 1e3);
     x->t_start = accel_now_ms();
     fprintf(stderr, "%s: %s\n", name, x->quick ? "quick budget" : "full budget");
 }
 
+static void write_leftout(exp_ctx *x)
+{
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s.leftout.csv", x->out_dir, x->name);
+    FILE *f = fopen(path, "w");
+    if (!f) return;
+    csv_file c;
+    csv_open(&c, f);
+    csv_row(&c, "section,identical,collapsed,not_in_build,pointless,failed\n");
+    csv_row(&c, "%s,%d,%d,%d,%d,%d\n", x->name, x->left[EXP_LEFT_IDENTICAL],
+            x->left[EXP_LEFT_COLLAPSED], x->left[EXP_LEFT_UNPARSED], x->left[EXP_LEFT_POINTLESS],
+            x->left[EXP_LEFT_FAILED]);
+    fclose(f);
+}
+
+/* DIR/machine.md: the machine and the compiler of this run (report.sh
+ * puts it in the report's header; every experiment writes the same). */
+static void write_machine(exp_ctx *x)
+{
+    char path[1024], table[2048];
+    snprintf(path, sizeof path, "%s/machine.md", x->out_dir);
+    FILE *f = fopen(path, "w");
+    if (!f) return;
+    exp_machine m;
+    exp_machine_read(&m);
+    exp_machine_markdown(&m, table, sizeof table);
+    fprintf(f, "%s| compiler | %s |\n", table, exp_compiler());
+    fclose(f);
+}
+
 int exp_finish(exp_ctx *x)
 {
     double s = (accel_now_ms() - x->t_start) / 1e3;
-    exp_md(x, "\n_%s ran in %.1f s (%s budget, %d thread%s, %d timed repeat%s, images %dx%d)._\n",
-           x->name, s, x->quick ? "quick" : "full", x->threads, x->threads > 1 ? "s" : "",
-           x->repeats, x->repeats > 1 ? "s" : "", x->size, x->size);
+    if (x->floor_count) {
+        double lo = x->floors[0], hi = x->floors[0];
+        for (int i = 1; i < x->floor_count; i++) lo = fmin(lo, x->floors[i]), hi = fmax(hi, x->floors[i]);
+        exp_md(x, "\n_Noise floor of this section: %.1f%% (the largest of %d group%s, from %.1f%%; "
+                  "%d measured by an A/A control: one configuration timed twice per round). "
+                  "Differences within a 95%% interval or under the floor are ties._\n",
+               100 * hi, x->floor_count, x->floor_count > 1 ? "s" : "", 100 * lo,
+               x->floors_measured);
+    }
+    double load_end[3];
+    exp_loadavg(load_end);
+    struct rusage ru;
+    double cpu = 0;
+    if (getrusage(RUSAGE_SELF, &ru) == 0)
+        cpu = (double)ru.ru_utime.tv_sec + ru.ru_utime.tv_usec / 1e6 + (double)ru.ru_stime.tv_sec +
+              ru.ru_stime.tv_usec / 1e6;
+    exp_md(x, "\n_%s ran in %.1f s, %.1f s of CPU time (%s budget, %d thread%s unless a table says otherwise; "
+              "%d to %d interleaved timed rounds per configuration (at most %d; fewer for slow "
+              "passes), samples of at least %.0f ms; images %dx%d and %dx%d; load average %.2f "
+              "at the start, %.2f at the end)._\n",
+           x->name, s, cpu, x->quick ? "quick" : "full", x->threads, x->threads > 1 ? "s" : "",
+           x->rounds_lo, x->rounds_hi, x->repeats, x->sample_ms, x->size, x->size, x->rt_size[0],
+           x->rt_size[1], x->load_start[0], load_end[0]);
     bench_progress_stop(x->progress);
     x->progress = NULL;
-    if (x->csv.bad_rows) {
-        fprintf(stderr, "%s: %d CSV record(s) refused, the first: %s\n", x->name, x->csv.bad_rows,
-                x->csv.first_bad);
+    if (x->csv.bad_rows || x->verdicts.bad_rows) {
+        fprintf(stderr, "%s: %d CSV record(s) refused, the first: %s\n", x->name,
+                x->csv.bad_rows + x->verdicts.bad_rows,
+                x->csv.bad_rows ? x->csv.first_bad : x->verdicts.first_bad);
         x->status = CLI_EXIT_INTERNAL;
     }
+    write_leftout(x);
+    write_machine(x);
     fclose(x->csv.f);
+    fclose(x->verdicts.f);
     fclose(x->md);
-    fprintf(stderr, "%s: done in %.1f s%s\n", x->name, s,
+    free(x->floors);
+    exp_text_free(&x->unparsed);
+    fprintf(stderr, "%s: done in %.1f s (%.1f s CPU)%s\n", x->name, s, cpu,
             x->status ? " (with errors, see above)" : "");
     return x->status;
+}
+
+void exp_text_add(exp_text *t, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    int need = vsnprintf(NULL, 0, fmt, ap);
+    va_end(ap);
+    if (need < 0) return;
+    if (t->len + (size_t)need + 1 > t->cap) {
+        size_t cap = t->cap ? t->cap : 256;
+        while (cap < t->len + (size_t)need + 1) cap *= 2;
+        char *s = realloc(t->s, cap);
+        if (!s) {
+            fprintf(stderr, "out of memory for text\n");
+            exit(CLI_EXIT_INTERNAL);
+        }
+        t->s = s, t->cap = cap;
+    }
+    va_start(ap, fmt);
+    vsnprintf(t->s + t->len, t->cap - t->len, fmt, ap);
+    va_end(ap);
+    t->len += (size_t)need;
+}
+
+const char *exp_text_str(const exp_text *t) { return t->s ? t->s : ""; }
+
+void exp_text_free(exp_text *t)
+{
+    free(t->s);
+    memset(t, 0, sizeof *t);
+}
+
+int exp_kind_wanted(const exp_ctx *x, const char *name)
+{
+    if (!x->kinds || !*x->kinds) return 1;
+    size_t len = strlen(name);
+    for (const char *p = x->kinds; *p;) {
+        size_t n = strcspn(p, ",");
+        if (n == len && !strncmp(p, name, n)) return 1;
+        p += n;
+        if (*p) p++;
+    }
+    return 0;
+}
+
+/* The kind part of a spec ("bvh" of "bvh:width=4"). */
+static void kind_of(const char *spec, char *kind, size_t n)
+{
+    size_t len = strcspn(spec, ":");
+    snprintf(kind, n, "%.*s", (int)(len < n - 1 ? len : n - 1), spec);
+}
+
+void exp_list_make(exp_ctx *x, const char *const *defaults, int n, const char *accept,
+                   exp_list *out)
+{
+    out->count = 0;
+    out->spec = malloc((size_t)(n + x->accel_count + 1) * sizeof *out->spec);
+    if (!out->spec) exit(CLI_EXIT_INTERNAL);
+    for (int pass = 0; pass < 2; pass++) {
+        int m = pass == 0 ? (x->only_accels ? 0 : n) : x->accel_count;
+        for (int i = 0; i < m; i++) {
+            const char *spec = pass == 0 ? defaults[i] : x->accels[i];
+            char kind[64];
+            kind_of(spec, kind, sizeof kind);
+            if (!exp_kind_wanted(x, kind)) continue;
+            if (pass == 1 && accept) {
+                exp_ctx probe = *x;
+                probe.kinds = accept;
+                if (!exp_kind_wanted(&probe, kind)) continue;
+            }
+            int dup = 0;
+            for (int j = 0; j < out->count; j++) dup |= !strcmp(out->spec[j], spec);
+            if (!dup) out->spec[out->count++] = spec;
+        }
+    }
+}
+
+void exp_list_free(exp_list *l)
+{
+    free(l->spec);
+    memset(l, 0, sizeof *l);
+}
+
+void exp_verdict(exp_ctx *x, const char *claim, const char *verdict, const char *scenes,
+                 const char *evidence_fmt, ...)
+{
+    if (!exp_claim_find(claim) || !exp_verdict_valid(verdict)) {
+        fprintf(stderr, "%s: internal: bad verdict '%s' on claim '%s'\n", x->name, verdict, claim);
+        x->status = CLI_EXIT_INTERNAL;
+        return;
+    }
+    va_list ap;
+    va_start(ap, evidence_fmt);
+    int need = vsnprintf(NULL, 0, evidence_fmt, ap);
+    va_end(ap);
+    char *ev = malloc(need > 0 ? (size_t)need + 1 : 1);
+    if (!ev) exit(CLI_EXIT_INTERNAL);
+    va_start(ap, evidence_fmt);
+    vsnprintf(ev, (size_t)need + 1, evidence_fmt, ap);
+    va_end(ap);
+    /* A record too long for the CSV writer is refused and fails the run
+     * (exit 4): evidence is never cut short silently. */
+    csv_row(&x->verdicts, "%s,%s,%s,%s,%s\n", claim, verdict, ev, scenes, x->name);
+    free(ev);
+    x->verdict_count++;
+}
+
+const char *exp_no_difference(double floor)
+{
+    return floor <= EXP_NOISY ? EXP_REFUTED : EXP_UNTESTABLE;
+}
+
+int exp_note_unparsed(exp_ctx *x, const char *spec)
+{
+    char line[300];
+    snprintf(line, sizeof line, "\n%s\n", spec);
+    if (strstr(exp_text_str(&x->unparsed), line)) return 0;
+    exp_text_add(&x->unparsed, "%s%s\n", x->unparsed.len ? "" : "\n", spec);
+    return 1;
+}
+
+const char *exp_slow_verdict(const exp_ctx *x, const char *verdict)
+{
+    return !strcmp(verdict, EXP_REFUTED) && x->load_start[0] >= 1.0 ? EXP_UNTESTABLE : verdict;
+}
+
+void exp_note_left(exp_ctx *x, int why)
+{
+    if (why > 0 && why < EXP_LEFT_KINDS) x->left[why]++;
+}
+
+void exp_note_floor(exp_ctx *x, double floor, int measured)
+{
+    double *f = realloc(x->floors, (size_t)(x->floor_count + 1) * sizeof *f);
+    if (!f) exit(CLI_EXIT_INTERNAL);
+    x->floors = f;
+    x->floors[x->floor_count++] = floor;
+    x->floors_measured += measured != 0;
+}
+
+double exp_section_floor(const exp_ctx *x)
+{
+    double hi = 0;
+    for (int i = 0; i < x->floor_count; i++) hi = fmax(hi, x->floors[i]);
+    return x->floor_count ? hi : 0.05;
 }
 
 void exp_csv(exp_ctx *x, const char *fmt, ...)
@@ -161,16 +396,6 @@ void exp_csv(exp_ctx *x, const char *fmt, ...)
     va_list ap;
     va_start(ap, fmt);
     csv_vrow(&x->csv, fmt, ap); /* refusals are counted; exp_finish reports them */
-    va_end(ap);
-}
-
-void exp_append(char *buf, size_t n, const char *fmt, ...)
-{
-    size_t len = strlen(buf);
-    if (len >= n) return;
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(buf + len, n - len, fmt, ap);
     va_end(ap);
 }
 
@@ -189,6 +414,16 @@ void exp_md(exp_ctx *x, const char *fmt, ...)
     fflush(x->md);
 }
 
+void exp_header(exp_ctx *x, const char *title, const char *words, const char *question_fmt, ...)
+{
+    exp_md(x, "## %s (%s)\n\n**Question:** ", title, x->name);
+    va_list ap;
+    va_start(ap, question_fmt);
+    vfprintf(x->md, question_fmt, ap);
+    va_end(ap);
+    exp_md(x, "\n\n**In the lecture's words:** %s\n\n<!-- verdicts -->\n", words);
+}
+
 void exp_md_table(exp_ctx *x, const char *cols)
 {
     int n = 1;
@@ -196,12 +431,6 @@ void exp_md_table(exp_ctx *x, const char *cols)
     exp_md(x, "\n| %s |\n|", cols);
     for (int i = 0; i < n; i++) exp_md(x, "---|");
     exp_md(x, "\n");
-}
-
-const char *exp_fmt_timing(char *buf, size_t n, const accel_timing *t, int decimals)
-{
-    snprintf(buf, n, "%.*f (%.*f-%.*f)", decimals, t->median, decimals, t->min, decimals, t->max);
-    return buf;
 }
 
 void exp_scene(exp_ctx *x, const char *spec, accel_scene *s)
@@ -220,10 +449,32 @@ void exp_scene(exp_ctx *x, const char *spec, accel_scene *s)
     }
 }
 
-void exp_sets(exp_ctx *x, const accel_scene *s, int mask, bench_sets *out)
+int exp_scene_try(exp_ctx *x, const char *spec, accel_scene *s, char *why, size_t why_n)
 {
     accel_error err = {0};
-    bench_set_opts o = {NULL, x->size, x->size, 4, 0, 1, x->threads, NULL};
+    char phase[300];
+    snprintf(phase, sizeof phase, "make scene %s", spec);
+    bench_progress_begin(x->progress, phase, 0, 0);
+    int rc = scene_create(spec, s, &err);
+    bench_progress_end(x->progress);
+    if (rc == 0 && s->live_count == 0) {
+        scene_free(s);
+        rc = accel_fail(&err, ACCEL_ERR_RANGE, "scene %s has nothing to hit", spec);
+    }
+    if (rc) snprintf(why, why_n, "%s", err.msg);
+    return rc;
+}
+
+void exp_sets(exp_ctx *x, const accel_scene *s, int mask, bench_sets *out)
+{
+    exp_sets_wh(x, s, mask, x->size, x->size, 4, out);
+}
+
+void exp_sets_wh(exp_ctx *x, const accel_scene *s, int mask, int w, int h, int ao_samples,
+                 bench_sets *out)
+{
+    accel_error err = {0};
+    bench_set_opts o = {NULL, w, h, ao_samples, 0, 1, x->threads, NULL};
     bench_progress_begin(x->progress, "make ray sets", 0, 0);
     int rc = bench_sets_make(s, &o, mask, out, &err);
     bench_progress_end(x->progress);
@@ -243,52 +494,15 @@ void exp_reference(exp_ctx *x, const accel_scene *s, const accel_ray *rays, acce
     bench_progress_end(x->progress);
 }
 
-int exp_run(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets *sets, int mask,
-            exp_measure *m, char *why, size_t why_n)
-{
-    memset(m, 0, sizeof *m);
-    accel_error err = {0};
-    const accel_kind *kind;
-    void *accel;
-    int build_reps = x->quick ? 1 : 3;
-    if (bench_build(spec, s, x->threads, build_reps, 5000.0, &kind, &accel, &m->build,
-                    &m->build_ms, x->progress, &err)) {
-        snprintf(why, why_n, "%s", err.msg);
-        return 1;
-    }
-    for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
-        if (!(mask & bit) || !(sets->made & bit)) continue;
-        int i = exp_set_index(bit);
-        char phase[320];
-        snprintf(phase, sizeof phase, "trace %s with %s", bench_set_name(bit), spec);
-        bench_trace_opts o = {.threads = x->threads, .warmup = 1, .repeats = x->repeats,
-                              .count_pass = 1, .min_ms = x->quick ? 0.0 : 50.0,
-                              .max_ms = x->quick ? 2000.0 : 10000.0,
-                              .progress = x->progress, .progress_name = phase};
-        if (bench_trace(kind, accel, bench_sets_get(sets, bit), bench_set_is_occlusion(bit), &o,
-                        &m->res[i], &err)) {
-            snprintf(why, why_n, "%s", err.msg);
-            if (err.code == ACCEL_ERR_INTERNAL) exp_internal(x, spec, &err);
-            kind->destroy(accel);
-            return 1;
-        }
-        m->have[i] = 1;
-    }
-    kind->destroy(accel);
-    return 0;
-}
-
-void exp_plot(exp_ctx *x, const char *plot_name, const char *script)
+void exp_svg(exp_ctx *x, void *plot, const char *name, const char *caption)
 {
     char path[1024];
-    snprintf(path, sizeof path, "%s/%s.gp", x->out_dir, plot_name);
-    FILE *f = fopen(path, "w");
-    if (!f) return;
-    fprintf(f, "set terminal png size 800,500 noenhanced\nset output '%s/%s.png'\n"
-               "csv = '%s/%s.csv'\nset datafile separator ','\nset key outside\nset grid\n%s\n",
-            x->out_dir, plot_name, x->out_dir, x->name, script);
-    fclose(f);
-    exp_md(x, "\n<!-- plot: %s -->\n", plot_name);
+    snprintf(path, sizeof path, "%s/%s.svg", x->out_dir, name);
+    if (svg_write(plot, path) == 0)
+        exp_md(x, "\n%s:\n\n<!-- plot: %s -->\n", caption, name);
+    else
+        exp_md(x, "\n(plot %s not written: cannot write %s)\n", name, path);
+    svg_free(plot);
 }
 
 int exp_heatmap(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets *sets,
@@ -352,4 +566,10 @@ done:
     free(hits);
     kind->destroy(accel);
     return rc;
+}
+
+const char *exp_fmt_timing(char *buf, size_t n, const accel_timing *t, int decimals)
+{
+    snprintf(buf, n, "%.*f (%.*f-%.*f)", decimals, t->median, decimals, t->min, decimals, t->max);
+    return buf;
 }

@@ -3,14 +3,17 @@
  *
  * An experiment answers one question. It parses the common options (one
  * table in harness.c drives parsing and --help: --quick, --out DIR,
- * --threads N, --repeat N, --size N, --mesh FILE..., --heat-scale SPEC,
- * --quiet, --help),
- * measures through bench.h, writes its raw numbers to DIR/<name>.csv (RFC
- * 4180, one schema: the first record is the header) and one Markdown
- * section to DIR/<name>.md: the question, a table (medians with min-max,
- * and the hardware-independent counts beside every time), a finding
- * computed from the numbers, and the lecture's claim beside the
- * measurement. experiments/report.sh stitches the sections into REPORT.md.
+ * --threads N, --repeat N, --size N, --rt-size WxH, --mesh FILE...,
+ * --accel SPEC..., --only-accels, --kinds LIST, --heat-scale SPEC, --quiet,
+ * --help), measures configurations in interleaved rounds (group.h), writes
+ * its raw numbers to DIR/<name>.csv (RFC 4180, one schema: the first
+ * record is the header), one Markdown section to DIR/<name>.md (the
+ * question, the lecture's words, tables of medians with their 95%
+ * intervals and the hardware-independent counts beside every time,
+ * findings computed from the numbers, the section's noise floor), its
+ * verdicts to DIR/<name>.verdicts.csv (claim, verdict, evidence, scenes,
+ * section: claims.h) and what it left out to DIR/<name>.leftout.csv.
+ * experiments/report.sh runs them; bin/mkreport assembles REPORT.md.
  *
  * Exit statuses are those of bench/cli.h: 2 for a bad option, 3 for a scene
  * that cannot be made, 4 when a counted pass broke a traversal invariant or
@@ -25,8 +28,32 @@
 #include "bench/csv.h"
 #include "bench/image.h"
 #include "scene/scene.h"
+#include "claims.h"
+#include "stats.h"
 
 #define EXP_MAX_MESHES 16
+#define EXP_MAX_ACCELS 32
+
+/* Text that grows as it is written: findings are never cut off. */
+typedef struct {
+    char *s;
+    size_t len, cap;
+} exp_text;
+void exp_text_add(exp_text *t, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* The text so far ("" when empty). */
+const char *exp_text_str(const exp_text *t);
+void exp_text_free(exp_text *t);
+
+/* Why a configuration was left out (counted per section for the report). */
+enum {
+    EXP_LEFT_NONE,
+    EXP_LEFT_IDENTICAL, /* the same structure as another configuration */
+    EXP_LEFT_COLLAPSED, /* a structure that degenerates on this scene (seconds per pass) */
+    EXP_LEFT_UNPARSED,  /* a spec this build does not know (a kind or parameter not merged yet) */
+    EXP_LEFT_POINTLESS, /* means nothing here (e.g. brute force at minutes per pass) */
+    EXP_LEFT_FAILED,    /* the build failed (e.g. over its memory limit) */
+    EXP_LEFT_KINDS
+};
 
 typedef struct {
     const char *name;     /* e.g. "exp_sah" */
@@ -36,6 +63,14 @@ typedef struct {
     int threads_given;    /* --threads was on the command line */
     int repeats;          /* timed passes per measurement */
     int size;             /* primary image size (square) */
+    int rt_size[2];       /* the lecture's real-time image (default 800x600) */
+    const char *accels[EXP_MAX_ACCELS]; /* --accel: specs added to the experiment's list */
+    int accel_count;
+    int only_accels;      /* --only-accels: the --accel specs replace the list */
+    const char *kinds;    /* --kinds a,b: only these kinds (NULL: all) */
+    double sample_ms;     /* one timed sample lasts at least this (passes are batched) */
+    double set_budget_ms; /* timed work per configuration and ray set */
+    double build_budget_ms; /* interleaved builds per configuration */
     const char *meshes[EXP_MAX_MESHES]; /* extra mesh files (default: the meshes in ../shared/scenes) */
     int mesh_count;
     int no_meshes, quiet, help;
@@ -46,6 +81,14 @@ typedef struct {
     bench_progress *progress; /* NULL with --quiet */
     int status;           /* exit status exp_finish returns (CLI_EXIT_*) */
     double t_start;
+    double load_start[3];
+    csv_file verdicts;    /* DIR/<name>.verdicts.csv */
+    int verdict_count;
+    int left[EXP_LEFT_KINDS]; /* configurations left out, by reason */
+    exp_text unparsed;    /* specs not in this build, one per line */
+    int rounds_lo, rounds_hi; /* timed rounds per configuration over the section */
+    double *floors;       /* noise floors of the section's groups */
+    int floor_count, floors_measured;
 } exp_ctx;
 
 /* Parses the common options; `extra_help` is printed under --help. Exits on
@@ -59,39 +102,71 @@ int exp_finish(exp_ctx *x);
 /* One CSV record: commas of fmt separate fields, %s values are quoted as
  * RFC 4180 needs; the first call writes the header. */
 void exp_csv(exp_ctx *x, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* "median (min-max)" of a timing, with `decimals` decimals, into buf. */
+const char *exp_fmt_timing(char *buf, size_t n, const accel_timing *t, int decimals);
 void exp_md(exp_ctx *x, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* The section's head: "## title (name)", the question, the lecture's (or
+ * the user's) words, and the place where the report puts the verdicts. */
+void exp_header(exp_ctx *x, const char *title, const char *words, const char *question_fmt, ...)
+    __attribute__((format(printf, 4, 5)));
 /* A Markdown table header: cols separated by '|'. */
 void exp_md_table(exp_ctx *x, const char *cols);
-/* "12.3 (11.9-12.8)": a median with its min-max range. */
-const char *exp_fmt_timing(char *buf, size_t n, const accel_timing *t, int decimals);
-/* Appends a printf-formatted line to a findings buffer. */
-void exp_append(char *buf, size_t n, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
-
 /* Loads a scene spec or dies with its error (experiments stop on bad
  * input): exit 3, also for a scene with nothing to hit. */
 void exp_scene(exp_ctx *x, const char *spec, accel_scene *s);
+/* The same for a scene that may not exist in this build (a generator not
+ * merged yet): 0, or nonzero with the reason in why. */
+int exp_scene_try(exp_ctx *x, const char *spec, accel_scene *s, char *why, size_t why_n);
 /* Builds the standard ray sets (mask of bench_set_bit) for s at x->size. */
 void exp_sets(exp_ctx *x, const accel_scene *s, int mask, bench_sets *out);
+/* The same at w x h with ao_samples ambient occlusion rays per hit. */
+void exp_sets_wh(exp_ctx *x, const accel_scene *s, int mask, int w, int h, int ao_samples,
+                 bench_sets *out);
+
+/* A list of specs for one question: the experiment's defaults (or only the
+ * --accel specs with --only-accels) plus the --accel specs whose kind is in
+ * `accept` (a comma list of kind names; NULL: every kind), without the
+ * kinds --kinds leaves out. Specs this build cannot parse stay in the list:
+ * exp_group_add leaves them out with the reason, so the report works before
+ * and after the kinds and parameters it names have landed. */
+typedef struct {
+    const char **spec;
+    int count;
+} exp_list;
+void exp_list_make(exp_ctx *x, const char *const *defaults, int n, const char *accept,
+                   exp_list *out);
+void exp_list_free(exp_list *l);
+/* Whether --kinds lets kind `name` run (always 1 without --kinds). */
+int exp_kind_wanted(const exp_ctx *x, const char *name);
+
+/* One verdict on a claim of claims.h: verdict is EXP_CONFIRMED, EXP_PARTLY,
+ * EXP_REFUTED or EXP_UNTESTABLE; evidence gives the deciding numbers with
+ * their intervals; scenes names where they were measured. A bad claim id or
+ * label is an internal error (exit 4). */
+void exp_verdict(exp_ctx *x, const char *claim, const char *verdict, const char *scenes,
+                 const char *evidence_fmt, ...) __attribute__((format(printf, 5, 6)));
+/* The verdict for a claim that comes out as "no difference": refuted when
+ * the noise floor could have shown the effect (floor <= EXP_NOISY),
+ * otherwise not testable (the run was too noisy to tell). */
+#define EXP_NOISY 0.25
+const char *exp_no_difference(double floor);
+/* For a verdict that says "too slow": on a busy machine (a load average of
+ * 1 or more at the start) a refutation is not testable here, since the
+ * measured times are upper bounds of a quiet machine's. */
+const char *exp_slow_verdict(const exp_ctx *x, const char *verdict);
+/* 1 the first time spec is reported as not in this build in this section. */
+int exp_note_unparsed(exp_ctx *x, const char *spec);
+/* Counts a configuration left out (exp_group does it for its own). */
+void exp_note_left(exp_ctx *x, int why);
+/* Records a group's noise floor (measured: from an A/A control). */
+void exp_note_floor(exp_ctx *x, double floor, int measured);
+/* The section's noise floor so far: the largest of its groups' (EXP_MIN_FLOOR... 5% when none). */
+double exp_section_floor(const exp_ctx *x);
 /* The double-precision reference with x->threads, shown as a progress phase. */
 void exp_reference(exp_ctx *x, const accel_scene *s, const accel_ray *rays, accel_hit *hits,
                    size_t count);
 /* Records an internal error (printed; exp_finish returns 4). */
 void exp_internal(exp_ctx *x, const char *what, const accel_error *err);
-
-/* One accelerator configuration measured on one scene and some ray sets. */
-typedef struct {
-    accel_build_stats build;
-    accel_timing build_ms;
-    bench_result res[4]; /* indexed by set: 0 primary, 1 shadow, 2 diffuse, 3 ao */
-    int have[4];
-} exp_measure;
-
-/* Builds spec (repeats per the budget) and traces every set in mask.
- * Returns 0, or puts the reason in why and returns nonzero (the caller
- * reports a skipped configuration). A broken invariant also counts as an
- * internal error of the run. */
-int exp_run(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets *sets, int mask,
-            exp_measure *m, char *why, size_t why_n);
 
 static inline int exp_set_index(int bit)
 {
@@ -104,9 +179,9 @@ static inline double exp_per_ray(uint64_t v, const bench_result *r)
     return r->rays ? (double)v / (double)r->rays : 0.0;
 }
 
-/* Writes DIR/<plot_name>.gp drawing DIR/<plot_name>.png; the script may use
- * the variable `csv` (this experiment's CSV). report.sh runs it when gnuplot exists. */
-void exp_plot(exp_ctx *x, const char *plot_name, const char *script);
+/* Writes the svg_plot (svg.h) `plot` to DIR/<name>.svg and places it in the
+ * section with its caption (mkreport links it); frees the plot. */
+void exp_svg(exp_ctx *x, void *plot, const char *name, const char *caption);
 
 /* Traces the primary rays of `sets` with spec on s in a counted pass and
  * writes DIR/<image_name>.png: steps (what='s') or primitive tests ('p')

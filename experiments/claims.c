@@ -1,0 +1,78 @@
+/*
+ * claims.c - the claims of the study, in the order the summary lists them.
+ */
+#include <string.h>
+
+#include "claims.h"
+
+const exp_claim exp_claims[] = {
+    {"brute-cost", "lecture", "cost without acceleration",
+     "Primary rays cost O(N\xc2\xb7M) without acceleration", "exp_scaling"},
+    {"accel-sublinear", "lecture", "structures reduce M",
+     "Reduce M by stepping through a regular grid / by traversing a binary tree", "exp_scaling"},
+    {"cost-model", "lecture", "the cost model",
+     "C_step \xc2\xb7 N_steps + C_intersect \xc2\xb7 N_intersect (\"stepping is not free\")",
+     "exp_step_cost"},
+    {"grid-model-optimum", "lecture", "grid resolution by the model",
+     "The optimal resolution minimizes C_step \xc2\xb7 N_steps + C_intersect \xc2\xb7 N_intersect",
+     "exp_grid_resolution"},
+    {"grid-scene-dependent", "lecture", "grid optimum per scene",
+     "it is scene-dependent", "exp_grid_resolution"},
+    {"grid-region-dependent", "lecture", "grid optimum per region",
+     "even region-dependent", "exp_grid_resolution"},
+    {"nested-adapts", "lecture", "nested grid adapts",
+     "A grid whose dense cells hold grids of their own: it adapts to local scene complexity",
+     "exp_nested_grid"},
+    {"nested-tweaking", "lecture", "nested grid tweaking",
+     "\"but resolutions still require manual tweaking\"", "exp_nested_grid"},
+    {"bvh-layout", "lecture", "BVH node layout and order",
+     "the 32-byte node, sibling pairs in one cache line, and \"better: the near child first\"",
+     "exp_sah"},
+    {"sah-2x", "lecture", "SAH speed-up", "SAH will double performance", "exp_sah"},
+    {"sah-build-slower", "lecture", "SAH build cost", "but construction becomes much slower",
+     "exp_sah"},
+    {"binned-quality", "lecture", "binned SAH quality",
+     "Binned SAH: a high quality BVH in little time", "exp_binning"},
+    {"binned-30hz", "lecture", "binned SAH at 30 Hz", "up to 100k triangles @ 30 Hz",
+     "exp_binning"},
+    {"packets-speedup", "lecture", "ray packets",
+     "Traverse a node if any ray of the packet hits its box (first active ray, early in, scan)",
+     "exp_packets"},
+    {"realtime-20fps", "lecture", "real time",
+     "BVH + ray packets = real-time performance: 800\xc3\x97" "600 at 20 fps, 9.6M primary plus "
+     "9.6M shadow rays per second",
+     "exp_threads"},
+    {"threads-linear", "lecture", "thread scaling", "near-linear scaling in cores",
+     "exp_threads"},
+    {"threads-ht", "lecture", "hyper-threading", "about +20% from hyper-threading",
+     "exp_threads"},
+    {"threads-100m", "lecture", "100M rays/s",
+     "multithreading \"easily\" pushes past 100M rays/s", "exp_threads"},
+    {"error-time", "request", "error against run time",
+     "error against run time: the lowest image error in a fixed time, and what robust kernels "
+     "cost",
+     "exp_error_time"},
+    {"build-pays-off", "study", "build time against trace time",
+     "a structure slower to build but faster to trace pays off after enough rays",
+     "exp_time_to_image"},
+    {"stability", "request", "stability",
+     "stability on stiff and extreme cases: no holes, false hits or leaks", "exp_stability"},
+    {"leave-out", "request", "leave out what is not needed",
+     "leaving out what a scene does not need: configurations that mean nothing for a scene are "
+     "skipped with their reason",
+     "(every section)"},
+};
+const int exp_claim_count = (int)(sizeof exp_claims / sizeof exp_claims[0]);
+
+const exp_claim *exp_claim_find(const char *id)
+{
+    for (int i = 0; i < exp_claim_count; i++)
+        if (!strcmp(exp_claims[i].id, id)) return &exp_claims[i];
+    return NULL;
+}
+
+int exp_verdict_valid(const char *v)
+{
+    return !strcmp(v, EXP_CONFIRMED) || !strcmp(v, EXP_PARTLY) || !strcmp(v, EXP_REFUTED) ||
+           !strcmp(v, EXP_UNTESTABLE);
+}

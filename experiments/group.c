@@ -1,0 +1,458 @@
+/*
+ * group.c - configurations measured in interleaved rounds (see group.h).
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "group.h"
+#include "bench/cli.h"
+
+void exp_group_init(exp_group *g, exp_ctx *x, const accel_scene *s, const bench_sets *sets,
+                    int mask)
+{
+    memset(g, 0, sizeof *g);
+    g->x = x;
+    g->s = s;
+    g->sets = sets;
+    g->mask = mask & sets->made;
+    g->control = 1;
+    g->time_builds = 1;
+    g->floor = EXP_MIN_FLOOR;
+}
+
+static void one_pass(const exp_cfg *c, int bit, const rays_set *r, accel_hit *hits, uint8_t *occ,
+                     accel_counters *cnt)
+{
+    if (bench_set_is_occlusion(bit))
+        accel_trace_occluded(c->kind, c->accel, r->rays, occ, r->count, c->threads, cnt);
+    else
+        accel_trace(c->kind, c->accel, r->rays, hits, r->count, c->threads, cnt);
+}
+
+/* Scratch results for the largest set (one buffer serves every pass). */
+typedef struct {
+    accel_hit *hits;
+    uint8_t *occ;
+} scratch;
+
+static scratch scratch_make(const exp_group *g)
+{
+    size_t most = 1;
+    for (int bit = 1; bit <= BENCH_AO; bit <<= 1)
+        if (g->mask & bit) {
+            size_t n = bench_sets_get(g->sets, bit)->count;
+            if (n > most) most = n;
+        }
+    scratch s = {malloc(most * sizeof *s.hits), malloc(most)};
+    if (!s.hits || !s.occ) {
+        fprintf(stderr, "%s: out of memory for %zu results\n", g->x->name, most);
+        exit(CLI_EXIT_INTERNAL);
+    }
+    return s;
+}
+
+static int same_structure(const exp_cfg *a, const exp_cfg *b, int mask)
+{
+    const accel_build_stats *p = &a->build, *q = &b->build;
+    if (a->kind != b->kind || a->threads != b->threads || p->bytes != q->bytes ||
+        p->nodes != q->nodes || p->leaves != q->leaves || p->refs != q->refs ||
+        p->depth != q->depth || memcmp(p->res, q->res, sizeof p->res) ||
+        !((isnan(p->sah_cost) && isnan(q->sah_cost)) || p->sah_cost == q->sah_cost))
+        return 0;
+    /* Kernel choices that change answers or layout but not the counts. */
+    accel_params pa, pb;
+    accel_error err;
+    if (accel_params_parse(a->spec, &pa, &err) || accel_params_parse(b->spec, &pb, &err) ||
+        pa.naive != pb.naive || pa.reorder != pb.reorder)
+        return 0;
+    for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
+        if (!(mask & bit)) continue;
+        const accel_counters *u = &a->set[exp_set_index(bit)].counters;
+        const accel_counters *v = &b->set[exp_set_index(bit)].counters;
+        if (u->steps != v->steps || u->box_tests != v->box_tests ||
+            u->prim_tests != v->prim_tests || u->empty_steps != v->empty_steps ||
+            u->mailbox_skips != v->mailbox_skips || u->packet_steps != v->packet_steps)
+            return 0;
+    }
+    return 1;
+}
+
+static void leave_out(exp_group *g, exp_cfg *c, int why_kind)
+{
+    c->ok = 0;
+    c->left = why_kind;
+    /* A spec this build lacks counts once per section, however many scenes. */
+    if (why_kind != EXP_LEFT_UNPARSED || exp_note_unparsed(g->x, c->spec)) exp_note_left(g->x, why_kind);
+    if (c->accel) c->kind->destroy(c->accel);
+    c->accel = NULL;
+}
+
+int exp_group_add(exp_group *g, const char *spec, int threads)
+{
+    exp_ctx *x = g->x;
+    if (g->count == g->cap) {
+        int cap = g->cap ? 2 * g->cap : 16;
+        exp_cfg *n = realloc(g->cfg, (size_t)cap * sizeof *n);
+        if (!n) {
+            fprintf(stderr, "%s: out of memory\n", x->name);
+            exit(CLI_EXIT_INTERNAL);
+        }
+        g->cfg = n, g->cap = cap;
+    }
+    int idx = g->count++;
+    exp_cfg *c = &g->cfg[idx];
+    memset(c, 0, sizeof *c);
+    snprintf(c->spec, sizeof c->spec, "%s", spec);
+    c->threads = threads > 0 ? threads : x->threads;
+    c->same_as = -1;
+    accel_error err = {0};
+    accel_params p;
+    if (accel_params_parse(spec, &p, &err)) {
+        snprintf(c->why, sizeof c->why, "not in this build: %s", err.msg);
+        leave_out(g, c, EXP_LEFT_UNPARSED);
+        return idx;
+    }
+    char phase[320];
+    snprintf(phase, sizeof phase, "build %s", spec);
+    bench_progress_begin(x->progress, phase, 0, 0);
+    int rc = accel_build_spec(spec, g->s, c->threads, &c->kind, &c->accel, &c->build, &err);
+    bench_progress_end(x->progress);
+    if (rc) {
+        snprintf(c->why, sizeof c->why, "%s", err.msg);
+        c->accel = NULL;
+        leave_out(g, c, EXP_LEFT_FAILED);
+        return idx;
+    }
+    c->build_samples[0] = c->build.ms;
+    exp_est_of(c->build_samples, 1, &c->build_ms);
+    scratch sc = scratch_make(g);
+    for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
+        if (!(g->mask & bit)) continue;
+        exp_trace *t = &c->set[exp_set_index(bit)];
+        const rays_set *r = bench_sets_get(g->sets, bit);
+        t->rays = r->count;
+        if (g->per_ray && bit == BENCH_PRIMARY) {
+            t->ray_steps = calloc(r->count ? r->count : 1, sizeof *t->ray_steps);
+            t->ray_prims = calloc(r->count ? r->count : 1, sizeof *t->ray_prims);
+            t->counters.ray_steps = t->ray_steps;
+            t->counters.ray_prims = t->ray_prims;
+        }
+        snprintf(phase, sizeof phase, "count %s with %s", bench_set_name(bit), spec);
+        bench_progress_begin(x->progress, phase, (double)r->count, 1);
+        double t0 = accel_now_ms();
+        one_pass(c, bit, r, sc.hits, sc.occ, &t->counters);
+        double counted_ms = accel_now_ms() - t0;
+        bench_progress_end(x->progress);
+        if (counted_ms > c->counted_ms) c->counted_ms = counted_ms;
+        t->counters.ray_steps = t->counters.ray_prims = NULL;
+        if (accel_counters_status(&t->counters, &err)) {
+            exp_internal(x, spec, &err);
+            snprintf(c->why, sizeof c->why, "broken invariant: %s", err.msg);
+            free(sc.hits), free(sc.occ);
+            leave_out(g, c, EXP_LEFT_FAILED);
+            return idx;
+        }
+        if (g->collapse_ms > 0 && counted_ms > g->collapse_ms) {
+            snprintf(c->why, sizeof c->why,
+                     "collapsed: %.0f primitive tests per %s ray (of %u primitives), one counted "
+                     "pass takes %.1f s",
+                     (double)t->counters.prim_tests / (double)(r->count ? r->count : 1),
+                     bench_set_name(bit), g->s->live_count, counted_ms / 1e3);
+            free(sc.hits), free(sc.occ);
+            leave_out(g, c, EXP_LEFT_COLLAPSED);
+            return idx;
+        }
+        /* The warm-up: a pass as long as a sample budget already warmed the
+         * caches in the counted pass and stands in for it. */
+        if (counted_ms > 4 * x->sample_ms) {
+            t->pass_ms = counted_ms;
+        } else {
+            t0 = accel_now_ms();
+            one_pass(c, bit, r, sc.hits, sc.occ, NULL);
+            t->pass_ms = accel_now_ms() - t0;
+        }
+        t->have = 1;
+        t->batch = t->pass_ms > 0 ? (int)ceil(x->sample_ms / t->pass_ms) : 1;
+        if (t->batch < 1) t->batch = 1;
+        if (t->batch > 1000) t->batch = 1000;
+    }
+    free(sc.hits), free(sc.occ);
+    for (int d = 0; d < idx; d++)
+        if (g->cfg[d].ok && same_structure(&g->cfg[d], c, g->mask)) {
+            c->same_as = d;
+            snprintf(c->why, sizeof c->why, "the same structure as `%s` (equal build statistics "
+                     "and counts per ray)", g->cfg[d].spec);
+            leave_out(g, c, EXP_LEFT_IDENTICAL);
+            return idx;
+        }
+    double round_ms = 0;
+    int nsets = 0;
+    for (int i = 0; i < 4; i++)
+        if (c->set[i].have) round_ms += c->set[i].batch * c->set[i].pass_ms, nsets++;
+    double budget = x->set_budget_ms * (nsets ? nsets : 1);
+    c->want = round_ms > 0 ? (int)(budget / round_ms) : x->repeats;
+    if (c->want > x->repeats) c->want = x->repeats;
+    if (c->want < 1) c->want = 1;
+    if (c->want > EXP_MAX_SAMPLES) c->want = EXP_MAX_SAMPLES;
+    c->ok = 1;
+    return idx;
+}
+
+/* Builds every configuration again in rounds; the last structure built is
+ * dropped at once (the traced one stays). */
+static void build_rounds(exp_group *g)
+{
+    exp_ctx *x = g->x;
+    int reps[256] = {0}, most = 0, n = g->count < 256 ? g->count : 256;
+    for (int c = 0; c < n; c++) {
+        if (!g->cfg[c].ok) continue;
+        double first = g->cfg[c].build.ms;
+        int r = x->quick ? 3 : 5;
+        if (first > 0 && first * r > x->build_budget_ms) r = (int)(x->build_budget_ms / first);
+        reps[c] = r < 1 ? 1 : r;
+        if (reps[c] > most) most = reps[c];
+    }
+    bench_progress_begin(x->progress, "interleaved builds", most * n, 0);
+    for (int r = 0; r < most; r++)
+        for (int k = 0; k < n; k++) {
+            int c = (k + r) % n;
+            exp_cfg *cf = &g->cfg[c];
+            bench_progress_add(x->progress, 1);
+            if (!cf->ok || r >= reps[c]) continue;
+            const accel_kind *kind;
+            void *a;
+            accel_build_stats st;
+            accel_error err = {0};
+            if (accel_build_spec(cf->spec, g->s, cf->threads, &kind, &a, &st, &err)) continue;
+            kind->destroy(a);
+            cf->build_samples[r] = st.ms;
+            exp_est_of(cf->build_samples, r + 1, &cf->build_ms);
+        }
+    bench_progress_end(x->progress);
+}
+
+static double time_sample(const exp_cfg *c, int bit, const exp_group *g, scratch *sc)
+{
+    const exp_trace *t = &c->set[exp_set_index(bit)];
+    const rays_set *r = bench_sets_get(g->sets, bit);
+    double t0 = accel_now_ms();
+    for (int b = 0; b < t->batch; b++) one_pass(c, bit, r, sc->hits, sc->occ, NULL);
+    return (accel_now_ms() - t0) / t->batch;
+}
+
+void exp_group_run(exp_group *g)
+{
+    exp_ctx *x = g->x;
+    if (g->time_builds) build_rounds(g);
+    int most = 0, slots = g->count + (g->control && g->count && g->cfg[0].ok);
+    double total_ms = 0;
+    for (int c = 0; c < g->count; c++) {
+        if (!g->cfg[c].ok) continue;
+        if (g->cfg[c].want > most) most = g->cfg[c].want;
+        for (int i = 0; i < 4; i++)
+            total_ms += g->cfg[c].want * g->cfg[c].set[i].batch * g->cfg[c].set[i].pass_ms;
+    }
+    scratch sc = scratch_make(g);
+    bench_progress_begin(x->progress, "interleaved timed rounds", total_ms, 0);
+    for (int r = 0; r < most; r++)
+        for (int k = 0; k < slots; k++) {
+            int slot = (k + r) % slots;
+            int c = slot == g->count ? 0 : slot; /* the last slot is the A/A control */
+            exp_cfg *cf = &g->cfg[c];
+            if (!cf->ok || r >= cf->want) continue;
+            for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
+                exp_trace *t = &cf->set[exp_set_index(bit)];
+                if (!t->have) continue;
+                double ms = time_sample(cf, bit, g, &sc);
+                if (slot == g->count)
+                    g->aa_samples[exp_set_index(bit)][r] = ms;
+                else
+                    t->samples[r] = ms, t->n = r + 1;
+                bench_progress_add(x->progress, ms * t->batch);
+            }
+        }
+    bench_progress_end(x->progress);
+    free(sc.hits), free(sc.occ);
+    g->rounds = most;
+    for (int c = 0; c < g->count; c++) {
+        if (!g->cfg[c].ok) continue;
+        if (!x->rounds_hi || g->cfg[c].want < x->rounds_lo) x->rounds_lo = g->cfg[c].want;
+        if (g->cfg[c].want > x->rounds_hi) x->rounds_hi = g->cfg[c].want;
+    }
+    for (int c = 0; c < g->count; c++)
+        for (int i = 0; i < 4; i++)
+            if (g->cfg[c].ok && g->cfg[c].set[i].have)
+                exp_est_of(g->cfg[c].set[i].samples, g->cfg[c].set[i].n, &g->cfg[c].set[i].ms);
+    /* The floor: how far configuration 0 strays from itself. */
+    g->floor = 0.05;
+    if (slots > g->count && g->cfg[0].want >= 3) {
+        double a[EXP_MAX_SAMPLES], b[EXP_MAX_SAMPLES];
+        int n = exp_group_round_ms(g, 0, g->mask, a);
+        for (int r = 0; r < n; r++) {
+            b[r] = 0;
+            for (int i = 0; i < 4; i++)
+                if (g->cfg[0].set[i].have) b[r] += g->aa_samples[i][r];
+        }
+        exp_est_ratio(a, b, n, &g->aa);
+        g->floor = fmax(fabs(g->aa.median - 1), fmax(fabs(g->aa.hi - 1), fabs(1 - g->aa.lo)));
+        if (g->floor < EXP_MIN_FLOOR) g->floor = EXP_MIN_FLOOR;
+    }
+    exp_note_floor(x, g->floor, g->aa.n >= 3);
+}
+
+void exp_group_note(exp_group *g)
+{
+    int any = 0;
+    for (int c = 0; c < g->count; c++)
+        if (g->cfg[c].left) {
+            exp_md(g->x, "%s`%s` (%s)", any ? "; " : "\nLeft out: ", g->cfg[c].spec, g->cfg[c].why);
+            any = 1;
+        }
+    if (any) exp_md(g->x, ".\n");
+}
+
+void exp_group_free(exp_group *g)
+{
+    for (int c = 0; c < g->count; c++) {
+        exp_cfg *cf = &g->cfg[c];
+        if (cf->accel) cf->kind->destroy(cf->accel);
+        for (int i = 0; i < 4; i++) free(cf->set[i].ray_steps), free(cf->set[i].ray_prims);
+    }
+    free(g->cfg);
+    memset(g, 0, sizeof *g);
+}
+
+int exp_group_round_ms(const exp_group *g, int c, int mask, double *out)
+{
+    const exp_cfg *cf = &g->cfg[c];
+    int n = EXP_MAX_SAMPLES;
+    for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
+        const exp_trace *t = &cf->set[exp_set_index(bit)];
+        if ((mask & bit) && t->have && t->n < n) n = t->n;
+    }
+    if (n == EXP_MAX_SAMPLES) n = 0;
+    for (int r = 0; r < n; r++) {
+        out[r] = 0;
+        for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
+            const exp_trace *t = &cf->set[exp_set_index(bit)];
+            if ((mask & bit) && t->have) out[r] += t->samples[r];
+        }
+    }
+    return n;
+}
+
+size_t exp_group_rays(const exp_group *g, int c, int mask)
+{
+    size_t n = 0;
+    for (int bit = 1; bit <= BENCH_AO; bit <<= 1)
+        if ((mask & bit) && g->cfg[c].set[exp_set_index(bit)].have)
+            n += g->cfg[c].set[exp_set_index(bit)].rays;
+    return n;
+}
+
+exp_est exp_group_ns(const exp_group *g, int c, int mask)
+{
+    double v[EXP_MAX_SAMPLES];
+    int n = exp_group_round_ms(g, c, mask, v);
+    exp_est e;
+    exp_est_of(v, n, &e);
+    size_t rays = exp_group_rays(g, c, mask);
+    return exp_est_scale(&e, rays ? 1e6 / (double)rays : 0);
+}
+
+exp_est exp_group_mrays(const exp_group *g, int c, int mask)
+{
+    exp_est ns = exp_group_ns(g, c, mask);
+    return exp_est_inv(&ns, 1e3);
+}
+
+exp_est exp_group_speedup(const exp_group *g, int base, int c, int mask)
+{
+    double a[EXP_MAX_SAMPLES], b[EXP_MAX_SAMPLES];
+    int na = exp_group_round_ms(g, base, mask, a), nb = exp_group_round_ms(g, c, mask, b);
+    exp_est e;
+    exp_est_ratio(a, b, na < nb ? na : nb, &e);
+    return e;
+}
+
+static double per_ray(const exp_group *g, int c, int mask, int what)
+{
+    uint64_t v = 0;
+    size_t rays = exp_group_rays(g, c, mask);
+    for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
+        const exp_trace *t = &g->cfg[c].set[exp_set_index(bit)];
+        if (!(mask & bit) || !t->have) continue;
+        v += what == 0 ? t->counters.steps : what == 1 ? t->counters.prim_tests : t->counters.box_tests;
+    }
+    return rays ? (double)v / (double)rays : 0;
+}
+
+double exp_group_steps(const exp_group *g, int c, int mask) { return per_ray(g, c, mask, 0); }
+double exp_group_prims(const exp_group *g, int c, int mask) { return per_ray(g, c, mask, 1); }
+double exp_group_boxes(const exp_group *g, int c, int mask) { return per_ray(g, c, mask, 2); }
+
+void exp_group_compare_head(exp_group *g)
+{
+    exp_md(g->x, "\nComparisons (paired rounds; a tie is inside the interval or under the noise "
+                 "floor of %.1f%%):\n", 100 * g->floor);
+    exp_md_table(g->x, "comparison|rays|time change [95% CI]|speed-up [95% CI]|outcome");
+}
+
+int exp_group_compare(exp_group *g, int c, int base, int mask, char *buf, size_t n)
+{
+    exp_est r = exp_group_speedup(g, c, base, mask), sp = exp_est_inv(&r, 1.0);
+    exp_fmt_pct(buf, n, &r);
+    int cmp = exp_ratio_cmp(&r, g->floor);
+    char s[96], sets[64] = "";
+    for (int bit = 1; bit <= BENCH_AO; bit <<= 1)
+        if ((mask & g->mask) & bit)
+            snprintf(sets + strlen(sets), sizeof sets - strlen(sets), "%s%s", sets[0] ? "+" : "",
+                     bench_set_name(bit));
+    exp_md(g->x, "| `%s` against `%s` | %s | %s | %s | %s |\n", g->cfg[c].spec, g->cfg[base].spec,
+           sets, buf, exp_fmt_x(s, sizeof s, &sp), cmp == 0 ? "a tie" : cmp < 0 ? "faster" : "slower");
+    if (cmp == 0) snprintf(buf + strlen(buf), n - strlen(buf), " (a tie)");
+    return cmp;
+}
+
+int exp_group_compare_build(exp_group *g, int c, int base, char *buf, size_t n)
+{
+    const exp_cfg *a = &g->cfg[c], *b = &g->cfg[base];
+    exp_est r, sp;
+    int m = a->build_ms.n < b->build_ms.n ? a->build_ms.n : b->build_ms.n;
+    exp_est_ratio(a->build_samples, b->build_samples, m, &r);
+    sp = exp_est_inv(&r, 1.0);
+    exp_fmt_pct(buf, n, &r);
+    int cmp = exp_ratio_cmp(&r, g->floor);
+    char s[96];
+    exp_md(g->x, "| `%s` against `%s` | build | %s | %s | %s |\n", a->spec, b->spec, buf,
+           exp_fmt_x(s, sizeof s, &sp), cmp == 0 ? "a tie" : cmp < 0 ? "faster" : "slower");
+    if (cmp == 0) snprintf(buf + strlen(buf), n - strlen(buf), " (a tie)");
+    return cmp;
+}
+
+int exp_group_best(const exp_group *g, int mask, int lo, int hi, const char *prefix)
+{
+    int best = -1;
+    size_t pl = strlen(prefix);
+    for (int c = lo; c < hi && c < g->count; c++)
+        if (g->cfg[c].ok && !strncmp(g->cfg[c].spec, prefix, pl) &&
+            (best < 0 || exp_group_ns(g, c, mask).median < exp_group_ns(g, best, mask).median))
+            best = c;
+    if (best < 0) return -1;
+    int refined = best;
+    double low = 1.0;
+    for (int c = lo; c < hi && c < g->count; c++) {
+        if (!g->cfg[c].ok || c == best || strncmp(g->cfg[c].spec, prefix, pl)) continue;
+        exp_est r = exp_group_speedup(g, c, best, mask);
+        if (r.n && r.median < low) low = r.median, refined = c;
+    }
+    return refined;
+}
+
+int exp_group_find(const exp_group *g, const char *spec)
+{
+    for (int c = 0; c < g->count; c++)
+        if (!strcmp(g->cfg[c].spec, spec)) return c;
+    return -1;
+}

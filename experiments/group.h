@@ -1,0 +1,125 @@
+/*
+ * group.h - configurations compared on one scene, measured in interleaved
+ * rounds.
+ *
+ * Every configuration (a spec and a thread count) is built once and traced
+ * once counted (the hardware-independent counts) and once uncounted (the
+ * warm-up, which also sizes the samples). Then the builds are repeated in
+ * rounds A B C A B C ..., and so are the timed traces: a round times one
+ * sample of every configuration and ray set, with the order rotated each
+ * round, so that the drift of a shared machine falls on every configuration
+ * alike and round i of A pairs with round i of B (paired ratios, stats.h).
+ * A sample is the mean of enough back-to-back passes to last
+ * x->sample_ms; a configuration gets x->repeats rounds, fewer when its
+ * passes are slow (x->set_budget_ms of timed work per ray set, at least one).
+ *
+ * The A/A control: configuration 0 is timed twice per round, in two slots;
+ * the paired ratio of the two is what an identical configuration differs
+ * by here and now, and its interval gives the group's noise floor.
+ *
+ * Configurations that mean nothing are left out with their reason, never
+ * measured into rows: a spec that does not parse or build in this build,
+ * the same structure as an earlier configuration (equal build statistics
+ * and equal counts on every ray set), or a collapsed one (a first pass
+ * longer than collapse_ms).
+ */
+#ifndef EXP_GROUP_H
+#define EXP_GROUP_H
+
+#include "harness.h"
+
+typedef struct {
+    int have;                 /* the set was traced */
+    size_t rays;
+    accel_counters counters;  /* totals of the counted pass */
+    double pass_ms;           /* one uncounted pass (the warm-up) */
+    int batch;                /* passes per timed sample */
+    double samples[EXP_MAX_SAMPLES]; /* ms per pass, round by round */
+    int n;
+    exp_est ms;               /* ms per pass */
+    uint32_t *ray_steps, *ray_prims; /* per ray: the primary set, with per_ray */
+} exp_trace;
+
+typedef struct {
+    char spec[256];
+    int threads;
+    const accel_kind *kind;
+    void *accel;
+    accel_build_stats build;
+    double build_samples[EXP_MAX_SAMPLES];
+    exp_est build_ms;
+    int ok;        /* measured: belongs in the tables */
+    int left;      /* EXP_LEFT_* when left out */
+    char why[640]; /* the reason it was left out */
+    int same_as;   /* the configuration with the same structure, or -1 */
+    int want;      /* timed rounds */
+    double counted_ms; /* the longest counted pass (a collapsed configuration's only time) */
+    exp_trace set[4]; /* indexed by exp_set_index */
+} exp_cfg;
+
+typedef struct {
+    exp_ctx *x;
+    const accel_scene *s;
+    const bench_sets *sets;
+    int mask;
+    exp_cfg *cfg;
+    int count, cap;
+    /* Options (set before the first exp_group_add). */
+    int control;        /* A/A control of configuration 0 (default 1) */
+    int per_ray;        /* keep per-ray steps and tests of the primary set */
+    int time_builds;    /* time builds in interleaved rounds (default 1) */
+    double collapse_ms; /* leave out a configuration whose first pass is longer (0: never) */
+    /* Results of exp_group_run. */
+    double aa_samples[4][EXP_MAX_SAMPLES];
+    exp_est aa;         /* configuration 0 against itself: paired ratio over the mask */
+    double floor;       /* the noise floor of this group, relative */
+    int rounds;
+} exp_group;
+
+/* The smallest noise floor the study uses: differences under 1% are never findings. */
+#define EXP_MIN_FLOOR 0.01
+
+void exp_group_init(exp_group *g, exp_ctx *x, const accel_scene *s, const bench_sets *sets,
+                    int mask);
+/* Adds, builds and checks a configuration (threads <= 0: x->threads).
+ * Returns its index; cfg[i].ok says whether it will be measured. */
+int exp_group_add(exp_group *g, const char *spec, int threads);
+/* The interleaved build and trace rounds, then the estimates and the floor
+ * (recorded for the section with exp_note_floor). */
+void exp_group_run(exp_group *g);
+/* Writes "Left out: ..." for the configurations left out (nothing if none). */
+void exp_group_note(exp_group *g);
+void exp_group_free(exp_group *g);
+
+/* Per-round ms of the sets in mask, summed; returns the rounds. */
+int exp_group_round_ms(const exp_group *g, int c, int mask, double *out);
+/* Rays of the sets in mask. */
+size_t exp_group_rays(const exp_group *g, int c, int mask);
+/* ns per ray over the sets in mask, and Mrays/s. */
+exp_est exp_group_ns(const exp_group *g, int c, int mask);
+exp_est exp_group_mrays(const exp_group *g, int c, int mask);
+/* Speed of c relative to base over the sets in mask: time(base) / time(c)
+ * per round (> 1: c is faster), paired. */
+exp_est exp_group_speedup(const exp_group *g, int base, int c, int mask);
+/* Counts per ray over the sets in mask. */
+double exp_group_steps(const exp_group *g, int c, int mask);
+double exp_group_prims(const exp_group *g, int c, int mask);
+double exp_group_boxes(const exp_group *g, int c, int mask);
+/* The comparisons table: its header, then one row per comparison
+ * "| `c` against `base` | time +x% [lo, hi] | slower / faster / a tie |".
+ * exp_group_compare puts the change in buf (for findings that quote it,
+ * with " (a tie)" after it when it is one) and returns exp_ratio_cmp of
+ * the time ratio (0: a tie). */
+void exp_group_compare_head(exp_group *g);
+int exp_group_compare(exp_group *g, int c, int base, int mask, char *buf, size_t n);
+/* The same for build times (paired interleaved build rounds). */
+int exp_group_compare_build(exp_group *g, int c, int base, char *buf, size_t n);
+/* The fastest configuration over mask among those of [lo, hi) whose spec
+ * starts with prefix ("" for all): the lowest median time, then the one
+ * with the lowest paired ratio against it, so that "the best" never loses a
+ * paired comparison to another candidate. -1 when none was measured. */
+int exp_group_best(const exp_group *g, int mask, int lo, int hi, const char *prefix);
+/* Index of the configuration named spec, or -1. */
+int exp_group_find(const exp_group *g, const char *spec);
+
+#endif

@@ -1,0 +1,334 @@
+/*
+ * stats.c - medians with bootstrap intervals, ties, paired ratios, binomial
+ * bounds and the fits of the study (see stats.h).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "stats.h"
+
+/* Resamples per bootstrap interval: the 2.5% and 97.5% points are the
+ * 50th and 1950th of 2000 sorted medians. */
+#define BOOT_RESAMPLES 2000
+
+/* splitmix64 (Steele, Lea and Flood 2014): a fixed seed makes every
+ * interval a function of its samples alone. */
+static uint64_t next_rand(uint64_t *s)
+{
+    uint64_t z = (*s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double median_sorted(const double *v, int n)
+{
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+void exp_est_of(const double *samples, int n, exp_est *out)
+{
+    memset(out, 0, sizeof *out);
+    if (n <= 0) return;
+    if (n > EXP_MAX_SAMPLES) n = EXP_MAX_SAMPLES;
+    double v[EXP_MAX_SAMPLES], r[EXP_MAX_SAMPLES];
+    memcpy(v, samples, (size_t)n * sizeof *v);
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    out->n = n;
+    out->min = v[0];
+    out->max = v[n - 1];
+    out->median = median_sorted(v, n);
+    out->lo = out->hi = out->median;
+    if (n < 2) return;
+    double meds[BOOT_RESAMPLES];
+    uint64_t seed = 0x5EEDull ^ (uint64_t)n;
+    for (int b = 0; b < BOOT_RESAMPLES; b++) {
+        for (int i = 0; i < n; i++) r[i] = v[next_rand(&seed) % (uint64_t)n];
+        qsort(r, (size_t)n, sizeof *r, cmp_double);
+        meds[b] = median_sorted(r, n);
+    }
+    qsort(meds, BOOT_RESAMPLES, sizeof *meds, cmp_double);
+    out->lo = meds[BOOT_RESAMPLES / 40];
+    out->hi = meds[BOOT_RESAMPLES - 1 - BOOT_RESAMPLES / 40];
+}
+
+void exp_est_ratio(const double *a, const double *b, int n, exp_est *out)
+{
+    double r[EXP_MAX_SAMPLES];
+    int m = 0;
+    for (int i = 0; i < n && m < EXP_MAX_SAMPLES; i++)
+        if (b[i] > 0) r[m++] = a[i] / b[i];
+    exp_est_of(r, m, out);
+}
+
+exp_est exp_est_scale(const exp_est *e, double k)
+{
+    exp_est o = *e;
+    o.median *= k, o.lo *= k, o.hi *= k, o.min *= k, o.max *= k;
+    return o;
+}
+
+exp_est exp_est_inv(const exp_est *e, double k)
+{
+    exp_est o = *e;
+    o.median = e->median > 0 ? k / e->median : 0;
+    o.lo = e->hi > 0 ? k / e->hi : 0;
+    o.hi = e->lo > 0 ? k / e->lo : 0;
+    o.min = e->max > 0 ? k / e->max : 0;
+    o.max = e->min > 0 ? k / e->min : 0;
+    return o;
+}
+
+exp_est exp_est_div(const exp_est *a, const exp_est *b)
+{
+    exp_est o = {0};
+    if (!(b->median > 0) || !(b->lo > 0)) return o;
+    o.n = a->n < b->n ? a->n : b->n;
+    o.median = a->median / b->median;
+    o.lo = a->lo / b->hi;
+    o.hi = a->hi / b->lo;
+    o.min = a->min / b->max;
+    o.max = a->max / b->min;
+    return o;
+}
+
+int exp_tie(const exp_est *a, const exp_est *b, double floor)
+{
+    if (a->lo <= b->hi && b->lo <= a->hi) return 1;
+    double small = fmin(fabs(a->median), fabs(b->median));
+    return fabs(a->median - b->median) <= floor * small;
+}
+
+int exp_cmp(const exp_est *a, const exp_est *b, double floor)
+{
+    if (exp_tie(a, b, floor)) return 0;
+    return a->median < b->median ? -1 : 1;
+}
+
+int exp_ratio_cmp(const exp_est *r, double floor)
+{
+    /* Symmetric in the ratio: 1.25 and 0.8 are the same distance from 1. */
+    if ((r->lo <= 1.0 && r->hi >= 1.0) || (r->median <= 1.0 + floor && r->median * (1.0 + floor) >= 1.0))
+        return 0;
+    return r->median < 1.0 ? -1 : 1;
+}
+
+const char *exp_fmt_est(char *buf, size_t n, const exp_est *e, int decimals)
+{
+    if (e->n < 2 || !(e->hi > e->lo))
+        snprintf(buf, n, "%.*f", decimals, e->median);
+    else
+        snprintf(buf, n, "%.*f [%.*f, %.*f]", decimals, e->median, decimals, e->lo, decimals,
+                 e->hi);
+    return buf;
+}
+
+const char *exp_fmt_pct(char *buf, size_t n, const exp_est *r)
+{
+    if (r->n < 2 || !(r->hi > r->lo))
+        snprintf(buf, n, "%+.1f%%", 100 * (r->median - 1));
+    else
+        snprintf(buf, n, "%+.1f%% [%+.1f%%, %+.1f%%]", 100 * (r->median - 1), 100 * (r->lo - 1),
+                 100 * (r->hi - 1));
+    return buf;
+}
+
+const char *exp_fmt_x(char *buf, size_t n, const exp_est *e)
+{
+    if (e->n < 2 || !(e->hi > e->lo))
+        snprintf(buf, n, "%.2fx", e->median);
+    else
+        snprintf(buf, n, "%.2fx [%.2f, %.2f]", e->median, e->lo, e->hi);
+    return buf;
+}
+
+double exp_est_spread(const exp_est *e)
+{
+    return e->median > 0 ? (e->hi - e->lo) / 2 / e->median : 0;
+}
+
+/* log P(X <= k) for X ~ Binomial(n, p), summed in log space. */
+static double log_binom_cdf(uint64_t k, uint64_t n, double p)
+{
+    if (p <= 0) return 0;
+    if (p >= 1) return k >= n ? 0 : -INFINITY;
+    double lp = log(p), lq = log1p(-p), lnf = lgamma((double)n + 1), acc = -INFINITY;
+    for (uint64_t i = 0; i <= k && i <= n; i++) {
+        double t = lnf - lgamma((double)i + 1) - lgamma((double)(n - i) + 1) + (double)i * lp +
+                   (double)(n - i) * lq;
+        double hi = fmax(acc, t);
+        acc = hi == -INFINITY ? hi : hi + log(exp(acc - hi) + exp(t - hi));
+    }
+    return acc;
+}
+
+double exp_binom_upper(uint64_t k, uint64_t n)
+{
+    if (n == 0 || k >= n) return 1.0;
+    if (k == 0) return 1.0 - pow(0.05, 1.0 / (double)n);
+    /* The p at which P(X <= k) falls to 2.5%: the CDF decreases in p. */
+    double lo = (double)k / (double)n, hi = 1.0, target = log(0.025);
+    for (int it = 0; it < 60; it++) {
+        double mid = 0.5 * (lo + hi);
+        if (log_binom_cdf(k, n, mid) > target)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return hi;
+}
+
+/* Solves the m x m system A c = r by Gaussian elimination with partial
+ * pivoting; -1 when singular (relative to the matrix's scale). */
+static int solve(double A[3][3], double r[3], int m, double c[3])
+{
+    double scale = 0;
+    for (int i = 0; i < m; i++)
+        for (int j = 0; j < m; j++) scale = fmax(scale, fabs(A[i][j]));
+    if (!(scale > 0)) return -1;
+    for (int col = 0; col < m; col++) {
+        int piv = col;
+        for (int i = col + 1; i < m; i++)
+            if (fabs(A[i][col]) > fabs(A[piv][col])) piv = i;
+        if (fabs(A[piv][col]) < 1e-12 * scale) return -1;
+        for (int j = 0; j < m; j++) {
+            double t = A[col][j];
+            A[col][j] = A[piv][j];
+            A[piv][j] = t;
+        }
+        double t = r[col];
+        r[col] = r[piv];
+        r[piv] = t;
+        for (int i = 0; i < m; i++) {
+            if (i == col) continue;
+            double f = A[i][col] / A[col][col];
+            for (int j = 0; j < m; j++) A[i][j] -= f * A[col][j];
+            r[i] -= f * r[col];
+        }
+    }
+    for (int i = 0; i < m; i++) c[i] = r[i] / A[i][i];
+    return 0;
+}
+
+/* Least squares over the columns whose bit is set in `use`; coefficients
+ * of the others are 0. Returns the squared residual, or -1 if singular. */
+static double lsq_subset(const double *const *x, int m, const double *y, int n, unsigned use,
+                         double coef[3])
+{
+    int idx[3], k = 0;
+    for (int j = 0; j < m; j++) {
+        coef[j] = 0;
+        if (use & (1u << j)) idx[k++] = j;
+    }
+    if (k > 0) {
+        if (n < k) return -1;
+        double A[3][3] = {{0}}, r[3] = {0}, c[3];
+        for (int i = 0; i < n; i++)
+            for (int a = 0; a < k; a++) {
+                r[a] += x[idx[a]][i] * y[i];
+                for (int b = 0; b < k; b++) A[a][b] += x[idx[a]][i] * x[idx[b]][i];
+            }
+        if (solve(A, r, k, c)) return -1;
+        for (int a = 0; a < k; a++) coef[idx[a]] = c[a];
+    }
+    double sse = 0;
+    for (int i = 0; i < n; i++) {
+        double p = 0;
+        for (int j = 0; j < m; j++) p += coef[j] * x[j][i];
+        sse += (y[i] - p) * (y[i] - p);
+    }
+    return sse;
+}
+
+int exp_lsq(const double *const *x, int m, const double *y, int n, double coef[3])
+{
+    return lsq_subset(x, m, y, n, (1u << m) - 1, coef) < 0 ? -1 : 0;
+}
+
+int exp_nnls(const double *const *x, int m, const double *y, int n, exp_fit *out)
+{
+    memset(out, 0, sizeof *out);
+    out->sse = INFINITY;
+    int found = 0;
+    for (unsigned use = 1; use < (1u << m); use++) {
+        double c[3];
+        double sse = lsq_subset(x, m, y, n, use, c);
+        if (sse < 0) continue;
+        int feasible = 1;
+        for (int j = 0; j < m; j++) feasible &= c[j] >= 0;
+        if (!feasible || sse >= out->sse) continue;
+        out->sse = sse;
+        for (int j = 0; j < m; j++) {
+            out->coef[j] = c[j];
+            out->pinned[j] = !(use & (1u << j));
+        }
+        found = 1;
+    }
+    return found ? 0 : -1;
+}
+
+/* 97.5% points of Student's t for 1..30 degrees of freedom. */
+static const double t975[30] = {12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306,
+                                2.262,  2.228, 2.201, 2.179, 2.160, 2.145, 2.131, 2.120,
+                                2.110,  2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064,
+                                2.060,  2.056, 2.052, 2.048, 2.045, 2.042};
+
+int exp_loglog_slope(const double *x, const double *y, int n, exp_est *slope, double *intercept)
+{
+    double lx[256], ly[256];
+    int m = 0;
+    for (int i = 0; i < n && m < 256; i++)
+        if (x[i] > 0 && y[i] > 0) lx[m] = log(x[i]), ly[m] = log(y[i]), m++;
+    memset(slope, 0, sizeof *slope);
+    if (intercept) *intercept = 0;
+    if (m < 2) return m;
+    double mx = 0, my = 0;
+    for (int i = 0; i < m; i++) mx += lx[i], my += ly[i];
+    mx /= m, my /= m;
+    double sxx = 0, sxy = 0;
+    for (int i = 0; i < m; i++) sxx += (lx[i] - mx) * (lx[i] - mx), sxy += (lx[i] - mx) * (ly[i] - my);
+    if (!(sxx > 0)) return 0;
+    double b = sxy / sxx, a = my - b * mx, sse = 0;
+    for (int i = 0; i < m; i++) sse += (ly[i] - a - b * lx[i]) * (ly[i] - a - b * lx[i]);
+    slope->n = m;
+    slope->median = slope->min = slope->max = b;
+    double half = 0;
+    if (m > 2) half = (m - 2 <= 30 ? t975[m - 3] : 1.96) * sqrt(sse / (m - 2) / sxx);
+    slope->lo = b - half;
+    slope->hi = b + half;
+    if (intercept) *intercept = a;
+    return m;
+}
+
+double exp_cv(const double *v, int n)
+{
+    if (n < 2) return 0;
+    double m = 0, s = 0;
+    for (int i = 0; i < n; i++) m += v[i];
+    m /= n;
+    for (int i = 0; i < n; i++) s += (v[i] - m) * (v[i] - m);
+    return m != 0 ? sqrt(s / (n - 1)) / fabs(m) : 0;
+}
+
+double exp_corr(const double *a, const double *b, int n)
+{
+    double ma = 0, mb = 0;
+    for (int i = 0; i < n; i++) ma += a[i], mb += b[i];
+    if (n < 2) return 0;
+    ma /= n, mb /= n;
+    double sab = 0, saa = 0, sbb = 0;
+    for (int i = 0; i < n; i++) {
+        sab += (a[i] - ma) * (b[i] - mb);
+        saa += (a[i] - ma) * (a[i] - ma);
+        sbb += (b[i] - mb) * (b[i] - mb);
+    }
+    return saa > 0 && sbb > 0 ? sab / sqrt(saa * sbb) : 0;
+}

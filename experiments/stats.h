@@ -1,0 +1,92 @@
+/*
+ * stats.h - the statistics every verdict of the study rests on.
+ *
+ * - A measurement is an estimate: the median of its samples with a 95%
+ *   confidence interval from the percentile bootstrap (Efron 1979), drawn
+ *   with a fixed-seed generator so that the same samples always give the
+ *   same interval, plus min and max.
+ * - Two estimates tie when their intervals overlap or they differ by less
+ *   than the noise floor; a tie is never a win (exp_cmp).
+ * - Configurations measured in interleaved rounds (A B A B ...) give paired
+ *   samples: the ratio of round i's A to round i's B cancels the drift of a
+ *   shared machine, and its bootstrap interval is the speed-up's.
+ * - Rates of rare events carry an exact binomial upper bound
+ *   (Clopper and Pearson 1934; for zero events 1 - 0.05^(1/n), about 3/n,
+ *   the "rule of three").
+ * - The cost model is fitted by non-negative least squares; a coefficient
+ *   pinned at zero is reported, never dropped silently.
+ * - Growth exponents are least-squares slopes on log-log points with the
+ *   t-interval of the slope.
+ */
+#ifndef EXP_STATS_H
+#define EXP_STATS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+/* A median with its 95% bootstrap interval [lo, hi], min, max and the
+ * sample count (n == 0: nothing measured; n == 1: lo == hi == median). */
+typedef struct {
+    double median, lo, hi, min, max;
+    int n;
+} exp_est;
+
+/* The most samples one estimate holds. */
+#define EXP_MAX_SAMPLES 64
+
+void exp_est_of(const double *samples, int n, exp_est *out);
+/* Paired ratio a[i] / b[i] of the first n rounds (pairs with b[i] <= 0 are skipped). */
+void exp_est_ratio(const double *a, const double *b, int n, exp_est *out);
+/* k * e (k > 0) and k / e (e > 0): intervals follow (k / e swaps the ends). */
+exp_est exp_est_scale(const exp_est *e, double k);
+exp_est exp_est_inv(const exp_est *e, double k);
+/* a / b for estimates that are not paired: the interval from the ends
+ * (a.lo / b.hi, a.hi / b.lo), conservative. */
+exp_est exp_est_div(const exp_est *a, const exp_est *b);
+
+/* 1 when a and b cannot be told apart: their intervals overlap, or their
+ * medians differ by less than floor (relative, of the smaller). */
+int exp_tie(const exp_est *a, const exp_est *b, double floor);
+/* -1 when a is below b, 1 above, 0 a tie (exp_tie). */
+int exp_cmp(const exp_est *a, const exp_est *b, double floor);
+/* A ratio against 1: 0 when its interval holds 1 or its median lies in
+ * [1 / (1 + floor), 1 + floor], else -1 (below) or 1 (above). */
+int exp_ratio_cmp(const exp_est *r, double floor);
+
+/* "12.3 [12.1, 12.6]": the median and its interval; "12.3" when n < 2. */
+const char *exp_fmt_est(char *buf, size_t n, const exp_est *e, int decimals);
+/* A ratio as a change: "+20.2% [-3.1%, +41.0%]" ("+20.2%" when n < 2). */
+const char *exp_fmt_pct(char *buf, size_t n, const exp_est *ratio);
+/* A factor: "1.84x [1.80, 1.90]" ("1.84x" when n < 2). */
+const char *exp_fmt_x(char *buf, size_t n, const exp_est *e);
+/* The relative half-width of the interval, (hi - lo) / 2 / median. */
+double exp_est_spread(const exp_est *e);
+
+/* Upper end of the 95% interval of a binomial rate with k events in n
+ * trials: one-sided 1 - 0.05^(1/n) for k == 0, else the two-sided
+ * Clopper-Pearson bound. 1 when n == 0. */
+double exp_binom_upper(uint64_t k, uint64_t n);
+
+/* Non-negative least squares of y = sum_j coef[j] * x[j][i] over m <= 3
+ * columns: every subset of free columns is solved and the feasible one with
+ * the least squared residual kept. pinned[j] = 1 when coef[j] was held at 0.
+ * Returns 0, or -1 when no subset is solvable (n < m or singular). */
+typedef struct {
+    double coef[3];
+    int pinned[3];
+    double sse;
+} exp_fit;
+int exp_nnls(const double *const *x, int m, const double *y, int n, exp_fit *out);
+/* The unconstrained least squares of the same (0, or -1 when singular). */
+int exp_lsq(const double *const *x, int m, const double *y, int n, double coef[3]);
+
+/* Slope of log(y) against log(x) over the points with x, y > 0, with its
+ * 95% t-interval (lo == hi == slope with 2 points). Returns the points used. */
+int exp_loglog_slope(const double *x, const double *y, int n, exp_est *slope, double *intercept);
+
+/* Coefficient of variation (standard deviation / mean) of n values. */
+double exp_cv(const double *v, int n);
+/* Pearson correlation of two columns (0 when either is constant). */
+double exp_corr(const double *a, const double *b, int n);
+
+#endif

@@ -1,0 +1,322 @@
+/*
+ * test_report_checks.c - the report a referee would accept, checked on the
+ * quick run (build/quick-report, made by report_quick_smoke or here):
+ * no nan or inf in any table or CSV, every CSV strict RFC 4180 with one
+ * column count, no finding cut short, every number a finding quotes
+ * present in its section's tables, no interval that holds zero presented
+ * as a difference, and the summary table with a verdict for every claim.
+ * Also the statistics the verdicts rest on (ties, bootstrap intervals,
+ * binomial bounds, non-negative fits) and the SVG axes.
+ */
+#include <ctype.h>
+#include <dirent.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+
+#include "test.h"
+#include "experiments/claims.h"
+#include "experiments/stats.h"
+#include "experiments/svg.h"
+
+#ifndef DIR_OUT
+#define DIR_OUT "build/quick-report"
+#endif
+
+static time_t process_start;
+__attribute__((constructor)) static void note_start(void) { process_start = time(NULL); }
+
+static char *slurp(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *buf = malloc((size_t)n + 1);
+    if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) n = 0;
+    if (buf) buf[n] = 0;
+    fclose(f);
+    return buf;
+}
+
+/* The quick report of this test run: made once per process (the smoke
+ * test of test_report.c runs first when both are selected). */
+static int quick_report(void)
+{
+    struct stat st;
+    if (stat(DIR_OUT "/REPORT.md", &st) == 0 && st.st_mtime >= process_start) return 1;
+    if (system("experiments/report.sh --quick > build/quick-report.log 2>&1") != 0) {
+        test_fail(__FILE__, __LINE__, "experiments/report.sh --quick failed: see build/quick-report.log");
+        return 0;
+    }
+    return 1;
+}
+
+/* Calls fn(path, text) for every file of the quick report ending in ext
+ * (and starting with "exp_" when sections_only). */
+static int sections_only;
+static int each_file(const char *ext, void (*fn)(const char *path, char *text))
+{
+    DIR *d = opendir(DIR_OUT);
+    struct dirent *e;
+    int n = 0;
+    size_t el = strlen(ext);
+    while (d && (e = readdir(d))) {
+        size_t l = strlen(e->d_name);
+        if (l < el || strcmp(e->d_name + l - el, ext)) continue;
+        if (sections_only && strncmp(e->d_name, "exp_", 4)) continue;
+        char path[512];
+        snprintf(path, sizeof path, DIR_OUT "/%s", e->d_name);
+        char *text = slurp(path);
+        if (text) fn(path, text), n++;
+        free(text);
+    }
+    if (d) closedir(d);
+    return n;
+}
+
+/* A word nan or inf (any case, any sign) in s. */
+static int has_nonfinite(const char *s)
+{
+    for (const char *p = s; *p; p++) {
+        if (p > s && isalnum((unsigned char)p[-1])) continue;
+        if ((!strncasecmp(p, "nan", 3) || !strncasecmp(p, "inf", 3)) && !isalnum((unsigned char)p[3]))
+            return 1;
+    }
+    return 0;
+}
+
+static void check_tables_finite(const char *path, char *text)
+{
+    for (char *line = strtok(text, "\n"); line; line = strtok(NULL, "\n"))
+        if (line[0] == '|') CHECKF(!has_nonfinite(line), "%s: a table row holds nan or inf: %.200s", path, line);
+}
+
+TEST(report_quick_tables_finite)
+{
+    if (!quick_report()) return;
+    CHECKF(each_file(".md", check_tables_finite) >= 12, "too few Markdown files in " DIR_OUT);
+}
+
+/* Strict RFC 4180: fields separated by commas, records by LF or CRLF,
+ * quoted fields with doubled quotes, no quote inside an unquoted field,
+ * one field count for every record. Returns records, -1 when malformed. */
+static int strict_csv(const char *s, int *columns, char *why, size_t wn)
+{
+    int records = 0;
+    *columns = -1;
+    while (*s) {
+        int fields = 0;
+        for (;;) {
+            if (*s == '"') {
+                for (s++;; s++) {
+                    if (!*s) return snprintf(why, wn, "record %d: unterminated quote", records + 1), -1;
+                    if (*s == '"' && s[1] == '"') s++;
+                    else if (*s == '"') { s++; break; }
+                }
+            } else {
+                for (; *s && *s != ',' && *s != '\n' && *s != '\r'; s++)
+                    if (*s == '"') return snprintf(why, wn, "record %d: a quote inside an unquoted field", records + 1), -1;
+            }
+            fields++;
+            if (*s == ',') { s++; continue; }
+            if (*s == '\r' && s[1] == '\n') s += 2;
+            else if (*s == '\n') s++;
+            else if (*s) return snprintf(why, wn, "record %d: text after a closing quote", records + 1), -1;
+            break;
+        }
+        if (*columns < 0) *columns = fields;
+        if (fields != *columns)
+            return snprintf(why, wn, "record %d has %d fields, the header %d", records + 1, fields, *columns), -1;
+        records++;
+    }
+    return records;
+}
+
+static void check_csv(const char *path, char *text)
+{
+    char why[160] = "";
+    int cols, n = strict_csv(text, &cols, why, sizeof why);
+    CHECKF(n >= 1, "%s: not strict RFC 4180 CSV: %s", path, why);
+    CHECKF(!has_nonfinite(text), "%s: a field holds nan or inf", path);
+}
+
+TEST(report_quick_csv_strict)
+{
+    if (!quick_report()) return;
+    char why[160];
+    int cols;
+    /* The reader itself must refuse what RFC 4180 refuses. */
+    CHECK(strict_csv("a,b\n1,2\n", &cols, why, sizeof why) == 2 && cols == 2);
+    CHECK(strict_csv("a,b\n\"x,\"\"y\"\"\",2\r\n", &cols, why, sizeof why) == 2);
+    CHECK(strict_csv("a,b\n1,2,3\n", &cols, why, sizeof why) < 0);
+    CHECK(strict_csv("a,b\nx\"y,2\n", &cols, why, sizeof why) < 0);
+    CHECK(strict_csv("a,b\n\"x\"y,2\n", &cols, why, sizeof why) < 0);
+    CHECKF(each_file(".csv", check_csv) >= 22, "too few CSV files in " DIR_OUT);
+}
+
+/* The findings of a section: the "- " lines after its **Findings line. */
+static void check_findings(const char *path, char *text)
+{
+    char *f = strstr(text, "\n**Findings");
+    CHECKF(f != NULL, "%s: no findings", path);
+    if (!f) return;
+    CHECKF(strstr(text, " ran in ") != NULL, "%s: the section has no footer (cut short?)", path);
+    *f = 0; /* text: the section above its findings */
+    char *body = text;
+    int lines = 0;
+    for (char *line = strtok(f + 1, "\n"); line; line = strtok(NULL, "\n")) {
+        if (strncmp(line, "- ", 2)) continue;
+        lines++;
+        size_t l = strlen(line);
+        char last = l ? line[l - 1] : 0;
+        CHECKF(last == '.' || last == ')' || last == ':', "%s: a finding ends mid-sentence: %.300s",
+               path, line);
+        /* Every measured-looking number (decimals, percentages, factors)
+         * must stand in the section above, where its table is. */
+        for (const char *p = line; *p; p++) {
+            if (!isdigit((unsigned char)*p) || (p > line && (isalnum((unsigned char)p[-1]) ||
+                                                             p[-1] == '.' || p[-1] == '=' || p[-1] == '_')))
+                continue;
+            const char *q = p;
+            while (isdigit((unsigned char)*q) || *q == '.') q++;
+            if (q[-1] == '.') q--;
+            int decimal = memchr(p, '.', (size_t)(q - p)) != NULL;
+            int unit = *q == '%' || (*q == 'x' && !isalnum((unsigned char)q[1]));
+            if (decimal || unit) {
+                char tok[64];
+                snprintf(tok, sizeof tok, "%.*s%s", (int)(q - p), p, *q == '%' ? "%" : "");
+                CHECKF(strstr(body, tok) != NULL, "%s: the finding quotes %s, which its tables "
+                       "do not show: %.200s", path, tok, line);
+            }
+            p = q - 1;
+        }
+    }
+    (void)lines;
+}
+
+TEST(report_quick_findings_complete)
+{
+    if (!quick_report()) return;
+    sections_only = 1;
+    CHECKF(each_file(".md", check_findings) >= 11, "too few sections");
+    sections_only = 0;
+}
+
+/* A row showing a change with an interval that holds zero must say tie. */
+static void check_ties(const char *path, char *text)
+{
+    for (char *line = strtok(text, "\n"); line; line = strtok(NULL, "\n")) {
+        if (line[0] != '|') continue;
+        const char *p = line;
+        while ((p = strstr(p, "% ["))) {
+            double lo, hi;
+            if (sscanf(p + 3, "%lf%%, %lf%%]", &lo, &hi) == 2 && lo <= 0 && hi >= 0)
+                CHECKF(strstr(line, "tie") != NULL, "%s: an interval holding zero is not called "
+                       "a tie: %.300s", path, line);
+            p += 3;
+        }
+    }
+}
+
+TEST(report_quick_ties_not_wins)
+{
+    if (!quick_report()) return;
+    each_file(".md", check_ties);
+}
+
+TEST(report_quick_summary_verdicts)
+{
+    if (!quick_report()) return;
+    char *r = slurp(DIR_OUT "/REPORT.md");
+    CHECKF(r != NULL, DIR_OUT "/REPORT.md missing");
+    if (!r) return;
+    char *sum = strstr(r, "## Summary"), *contents = strstr(r, "## Contents");
+    CHECKF(sum && contents && sum < contents, "no summary before the contents");
+    if (!sum || !contents) { free(r); return; }
+    *contents = 0;
+    for (int c = 0; c < exp_claim_count; c++) {
+        char tag[96];
+        snprintf(tag, sizeof tag, "(`%s`)", exp_claims[c].id);
+        char *row = strstr(sum, tag);
+        CHECKF(row != NULL, "the summary has no row for claim %s", exp_claims[c].id);
+        if (!row) continue;
+        char *end = strchr(row, '\n');
+        if (end) *end = 0;
+        CHECKF(strstr(row, "| " EXP_CONFIRMED " |") || strstr(row, "| " EXP_PARTLY " |") ||
+               strstr(row, "| " EXP_REFUTED " |") || strstr(row, "| " EXP_UNTESTABLE " |"),
+               "claim %s has no verdict: %.300s", exp_claims[c].id, row);
+        if (end) *end = '\n';
+    }
+    *contents = '#';
+    CHECK(strstr(r, "## Machine and method") && strstr(r, "| machine |") && strstr(r, "| commit |"));
+    CHECK(strstr(r, "> **Verdict on ") != NULL);
+    free(r);
+}
+
+TEST(report_stats_ties_and_intervals)
+{
+    double a[7] = {10, 11, 10.5, 12, 9.8, 10.2, 30}, b[7] = {20, 21, 20.5, 22, 19.8, 20.2, 25};
+    exp_est ea, eb, ea2;
+    exp_est_of(a, 7, &ea);
+    exp_est_of(a, 7, &ea2);
+    exp_est_of(b, 7, &eb);
+    CHECK(ea.median == 10.5 && ea.lo <= ea.median && ea.hi >= ea.median && ea.n == 7);
+    CHECK(ea.lo == ea2.lo && ea.hi == ea2.hi); /* deterministic */
+    CHECK(ea.hi < 30);                         /* the outlier moves the median's interval little */
+    CHECK(exp_cmp(&ea, &eb, 0.01) == -1 && exp_cmp(&eb, &ea, 0.01) == 1);
+    exp_est c = ea;
+    c.median *= 1.02, c.lo = c.hi = c.median; /* 2% apart, no overlap: a tie only under a 5% floor */
+    exp_est d = ea;
+    d.lo = d.hi = d.median;
+    CHECK(exp_tie(&c, &d, 0.05) && !exp_tie(&c, &d, 0.01));
+    exp_est r = {1.3, 0.9, 1.5, 0.9, 1.5, 5};
+    CHECK(exp_ratio_cmp(&r, 0.01) == 0); /* the interval holds 1 */
+    r.lo = 1.2;
+    CHECK(exp_ratio_cmp(&r, 0.01) == 1 && exp_ratio_cmp(&r, 0.4) == 0);
+    exp_est q;
+    exp_est_ratio(a, b, 7, &q);
+    CHECK(q.median > 0.45 && q.median < 0.55 && exp_ratio_cmp(&q, 0.05) == -1);
+    /* Clopper-Pearson: 0 in n is about 3/n; 5 in 1000 is 1.16%. */
+    CHECK(fabs(exp_binom_upper(0, 3000) - 3.0 / 3000) < 0.05 * 3.0 / 3000);
+    CHECK(fabs(exp_binom_upper(5, 1000) - 0.01164) < 2e-4);
+    /* NNLS pins a negative constant at zero and says so. */
+    double s[5] = {1, 2, 3, 4, 5}, p[5] = {2, 1, 4, 3, 6}, one[5] = {1, 1, 1, 1, 1}, y[5];
+    for (int i = 0; i < 5; i++) y[i] = 2 * s[i] + 3 * p[i] - 4;
+    const double *cols[3] = {s, p, one};
+    exp_fit fit;
+    CHECK(exp_nnls(cols, 3, y, 5, &fit) == 0 && fit.pinned[2] && fit.coef[2] == 0 &&
+          !fit.pinned[0] && !fit.pinned[1]);
+    for (int i = 0; i < 5; i++) y[i] = 2 * s[i] + 3 * p[i] + 1;
+    CHECK(exp_nnls(cols, 3, y, 5, &fit) == 0 && fabs(fit.coef[2] - 1) < 1e-9 && !fit.pinned[2]);
+    double xs[4] = {1000, 4000, 16000, 64000}, ys[4] = {1, 4.1, 15.9, 64.5};
+    exp_est sl;
+    CHECK(exp_loglog_slope(xs, ys, 4, &sl, NULL) == 4 && sl.lo < 1 && sl.hi > 1);
+    char buf[64];
+    exp_est w = {1.0, 1.0, 1.0, 1.0, 1.0, 1};
+    CHECK(!strcmp(exp_fmt_est(buf, sizeof buf, &w, 1), "1.0")); /* no interval from one sample */
+}
+
+TEST(report_svg_ticks)
+{
+    double t[64];
+    int n = svg_ticks(0, 10, 0, t, 64);
+    CHECK(n >= 4 && n <= 12 && t[0] == 0 && t[n - 1] <= 10);
+    n = svg_ticks(1, 1000, 1, t, 64);
+    CHECK(n == 4 && t[0] == 1 && t[3] == 1000);
+    n = svg_ticks(1, 50, 1, t, 64); /* short range: 1 2 5 10 20 50 */
+    CHECK(n == 6 && t[1] == 2 && t[5] == 50);
+    svg_plot pl;
+    svg_plot_init(&pl, "a <title> & more", "x", "y");
+    double x[3] = {1, 10, 100}, y[3] = {3, 2, 1};
+    CHECK(svg_add(&pl, "s", x, y, NULL, NULL, 3, SVG_LINE | SVG_POINTS) == 0);
+    CHECK(svg_write(&pl, "build/test_plot.svg") == 0);
+    svg_free(&pl);
+    char *s = slurp("build/test_plot.svg");
+    CHECK(s && strstr(s, "&lt;title&gt; &amp; more") && strstr(s, "<polyline") && strstr(s, "</svg>"));
+    free(s);
+}
