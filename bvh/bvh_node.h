@@ -181,8 +181,9 @@ static inline box3 bvh_node_box(const bvh_node *n)
  * the packet frustum. */
 static inline unsigned bvh_variant_flags(const bvh *b)
 {
-    return (b->naive ? ACCEL_V_NAIVE : 0u) | (b->has_spheres ? ACCEL_V_SPHERES : 0u) |
-           (b->frustum ? ACCEL_V_OPT : 0u);
+    return (b->naive ? (unsigned)ACCEL_V_NAIVE : 0u) |
+           (b->has_spheres ? (unsigned)ACCEL_V_SPHERES : 0u) |
+           (b->frustum ? (unsigned)ACCEL_V_OPT : 0u);
 }
 
 /* Kernels in bvh_single.c (single rays) and bvh_packet.c (64-ray packets). */

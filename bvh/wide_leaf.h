@@ -1,5 +1,7 @@
 /*
  * wide_leaf.h - one ray against a leaf block of WIDE_LB (4 or 8) primitives:
+ * A kernel body (C only): included by the .c files of its folder, not part
+ * of the interface a C++ program includes.
  * the watertight test of Woop, Benthin and Wald ("Watertight Ray/Triangle
  * Intersection", JCGT 2(1), 2013) on all lanes at once, with this project's
  * exact fallback.
@@ -28,8 +30,16 @@
 #include "wide_node.h"
 #include "wide_simd.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 #ifndef WIDE_LB
 #define WIDE_LB 4
+#ifdef __cplusplus
+}
+#endif
+
 #endif
 
 #define WL_CAT_(a, b) a##_##b

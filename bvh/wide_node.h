@@ -51,10 +51,15 @@
 #ifndef BVH_WIDE_NODE_H
 #define BVH_WIDE_NODE_H
 
+#include <assert.h>
 #include <stddef.h>
 #include <stdint.h>
 
 #include "bvh_node.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 typedef struct {
     float box[6][8];
@@ -78,13 +83,13 @@ typedef struct {
     uint32_t id[4];
 } wide_block4;
 
-_Static_assert(sizeof(wide_node8) == 256, "an 8-wide node is four cache lines");
-_Static_assert(offsetof(wide_node8, child) == 192, "child references follow the 6 box rows");
-_Static_assert(sizeof(wide_node4) == 128, "a 4-wide node is two cache lines");
-_Static_assert(offsetof(wide_node4, child) == 96, "child references follow the 6 box rows");
-_Static_assert(sizeof(wide_block8) == 320, "a block of 8 is 36 + 4 bytes per primitive");
-_Static_assert(sizeof(wide_block4) == 160, "a block of 4 is 36 + 4 bytes per primitive");
-_Static_assert(offsetof(wide_block8, id) == 288 && offsetof(wide_block4, id) == 144,
+static_assert(sizeof(wide_node8) == 256, "an 8-wide node is four cache lines");
+static_assert(offsetof(wide_node8, child) == 192, "child references follow the 6 box rows");
+static_assert(sizeof(wide_node4) == 128, "a 4-wide node is two cache lines");
+static_assert(offsetof(wide_node4, child) == 96, "child references follow the 6 box rows");
+static_assert(sizeof(wide_block8) == 320, "a block of 8 is 36 + 4 bytes per primitive");
+static_assert(sizeof(wide_block4) == 160, "a block of 4 is 36 + 4 bytes per primitive");
+static_assert(offsetof(wide_block8, id) == 288 && offsetof(wide_block4, id) == 144,
                "ids follow the vertex rows");
 
 /* Child references. */
@@ -152,5 +157,9 @@ void bvh_wide_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hit
                         accel_counters *c, int naive, int has_spheres);
 void bvh_wide_occluded(const bvh_wide *w, const accel_ray *rays, uint8_t *occ, size_t count,
                        accel_counters *c, int naive, int has_spheres);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -1,5 +1,7 @@
 /*
  * wide_packet.h - 64-ray packets over a wide BVH (traverse=packet with
+ * A kernel body (C only): included by the .c files of its folder, not part
+ * of the interface a C++ program includes.
  * width=4|8): the coherent mode for primary and shadow rays.
  *
  * A template: wide_packet.c includes it once per (WIDE_NW, WIDE_LB) pair
@@ -43,6 +45,10 @@
 #include "wide_node.h"
 #include "wide_simd.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 #ifndef BVH_WIDE_PACKET_TYPES
 #define BVH_WIDE_PACKET_TYPES
 #define WP_RAYS 64
@@ -67,6 +73,10 @@ static inline unsigned wp_range(uint64_t alive, unsigned g, unsigned first)
     uint64_t from = first >= WP_RAYS ? 0 : ~(uint64_t)0 << first;
     return (unsigned)((alive & from) >> (8 * g)) & 0xFFu;
 }
+#ifdef __cplusplus
+}
+#endif
+
 #endif
 
 #define PK_CAT_(a, b, c) a##_##b##_##c

@@ -1,5 +1,7 @@
 /*
  * wide_simd.h - the few float-vector operations the wide BVH kernels use,
+ * A kernel body (C only): included by the .c files of its folder, not part
+ * of the interface a C++ program includes.
  * for 4 lanes (f4: SSE) and 8 lanes (f8: AVX2), each with a plain-C twin
  * (a struct of floats and a loop per operation) used when the compiler
  * does not target the instruction set, or with -DBVH_NO_SIMD. AVX-512 is
@@ -19,6 +21,7 @@
 #ifndef BVH_WIDE_SIMD_H
 #define BVH_WIDE_SIMD_H
 
+#include <assert.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -27,6 +30,10 @@
 #if defined(__SSE2__) && !defined(BVH_NO_SIMD)
 #define WIDE_SSE 1
 #include <immintrin.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 #else
 #define WIDE_SSE 0
 #endif
@@ -223,12 +230,16 @@ static inline int wide_prep_ray(const accel_ray *r, accel_ray_prep *p)
 #define WIDE_LUT64(m) WIDE_LUT16(m), WIDE_LUT16((m) + 16), WIDE_LUT16((m) + 32), WIDE_LUT16((m) + 48)
 static const uint32_t wide_compress_lut[256] = {WIDE_LUT64(0u), WIDE_LUT64(64u), WIDE_LUT64(128u),
                                                 WIDE_LUT64(192u)};
-_Static_assert(WIDE_LUT(0x26u) == 0x125u, "compress table: positions 5, 2, 1");
+static_assert(WIDE_LUT(0x26u) == 0x125u, "compress table: positions 5, 2, 1");
 
 /* fN_op for a width given as a macro: WIDE_V(8, mul) is f8_mul. */
 #define WIDE_V_(n, op) f##n##_##op
 #define WIDE_V(n, op) WIDE_V_(n, op)
 #define WIDE_T_(n) f##n
 #define WIDE_T(n) WIDE_T_(n)
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -1,5 +1,7 @@
 /*
  * grid_kernel.h - the one traversal kernel of the `grid` kind (closest hit
+ * A kernel body (C only): included by the .c files of its folder, not part
+ * of the interface a C++ program includes.
  * and any hit, every skipping mode), private to grid/. Described in
  * grid_trace.c. GRID_KERNELS(NAME, SKIP) compiles it into the variant
  * tables NAME_hit_table and NAME_occ_table (core/variant.h) for one
@@ -18,6 +20,10 @@
 
 #include "core/variant.h"
 #include "grid_impl.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 /* Entries of the per-ray mailbox (power of two). */
 #define GRID_MAILBOX 16
@@ -174,5 +180,9 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
  * [0] closest hit, [1] any hit. */
 extern const accel_kernel_table *const grid_cloud_tables[2];
 extern const accel_kernel_table *const grid_macro_tables[2];
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -1,5 +1,7 @@
 /*
  * grid_packet.h - the packet of the coherent grid traversal (grid_packet.c),
+ * A kernel body (C only): included by the .c files of its folder, not part
+ * of the interface a C++ program includes.
  * its setup and its slice ranges (grid_packet_setup.c). Private to grid/.
  *
  * A packet holds up to GRID_PACKET_SIZE consecutive rays as arrays of
@@ -17,6 +19,10 @@
 #if defined(__AVX2__) && defined(__FMA__) && !defined(GRID_NO_SIMD)
 #define GRID_PACKET_AVX 1
 #include <immintrin.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 #else
 #define GRID_PACKET_AVX 0
 #endif
@@ -125,5 +131,9 @@ int grid_macro_build(grid_accel *g, accel_error *err);
  * a1, a2 holds a primitive. */
 int grid_macro_any(const grid_accel *g, int K, int a1, int a2, int layer, const int lo[2],
                    const int hi[2]);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

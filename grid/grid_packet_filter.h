@@ -1,5 +1,7 @@
 /*
  * grid_packet_filter.h - the conservative filters of the coherent grid
+ * A kernel body (C only): included by the .c files of its folder, not part
+ * of the interface a C++ program includes.
  * traversal (grid_packet.c): which active rays of a packet may hit a
  * primitive. A filter only drops a (ray, primitive) pair that the exact test
  * accel_prim_hit (core/prim.h) would reject; the argument for each bound is
@@ -9,6 +11,10 @@
 #define GRID_GRID_PACKET_FILTER_H
 
 #include "grid_packet.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 /* A triangle seen from the packet: per edge AB, BC, CA the Pluecker
  * moments A'xB' (A' = A - ref) and the edge vectors B - A. */
@@ -288,5 +294,9 @@ static inline void grid_packet_hit_end(grid_packet *pk, int l)
     if (w < pk->w_end[l]) pk->w_end[l] = w;
     if (w < pk->w_next) pk->w_next = w;
 }
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

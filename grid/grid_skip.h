@@ -40,6 +40,10 @@
 
 #include "grid_core.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef enum {
     GRID_SKIP_NONE = 0,  /* plain 3D-DDA */
     GRID_SKIP_CLOUD = 1, /* proximity clouds */
@@ -142,5 +146,9 @@ grid_dda_leave_box(grid_dda *d, const grid_frame *f, const int lo[3], const int 
     return grid_dda_settle(d, f, 0, t_exit, t0, far0) & grid_dda_settle(d, f, 1, t_exit, t1, far1) &
            grid_dda_settle(d, f, 2, t_exit, t2, far2);
 }
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

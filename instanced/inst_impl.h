@@ -7,7 +7,12 @@
 #ifndef INSTANCED_INST_IMPL_H
 #define INSTANCED_INST_IMPL_H
 
+#include <assert.h>
 #include "accel.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 /* ---- structures over boxes ----------------------------------------------- */
 
@@ -19,7 +24,7 @@ typedef struct {
     float hi[3];
     uint32_t count; /* 0: inner node; else items in the leaf */
 } inst_node;
-_Static_assert(sizeof(inst_node) == 32, "inst_node is 32 bytes");
+static_assert(sizeof(inst_node) == 32, "inst_node is 32 bytes");
 
 typedef struct {
     inst_node *nodes;
@@ -104,5 +109,9 @@ void inst_intersect(const void *a, const accel_ray *rays, accel_hit *hits, size_
                     accel_counters *c);
 void inst_occluded(const void *a, const accel_ray *rays, uint8_t *occ, size_t n,
                    accel_counters *c);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -28,6 +28,14 @@
 
 #include "accel.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 extern const accel_kind accel_kind_instanced;
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -42,8 +42,13 @@
 #ifndef IRREGULAR_GRID_IGRID_H
 #define IRREGULAR_GRID_IGRID_H
 
+#include <assert.h>
 #include "accel.h"
 #include "grid/grid_core.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 /* Defaults, from the sweeps in irregular_grid/README.md. */
 #define IGRID_DEFAULT_TOP_LAMBDA 0.12
@@ -65,7 +70,7 @@ typedef struct {
     int32_t hi[3];
     uint32_t end;
 } igrid_cell;
-_Static_assert(sizeof(igrid_cell) == 32, "igrid_cell is 32 bytes");
+static_assert(sizeof(igrid_cell) == 32, "igrid_cell is 32 bytes");
 
 /*
  * The voxel map: entry of top cell (x, y, z) at map[x + tx*(y + ty*z)];
@@ -104,5 +109,9 @@ typedef struct {
 } igrid_view;
 
 void igrid_get_view(const void *accel, igrid_view *v);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

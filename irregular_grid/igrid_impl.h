@@ -8,6 +8,10 @@
 
 #include "igrid.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct {
     /* The primitive store (accel.h): cells hold its local ids. */
     accel_prim_store store;
@@ -82,5 +86,9 @@ void igrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, 
                      accel_counters *counters);
 void igrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                     accel_counters *counters);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

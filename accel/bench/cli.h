@@ -15,6 +15,10 @@
 
 #include "accel.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Exit statuses of bin/trace and of every experiment. */
 enum {
     CLI_EXIT_OK = 0,
@@ -74,5 +78,9 @@ int cli_check_output(const char *opt, const char *path, const char *exts, accel_
 /* Strict conversions of a whole string: 1 on success, 0 otherwise. */
 int cli_to_long(const char *s, long lo, long hi, long *out);
 int cli_to_double(const char *s, double lo, double hi, double *out);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

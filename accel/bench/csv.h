@@ -17,6 +17,10 @@
 #include <stddef.h>
 #include <stdio.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct {
     FILE *f;
     int columns;    /* fields of the header; 0 until it is written */
@@ -36,5 +40,9 @@ void csv_open(csv_file *c, FILE *f);
  * the record was refused (c->bad_rows, c->first_bad say why). */
 int csv_row(csv_file *c, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 int csv_vrow(csv_file *c, const char *fmt, va_list ap);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -17,6 +17,10 @@
 #include <stddef.h>
 #include <stdio.h>
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 typedef struct bench_progress bench_progress;
 
 /* The default threshold: phases shorter than this stay silent. */
@@ -39,5 +43,9 @@ void bench_progress_end(bench_progress *p);
  * "name: 3.1 s, no estimate yet" while nothing is done or total is 0. */
 void bench_progress_format(char *buf, size_t n, const char *name, double done, double total,
                            double elapsed_ms);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

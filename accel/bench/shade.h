@@ -7,8 +7,16 @@
 #include "bench/image.h"
 #include "rays/rays.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Colours the pixel of every ray of r (r->pixel, or ray i = pixel i) in img
  * from its hit; pixels without a ray keep their colour. */
 void bench_shade(const accel_scene *s, const rays_set *r, const accel_hit *hits, image_rgb *img);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

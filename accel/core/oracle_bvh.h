@@ -11,7 +11,12 @@
 #ifndef ACCEL_ORACLE_BVH_H
 #define ACCEL_ORACLE_BVH_H
 
+#include <assert.h>
 #include "accel.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
 
 /* 32 bytes. Boxes are the exact float bounds of the vertices (min and max
  * of floats round nothing); sphere boxes are rounded outward. */
@@ -20,7 +25,7 @@ typedef struct {
     uint32_t index; /* interior: first child, the second is index + 1; leaf: first item */
     uint32_t count; /* low 31 bits: leaf items (> 0), 0 for interior; top bit: ORACLE_SPHERES */
 } oracle_node;
-_Static_assert(sizeof(oracle_node) == 32, "oracle_node is 32 bytes");
+static_assert(sizeof(oracle_node) == 32, "oracle_node is 32 bytes");
 
 /* Set on a node whose subtree holds a sphere: such a node is culled by the
  * line test alone, never by distance (see oracle.c). */
@@ -46,5 +51,9 @@ struct accel_oracle {
 
 /* Builds o->nodes, o->items, o->always, o->scale from o->scene. */
 int oracle_bvh_build(accel_oracle *o, accel_error *err);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif

@@ -36,13 +36,12 @@
 extern "C" {
 #endif
 
-/* The flags a kernel copy is specialized on. */
-enum {
-    ACCEL_V_NAIVE = 1u,   /* tri=naive: Moller-Trumbore instead of watertight */
-    ACCEL_V_SPHERES = 2u, /* the scene holds spheres (triangle-only scenes skip the branch) */
-    ACCEL_V_OPT = 4u,     /* the kind's own switch: mailbox (grids), frustum (bvh packets) */
-    ACCEL_V_COPIES = 8
-};
+/* The flags a kernel copy is specialized on (unsigned, so that C++ mixes
+ * them with other unsigned values without warnings). */
+#define ACCEL_V_NAIVE 1u   /* tri=naive: Moller-Trumbore instead of watertight */
+#define ACCEL_V_SPHERES 2u /* the scene holds spheres (triangle-only scenes skip the branch) */
+#define ACCEL_V_OPT 4u     /* the kind's own switch: mailbox (grids), frustum (bvh packets) */
+#define ACCEL_V_COPIES 8
 
 typedef void (*accel_kernel_fn)(const void *accel, const accel_ray *rays, void *out, size_t count,
                                 accel_counters *c, unsigned flags);

@@ -17,6 +17,10 @@
 
 #include "scene/scene.h"
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* The largest flattened scene: ids are uint32 and 0xFFFFFFFF means miss. */
 #define SCENE_COMPOSE_MAX_PRIMS 0xFFFFFFFEull
 
@@ -63,5 +67,9 @@ double scene_xform_det(const double m[12]);
  * rows' lengths (so that a uniform scale by 1e-20 is fine and a matrix with
  * two nearly parallel rows is not). */
 int scene_xform_invert(const double m[12], double inv[12]);
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif
