@@ -221,6 +221,22 @@ typedef struct {
 #endif
 #define ACCEL_COUNTERS_ON(c) (ACCEL_COUNTERS ? (c) : (accel_counters *)NULL)
 
+/* One ray's costs into a counted run's counters: the totals, and the
+ * per-ray arrays at the ray's index i in the batch when they are asked for.
+ * Kernels call it once per ray under `if (c)`. */
+static inline void accel_count_ray(accel_counters *c, size_t i, uint32_t steps, uint32_t empty,
+                                   uint32_t boxes, uint32_t prims, uint32_t skips)
+{
+    c->rays++;
+    c->steps += steps;
+    c->empty_steps += empty;
+    c->box_tests += boxes;
+    c->prim_tests += prims;
+    c->mailbox_skips += skips;
+    if (c->ray_steps) c->ray_steps[i] = steps;
+    if (c->ray_prims) c->ray_prims[i] = prims;
+}
+
 /* Adds b's totals into a (not the per-ray arrays). */
 void accel_counters_add(accel_counters *a, const accel_counters *b);
 /* Records a broken invariant in c (the first one's place is kept); returns 1. */

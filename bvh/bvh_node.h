@@ -181,9 +181,7 @@ static inline box3 bvh_node_box(const bvh_node *n)
  * the packet frustum. */
 static inline unsigned bvh_variant_flags(const bvh *b)
 {
-    return (b->naive ? (unsigned)ACCEL_V_NAIVE : 0u) |
-           (b->has_spheres ? (unsigned)ACCEL_V_SPHERES : 0u) |
-           (b->frustum ? (unsigned)ACCEL_V_OPT : 0u);
+    return accel_variant_flags(b->naive, b->has_spheres, b->frustum);
 }
 
 /* Kernels in bvh_single.c (single rays) and bvh_packet.c (64-ray packets). */

@@ -385,8 +385,9 @@ out:
 
 static inline __attribute__((always_inline)) void
 packet_batch(const bvh *b, const accel_ray *rays, accel_hit *hits, uint8_t *occ, size_t count,
-             accel_counters *c, int naive, int has_spheres, int any_hit, int frustum)
+             accel_counters *c, int naive, int has_spheres, int frustum)
 {
+    const int any_hit = occ != NULL;
     packet pk; /* about 10 KB, aligned by its members */
     for (size_t base = 0; base < count; base += P) {
         uint32_t n = (uint32_t)(count - base < P ? count - base : P);
@@ -408,24 +409,7 @@ packet_batch(const bvh *b, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
     }
 }
 
-static inline __attribute__((always_inline)) void
-packet_hit_kernel(const void *a, const accel_ray *rays, void *out, size_t count,
-                  accel_counters *c, unsigned f)
-{
-    packet_batch(a, rays, out, NULL, count, c, (f & ACCEL_V_NAIVE) != 0,
-                 (f & ACCEL_V_SPHERES) != 0, 0, (f & ACCEL_V_OPT) != 0);
-}
-
-static inline __attribute__((always_inline)) void
-packet_occ_kernel(const void *a, const accel_ray *rays, void *out, size_t count,
-                  accel_counters *c, unsigned f)
-{
-    packet_batch(a, rays, NULL, out, count, c, (f & ACCEL_V_NAIVE) != 0,
-                 (f & ACCEL_V_SPHERES) != 0, 1, (f & ACCEL_V_OPT) != 0);
-}
-
-ACCEL_KERNEL_TABLE(packet_hit_table, packet_hit_kernel)
-ACCEL_KERNEL_TABLE(packet_occ_table, packet_occ_kernel)
+ACCEL_KERNEL_PAIR(packet, packet_batch)
 
 void bvh_packet_intersect(const bvh *b, const accel_ray *rays, accel_hit *hits, size_t count,
                           accel_counters *c)

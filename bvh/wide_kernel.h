@@ -192,14 +192,7 @@ WIDE_INLINE void WK(finish)(accel_hit hit, uint32_t hit_id, float t, void *out, 
         ((uint8_t *)out)[ray_idx] = hit.prim != ACCEL_MISS;
     else
         ((accel_hit *)out)[ray_idx] = hit;
-    if (c) {
-        c->rays++;
-        c->steps += steps;
-        c->box_tests += boxes;
-        c->prim_tests += prims;
-        if (c->ray_steps) c->ray_steps[ray_idx] = steps;
-        if (c->ray_prims) c->ray_prims[ray_idx] = prims;
-    }
+    if (c) accel_count_ray(c, ray_idx, steps, 0, boxes, prims, 0);
 }
 
 /* One ray from root to answer. */

@@ -62,8 +62,7 @@ static const accel_kernel_table *const tables[2][2][2][2] = {
 
 static unsigned kernel_flags(const bvh_wide *w, int naive, int has_spheres)
 {
-    return (naive ? ACCEL_V_NAIVE : 0u) | (has_spheres ? ACCEL_V_SPHERES : 0u) |
-           (w->order == WIDE_ORDER_OCTANT ? ACCEL_V_OPT : 0u);
+    return accel_variant_flags(naive, has_spheres, w->order == WIDE_ORDER_OCTANT);
 }
 
 void bvh_wide_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hits, size_t count,

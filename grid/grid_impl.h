@@ -48,8 +48,7 @@ enum { GRID_TRAVERSE_SINGLE = 0, GRID_TRAVERSE_PACKET = 1 };
 /* The kernel-variant flags of a built grid (core/variant.h). */
 static inline unsigned grid_variant_flags(const grid_accel *g)
 {
-    return (g->naive ? ACCEL_V_NAIVE : 0u) | (g->has_spheres ? ACCEL_V_SPHERES : 0u) |
-           (g->mailbox ? ACCEL_V_OPT : 0u);
+    return accel_variant_flags(g->naive, g->has_spheres, g->mailbox);
 }
 
 /* Single-ray traversal (grid_trace.c). */

@@ -144,37 +144,19 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
             occ[i] = h.prim != ACCEL_MISS;
         else
             hits[i] = h;
-        if (c) {
-            c->rays++;
-            c->steps += steps;
-            c->empty_steps += empty;
-            c->prim_tests += tests;
-            c->mailbox_skips += skips;
-            c->box_tests += boxes;
-            if (c->ray_steps) c->ray_steps[i] = steps;
-            if (c->ray_prims) c->ray_prims[i] = tests;
-        }
+        if (c) accel_count_ray(c, i, steps, empty, boxes, tests, skips);
     }
 }
 
 /* Tables per query for one skipping mode (a constant in each copy). */
 #define GRID_KERNELS(NAME, SKIP)                                                            \
-    static inline __attribute__((always_inline)) void NAME##_hit_kernel(                  \
-        const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,   \
-        unsigned f)                                                                         \
+    static inline __attribute__((always_inline)) void NAME##_mode_kernel(                  \
+        const void *a, const accel_ray *rays, accel_hit *hits, uint8_t *occ, size_t count,  \
+        accel_counters *c, int naive, int spheres, int mailbox)                             \
     {                                                                                       \
-        grid_kernel(a, rays, out, NULL, count, c, (f & ACCEL_V_NAIVE) != 0,                 \
-                    (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0, SKIP);              \
+        grid_kernel(a, rays, hits, occ, count, c, naive, spheres, mailbox, SKIP);           \
     }                                                                                       \
-    static inline __attribute__((always_inline)) void NAME##_occ_kernel(                  \
-        const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,   \
-        unsigned f)                                                                         \
-    {                                                                                       \
-        grid_kernel(a, rays, NULL, out, count, c, (f & ACCEL_V_NAIVE) != 0,                 \
-                    (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0, SKIP);              \
-    }                                                                                       \
-    ACCEL_KERNEL_TABLE(NAME##_hit_table, NAME##_hit_kernel)                                 \
-    ACCEL_KERNEL_TABLE(NAME##_occ_table, NAME##_occ_kernel)
+    ACCEL_KERNEL_PAIR(NAME, NAME##_mode_kernel)
 
 /* The skipping modes' tables (grid_trace_cloud.c, grid_trace_macro.c):
  * [0] closest hit, [1] any hit. */

@@ -308,24 +308,7 @@ packet_batch(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_
     }
 }
 
-static inline __attribute__((always_inline)) void
-packet_hit_kernel(const void *a, const accel_ray *rays, void *out, size_t count,
-                  accel_counters *c, unsigned f)
-{
-    packet_batch(a, rays, out, NULL, count, c, (f & ACCEL_V_NAIVE) != 0,
-                 (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0);
-}
-
-static inline __attribute__((always_inline)) void
-packet_occ_kernel(const void *a, const accel_ray *rays, void *out, size_t count,
-                  accel_counters *c, unsigned f)
-{
-    packet_batch(a, rays, NULL, out, count, c, (f & ACCEL_V_NAIVE) != 0,
-                 (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0);
-}
-
-ACCEL_KERNEL_TABLE(grid_packet_hit_table, packet_hit_kernel)
-ACCEL_KERNEL_TABLE(grid_packet_occ_table, packet_occ_kernel)
+ACCEL_KERNEL_PAIR(grid_packet, packet_batch)
 
 void grid_packet_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
                            size_t count, accel_counters *counters)

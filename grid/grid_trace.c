@@ -39,17 +39,11 @@ static const accel_kernel_table *grid_table(const grid_accel *g, int query)
     return query ? &grid_occ_table : &grid_hit_table;
 }
 
-static unsigned grid_flags(const grid_accel *g)
-{
-    return (g->naive ? ACCEL_V_NAIVE : 0u) | (g->has_spheres ? ACCEL_V_SPHERES : 0u) |
-           (g->mailbox ? ACCEL_V_OPT : 0u);
-}
-
 void grid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
                     accel_counters *counters)
 {
     const grid_accel *g = accel;
-    accel_run_kernel(grid_table(g, 0), accel, rays, hits, count, counters, grid_flags(g));
+    accel_run_kernel(grid_table(g, 0), accel, rays, hits, count, counters, grid_variant_flags(g));
 }
 
 void grid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
@@ -57,5 +51,5 @@ void grid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, 
 {
     const grid_accel *g = accel;
     accel_run_kernel(grid_table(g, 1), accel, rays, occluded, count, counters,
-                     grid_flags(g));
+                     grid_variant_flags(g));
 }

@@ -453,17 +453,10 @@ INLINE void kernel(const void *acc, const accel_ray *rays, void *out, size_t cou
             ((accel_hit *)out)[i] = h;
         }
         if (c) {
-            uint32_t steps = r.top_steps + r.bottom_steps;
-            c->rays++;
-            c->steps += steps;
+            accel_count_ray(c, i, r.top_steps + r.bottom_steps, r.empties, r.boxes, r.prims,
+                            r.skips);
             c->level_steps[0] += r.top_steps;
             c->level_steps[1] += r.bottom_steps;
-            c->empty_steps += r.empties;
-            c->box_tests += r.boxes;
-            c->prim_tests += r.prims;
-            c->mailbox_skips += r.skips;
-            if (c->ray_steps) c->ray_steps[i] = steps;
-            if (c->ray_prims) c->ray_prims[i] = r.prims;
         }
     }
 }
@@ -475,7 +468,7 @@ ACCEL_KERNEL_TABLE(inst_any_table, ANY_KERNEL)
 
 static unsigned flags_of(const inst_accel *a)
 {
-    return (a->naive ? ACCEL_V_NAIVE : 0u) | (a->spheres ? ACCEL_V_SPHERES : 0u);
+    return accel_variant_flags(a->naive, a->spheres, 0);
 }
 
 void inst_intersect(const void *acc, const accel_ray *rays, accel_hit *hits, size_t n,

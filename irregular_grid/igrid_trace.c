@@ -149,42 +149,15 @@ igrid_kernel(const igrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
             occ[i] = h.prim != ACCEL_MISS;
         else
             hits[i] = h;
-        if (c) {
-            c->rays++;
-            c->steps += steps;
-            c->empty_steps += empty;
-            c->prim_tests += tests;
-            c->mailbox_skips += skips;
-            c->box_tests += boxes;
-            if (c->ray_steps) c->ray_steps[i] = steps;
-            if (c->ray_prims) c->ray_prims[i] = tests;
-        }
+        if (c) accel_count_ray(c, i, steps, empty, boxes, tests, skips);
     }
 }
 
-static inline __attribute__((always_inline)) void
-igrid_hit_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
-                 unsigned f)
-{
-    igrid_kernel(a, rays, out, NULL, count, c, (f & ACCEL_V_NAIVE) != 0, (f & ACCEL_V_SPHERES) != 0,
-                 (f & ACCEL_V_OPT) != 0);
-}
-
-static inline __attribute__((always_inline)) void
-igrid_occ_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
-                 unsigned f)
-{
-    igrid_kernel(a, rays, NULL, out, count, c, (f & ACCEL_V_NAIVE) != 0, (f & ACCEL_V_SPHERES) != 0,
-                 (f & ACCEL_V_OPT) != 0);
-}
-
-ACCEL_KERNEL_TABLE(igrid_hit_table, igrid_hit_kernel)
-ACCEL_KERNEL_TABLE(igrid_occ_table, igrid_occ_kernel)
+ACCEL_KERNEL_PAIR(igrid, igrid_kernel)
 
 static unsigned igrid_flags(const igrid_accel *g)
 {
-    return (g->naive ? ACCEL_V_NAIVE : 0u) | (g->has_spheres ? ACCEL_V_SPHERES : 0u) |
-           (g->mailbox ? ACCEL_V_OPT : 0u);
+    return accel_variant_flags(g->naive, g->has_spheres, g->mailbox);
 }
 
 void igrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,

@@ -212,9 +212,9 @@ trace_packet(const lab_bvh *b, const accel_ray_prep *p, const int *valid, uint32
 
 static inline __attribute__((always_inline)) void
 lab_kernel(const lab_bvh *b, const accel_ray *rays, accel_hit *hits, uint8_t *occ, size_t count,
-           accel_counters *c, unsigned flags)
+           accel_counters *c, int naive, int spheres, int opt)
 {
-    const int naive = (flags & ACCEL_V_NAIVE) != 0, spheres = (flags & ACCEL_V_SPHERES) != 0;
+    (void)opt; /* the lab's kind has no switch of its own */
     const int any_hit = occ != NULL;
     for (size_t base = 0; base < count; base += 64) {
         uint32_t n = (uint32_t)(count - base < 64 ? count - base : 64);
@@ -246,38 +246,16 @@ lab_kernel(const lab_bvh *b, const accel_ray *rays, accel_hit *hits, uint8_t *oc
             } else {
                 hits[r] = accel_hit_miss();
             }
-            if (c) {
-                c->rays++;
-                c->steps += steps[i];
-                c->box_tests += boxes[i];
-                c->prim_tests += prims[i];
-                if (c->ray_steps) c->ray_steps[r] = steps[i];
-                if (c->ray_prims) c->ray_prims[r] = prims[i];
-            }
+            if (c) accel_count_ray(c, r, steps[i], 0, boxes[i], prims[i], 0);
         }
     }
 }
 
-static inline __attribute__((always_inline)) void
-lab_hit_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
-               unsigned flags)
-{
-    lab_kernel(a, rays, out, NULL, count, c, flags);
-}
-
-static inline __attribute__((always_inline)) void
-lab_occ_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
-               unsigned flags)
-{
-    lab_kernel(a, rays, NULL, out, count, c, flags);
-}
-
-ACCEL_KERNEL_TABLE(lab_hit_table, lab_hit_kernel)
-ACCEL_KERNEL_TABLE(lab_occ_table, lab_occ_kernel)
+ACCEL_KERNEL_PAIR(lab, lab_kernel)
 
 static unsigned lab_flags(const lab_bvh *b)
 {
-    return (b->naive ? ACCEL_V_NAIVE : 0u) | (b->store.prims.sphere_count ? ACCEL_V_SPHERES : 0u);
+    return accel_variant_flags(b->naive, b->store.prims.sphere_count > 0, 0);
 }
 
 static void lab_intersect(const void *a, const accel_ray *rays, accel_hit *hits, size_t n,

@@ -128,42 +128,17 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
         else
             hits[i] = h;
         if (c) {
-            c->rays++;
-            c->steps += steps;
-            c->empty_steps += empty;
-            c->prim_tests += tests;
-            c->mailbox_skips += skips;
-            c->box_tests += boxes;
+            accel_count_ray(c, i, steps, empty, boxes, tests, skips);
             for (int l = 0; l < NGRID_MAX_LEVELS; l++) c->level_steps[l] += level_steps[l];
-            if (c->ray_steps) c->ray_steps[i] = steps;
-            if (c->ray_prims) c->ray_prims[i] = tests;
         }
     }
 }
 
-static inline __attribute__((always_inline)) void
-ngrid_hit_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
-                 unsigned f)
-{
-    ngrid_kernel(a, rays, out, NULL, count, c, (f & ACCEL_V_NAIVE) != 0,
-                 (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0);
-}
-
-static inline __attribute__((always_inline)) void
-ngrid_occ_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
-                 unsigned f)
-{
-    ngrid_kernel(a, rays, NULL, out, count, c, (f & ACCEL_V_NAIVE) != 0,
-                 (f & ACCEL_V_SPHERES) != 0, (f & ACCEL_V_OPT) != 0);
-}
-
-ACCEL_KERNEL_TABLE(ngrid_hit_table, ngrid_hit_kernel)
-ACCEL_KERNEL_TABLE(ngrid_occ_table, ngrid_occ_kernel)
+ACCEL_KERNEL_PAIR(ngrid, ngrid_kernel)
 
 static unsigned ngrid_flags(const ngrid_accel *g)
 {
-    return (g->naive ? ACCEL_V_NAIVE : 0u) | (g->has_spheres ? ACCEL_V_SPHERES : 0u) |
-           (g->mailbox ? ACCEL_V_OPT : 0u);
+    return accel_variant_flags(g->naive, g->has_spheres, g->mailbox);
 }
 
 void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,

@@ -61,13 +61,14 @@ static int brute_build(const accel_scene *scene, const accel_params *params, int
 }
 
 /* One kernel for both queries (occ != NULL: any hit). The flags are
- * literals in every timed copy, so the sphere and naive branches vanish. */
+ * literals in every timed copy, so the sphere and naive branches vanish;
+ * brute has no option of its own (opt). */
 static inline __attribute__((always_inline)) void
 brute_kernel(const brute_accel *b, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
-             size_t count, accel_counters *c, unsigned flags)
+             size_t count, accel_counters *c, int naive, int spheres, int opt)
 {
+    (void)opt;
     const accel_scene *s = &b->store.prims;
-    const int naive = (flags & ACCEL_V_NAIVE) != 0, spheres = (flags & ACCEL_V_SPHERES) != 0;
     for (size_t i = 0; i < count; i++) {
         accel_ray_prep p;
         accel_hit h = accel_hit_miss();
@@ -87,35 +88,15 @@ brute_kernel(const brute_accel *b, const accel_ray *rays, accel_hit *hits, uint8
             occ[i] = h.prim != ACCEL_MISS;
         else
             hits[i] = h;
-        if (c) {
-            c->rays++;
-            c->prim_tests += tests;
-            if (c->ray_steps) c->ray_steps[i] = 0;
-            if (c->ray_prims) c->ray_prims[i] = tests;
-        }
+        if (c) accel_count_ray(c, i, 0, 0, 0, tests, 0);
     }
 }
 
-static inline __attribute__((always_inline)) void
-brute_hit_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
-                 unsigned flags)
-{
-    brute_kernel(a, rays, out, NULL, count, c, flags);
-}
-
-static inline __attribute__((always_inline)) void
-brute_occ_kernel(const void *a, const accel_ray *rays, void *out, size_t count, accel_counters *c,
-                 unsigned flags)
-{
-    brute_kernel(a, rays, NULL, out, count, c, flags);
-}
-
-ACCEL_KERNEL_TABLE(brute_hit_table, brute_hit_kernel)
-ACCEL_KERNEL_TABLE(brute_occ_table, brute_occ_kernel)
+ACCEL_KERNEL_PAIR(brute, brute_kernel)
 
 static unsigned brute_flags(const brute_accel *b)
 {
-    return (b->naive ? ACCEL_V_NAIVE : 0u) | (b->store.prims.sphere_count ? ACCEL_V_SPHERES : 0u);
+    return accel_variant_flags(b->naive, b->store.prims.sphere_count > 0, 0);
 }
 
 static void brute_intersect(const void *a, const accel_ray *rays, accel_hit *hits, size_t n,

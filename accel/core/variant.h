@@ -12,7 +12,8 @@
  * one copy per combination of the flags below with counters == NULL and the
  * flags as literals, so each timed copy holds no counting code and no
  * branch on a flag; and one counted copy that takes the flags at run time.
- * accel_run_kernel() picks the copy for a batch. This is the C form of the
+ * ACCEL_KERNEL_PAIR(name, KERNEL) does that for the usual kernel that serves
+ * both queries. accel_run_kernel() picks the copy for a batch. This is the C form of the
  * variant tables of Embree and madmann91/bvh (see ../shared/STYLE.md).
  *
  * Counters are switched off in exactly one place: accel_run_kernel applies
@@ -92,6 +93,35 @@ typedef struct {
         NAME##_counted,                                                                     \
         {NAME##_v0, NAME##_v1, NAME##_v2, NAME##_v3, NAME##_v4, NAME##_v5, NAME##_v6,       \
          NAME##_v7}};
+
+/* The flags of a built structure's switches. */
+static inline unsigned accel_variant_flags(int naive, int spheres, int opt)
+{
+    return (naive ? ACCEL_V_NAIVE : 0u) | (spheres ? ACCEL_V_SPHERES : 0u) | (opt ? ACCEL_V_OPT : 0u);
+}
+
+/* The usual case: one always-inline kernel serves both queries,
+ *
+ *     KERNEL(accel, rays, hits, occ, count, c, naive, spheres, opt)
+ *
+ * (occ == NULL: closest hits into hits; else any hit into occ), and the
+ * macro defines its two tables, NAME_hit_table and NAME_occ_table. In each
+ * copy one of hits and occ is a literal NULL, so a kernel tests `occ` for
+ * the query; one that wants it as a literal argument uses two
+ * ACCEL_KERNEL_TABLEs instead (bvh_single.c). */
+#define ACCEL_KERNEL_QUERY_(NAME, KERNEL, Q, HITS, OCC)                                     \
+    static inline __attribute__((always_inline)) void NAME##_##Q##_kernel_(                \
+        const void *a, const accel_ray *r, void *o, size_t n, accel_counters *c, unsigned f) \
+    {                                                                                       \
+        (void)o;                                                                            \
+        KERNEL(a, r, HITS, OCC, n, c, (f & ACCEL_V_NAIVE) != 0, (f & ACCEL_V_SPHERES) != 0, \
+               (f & ACCEL_V_OPT) != 0);                                                     \
+    }                                                                                       \
+    ACCEL_KERNEL_TABLE(NAME##_##Q##_table, NAME##_##Q##_kernel_)
+
+#define ACCEL_KERNEL_PAIR(NAME, KERNEL)                                                     \
+    ACCEL_KERNEL_QUERY_(NAME, KERNEL, hit, (accel_hit *)o, (uint8_t *)NULL)                 \
+    ACCEL_KERNEL_QUERY_(NAME, KERNEL, occ, (accel_hit *)NULL, (uint8_t *)o)
 
 /* Runs one batch with the copy for these flags: the counted copy when
  * counters are given (and compiled in), else the specialized one. */
