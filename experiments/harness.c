@@ -47,12 +47,6 @@ static int opt_accel(const cli_option *o, void *field, char **v, accel_error *er
 }
 
 #define OPT(f) offsetof(exp_ctx, f)
-static int opt_heat_scale(const cli_option *o, void *field, char **v, accel_error *err)
-{
-    (void)o;
-    return image_heat_scale_parse(v[0], field, err);
-}
-
 static const cli_option exp_options[] = {
     {"--quick", NULL, "smoke-test budget (tiny scenes, 1 repeat)", cli_flag, OPT(quick), 0, 0},
     {"--out", "DIR", "where <name>.csv and <name>.md go (default experiments/out)", cli_string,
@@ -74,12 +68,7 @@ static const cli_option exp_options[] = {
     {"--mesh", "FILE", "add a mesh (repeatable; default ../shared/scenes/*.off if present)",
      opt_mesh, OPT(meshes), 0, 0},
     {"--no-meshes", NULL, "built-in scenes only", cli_flag, OPT(no_meshes), 0, 0},
-    {"--heat-scale", "SPEC", "heatmap scale: auto (default), max=N, log, e.g. log,max=200",
-     opt_heat_scale, OPT(heat_scale), 0, 0},
-    {"--quiet", NULL, "no progress lines on stderr", cli_flag, OPT(quiet), 0, 0},
-    {"--progress-after", "S", "show progress of phases longer than S seconds (default 2)",
-     cli_double, OPT(progress_after), 0, 1e6},
-    {"--help", NULL, "this text", cli_flag, OPT(help), 0, 0},
+    CLI_COMMON_ROWS(exp_ctx),
 };
 #define OPTION_COUNT (sizeof exp_options / sizeof exp_options[0])
 

@@ -17,6 +17,7 @@
 #include <sys/stat.h>
 #include <time.h>
 
+#include "support.h"
 #include "test.h"
 #include "experiments/claims.h"
 #include "experiments/stats.h"
@@ -28,20 +29,6 @@
 
 static time_t process_start;
 __attribute__((constructor)) static void note_start(void) { process_start = time(NULL); }
-
-static char *slurp(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *buf = malloc((size_t)n + 1);
-    if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) n = 0;
-    if (buf) buf[n] = 0;
-    fclose(f);
-    return buf;
-}
 
 /* The quick report of this test run: made once per process (the smoke
  * test of test_report.c runs first when both are selected). */
@@ -71,7 +58,7 @@ static int each_file(const char *ext, void (*fn)(const char *path, char *text))
         if (sections_only && strncmp(e->d_name, "exp_", 4)) continue;
         char path[512];
         snprintf(path, sizeof path, DIR_OUT "/%s", e->d_name);
-        char *text = slurp(path);
+        char *text = test_read_file(path, NULL);
         if (text) fn(path, text), n++;
         free(text);
     }
@@ -232,7 +219,7 @@ TEST(report_quick_ties_not_wins)
 TEST(report_quick_summary_verdicts)
 {
     if (!quick_report()) return;
-    char *r = slurp(DIR_OUT "/REPORT.md");
+    char *r = test_read_file(DIR_OUT "/REPORT.md", NULL);
     CHECKF(r != NULL, DIR_OUT "/REPORT.md missing");
     if (!r) return;
     char *sum = strstr(r, "## Summary"), *contents = strstr(r, "## Contents");
@@ -316,7 +303,7 @@ TEST(report_svg_ticks)
     CHECK(svg_add(&pl, "s", x, y, NULL, NULL, 3, SVG_LINE | SVG_POINTS) == 0);
     CHECK(svg_write(&pl, "build/test_plot.svg") == 0);
     svg_free(&pl);
-    char *s = slurp("build/test_plot.svg");
+    char *s = test_read_file("build/test_plot.svg", NULL);
     CHECK(s && strstr(s, "&lt;title&gt; &amp; more") && strstr(s, "<polyline") && strstr(s, "</svg>"));
     free(s);
 }

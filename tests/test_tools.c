@@ -16,23 +16,10 @@
 #include "bench/csv.h"
 #include "bench/progress.h"
 #include "scene/scene.h"
+#include "support.h"
 #include "test.h"
 
 #define DIR "build/test_tools"
-
-static char *read_file(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *buf = malloc((size_t)n + 1);
-    if (buf && fread(buf, 1, (size_t)n, f) != (size_t)n) n = 0;
-    if (buf) buf[n] = 0;
-    fclose(f);
-    return buf;
-}
 
 /* The text written to a tmpfile, which is closed. */
 static void slurp(FILE *f, char *text, size_t size)
@@ -52,8 +39,8 @@ static int run(const char *cmd, char **out, char **err)
     char full[4096];
     snprintf(full, sizeof full, "%s >" DIR "/out.txt 2>" DIR "/err.txt", cmd);
     int st = system(full);
-    if (out) *out = read_file(DIR "/out.txt");
-    if (err) *err = read_file(DIR "/err.txt");
+    if (out) *out = test_read_file(DIR "/out.txt", NULL);
+    if (err) *err = test_read_file(DIR "/err.txt", NULL);
     return st != -1 && WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
@@ -450,7 +437,7 @@ TEST(tools_trace_flushes_output_in_order)
     int st = system("bin/trace --size 16x16 --repeat 1 --build-repeat 1 --scene soup:tris=500 "
                     "--progress-after 0 > " DIR "/both.txt 2>&1");
     CHECK(st == 0);
-    char *all = read_file(DIR "/both.txt");
+    char *all = test_read_file(DIR "/both.txt", NULL);
     if (!all) return;
     const char *order[] = {"scene soup", "trace: build bvh: done in", "accel bvh:",
                            "trace: trace primary with bvh: done in", "  primary "};
@@ -548,7 +535,7 @@ static void check_experiment_csv(const char *exp, const char *spec_with_comma)
     snprintf(cmd, sizeof cmd, "bin/%s --quick --quiet --out " DIR "/exp", exp);
     CHECKF(run(cmd, NULL, NULL) == 0, "%s failed", exp);
     snprintf(path, sizeof path, DIR "/exp/%s.csv", exp);
-    char *text = read_file(path);
+    char *text = test_read_file(path, NULL);
     CHECKF(text != NULL, "%s not written", path);
     if (!text) return;
     csv_doc d;
@@ -581,7 +568,7 @@ TEST(tools_exp_threads_takes_threads_as_largest_count)
         snprintf(cmd, sizeof cmd, "bin/exp_threads --quick --quiet --threads %d --out " DIR
                  "/exp", t);
         CHECK(run(cmd, NULL, NULL) == 0);
-        char *text = read_file(DIR "/exp/exp_threads.csv");
+        char *text = test_read_file(DIR "/exp/exp_threads.csv", NULL);
         if (!text) continue;
         csv_doc d;
         csv_read(text, &d);

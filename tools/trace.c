@@ -55,12 +55,6 @@ static int opt_accel(const cli_option *o, void *field, char **v, accel_error *er
     return 0;
 }
 
-static int opt_heat_scale(const cli_option *o, void *field, char **v, accel_error *err)
-{
-    (void)o;
-    return image_heat_scale_parse(v[0], field, err);
-}
-
 static int opt_heatmap(const cli_option *o, void *field, char **v, accel_error *err)
 {
     const char **hm = field;
@@ -97,8 +91,6 @@ static const cli_option trace_options[] = {
      0, 0},
     {"--heatmap", "steps|prims F.png", "cost per pixel with a colour scale (F.<set>.png if several)",
      opt_heatmap, OPT(heatmap), 0, 0},
-    {"--heat-scale", "SPEC", "heatmap scale: auto (0..image max, default), max=N (fixed, so\n"
-     "images compare), log (log(1+v)); e.g. log,max=200", opt_heat_scale, OPT(heat_scale), 0, 0},
     {"--dump-rays", "F", "write the ray set(s) as FORMATS.md .rays (F.<set>.rays if several)",
      cli_string, OPT(dump_rays), 0, 0},
     {"--dump-hits", "F", "write the hits of the last accelerator (F.<set>.hits if several)",
@@ -114,10 +106,7 @@ static const cli_option trace_options[] = {
      OPT(ao_samples), 1, 4096},
     {"--ao-radius", "R", "ambient occlusion ray length (default 0: 10% of the scene diagonal)",
      cli_float, OPT(ao_radius), 0, 1e30},
-    {"--quiet", NULL, "no progress lines on stderr", cli_flag, OPT(quiet), 0, 0},
-    {"--progress-after", "S", "show progress of phases longer than S seconds (default 2)",
-     cli_double, OPT(progress_after), 0, 1e6},
-    {"--help", NULL, "this text", cli_flag, OPT(help), 0, 0},
+    CLI_COMMON_ROWS(options),
 };
 #define OPTION_COUNT (sizeof trace_options / sizeof trace_options[0])
 

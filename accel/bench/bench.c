@@ -239,35 +239,3 @@ int bench_build(const char *spec, const accel_scene *s, int threads, int repeats
     stats->ms = timing->median;
     return 0;
 }
-
-void bench_machine_info(char *cpu, size_t cpu_n, int *cores)
-{
-    snprintf(cpu, cpu_n, "unknown CPU");
-    FILE *f = fopen("/proc/cpuinfo", "r");
-    if (f) {
-        char line[512];
-        while (fgets(line, sizeof line, f)) {
-            if (strncmp(line, "model name", 10) != 0) continue;
-            char *colon = strchr(line, ':');
-            if (!colon) continue;
-            colon++;
-            while (*colon == ' ') colon++;
-            colon[strcspn(colon, "\n")] = 0;
-            snprintf(cpu, cpu_n, "%s", colon);
-            break;
-        }
-        fclose(f);
-    }
-    *cores = accel_cpu_count();
-}
-
-const char *bench_compiler(void)
-{
-#if defined(__clang__)
-    return "clang " __clang_version__;
-#elif defined(__GNUC__)
-    return "gcc " __VERSION__;
-#else
-    return "unknown compiler";
-#endif
-}

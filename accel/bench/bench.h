@@ -95,9 +95,6 @@ int bench_build(const char *spec, const accel_scene *s, int threads, int repeats
                 const accel_kind **kind, void **accel, accel_build_stats *stats,
                 accel_timing *timing, bench_progress *progress, accel_error *err);
 
-/* Machine, compiler, flags and commit, for reports (one line each). */
-void bench_machine_info(char *cpu, size_t cpu_n, int *cores);
-const char *bench_compiler(void);
 
 #ifdef __cplusplus
 }

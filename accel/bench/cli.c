@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include "bench/cli.h"
+#include "bench/image.h"
 
 int cli_exit_of(int accel_status)
 {
@@ -228,4 +229,10 @@ int cli_check_output(const char *opt, const char *path, const char *exts, accel_
     }
     return accel_fail(err, ACCEL_ERR_SPEC, "%s %s: the file name must end in one of: %s", opt,
                       path, exts);
+}
+
+int cli_heat_scale(const cli_option *o, void *field, char **v, accel_error *err)
+{
+    (void)o;
+    return image_heat_scale_parse(v[0], field, err);
 }

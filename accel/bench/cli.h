@@ -62,6 +62,19 @@ int cli_int(const cli_option *o, void *field, char **v, accel_error *err);    /*
 int cli_u64(const cli_option *o, void *field, char **v, accel_error *err);    /* uint64_t, decimal */
 int cli_float(const cli_option *o, void *field, char **v, accel_error *err);  /* float in [lo, hi] */
 int cli_double(const cli_option *o, void *field, char **v, accel_error *err); /* double in [lo, hi] */
+int cli_heat_scale(const cli_option *o, void *field, char **v, accel_error *err); /* image_heat_scale */
+
+/* The rows every tool shares, for an options struct T with the fields
+ * heat_scale (image_heat_scale), quiet, help (int) and progress_after
+ * (double, seconds). */
+#define CLI_COMMON_ROWS(T)                                                                  \
+    {"--heat-scale", "SPEC", "heatmap scale: auto (0..image max, default), max=N (fixed, so\n" \
+     "images compare), log (log(1+v)); e.g. log,max=200", cli_heat_scale,                  \
+     offsetof(T, heat_scale), 0, 0},                                                        \
+    {"--quiet", NULL, "no progress lines on stderr", cli_flag, offsetof(T, quiet), 0, 0},   \
+    {"--progress-after", "S", "show progress of phases longer than S seconds (default 2)",  \
+     cli_double, offsetof(T, progress_after), 0, 1e6},                                      \
+    {"--help", NULL, "this text", cli_flag, offsetof(T, help), 0, 0}
 
 /* A vector option "X,Y,Z" and whether it was given. */
 typedef struct {
