@@ -114,9 +114,10 @@ lab:
 	@test -f lab/student.c || { sed -e 's/accel_kind_starter/accel_kind_student/' \
 	  -e 's/"starter"/"student"/' -e 's@^ \* starter.c - @ * student.c - @' lab/starter.c > lab/student.c && \
 	  echo "lab: made lab/student.c from lab/starter.c: your kind is 'student'"; }
-	$(MAKE) BUILD=build-lab BIN=bin-lab LAB=1 bin-lab/lab bin-lab/trace
+	$(MAKE) BUILD=build-lab BIN=bin-lab LAB=1 bin-lab/lab bin-lab/trace bin-lab/run_tests \
+	  $(patsubst $(BIN)/%,bin-lab/%,$(EXP_BINS))
 	@if [ -n "$(STEP)" ]; then ./bin-lab/lab --step $(STEP) --out lab/out; \
-	 else echo "lab: built bin-lab/trace with your kind 'student'; make lab STEP=1..5 checks a step"; fi
+	 else echo "lab: built bin-lab/ (trace, run_tests, experiments) with your kind 'student'; make lab STEP=1..5 checks a step"; fi
 
 clean:
 	rm -rf build build-san bin bin-san build-lab bin-lab
