@@ -109,13 +109,17 @@ fuzz:
 
 # The lab (LAB.md): the student's kind, lab/student.c, made from the starter
 # on first use and registered only in this build (build-lab/, bin-lab/).
-# make lab STEP=n runs step n's check on it.
+# make lab STEP=n runs step n's check on it, writing its images to lab/out/.
+# The build is quiet (-s): only the compiler's warnings and errors show, so
+# the check's report is not buried under link lines.
 lab:
 	@test -f lab/student.c || { sed -e 's/accel_kind_starter/accel_kind_student/' \
 	  -e 's/"starter"/"student"/' -e 's@^ \* starter.c - @ * student.c - @' lab/starter.c > lab/student.c && \
 	  echo "lab: made lab/student.c from lab/starter.c: your kind is 'student'"; }
-	$(MAKE) BUILD=build-lab BIN=bin-lab LAB=1 bin-lab/lab bin-lab/trace bin-lab/run_tests \
-	  $(patsubst $(BIN)/%,bin-lab/%,$(EXP_BINS))
+	@mkdir -p lab/out
+	@echo "lab: building bin-lab/ (the first time takes minutes: make -j2 lab uses 2 cores)"
+	@$(MAKE) -s --no-print-directory BUILD=build-lab BIN=bin-lab LAB=1 bin-lab/lab bin-lab/trace \
+	  bin-lab/run_tests $(patsubst $(BIN)/%,bin-lab/%,$(EXP_BINS))
 	@if [ -n "$(STEP)" ]; then ./bin-lab/lab --step $(STEP) --out lab/out; \
 	 else echo "lab: built bin-lab/ (trace, run_tests, experiments) with your kind 'student'; make lab STEP=1..5 checks a step"; fi
 

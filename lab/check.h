@@ -19,7 +19,7 @@ typedef struct {
     const accel_kind *kind; /* the kind under test (registered or not) */
     const char *kv;         /* its parameters, the part of a spec after "name:" */
     int threads;            /* step 5 */
-    const char *out_dir;    /* NULL: write no images; else the depth view and step 5's frame */
+    const char *out_dir;    /* NULL: no images; else an existing folder for step 2's depth views */
     int quick;              /* smaller sizes (the self-test in `make test`) */
 } lab_subject;
 

@@ -75,7 +75,8 @@ static const accel_param_def lab_params[] = {
  *  - if count <= b->max_leaf, make it a leaf (left_first = first);
  *  - else split at the object median along the largest axis of the
  *    centroids' bounds (sort or partially sort order[first..] by centroid,
- *    e.g. with qsort or nth-element), take two new nodes
+ *    e.g. with qsort_r, whose context argument carries the axis, or an
+ *    nth-element of your own), take two new nodes
  *    (b->node_count, b->node_count + 1), and recurse into both halves;
  *  - keep b->depth and b->leaf_count up to date.
  * The node pool holds 2 * prim_count nodes: enough for any binary tree.
@@ -195,13 +196,15 @@ trace_ray(const lab_bvh *b, const accel_ray_prep *p, int any_hit, int naive, int
  * ray" and early-out), the closest hit kept per ray. To do (step 4); until
  * then each ray is traced alone, which is correct but not a packet.
  * Fill hit_local[i] (local id or ACCEL_MISS), t[i], u[i], v[i], and the
- * counters as in step 2.
+ * per-ray counters as in step 2; count each node the packet enters (once
+ * for the whole packet) in *packet_steps: the check's sharing figure.
  */
 static inline __attribute__((always_inline)) void
 trace_packet(const lab_bvh *b, const accel_ray_prep *p, const int *valid, uint32_t n,
              int any_hit, int naive, int spheres, uint32_t *hit_local, float *t, float *u,
-             float *v, uint32_t *steps, uint32_t *boxes, uint32_t *prims)
+             float *v, uint32_t *steps, uint32_t *boxes, uint32_t *prims, uint32_t *packet_steps)
 {
+    (void)packet_steps;
     for (uint32_t i = 0; i < n; i++) /* TODO step 4: one walk for all n rays */
         hit_local[i] = valid[i] ? trace_ray(b, &p[i], any_hit, naive, spheres, &t[i], &u[i],
                                             &v[i], &steps[i], &boxes[i], &prims[i])
@@ -228,8 +231,10 @@ lab_kernel(const lab_bvh *b, const accel_ray *rays, accel_hit *hits, uint8_t *oc
             u[i] = v[i] = 0.0f;
         }
         if (b->packet) {
+            uint32_t packet_steps = 0;
             trace_packet(b, p, valid, n, any_hit, naive, spheres, local, t, u, v, steps, boxes,
-                         prims);
+                         prims, &packet_steps);
+            if (c) c->packet_steps += packet_steps;
         } else {
             for (uint32_t i = 0; i < n; i++)
                 local[i] = valid[i] ? trace_ray(b, &p[i], any_hit, naive, spheres, &t[i], &u[i],
