@@ -176,7 +176,7 @@ static void compare_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
         exp_anim_row(x, "two_level", &s, cf->spec, cf->threads, 0, "bytes_read_per_tri", &r);
     }
     exp_md_table(x, "configuration|primary Mrays/s [95% CI]|speed against `bvh`|shadow Mrays/s|"
-                    "speed against `bvh`|diffuse Mrays/s|speed against `bvh`");
+                    "speed against `bvh`|diffuse Mrays/s|speed against `bvh`|all three: speed against `bvh`");
     for (int c = 0; c < g.count; c++) {
         const exp_cfg *cf = &g.cfg[c];
         if (!cf->ok) continue;
@@ -194,7 +194,9 @@ static void compare_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
             snprintf(q, sizeof q, "disagreements_%s", bench_set_name(set_bits[k]));
             exp_anim_row(x, "two_level", &s, cf->spec, cf->threads, 0, q, &d);
         }
-        exp_md(x, "|\n");
+        exp_est all = exp_group_speedup(&g, 0, c, SETS);
+        exp_md(x, "| %s |\n", c ? exp_anim_ratio(b2, sizeof b2, &all, g.floor) : "1.00x");
+        exp_anim_row(x, "two_level", &s, cf->spec, cf->threads, 0, "speed_vs_first_all", &all);
     }
     exp_group_note(&g);
     /* Findings: the fastest combination and flattened structure, the control, the answers. */
