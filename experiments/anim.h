@@ -5,7 +5,7 @@
  * Refit against rebuild: two chains of the same two-level structure follow
  * the animated scene frame by frame, one refitting the changed meshes'
  * bottom BVHs, one rebuilding them (update ms per frame, medians over the
- * frames); at k = 1, 5, 20 frames the refit tree is timed against a fresh
+ * frames); at k = 1, 5, 20, 100 frames the refit tree is timed against a fresh
  * build of frame k in paired rounds (primary plus shadow rays, 1 thread).
  * Frames per second: the fastest two-level configuration (refit per frame)
  * and the fastest flattened one (a full build per frame) render frames 1..N
@@ -28,7 +28,7 @@ typedef struct {
      * build's after the last k (> 0: slower), and of refit's update speed
      * over a rebuild's (> 0: faster), with the numbers that decide. */
     int loss_cmp, update_cmp;
-    char loss_ev[512], update_ev[512];
+    char loss_ev[1024], update_ev[512];
 } exp_anim;
 
 /* Refit against rebuild on a->anim (tables, CSV part "refit", findings). */

@@ -17,7 +17,7 @@
  * BVH by refit (boxes recomputed bottom-up, the tree kept: Wald, Boulos and
  * Shirley, ACM TOG 26(1), 2007) against a rebuild, the top level's rebuild,
  * and the trace time of a tree refit through k frames against a fresh build
- * of frame k (paired rounds, k = 1, 5, 20): refit keeps splits chosen for
+ * of frame k (paired rounds, k = 1, 5, 20, 100): refit keeps splits chosen for
  * the old shape.
  * Part 3: frames per second of `animated` at 800x600, primary plus shadow
  * rays, update included (refit for the two-level structure, a full build for
@@ -289,7 +289,9 @@ static void verdicts(exp_ctx *x, study *st, const exp_anim *an)
                     st->build_ok, st->scenes, st->mem_ok, st->slower);
     const char *v = an->update_cmp > 0 && an->loss_cmp > 0 ? EXP_CONFIRMED
                   : an->update_cmp <= 0 && an->loss_cmp <= 0 ? EXP_REFUTED : EXP_PARTLY;
-    exp_verdict(x, "refit", v, an->anim, "`%s`: %s; %s", an->refit, an->update_ev, an->loss_ev);
+    exp_verdict(x, "refit", v, an->anim, "`%s`: %s; the time of primary plus shadow rays on the "
+                "tree refit through k frames against a fresh build changes by %s", an->refit,
+                an->update_ev, an->loss_ev);
 }
 
 int main(int argc, char **argv)
