@@ -40,7 +40,10 @@ void exp_anim_fps(exp_ctx *x, exp_anim *a);
 /* anim=SPEC plus frame=N ("animated:instances=48,frame=3"). */
 void exp_anim_frame_spec(char *buf, size_t n, const char *anim, int frame);
 /* One CSV record of exp_twolevel's schema:
- * part,scene,triangles,config,threads,frame,quantity,median,lo,hi,n. */
+ * part,scene,triangles,config,threads,frame,quantity,median,lo,hi,n, where
+ * part is two_level (frame 0), refit (frame: k, the frames of refit; for the
+ * update rows, the frames in their medians) or fps (frame: frames rendered);
+ * n is the samples of the estimate (for a count of disagreements: the rays). */
 void exp_anim_row(exp_ctx *x, const char *part, const accel_scene *s, const char *config,
                   int threads, int frame, const char *quantity, const exp_est *e);
 /* "1.23x [1.10, 1.30]", with " (a tie)" when the ratio stays within floor. */
