@@ -48,6 +48,21 @@ const exp_claim exp_claims[] = {
      "exp_threads"},
     {"threads-100m", "lecture", "100M rays/s",
      "multithreading \"easily\" pushes past 100M rays/s", "exp_threads"},
+    {"realtime-animated", "lecture", "real time, animated",
+     "800\xc3\x97" "600 at 20 fps, primary plus shadow rays, for an animated scene of about 100k "
+     "triangles with its structure updated every frame (issue 12's target for the lecture's "
+     "real-time claim and lab)",
+     "exp_twolevel"},
+    {"two-level", "study", "two-level against flattened",
+     "a two-level structure (a top level over the instances, one bottom level per mesh, rays "
+     "moved to object space: the lab's step 3) builds faster and needs less memory than one "
+     "flattened BVH over the world-space triangles (step 1), and pays for it in trace speed",
+     "exp_twolevel"},
+    {"refit", "study", "refit against rebuild",
+     "refitting a deforming mesh's BVH (boxes updated, the tree kept; Wald, Boulos and Shirley "
+     "2007) costs much less per frame than rebuilding it, and the refit tree traces more slowly "
+     "as the frames go by",
+     "exp_twolevel"},
     {"error-time", "request", "error against run time",
      "error against run time: the lowest image error in a fixed time, and what robust kernels "
      "cost",

@@ -178,7 +178,7 @@ int exp_group_add(exp_group *g, const char *spec, int threads)
         if (t->batch > 1000) t->batch = 1000;
     }
     free(sc.hits), free(sc.occ);
-    for (int d = 0; d < idx; d++)
+    for (int d = 0; d < idx && !g->keep_same; d++)
         if (g->cfg[d].ok && same_structure(&g->cfg[d], c, g->mask)) {
             c->same_as = d;
             snprintf(c->why, sizeof c->why, "the same structure as `%s` (equal build statistics "

@@ -69,6 +69,8 @@ typedef struct {
     int per_ray;        /* keep per-ray steps and tests of the primary set */
     int time_builds;    /* time builds in interleaved rounds (default 1) */
     double collapse_ms; /* leave out a configuration whose first pass is longer (0: never) */
+    int keep_same;      /* measure configurations of the same structure too (a control whose
+                           difference the counts cannot show, e.g. instanced:world=flat) */
     /* Results of exp_group_run. */
     double aa_samples[4][EXP_MAX_SAMPLES];
     exp_est aa;         /* configuration 0 against itself: paired ratio over the mask */

@@ -32,7 +32,7 @@ extra=()
 for spec in ${ACCEL:-}; do extra+=(--accel "$spec"); done
 read -r load_start _ < /proc/loadavg || load_start="?"
 # Experiments in the order the report reads them.
-order="exp_step_cost exp_grid_resolution exp_grid_packet exp_nested_grid exp_sah exp_binning exp_packets exp_wide exp_threads exp_scaling exp_error_time exp_time_to_image exp_stability"
+order="exp_step_cost exp_grid_resolution exp_grid_packet exp_nested_grid exp_sah exp_binning exp_packets exp_wide exp_threads exp_twolevel exp_scaling exp_error_time exp_time_to_image exp_stability"
 start=$(date +%s)
 ran=()
 for e in $order; do

@@ -1,0 +1,366 @@
+/*
+ * exp_twolevel - scenes of many meshes (issue 12's closing questions):
+ * two-level structures against flattened ones, refit against rebuild, and
+ * the frames per second of an animated scene against the lecture's 20.
+ *
+ * Part 1, per multi-mesh scene (`field`; `animated` at frame 0): build ms,
+ * memory and Mrays/s on primary, shadow and diffuse rays at the real-time
+ * image (800x600), 1 thread, in interleaved rounds (group.h), for the
+ * flattened kinds (every instance's triangles in world space: the lab's
+ * step 1) and the two-level combinations instanced:top=bvh|grid,
+ * bottom=bvh|grid (step 3: rays moved to object space); instanced:world=flat
+ * (world triangles read instead of recomputed) once, on `animated`, as a
+ * control. Speeds are paired ratios to the flattened bvh of the same rounds.
+ * Every answer is compared with the flattened bvh's (FORMATS.md rule): the
+ * tables count disagreements, which must be 0.
+ * Part 2, on `animated`: the per-frame update of the deforming mesh's bottom
+ * BVH by refit (boxes recomputed bottom-up, the tree kept: Wald, Boulos and
+ * Shirley, ACM TOG 26(1), 2007) against a rebuild, the top level's rebuild,
+ * and the trace time of a tree refit through k frames against a fresh build
+ * of frame k (paired rounds, k = 1, 5, 20, 100): refit keeps splits chosen for
+ * the old shape.
+ * Part 3: frames per second of `animated` at 800x600, primary plus shadow
+ * rays, update included (refit for the two-level structure, a full build for
+ * a flattened one), 1 and 2 threads, for the fastest two-level and the
+ * fastest flattened configuration of part 1, against the lecture's 20 fps.
+ * Issue 12 aims at about 100k triangles: instances=48 gives 100,288.
+ *
+ *   bin/exp_twolevel [--scene SPEC]... [--anim SPEC] [harness options]
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "anim.h"
+#include "group.h"
+#include "bench/cli.h"
+#include "rays/rays.h"
+
+#define SETS (BENCH_PRIMARY | BENCH_SHADOW | BENCH_DIFFUSE)
+#define FRAME (BENCH_PRIMARY | BENCH_SHADOW)
+#define CONTROL "instanced:world=flat"
+#define TRI_BYTES 36.0 /* nine floats: a triangle a two-level kind reads from its scene */
+#define MAX_SCENES 8
+
+static const char *const defaults[] = {
+    "bvh", "bvh:width=8", "grid", "nested_grid", "instanced:top=bvh,bottom=bvh",
+    "instanced:top=grid,bottom=bvh", "instanced:top=bvh,bottom=grid",
+    "instanced:top=grid,bottom=grid", CONTROL};
+static const int set_bits[3] = {BENCH_PRIMARY, BENCH_SHADOW, BENCH_DIFFUSE};
+
+typedef struct {
+    exp_text findings, ev_two, two_scenes;
+    int scenes, build_ok, mem_ok, slower; /* part 1's verdict: scenes where each holds */
+    char two[256], flat[256]; /* part 3's configurations (from `animated`) */
+    char refit[256];          /* part 2's: the fastest two-level with bottom=bvh */
+} study;
+
+static int is_two(const char *spec) { return !strncmp(spec, "instanced", 9); }
+
+/* Bytes a configuration needs to trace: its own (a flattened kind holds its
+ * copy of the triangles) plus, for a two-level one, the triangles it reads
+ * from the scene: the meshes once, or the flattened scene (world=flat). */
+static double bytes_read(const exp_cfg *c, const accel_scene *s)
+{
+    double b = (double)c->build.bytes;
+    if (!is_two(c->spec)) return b;
+    if (strstr(c->spec, "world=flat") || !s->instances) return b + TRI_BYTES * s->tri_count;
+    for (uint32_t m = 0; m < s->instances->mesh_count; m++)
+        b += TRI_BYTES * s->instances->meshes[m].tri_count;
+    return b;
+}
+
+/* Disagreements of every measured configuration with configuration 0, per
+ * set: hits by the FORMATS.md rule, occlusion bit by bit. -1: not checked. */
+static void agreement(exp_ctx *x, exp_group *g, long long (*dis)[3])
+{
+    for (int c = 0; c < g->count; c++) dis[c][0] = dis[c][1] = dis[c][2] = -1;
+    if (!g->cfg[0].ok) return;
+    size_t most = 1;
+    for (int k = 0; k < 3; k++)
+        if (g->mask & set_bits[k]) {
+            size_t n = bench_sets_get(g->sets, set_bits[k])->count;
+            most = n > most ? n : most;
+        }
+    accel_hit *ref = malloc(most * sizeof *ref), *h = malloc(most * sizeof *h);
+    uint8_t *ro = malloc(most), *o = malloc(most);
+    if (!ref || !h || !ro || !o) exit(CLI_EXIT_INTERNAL);
+    int t = accel_cpu_count(); /* not timed: every core */
+    bench_progress_begin(x->progress, "answers against the first configuration", 0, 0);
+    for (int k = 0; k < 3; k++) {
+        if (!(g->mask & set_bits[k])) continue;
+        const rays_set *r = bench_sets_get(g->sets, set_bits[k]);
+        const exp_cfg *b = &g->cfg[0];
+        if (k == 1) accel_trace_occluded(b->kind, b->accel, r->rays, ro, r->count, t, NULL);
+        else accel_trace(b->kind, b->accel, r->rays, ref, r->count, t, NULL);
+        for (int c = 0; c < g->count; c++) {
+            const exp_cfg *cf = &g->cfg[c];
+            if (!cf->ok) continue;
+            long long bad = 0;
+            if (k == 1) {
+                accel_trace_occluded(cf->kind, cf->accel, r->rays, o, r->count, t, NULL);
+                for (size_t i = 0; i < r->count; i++) bad += o[i] != ro[i];
+            } else {
+                accel_trace(cf->kind, cf->accel, r->rays, h, r->count, t, NULL);
+                hits_diff d = hits_compare(ref, h, r->count);
+                bad = (long long)(d.holes + d.false_hits + d.disagreements);
+            }
+            dis[c][k] = bad;
+        }
+    }
+    bench_progress_end(x->progress);
+    free(ref), free(h), free(ro), free(o);
+}
+
+/* The configuration of one family (two-level or flattened, the control left
+ * out) with the shortest frame over mask, plus its build when add_build. */
+static int best_of(const exp_group *g, int mask, int two, int add_build)
+{
+    int best = -1;
+    double best_ms = 0;
+    for (int c = 0; c < g->count; c++) {
+        const exp_cfg *cf = &g->cfg[c];
+        if (!cf->ok || is_two(cf->spec) != two || !strcmp(cf->spec, CONTROL)) continue;
+        double ms = exp_group_ns(g, c, mask).median * (double)exp_group_rays(g, c, mask) / 1e6;
+        if (add_build) ms += cf->build_ms.median;
+        if (best < 0 || ms < best_ms) best = c, best_ms = ms;
+    }
+    return best;
+}
+
+static void compare_scene(exp_ctx *x, study *st, const char *spec, const exp_list *list, int control)
+{
+    accel_scene s;
+    exp_scene(x, spec, &s);
+    bench_sets sets;
+    exp_sets_wh(x, &s, SETS, x->rt_size[0], x->rt_size[1], 1, &sets);
+    const accel_instances *in = s.instances;
+    exp_md(x, "\n### %s: %u triangles, %u instances of %u meshes, %dx%d\n", s.name, s.tri_count,
+           in ? in->instance_count : 1, in ? in->mesh_count : 1, x->rt_size[0], x->rt_size[1]);
+    exp_group g;
+    exp_group_init(&g, x, &s, &sets, SETS);
+    g.collapse_ms = x->quick ? 1000 : 5000;
+    g.keep_same = control; /* the control has the counts of instanced:top=bvh,bottom=bvh */
+    for (int i = 0; i < list->count; i++)
+        if (control || strcmp(list->spec[i], CONTROL)) exp_group_add(&g, list->spec[i], 0);
+    /* 800x600 passes are long: the budget gives slow ones few rounds, never under 3. */
+    int least = x->repeats < 3 ? x->repeats : 3;
+    for (int c = 0; c < g.count; c++)
+        if (g.cfg[c].ok && g.cfg[c].want < least) g.cfg[c].want = least;
+    exp_group_run(&g);
+    long long (*dis)[3] = calloc((size_t)g.count + 1, sizeof *dis);
+    if (!dis) exit(CLI_EXIT_INTERNAL);
+    agreement(x, &g, dis);
+    const exp_cfg *base = &g.cfg[0];
+    char b1[128], b2[128], b3[128], b4[128], b5[128], b6[128];
+    exp_md_table(x, "configuration|build ms [95% CI]|build speed against `bvh`|memory MB|"
+                    "B/triangle|B/triangle with the triangles it reads|nodes/ray|prims/ray|"
+                    "disagreements with `bvh` (primary/shadow/diffuse)");
+    for (int c = 0; c < g.count; c++) {
+        const exp_cfg *cf = &g.cfg[c];
+        if (!cf->ok) continue;
+        exp_est br;
+        int m = cf->build_ms.n < base->build_ms.n ? cf->build_ms.n : base->build_ms.n;
+        exp_est_ratio(base->build_samples, cf->build_samples, m, &br);
+        double bpt = (double)cf->build.bytes / s.tri_count, rpt = bytes_read(cf, &s) / s.tri_count;
+        exp_md(x, "| `%s` | %s | %s | %.2f | %.1f | %.1f | %.1f | %.1f | %lld / %lld / %lld |\n",
+               cf->spec, exp_fmt_est(b1, sizeof b1, &cf->build_ms, 2),
+               c ? exp_anim_ratio(b2, sizeof b2, &br, g.floor) : "1.00x", cf->build.bytes / 1e6, bpt,
+               rpt, exp_group_steps(&g, c, SETS), exp_group_prims(&g, c, SETS), dis[c][0],
+               dis[c][1], dis[c][2]);
+        exp_est e = exp_est_one(bpt, 1), r = exp_est_one(rpt, 1), by = exp_est_one((double)cf->build.bytes, 1);
+        exp_anim_row(x, "two_level", &s, cf->spec, cf->threads, 0, "build_ms", &cf->build_ms);
+        exp_anim_row(x, "two_level", &s, cf->spec, cf->threads, 0, "build_speed_vs_first", &br);
+        exp_anim_row(x, "two_level", &s, cf->spec, cf->threads, 0, "bytes", &by);
+        exp_anim_row(x, "two_level", &s, cf->spec, cf->threads, 0, "bytes_per_tri", &e);
+        exp_anim_row(x, "two_level", &s, cf->spec, cf->threads, 0, "bytes_read_per_tri", &r);
+    }
+    exp_md_table(x, "configuration|primary Mrays/s [95% CI]|speed against `bvh`|shadow Mrays/s|"
+                    "speed against `bvh`|diffuse Mrays/s|speed against `bvh`|all three: speed against `bvh`");
+    for (int c = 0; c < g.count; c++) {
+        const exp_cfg *cf = &g.cfg[c];
+        if (!cf->ok) continue;
+        exp_md(x, "| `%s` ", cf->spec);
+        for (int k = 0; k < 3; k++) {
+            exp_est mr = exp_group_mrays(&g, c, set_bits[k]), sp = exp_group_speedup(&g, 0, c, set_bits[k]);
+            exp_md(x, "| %s | %s ", exp_fmt_est(b1, sizeof b1, &mr, 2),
+                   c ? exp_anim_ratio(b2, sizeof b2, &sp, g.floor) : "1.00x");
+            char q[64];
+            snprintf(q, sizeof q, "mrays_%s", bench_set_name(set_bits[k]));
+            exp_anim_row(x, "two_level", &s, cf->spec, cf->threads, 0, q, &mr);
+            snprintf(q, sizeof q, "speed_vs_first_%s", bench_set_name(set_bits[k]));
+            exp_anim_row(x, "two_level", &s, cf->spec, cf->threads, 0, q, &sp);
+            exp_est d = exp_est_one((double)dis[c][k], (int)exp_group_rays(&g, c, set_bits[k]));
+            snprintf(q, sizeof q, "disagreements_%s", bench_set_name(set_bits[k]));
+            exp_anim_row(x, "two_level", &s, cf->spec, cf->threads, 0, q, &d);
+        }
+        exp_est all = exp_group_speedup(&g, 0, c, SETS);
+        exp_md(x, "| %s |\n", c ? exp_anim_ratio(b2, sizeof b2, &all, g.floor) : "1.00x");
+        exp_anim_row(x, "two_level", &s, cf->spec, cf->threads, 0, "speed_vs_first_all", &all);
+    }
+    exp_group_note(&g);
+    /* Findings: the fastest combination and flattened structure, the control, the answers. */
+    int two = exp_group_best(&g, SETS, 0, g.count, "instanced:top="), flat = best_of(&g, SETS, 0, 0);
+    if (two >= 0 && base->ok) {
+        const exp_cfg *tc = &g.cfg[two];
+        exp_est sp[3], br;
+        for (int k = 0; k < 3; k++) sp[k] = exp_group_speedup(&g, 0, two, set_bits[k]);
+        int m = tc->build_ms.n < base->build_ms.n ? tc->build_ms.n : base->build_ms.n;
+        exp_est_ratio(base->build_samples, tc->build_samples, m, &br);
+        double tr = bytes_read(tc, &s) / s.tri_count, fr = (double)base->build.bytes / s.tri_count;
+        exp_text_add(&st->findings, "- %s: the fastest two-level combination, `%s`, traces at %s "
+                     "the speed of `%s` on primary, %s on shadow and %s on diffuse rays; it builds "
+                     "in %s ms against %s ms (build speed %s) and needs %.1f against %.1f B/triangle "
+                     "with the triangles it reads.\n", s.name, tc->spec,
+                     exp_anim_ratio(b1, sizeof b1, &sp[0], g.floor), base->spec,
+                     exp_anim_ratio(b2, sizeof b2, &sp[1], g.floor), exp_anim_ratio(b3, sizeof b3, &sp[2], g.floor),
+                     exp_fmt_est(b4, sizeof b4, &tc->build_ms, 2),
+                     exp_fmt_est(b5, sizeof b5, &base->build_ms, 2), exp_anim_ratio(b6, sizeof b6, &br, g.floor),
+                     tr, fr);
+        exp_est all = exp_group_speedup(&g, 0, two, SETS);
+        int build_ok = exp_ratio_cmp(&br, g.floor) > 0, mem_ok = tr < fr;
+        int slower = exp_ratio_cmp(&all, g.floor) < 0;
+        st->scenes++, st->build_ok += build_ok, st->mem_ok += mem_ok, st->slower += slower;
+        exp_text_add(&st->ev_two, "%s%s: `%s` builds at %s the speed, needs %.1f against %.1f "
+                     "B/triangle, traces the three ray sets at %s the speed of `%s`",
+                     st->ev_two.len ? "; " : "", s.name, tc->spec, b6, tr, fr,
+                     exp_anim_ratio(b1, sizeof b1, &all, g.floor), base->spec);
+        exp_text_add(&st->two_scenes, "%s%s", st->two_scenes.len ? ", " : "", s.name);
+    }
+    if (flat >= 0 && flat != 0 && base->ok) {
+        exp_est sp = exp_group_speedup(&g, 0, flat, SETS);
+        exp_text_add(&st->findings, "- %s: the fastest flattened structure is `%s`, %s the speed "
+                     "of `%s` over the three ray sets.\n", s.name, g.cfg[flat].spec,
+                     exp_anim_ratio(b1, sizeof b1, &sp, g.floor), base->spec);
+    }
+    int ctl = exp_group_find(&g, CONTROL), plain = exp_group_find(&g, "instanced:top=bvh,bottom=bvh");
+    if (ctl >= 0 && plain >= 0 && g.cfg[ctl].ok && g.cfg[plain].ok) {
+        exp_group_compare_head(&g);
+        char pc[3][128];
+        for (int k = 0; k < 3; k++)
+            exp_group_compare(&g, ctl, plain, set_bits[k], pc[k], sizeof pc[k]);
+        exp_text_add(&st->findings, "- %s, the control: reading the world triangles (`%s`) "
+                     "instead of recomputing them changes the time of primary rays by %s, shadow "
+                     "by %s, diffuse by %s (against `%s`).\n", s.name, CONTROL, pc[0], pc[1],
+                     pc[2], g.cfg[plain].spec);
+    }
+    long long bad = 0, bad_two = 0, rays = 0;
+    for (int c = 1; c < g.count; c++)
+        for (int k = 0; k < 3; k++)
+            if (g.cfg[c].ok && dis[c][k] > 0) bad += dis[c][k], bad_two += is_two(g.cfg[c].spec) ? dis[c][k] : 0;
+    for (int k = 0; k < 3; k++) rays += (long long)bench_sets_get(&sets, set_bits[k])->count;
+    exp_text_add(&st->findings, "- %s: answers against `%s` on %lld rays: %lld disagreements "
+                 "in all, %lld of them from two-level configurations (must be 0)%s.\n", s.name,
+                 base->spec, rays, bad, bad_two, base->ok ? "" : " (not checked: no reference)");
+    if (bad_two) {
+        accel_error e = {0};
+        accel_fail(&e, ACCEL_ERR_INTERNAL, "%lld answers differ from the flattened bvh's", bad_two);
+        exp_internal(x, s.name, &e);
+    }
+    if (control) { /* the animated scene: part 2 and 3 take their configurations from it */
+        int f2 = best_of(&g, FRAME, 1, 1), ff = best_of(&g, FRAME, 0, 1);
+        snprintf(st->two, sizeof st->two, "%s", f2 >= 0 ? g.cfg[f2].spec : "instanced");
+        snprintf(st->flat, sizeof st->flat, "%s", ff >= 0 ? g.cfg[ff].spec : "bvh");
+        int rb = -1;
+        for (int c = 0; c < g.count; c++)
+            if (g.cfg[c].ok && strstr(g.cfg[c].spec, "bottom=bvh") &&
+                (rb < 0 || exp_group_ns(&g, c, FRAME).median < exp_group_ns(&g, rb, FRAME).median))
+                rb = c;
+        snprintf(st->refit, sizeof st->refit, "%s", rb >= 0 ? g.cfg[rb].spec : "instanced");
+    }
+    free(dis);
+    exp_group_free(&g);
+    bench_sets_free(&sets);
+    scene_free(&s);
+}
+
+/* ---- verdicts and main ------------------------------------------------------- */
+
+static void verdicts(exp_ctx *x, study *st, const exp_anim *an)
+{
+    if (!st->scenes)
+        exp_verdict(x, "two-level", EXP_UNTESTABLE, "-", "no scene measured both a two-level "
+                    "combination and the flattened bvh");
+    else
+        exp_verdict(x, "two-level", st->build_ok + st->mem_ok + st->slower == 3 * st->scenes
+                    ? EXP_CONFIRMED : st->build_ok + st->mem_ok + st->slower == 0 ? EXP_REFUTED
+                    : EXP_PARTLY, exp_text_str(&st->two_scenes), "%s (faster build on %d of %d "
+                    "scenes, less memory on %d, slower traces on %d)", exp_text_str(&st->ev_two),
+                    st->build_ok, st->scenes, st->mem_ok, st->slower);
+    const char *v = an->update_cmp > 0 && an->loss_cmp > 0 ? EXP_CONFIRMED
+                  : an->update_cmp <= 0 && an->loss_cmp <= 0 ? EXP_REFUTED : EXP_PARTLY;
+    exp_verdict(x, "refit", v, an->anim, "`%s`: %s; the time of primary plus shadow rays on the "
+                "tree refit through k frames against a fresh build changes by %s", an->refit,
+                an->update_ev, an->loss_ev);
+}
+
+int main(int argc, char **argv)
+{
+    const char *scenes[MAX_SCENES], *anim = NULL;
+    int scene_count = 0;
+    char *rest[64];
+    int rest_count = 0;
+    for (int i = 0; i < argc && rest_count < 63; i++) {
+        if (i + 1 < argc && !strcmp(argv[i], "--scene") && scene_count < MAX_SCENES)
+            scenes[scene_count++] = argv[++i];
+        else if (i + 1 < argc && !strcmp(argv[i], "--anim"))
+            anim = argv[++i];
+        else
+            rest[rest_count++] = argv[i];
+    }
+    rest[rest_count] = NULL;
+    exp_ctx x;
+    exp_init(&x, rest_count, rest, "exp_twolevel",
+             "Two-level against flattened structures, refit against rebuild, and the frames per "
+             "second of an animated scene of about 100k triangles against the lecture's 20.",
+             "  --scene SPEC     a scene of part 1 (repeatable; default field and the animated\n"
+             "                   scene at frame 0; a .scene file works too)\n"
+             "  --anim SPEC      the animated scene of parts 2 and 3, without frame=\n"
+             "                   (default animated:instances=48: 100,288 triangles)\n");
+    if (!anim) anim = x.quick ? "animated:instances=8,detail=3" : "animated:instances=48";
+    char anim0[600];
+    exp_anim_frame_spec(anim0, sizeof anim0, anim, 0);
+    if (!scene_count) {
+        scenes[scene_count++] = x.quick ? "field:instances=40,detail=2" : "field";
+        scenes[scene_count++] = anim0;
+    }
+    if (!x.quick) x.set_budget_ms = 800, x.build_budget_ms = 1000; /* 800x600 passes */
+    exp_header(&x, "Scenes of many meshes: two-level, refit, frames per second",
+               "lab step 1: \"build a BVH per mesh over world-space transformed triangles\"; step "
+               "3: \"handle multiple meshes ... optionally transform rays to object space\"; "
+               "\"BVH + ray packets = real-time performance\": 800\xc3\x97" "600 at 20 fps",
+               "on scenes of many meshes, what does a two-level structure (a top level over the "
+               "instances, one bottom level per mesh) cost or save against one flattened "
+               "structure over the world-space triangles, in build time, memory and trace speed; "
+               "what does refitting a deforming mesh save per frame, and what does it lose in "
+               "trace speed after k frames; and how many frames per second does the animated "
+               "scene reach at %dx%d with 1 and 2 threads, against the lecture's 20? Part 1: %dx%d, "
+               "%d thread, interleaved rounds, speeds paired against `bvh` in the same rounds.",
+               x.rt_size[0], x.rt_size[1], x.rt_size[0], x.rt_size[1], x.threads);
+    exp_csv(&x, "part,scene,triangles,config,threads,frame,quantity,median,lo,hi,n\n");
+    exp_md(&x, "\nMemory: the bytes each structure reports; a flattened kind holds its own copy of "
+               "the triangles, a two-level one reads them from the scene, so the column \"with "
+               "the triangles it reads\" adds the meshes' triangles (36 B each) once, or the "
+               "flattened scene's for `world=flat`. Disagreements: answers that differ from "
+               "`bvh`'s by the FORMATS.md rule (hits) or bit by bit (shadow rays). No `.scene` "
+               "file ships with the repository (tests/fuzz/corpus/scene holds parser inputs, not "
+               "scenes to measure): `--scene FILE.scene` adds one.\n");
+    study st = {0};
+    exp_list list;
+    exp_list_make(&x, defaults, (int)(sizeof defaults / sizeof defaults[0]), NULL, &list);
+    snprintf(st.two, sizeof st.two, "instanced");
+    snprintf(st.flat, sizeof st.flat, "bvh");
+    snprintf(st.refit, sizeof st.refit, "instanced");
+    for (int i = 0; i < scene_count; i++)
+        compare_scene(&x, &st, scenes[i], &list, !strcmp(scenes[i], anim0));
+    exp_anim an = {anim, st.refit, st.two, st.flat, &st.findings, 0, 0, "", ""};
+    exp_anim_refit(&x, &an);
+    exp_anim_fps(&x, &an);
+    exp_md(&x, "\n**Findings:**\n\n%s", exp_text_str(&st.findings));
+    verdicts(&x, &st, &an);
+    exp_list_free(&list);
+    exp_text_free(&st.findings);
+    exp_text_free(&st.ev_two);
+    exp_text_free(&st.two_scenes);
+    return exp_finish(&x);
+}
