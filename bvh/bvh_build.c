@@ -1,6 +1,7 @@
 /*
  * bvh_build.c - the build driver of the `bvh` kind: one reference per live
- * primitive, the chosen builder (build_binned.c, build_sah.c, build_mid.c),
+ * primitive, the chosen builder (build_binned.c, build_sah.c, build_mid.c,
+ * build_sbvh.c, which may duplicate references),
  * then the final pass that lays the nodes out depth-first, copies the
  * primitives in leaf order and computes the statistics.
  */
@@ -167,6 +168,7 @@ static int build_over(const accel_prim_store *st, const bvh_build_opts *opts, in
         case BVH_BUILD_SAH: rc = bvh_build_sah(&ctx, err); break;
         case BVH_BUILD_MID: rc = bvh_build_mid(&ctx, err); break;
         case BVH_BUILD_MEDIAN: rc = bvh_build_median(&ctx, err); break;
+        case BVH_BUILD_SBVH: rc = bvh_build_sbvh(&ctx, err); break;
         default: rc = accel_fail(err, ACCEL_ERR_INTERNAL, "bvh: unknown builder %d", opts->builder);
         }
     }
