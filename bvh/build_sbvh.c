@@ -47,7 +47,6 @@
  *
  * The build runs on one thread (the result does not depend on `threads`).
  */
-#include <stdio.h>
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
@@ -261,15 +260,16 @@ typedef struct {
 
 static inline double slab_plane(const slabs *s, int i) { return s->lo + s->width * i; }
 
-/* Where the edge a-b crosses the plane x[axis] = p (a[axis] < p < b[axis]). */
-static inline vec3 edge_cross(vec3 a, vec3 b, int axis, float p)
+/* Grows box b by the point where the edge a-b crosses the plane x[axis] = p
+ * (a[axis] < p < b[axis]). */
+static inline void grow_cross(float *lo, float *hi, const float *a, const float *b, int axis, float p)
 {
-    float s = (p - v3_get(a, axis)) / (v3_get(b, axis) - v3_get(a, axis));
-    vec3 q = v3_add(a, v3_scale(v3_sub(b, a), s));
-    if (axis == 0) q.x = p;
-    else if (axis == 1) q.y = p;
-    else q.z = p;
-    return q;
+    float s = (p - a[axis]) / (b[axis] - a[axis]);
+    for (int k = 0; k < 3; k++) {
+        float q = k == axis ? p : a[k] + s * (b[k] - a[k]);
+        lo[k] = minf(lo[k], q);
+        hi[k] = maxf(hi[k], q);
+    }
 }
 
 /* Grows bins b0..b1 by the boxes of a reference's parts in each slab. This
@@ -297,32 +297,41 @@ static void bin_pieces(const sbvh_ctx *x, const bvh_ref *r, int a, const slabs *
         return;
     }
     const float *t = s->tris + 9 * (size_t)r->prim;
-    vec3 v[3] = {v3_load(t), v3_load(t + 3), v3_load(t + 6)}, tmp;
-    if (v3_get(v[1], a) < v3_get(v[0], a)) tmp = v[0], v[0] = v[1], v[1] = tmp;
-    if (v3_get(v[2], a) < v3_get(v[1], a)) tmp = v[1], v[1] = v[2], v[2] = tmp;
-    if (v3_get(v[1], a) < v3_get(v[0], a)) tmp = v[0], v[0] = v[1], v[1] = tmp;
+    /* vertices in axis order */
+    int i0 = 0, i1 = 1, i2 = 2, tmp;
+    if (t[3 * i1 + a] < t[3 * i0 + a]) tmp = i0, i0 = i1, i1 = tmp;
+    if (t[3 * i2 + a] < t[3 * i1 + a]) tmp = i1, i1 = i2, i2 = tmp;
+    if (t[3 * i1 + a] < t[3 * i0 + a]) tmp = i0, i0 = i1, i1 = tmp;
+    const float *v0 = t + 3 * i0, *v1 = t + 3 * i1, *v2 = t + 3 * i2;
+    const float *vs[3] = {v0, v1, v2};
     int vb[3];
     for (int i = 0; i < 3; i++) {
-        int b = bin_of(v3_get(v[i], a), sl->lo, sl->scale, x->bins);
+        int b = bin_of(vs[i][a], sl->lo, sl->scale, x->bins);
         vb[i] = b < b0 ? b0 : b > b1 ? b1 : b;
     }
-    box3 lower = box3_empty(); /* crossings on the slab's lower plane */
+    float llo[3] = {INFINITY, INFINITY, INFINITY}, lhi[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (int k = b0; k <= b1; k++) {
-        box3 piece = lower, upper = box3_empty();
+        /* the crossings on the slab's lower plane (llo, lhi), then its upper one */
+        float lo[3] = {llo[0], llo[1], llo[2]}, hi[3] = {lhi[0], lhi[1], lhi[2]};
+        float ulo[3] = {INFINITY, INFINITY, INFINITY}, uhi[3] = {-INFINITY, -INFINITY, -INFINITY};
         if (k < b1) {
             float p = (float)slab_plane(sl, k + 1);
-            if (v3_get(v[0], a) < p && p < v3_get(v[2], a)) {
-                upper = box3_grow(upper, edge_cross(v[0], v[2], a, p));
-                upper = box3_grow(upper, p < v3_get(v[1], a) ? edge_cross(v[0], v[1], a, p)
-                                                             : edge_cross(v[1], v[2], a, p));
+            if (v0[a] < p && p < v2[a]) {
+                grow_cross(ulo, uhi, v0, v2, a, p);
+                if (p < v1[a])
+                    grow_cross(ulo, uhi, v0, v1, a, p);
+                else
+                    grow_cross(ulo, uhi, v1, v2, a, p);
             }
         }
-        piece = box3_union(piece, upper);
-        for (int i = 0; i < 3; i++)
-            if (vb[i] == k) piece = box3_grow(piece, v[i]);
-        piece = box_intersect(piece, box);
+        for (int c = 0; c < 3; c++) {
+            lo[c] = minf(lo[c], ulo[c]), hi[c] = maxf(hi[c], uhi[c]);
+            for (int i = 0; i < 3; i++)
+                if (vb[i] == k) lo[c] = minf(lo[c], vs[i][c]), hi[c] = maxf(hi[c], vs[i][c]);
+            llo[c] = ulo[c], lhi[c] = uhi[c];
+        }
+        box3 piece = box_intersect((box3){{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}}, box);
         if (box_valid(piece)) bin[k].box = box3_union(bin[k].box, piece);
-        lower = upper;
     }
 }
 
@@ -548,7 +557,6 @@ static int split_task(sbvh_ctx *x, const sbvh_task *st, sbvh_task *l, sbvh_task 
         box3 both = box_intersect(obj.left, obj.right);
         double overlap = obj.at < 0 ? INFINITY : box_valid(both) ? bvh_half_area(both) : 0.0;
         if (st->cap > t->count && overlap > x->alpha * x->root_area) spatial_split(x, st, &c);
-        if (getenv("SBVH_DBG") && t->count > 1000) fprintf(stderr, "lvl %d n %u cap %u obj %g ov %g spatial %d cost %g nl %u nr %u\n", t->level, t->count, st->cap, obj.cost, overlap, c.spatial, c.cost, c.nl, c.nr);
         if (c.spatial && bvh_split_pays(ctx, t, c.cost)) done = apply_spatial(x, st, &c, l, r);
         if (!done && obj.at >= 0 && bvh_split_pays(ctx, t, obj.cost)) {
             apply_object(x, st, &obj, 0, l, r);
