@@ -57,6 +57,7 @@ typedef struct {
     int term_none; /* term=none: split every node over max_leaf, never stop by the SAH rule */
     int reorder;       /* common parameter: Morton-ordered primitive store */
     double split_budget; /* sbvh: most duplicated references, as a fraction of the primitives */
+    double max_mb;       /* memory limit of the build, MiB (bvh_build.c checks it up front) */
     double alpha;        /* sbvh: spatial splits only where the object split's children overlap
                           * by more than alpha times the root's (half) area */
 } bvh_build_opts;

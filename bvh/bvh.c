@@ -28,6 +28,9 @@ static const accel_param_def bvh_params[] = {
     {"alpha", ACCEL_PARAM_FLOAT, "1e-5", 0, 1, NULL,
      "build=sbvh: try spatial splits where the object split's children overlap by more than "
      "alpha times the root's area (0: everywhere)"},
+    {"max_mb", ACCEL_PARAM_FLOAT, "4096", 1.0, 1048576.0, NULL,
+     "memory limit of the build (references, node pool, scratch, final pools), MiB; "
+     "a larger tree is refused"},
     {"leaf", ACCEL_PARAM_INT, "8", 1, 256, NULL,
      "largest leaf (primitives); smaller leaves when the SAH rule says so"},
     {"ct", ACCEL_PARAM_FLOAT, "1", 0, 1e6, NULL,
@@ -67,6 +70,7 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
     o->reorder = p->reorder;
     o->split_budget = accel_param_num(p, "split_budget");
     o->alpha = accel_param_num(p, "alpha");
+    o->max_mb = accel_param_num(p, "max_mb");
     *traverse = (int)accel_param_num(p, "traverse");
     *frustum = (int)accel_param_num(p, "frustum");
     /* Options that would be silently ignored are errors. */

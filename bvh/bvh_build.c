@@ -147,6 +147,22 @@ static int build_over(const accel_prim_store *st, const bvh_build_opts *opts, in
         return accel_fail(err, ACCEL_ERR_RANGE,
                           "bvh: %u primitives exceed the limit of 2^31-1 (uint32 node indices)",
                           live);
+    /* The build's peak, known up front: N references (N(1 + split_budget)
+     * with sbvh, plus its scratch copy and side bytes), a node pool of
+     * twice that, and the final slots (36 + 4 bytes each). */
+    double slots = live, scratch = 0.0;
+    if (opts->builder == BVH_BUILD_SBVH) {
+        slots = live + floor(opts->split_budget * live);
+        scratch = slots * (sizeof(bvh_ref) + 1);
+    }
+    double peak = slots * (sizeof(bvh_ref) + 2 * sizeof(bvh_node) + BVH_SLOT_FLOATS * sizeof(float) +
+                           sizeof(uint32_t)) + scratch;
+    if (opts->max_mb > 0 && peak > opts->max_mb * 1048576.0)
+        return accel_fail(err, ACCEL_ERR_RANGE,
+                          "bvh: the build needs up to %.1f MiB for %u primitives (%.0f slots), over "
+                          "max_mb = %.1f MiB (raise max_mb%s)",
+                          peak / 1048576.0, live, slots, opts->max_mb,
+                          opts->builder == BVH_BUILD_SBVH ? " or lower split_budget" : "");
     bvh_build ctx;
     memset(&ctx, 0, sizeof ctx);
     ctx.scene = scene;

@@ -390,4 +390,18 @@ TEST(sbvh_spec_errors)
     void *a = test_build("bvh:build=sbvh,bins=64,split_budget=0.5,alpha=1e-3", &s, 1, NULL);
     if (a) accel_kind_bvh.destroy(a);
     scene_free(&s);
+    /* max_mb bounds the build's peak, duplicates included: 3000 triangles
+     * need about 0.65 MiB with +30%, 2.4 MiB with +400%. */
+    if (!test_make_scene("soup:tris=3000", &s)) return;
+    a = test_build("bvh:build=sbvh,max_mb=1", &s, 1, NULL);
+    if (a) accel_kind_bvh.destroy(a);
+    const accel_kind *k;
+    accel_build_stats st;
+    accel_error err = {0};
+    a = NULL;
+    int rc = accel_build_spec("bvh:build=sbvh,split_budget=4,max_mb=1", &s, 1, &k, &a, &st, &err);
+    CHECKF(rc == ACCEL_ERR_RANGE && a == NULL && strstr(err.msg, "max_mb") &&
+               strstr(err.msg, "split_budget"),
+           "budget over max_mb: rc %d, %s", rc, err.msg);
+    scene_free(&s);
 }
