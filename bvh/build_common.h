@@ -196,10 +196,12 @@ int bvh_build_sbvh(bvh_build *ctx, accel_error *err);
  * plane x[axis] = plane, each intersected with `box`: computed in double and,
  * with outward = 1, rounded outward to float with a pad for the double
  * rounding of the edge/plane intersections, so that each contains the exact
- * part (build_sbvh.c; outward = 0 rounds to nearest, for the test that shows
+ * part (build_sbvh_chop.c; outward = 0 rounds to nearest, for the test that shows
  * the difference). An empty part has min > max on some axis. */
 void bvh_sbvh_chop(const float *tri, box3 box, int axis, double plane, int outward, box3 *left,
                    box3 *right);
+/* The same for a box alone (a sphere's part lies in its box's part). */
+void bvh_sbvh_chop_box(box3 box, int axis, double plane, box3 *left, box3 *right);
 
 /* Builds a complete bvh (nodes, primitives in leaf order, stats) over the
  * scene's live primitives. Fills stats->nodes, leaves, refs, sah_cost,

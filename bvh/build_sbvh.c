@@ -29,7 +29,8 @@
  * on one side of the plane, computed in double and rounded outward to float
  * (min down, max up), padded by a bound on the double rounding of the
  * edge/plane intersection, and intersected with the reference's previous
- * box (which already contains that part). Spheres are chopped as boxes.
+ * box (which already contains that part): build_sbvh_chop.c. Spheres are
+ * chopped as boxes.
  *
  * Budget. The references live in one array of N(1 + split_budget) slots.
  * A task owns a run of that array (its references, then free slots); a
@@ -47,7 +48,6 @@
  *
  * The build runs on one thread (the result does not depend on `threads`).
  */
-#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -90,7 +90,7 @@ typedef struct {
     uint32_t nl, nr;
 } sbvh_choice;
 
-/* ---- boxes in double, rounded outward to float ------------------------------ */
+/* ---- boxes --------------------------------------------------------------------- */
 
 static inline int box_valid(box3 b)
 {
@@ -102,81 +102,6 @@ static inline box3 box_intersect(box3 a, box3 b)
     a.min = v3_max(a.min, b.min);
     a.max = v3_min(a.max, b.max);
     return a;
-}
-
-static inline float round_down(double d)
-{
-    float f = (float)d;
-    return (double)f > d ? nextafterf(f, -INFINITY) : f;
-}
-
-static inline float round_up(double d)
-{
-    float f = (float)d;
-    return (double)f < d ? nextafterf(f, INFINITY) : f;
-}
-
-typedef struct {
-    double lo[3], hi[3];
-} dbox;
-
-static inline void dbox_clear(dbox *b)
-{
-    for (int k = 0; k < 3; k++) b->lo[k] = INFINITY, b->hi[k] = -INFINITY;
-}
-
-static inline void dbox_grow(dbox *b, const double *p, const double *pad)
-{
-    for (int k = 0; k < 3; k++) {
-        if (p[k] - pad[k] < b->lo[k]) b->lo[k] = p[k] - pad[k];
-        if (p[k] + pad[k] > b->hi[k]) b->hi[k] = p[k] + pad[k];
-    }
-}
-
-/* To float: outward (min down, max up) or, for the test of this very
- * property, to nearest. */
-static box3 dbox_to_box3(const dbox *b, int outward)
-{
-    box3 r;
-    if (outward) {
-        r.min = v3(round_down(b->lo[0]), round_down(b->lo[1]), round_down(b->lo[2]));
-        r.max = v3(round_up(b->hi[0]), round_up(b->hi[1]), round_up(b->hi[2]));
-    } else {
-        r.min = v3((float)b->lo[0], (float)b->lo[1], (float)b->lo[2]);
-        r.max = v3((float)b->hi[0], (float)b->hi[1], (float)b->hi[2]);
-    }
-    return r;
-}
-
-void bvh_sbvh_chop(const float *tri, box3 box, int axis, double plane, int outward, box3 *left,
-                   box3 *right)
-{
-    dbox l, r;
-    dbox_clear(&l);
-    dbox_clear(&r);
-    const double zero[3] = {0.0, 0.0, 0.0};
-    for (int e = 0; e < 3; e++) {
-        double a[3], b[3];
-        for (int k = 0; k < 3; k++) a[k] = tri[3 * e + k], b[k] = tri[3 * ((e + 1) % 3) + k];
-        if (a[axis] <= plane) dbox_grow(&l, a, zero);
-        if (a[axis] >= plane) dbox_grow(&r, a, zero);
-        if ((a[axis] < plane && b[axis] > plane) || (a[axis] > plane && b[axis] < plane)) {
-            /* The edge crosses the plane at p = a + s (b - a). In double each
-             * coordinate is off by a few units in the last place of
-             * |a| + |b| (the difference, the quotient, the product and the
-             * sum each round once); 8 units cover it. The plane coordinate
-             * itself is exact. */
-            double s = (plane - a[axis]) / (b[axis] - a[axis]), p[3], pad[3];
-            for (int k = 0; k < 3; k++) {
-                p[k] = k == axis ? plane : a[k] + s * (b[k] - a[k]);
-                pad[k] = k == axis || !outward ? 0.0 : 8.0 * DBL_EPSILON * (fabs(a[k]) + fabs(b[k]));
-            }
-            dbox_grow(&l, p, pad);
-            dbox_grow(&r, p, pad);
-        }
-    }
-    *left = box_intersect(dbox_to_box3(&l, outward), box);
-    *right = box_intersect(dbox_to_box3(&r, outward), box);
 }
 
 /* The two parts of a reference's box at a plane: the triangle's parts, or
@@ -191,15 +116,7 @@ static void chop_ref(const sbvh_ctx *x, const bvh_ref *ref, int axis, double pla
         bvh_sbvh_chop(s->tris + 9 * (size_t)ref->prim, box, axis, plane, 1, left, right);
         return;
     }
-    dbox l, r;
-    for (int k = 0; k < 3; k++) {
-        l.lo[k] = r.lo[k] = v3_get(box.min, k);
-        l.hi[k] = r.hi[k] = v3_get(box.max, k);
-    }
-    l.hi[axis] = plane;
-    r.lo[axis] = plane;
-    *left = box_intersect(dbox_to_box3(&l, 1), box);
-    *right = box_intersect(dbox_to_box3(&r, 1), box);
+    bvh_sbvh_chop_box(box, axis, plane, left, right);
 }
 
 /* ---- binning ------------------------------------------------------------------ */
