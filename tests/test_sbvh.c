@@ -87,6 +87,8 @@ TEST(sbvh_chop_conservative)
         nearest_misses += chop_misses(tri, 0, plane, 0);
         cases++;
     }
+    test_note("%ld cases: outward chop misses %ld exact points, round-to-nearest %ld",
+              cases, outward_misses, nearest_misses);
     CHECKF(outward_misses == 0, "outward chop misses %ld exact points in %ld cases", outward_misses,
            cases);
     CHECKF(nearest_misses > cases / 20,
