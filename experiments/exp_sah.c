@@ -151,9 +151,8 @@ static void sbvh_notes(exp_group *g, study *st, const accel_scene *s)
     exp_group_compare(g, sb, b16, g->mask, t, sizeof t);
     exp_group_compare_build(g, sb, b16, b, sizeof b);
     exp_text_add(&st->findings, "- %s: spatial splits (`build=sbvh`) against binned SAH: SAH cost "
-                 "%.2f against %.2f, %.2f references per primitive, trace time %s, build time %s.\n",
-                 s->name, g->cfg[sb].build.sah_cost, g->cfg[b16].build.sah_cost,
-                 s->live_count ? (double)g->cfg[sb].build.refs / s->live_count : 0.0, t, b);
+                 "%.2f against %.2f, trace time %s, build time %s.\n",
+                 s->name, g->cfg[sb].build.sah_cost, g->cfg[b16].build.sah_cost, t, b);
 }
 
 static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_list *list)
