@@ -40,7 +40,13 @@ typedef struct {
 
 static_assert(sizeof(bvh_ref) == 32, "bvh_ref is one half cache line");
 
-typedef enum { BVH_BUILD_BINNED = 0, BVH_BUILD_SAH, BVH_BUILD_MID, BVH_BUILD_MEDIAN } bvh_builder;
+typedef enum {
+    BVH_BUILD_BINNED = 0,
+    BVH_BUILD_SAH,
+    BVH_BUILD_MID,
+    BVH_BUILD_MEDIAN,
+    BVH_BUILD_SBVH
+} bvh_builder;
 
 typedef struct {
     bvh_builder builder;
@@ -50,6 +56,10 @@ typedef struct {
     float ct, ci;  /* SAH: cost of a node visit and of a primitive test (one unit) */
     int term_none; /* term=none: split every node over max_leaf, never stop by the SAH rule */
     int reorder;       /* common parameter: Morton-ordered primitive store */
+    double split_budget; /* sbvh: most duplicated references, as a fraction of the primitives */
+    double max_mb;       /* memory limit of the build, MiB (bvh_build.c checks it up front) */
+    double alpha;        /* sbvh: spatial splits only where the object split's children overlap
+                          * by more than alpha times the root's (half) area */
 } bvh_build_opts;
 
 /* A node to build: its place in the temporary pool and its references. */
@@ -177,6 +187,21 @@ int bvh_build_binned(bvh_build *ctx, accel_error *err);
 int bvh_build_sah(bvh_build *ctx, accel_error *err);
 int bvh_build_mid(bvh_build *ctx, accel_error *err);
 int bvh_build_median(bvh_build *ctx, accel_error *err);
+/* The split BVH (build_sbvh.c): it replaces ctx->refs and ctx->nodes by
+ * larger arrays (N(1 + split_budget) references, twice that many nodes) and
+ * sets ctx->ref_count to the references of the finished tree (>= N). */
+int bvh_build_sbvh(bvh_build *ctx, accel_error *err);
+
+/* The boxes of the parts of triangle `tri` (9 floats) on either side of the
+ * plane x[axis] = plane, each intersected with `box`: computed in double and,
+ * with outward = 1, rounded outward to float with a pad for the double
+ * rounding of the edge/plane intersections, so that each contains the exact
+ * part (build_sbvh_chop.c; outward = 0 rounds to nearest, for the test that shows
+ * the difference). An empty part has min > max on some axis. */
+void bvh_sbvh_chop(const float *tri, box3 box, int axis, double plane, int outward, box3 *left,
+                   box3 *right);
+/* The same for a box alone (a sphere's part lies in its box's part). */
+void bvh_sbvh_chop_box(box3 box, int axis, double plane, box3 *left, box3 *right);
 
 /* Builds a complete bvh (nodes, primitives in leaf order, stats) over the
  * scene's live primitives. Fills stats->nodes, leaves, refs, sah_cost,

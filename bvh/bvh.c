@@ -16,11 +16,21 @@
 #include "wide_node.h"
 
 static const accel_param_def bvh_params[] = {
-    {"build", ACCEL_PARAM_ENUM, "binned", 0, 0, "binned|sah|mid|median",
-     "builder: binned SAH (Wald 2007), exact SAH by full sweep, spatial middle, object median"},
-    {"bins", ACCEL_PARAM_INT, "16", 2, 256, NULL, "build=binned: bins per axis (count)"},
+    {"build", ACCEL_PARAM_ENUM, "binned", 0, 0, "binned|sah|mid|median|sbvh",
+     "builder: binned SAH (Wald 2007), exact SAH by full sweep, spatial middle, object median, "
+     "binned SAH with spatial splits (Stich et al. 2009)"},
+    {"bins", ACCEL_PARAM_INT, "16", 2, 256, NULL,
+     "build=binned|sbvh: bins per axis (count; sbvh: for object and spatial splits)"},
     {"axes", ACCEL_PARAM_ENUM, "3", 0, 0, "1|3",
      "build=binned: axes binned per node, 1 = largest centroid extent only, 3 = all"},
+    {"split_budget", ACCEL_PARAM_FLOAT, "0.3", 0, 4, NULL,
+     "build=sbvh: most duplicated references, as a fraction of the primitives (0.3 = +30%)"},
+    {"alpha", ACCEL_PARAM_FLOAT, "1e-5", 0, 1, NULL,
+     "build=sbvh: try spatial splits where the object split's children overlap by more than "
+     "alpha times the root's area (0: everywhere)"},
+    {"max_mb", ACCEL_PARAM_FLOAT, "4096", 1.0, 1048576.0, NULL,
+     "memory limit of the build (references, node pool, scratch, final pools), MiB; "
+     "a larger tree is refused"},
     {"leaf", ACCEL_PARAM_INT, "8", 1, 256, NULL,
      "largest leaf (primitives); smaller leaves when the SAH rule says so"},
     {"ct", ACCEL_PARAM_FLOAT, "1", 0, 1e6, NULL,
@@ -58,12 +68,19 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
     o->ci = (float)accel_param_num(p, "ci");
     o->term_none = (int)accel_param_num(p, "term") == 1;
     o->reorder = p->reorder;
+    o->split_budget = accel_param_num(p, "split_budget");
+    o->alpha = accel_param_num(p, "alpha");
+    o->max_mb = accel_param_num(p, "max_mb");
     *traverse = (int)accel_param_num(p, "traverse");
     *frustum = (int)accel_param_num(p, "frustum");
     /* Options that would be silently ignored are errors. */
-    if (o->builder != BVH_BUILD_BINNED && (accel_param_given(p, "bins") || accel_param_given(p, "axes")))
-        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: bins and axes apply to build=binned only (got build=%s)",
+    int binned = o->builder == BVH_BUILD_BINNED, sbvh = o->builder == BVH_BUILD_SBVH;
+    if ((!binned && accel_param_given(p, "axes")) || (!binned && !sbvh && accel_param_given(p, "bins")))
+        return accel_fail(err, ACCEL_ERR_SPEC,
+                          "bvh: bins applies to build=binned|sbvh, axes to build=binned (got build=%s)",
                           accel_param_str(p, "build"));
+    if (!sbvh && (accel_param_given(p, "split_budget") || accel_param_given(p, "alpha")))
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: split_budget and alpha apply to build=sbvh only");
     if (*frustum && *traverse != BVH_TRAVERSE_PACKET)
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: frustum=1 needs traverse=packet");
     wo->width = atoi(accel_param_str(p, "width"));
@@ -173,6 +190,12 @@ static const char *const bvh_variants[] = {
     "width=8,traverse=packet",
     "width=4,block=4,traverse=packet",
     "build=median,term=none,leaf=4",
+    "build=sbvh",
+    "build=sbvh,traverse=packet",
+    "build=sbvh,width=4",
+    "build=sbvh,width=8",
+    "build=sbvh,width=4,traverse=packet",
+    "build=sbvh,width=8,traverse=packet",
     NULL,
 };
 

@@ -2,11 +2,13 @@
  * bvh.h - the bounding volume hierarchy accelerator (kind "bvh").
  *
  * A binary BVH with the lecture's 32-byte nodes (bvh_node.h), built by one
- * of four builders and traced one ray at a time or in 64-ray packets:
+ * of five builders and traced one ray at a time or in 64-ray packets:
  *
  *   bvh:build=binned,bins=16,axes=3   binned SAH (Wald 2007), the default
  *   bvh:build=sah                     exact SAH, full sweep on all three axes
  *   bvh:build=mid | build=median      spatial / object median of the longest axis
+ *   bvh:build=sbvh,split_budget=0.3   binned SAH with spatial splits (Stich et al.
+ *                                     2009): references duplicated, at most +30%
  *   bvh:leaf=4,ct=1,ci=1              leaf size bound and SAH costs
  *   bvh:build=median,term=none,leaf=4 the lecture's pure median split: no SAH
  *                                     termination, leaves of at most 4

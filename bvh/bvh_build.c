@@ -1,6 +1,7 @@
 /*
  * bvh_build.c - the build driver of the `bvh` kind: one reference per live
- * primitive, the chosen builder (build_binned.c, build_sah.c, build_mid.c),
+ * primitive, the chosen builder (build_binned.c, build_sah.c, build_mid.c,
+ * build_sbvh.c, which may duplicate references),
  * then the final pass that lays the nodes out depth-first, copies the
  * primitives in leaf order and computes the statistics.
  */
@@ -146,6 +147,22 @@ static int build_over(const accel_prim_store *st, const bvh_build_opts *opts, in
         return accel_fail(err, ACCEL_ERR_RANGE,
                           "bvh: %u primitives exceed the limit of 2^31-1 (uint32 node indices)",
                           live);
+    /* The build's peak, known up front: N references (N(1 + split_budget)
+     * with sbvh, plus its scratch copy and side bytes), a node pool of
+     * twice that, and the final slots (36 + 4 bytes each). */
+    double slots = live, scratch = 0.0;
+    if (opts->builder == BVH_BUILD_SBVH) {
+        slots = live + floor(opts->split_budget * live);
+        scratch = slots * (sizeof(bvh_ref) + 1);
+    }
+    double peak = slots * (sizeof(bvh_ref) + 2 * sizeof(bvh_node) + BVH_SLOT_FLOATS * sizeof(float) +
+                           sizeof(uint32_t)) + scratch;
+    if (opts->max_mb > 0 && peak > opts->max_mb * 1048576.0)
+        return accel_fail(err, ACCEL_ERR_RANGE,
+                          "bvh: the build needs up to %.1f MiB for %u primitives (%.0f slots), over "
+                          "max_mb = %.1f MiB (raise max_mb%s)",
+                          peak / 1048576.0, live, slots, opts->max_mb,
+                          opts->builder == BVH_BUILD_SBVH ? " or lower split_budget" : "");
     bvh_build ctx;
     memset(&ctx, 0, sizeof ctx);
     ctx.scene = scene;
@@ -167,6 +184,7 @@ static int build_over(const accel_prim_store *st, const bvh_build_opts *opts, in
         case BVH_BUILD_SAH: rc = bvh_build_sah(&ctx, err); break;
         case BVH_BUILD_MID: rc = bvh_build_mid(&ctx, err); break;
         case BVH_BUILD_MEDIAN: rc = bvh_build_median(&ctx, err); break;
+        case BVH_BUILD_SBVH: rc = bvh_build_sbvh(&ctx, err); break;
         default: rc = accel_fail(err, ACCEL_ERR_INTERNAL, "bvh: unknown builder %d", opts->builder);
         }
     }
