@@ -68,6 +68,7 @@ static int same_structure(const exp_cfg *a, const exp_cfg *b, int mask)
         return 0;
     for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
         if (!(mask & bit)) continue;
+        if (a->set[exp_set_index(bit)].have != b->set[exp_set_index(bit)].have) return 0;
         const accel_counters *u = &a->set[exp_set_index(bit)].counters;
         const accel_counters *v = &b->set[exp_set_index(bit)].counters;
         if (u->steps != v->steps || u->box_tests != v->box_tests ||
@@ -163,8 +164,9 @@ int exp_group_add(exp_group *g, const char *spec, int threads)
     c->build_samples[0] = c->build.ms;
     exp_est_of(c->build_samples, 1, &c->build_ms);
     scratch sc = scratch_make(g);
+    int cmask = g->add_mask ? g->mask & g->add_mask : g->mask;
     for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
-        if (!(g->mask & bit)) continue;
+        if (!(cmask & bit)) continue;
         exp_trace *t = &c->set[exp_set_index(bit)];
         const rays_set *r = bench_sets_get(g->sets, bit);
         t->rays = r->count;

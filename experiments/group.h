@@ -69,6 +69,7 @@ typedef struct {
     int per_ray;        /* keep per-ray steps and tests of the primary set */
     int time_builds;    /* time builds in interleaved rounds (default 1) */
     double collapse_ms; /* leave out a configuration whose first pass is longer (0: never) */
+    int add_mask;       /* sets of the next exp_group_add (0: every set of mask) */
     /* Results of exp_group_run. */
     double aa_samples[4][EXP_MAX_SAMPLES];
     exp_est aa;         /* configuration 0 against itself: paired ratio over the mask */
