@@ -91,9 +91,10 @@ static void leave_out(exp_group *g, exp_cfg *c, int why_kind)
 
 /* Before a counted pass that may take minutes: PROBE_BLOCKS blocks of 64
  * consecutive rays (8x8 tiles, so packets stay coherent) spread evenly over
- * the set are traced, counted; when the pass they predict is longer than
- * collapse_ms the configuration is collapsed without the full pass (one
- * such pass of `grid` on teapot_stadium at 800x600 took 143 s). */
+ * the set are traced, counted, then timed; when the pass they predict is
+ * longer than twice collapse_ms the configuration is collapsed without the
+ * full pass (one such pass of `grid` on teapot_stadium at 800x600 took
+ * 143 s). */
 #define PROBE_BLOCKS 32
 static int probe_collapsed(exp_group *g, exp_cfg *c, int bit, const rays_set *r)
 {
@@ -111,11 +112,16 @@ static int probe_collapsed(exp_group *g, exp_cfg *c, int bit, const rays_set *r)
         memcpy(rays + b * block, r->rays + (b * blocks / PROBE_BLOCKS) * block, block * sizeof *rays);
     rays_set probe = {rays, NULL, n, 0, 0};
     accel_counters cnt = {0};
-    double t0 = accel_now_ms();
+    /* Timed warm (the first touch of a fresh structure is slow): the
+     * counted pass warms it, the second is timed. */
     one_pass(c, bit, &probe, hits, occ, &cnt);
+    double t0 = accel_now_ms();
+    one_pass(c, bit, &probe, hits, occ, NULL);
     double est_ms = (accel_now_ms() - t0) * (double)r->count / (double)n;
     free(rays), free(hits), free(occ);
-    if (est_ms <= g->collapse_ms) return 0;
+    /* Only a clear collapse is decided by the probe; a near one gets the
+     * full counted pass and the rule below, as before. */
+    if (est_ms <= 2 * g->collapse_ms) return 0;
     c->counted_ms = est_ms;
     snprintf(c->why, sizeof c->why,
              "collapsed: %.0f primitive tests per %s ray (of %u primitives) in a probe of %zu "
@@ -236,6 +242,7 @@ int exp_group_add(exp_group *g, const char *spec, int threads)
     double budget = x->set_budget_ms * (nsets ? nsets : 1);
     c->want = round_ms > 0 ? (int)(budget / round_ms) : x->repeats;
     if (c->want > x->repeats) c->want = x->repeats;
+    if (c->want < g->min_rounds) c->want = g->min_rounds < x->repeats ? g->min_rounds : x->repeats;
     if (c->want < 1) c->want = 1;
     if (c->want > EXP_MAX_SAMPLES) c->want = EXP_MAX_SAMPLES;
     c->ok = 1;
