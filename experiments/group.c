@@ -92,7 +92,7 @@ static void leave_out(exp_group *g, exp_cfg *c, int why_kind)
 /* Before a counted pass that may take minutes: PROBE_BLOCKS blocks of 64
  * consecutive rays (8x8 tiles, so packets stay coherent) spread evenly over
  * the set are traced, counted, then timed; when the pass they predict is
- * longer than twice collapse_ms the configuration is collapsed without the
+ * longer than 1.25 collapse_ms the configuration is collapsed without the
  * full pass (one such pass of `grid` on teapot_stadium at 800x600 took
  * 143 s). */
 #define PROBE_BLOCKS 32
@@ -119,9 +119,9 @@ static int probe_collapsed(exp_group *g, exp_cfg *c, int bit, const rays_set *r)
     one_pass(c, bit, &probe, hits, occ, NULL);
     double est_ms = (accel_now_ms() - t0) * (double)r->count / (double)n;
     free(rays), free(hits), free(occ);
-    /* Only a clear collapse is decided by the probe; a near one gets the
-     * full counted pass and the rule below, as before. */
-    if (est_ms <= 2 * g->collapse_ms) return 0;
+    /* Only a clear collapse is decided by the probe (a 25% margin for its
+     * noise); a near one gets the full counted pass and the rule below. */
+    if (est_ms <= 1.25 * g->collapse_ms) return 0;
     c->counted_ms = est_ms;
     snprintf(c->why, sizeof c->why,
              "collapsed: %.0f primitive tests per %s ray (of %u primitives) in a probe of %zu "
@@ -260,7 +260,9 @@ static void build_rounds(exp_group *g)
         double first = g->cfg[c].build.ms;
         int r = x->quick ? 3 : 5;
         if (first > 0 && first * r > x->build_budget_ms) r = (int)(x->build_budget_ms / first);
-        reps[c] = r < 1 ? 1 : r;
+        /* A build longer than the budget keeps its first (add-time) sample
+         * instead of being built once more for a single sample. */
+        reps[c] = r < 2 ? 0 : r;
         if (reps[c] > most) most = reps[c];
     }
     bench_progress_begin(x->progress, "interleaved builds", most * n, 0);
