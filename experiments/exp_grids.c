@@ -50,32 +50,38 @@ static exp_est rel_bvh(const exp_group *g, int bvh, int c, int bit)
     return exp_group_speedup(g, c, bvh, bit);
 }
 
-static void findings(exp_ctx *x, study *st, const exp_group *g, const accel_scene *s,
-                     const bench_sets *sets)
+/* One row of a scene's targets table, quoted by its finding. */
+static void target_row(exp_ctx *x, exp_text *f, const char *what, int bit, const char *value,
+                       const char *target, const char *outcome)
 {
-    char a[96], b[96];
+    exp_md(x, "| %s | %s | %s | %s | %s |\n", what, bench_set_name(bit), value, target, outcome);
+    exp_text_add(f, " %s, %s: %s (target %s: %s);", what, bench_set_name(bit), value, target, outcome);
+}
+
+static void findings(exp_ctx *x, study *st, const exp_group *g, const accel_scene *s)
+{
+    char a[96], what[640], tt[32];
     int bvh = exp_group_find(g, "bvh"), grid = exp_group_find(g, "grid");
     int pk = exp_group_find(g, "grid:traverse=packet"), nested = exp_group_find(g, "nested_grid");
     int irr = exp_group_find(g, "irregular_grid");
+    exp_md(x, "\nIssue 13's targets on this scene (paired ratios of the rounds above):\n");
+    exp_md_table(x, "comparison|ray set|ratio [95% CI]|target|outcome");
     exp_text_add(&st->findings, "- **%s**:", s->name);
     /* 1. Coherent grid traversal against the single-ray grid, primary rays. */
     if (pk >= 0 && g->cfg[pk].ok && grid >= 0) {
         if (g->cfg[grid].ok) {
             exp_est r = exp_group_speedup(g, grid, pk, BENCH_PRIMARY);
-            exp_text_add(&st->findings, " coherent grid traversal is %s as fast as the single-ray grid on "
-                         "primary rays (target 5x: %s);", exp_fmt_x(a, sizeof a, &r),
-                         r.lo >= 5 ? "met" : r.hi < 5 ? "not met" : "a tie with the target");
+            target_row(x, &st->findings, "speed of `grid:traverse=packet` over `grid`",
+                       BENCH_PRIMARY, exp_fmt_x(a, sizeof a, &r), "at least 5x",
+                       r.lo >= 5 ? "met" : r.hi < 5 ? "not met" : "a tie with the target");
         } else if (g->cfg[grid].left == EXP_LEFT_COLLAPSED && g->cfg[grid].counted_ms > 0) {
-            /* Only the probe's prediction exists for the collapsed grid:
-             * stated under the table, then quoted. */
+            /* Only the probe's prediction exists for the collapsed grid. */
             double est = g->cfg[grid].counted_ms / g->cfg[pk].set[0].ms.median;
-            exp_md(x, "\nThe collapsed `grid` against coherent traversal on primary rays: its "
-                      "probe predicts %.1f s per pass, `grid:traverse=packet` takes %.1f ms: "
-                      "about %.0fx.\n", g->cfg[grid].counted_ms / 1e3, g->cfg[pk].set[0].ms.median, est);
-            exp_text_add(&st->findings, " coherent grid traversal is about %.0fx as fast as the "
-                         "single-ray grid on primary rays, against the grid's time predicted by a "
-                         "probe (%.1f s per pass; target 5x: %s on that estimate);", est,
-                         g->cfg[grid].counted_ms / 1e3, est >= 5 ? "met" : "not met");
+            snprintf(a, sizeof a, "about %.0fx (estimate)", est);
+            snprintf(what, sizeof what, "speed of `grid:traverse=packet` over `grid` (collapsed: "
+                     "its probe predicts %.1f s per pass)", g->cfg[grid].counted_ms / 1e3);
+            target_row(x, &st->findings, what, BENCH_PRIMARY, a, "at least 5x",
+                       est >= 5 ? "met on the estimate" : "not met on the estimate");
         }
     }
     /* 2. The best single-ray grid kind against bvh, primary and diffuse. */
@@ -93,40 +99,37 @@ static void findings(exp_ctx *x, study *st, const exp_group *g, const accel_scen
             }
             if (best < 0) continue;
             exp_est r = rel_bvh(g, bvh, best, bit);
-            exp_text_add(&st->findings, " best single-ray grid on %s rays `%s` takes %s the "
-                         "time of `bvh`", bench_set_name(bit), g->cfg[best].spec,
-                         exp_fmt_x(a, sizeof a, &r));
-            if (t > 0)
-                exp_text_add(&st->findings, " (target at most %gx: %s)", t, at_most(&r, t));
-            exp_text_add(&st->findings, ";");
+            snprintf(what, sizeof what, "time of the best single-ray grid `%s` over `bvh`",
+                     g->cfg[best].spec);
+            snprintf(tt, sizeof tt, t > 0 ? "at most %gx" : "-", t);
+            target_row(x, &st->findings, what, bit, exp_fmt_x(a, sizeof a, &r), tt,
+                       t > 0 ? at_most(&r, t) : "no target on this scene");
         }
     }
     /* 3. Irregular against nested where nested beats the regular grid. */
     if (nested >= 0 && irr >= 0 && g->cfg[nested].ok && g->cfg[irr].ok && grid >= 0) {
         for (int k = 0; k < 3; k++) {
             int bit = set_bits[k];
-            int beats = !g->cfg[grid].ok; /* a collapsed grid is beaten */
             if (g->cfg[grid].ok) {
                 exp_est r = exp_group_speedup(g, grid, nested, bit); /* > 1: nested faster */
-                beats = exp_ratio_cmp(&r, g->floor) > 0;
-            }
-            if (!beats) {
-                exp_text_add(&st->findings, " %s: `nested_grid` does not beat `grid`, so the "
-                             "irregular-grid target does not apply;", bench_set_name(bit));
-                continue;
+                int beats = exp_ratio_cmp(&r, g->floor) > 0;
+                target_row(x, &st->findings, "speed of `nested_grid` over `grid`", bit,
+                           exp_fmt_x(a, sizeof a, &r), "(condition)",
+                           beats ? "nested beats regular: the next row applies"
+                                 : "nested does not beat regular: no irregular target here");
+                if (!beats) continue;
             }
             exp_est r = exp_group_speedup(g, nested, irr, bit);
             int cmp = exp_ratio_cmp(&r, g->floor);
-            exp_text_add(&st->findings, " %s: `nested_grid` beats `grid`, `irregular_grid` is %s "
-                         "as fast as `nested_grid` (target ahead: %s);", bench_set_name(bit),
-                         exp_fmt_x(b, sizeof b, &r),
-                         cmp > 0 ? "met" : cmp < 0 ? "not met" : "a tie, not met");
+            target_row(x, &st->findings, g->cfg[grid].ok ? "speed of `irregular_grid` over "
+                       "`nested_grid`" : "speed of `irregular_grid` over `nested_grid` (`grid` "
+                       "collapsed, so nested beats it)", bit, exp_fmt_x(a, sizeof a, &r), "ahead",
+                       cmp > 0 ? "met" : cmp < 0 ? "not met" : "a tie, not met");
         }
     }
     size_t len = st->findings.len;
     if (len && st->findings.s[len - 1] == ';') st->findings.s[len - 1] = '.';
     exp_text_add(&st->findings, "\n");
-    (void)sets;
 }
 
 static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_list *list)
@@ -183,7 +186,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
         exp_md(x, "\n");
     }
     exp_group_note(&g);
-    findings(x, st, &g, &s, &sets);
+    findings(x, st, &g, &s);
     exp_group_free(&g);
     bench_sets_free(&sets);
     scene_free(&s);

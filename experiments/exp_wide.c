@@ -52,6 +52,19 @@ typedef struct {
     int met[3], tie[3], scenes;
 } study;
 
+/* One row of a scene's targets table, quoted by its finding (t == 0: no target). */
+static void target_row(exp_ctx *x, exp_text *f, const char *what, int bit, const exp_est *r,
+                       double t, const char *outcome)
+{
+    char a[96], tt[32] = "-";
+    exp_fmt_x(a, sizeof a, r);
+    if (t > 0) snprintf(tt, sizeof tt, "%gx", t);
+    exp_md(x, "| %s | %s | %s | %s | %s |\n", what, bench_set_name(bit), a, tt, t > 0 ? outcome : "-");
+    exp_text_add(f, " %s, %s: %s", what, bench_set_name(bit), a);
+    if (t > 0) exp_text_add(f, " (target %s: %s)", tt, outcome);
+    exp_text_add(f, ";");
+}
+
 /* The tree a spec builds: the spec without its traversal choice. */
 static void tree_of(const char *spec, char *out, size_t n)
 {
@@ -187,8 +200,11 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, cons
     }
     exp_group_note(&g);
     if (base < 0) goto done;
-    /* Findings: best wide single kernel per set against its target, the
-     * best coherent one against the best single, 2 threads against 1. */
+    /* The targets: best wide single kernel per set over bvh, the best
+     * coherent one over the best single, 2 threads over 1; each a row of
+     * the targets table, then quoted by the findings. */
+    exp_md(x, "\nIssue 11's targets on this scene (paired ratios of the rounds above):\n");
+    exp_md_table(x, "comparison|ray set|ratio [95% CI]|target|outcome");
     exp_text_add(&st->findings, "- **%s**:", s.name);
     st->scenes++;
     for (int k = 0; k < 3; k++) {
@@ -200,32 +216,31 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, cons
             if (*b < 0 || exp_group_ns(&g, c, bit).median < exp_group_ns(&g, *b, bit).median) *b = c;
         }
         if (best < 0) continue;
+        char what[640];
         exp_est r = exp_group_speedup(&g, base, best, bit);
-        char a[96];
         const char *v = against(&r, target[k]);
         st->met[k] += !strcmp(v, "met");
         st->tie[k] += v[0] == 'a';
-        exp_text_add(&st->findings, " %s: best wide single `%s` %s over `bvh` (target %.1fx: %s)",
-                     bench_set_name(bit), g.cfg[best].spec, exp_fmt_x(a, sizeof a, &r), target[k], v);
+        snprintf(what, sizeof what, "best wide single `%s` over `bvh`", g.cfg[best].spec);
+        target_row(x, &st->findings, what, bit, &r, target[k], v);
         if (bestc >= 0 && k < 2) {
             exp_est rc = exp_group_speedup(&g, best, bestc, bit);
-            exp_text_add(&st->findings, ", coherent `%s` %s over it%s", g.cfg[bestc].spec,
-                         exp_fmt_x(a, sizeof a, &rc),
-                         k == 0 ? (rc.lo >= 1.5   ? " (target 1.5x: met)"
-                                   : rc.hi < 1.5 ? " (target 1.5x: not met)"
-                                                 : " (target 1.5x: a tie with the target)")
-                                : "");
+            snprintf(what, sizeof what, "best coherent `%s` over `%s`", g.cfg[bestc].spec,
+                     g.cfg[best].spec);
+            target_row(x, &st->findings, what, bit, &rc, k == 0 ? 1.5 : 0, against(&rc, 1.5));
         }
         for (int t = first_twin; t < g.count; t++) {
             if (!g.cfg[t].ok) continue;
             int one = twin_of[t - first_twin];
             if (one != best && one != bestc) continue;
             exp_est rt = exp_group_speedup(&g, one, t, bit);
-            exp_text_add(&st->findings, ", `%s` 2 threads %s over 1 (target 1.9x: %s)",
-                         g.cfg[t].spec, exp_fmt_x(a, sizeof a, &rt), against(&rt, 1.9));
+            snprintf(what, sizeof what, "`%s` on 2 threads over 1", g.cfg[t].spec);
+            target_row(x, &st->findings, what, bit, &rt, 1.9, against(&rt, 1.9));
         }
-        exp_text_add(&st->findings, "%s", k < 2 ? ";" : ".\n");
     }
+    size_t len = st->findings.len;
+    if (len && st->findings.s[len - 1] == ';') st->findings.s[len - 1] = '.';
+    exp_text_add(&st->findings, "\n");
 done:
     exp_group_free(&g);
     bench_sets_free(&sets);
