@@ -313,8 +313,8 @@ static void verdicts(exp_ctx *x, study *st)
                     st->sc[si].excess[i] > WITHIN)
                     exp_text_add(&miss, "%s%s %+.1f%%", miss.len ? ", " : "", st->sc[si].name,
                                  100 * st->sc[si].excess[i]);
-        char worst_txt[96] = "the measured best on each of them"; /* no "+0.0%": not a table value */
-        if (best_worst_in > 0)
+        char worst_txt[96] = "at the measured best on each of them"; /* no "+0.0%": no table shows it */
+        if (100 * best_worst_in >= 0.05)
             snprintf(worst_txt, sizeof worst_txt, "the largest excess among them %+.1f%%",
                      100 * best_worst_in);
         exp_text_add(&st->findings, "- lambda=%g is tied with the best or within %.0f%% of it on "
