@@ -4,9 +4,9 @@
  * At the lecture's 800x600, on one thread, in interleaved rounds: the BVH
  * traced ray by ray, with 8x8 packets (first-active ray, early-in test,
  * scan for the first hitting ray) and with packets plus the frustum
- * early-out; wide BVHs and the grid's coherent traversal when this build
- * has them, each against its own single-ray traversal, on coherent
- * (primary, shadow) and incoherent (diffuse, ambient occlusion) ray sets.
+ * early-out, each against single rays, on coherent (primary, shadow) and
+ * incoherent (diffuse, ambient occlusion) ray sets. Other kinds and widths
+ * join with --accel (each against its own single-ray traversal).
  * At 800x600 an 8x8 packet covers 1/7,500 of the screen, as in the
  * lecture (at 128x128 it covered 1/256, which biases against packets).
  */
