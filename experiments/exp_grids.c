@@ -55,7 +55,10 @@ static void target_row(exp_ctx *x, exp_text *f, const char *what, int bit, const
                        const char *target, const char *outcome)
 {
     exp_md(x, "| %s | %s | %s | %s | %s |\n", what, bench_set_name(bit), value, target, outcome);
-    exp_text_add(f, " %s, %s: %s (target %s: %s);", what, bench_set_name(bit), value, target, outcome);
+    if (target[0] == '-' || target[0] == '(') /* no target: the row's outcome only */
+        exp_text_add(f, " %s, %s: %s (%s);", what, bench_set_name(bit), value, outcome);
+    else
+        exp_text_add(f, " %s, %s: %s (target %s: %s);", what, bench_set_name(bit), value, target, outcome);
 }
 
 static void findings(exp_ctx *x, study *st, const exp_group *g, const accel_scene *s)
