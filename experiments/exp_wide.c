@@ -146,10 +146,10 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, cons
     exp_sets_wh(x, &s, MASK, w, h, 1, &sets);
     exp_md(x, "\n### %s (%u primitives)\n\n", s.name, s.live_count);
     if (div > 1)
-        exp_md(x, "Rays at %dx%d, not %dx%d: a pass of `bvh` here is %s, and the section's "
-                  "budget is about 150 s (Mrays/s compare; packets cover %dx more of the screen, "
-                  "a bias against them).\n\n", w, h, x->rt_size[0], x->rt_size[1],
-               div >= 4 ? "seconds long" : "about a second", div * div);
+        exp_md(x, "Rays at %dx%d, not %dx%d, to keep this scene within the section's budget of "
+                  "about 150 s (Mrays/s still compare; an 8x8 packet covers %dx more of the "
+                  "screen here, a bias against packets).\n\n",
+               w, h, x->rt_size[0], x->rt_size[1], div * div);
     exp_group g;
     exp_group_init(&g, x, &s, &sets, MASK);
     g.time_builds = 0; /* build_table times each tree once per round */
