@@ -1,7 +1,8 @@
 /*
  * exp_wide - issue 11's closing table: how much faster than the binary BVH
  * (`bvh`, single rays) are the 4- and 8-wide BVHs, single and coherent
- * (`traverse=packet`), per scene and ray set at the lecture's 800x600, what
+ * (`traverse=packet`), per scene and ray set at the lecture's 800x600 (the
+ * 1M-triangle scenes at 400x300, slivers at 200x150: the budget), what
  * do they cost in build time and memory, and do 2 threads give 1.9x?
  *
  * Every kernel of a scene is measured in the same interleaved rounds
