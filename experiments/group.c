@@ -260,7 +260,7 @@ static void build_rounds(exp_group *g)
         double first = g->cfg[c].build.ms;
         int r = x->quick ? 3 : 5;
         if (first > 0 && first * r > x->build_budget_ms) r = (int)(x->build_budget_ms / first);
-        /* A build longer than the budget keeps its first (add-time) sample
+        /* A build longer than half the budget keeps its first (add-time) sample
          * instead of being built once more for a single sample. */
         reps[c] = r < 2 ? 0 : r;
         if (reps[c] > most) most = reps[c];
