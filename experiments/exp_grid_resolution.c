@@ -313,10 +313,13 @@ static void verdicts(exp_ctx *x, study *st)
                     st->sc[si].excess[i] > WITHIN)
                     exp_text_add(&miss, "%s%s %+.1f%%", miss.len ? ", " : "", st->sc[si].name,
                                  100 * st->sc[si].excess[i]);
+        char worst_txt[96] = "at the measured best on each of them"; /* no "+0.0%": no table shows it */
+        if (100 * best_worst_in >= 0.05)
+            snprintf(worst_txt, sizeof worst_txt, "the largest excess among them %+.1f%%",
+                     100 * best_worst_in);
         exp_text_add(&st->findings, "- lambda=%g is tied with the best or within %.0f%% of it on "
-                     "%d of %d scenes (the largest excess among them %+.1f%%)%s%s.\n", ls[best_l],
-                     100 * WITHIN, best_within, n, 100 * best_worst_in,
-                     miss.len ? "; it misses on " : "", exp_text_str(&miss));
+                     "%d of %d scenes (%s)%s%s.\n", ls[best_l], 100 * WITHIN, best_within, n,
+                     worst_txt, miss.len ? "; it misses on " : "", exp_text_str(&miss));
         exp_verdict(x, "grid-scene-dependent", v, "every scene of the sweep",
                     "one lambda (%g) is tied with the measured best or within %.0f%% of it on %d "
                     "of %d scenes%s%s", ls[best_l], 100 * WITHIN, best_within, n,

@@ -168,6 +168,10 @@ int main(int argc, char **argv)
              "How do build time, memory and trace time grow with the triangle count, per "
              "accelerator?",
              NULL);
+    /* Builds of the 256k and 1M sizes take 0.1-1 s: 1 s of interleaved
+     * builds per configuration gives them 2-5 samples (the growth fit
+     * rests on seven sizes, not on one size's interval). */
+    if (!x.quick) x.build_budget_ms = 1000;
     exp_header(&x, "Scaling with scene size", "\"Primary rays cost O(N\xc2\xb7M) without "
                "acceleration\"; structures \"reduce M\"",
                "how do build time, memory and trace time per ray grow with the number of "

@@ -68,6 +68,7 @@ static int same_structure(const exp_cfg *a, const exp_cfg *b, int mask)
         return 0;
     for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
         if (!(mask & bit)) continue;
+        if (a->set[exp_set_index(bit)].have != b->set[exp_set_index(bit)].have) return 0;
         const accel_counters *u = &a->set[exp_set_index(bit)].counters;
         const accel_counters *v = &b->set[exp_set_index(bit)].counters;
         if (u->steps != v->steps || u->box_tests != v->box_tests ||
@@ -86,6 +87,48 @@ static void leave_out(exp_group *g, exp_cfg *c, int why_kind)
     if (why_kind != EXP_LEFT_UNPARSED || exp_note_unparsed(g->x, c->spec)) exp_note_left(g->x, why_kind);
     if (c->accel) c->kind->destroy(c->accel);
     c->accel = NULL;
+}
+
+/* Before a counted pass that may take minutes: PROBE_BLOCKS blocks of 64
+ * consecutive rays (8x8 tiles, so packets stay coherent) spread evenly over
+ * the set are traced, counted, then timed; when the pass they predict is
+ * longer than 1.25 collapse_ms the configuration is collapsed without the
+ * full pass (one such pass of `grid` on teapot_stadium at 800x600 took
+ * 143 s). */
+#define PROBE_BLOCKS 32
+static int probe_collapsed(exp_group *g, exp_cfg *c, int bit, const rays_set *r)
+{
+    const size_t block = 64, n = PROBE_BLOCKS * block;
+    if (r->count < 4 * n) return 0;
+    accel_ray *rays = malloc(n * sizeof *rays);
+    accel_hit *hits = malloc(n * sizeof *hits);
+    uint8_t *occ = malloc(n);
+    if (!rays || !hits || !occ) {
+        free(rays), free(hits), free(occ);
+        return 0;
+    }
+    size_t blocks = r->count / block;
+    for (size_t b = 0; b < PROBE_BLOCKS; b++)
+        memcpy(rays + b * block, r->rays + (b * blocks / PROBE_BLOCKS) * block, block * sizeof *rays);
+    rays_set probe = {rays, NULL, n, 0, 0};
+    accel_counters cnt = {0};
+    /* Timed warm (the first touch of a fresh structure is slow): the
+     * counted pass warms it, the second is timed. */
+    one_pass(c, bit, &probe, hits, occ, &cnt);
+    double t0 = accel_now_ms();
+    one_pass(c, bit, &probe, hits, occ, NULL);
+    double est_ms = (accel_now_ms() - t0) * (double)r->count / (double)n;
+    free(rays), free(hits), free(occ);
+    /* Only a clear collapse is decided by the probe (a 25% margin for its
+     * noise); a near one gets the full counted pass and the rule below. */
+    if (est_ms <= 1.25 * g->collapse_ms) return 0;
+    c->counted_ms = est_ms;
+    snprintf(c->why, sizeof c->why,
+             "collapsed: %.0f primitive tests per %s ray (of %u primitives) in a probe of %zu "
+             "rays, which predicts %.1f s per pass",
+             (double)cnt.prim_tests / (double)n, bench_set_name(bit), g->s->live_count, n,
+             est_ms / 1e3);
+    return 1;
 }
 
 int exp_group_add(exp_group *g, const char *spec, int threads)
@@ -127,8 +170,9 @@ int exp_group_add(exp_group *g, const char *spec, int threads)
     c->build_samples[0] = c->build.ms;
     exp_est_of(c->build_samples, 1, &c->build_ms);
     scratch sc = scratch_make(g);
+    int cmask = g->add_mask ? g->mask & g->add_mask : g->mask;
     for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
-        if (!(g->mask & bit)) continue;
+        if (!(cmask & bit)) continue;
         exp_trace *t = &c->set[exp_set_index(bit)];
         const rays_set *r = bench_sets_get(g->sets, bit);
         t->rays = r->count;
@@ -137,6 +181,11 @@ int exp_group_add(exp_group *g, const char *spec, int threads)
             t->ray_prims = calloc(r->count ? r->count : 1, sizeof *t->ray_prims);
             t->counters.ray_steps = t->ray_steps;
             t->counters.ray_prims = t->ray_prims;
+        }
+        if (g->collapse_ms > 0 && probe_collapsed(g, c, bit, r)) {
+            free(sc.hits), free(sc.occ);
+            leave_out(g, c, EXP_LEFT_COLLAPSED);
+            return idx;
         }
         snprintf(phase, sizeof phase, "count %s with %s", bench_set_name(bit), spec);
         bench_progress_begin(x->progress, phase, (double)r->count, 1);
@@ -193,6 +242,7 @@ int exp_group_add(exp_group *g, const char *spec, int threads)
     double budget = x->set_budget_ms * (nsets ? nsets : 1);
     c->want = round_ms > 0 ? (int)(budget / round_ms) : x->repeats;
     if (c->want > x->repeats) c->want = x->repeats;
+    if (c->want < g->min_rounds) c->want = g->min_rounds < x->repeats ? g->min_rounds : x->repeats;
     if (c->want < 1) c->want = 1;
     if (c->want > EXP_MAX_SAMPLES) c->want = EXP_MAX_SAMPLES;
     c->ok = 1;
@@ -210,7 +260,9 @@ static void build_rounds(exp_group *g)
         double first = g->cfg[c].build.ms;
         int r = x->quick ? 3 : 5;
         if (first > 0 && first * r > x->build_budget_ms) r = (int)(x->build_budget_ms / first);
-        reps[c] = r < 1 ? 1 : r;
+        /* A build longer than half the budget keeps its first (add-time) sample
+         * instead of being built once more for a single sample. */
+        reps[c] = r < 2 ? 0 : r;
         if (reps[c] > most) most = reps[c];
     }
     bench_progress_begin(x->progress, "interleaved builds", most * n, 0);

@@ -71,6 +71,8 @@ typedef struct {
     double collapse_ms; /* leave out a configuration whose first pass is longer (0: never) */
     int keep_same;      /* measure configurations of the same structure too (a control whose
                            difference the counts cannot show, e.g. instanced:world=flat) */
+    int add_mask;       /* sets of the next exp_group_add (0: every set of mask) */
+    int min_rounds;     /* timed rounds even for slow passes (default 1; an interval needs 3) */
     /* Results of exp_group_run. */
     double aa_samples[4][EXP_MAX_SAMPLES];
     exp_est aa;         /* configuration 0 against itself: paired ratio over the mask */

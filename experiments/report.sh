@@ -32,17 +32,23 @@ extra=()
 for spec in ${ACCEL:-}; do extra+=(--accel "$spec"); done
 read -r load_start _ < /proc/loadavg || load_start="?"
 # Experiments in the order the report reads them.
-order="exp_step_cost exp_grid_resolution exp_grid_packet exp_nested_grid exp_sah exp_binning exp_packets exp_wide exp_threads exp_twolevel exp_scaling exp_error_time exp_time_to_image exp_stability"
+order="exp_step_cost exp_grid_resolution exp_grids exp_nested_grid exp_sah exp_binning exp_packets exp_wide exp_threads exp_twolevel exp_scaling exp_error_time exp_time_to_image exp_stability"
 start=$(date +%s)
 ran=()
+times=""   # each experiment's own wall time, for the run record
+sum=0
 for e in $order; do
   [ -x "bin/$e" ] || continue
   if [ -n "$only" ] && [ "$only" != "$e" ]; then continue; fi
   echo "== $e" >&2
+  t0=$(date +%s)
   if ! "bin/$e" $flag --out "$out" "${extra[@]}"; then
     echo "report.sh: $e failed" >&2
     exit 1
   fi
+  t=$(( $(date +%s) - t0 ))
+  sum=$((sum + t))
+  times="${times:+$times, }$e $t s"
   ran+=("$e")
 done
 end=$(date +%s)
@@ -54,7 +60,7 @@ commit="$commit, $(git log -1 --format='%cd' --date=format:'%Y-%m-%d %H:%M' 2>/d
 cc_version=$(${CC:-cc} --version 2>/dev/null | head -1)
 bin/mkreport --out "$out" --report "$report" --links "$links" --budget "$budget" \
   --commit "$commit" --flags "${GRIDBVH_CFLAGS:-see Makefile} (driver: $cc_version)" \
-  --run "$((end - start)) s for ${ran[*]}${KINDS:+; KINDS=$KINDS}${ACCEL:+; ACCEL=$ACCEL}" \
+  --run "$((end - start)) s; per experiment: $times (sum $sum s)${KINDS:+; KINDS=$KINDS}${ACCEL:+; ACCEL=$ACCEL}" \
   --load "$load_start (1 minute) before the first experiment, $load_end after the last" \
   "${ran[@]}"
 echo "report.sh: wrote $report in $((end - start)) s" >&2

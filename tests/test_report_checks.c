@@ -245,6 +245,91 @@ TEST(report_quick_summary_verdicts)
     free(r);
 }
 
+/* Every section's footer states how many interleaved rounds it timed: at
+ * least one (exp_grid_packet and exp_wide once said "0 to 0", timing
+ * outside the rounds they claimed). */
+static void check_rounds(const char *path, char *text)
+{
+    const char *f = strstr(text, " interleaved timed rounds per configuration");
+    CHECKF(f != NULL, "%s: the footer does not state its rounds", path);
+    if (!f) return;
+    const char *p = f;
+    while (p > text && p[-1] != ';') p--;
+    int lo = -1, hi = -1;
+    CHECKF(sscanf(p, " %d to %d", &lo, &hi) == 2 && lo >= 1 && hi >= lo,
+           "%s: footer rounds %d to %d: %.80s", path, lo, hi, p);
+}
+
+TEST(report_quick_footer_rounds)
+{
+    if (!quick_report()) return;
+    sections_only = 1;
+    CHECKF(each_file(".md", check_rounds) >= 11, "too few sections");
+    sections_only = 0;
+}
+
+/* The run record names every section's own wall time and their sum. */
+static char *run_row;
+static void check_run_time(const char *path, char *text)
+{
+    (void)text;
+    const char *name = strrchr(path, '/') + 1;
+    char tag[128];
+    snprintf(tag, sizeof tag, "%.*s ", (int)(strlen(name) - 3), name);
+    const char *at = run_row ? strstr(run_row, tag) : NULL;
+    int sec = -1;
+    CHECKF(at && sscanf(at + strlen(tag), "%d s", &sec) == 1 && sec >= 0,
+           "the run record has no wall time for %s", name);
+}
+
+TEST(report_quick_run_times)
+{
+    if (!quick_report()) return;
+    char *r = test_read_file(DIR_OUT "/REPORT.md", NULL);
+    CHECKF(r != NULL, DIR_OUT "/REPORT.md missing");
+    if (!r) return;
+    run_row = strstr(r, "| run | ");
+    char *end = run_row ? strchr(run_row, '\n') : NULL;
+    if (end) *end = 0;
+    CHECKF(run_row && strstr(run_row, "per experiment: ") && strstr(run_row, "(sum "),
+           "the run record has no per-experiment times: %.300s", run_row ? run_row : "(none)");
+    sections_only = 1;
+    each_file(".md", check_run_time);
+    sections_only = 0;
+    run_row = NULL;
+    free(r);
+}
+
+/* Issue 11's and issue 13's closing tables: every kernel they compare has
+ * its row or is left out with a reason; the targets are stated. */
+static void check_rows(const char *path, const char *const *specs, int n, const char *must)
+{
+    char *t = test_read_file(path, NULL);
+    CHECKF(t != NULL, "%s missing", path);
+    if (!t) return;
+    for (int i = 0; i < n; i++) {
+        char row[128], left[128];
+        snprintf(row, sizeof row, "| `%s` |", specs[i]);
+        snprintf(left, sizeof left, "`%s` (", specs[i]);
+        CHECKF(strstr(t, row) || strstr(t, left), "%s: no row for %s", path, specs[i]);
+    }
+    CHECKF(strstr(t, must) != NULL, "%s: no %s", path, must);
+    free(t);
+}
+
+TEST(report_quick_issue_tables)
+{
+    if (!quick_report()) return;
+    static const char *const wide[] = {"bvh", "bvh:width=4", "bvh:width=8", "bvh:traverse=packet",
+                                       "bvh:width=4,traverse=packet", "bvh:width=8,traverse=packet"};
+    check_rows(DIR_OUT "/exp_wide.md", wide, 6, "on 2 threads over 1 |");
+    static const char *const grids[] = {"bvh", "grid", "grid:skip=cloud", "grid:skip=macro",
+                                        "grid:traverse=packet", "nested_grid", "irregular_grid",
+                                        "irregular_grid:subdivide=0", "irregular_grid:merge=0",
+                                        "irregular_grid:expand=0"};
+    check_rows(DIR_OUT "/exp_grids.md", grids, 10, "| at least 5x |");
+}
+
 TEST(report_stats_ties_and_intervals)
 {
     double a[7] = {10, 11, 10.5, 12, 9.8, 10.2, 30}, b[7] = {20, 21, 20.5, 22, 19.8, 20.2, 25};
