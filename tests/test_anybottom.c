@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "instanced/instanced.h"
+#include "lab/check.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
 #include "test.h"
@@ -185,4 +186,20 @@ TEST(anybottom_update_frames)
     free(l.r);
     scene_free(&f0);
     scene_free(&f1);
+}
+
+TEST(anybottom_lab_step3_catches_a_walk_without_pad)
+{
+    /* Lab step 3's check on a bvh whose walk forgets the pad: it must fail,
+     * naming a ray and a triangle (test_lab.c runs it on the project's bvh,
+     * which passes, and on the untouched starter, which fails). */
+    accel_kind broken = *accel_find_kind("bvh");
+    broken.name = "bvh_without_pad";
+    broken.walk = nopad_walk;
+    lab_subject sub = {&broken, "build=median", 2, NULL, 1};
+    lab_result r;
+    accel_error err = {0};
+    CHECK(lab_check(3, &sub, &r, &err) == 0);
+    CHECKF(!r.passed, "step 3 passes a walk without the pad:\n%s", r.report);
+    CHECKF(strstr(r.report, "the reference hits triangle") != NULL, "report:\n%s", r.report);
 }
