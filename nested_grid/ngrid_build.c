@@ -339,16 +339,6 @@ static const char *const ngrid_variants[] = {
     NULL,
 };
 
-/* accel.h's conservative walk: the simplest correct one, every primitive
- * whose bounding box grown by the pad the ray reaches (the primitive
- * store's walk, in store order; README.md says why not a padded walk of
- * the cells). */
-static int ngrid_walk(const void *a, const accel_ray *ray, float pad, accel_walk_visit visit,
-                void *ctx, uint32_t *steps)
-{
-    return accel_prim_store_walk(&((const ngrid_accel *)a)->store, ray, pad, visit, ctx, steps);
-}
-
 const accel_kind accel_kind_nested_grid = {
     .name = "nested_grid",
     .summary = "nested uniform grids: dense cells hold sub-grids, hierarchical 3D-DDA, auto mode "
