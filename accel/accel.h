@@ -345,6 +345,10 @@ typedef struct {
  *    (at most 2^-20 relative to the largest |coordinate| of the structure
  *    plus the pad) and a relative 2^-20 of t; a caller that needs
  *    exactness grows pad and [t_near, t_max] by that (instanced does).
+ *    With pad = 0 it reaches at least every primitive the kind's own trace
+ *    of that ray would test (the same robust box and cell tests): a caller
+ *    deciding on the structure's own floats needs no margin (instanced's
+ *    identity instances, a plain scene).
  *  - Order: roughly nearest first where the structure allows (a tree's
  *    nearer child first, a grid's cells along the ray), so that shrinking
  *    t_max culls; a walk that cannot order (brute) visits in its own order.

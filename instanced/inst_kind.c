@@ -388,7 +388,8 @@ int instanced_build_with_bottom(const accel_scene *scene, const char *kv, const 
 }
 
 static const char *const inst_variants[] = {
-    "", "top=grid", "bottom=grid", "top=grid,bottom=grid", "world=flat,leaf=1", NULL,
+    "", "top=grid", "bottom=grid", "top=grid,bottom=grid", "world=flat,leaf=1",
+    "bottom=bvh:width=8", "top=grid,bottom=nested_grid", "bottom=grid:", NULL,
 };
 
 const accel_kind accel_kind_instanced = {

@@ -300,7 +300,7 @@ static float walk_visit(void *ctx, uint32_t q, float t_max)
         test_prim(w->a, w->it, w->b->mesh, q, w->r, 0, 0);
     if (w->r->done) return -INFINITY;
     float hi_t = (float)((double)w->r->t - w->shift);
-    hi_t += fabsf(hi_t) * w->slack;
+    if (w->slack != 0.0f) hi_t += fabsf(hi_t) * w->slack; /* never 0 * inf */
     return hi_t < t_max ? hi_t : t_max;
 }
 
@@ -309,11 +309,13 @@ static __attribute__((noinline)) void walk_kind(const inst_accel *a, const inst_
                                                 vec3 dir, float pad, double shift, int naive,
                                                 int spheres)
 {
-    walk_ctx w = {a, it, b, r, shift, 0x1p-20f, naive, spheres};
+    walk_ctx w = {a, it, b, r, shift, it->identity ? 0.0f : 0x1p-20f, naive, spheres};
     float lo_t = (float)((double)r->p.t_near - shift);
-    lo_t -= fabsf(lo_t) * w.slack;
     float hi_t = (float)((double)r->t - shift);
-    hi_t += fabsf(hi_t) * w.slack;
+    if (w.slack != 0.0f) {
+        lo_t -= fabsf(lo_t) * w.slack; /* never 0 * inf */
+        hi_t += fabsf(hi_t) * w.slack;
+    }
     accel_ray ray = {org.x, org.y, org.z, lo_t, dir.x, dir.y, dir.z, hi_t};
     uint32_t steps = 0;
     if (b->walk) a->walk_kind->walk(b->walk, &ray, pad, walk_visit, &w, &steps);
@@ -328,8 +330,13 @@ INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int 
 {
     const inst_item *it = &a->items[k];
     const inst_bottom *b = &a->bottoms[it->bottom];
-    if (it->identity && a->bottom_kind != INST_WALK) {
-        if (a->bottom_kind == INST_BVH)
+    if (it->identity) {
+        /* No transform: the walk sees the world ray itself, no pad (its
+         * box and cell tests are the kind's own robust ones, on the very
+         * floats the world test uses). */
+        if (a->bottom_kind == INST_WALK)
+            walk_kind(a, it, b, r, r->p.org, r->p.dir, 0.0f, 0.0, naive, spheres);
+        else if (a->bottom_kind == INST_BVH)
             walk_bvh_flat(a, it, b, r, r->p.org, r->p.dir, 0.0f, 0.0, naive, spheres);
         else
             walk_grid_flat(a, it, b, r, r->o, r->d, r->p.t_near, naive, spheres);
