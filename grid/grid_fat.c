@@ -19,18 +19,6 @@
 
 #include "grid_core.h"
 
-/* Float bound of a double, rounded outward. */
-static float down(double x)
-{
-    float f = (float)x;
-    return (double)f > x ? nextafterf(f, -INFINITY) : f;
-}
-static float up(double x)
-{
-    float f = (float)x;
-    return (double)f < x ? nextafterf(f, INFINITY) : f;
-}
-
 /* The cells the piece [ta, tb] grown by the pad touches; 0 when fn ended
  * the walk. */
 static int piece(const grid_frame *f, const accel_ray_prep *p, double ta, double tb, float pad,
@@ -44,7 +32,8 @@ static int piece(const grid_frame *f, const accel_ray_prep *p, double ta, double
         lo[a] = (pa < pb ? pa : pb) - m;
         hi[a] = (pa < pb ? pb : pa) + m;
     }
-    box3 b = {{down(lo[0]), down(lo[1]), down(lo[2])}, {up(hi[0]), up(hi[1]), up(hi[2])}};
+    box3 b = {{accel_float_down(lo[0]), accel_float_down(lo[1]), accel_float_down(lo[2])},
+              {accel_float_up(hi[0]), accel_float_up(hi[1]), accel_float_up(hi[2])}};
     int c0[3], c1[3];
     if (!grid_cell_range(f, b, c0, c1)) return 1;
     for (int z = c0[2]; z <= c1[2]; z++)

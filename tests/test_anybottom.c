@@ -21,38 +21,6 @@
 #include "test.h"
 #include "test_instanced.h"
 
-/* Bad rays of a built instanced structure against the oracle's hits. */
-static size_t count_bad(const void *a, const ray_list *l, const accel_hit *ref)
-{
-    const accel_kind *k = &accel_kind_instanced;
-    accel_hit *h = malloc(l->n * sizeof *h);
-    uint8_t *occ = malloc(l->n);
-    accel_trace(k, a, l->r, h, l->n, 1, NULL);
-    accel_trace_occluded(k, a, l->r, occ, l->n, 1, NULL);
-    hits_diff d = hits_compare(ref, h, l->n);
-    size_t bad = d.holes + d.false_hits + d.disagreements;
-    for (size_t i = 0; i < l->n; i++) bad += occ[i] != (ref[i].prim != ACCEL_MISS);
-    free(h);
-    free(occ);
-    return bad;
-}
-
-static size_t bad_spec(const accel_scene *s, const ray_list *l, const accel_hit *ref,
-                       const char *spec)
-{
-    accel_error err = {0};
-    const accel_kind *kind;
-    void *a;
-    accel_build_stats st;
-    if (accel_build_spec(spec, s, 1, &kind, &a, &st, &err)) {
-        test_fail(__FILE__, __LINE__, "%s: %s", spec, err.msg);
-        return 1;
-    }
-    size_t bad = count_bad(a, l, ref);
-    kind->destroy(a);
-    return bad;
-}
-
 /* A bvh whose walk forgets the pad: the mistake the pad=0 control makes
  * on purpose, made inside a kind. */
 static int nopad_walk(const void *a, const accel_ray *ray, float pad, accel_walk_visit visit,
@@ -110,13 +78,13 @@ TEST(anybottom_every_kind_exact)
                 char spec[160];
                 snprintf(spec, sizeof spec, "instanced:top=%s,bottom=%.63s", top ? "grid" : "bvh",
                          bottoms[b]);
-                size_t bad = bad_spec(&s, &l, ref, spec);
+                size_t bad = inst_bad_rays(&s, &l, ref, spec, NULL);
                 CHECKF(bad == 0, "%s on %s: %zu bad rays of %zu", spec, cases[c].name, bad, l.n);
             }
         if (cases[c].far) {
             /* The controls: without the pad the far scenes disagree. */
-            size_t p0 = bad_spec(&s, &l, ref, "instanced:pad=0,bottom=bvh:") +
-                        bad_spec(&s, &l, ref, "instanced:pad=0,bottom=grid:");
+            size_t p0 = inst_bad_rays(&s, &l, ref, "instanced:pad=0,bottom=bvh:", NULL) +
+                        inst_bad_rays(&s, &l, ref, "instanced:pad=0,bottom=grid:", NULL);
             const accel_kind *bvh = accel_find_kind("bvh");
             accel_kind broken = *bvh;
             broken.name = "bvh_without_pad";
@@ -126,7 +94,8 @@ TEST(anybottom_every_kind_exact)
             accel_error err = {0};
             size_t np = 0;
             if (instanced_build_with_bottom(&s, "", &broken, "", 1, &a, &st, &err) == 0) {
-                np = count_bad(a, &l, ref);
+                np = inst_count_bad(&accel_kind_instanced, a, &s, &l, ref, "pad=0 (no pad)",
+                                    NULL);
                 accel_kind_instanced.destroy(a);
             } else {
                 test_fail(__FILE__, __LINE__, "%s", err.msg);
@@ -179,7 +148,7 @@ TEST(anybottom_update_frames)
     inst_make_rays(&f1, &l);
     accel_hit *ref = malloc(l.n * sizeof *ref);
     accel_reference_trace(&f1, l.r, ref, l.n, 2);
-    size_t bad = count_bad(a, &l, ref);
+    size_t bad = inst_count_bad(k, a, &f1, &l, ref, "update", NULL);
     CHECKF(bad == 0, "after update: %zu bad rays of %zu", bad, l.n);
     k->destroy(a);
     free(ref);
