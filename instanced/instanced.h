@@ -19,7 +19,7 @@
  * hits are those of any kind on the flattened scene (ids base + local id,
  * t the world parameter, u and v of the world triangle).
  *
- * Parameters (bin/trace --help): top, bottom (bvh|grid), leaf (bottom BVH
+ * Parameters (bin/trace --help): top, bottom (bvh|grid or a kind spec), leaf (bottom BVH
  * leaf size), lambda and top_lambda (grid cells per primitive / instance),
  * world (compute|flat), and the common tri=watertight|naive.
  *
