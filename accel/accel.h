@@ -324,6 +324,52 @@ typedef struct {
     uint32_t meshes_refit, meshes_rebuilt;
 } accel_update_stats;
 
+/* ---- the conservative walk (optional accel_kind.walk) ----------------------
+ *
+ * What a kind must offer to serve as the bottom level of a two-level
+ * structure that decides every primitive itself (instanced: it tests the
+ * world-space copy of each candidate; instanced/README.md says why a
+ * closest-hit answer cannot serve). The contract:
+ *
+ *  - walk(accel, ray, pad, visit, ctx, steps) calls visit(ctx, id, t_max)
+ *    for EVERY primitive of the scene the structure was built on (id: its
+ *    scene id, as in hits) that has a point within `pad` (max norm: per
+ *    axis) of a point o + t d of the ray with t in [t_near, t_max]. t_max
+ *    starts at ray->t_far; each call returns the new t_max (the visitor
+ *    decides what a hit is; return t_max unchanged to keep it, a smaller
+ *    value to let the walk cull, -INFINITY to end the walk).
+ *  - It is conservative: visiting more primitives is allowed (a box or a
+ *    cell grown by the pad holds more than the primitive), and so is
+ *    visiting one primitive more than once; missing one is not. Up to its
+ *    float rounding: a walk may lose a few float ulps of its coordinates
+ *    (at most 2^-20 relative to the largest |coordinate| of the structure
+ *    plus the pad) and a relative 2^-20 of t; a caller that needs
+ *    exactness grows pad and [t_near, t_max] by that (instanced does).
+ *    With pad = 0 it reaches at least every primitive the kind's own trace
+ *    of that ray would test (the same robust box and cell tests): a caller
+ *    deciding on the structure's own floats needs no margin (instanced's
+ *    identity instances, a plain scene).
+ *  - Order: roughly nearest first where the structure allows (a tree's
+ *    nearer child first, a grid's cells along the ray), so that shrinking
+ *    t_max culls; a walk that cannot order (brute) visits in its own order.
+ *  - The direction need not be normalized and may have zero components
+ *    (not all three); t keeps the caller's parameterization.
+ *  - *steps gets the nodes or cells visited added (the depth view).
+ *  - Returns 0; or, called with visit == NULL, answers whether this BUILT
+ *    structure can walk (0) or not (ACCEL_ERR_SPEC, e.g. a mode that keeps
+ *    no walkable structure): callers probe once at build.
+ *  - Reentrant like intersect; reads only the built structure.
+ * A kind without it (walk == NULL) cannot be such a bottom level, and
+ * instanced refuses it at build, naming the kind. */
+typedef float (*accel_walk_visit)(void *ctx, uint32_t prim, float t_max);
+
+/* The simplest walk, for any kind that keeps the primitive store: every
+ * primitive whose bounding box grown by pad the ray reaches within
+ * [t_near, t_max], in store order (brute; nested_grid and irregular_grid
+ * fall back to it, see their READMEs). */
+int accel_prim_store_walk(const accel_prim_store *st, const accel_ray *ray, float pad,
+                          accel_walk_visit visit, void *ctx, uint32_t *steps);
+
 typedef struct accel_kind {
     const char *name;
     const char *summary;       /* one line for --help */
@@ -352,6 +398,10 @@ typedef struct accel_kind {
      * it. Not reentrant with traversal: no ray may be in flight. */
     int (*update)(void *accel, const accel_scene *scene, int refit, accel_update_stats *stats,
                   accel_error *err);
+    /* Optional (NULL: none): the conservative walk above, which lets the
+     * kind serve as instanced's bottom level (instanced:bottom=<spec>). */
+    int (*walk)(const void *accel, const accel_ray *ray, float pad, accel_walk_visit visit,
+                void *ctx, uint32_t *steps);
 } accel_kind;
 
 /* registry.c: every kind, one line each. */

@@ -211,6 +211,7 @@ const accel_kind accel_kind_bvh = {
     .occluded = bvh_occluded,
     .memory = bvh_memory,
     .destroy = bvh_destroy,
+    .walk = bvh_walk,
 };
 
 /* ---- inspection ---------------------------------------------------------- */

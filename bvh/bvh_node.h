@@ -194,6 +194,10 @@ void bvh_packet_intersect(const bvh *b, const accel_ray *rays, accel_hit *hits, 
 void bvh_packet_occluded(const bvh *b, const accel_ray *rays, uint8_t *occ, size_t count,
                          accel_counters *c);
 
+/* accel.h's conservative walk (bvh_walk.c): binary and wide trees. */
+int bvh_walk(const void *accel, const accel_ray *ray, float pad, accel_walk_visit visit, void *ctx,
+             uint32_t *steps);
+
 #ifdef __cplusplus
 }
 #endif

@@ -224,4 +224,5 @@ const accel_kind accel_kind_grid = {
     .occluded = grid_trace_occluded,
     .memory = grid_memory,
     .destroy = grid_destroy,
+    .walk = grid_walk,
 };

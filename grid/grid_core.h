@@ -294,6 +294,18 @@ static inline __attribute__((always_inline)) int grid_dda_step(grid_dda *d)
     return grid_dda_advance(d, 2);
 }
 
+/* ---- the fat walk (grid_fat.c) ------------------------------------------------
+ * accel.h's conservative walk over one grid: calls fn(ctx, cell, ta, tb)
+ * for every cell (linear index) whose box, grown by pad and the membership
+ * padding, the segment [ta, tb] of the ray reaches before *t_max (read
+ * again after every call: the caller shrinks it). [ta, tb] is the piece of
+ * the segment that made the cell a candidate (a parent may walk a
+ * sub-grid over it). Pieces come along the ray; a cell may be reported
+ * more than once. Returns 0 when fn returned 0 (the walk is over), else 1. */
+typedef int (*grid_fat_cell_fn)(void *ctx, uint32_t cell, double ta, double tb);
+int grid_fat_walk(const grid_frame *f, const accel_ray_prep *p, double ta, double tb, float pad,
+                  const float *t_max, grid_fat_cell_fn fn, void *ctx);
+
 #ifdef __cplusplus
 }
 #endif

@@ -64,6 +64,10 @@ void grid_packet_intersect(const void *accel, const accel_ray *rays, accel_hit *
 void grid_packet_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded,
                           size_t count, accel_counters *counters);
 
+/* accel.h's conservative walk (grid_walk.c): a DDA over cells grown by the pad. */
+int grid_walk(const void *accel, const accel_ray *ray, float pad, accel_walk_visit visit,
+              void *ctx, uint32_t *steps);
+
 #ifdef __cplusplus
 }
 #endif

@@ -55,7 +55,7 @@ void inst_grid_free(inst_grid *g);
 
 /* ---- the kind ------------------------------------------------------------- */
 
-enum { INST_BVH = 0, INST_GRID = 1 };
+enum { INST_BVH = 0, INST_GRID = 1, INST_WALK = 2 };
 
 /* One per mesh: its bottom level, shared by every instance of the mesh. */
 typedef struct {
@@ -67,6 +67,13 @@ typedef struct {
     double grid_pad;         /* bottom=grid: how far its boxes were grown */
     inst_bvh bvh;
     inst_grid grid;
+    /* bottom=<kind spec>: the kind's structure over the mesh, walked
+     * (accel.h's walk); and the mesh's triangles with no area in object
+     * space, which the kind leaves out but whose world copies may live. */
+    void *walk;
+    accel_build_stats walk_stats;
+    uint32_t *dead;
+    uint32_t dead_count;
 } inst_bottom;
 
 /* One per instance: what the traversal reads, packed together. */
@@ -81,7 +88,11 @@ typedef struct {
 
 typedef struct {
     const accel_scene *scene; /* the flattened scene */
-    int top, bottom_kind;     /* INST_BVH or INST_GRID */
+    int top;                  /* INST_BVH or INST_GRID */
+    int bottom_kind;          /* INST_BVH, INST_GRID or INST_WALK */
+    const accel_kind *walk_kind; /* INST_WALK: the bottom kind, and its parameters */
+    char walk_kv[64];
+    int threads;
     int naive, world_flat, spheres;
     int no_pad;               /* pad=0: boxes not grown (shows what the pad is for) */
     int leaf;                 /* bottom=bvh: largest leaf */
@@ -101,6 +112,12 @@ int inst_build_top(inst_accel *a, accel_error *err);
 void inst_fill_stats(const inst_accel *a, accel_build_stats *stats);
 size_t inst_memory(const void *a);
 void inst_destroy(void *a);
+/* The build, with `bottom` (when not NULL) as the walked bottom kind
+ * instead of the parameter's; and the choice of a walked bottom kind. */
+int inst_build_with(const accel_scene *scene, const accel_params *params, int threads,
+                    const accel_kind *bottom, const char *bottom_kv, void **out,
+                    accel_build_stats *stats, accel_error *err);
+int inst_use_bottom_kind(inst_accel *a, const accel_kind *k, accel_error *err);
 /* accel_kind.update (inst_update.c). */
 int inst_update(void *a, const accel_scene *scene, int refit, accel_update_stats *st,
                 accel_error *err);

@@ -10,6 +10,7 @@
  */
 #include <float.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -19,8 +20,10 @@
 static const accel_param_def inst_params[] = {
     {"top", ACCEL_PARAM_ENUM, "bvh", 0, 0, "bvh|grid",
      "top level over the instances' world bounds: binned-SAH BVH or uniform grid"},
-    {"bottom", ACCEL_PARAM_ENUM, "bvh", 0, 0, "bvh|grid",
-     "bottom level per mesh, object space, shared by its instances"},
+    {"bottom", ACCEL_PARAM_STR, "bvh", 0, 0, NULL,
+     "bottom level per mesh, object space, shared by its instances: bvh or grid (the kind's "
+     "own), or any kind with a walk: <kind> or <kind>:key=value;key=value (';' for ','), e.g. "
+     "nested_grid, bvh:width=4"},
     {"leaf", ACCEL_PARAM_INT, "4", 1, 64, NULL, "bottom=bvh: largest leaf (primitives)"},
     {"lambda", ACCEL_PARAM_FLOAT, "2", 0.01, 64, NULL, "bottom=grid: cells per primitive"},
     {"top_lambda", ACCEL_PARAM_FLOAT, "2", 0.01, 64, NULL, "top=grid: cells per instance"},
@@ -66,6 +69,8 @@ void inst_destroy(void *p)
     for (uint32_t i = 0; i < a->bottom_count; i++) {
         inst_bvh_free(&a->bottoms[i].bvh);
         inst_grid_free(&a->bottoms[i].grid);
+        if (a->bottoms[i].walk) a->walk_kind->destroy(a->bottoms[i].walk);
+        free(a->bottoms[i].dead);
     }
     inst_bvh_free(&a->top_bvh);
     inst_grid_free(&a->top_grid);
@@ -91,9 +96,42 @@ size_t inst_memory(const void *p)
     size_t bytes = sizeof *a + a->item_count * (sizeof(inst_item) + sizeof(box3)) +
                    a->bottom_count * sizeof(inst_bottom) + bvh_bytes(&a->top_bvh) +
                    grid_bytes(&a->top_grid);
-    for (uint32_t i = 0; i < a->bottom_count; i++)
-        bytes += bvh_bytes(&a->bottoms[i].bvh) + grid_bytes(&a->bottoms[i].grid);
+    for (uint32_t i = 0; i < a->bottom_count; i++) {
+        const inst_bottom *b = &a->bottoms[i];
+        bytes += bvh_bytes(&b->bvh) + grid_bytes(&b->grid) + b->dead_count * sizeof(uint32_t);
+        if (b->walk) bytes += a->walk_kind->memory(b->walk);
+    }
     return bytes;
+}
+
+/* bottom=<kind spec>: the kind over the mesh (object space), and the list
+ * of the mesh's triangles it leaves out (no area in object space: their
+ * world copies may have some, and are then tested for every instance). */
+static int build_walk_bottom(inst_accel *a, inst_bottom *b, accel_error *err)
+{
+    const accel_scene *m = b->mesh;
+    accel_build_stats st;
+    int rc = accel_build_kind(a->walk_kind, a->walk_kv, m, a->threads, &b->walk, &st, err);
+    if (rc) return rc;
+    b->walk_stats = st;
+    if (a->walk_kind->walk(b->walk, NULL, 0.0f, NULL, NULL, NULL))
+        return accel_fail(err, ACCEL_ERR_SPEC,
+                          "instanced: bottom=%s%s%s built a structure that cannot walk (accel.h: "
+                          "walk probe refused); choose another mode of the kind",
+                          a->walk_kind->name, *a->walk_kv ? ":" : "", a->walk_kv);
+    if (!a->scene->instances || m->degenerate_count == 0) return 0;
+    uint8_t *alive = calloc(m->tri_count ? m->tri_count : 1, 1);
+    b->dead = malloc((m->degenerate_count ? m->degenerate_count : 1) * sizeof *b->dead);
+    if (!alive || !b->dead) {
+        free(alive);
+        return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
+    }
+    for (uint32_t k = 0; k < m->live_count; k++)
+        if (m->live[k] < m->tri_count) alive[m->live[k]] = 1;
+    for (uint32_t q = 0; q < m->tri_count && b->dead_count < m->degenerate_count; q++)
+        if (!alive[q]) b->dead[b->dead_count++] = q;
+    free(alive);
+    return 0;
 }
 
 /* The bottom level of mesh i over its primitives (a plain scene: the live
@@ -103,6 +141,11 @@ int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *e
     inst_bottom *b = &a->bottoms[i];
     inst_bvh_free(&b->bvh);
     inst_grid_free(&b->grid);
+    if (b->walk) a->walk_kind->destroy(b->walk);
+    b->walk = NULL;
+    free(b->dead);
+    b->dead = NULL;
+    b->dead_count = 0;
     const accel_scene *m = b->mesh;
     const uint32_t *ids = a->scene->instances ? NULL : m->live;
     uint32_t n = ids ? m->live_count : m->tri_count;
@@ -126,6 +169,10 @@ int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *e
     b->abs_max = box_abs_max(b->box);
     /* The DDA's own rounding: a margin far above double error, far below a cell. */
     b->grid_pad = grid_pad + 0x1p-24 * b->abs_max + 1e-30;
+    if (a->bottom_kind == INST_WALK) {
+        free(boxes);
+        return build_walk_bottom(a, b, err);
+    }
     int rc = a->bottom_kind == INST_BVH
                  ? inst_bvh_build(boxes, n, a->leaf, &b->bvh, err)
                  : inst_grid_build(boxes, n, a->lambda, b->grid_pad, &b->grid, err);
@@ -210,6 +257,12 @@ void inst_fill_stats(const inst_accel *a, accel_build_stats *stats)
     int bottom_depth = 0;
     for (uint32_t i = 0; i < a->bottom_count; i++) {
         const inst_bottom *b = &a->bottoms[i];
+        if (a->bottom_kind == INST_WALK) {
+            stats->nodes += b->walk_stats.nodes;
+            stats->refs += b->walk_stats.refs;
+            if (b->walk_stats.depth > bottom_depth) bottom_depth = b->walk_stats.depth;
+            continue;
+        }
         stats->nodes += a->bottom_kind == INST_BVH ? b->bvh.node_count : b->grid.cell_count;
         stats->refs += a->bottom_kind == INST_BVH ? b->bvh.item_count : b->grid.ref_count;
         if (b->bvh.depth > bottom_depth) bottom_depth = b->bvh.depth;
@@ -221,14 +274,70 @@ void inst_fill_stats(const inst_accel *a, accel_build_stats *stats)
     stats->bytes = inst_memory(a);
 }
 
-static int inst_build(const accel_scene *scene, const accel_params *params, int threads,
-                      void **out, accel_build_stats *stats, accel_error *err)
+/* bottom=<text>: bvh and grid are the kind's own; anything else names a
+ * kind with a walk, its parameters after ':' with ';' for ','. */
+static int parse_bottom(inst_accel *a, const char *text, accel_error *err)
 {
-    (void)threads;
+    if (!strcmp(text, "bvh") || !strcmp(text, "grid")) {
+        a->bottom_kind = !strcmp(text, "bvh") ? INST_BVH : INST_GRID;
+        return 0;
+    }
+    char name[64];
+    const char *colon = strchr(text, ':');
+    size_t n = colon ? (size_t)(colon - text) : strlen(text);
+    snprintf(name, sizeof name, "%.*s", (int)n, text);
+    snprintf(a->walk_kv, sizeof a->walk_kv, "%s", colon ? colon + 1 : "");
+    for (char *c = a->walk_kv; *c; c++)
+        if (*c == ';') *c = ',';
+    const accel_kind *k = accel_find_kind(name);
+    if (!k) {
+        char names[300] = "";
+        for (size_t i = 0; i < accel_kind_count; i++)
+            if (accel_kinds[i]->walk) {
+                size_t len = strlen(names);
+                snprintf(names + len, sizeof names - len, " %s", accel_kinds[i]->name);
+            }
+        return accel_fail(err, ACCEL_ERR_SPEC,
+                          "instanced: bottom=%s: no kind '%s'; accepted: bvh, grid (the kind's "
+                          "own), or a kind with a walk:%s (parameters as <kind>:k=v;k=v)",
+                          text, name, names);
+    }
+    return inst_use_bottom_kind(a, k, err);
+}
+
+int inst_use_bottom_kind(inst_accel *a, const accel_kind *k, accel_error *err)
+{
+    if (!k->walk)
+        return accel_fail(err, ACCEL_ERR_SPEC,
+                          "instanced: kind '%s' has no walk (accel_kind.walk, accel.h), so it "
+                          "cannot be a bottom level: the world-space decisions need every "
+                          "primitive the ray passes within the pad of, which a closest-hit "
+                          "answer does not give (instanced/README.md)",
+                          k->name);
+    a->bottom_kind = INST_WALK;
+    a->walk_kind = k;
+    return 0;
+}
+
+int inst_build_with(const accel_scene *scene, const accel_params *params, int threads,
+                    const accel_kind *bottom, const char *bottom_kv, void **out,
+                    accel_build_stats *stats, accel_error *err)
+{
     inst_accel *a = calloc(1, sizeof *a);
     if (!a) return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
+    a->threads = threads;
     a->top = (int)accel_param_num(params, "top");
-    a->bottom_kind = (int)accel_param_num(params, "bottom");
+    int brc = 0;
+    if (bottom) {
+        snprintf(a->walk_kv, sizeof a->walk_kv, "%s", bottom_kv ? bottom_kv : "");
+        brc = inst_use_bottom_kind(a, bottom, err);
+    } else {
+        brc = parse_bottom(a, accel_param_str(params, "bottom"), err);
+    }
+    if (brc) {
+        free(a);
+        return brc;
+    }
     a->naive = params->naive;
     a->world_flat = (int)accel_param_num(params, "world") == 1;
     a->no_pad = accel_param_num(params, "pad") == 0.0;
@@ -259,8 +368,28 @@ static int inst_build(const accel_scene *scene, const accel_params *params, int 
     return 0;
 }
 
+static int inst_build(const accel_scene *scene, const accel_params *params, int threads,
+                      void **out, accel_build_stats *stats, accel_error *err)
+{
+    return inst_build_with(scene, params, threads, NULL, NULL, out, stats, err);
+}
+
+int instanced_build_with_bottom(const accel_scene *scene, const char *kv, const accel_kind *bottom,
+                                const char *bottom_kv, int threads, void **out,
+                                accel_build_stats *stats, accel_error *err)
+{
+    accel_params p;
+    int rc = accel_params_parse_kind(&accel_kind_instanced, kv, &p, err);
+    if (rc) return rc;
+    double t0 = accel_now_ms();
+    rc = inst_build_with(scene, &p, threads, bottom, bottom_kv, out, stats, err);
+    if (rc == 0) stats->ms = accel_now_ms() - t0;
+    return rc;
+}
+
 static const char *const inst_variants[] = {
-    "", "top=grid", "bottom=grid", "top=grid,bottom=grid", "world=flat,leaf=1", NULL,
+    "", "top=grid", "bottom=grid", "top=grid,bottom=grid", "world=flat,leaf=1",
+    "bottom=bvh:width=8", "top=grid,bottom=nested_grid", "bottom=grid:", NULL,
 };
 
 const accel_kind accel_kind_instanced = {

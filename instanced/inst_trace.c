@@ -274,6 +274,56 @@ walk_grid_flat(const inst_accel *a, const inst_item *it, const inst_bottom *b, r
         walk_grid(a, it, b, r, o, d, t0, 0, 0);
 }
 
+/* ---- bottom level: any kind with a walk (accel.h) ------------------------------ */
+
+typedef struct {
+    const inst_accel *a;
+    const inst_item *it;
+    const inst_bottom *b;
+    ray_state *r;
+    double shift;
+    float slack;
+    int naive, spheres;
+} walk_ctx;
+
+/* The walk's visitor: decides the candidate in world space and hands back
+ * the closest hit so far in the walk's parameter (object space, from the
+ * box entry), widened by the slack; -inf ends an occlusion walk. */
+static float walk_visit(void *ctx, uint32_t q, float t_max)
+{
+    walk_ctx *w = ctx;
+    if (w->naive)
+        test_prim(w->a, w->it, w->b->mesh, q, w->r, 1, w->spheres);
+    else if (w->spheres)
+        test_prim(w->a, w->it, w->b->mesh, q, w->r, 0, 1);
+    else
+        test_prim(w->a, w->it, w->b->mesh, q, w->r, 0, 0);
+    if (w->r->done) return -INFINITY;
+    float hi_t = (float)((double)w->r->t - w->shift);
+    if (w->slack != 0.0f) hi_t += fabsf(hi_t) * w->slack; /* never 0 * inf */
+    return hi_t < t_max ? hi_t : t_max;
+}
+
+static __attribute__((noinline)) void walk_kind(const inst_accel *a, const inst_item *it,
+                                                const inst_bottom *b, ray_state *r, vec3 org,
+                                                vec3 dir, float pad, double shift, int naive,
+                                                int spheres)
+{
+    walk_ctx w = {a, it, b, r, shift, it->identity ? 0.0f : 0x1p-20f, naive, spheres};
+    float lo_t = (float)((double)r->p.t_near - shift);
+    float hi_t = (float)((double)r->t - shift);
+    if (w.slack != 0.0f) {
+        lo_t -= fabsf(lo_t) * w.slack; /* never 0 * inf */
+        hi_t += fabsf(hi_t) * w.slack;
+    }
+    accel_ray ray = {org.x, org.y, org.z, lo_t, dir.x, dir.y, dir.z, hi_t};
+    uint32_t steps = 0;
+    if (b->walk) a->walk_kind->walk(b->walk, &ray, pad, walk_visit, &w, &steps);
+    r->bottom_steps += steps;
+    /* Triangles the kind left out (no area in object space). */
+    for (uint32_t i = 0; i < b->dead_count && !r->done; i++) walk_visit(&w, b->dead[i], hi_t);
+}
+
 /* ---- one instance ------------------------------------------------------------- */
 
 INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int spheres)
@@ -281,7 +331,12 @@ INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int 
     const inst_item *it = &a->items[k];
     const inst_bottom *b = &a->bottoms[it->bottom];
     if (it->identity) {
-        if (a->bottom_kind == INST_BVH)
+        /* No transform: the walk sees the world ray itself, no pad (its
+         * box and cell tests are the kind's own robust ones, on the very
+         * floats the world test uses). */
+        if (a->bottom_kind == INST_WALK)
+            walk_kind(a, it, b, r, r->p.org, r->p.dir, 0.0f, 0.0, naive, spheres);
+        else if (a->bottom_kind == INST_BVH)
             walk_bvh_flat(a, it, b, r, r->p.org, r->p.dir, 0.0f, 0.0, naive, spheres);
         else
             walk_grid_flat(a, it, b, r, r->o, r->d, r->p.t_near, naive, spheres);
@@ -339,7 +394,10 @@ INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int 
     vec3 df = v3((float)d[0], (float)d[1], (float)d[2]);
     double pf = a->no_pad ? 0.0
                           : pad + 0x1p-20 * (b->abs_max + 2.0 * pad) + 0x1p-50 * (oa + fabs(s0) * da);
-    walk_bvh_flat(a, it, b, r, of, df, (float)(pf * (1.0 + 0x1p-20)), s0, naive, spheres);
+    if (a->bottom_kind == INST_WALK)
+        walk_kind(a, it, b, r, of, df, (float)(pf * (1.0 + 0x1p-20)), s0, naive, spheres);
+    else
+        walk_bvh_flat(a, it, b, r, of, df, (float)(pf * (1.0 + 0x1p-20)), s0, naive, spheres);
 }
 
 /* ---- top level ------------------------------------------------------------------ */

@@ -88,7 +88,11 @@ int inst_update(void *acc, const accel_scene *scene, int refit, accel_update_sta
     double t1 = accel_now_ms();
     for (uint32_t i = 0; rc == 0 && i < a->bottom_count; i++) {
         inst_bottom *b = &a->bottoms[i];
-        if (a->bottom_kind == INST_BVH) {
+        if (a->bottom_kind == INST_WALK) {
+            /* A walked kind has no refit here: a changed mesh is rebuilt
+             * (its walk takes the pad per ray, so unchanged ones stay). */
+            if (!changed[i]) continue;
+        } else if (a->bottom_kind == INST_BVH) {
             if (!changed[i]) continue;
             if (refit) {
                 refit_bvh(b);

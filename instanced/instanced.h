@@ -5,6 +5,9 @@
  *
  *   instanced                          top=bvh, bottom=bvh
  *   instanced:top=grid,bottom=grid     uniform grids at both levels
+ *   instanced:bottom=nested_grid       any kind with a walk (accel.h) as the
+ *                                      bottom level: bottom=<kind> or
+ *                                      bottom=<kind>:k=v;k=v (';' for ',')
  *   instanced:world=flat               world triangles read from the
  *                                      flattened scene, not recomputed
  *
@@ -16,7 +19,7 @@
  * hits are those of any kind on the flattened scene (ids base + local id,
  * t the world parameter, u and v of the world triangle).
  *
- * Parameters (bin/trace --help): top, bottom (bvh|grid), leaf (bottom BVH
+ * Parameters (bin/trace --help): top, bottom (bvh|grid or a kind spec), leaf (bottom BVH
  * leaf size), lambda and top_lambda (grid cells per primitive / instance),
  * world (compute|flat), and the common tri=watertight|naive.
  *
@@ -33,6 +36,15 @@ extern "C" {
 #endif
 
 extern const accel_kind accel_kind_instanced;
+
+/* Builds `instanced` (parameters kv, as after "instanced:") with the kind
+ * `bottom` (registered or not, e.g. the lab's; parameters bottom_kv) as the
+ * bottom level of every mesh, walked through its accel.h walk; the result
+ * is traced and destroyed through accel_kind_instanced. The same as
+ * bottom=<spec>, for a kind the registry does not list. */
+int instanced_build_with_bottom(const accel_scene *scene, const char *kv, const accel_kind *bottom,
+                                const char *bottom_kv, int threads, void **out,
+                                accel_build_stats *stats, accel_error *err);
 
 #ifdef __cplusplus
 }

@@ -596,4 +596,5 @@ const accel_kind accel_kind_irregular_grid = {
     .occluded = igrid_occluded,
     .memory = igrid_memory,
     .destroy = igrid_destroy,
+    .walk = igrid_walk,
 };

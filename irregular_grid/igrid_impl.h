@@ -87,6 +87,10 @@ void igrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, 
 void igrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                     accel_counters *counters);
 
+/* accel.h's conservative walk (igrid_trace.c). */
+int igrid_walk(const void *a, const accel_ray *ray, float pad, accel_walk_visit visit,
+               void *ctx, uint32_t *steps);
+
 #ifdef __cplusplus
 }
 #endif

@@ -171,3 +171,13 @@ void igrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded,
 {
     accel_run_kernel(&igrid_occ_table, accel, rays, occluded, count, counters, igrid_flags(accel));
 }
+
+/* accel.h's conservative walk: the simplest correct one, every primitive
+ * whose bounding box grown by the pad the ray reaches (the primitive
+ * store's walk, in store order; README.md says why not a padded walk of
+ * the cells). */
+int igrid_walk(const void *a, const accel_ray *ray, float pad, accel_walk_visit visit,
+               void *ctx, uint32_t *steps)
+{
+    return accel_prim_store_walk(&((const igrid_accel *)a)->store, ray, pad, visit, ctx, steps);
+}

@@ -8,6 +8,7 @@
 #define LAB_CHECK_H
 
 #include "accel.h"
+#include "rays/rays.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -32,6 +33,16 @@ const char *lab_step_title(int step);
 /* Runs step `step` (1..LAB_STEPS) on the subject. Returns 0 when the check
  * could run (passed or not: see out->passed), else an error status. */
 int lab_check(int step, const lab_subject *s, lab_result *out, accel_error *err);
+
+/* Shared by the checks (check.c, check_step3.c). */
+void lab_say(lab_result *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* Fails the step with a message (the first failure is the one to fix). */
+void lab_fail(lab_result *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* Rays from the camera through triangle vertices, and axis-parallel rays
+ * with +-0 components from the faces of the scene's box. */
+int lab_make_stiff_rays(const accel_scene *sc, rays_set *out, accel_error *err);
+/* Step 3 (check_step3.c). */
+void lab_check_step3(const lab_subject *s, lab_result *r, accel_error *err);
 
 #ifdef __cplusplus
 }

@@ -14,11 +14,13 @@
  *   step 1  build_node(): a median-split BVH (the lecture's lab, step 1)
  *   step 2  trace_ray(): single-ray traversal with a ray/box test, counting
  *           nodes visited (the depth view is a heatmap of that count)
+ *   step 3  walk_ray(): your step 2 traversal as a conservative walk, boxes
+ *           grown by a pad, every primitive of a reached leaf handed to a
+ *           callback: your kind becomes the bottom level of the two-level
+ *           kind `instanced`, which transforms rays to object space
  *   step 4  trace_packet(): 8x8 packets of rays (traverse=packet)
  *
- * Step 3 (many meshes, rays in object space) needs no code here: your kind
- * becomes the bottom level of the two-level kind (LAB.md). Step 5 measures
- * your frames per second.
+ * Step 5 measures your frames per second.
  *
  * Useful, in accel/core/: box3_slab (geom.h: the robust ray/box slab test),
  * accel_prep_ray and accel_prim_hit (prim.h: ray setup and the exact
@@ -187,6 +189,50 @@ trace_ray(const lab_bvh *b, const accel_ray_prep *p, int any_hit, int naive, int
     return ACCEL_MISS; /* TODO step 2 */
 }
 
+/* ---- step 3: the walk (many meshes) -------------------------------------- */
+
+/*
+ * accel.h's conservative walk: the two-level kind `instanced` builds your
+ * kind once per mesh, in the mesh's object space, and for each instance a
+ * ray reaches it calls this with the ray in object space. It decides every
+ * triangle itself, on the world-space copy the flattened scene holds, so
+ * all it needs from you is every primitive the ray passes NEAR: within
+ * `pad` of the ray (the flattening rounds each world triangle to float,
+ * and the object-space ray is rounded too; the pad covers both).
+ *
+ * To do (step 3): your trace_ray() from step 2, with two changes:
+ *  - grow every box by pad on every side before box3_slab (bmin - pad,
+ *    bmax + pad), with the current t_max as the far end of the ray;
+ *  - in a leaf, do not test the primitives: for each, call
+ *    t_max = visit(ctx, b->store.scene_id[prim], t_max);
+ *    the answer is the closest hit instanced has found so far (in your
+ *    ray's t): use it to cull boxes and popped nodes as in step 2. If it
+ *    drops below p.t_near the walk is over (an occlusion ray hit): return.
+ * Count every node visited in *steps. Visiting a primitive twice, or one
+ * that is not hit, is allowed; missing one is a hole.
+ */
+static int walk_ray(const lab_bvh *b, const accel_ray_prep *p, float pad, accel_walk_visit visit,
+                    void *ctx, uint32_t *steps)
+{
+    (void)b;
+    (void)p;
+    (void)pad;
+    (void)visit;
+    (void)ctx;
+    (void)steps;
+    return ACCEL_OK; /* TODO step 3: visits nothing yet */
+}
+
+static int lab_walk(const void *a, const accel_ray *ray, float pad, accel_walk_visit visit,
+                    void *ctx, uint32_t *steps)
+{
+    const lab_bvh *b = a;
+    accel_ray_prep p;
+    if (!visit) return ACCEL_OK; /* "can you walk?": yes */
+    if (b->node_count == 0 || !accel_prep_ray(ray, &p)) return ACCEL_OK;
+    return walk_ray(b, &p, pad, visit, ctx, steps);
+}
+
 /* ---- step 4: packets ------------------------------------------------------ */
 
 /*
@@ -289,4 +335,5 @@ const accel_kind accel_kind_starter = {
     .occluded = lab_occluded,
     .memory = lab_memory,
     .destroy = lab_destroy,
+    .walk = lab_walk,
 };

@@ -352,4 +352,5 @@ const accel_kind accel_kind_nested_grid = {
     .occluded = ngrid_occluded,
     .memory = ngrid_memory,
     .destroy = ngrid_destroy,
+    .walk = ngrid_walk,
 };

@@ -131,6 +131,10 @@ void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, 
 void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                     accel_counters *counters);
 
+/* accel.h's conservative walk (ngrid_trace.c): the fat walk at every level. */
+int ngrid_walk(const void *accel, const accel_ray *ray, float pad, accel_walk_visit visit,
+               void *ctx, uint32_t *steps);
+
 #ifdef __cplusplus
 }
 #endif

@@ -152,3 +152,56 @@ void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded,
 {
     accel_run_kernel(&ngrid_occ_table, accel, rays, occluded, count, counters, ngrid_flags(accel));
 }
+
+/* ---- accel.h's conservative walk --------------------------------------------
+ * grid_core.h's fat walk at every level: the top grid's cells whose boxes
+ * grown by the pad the ray reaches, and in a cell holding a sub-grid the
+ * same walk of the sub-grid over the piece of the ray that reached the
+ * cell (a sub-grid's box is its parent cell's, so a primitive within the
+ * pad of the ray lies in a reached cell at every level). The primitives of
+ * every reached list go to the visitor, through the kernel's mailbox. */
+typedef struct {
+    const ngrid_accel *g;
+    const accel_ray_prep *p;
+    const ngrid_node *node; /* the grid being walked */
+    float pad, t_max;
+    accel_walk_visit visit;
+    void *ctx;
+    uint32_t *steps;
+    uint32_t mailbox[NGRID_MAILBOX];
+} ngrid_walker;
+
+static int walk_cell(void *ctx, uint32_t cell, double ta, double tb)
+{
+    ngrid_walker *w = ctx;
+    const ngrid_node *node = w->node;
+    uint32_t word = w->g->cells[node->cell_base + cell];
+    (*w->steps)++;
+    if (word & NGRID_CHILD) {
+        w->node = &w->g->nodes[word & ~NGRID_CHILD];
+        int go = grid_fat_walk(&w->node->frame, w->p, ta, tb, w->pad, &w->t_max, walk_cell, w);
+        w->node = node;
+        return go;
+    }
+    const uint32_t *list = w->g->lists + word;
+    for (uint32_t k = 1; k <= list[0]; k++) {
+        uint32_t prim = list[k], *slot = &w->mailbox[prim & (NGRID_MAILBOX - 1)];
+        if (*slot == prim) continue;
+        *slot = prim;
+        w->t_max = w->visit(w->ctx, w->g->store.scene_id[prim], w->t_max);
+        if (w->t_max < w->p->t_near) return 0;
+    }
+    return 1;
+}
+
+int ngrid_walk(const void *accel, const accel_ray *ray, float pad, accel_walk_visit visit,
+               void *ctx, uint32_t *steps)
+{
+    const ngrid_accel *g = accel;
+    accel_ray_prep p;
+    if (!visit || g->ref_count == 0 || !accel_prep_ray(ray, &p)) return 0;
+    ngrid_walker w = {g, &p, &g->nodes[0], pad, p.t_far, visit, ctx, steps, {0}};
+    memset(w.mailbox, 0xFF, sizeof w.mailbox);
+    grid_fat_walk(&g->nodes[0].frame, &p, p.t_near, p.t_far, pad, &w.t_max, walk_cell, &w);
+    return 0;
+}

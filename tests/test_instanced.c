@@ -20,9 +20,10 @@
 #include "rays/rays.h"
 #include "scene/scene.h"
 #include "test.h"
+#include "test_instanced.h"
 
 /* "quad": the unit square as two triangles; anything else is a built-in spec. */
-static int stiff_mesh(void *ctx, const char *source, const char *dir, accel_scene *mesh,
+int inst_stiff_mesh(void *ctx, const char *source, const char *dir, accel_scene *mesh,
                       accel_error *err)
 {
     (void)ctx;
@@ -35,11 +36,6 @@ static int stiff_mesh(void *ctx, const char *source, const char *dir, accel_scen
     scene_builder_free(&b);
     return rc;
 }
-
-typedef struct {
-    accel_ray *r;
-    size_t n, cap;
-} ray_list;
 
 static void push(ray_list *l, vec3 o, vec3 d, float t_near, float t_far)
 {
@@ -55,7 +51,7 @@ static void push(ray_list *l, vec3 o, vec3 d, float t_near, float t_far)
 /* Rays at world vertices and edge midpoints of random live triangles from
  * four eyes around the scene, rays from the centres of instances (inside
  * closed meshes), camera rays and shadow rays from the oracle's hits. */
-static void make_rays(const accel_scene *s, ray_list *l)
+void inst_make_rays(const accel_scene *s, ray_list *l)
 {
     vec3 c = box3_center(s->bounds), e = box3_extent(s->bounds);
     float r = v3_len(e) + 1.0f;
@@ -100,8 +96,8 @@ static void make_rays(const accel_scene *s, ray_list *l)
 
 /* Bad rays (holes + false hits + disagreements + occlusion mismatches) of
  * one spec on one scene, against the oracle. */
-static size_t bad_rays(const accel_scene *s, const ray_list *l, const accel_hit *ref,
-                       const char *spec, size_t *holes)
+size_t inst_bad_rays(const accel_scene *s, const ray_list *l, const accel_hit *ref,
+                     const char *spec, size_t *holes)
 {
     accel_error err = {0};
     const accel_kind *kind;
@@ -111,6 +107,16 @@ static size_t bad_rays(const accel_scene *s, const ray_list *l, const accel_hit 
         test_fail(__FILE__, __LINE__, "%s: %s", spec, err.msg);
         return 1;
     }
+    size_t bad = inst_count_bad(kind, a, s, l, ref, spec, holes);
+    kind->destroy(a);
+    return bad;
+}
+
+/* Bad rays of a built structure; a note names the first one (not for the
+ * pad=0 control, which is expected to have many). */
+size_t inst_count_bad(const accel_kind *kind, const void *a, const accel_scene *s,
+                      const ray_list *l, const accel_hit *ref, const char *spec, size_t *holes)
+{
     accel_hit *h = malloc(l->n * sizeof *h);
     uint8_t *occ = malloc(l->n);
     accel_trace(kind, a, l->r, h, l->n, 1, NULL);
@@ -128,7 +134,6 @@ static size_t bad_rays(const accel_scene *s, const ray_list *l, const accel_hit 
     }
     free(h);
     free(occ);
-    kind->destroy(a);
     return bad;
 }
 
@@ -142,24 +147,24 @@ static size_t check_scene(const char *name, const char *text)
 {
     accel_scene s;
     accel_error err = {0};
-    scene_file_options o = {0, stiff_mesh, NULL};
+    scene_file_options o = {0, inst_stiff_mesh, NULL};
     if (scene_parse_scene(name, "", text, strlen(text), &o, &s, &err)) {
         test_fail(__FILE__, __LINE__, "%s", err.msg);
         return 0;
     }
     ray_list l = {0};
-    make_rays(&s, &l);
+    inst_make_rays(&s, &l);
     accel_hit *ref = malloc(l.n * sizeof *ref);
     accel_reference_trace(&s, l.r, ref, l.n, 2);
     size_t hits = 0;
     for (size_t i = 0; i < l.n; i++) hits += ref[i].prim != ACCEL_MISS;
     CHECKF(hits > l.n / 4, "%s: only %zu of %zu rays hit", name, hits, l.n);
     for (size_t c = 0; c < sizeof combos / sizeof combos[0]; c++) {
-        size_t bad = bad_rays(&s, &l, ref, combos[c], NULL);
+        size_t bad = inst_bad_rays(&s, &l, ref, combos[c], NULL);
         CHECKF(bad == 0, "%s on %s: %zu bad rays of %zu", combos[c], name, bad, l.n);
     }
-    size_t control = bad_rays(&s, &l, ref, "instanced:pad=0", NULL) +
-                     bad_rays(&s, &l, ref, "instanced:pad=0,bottom=grid", NULL);
+    size_t control = inst_bad_rays(&s, &l, ref, "instanced:pad=0", NULL) +
+                     inst_bad_rays(&s, &l, ref, "instanced:pad=0,bottom=grid", NULL);
     test_note("%s: %zu rays, %zu hit; pad=0 control: %zu bad", name, l.n, hits, control);
     free(ref);
     free(l.r);
@@ -167,9 +172,32 @@ static size_t check_scene(const char *name, const char *text)
     return control;
 }
 
+/* The stiff scenes (also traced by test_anybottom.c). */
+const char *const inst_scene_mirrored_scaled =
+    "mesh s sphere:segments=6\nmesh c cube:n=3\n"
+    "instance s scale -1 1 1\n"
+    "instance s scale 2 -3 0.5 rotate 0 1 0 30 translate 5 0 0\n"
+    "instance c scale 1e-3 translate -3 0 0\n"
+    "instance c scale 1e3 -1e3 1e3 translate 0 0 -3000\n"
+    "instance s matrix -1 0 0 0  0 0 1 2  0 1 0 -2\n"
+    "camera eye 2 -12 4 look 1 0 0\n";
+const char *const inst_scene_far =
+    "mesh s sphere:segments=6\nmesh t teapot_stadium:n=2,stadium=3,tiers=0\n"
+    "instance s translate 1e5 1e5 1e5\n"
+    "instance s rotate 1 1 0 33 scale -1 1 1 translate 100002.5 1e5 1e5\n"
+    "instance s scale 0.01 translate 1e5 100001.3 1e5\n"
+    "instance s rotate 0 0 1 10 translate -1e5 0 0\n"
+    "camera eye 100000 99990 100003 look 100001 100000 100000\n";
+const char *const inst_scene_overlap =
+    "mesh s sphere:segments=5\nmesh q quad\n"
+    "instance s\ninstance s\ninstance s rotate 0 0 1 45\n"
+    "instance s scale 1.0000001 rotate 1 0 0 90 translate 0.5 0 0\n"
+    "instance q scale 4 translate -2 -2 0\ninstance q scale 4 translate -2 -2 0\n"
+    "instance q scale 4 rotate 1 0 0 90 translate -2 0 -2\n";
+
 /* A sheet of n x n unit squares, each its own instance, placed by `place`
  * (a transform applied after the integer translation). */
-static char *sheet(int n, const char *place)
+char *inst_sheet(int n, const char *place)
 {
     size_t cap = 64 + (size_t)n * n * (64 + strlen(place));
     char *t = malloc(cap);
@@ -183,13 +211,13 @@ static char *sheet(int n, const char *place)
 
 TEST(instanced_shared_edges)
 {
-    char *t = sheet(8, "");
+    char *t = inst_sheet(8, "");
     check_scene("sheet", t);
     free(t);
     /* Turned and moved far: shared vertices are no longer bit-identical in
      * the flattened scene (each instance rounds its own), and the oracle's
      * own holes are what the two-level kind must reproduce. */
-    t = sheet(8, "rotate 1 2 3 37 translate 100000 100000 0");
+    t = inst_sheet(8, "rotate 1 2 3 37 translate 100000 100000 0");
     size_t control = check_scene("sheet_far_turned", t);
     CHECKF(control > 0, "the pad=0 control agrees everywhere: the far sheet tests nothing");
     free(t);
@@ -198,31 +226,16 @@ TEST(instanced_shared_edges)
 TEST(instanced_mirrored_scaled_far)
 {
     check_scene("mirrored_scaled",
-                "mesh s sphere:segments=6\nmesh c cube:n=3\n"
-                "instance s scale -1 1 1\n"
-                "instance s scale 2 -3 0.5 rotate 0 1 0 30 translate 5 0 0\n"
-                "instance c scale 1e-3 translate -3 0 0\n"
-                "instance c scale 1e3 -1e3 1e3 translate 0 0 -3000\n"
-                "instance s matrix -1 0 0 0  0 0 1 2  0 1 0 -2\n"
-                "camera eye 2 -12 4 look 1 0 0\n");
+                inst_scene_mirrored_scaled);
     size_t control = check_scene("far",
-                                 "mesh s sphere:segments=6\nmesh t teapot_stadium:n=2,stadium=3,tiers=0\n"
-                                 "instance s translate 1e5 1e5 1e5\n"
-                                 "instance s rotate 1 1 0 33 scale -1 1 1 translate 100002.5 1e5 1e5\n"
-                                 "instance s scale 0.01 translate 1e5 100001.3 1e5\n"
-                                 "instance s rotate 0 0 1 10 translate -1e5 0 0\n"
-                                 "camera eye 100000 99990 100003 look 100001 100000 100000\n");
+                                 inst_scene_far);
     CHECKF(control > 0, "the pad=0 control agrees everywhere: the far case tests nothing");
 }
 
 TEST(instanced_overlapping)
 {
     check_scene("overlap",
-                "mesh s sphere:segments=5\nmesh q quad\n"
-                "instance s\ninstance s\ninstance s rotate 0 0 1 45\n"
-                "instance s scale 1.0000001 rotate 1 0 0 90 translate 0.5 0 0\n"
-                "instance q scale 4 translate -2 -2 0\ninstance q scale 4 translate -2 -2 0\n"
-                "instance q scale 4 rotate 1 0 0 90 translate -2 0 -2\n");
+                inst_scene_overlap);
 }
 
 TEST(instanced_builtin_multi_meshes)
@@ -240,11 +253,11 @@ TEST(instanced_builtin_multi_meshes)
             continue;
         }
         ray_list l = {0};
-        make_rays(&s, &l);
+        inst_make_rays(&s, &l);
         accel_hit *ref = malloc(l.n * sizeof *ref);
         accel_reference_trace(&s, l.r, ref, l.n, 2);
         for (size_t c = 0; c < 5; c++) {
-            size_t bad = bad_rays(&s, &l, ref, combos[c], NULL);
+            size_t bad = inst_bad_rays(&s, &l, ref, combos[c], NULL);
             CHECKF(bad == 0, "%s on %s: %zu bad rays of %zu", combos[c], specs[i], bad, l.n);
         }
         free(ref);
@@ -295,7 +308,7 @@ TEST(instanced_update_frames)
                        us.meshes_refit, us.meshes_rebuilt);
                 CHECK(v == 1 || us.meshes_refit == (uint32_t)refit);
                 ray_list l = {0};
-                make_rays(sc, &l);
+                inst_make_rays(sc, &l);
                 accel_hit *ref = malloc(l.n * sizeof *ref), *h = malloc(l.n * sizeof *h);
                 accel_reference_trace(sc, l.r, ref, l.n, 2);
                 accel_trace(kind, a, l.r, h, l.n, 1, NULL);

@@ -33,3 +33,4 @@ TEST(lab_step1_build) { run_step(1); }
 TEST(lab_step2_traversal) { run_step(2); }
 TEST(lab_step4_packets) { run_step(4); }
 TEST(lab_step5_real_time) { run_step(5); }
+TEST(lab_step3_many_meshes) { run_step(3); }

@@ -113,6 +113,14 @@ static void brute_occluded(const void *a, const accel_ray *rays, uint8_t *occ, s
 
 static const char *const brute_variants[] = {"", "tri=naive", "reorder=0", NULL};
 
+/* accel.h's conservative walk (brute): every primitive whose bounding
+ * box grown by the pad the ray reaches (the store's own walk). */
+static int brute_walk(const void *a, const accel_ray *ray, float pad, accel_walk_visit visit,
+                       void *ctx, uint32_t *steps)
+{
+    return accel_prim_store_walk(&((const brute_accel *)a)->store, ray, pad, visit, ctx, steps);
+}
+
 const accel_kind accel_kind_brute = {
     .name = "brute",
     .summary = "every primitive against every ray (float): the O(N*M) baseline",
@@ -125,4 +133,5 @@ const accel_kind accel_kind_brute = {
     .occluded = brute_occluded,
     .memory = brute_memory,
     .destroy = brute_destroy,
+    .walk = brute_walk,
 };

@@ -82,6 +82,19 @@ static inline float box3_half_area(box3 b)
     return e.x * e.y + e.y * e.z + e.z * e.x;
 }
 
+/* The float nearest to a double bound x on the outer side: at or below x
+ * (a box's low end), at or above it (its high end). */
+static inline float accel_float_down(double x)
+{
+    float f = (float)x;
+    return (double)f > x ? nextafterf(f, -INFINITY) : f;
+}
+static inline float accel_float_up(double x)
+{
+    float f = (float)x;
+    return (double)f < x ? nextafterf(f, INFINITY) : f;
+}
+
 /* gamma(n) = n*eps/(1-n*eps) with eps = 2^-24 (pbrt-v3, section 3.9). */
 #define ACCEL_GAMMA(n) (((float)(n) * 0x1p-24f) / (1.0f - (float)(n) * 0x1p-24f))
 /* Ize 2013: enlarging t_far by 2*gamma(3)*|t_far| makes the float slab test conservative. */

@@ -31,18 +31,6 @@ typedef struct {
     int depth;
 } build_task;
 
-/* The float nearest to x on the side away from the box's interior. */
-static float round_down(double x)
-{
-    float f = (float)x;
-    return (double)f > x ? nextafterf(f, -INFINITY) : f;
-}
-static float round_up(double x)
-{
-    float f = (float)x;
-    return (double)f < x ? nextafterf(f, INFINITY) : f;
-}
-
 /* Bounds of a primitive; returns 0 when one of them is not finite. */
 static int prim_box(const accel_scene *s, uint32_t prim, oracle_ref *r)
 {
@@ -60,8 +48,8 @@ static int prim_box(const accel_scene *s, uint32_t prim, oracle_ref *r)
         const float *sp = s->spheres + 4 * (size_t)(prim - s->tri_count);
         double rad = fabs((double)sp[3]);
         for (int a = 0; a < 3; a++) {
-            r->lo[a] = round_down((double)sp[a] - rad);
-            r->hi[a] = round_up((double)sp[a] + rad);
+            r->lo[a] = accel_float_down((double)sp[a] - rad);
+            r->hi[a] = accel_float_up((double)sp[a] + rad);
         }
         if (!isfinite(sp[3])) return 0;
     }

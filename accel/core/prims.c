@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "accel.h"
+#include "core/prim.h"
 
 box3 accel_prim_bounds(const accel_scene *s, uint32_t prim)
 {
@@ -144,4 +145,27 @@ int accel_prim_store_build(const accel_scene *scene, int reorder, accel_prim_sto
     free(order);
     free(tmp);
     return ACCEL_OK;
+}
+
+/* accel.h: the simplest conservative walk, over the store's primitives in
+ * order, each bounding box grown by pad and tested with the robust slab
+ * test against the current [t_near, t_max]. */
+int accel_prim_store_walk(const accel_prim_store *st, const accel_ray *ray, float pad,
+                          accel_walk_visit visit, void *ctx, uint32_t *steps)
+{
+    if (!visit) return 0;
+    accel_ray_prep p;
+    if (!accel_prep_ray(ray, &p)) return 0;
+    float t_max = p.t_far;
+    const accel_scene *s = &st->prims;
+    for (uint32_t k = 0; k < s->prim_count && t_max >= p.t_near; k++) {
+        box3 b = accel_prim_bounds(s, k);
+        float lo[3] = {b.min.x - pad, b.min.y - pad, b.min.z - pad};
+        float hi[3] = {b.max.x + pad, b.max.y + pad, b.max.z + pad};
+        float entry;
+        (*steps)++;
+        if (box3_slab(lo, hi, p.org, p.inv_dir, p.neg, p.t_near, t_max, &entry))
+            t_max = visit(ctx, st->scene_id[k], t_max);
+    }
+    return 0;
 }

@@ -1,0 +1,165 @@
+/*
+ * check_step3.c - step 3 of the lab (LAB.md): many meshes, rays in object
+ * space. The subject's kind becomes the bottom level of the two-level
+ * kind `instanced` (one structure per mesh, in object space, shared by
+ * the mesh's instances), walked through the kind's accel.h walk; every
+ * triangle the walk hands over is decided on its world-space copy. The
+ * result must agree with the oracle on the flattened scene, ray by ray,
+ * on multi-mesh scenes with scaled, mirrored, rotated and far instances.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "instanced/instanced.h"
+#include "scene/scene.h"
+
+/* Mirrored, scaled, rotated and far instances (1e5: the flattened
+ * triangles are quantized there to 2^-7, so a walk without the pad
+ * misses triangles the reference hits). */
+static const char *const far_scene =
+    "mesh s sphere:segments=6\n"
+    "mesh t teapot_stadium:n=2,stadium=3,tiers=0\n"
+    "instance s scale -1 1 1 translate 1e5 1e5 1e5\n"
+    "instance s rotate 1 1 0 33 scale 2 -1 0.5 translate 100002.5 1e5 1e5\n"
+    "instance t scale 0.01 translate 1e5 100001.3 1e5\n"
+    "instance s rotate 0 0 1 10 translate 99998 1e5 1e5\n"
+    "camera eye 100000 99990 100003 look 100001 100000 100000\n";
+
+/* The instance and its local triangle for a flattened id. */
+static void name_prim(const accel_scene *sc, uint32_t prim, lab_result *r)
+{
+    const accel_instances *set = sc->instances;
+    for (uint32_t k = 0; set && k < set->instance_count; k++) {
+        const accel_instance *in = &set->instances[k];
+        uint32_t n = set->meshes[in->mesh].prim_count;
+        if (prim >= in->base && prim < in->base + n) {
+            lab_say(r, "triangle %u (instance %u, triangle %u of its mesh %u)", prim, k,
+                    prim - in->base, in->mesh);
+            return;
+        }
+    }
+    lab_say(r, "triangle %u", prim);
+}
+
+static int compare(const lab_subject *s, const void *a, const accel_scene *sc, const char *what,
+                   const rays_set *rays, lab_result *r)
+{
+    const accel_kind *k = &accel_kind_instanced;
+    size_t n = rays->count;
+    accel_hit *ref = malloc((n ? n : 1) * sizeof *ref), *hits = malloc((n ? n : 1) * sizeof *hits);
+    uint8_t *occ = malloc(n ? n : 1);
+    int ok = 0;
+    if (!ref || !hits || !occ) {
+        lab_fail(r, "out of memory");
+        goto out;
+    }
+    accel_reference_trace(sc, rays->rays, ref, n, s->threads);
+    accel_trace(k, a, rays->rays, hits, n, 1, NULL);
+    hits_diff d = hits_compare(ref, hits, n);
+    if (d.first_bad != SIZE_MAX) {
+        size_t i = d.first_bad;
+        const accel_ray *ray = &rays->rays[i];
+        lab_fail(r, "%s / %s rays: %zu holes (the reference hits, your bottom level never "
+                    "handed the triangle over), %zu false hits, %zu other disagreements of %zu "
+                    "rays. First: ray %zu",
+                 sc->name, what, d.holes, d.false_hits, d.disagreements, n, i);
+        lab_say(r, "         ray o=(%.9g, %.9g, %.9g) d=(%.9g, %.9g, %.9g) t in [%g, %g]\n",
+                ray->ox, ray->oy, ray->oz, ray->dx, ray->dy, ray->dz, ray->t_near, ray->t_far);
+        lab_say(r, "         the reference hits ");
+        if (ref[i].prim != ACCEL_MISS) {
+            name_prim(sc, ref[i].prim, r);
+            lab_say(r, " at t=%.9g; ", ref[i].t);
+        } else {
+            lab_say(r, "nothing; ");
+        }
+        if (hits[i].prim != ACCEL_MISS) {
+            lab_say(r, "yours hits ");
+            name_prim(sc, hits[i].prim, r);
+            lab_say(r, " at t=%.9g\n", hits[i].t);
+        } else {
+            lab_say(r, "yours misses\n");
+        }
+        lab_say(r, "         hint: %s\n",
+                hits[i].prim == ACCEL_MISS || (ref[i].prim != ACCEL_MISS && hits[i].t > ref[i].t)
+                    ? "walk_ray() must hand over every primitive of every leaf whose box, grown "
+                      "by pad on every side, the ray reaches (the ray is in the mesh's object "
+                      "space: scaled, mirrored, not normalized; test boxes against [t_near, "
+                      "t_max] with the t_max visit() returns, never against 1 or the world t)"
+                    : "cull with the t_max visit() returns, not with your own triangle tests: "
+                      "instanced decides every triangle in world space");
+        goto out;
+    }
+    accel_trace_occluded(k, a, rays->rays, occ, n, 1, NULL);
+    for (size_t i = 0; i < n; i++)
+        if (occ[i] != (ref[i].prim != ACCEL_MISS)) {
+            lab_fail(r, "%s / %s rays: occluded() says %d for ray %zu, the reference %s: stop "
+                        "the walk when visit() returns a t_max below t_near",
+                     sc->name, what, occ[i], i, ref[i].prim != ACCEL_MISS ? "hits" : "misses");
+            goto out;
+        }
+    ok = 1;
+out:
+    free(ref);
+    free(hits);
+    free(occ);
+    return ok;
+}
+
+static void check_scene(const lab_subject *s, const char *name, const char *text, lab_result *r,
+                        accel_error *err)
+{
+    accel_scene sc;
+    int rc = text ? scene_parse_scene(name, "", text, strlen(text), NULL, &sc, err)
+                  : scene_create(name, &sc, err);
+    if (rc) {
+        lab_fail(r, "scene %s: %s", name, err->msg);
+        return;
+    }
+    rays_set g[3];
+    memset(g, 0, sizeof g);
+    static const char *const what[3] = {"primary", "shadow", "vertex and axis"};
+    accel_hit *ph = NULL;
+    void *a = NULL;
+    accel_build_stats st;
+    int size = s->quick ? 40 : 64;
+    if (rays_primary(&sc.camera, size, size, &g[0], err) ||
+        !(ph = malloc(g[0].count * sizeof *ph))) {
+        lab_fail(r, "%s: could not make the rays", name);
+        goto out;
+    }
+    accel_reference_trace(&sc, g[0].rays, ph, g[0].count, s->threads);
+    if (rays_shadow(&sc, &g[0], ph, &g[1], err) || lab_make_stiff_rays(&sc, &g[2], err)) {
+        lab_fail(r, "%s: could not make the rays: %s", name, err->msg);
+        goto out;
+    }
+    if (instanced_build_with_bottom(&sc, "", s->kind, s->kv, 1, &a, &st, err)) {
+        lab_fail(r, "%s: instanced with your kind as the bottom level: %s", name, err->msg);
+        goto out;
+    }
+    for (int i = 0; i < 3; i++)
+        if (!compare(s, a, &sc, what[i], &g[i], r)) goto out;
+    lab_say(r, "  ok   %s: %u meshes, %u instances, %zu rays agree with the reference on the "
+               "flattened scene\n",
+            name, sc.instances ? sc.instances->mesh_count : 1,
+            sc.instances ? sc.instances->instance_count : 1, g[0].count + g[1].count + g[2].count);
+out:
+    if (a) accel_kind_instanced.destroy(a);
+    for (int i = 0; i < 3; i++) rays_free(&g[i]);
+    free(ph);
+    scene_free(&sc);
+}
+
+void lab_check_step3(const lab_subject *s, lab_result *r, accel_error *err)
+{
+    if (!s->kind->walk) {
+        lab_fail(r, "your kind has no walk (accel_kind.walk): write walk_ray() (LAB.md, step 3) "
+                    "and keep `.walk = lab_walk` in the kind's table");
+        return;
+    }
+    check_scene(s, "field:instances=30,detail=2", NULL, r, err);
+    if (r->passed) check_scene(s, "animated:frame=77,instances=6,detail=2", NULL, r, err);
+    if (r->passed) check_scene(s, "far_instances", far_scene, r, err);
+}
