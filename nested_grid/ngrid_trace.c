@@ -32,8 +32,6 @@
 #include "core/variant.h"
 #include "ngrid_impl.h"
 
-/* Entries of the per-ray mailbox (power of two). */
-#define NGRID_MAILBOX 16
 
 static inline __attribute__((always_inline)) void
 ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
@@ -90,22 +88,9 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
                 const uint32_t *list = lists + w;
                 uint32_t n = list[0];
                 if (c && n == 0) empty++;
-                for (uint32_t k = 1; k <= n; k++) {
-                    uint32_t prim = list[k];
-                    if (mailbox) {
-                        uint32_t *slot = &box[prim & (NGRID_MAILBOX - 1)];
-                        if (*slot == prim) {
-                            if (c) skips++;
-                            continue;
-                        }
-                        *slot = prim;
-                    }
-                    if (c) tests++;
-                    if (accel_prim_hit(s, prim, &p, &t, &u, &v, naive, spheres)) {
-                        h.t = t, h.u = u, h.v = v, h.prim = prim;
-                        if (occ) goto done;
-                    }
-                }
+                if (ngrid_test_leaf(s, list + 1, n, &p, &h, &t, &u, &v, box, NGRID_MAILBOX - 1,
+                                    &tests, &skips, c, occ != NULL, naive, spheres, mailbox))
+                    goto done;
                 /* A hit (or the ray's end) before this cell's exit: nothing
                  * in a later cell, at any level, can be nearer. */
                 double t_exit = grid_dda_exit(&d);
@@ -144,11 +129,21 @@ static unsigned ngrid_flags(const ngrid_accel *g)
 void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
                      accel_counters *counters)
 {
+    const ngrid_accel *g = accel;
+    if (g->compact) {
+        ngrid_compact_intersect(g, rays, hits, count, counters);
+        return;
+    }
     accel_run_kernel(&ngrid_hit_table, accel, rays, hits, count, counters, ngrid_flags(accel));
 }
 
 void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                     accel_counters *counters)
 {
+    const ngrid_accel *g = accel;
+    if (g->compact) {
+        ngrid_compact_occluded(g, rays, occluded, count, counters);
+        return;
+    }
     accel_run_kernel(&ngrid_occ_table, accel, rays, occluded, count, counters, ngrid_flags(accel));
 }
