@@ -28,6 +28,9 @@
  *   overlap     exact | bbox cell membership
  *   mailbox     0/1: test a primitive once per ray across cells and levels
  *   max_mb      memory limit for the whole structure, MiB
+ *   layout      words (cell words, any depth) | compact (two levels: 8-byte top
+ *               cells with their own sub-grid resolution, 4-byte leaf cells,
+ *               one reference array; ngrid_compact.c)
  *   tri         watertight | naive (common to all kinds)
  */
 #ifndef NESTED_GRID_NGRID_H

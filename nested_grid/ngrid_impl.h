@@ -164,37 +164,6 @@ int ngrid_compact_build(ngrid_accel *g, double max_bytes, accel_error *err);
 void ngrid_compact_free(ngrid_compact *k);
 size_t ngrid_compact_bytes(const ngrid_compact *k);
 
-/*
- * One leaf cell's primitives, tested by a kernel of this kind (shared by
- * both layouts' walks): ids[0..n), each at most once per ray with the
- * mailbox, the nearest hit kept in *h (t, u, v: the running values).
- * Returns 1 when an any-hit query (occ) can stop.
- */
-static inline __attribute__((always_inline)) int
-ngrid_test_leaf(const accel_scene *s, const uint32_t *ids, uint32_t n, const accel_ray_prep *p,
-                accel_hit *h, float *t, float *u, float *v, uint32_t *box, uint32_t mask,
-                uint32_t *tests, uint32_t *skips, const accel_counters *c, int occ, int naive,
-                int spheres, int mailbox)
-{
-    for (uint32_t k = 0; k < n; k++) {
-        uint32_t prim = ids[k];
-        if (mailbox) {
-            uint32_t *slot = &box[prim & mask];
-            if (*slot == prim) {
-                if (c) (*skips)++;
-                continue;
-            }
-            *slot = prim;
-        }
-        if (c) (*tests)++;
-        if (accel_prim_hit(s, prim, p, t, u, v, naive, spheres)) {
-            h->t = *t, h->u = *u, h->v = *v, h->prim = prim;
-            if (occ) return 1;
-        }
-    }
-    return 0;
-}
-
 /* Traversal entry points (ngrid_trace.c; the compact layout's in ngrid_compact.c). */
 void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
                      accel_counters *counters);

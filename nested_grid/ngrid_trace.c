@@ -88,9 +88,22 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
                 const uint32_t *list = lists + w;
                 uint32_t n = list[0];
                 if (c && n == 0) empty++;
-                if (ngrid_test_leaf(s, list + 1, n, &p, &h, &t, &u, &v, box, NGRID_MAILBOX - 1,
-                                    &tests, &skips, c, occ != NULL, naive, spheres, mailbox))
-                    goto done;
+                for (uint32_t k = 1; k <= n; k++) {
+                    uint32_t prim = list[k];
+                    if (mailbox) {
+                        uint32_t *slot = &box[prim & (NGRID_MAILBOX - 1)];
+                        if (*slot == prim) {
+                            if (c) skips++;
+                            continue;
+                        }
+                        *slot = prim;
+                    }
+                    if (c) tests++;
+                    if (accel_prim_hit(s, prim, &p, &t, &u, &v, naive, spheres)) {
+                        h.t = t, h.u = u, h.v = v, h.prim = prim;
+                        if (occ) goto done;
+                    }
+                }
                 /* A hit (or the ray's end) before this cell's exit: nothing
                  * in a later cell, at any level, can be nearer. */
                 double t_exit = grid_dda_exit(&d);
