@@ -100,8 +100,8 @@ int ngrid_compact_build(ngrid_accel *g, double max_bytes, accel_error *err)
     if (bytes > max_bytes)
         return accel_fail(err, ACCEL_ERR_RANGE,
                           "nested_grid:layout=compact: %llu top cells, %llu leaf cells and %llu "
-                          "references need %.1f MiB, above the limit of %.1f MiB (raise max_mb "
-                          "or threshold)",
+                          "references need %.1f MiB, above the limit of %.1f MiB (raise max_mb, "
+                          "or lower lambda, res or sub_lambda)",
                           (unsigned long long)tops, (unsigned long long)leaves,
                           (unsigned long long)g->ref_count, bytes / 1048576.0,
                           max_bytes / 1048576.0);
