@@ -85,7 +85,10 @@ typedef struct {
     int levels;              /* levels actually built */
 } ngrid_view;
 
-/* Fills *v from an accelerator built by accel_kind_nested_grid. */
+/* Fills *v from an accelerator built by accel_kind_nested_grid. With
+ * layout=compact the word arrays are freed after the build: nodes, cells
+ * and lists are then NULL with counts 0 (ref_count, levels and the id map
+ * stay). */
 void ngrid_get_view(const void *accel, ngrid_view *v);
 
 /* ---- the cost model (ngrid_cost.c) --------------------------------------------- */
