@@ -19,7 +19,8 @@
  * remakes the sub-grid's frame from the top cell's box (the top grid's own
  * planes) and its resolution with grid_frame_init, the function the build
  * used, so its planes are the same floats, and walks it with the same DDA
- * from the distance where the ray entered the top cell. Everything else,
+ * from the distance where the ray entered the top cell (a 16-entry cache
+ * per batch keeps recently remade frames). Everything else,
  * the counters included, is the word layout's walk (ngrid_trace.c) at
  * depth 2, so both layouts give the same hits and the same counts.
  */
