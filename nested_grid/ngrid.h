@@ -28,6 +28,9 @@
  *   overlap     exact | bbox cell membership
  *   mailbox     0/1: test a primitive once per ray across cells and levels
  *   max_mb      memory limit for the whole structure, MiB
+ *   layout      words (cell words, any depth) | compact (two levels: 8-byte top
+ *               cells with their own sub-grid resolution, 4-byte leaf cells,
+ *               one reference array; ngrid_compact.c)
  *   tri         watertight | naive (common to all kinds)
  */
 #ifndef NESTED_GRID_NGRID_H
@@ -82,7 +85,10 @@ typedef struct {
     int levels;              /* levels actually built */
 } ngrid_view;
 
-/* Fills *v from an accelerator built by accel_kind_nested_grid. */
+/* Fills *v from an accelerator built by accel_kind_nested_grid. With
+ * layout=compact the word arrays are freed after the build: nodes, cells
+ * and lists are then NULL with counts 0 (ref_count, levels and the id map
+ * stay). */
 void ngrid_get_view(const void *accel, ngrid_view *v);
 
 /* ---- the cost model (ngrid_cost.c) --------------------------------------------- */

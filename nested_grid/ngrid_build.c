@@ -66,6 +66,10 @@ static const accel_param_def ngrid_params[] = {
      "test a primitive spanning several cells once per ray, across levels (16-entry cache)"},
     {"max_mb", ACCEL_PARAM_FLOAT, "4096", 1.0, 1048576.0, NULL,
      "memory limit for all levels (cells, references, planes), MiB"},
+    {"layout", ACCEL_PARAM_ENUM, "words", 0, 0, "words|compact",
+     "words: cell words and count-prefixed lists, any depth; compact: two levels, 8-byte top "
+     "cells with their own sub-grid resolution (at most 256 per axis), 4-byte leaf cells, one "
+     "reference array (Kalojanov et al. 2011; depth defaults to 2, others refused)"},
 };
 
 /* ---- the flat structure ------------------------------------------------------------ */
@@ -78,6 +82,7 @@ static void ngrid_destroy(void *a)
     free(g->cells);
     free(g->lists);
     free(g->planes);
+    ngrid_compact_free(g->compact);
     accel_prim_store_free(&g->store);
     free(g);
 }
@@ -85,6 +90,7 @@ static void ngrid_destroy(void *a)
 static size_t ngrid_memory(const void *a)
 {
     const ngrid_accel *g = a;
+    if (g->compact) return sizeof *g + ngrid_compact_bytes(g->compact) + accel_prim_store_bytes(&g->store);
     return sizeof *g + (size_t)g->node_count * sizeof *g->nodes +
            (size_t)g->cell_count * sizeof *g->cells + (size_t)g->list_len * sizeof *g->lists +
            g->plane_count * sizeof *g->planes + accel_prim_store_bytes(&g->store);
@@ -224,6 +230,16 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
     b.costs.c_step = accel_param_num(params, "c_step");
     b.costs.c_isect = accel_param_num(params, "c_isect");
     b.max_bytes = accel_param_num(params, "max_mb") * 1048576.0;
+    const int compact = (int)accel_param_num(params, "layout") == 1;
+    if (compact) {
+        if (accel_param_given(params, "depth") && b.depth != 2)
+            return accel_fail(err, ACCEL_ERR_RANGE,
+                              "nested_grid: layout=compact has exactly two levels (depth=2), "
+                              "not depth=%d (use layout=words for other depths)",
+                              b.depth);
+        b.depth = 2;
+        b.max_sub_res = NGRID_COMPACT_MAX_RES;
+    }
     if (b.sub_res == 1)
         return accel_fail(err, ACCEL_ERR_RANGE,
                           "nested_grid: sub_res=1 makes sub-grids of one cell (use 0 or 2..256)");
@@ -279,6 +295,7 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
         g->has_spheres = scene->sphere_count > 0;
         rc = flatten(&b, g, err);
     }
+    if (!rc && compact) rc = ngrid_compact_build(g, b.max_bytes, err);
     builder_free(&b);
     if (rc) {
         ngrid_destroy(g);
@@ -287,7 +304,7 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
 
     memset(stats, 0, sizeof *stats);
     stats->bytes = ngrid_memory(g);
-    stats->nodes = g->cell_count;
+    stats->nodes = g->compact ? g->compact->top_count + g->compact->leaf_count : g->cell_count;
     stats->leaves = g->leaf_count;
     stats->refs = g->ref_count;
     stats->sah_cost = NAN;
@@ -336,6 +353,7 @@ void ngrid_get_view(const void *accel, ngrid_view *v)
  * depth), never subdividing, bounding-box membership, no mailbox. */
 static const char *const ngrid_variants[] = {
     "", "auto", "depth=1", "threshold=1,depth=2", "threshold=100000", "overlap=bbox,mailbox=0",
+    "layout=compact", "layout=compact,auto", "layout=compact,threshold=1,sub_res=6",
     NULL,
 };
 

@@ -12,6 +12,34 @@
 extern "C" {
 #endif
 
+/*
+ * The compact two-level layout (`layout=compact`, ngrid_compact.c), after
+ * Kalojanov, Billeter & Slusallek, "Two-Level Grids for Ray Tracing on
+ * GPUs", EG 2011: one 8-byte word per top cell, one 4-byte offset per leaf
+ * cell, one reference array. A top cell's leaf cells are leaf[first ..
+ * first + rx*ry*rz) (one of them when the cell is a plain leaf); leaf cell k
+ * holds refs[leaf[k] .. leaf[k+1]). The sub-grid's box is the top cell's
+ * box (the top grid's planes) and its planes are remade from it by
+ * grid_frame_init during the walk, the very floats the build used.
+ */
+typedef struct {
+    uint32_t first; /* index of the cell's first leaf cell */
+    uint32_t res;   /* (rx-1) | (ry-1) << 8 | (rz-1) << 16; 0: a plain leaf */
+} ngrid_top_cell;
+
+#define NGRID_COMPACT_MAX_RES 256 /* sub-grid cells per axis (8 bits of res - 1) */
+
+typedef struct {
+    grid_frame top;       /* the top grid; planes in top_planes */
+    float *top_planes;
+    ngrid_top_cell *tops; /* one per top cell */
+    uint64_t top_count;
+    uint32_t *leaf;       /* leaf_count + 1 offsets into refs */
+    uint64_t leaf_count;
+    uint32_t *refs;       /* local primitive ids, every leaf's sorted list in leaf order */
+    uint64_t ref_count;
+} ngrid_compact;
+
 typedef struct {
     /* The primitive store (accel.h): lists hold its local ids, and
      * store.scene_id maps a hit back to the scene's id. */
@@ -29,6 +57,7 @@ typedef struct {
     uint64_t step_bound; /* most cells (all levels) one ray can visit */
     int levels;
     int naive, mailbox, has_spheres;
+    ngrid_compact *compact; /* layout=compact: the only arrays kept (nodes etc. freed) */
 } ngrid_accel;
 
 /*
@@ -99,6 +128,7 @@ typedef struct {
     double sub_lambda;
     uint32_t threshold;
     ngrid_costs costs;
+    int max_sub_res;     /* cap on a sub-grid's cells per axis (0: none) */
     double max_bytes;
     ngrid_bgrid **grids; /* breadth-first */
     uint32_t grid_count, grid_cap;
@@ -125,11 +155,24 @@ int ngrid_wrap_error(accel_error *err, int rc, const char *context);
 int ngrid_build_level(ngrid_builder *b, uint32_t begin, uint32_t end, int threads,
                       accel_error *err);
 
-/* Traversal entry points (ngrid_trace.c). */
+/* Entries of the per-ray mailbox of both layouts' walks (power of two). */
+#define NGRID_MAILBOX 16
+
+/* Turns a flattened two-level g into the compact layout (g->compact) and
+ * frees the word layout's arrays (ngrid_compact.c). */
+int ngrid_compact_build(ngrid_accel *g, double max_bytes, accel_error *err);
+void ngrid_compact_free(ngrid_compact *k);
+size_t ngrid_compact_bytes(const ngrid_compact *k);
+
+/* Traversal entry points (ngrid_trace.c; the compact layout's in ngrid_compact.c). */
 void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
                      accel_counters *counters);
 void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                     accel_counters *counters);
+void ngrid_compact_intersect(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits,
+                             size_t count, accel_counters *counters);
+void ngrid_compact_occluded(const ngrid_accel *g, const accel_ray *rays, uint8_t *occluded,
+                            size_t count, accel_counters *counters);
 
 /* accel.h's conservative walk (ngrid_trace.c): the fat walk at every level. */
 int ngrid_walk(const void *accel, const accel_ray *ray, float pad, accel_walk_visit visit,

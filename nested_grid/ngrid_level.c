@@ -169,6 +169,8 @@ static int plan_sub(const ngrid_builder *b, const sub_job *job, double budget, s
     } else {
         grid_resolution(p->box, (double)n, b->sub_lambda, res);
     }
+    for (int a = 0; b->max_sub_res && a < 3; a++)
+        if (res[a] > b->max_sub_res) res[a] = b->max_sub_res;
     if (res[0] == 1 && res[1] == 1 && res[2] == 1) return ACCEL_OK;
     int rc = grid_cell_count("nested_grid", res, budget, &p->cells, err);
     if (rc) {

@@ -32,8 +32,6 @@
 #include "core/variant.h"
 #include "ngrid_impl.h"
 
-/* Entries of the per-ray mailbox (power of two). */
-#define NGRID_MAILBOX 16
 
 static inline __attribute__((always_inline)) void
 ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
@@ -144,12 +142,22 @@ static unsigned ngrid_flags(const ngrid_accel *g)
 void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
                      accel_counters *counters)
 {
+    const ngrid_accel *g = accel;
+    if (g->compact) {
+        ngrid_compact_intersect(g, rays, hits, count, counters);
+        return;
+    }
     accel_run_kernel(&ngrid_hit_table, accel, rays, hits, count, counters, ngrid_flags(accel));
 }
 
 void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                     accel_counters *counters)
 {
+    const ngrid_accel *g = accel;
+    if (g->compact) {
+        ngrid_compact_occluded(g, rays, occluded, count, counters);
+        return;
+    }
     accel_run_kernel(&ngrid_occ_table, accel, rays, occluded, count, counters, ngrid_flags(accel));
 }
 
