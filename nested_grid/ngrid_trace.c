@@ -206,6 +206,9 @@ int ngrid_walk(const void *accel, const accel_ray *ray, float pad, accel_walk_vi
                void *ctx, uint32_t *steps)
 {
     const ngrid_accel *g = accel;
+    /* The compact layout keeps no nodes to walk: the store's padded-box walk
+     * (correct, not fast; a compact fat walk is not written). */
+    if (g->compact) return accel_prim_store_walk(&g->store, ray, pad, visit, ctx, steps);
     accel_ray_prep p;
     if (!visit || g->ref_count == 0 || !accel_prep_ray(ray, &p)) return 0;
     ngrid_walker w = {g, &p, &g->nodes[0], pad, p.t_far, visit, ctx, steps, {0}};
