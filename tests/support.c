@@ -7,6 +7,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <sys/stat.h>
+#include <time.h>
+
 #include "support.h"
 
 /* ---- random numbers ------------------------------------------------------------ */
@@ -567,4 +570,20 @@ void test_check_variants(const accel_scene *s, const accel_kind *kind, const cha
         test_check_spec(s, spec, rays, n, ref, NULL, NULL);
     }
     free(ref);
+}
+
+static time_t test_process_start;
+__attribute__((constructor)) static void test_note_start(void) { test_process_start = time(NULL); }
+
+int test_quick_report(void)
+{
+    struct stat st;
+    if (stat("build/quick-report/REPORT.md", &st) == 0 && st.st_mtime >= test_process_start)
+        return 1;
+    if (system("experiments/report.sh --quick > build/quick-report.log 2>&1") != 0) {
+        test_fail(__FILE__, __LINE__,
+                  "experiments/report.sh --quick failed: see build/quick-report.log");
+        return 0;
+    }
+    return 1;
 }

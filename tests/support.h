@@ -214,4 +214,9 @@ size_t test_check_spec(const accel_scene *s, const char *spec, const accel_ray *
 void test_check_variants(const accel_scene *s, const accel_kind *kind, const char *const *extra,
                          const accel_ray *rays, size_t n, test_oracle o);
 
+/* The quick report (experiments/report.sh --quick into build/quick-report/),
+ * made once per test process: the report tests share it. 0 (after a failed
+ * check naming the log) when it cannot be made. */
+int test_quick_report(void);
+
 #endif

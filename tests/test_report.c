@@ -12,10 +12,7 @@
 
 TEST(report_quick_smoke)
 {
-    if (system("experiments/report.sh --quick > build/quick-report.log 2>&1") != 0) {
-        test_fail(__FILE__, __LINE__, "experiments/report.sh --quick failed: see build/quick-report.log");
-        return;
-    }
+    if (!test_quick_report()) return;
     char *report = test_read_file("build/quick-report/REPORT.md", NULL);
     CHECKF(report != NULL, "build/quick-report/REPORT.md not written");
     if (!report) return;

@@ -27,22 +27,6 @@
 #define DIR_OUT "build/quick-report"
 #endif
 
-static time_t process_start;
-__attribute__((constructor)) static void note_start(void) { process_start = time(NULL); }
-
-/* The quick report of this test run: made once per process (the smoke
- * test of test_report.c runs first when both are selected). */
-static int quick_report(void)
-{
-    struct stat st;
-    if (stat(DIR_OUT "/REPORT.md", &st) == 0 && st.st_mtime >= process_start) return 1;
-    if (system("experiments/report.sh --quick > build/quick-report.log 2>&1") != 0) {
-        test_fail(__FILE__, __LINE__, "experiments/report.sh --quick failed: see build/quick-report.log");
-        return 0;
-    }
-    return 1;
-}
-
 /* Calls fn(path, text) for every file of the quick report ending in ext
  * (and starting with "exp_" when sections_only). */
 static int sections_only;
@@ -85,7 +69,7 @@ static void check_tables_finite(const char *path, char *text)
 
 TEST(report_quick_tables_finite)
 {
-    if (!quick_report()) return;
+    if (!test_quick_report()) return;
     CHECKF(each_file(".md", check_tables_finite) >= 12, "too few Markdown files in " DIR_OUT);
 }
 
@@ -134,7 +118,7 @@ static void check_csv(const char *path, char *text)
 
 TEST(report_quick_csv_strict)
 {
-    if (!quick_report()) return;
+    if (!test_quick_report()) return;
     char why[160];
     int cols;
     /* The reader itself must refuse what RFC 4180 refuses. */
@@ -188,7 +172,7 @@ static void check_findings(const char *path, char *text)
 
 TEST(report_quick_findings_complete)
 {
-    if (!quick_report()) return;
+    if (!test_quick_report()) return;
     sections_only = 1;
     CHECKF(each_file(".md", check_findings) >= 11, "too few sections");
     sections_only = 0;
@@ -212,13 +196,13 @@ static void check_ties(const char *path, char *text)
 
 TEST(report_quick_ties_not_wins)
 {
-    if (!quick_report()) return;
+    if (!test_quick_report()) return;
     each_file(".md", check_ties);
 }
 
 TEST(report_quick_summary_verdicts)
 {
-    if (!quick_report()) return;
+    if (!test_quick_report()) return;
     char *r = test_read_file(DIR_OUT "/REPORT.md", NULL);
     CHECKF(r != NULL, DIR_OUT "/REPORT.md missing");
     if (!r) return;
@@ -262,7 +246,7 @@ static void check_rounds(const char *path, char *text)
 
 TEST(report_quick_footer_rounds)
 {
-    if (!quick_report()) return;
+    if (!test_quick_report()) return;
     sections_only = 1;
     CHECKF(each_file(".md", check_rounds) >= 11, "too few sections");
     sections_only = 0;
@@ -284,7 +268,7 @@ static void check_run_time(const char *path, char *text)
 
 TEST(report_quick_run_times)
 {
-    if (!quick_report()) return;
+    if (!test_quick_report()) return;
     char *r = test_read_file(DIR_OUT "/REPORT.md", NULL);
     CHECKF(r != NULL, DIR_OUT "/REPORT.md missing");
     if (!r) return;
@@ -319,7 +303,7 @@ static void check_rows(const char *path, const char *const *specs, int n, const 
 
 TEST(report_quick_issue_tables)
 {
-    if (!quick_report()) return;
+    if (!test_quick_report()) return;
     static const char *const wide[] = {"bvh", "bvh:width=4", "bvh:width=8", "bvh:traverse=packet",
                                        "bvh:width=4,traverse=packet", "bvh:width=8,traverse=packet"};
     check_rows(DIR_OUT "/exp_wide.md", wide, 6, "on 2 threads over 1 |");
