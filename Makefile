@@ -117,7 +117,7 @@ lab:
 	  -e 's/"starter"/"student"/' -e 's@^ \* starter.c - @ * student.c - @' lab/starter.c > lab/student.c && \
 	  echo "lab: made lab/student.c from lab/starter.c: your kind is 'student'"; }
 	@mkdir -p lab/out
-	@echo "lab: building bin-lab/ (the first time takes minutes: make -j2 lab uses 2 cores)"
+	@test -x bin-lab/lab || echo "lab: building bin-lab/ (the first time takes minutes: make -j2 lab uses 2 cores)"
 	@$(MAKE) -s --no-print-directory BUILD=build-lab BIN=bin-lab LAB=1 bin-lab/lab bin-lab/trace \
 	  bin-lab/run_tests $(patsubst $(BIN)/%,bin-lab/%,$(EXP_BINS))
 	@if [ -n "$(STEP)" ]; then ./bin-lab/lab --step $(STEP) --out lab/out; \

@@ -63,10 +63,10 @@ static int compare(const lab_subject *s, const void *a, const accel_scene *sc, c
         size_t i = d.first_bad;
         const accel_ray *ray = &rays->rays[i];
         lab_fail(r, "%s / %s rays: %zu holes (the reference hits, your bottom level never "
-                    "handed the triangle over), %zu false hits, %zu other disagreements of %zu "
-                    "rays. First: ray %zu",
+                    "handed the triangle over), %zu false hits, %zu other disagreements (a "
+                    "farther or another triangle) of %zu rays. First: ray %zu",
                  sc->name, what, d.holes, d.false_hits, d.disagreements, n, i);
-        lab_say(r, "         ray o=(%.9g, %.9g, %.9g) d=(%.9g, %.9g, %.9g) t in [%g, %g]\n",
+        lab_say(r, "         world ray o=(%.9g, %.9g, %.9g) d=(%.9g, %.9g, %.9g) t in [%g, %g]\n",
                 ray->ox, ray->oy, ray->oz, ray->dx, ray->dy, ray->dz, ray->t_near, ray->t_far);
         lab_say(r, "         the reference hits ");
         if (ref[i].prim != ACCEL_MISS) {
@@ -82,14 +82,30 @@ static int compare(const lab_subject *s, const void *a, const accel_scene *sc, c
         } else {
             lab_say(r, "yours misses\n");
         }
-        lab_say(r, "         hint: %s\n",
-                hits[i].prim == ACCEL_MISS || (ref[i].prim != ACCEL_MISS && hits[i].t > ref[i].t)
-                    ? "walk_ray() must hand over every primitive of every leaf whose box, grown "
-                      "by pad on every side, the ray reaches (the ray is in the mesh's object "
-                      "space: scaled, mirrored, not normalized; test boxes against [t_near, "
-                      "t_max] with the t_max visit() returns, never against 1 or the world t)"
-                    : "cull with the t_max visit() returns, not with your own triangle tests: "
-                      "instanced decides every triangle in world space");
+        /* instanced decides every triangle itself, so a walk's mistakes are
+         * holes (nothing, or a farther triangle): the rays say which. A walk
+         * without the pad, or one that filters with its own triangle test,
+         * passes field's primary and shadow rays and fails its vertex rays;
+         * one that loses whole leaves fails the primary rays. */
+        int hole = hits[i].prim == ACCEL_MISS ||
+                   (ref[i].prim != ACCEL_MISS && hits[i].t > ref[i].t);
+        const char *hint =
+            !hole ? "a nearer hit than the reference, which a walk should not be able to cause "
+                    "(instanced decides every triangle in world space): is lab_walk() as the "
+                    "starter has it, and does visit() get scene ids, b->store.scene_id[...]?"
+            : strcmp(what, "vertex and axis") == 0
+                ? "these rays pass through triangle vertices and edges, where the object-space "
+                  "mesh and its world-space copy differ: grow every box by pad on every side "
+                  "(bmin - pad, bmax + pad) before box3_slab, the root's too, and hand every "
+                  "primitive of a reached leaf to visit(), hit or not (no accel_prim_hit of "
+                  "yours)"
+                : "walk_ray() must hand every primitive of every leaf whose box, grown by pad, "
+                  "the ray reaches to visit(), hit or not (no accel_prim_hit of yours), with "
+                  "its scene id b->store.scene_id[b->order[left_first + i]]; test boxes "
+                  "against [p->t_near, t_max] with the t_max visit() returns, never against 1 "
+                  "or a world t (the walk's ray is in the mesh's object space: scaled, "
+                  "mirrored, not normalized)";
+        lab_say(r, "         hint: %s\n", hint);
         goto out;
     }
     accel_trace_occluded(k, a, rays->rays, occ, n, 1, NULL);

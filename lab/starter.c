@@ -203,12 +203,15 @@ trace_ray(const lab_bvh *b, const accel_ray_prep *p, int any_hit, int naive, int
  * To do (step 3): your trace_ray() from step 2, with two changes:
  *  - grow every box by pad on every side before box3_slab (bmin - pad,
  *    bmax + pad), with the current t_max as the far end of the ray;
- *  - in a leaf, do not test the primitives: for each, call
+ *  - in a leaf, do not test the primitives (no accel_prim_hit: hand over
+ *    every one, hit or not): for each prim = b->order[left_first + i], call
  *    t_max = visit(ctx, b->store.scene_id[prim], t_max);
  *    the answer is the closest hit instanced has found so far (in your
  *    ray's t): use it to cull boxes and popped nodes as in step 2. If it
- *    drops below p.t_near the walk is over (an occlusion ray hit): return.
- * Count every node visited in *steps. Visiting a primitive twice, or one
+ *    drops below p->t_near the walk is over (an occlusion ray hit): return.
+ * t_near need not be 0 (instanced may move the origin along the ray): use
+ * p->t_near and the t_max visit() returns, nothing else. Count every node
+ * visited in *steps. Visiting a primitive twice, or one
  * that is not hit, is allowed; missing one is a hole.
  */
 static int walk_ray(const lab_bvh *b, const accel_ray_prep *p, float pad, accel_walk_visit visit,
