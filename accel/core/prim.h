@@ -218,8 +218,12 @@ static inline int accel_tri_watertight_d(const accel_ray_d *r, const float *tri,
      * det's error (eU + eV + eW) through the division; the shear's rounded
      * ratios move the direction by a few eps, negligible beside these. For
      * vertices at 1e30 along kz, the offsets cancel in num and et ~ 1e14
-     * (tests/test_oracle_huge.c); in ordinary scenes et < 2^-24 |tt| except
-     * for t within about 2^24 eps times the triangle's kz extent of t_near. */
+     * (tests/test_oracle_huge.c). In ordinary scenes et is some tens of
+     * eps times the offsets' size in t units (max |z| |sz|), below
+     * 2^-24 |tt| except for hits at t under about 2^-23 of that size: a ray
+     * leaving a surface it starts on (t ~ 0), where the plane form gives
+     * t = 0 for an origin exactly in the plane instead of +-2^-60 noise.
+     * Primary rays of the built-in scenes keep every answer bitwise. */
     double za = fabs(z[0]), zb = fabs(z[1]), zc = fabs(z[2]), ed = eU + eV + eW;
     double en = eps * (fabs(U) * za + fabs(V) * zb + fabs(W) * zc) + eU * za + eV * zb + eW * zc;
     double et = ed < 0.5 * fabs(det)
