@@ -308,7 +308,7 @@ TEST(sbvh_degenerate_inputs)
         test_add_tri(&b, v3(t, 2, 0), v3(t + 1, 2, 0), v3(t + 2, 2, 0));
         test_add_tri(&b, v3(t, 3, 1), v3(t, 3, 1), v3(t, 3, 1));
     }
-    test_add_tri(&b, v3(-1e9f, -1e9f, -3.0f), v3(1e9f, -1e9f, -3.0f), v3(0, 1e9f, -3.5f));
+    test_add_tri(&b, v3(-1e30f, -1e30f, -3.0f), v3(1e30f, -1e30f, -3.0f), v3(0, 1e30f, -3.5f));
     for (int i = 0; i < 200; i++) {
         vec3 p = test_rand_point((box3){{1e7f, 1e7f, 1e7f}, {1.0001e7f, 1.0001e7f, 1.0001e7f}});
         test_add_tri(&b, p, v3_add(p, v3(1, 0, 0)), v3_add(p, v3(0, 900, 1)));

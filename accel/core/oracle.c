@@ -35,7 +35,11 @@
  *  2. The distance, triangles only. An accepted t is computed as
  *     (U az + V bz + W cz) sz / det with U, V, W of one sign: a convex
  *     combination of the vertices' offsets along the dominant axis kz,
- *     divided by d[kz], up to ~8 eps S. So t lies in the kz slab interval
+ *     divided by d[kz], up to ~8 eps S. Where that value's error bound is
+ *     not small (huge triangles, whose +-1e30 offsets cancel in the sum),
+ *     prim.h takes the plane form n.(v0 - o)/n.d instead, but clamped into
+ *     [min, max] of az sz, bz sz, cz sz: the same interval, up to the
+ *     rounding of those three products. So t lies in the kz slab interval
  *     of any widened box holding the triangle: a node whose kz interval
  *     starts after the current hit's t (strictly after: an equal t may still
  *     win the tie) or ends before t_near holds no better hit. The usual

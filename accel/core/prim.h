@@ -108,6 +108,77 @@ static inline void accel_prep_ray_d(const accel_ray_prep *p, accel_ray_d *r)
     r->t_near = p->t_near;
 }
 
+/*
+ * t of a triangle hit from its plane: t = n.(v0 - o) / n.d with the normal
+ * n = (v1 - v0) x (v2 - v0) in double, for the rare hit whose watertight t
+ * is not certain (accel_tri_watertight_d). a = v0 - o as rounded there.
+ * *err gets a bound on |t - exact plane t| (exact for the float vertices
+ * and ray), to first order in eps = 2^-53: each edge component is rounded
+ * once, a normal component n_i = p - q errs by at most 4 eps (|p| + |q|)
+ * =: 4 eps nb_i, so n_i a_i errs by at most 6 eps nb_i |a_i| and the sum
+ * adds 2 eps sum |n_i a_i| <= 2 eps sum nb_i |a_i|: 8 eps, and 7 eps for
+ * n.d (d is exact), taken as 16 eps. Unlike the watertight form, whose
+ * numerator sums the vertices' offsets along the ray's dominant axis, the
+ * plane form weights each axis by the normal: for a huge, nearly flat
+ * triangle (vertices at 1e30 in x and y, z in [-3.5, -3]) and a ray whose
+ * dominant axis is x, the offsets +-1e30 cancel in the watertight sum
+ * (error ~ eps 1e30 in t) but carry a tiny normal weight here.
+ * err is +inf when n.d is within its error of zero (a ray along the plane).
+ */
+static double accel_tri_plane_t_d(const accel_ray_d *r, const float *tri, const double *a,
+                                  double *err) __attribute__((noinline, cold));
+static double accel_tri_plane_t_d(const accel_ray_d *r, const float *tri, const double *a,
+                                  double *err)
+{
+    double e1[3], e2[3], num = 0, den = 0, bn = 0, bd = 0;
+    for (int i = 0; i < 3; i++) {
+        e1[i] = (double)tri[3 + i] - tri[i];
+        e2[i] = (double)tri[6 + i] - tri[i];
+    }
+    for (int i = 0; i < 3; i++) {
+        int j = i == 2 ? 0 : i + 1, k = j == 2 ? 0 : j + 1;
+        double p = e1[j] * e2[k], q = e1[k] * e2[j], n = p - q, nb = fabs(p) + fabs(q);
+        num += n * a[i];
+        den += n * r->d[i];
+        bn += nb * fabs(a[i]);
+        bd += nb * fabs(r->d[i]);
+    }
+    const double eps = 16.0 * 0x1p-53;
+    double t = num / den, ed = eps * bd;
+    *err = ed < 0.5 * fabs(den)
+               ? (eps * bn + fabs(t) * ed) / (fabs(den) - ed) + 0x1p-52 * fabs(t)
+               : INFINITY;
+    return t;
+}
+
+/*
+ * The watertight t made certain to float precision. tt = num sz / det is
+ * the watertight form with error bound et (see below); when et is not below
+ * 2^-24 |tt| (finer than the float the reference reports) or does not
+ * decide tt against t_near, the plane form is tried and taken when its own
+ * bound is smaller. It is then clamped into [tt - et, tt + et] (the exact t
+ * lies there too, so clamping only brings it closer) and into [min, max] of
+ * the vertices' offsets along kz times sz, where tt lies up to its own
+ * rounding and where a hit's exact t lies (the hit point is in the
+ * triangle): oracle.c's culling argument (its point 2) stays true. Depends
+ * on the ray and the triangle only, never on the current hit, so the
+ * brute-force loop and the culled oracle, which test in different orders,
+ * get the same t bitwise.
+ */
+static double accel_tri_refine_t_d(const accel_ray_d *r, const float *tri, const double *a,
+                                   const double *z, double tt, double et)
+    __attribute__((noinline, cold));
+static double accel_tri_refine_t_d(const accel_ray_d *r, const float *tri, const double *a,
+                                   const double *z, double tt, double et)
+{
+    double ep, tp = accel_tri_plane_t_d(r, tri, a, &ep);
+    if (!(ep < et) || !isfinite(tp)) return tt;
+    double t0 = z[0] * r->sz, t1 = z[1] * r->sz, t2 = z[2] * r->sz;
+    double lo = fmin(t0, fmin(t1, t2)), hi = fmax(t0, fmax(t1, t2));
+    tp = fmin(fmax(tp, tt - et), tt + et);
+    return fmin(fmax(tp, lo), hi);
+}
+
 /* Watertight test (Woop et al. 2013) in double; hit if t in [t_near, *t]. */
 static inline int accel_tri_watertight_d(const accel_ray_d *r, const float *tri, double *t,
                                          double *u, double *v)
@@ -135,11 +206,31 @@ static inline int accel_tri_watertight_d(const accel_ray_d *r, const float *tri,
         my[i] = fabs(pts[i][r->ky]) + fabs(r->sy * pts[i][r->kz]);
     }
     const double eps = 16.0 * 0x1p-53;
-    if (fabs(U) <= eps * (mx[2] * my[1] + my[2] * mx[1]) &&
-        fabs(V) <= eps * (mx[0] * my[2] + my[0] * mx[2]) &&
-        fabs(W) <= eps * (mx[1] * my[0] + my[1] * mx[0]))
-        return 0;
-    double tt = (U * a[r->kz] + V * b[r->kz] + W * c[r->kz]) * r->sz / det;
+    double eU = eps * (mx[2] * my[1] + my[2] * mx[1]);
+    double eV = eps * (mx[0] * my[2] + my[0] * mx[2]);
+    double eW = eps * (mx[1] * my[0] + my[1] * mx[0]);
+    if (fabs(U) <= eU && fabs(V) <= eV && fabs(W) <= eW) return 0;
+    const double z[3] = {a[r->kz], b[r->kz], c[r->kz]};
+    double num = U * z[0] + V * z[1] + W * z[2];
+    double tt = num * r->sz / det;
+    /* Its error bound, as the float test's (same filter constant): the sum's
+     * rounding plus each edge function's bound carried by its offset, and
+     * det's error (eU + eV + eW) through the division; the shear's rounded
+     * ratios move the direction by a few eps, negligible beside these. For
+     * vertices at 1e30 along kz, the offsets cancel in num and et ~ 1e14
+     * (tests/test_oracle_huge.c). In ordinary scenes et is some tens of
+     * eps times the offsets' size in t units (max |z| |sz|), below
+     * 2^-24 |tt| except for hits at t under about 2^-23 of that size: a ray
+     * leaving a surface it starts on (t ~ 0), where the plane form gives
+     * t = 0 for an origin exactly in the plane instead of +-2^-60 noise.
+     * Primary rays of the built-in scenes keep every answer bitwise. */
+    double za = fabs(z[0]), zb = fabs(z[1]), zc = fabs(z[2]), ed = eU + eV + eW;
+    double en = eps * (fabs(U) * za + fabs(V) * zb + fabs(W) * zc) + eU * za + eV * zb + eW * zc;
+    double et = ed < 0.5 * fabs(det)
+                    ? (fabs(r->sz) * en + fabs(tt) * ed) / (fabs(det) - ed) + eps * fabs(tt)
+                    : INFINITY;
+    if (!(et <= 0x1p-24 * fabs(tt) && fabs(tt - r->t_near) > et))
+        tt = accel_tri_refine_t_d(r, tri, a, z, tt, et);
     if (!(tt >= r->t_near && tt <= *t)) return 0;
     *t = tt;
     *u = V / det;
