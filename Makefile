@@ -17,6 +17,11 @@ ALL_CFLAGS = $(BASE_CFLAGS) $(CFLAGS)
 LDLIBS  += -lm -pthread
 BUILD   ?= build
 BIN     ?= bin
+# Builds use every core unless the caller chose (make -jN): `make test` on a
+# clean clone compiles about 120 files before the tests start.
+ifeq ($(filter -j%,$(MAKEFLAGS)),)
+MAKEFLAGS += -j$(shell getconf _NPROCESSORS_ONLN 2>/dev/null || echo 2)
+endif
 
 # The library's sources and the backend discovery rule (shared with tests/fuzz).
 ROOT :=
