@@ -392,7 +392,7 @@ void exp_anim_fps(exp_ctx *x, exp_anim *a)
                 "update included, %u triangles (20 fps needs the lower end of the interval at 20 "
                 "or more)%s", exp_text_str(&ev), x->rt_size[0], x->rt_size[1], slot[cur].tri_count,
                 x->quick ? "; quick budget: not the lecture's image size or scene"
-                : x->load_start[0] >= 1.0 ? "; the machine was busy (see the load average): these "
+                : exp_busy(x) ? "; the machine was busy (other runnable threads at the start): these "
                 "rates are lower bounds" : "");
     exp_text_free(&ev);
     for (int l = 0; l < nl; l++) L[l].b.kind->destroy(L[l].b.accel), free(L[l].hits), free(L[l].occ), free(L[l].shade);

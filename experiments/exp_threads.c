@@ -185,10 +185,10 @@ static void verdicts(exp_ctx *x, study *st, int max_t, const exp_machine *m)
 {
     if (max_t < 2)
         exp_verdict(x, "threads-linear", EXP_UNTESTABLE, "-", "one thread only in this run");
-    else if (x->load_start[0] >= 1.0 && st->linear < st->kinds)
-        exp_verdict(x, "threads-linear", EXP_UNTESTABLE, "-", "the load average was %.2f at the "
+    else if (exp_busy(x) && st->linear < st->kinds)
+        exp_verdict(x, "threads-linear", EXP_UNTESTABLE, "-", "%.1f other runnable threads at the "
                     "start: other work held some of the %d CPUs, so efficiencies of %s measure "
-                    "the sharing, not the scaling", x->load_start[0], m->logical,
+                    "the sharing, not the scaling", x->others_start, m->logical,
                     exp_text_str(&st->lin_ev));
     else
         exp_verdict(x, "threads-linear", st->linear == st->kinds ? EXP_CONFIRMED
@@ -221,7 +221,7 @@ static void verdicts(exp_ctx *x, study *st, int max_t, const exp_machine *m)
                     max_t, max_t > 1 ? "s" : "", TARGET_FPS, x->rt_size[0], x->rt_size[1],
                     st->rt_yes, st->rt_scenes, exp_text_str(&st->rt_ev),
                     x->quick ? "; quick budget: not the lecture's image size"
-                    : x->load_start[0] >= 1.0 ? "; the machine was busy (see the load average): "
+                    : exp_busy(x) ? "; the machine was busy (other runnable threads at the start): "
                                                 "these rates are lower bounds" : "");
 }
 

@@ -236,11 +236,10 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, cons
             if (one != best && one != bestc) continue;
             exp_est rt = exp_group_speedup(&g, one, t, bit);
             snprintf(what, sizeof what, "`%s` on 2 threads over 1", g.cfg[t].spec);
-            /* A second thread needs a free core: on a busy machine (load
-             * 1 or more at the start, as exp_slow_verdict) a miss says
-             * nothing about the kernel. */
+            /* A second thread needs a free core: on a busy machine
+             * (exp_busy) a miss says nothing about the kernel. */
             const char *v2 = against(&rt, 1.9);
-            if (x->load_start[0] >= 1.0 && strcmp(v2, "met")) v2 = "not testable here (no free core)";
+            if (exp_busy(x) && strcmp(v2, "met")) v2 = "not testable here (no free core)";
             target_row(x, &st->findings, what, bit, &rt, 1.9, v2);
         }
     }
@@ -298,8 +297,8 @@ int main(int argc, char **argv)
                "thread, and the 8-wide kernels once more on 2 threads; ratios are paired per "
                "round, with 95%% bootstrap intervals. A target counts as met when the whole "
                "interval clears it, not met when the whole interval is below it, else a tie; "
-               "2 threads against 1 is not testable when the load average at the start is 1 or "
-               "more (no free core).",
+               "2 threads against 1 is not testable when other threads were runnable at the start "
+               "(half a thread or more on average: no free core).",
                x.rt_size[0], x.rt_size[1]);
     exp_csv(&x, "scene,spec,set,threads,rays,mrays,mrays_lo,mrays_hi,ratio,ratio_lo,ratio_hi,"
                 "build_ms,build_ms_lo,build_ms_hi,build_mtri_per_s,bytes_per_tri,steps_per_ray,"

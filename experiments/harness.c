@@ -153,6 +153,7 @@ void exp_init(exp_ctx *x, int argc, char **argv, const char *name, const char *q
     csv_open(&x->verdicts, vf);
     csv_row(&x->verdicts, "claim,verdict,evidence,scenes,section\n");
     exp_loadavg(x->load_start);
+    x->others_start = exp_others_running();
     x->progress = bench_progress_start(x->quiet ? NULL : stderr, name, x->progress_after * 1e3);
     x->t_start = accel_now_ms();
     fprintf(stderr, "%s: %s\n", name, x->quick ? "quick budget" : "full budget");
@@ -210,10 +211,10 @@ int exp_finish(exp_ctx *x)
     exp_md(x, "\n_%s ran in %.1f s, %.1f s of CPU time (%s budget, %d thread%s unless a table says otherwise; "
               "%d to %d interleaved timed rounds per configuration (at most %d; fewer for slow "
               "passes), samples of at least %.0f ms; images %dx%d and %dx%d; load average %.2f "
-              "at the start, %.2f at the end)._\n",
+              "at the start, %.2f at the end; %.1f other runnable threads at the start)._\n",
            x->name, s, cpu, x->quick ? "quick" : "full", x->threads, x->threads > 1 ? "s" : "",
            x->rounds_lo, x->rounds_hi, x->repeats, x->sample_ms, x->size, x->size, x->rt_size[0],
-           x->rt_size[1], x->load_start[0], load_end[0]);
+           x->rt_size[1], x->load_start[0], load_end[0], x->others_start);
     bench_progress_stop(x->progress);
     x->progress = NULL;
     if (x->csv.bad_rows || x->verdicts.bad_rows) {
@@ -356,8 +357,10 @@ int exp_note_unparsed(exp_ctx *x, const char *spec)
 
 const char *exp_slow_verdict(const exp_ctx *x, const char *verdict)
 {
-    return !strcmp(verdict, EXP_REFUTED) && x->load_start[0] >= 1.0 ? EXP_UNTESTABLE : verdict;
+    return !strcmp(verdict, EXP_REFUTED) && exp_busy(x) ? EXP_UNTESTABLE : verdict;
 }
+
+int exp_busy(const exp_ctx *x) { return !(x->others_start >= 0 && x->others_start < 0.5); }
 
 void exp_note_left(exp_ctx *x, int why)
 {

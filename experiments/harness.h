@@ -82,6 +82,7 @@ typedef struct {
     int status;           /* exit status exp_finish returns (CLI_EXIT_*) */
     double t_start;
     double load_start[3];
+    double others_start;  /* other runnable threads at the start (exp_others_running) */
     csv_file verdicts;    /* DIR/<name>.verdicts.csv */
     int verdict_count;
     int left[EXP_LEFT_KINDS]; /* configurations left out, by reason */
@@ -150,10 +151,14 @@ void exp_verdict(exp_ctx *x, const char *claim, const char *verdict, const char 
  * otherwise not testable (the run was too noisy to tell). */
 #define EXP_NOISY 0.25
 const char *exp_no_difference(double floor);
-/* For a verdict that says "too slow": on a busy machine (a load average of
- * 1 or more at the start) a refutation is not testable here, since the
+/* For a verdict that says "too slow": on a busy machine (exp_busy) a refutation is not testable here, since the
  * measured times are upper bounds of a quiet machine's. */
 const char *exp_slow_verdict(const exp_ctx *x, const char *verdict);
+/* 1 when other threads competed for the cores at the start (on average half
+ * a runnable thread or more besides this experiment, or unknown): a
+ * 2-thread measurement has no free core, a "too slow" verdict is an upper
+ * bound. */
+int exp_busy(const exp_ctx *x);
 /* 1 the first time spec is reported as not in this build in this section. */
 int exp_note_unparsed(exp_ctx *x, const char *spec);
 /* Counts a configuration left out (exp_group does it for its own). */

@@ -28,6 +28,11 @@ typedef struct {
 void exp_machine_read(exp_machine *m);
 /* The 1, 5 and 15 minute load averages; 0 and -1 entries when unreadable. */
 int exp_loadavg(double load[3]);
+/* Runnable threads other than the caller, averaged over samples of
+ * /proc/loadavg's running count taken every 10 ms for about 200 ms: what
+ * competes for the cores now. (The load average cannot say it: during a
+ * report the previous experiment alone holds it at 1.) -1 if unknown. */
+double exp_others_running(void);
 /* The compiler that built this program ("gcc 12.2.0"). */
 const char *exp_compiler(void);
 /* One Markdown table (| item | value |) describing m. */
