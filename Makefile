@@ -45,7 +45,7 @@ EXP_BINS := $(patsubst experiments/%.c,$(BIN)/%,$(wildcard experiments/exp_*.c))
 TEST_SRC := $(wildcard tests/*.c) lab/check.c lab/check_step3.c lab/starter.c \
             experiments/claims.c experiments/stats.c experiments/svg.c
 
-.PHONY: all test report sanitize fuzz clean bench lab FORCE
+.PHONY: all test report sanitize fuzz clean bench lab lab-report FORCE
 all: $(TOOLS) $(EXP_BINS) $(BIN)/mkreport $(BIN)/run_tests
 
 $(FLAGS_STAMP): FORCE
@@ -124,9 +124,17 @@ lab:
 	@mkdir -p lab/out
 	@test -x bin-lab/lab || echo "lab: building bin-lab/ (the first time takes minutes: make -j2 lab uses 2 cores)"
 	@$(MAKE) -s --no-print-directory BUILD=build-lab BIN=bin-lab LAB=1 bin-lab/lab bin-lab/trace \
-	  bin-lab/run_tests $(patsubst $(BIN)/%,bin-lab/%,$(EXP_BINS))
+	  bin-lab/run_tests bin-lab/mkreport $(patsubst $(BIN)/%,bin-lab/%,$(EXP_BINS))
 	@if [ -n "$(STEP)" ]; then ./bin-lab/lab --step $(STEP) --out lab/out; \
 	 else echo "lab: built bin-lab/ (trace, run_tests, experiments) with your kind 'student'; make lab STEP=1..5 checks a step"; fi
+
+# The study's report with the student's kind beside the project's, into
+# lab/out/report/REPORT.md (QUICK=1: the smoke budget, a minute; KINDS=
+# student,bvh,grid: only these kinds; the default adds 'student' to every
+# experiment's own list).
+lab-report: lab
+	BIN=bin-lab GRIDBVH_CFLAGS="$(ALL_CFLAGS) -DGRIDBVH_LAB" CC="$(CC)" KINDS="$(KINDS)" \
+	  ACCEL="$(if $(ACCEL),$(ACCEL),student)" ./experiments/report.sh --dir lab/out/report $(if $(QUICK),--quick,)
 
 clean:
 	rm -rf build build-san bin bin-san build-lab bin-lab

@@ -252,8 +252,7 @@ int main(int argc, char **argv)
     }
     if (!x.quick) x.set_budget_ms = 600, x.build_budget_ms = 800, x.repeats = 5;
     exp_list list;
-    exp_list_make(&x, configs, (int)(sizeof configs / sizeof configs[0]),
-                  "bvh,grid,nested_grid,irregular_grid", &list);
+    exp_list_make(&x, configs, (int)(sizeof configs / sizeof configs[0]), NULL, &list);
     study st = {0};
     for (int i = 0; i < n; i++) measure_scene(&x, &st, scenes[i], &list);
     exp_md(&x, "\n**Findings** (issue 13's targets; \"best single-ray grid\": the grid kind with "

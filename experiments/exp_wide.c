@@ -304,7 +304,7 @@ int main(int argc, char **argv)
                 "build_ms,build_ms_lo,build_ms_hi,build_mtri_per_s,bytes_per_tri,steps_per_ray,"
                 "box_per_ray,prims_per_ray\n");
     exp_list list;
-    exp_list_make(&x, configs, (int)(sizeof configs / sizeof configs[0]), "bvh", &list);
+    exp_list_make(&x, configs, (int)(sizeof configs / sizeof configs[0]), NULL, &list);
     study st = {0};
     for (int i = 0; i < scene_count; i++) measure_scene(&x, &st, scenes[i].spec, scenes[i].div, &list);
     exp_md(&x, "\n**Findings** (best wide single kernel = the 4- or 8-wide single-ray kernel with "

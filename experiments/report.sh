@@ -4,17 +4,23 @@
 #   experiments/report.sh            full budget: REPORT.md + report/ (committed)
 #   experiments/report.sh --quick    smoke budget: build/quick-report/REPORT.md
 #   experiments/report.sh --only exp_sah [--quick]   one experiment
+#   experiments/report.sh --dir D    the report into D/REPORT.md, sections in D/
+#                                    (the lab's `make lab-report`)
 # The environment passes choices through to every experiment:
+#   BIN=bin-lab             the binaries of another build (default bin)
 #   KINDS=grid,bvh          only these kinds (--kinds)
 #   ACCEL="spec spec ..."   more configurations (--accel SPEC, each)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 quick=0
 only=""
+dir=""
+bin="${BIN:-bin}"
 while [ $# -gt 0 ]; do
   case "$1" in
     --quick) quick=1 ;;
     --only) only="$2"; shift ;;
+    --dir) dir="$2"; shift ;;
     *) echo "report.sh: unknown option $1" >&2; exit 2 ;;
   esac
   shift
@@ -24,6 +30,7 @@ if [ "$quick" = 1 ]; then
 else
   out=report; report=REPORT.md; flag=""; budget="full"; links="report/"
 fi
+if [ -n "$dir" ]; then out="$dir"; report="$dir/REPORT.md"; links=""; fi
 mkdir -p "$out"
 # A whole run starts clean (no section of an earlier run survives); --only keeps the others.
 [ -n "$only" ] || rm -f "$out"/*.md "$out"/*.csv "$out"/*.svg "$out"/*.gp
@@ -38,11 +45,11 @@ ran=()
 times=""   # each experiment's own wall time, for the run record
 sum=0
 for e in $order; do
-  [ -x "bin/$e" ] || continue
+  [ -x "$bin/$e" ] || continue
   if [ -n "$only" ] && [ "$only" != "$e" ]; then continue; fi
   echo "== $e" >&2
   t0=$(date +%s)
-  if ! "bin/$e" $flag --out "$out" "${extra[@]}"; then
+  if ! "$bin/$e" $flag --out "$out" "${extra[@]}"; then
     echo "report.sh: $e failed" >&2
     exit 1
   fi
@@ -58,7 +65,7 @@ dirty=$(git status --porcelain --untracked-files=no 2>/dev/null | grep -v -e ' R
 [ -n "$dirty" ] && commit="$commit (with uncommitted changes)"
 commit="$commit, $(git log -1 --format='%cd' --date=format:'%Y-%m-%d %H:%M' 2>/dev/null || true)"
 cc_version=$(${CC:-cc} --version 2>/dev/null | head -1)
-bin/mkreport --out "$out" --report "$report" --links "$links" --budget "$budget" \
+"$bin/mkreport" --out "$out" --report "$report" --links "$links" --budget "$budget" \
   --commit "$commit" --flags "${GRIDBVH_CFLAGS:-see Makefile} (driver: $cc_version)" \
   --run "$((end - start)) s; per experiment: $times (sum $sum s)${KINDS:+; KINDS=$KINDS}${ACCEL:+; ACCEL=$ACCEL}" \
   --load "$load_start (1 minute) before the first experiment, $load_end after the last" \
