@@ -20,6 +20,9 @@
  * split planes; refit boxes hold whole primitives, so they are larger
  * (still conservative, the tree only gets slower).
  *
+ * A wide node's octant child orders (perm) are recomputed from the new
+ * boxes as the collapse computes them.
+ *
  * Nodes come before their children in both layouts (bvh_build.c's
  * compact_nodes, wide_build.c's depth-first numbering), so one backward
  * pass over the node pool sees every child before its parent.
@@ -191,9 +194,11 @@ static void refit_wide(bvh_wide *w, const accel_scene *s, int threads, int boxes
     for (uint32_t i = w->node_count; i-- > 0;) {
         float *rows = pool + floats * i;
         const uint32_t *child = (const uint32_t *)(rows + 6 * wd);
+        int used = 0;
         for (int c = 0; c < wd; c++) {
             uint32_t ref = child[c];
             if (ref == WIDE_EMPTY) continue; /* keeps its empty box */
+            used = c + 1;
             box3 box;
             if (ref & WIDE_LEAF) {
                 box = leaf_box(w, s, ref);
@@ -213,6 +218,9 @@ static void refit_wide(bvh_wide *w, const accel_scene *s, int threads, int boxes
                 rows[(2 * axis + 1) * wd + c] = hi[axis];
             }
         }
+        /* The children's octant order follows their moved centres (it only
+         * orders the traversal: stale, it is slower, never wrong). */
+        bvh_wide_set_perm(rows, wd, used);
     }
 }
 

@@ -5,6 +5,7 @@
  * wide trees, packets and the spatial-split builder; a refit that leaves
  * the boxes stale is caught; other primitive counts are refused.
  */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -219,6 +220,62 @@ TEST(bvh_refit_back_to_frame0_is_the_build)
                    specs[i]);
         }
         free(built), free(moved), free(back);
+        k->destroy(a);
+    }
+    scene_free(&s0);
+    scene_free(&s20);
+}
+
+/* Wide nodes whose octant orders (wide_node.h) do not rank the used
+ * children by their box centres along each octant's diagonal. */
+static uint32_t misordered_nodes(const void *a)
+{
+    const bvh_wide *w = ((const bvh *)a)->wide;
+    const int wd = w->width;
+    const size_t floats = (wd == 8 ? 256 : 128) / sizeof(float);
+    uint32_t bad = 0;
+    for (uint32_t i = 0; i < w->node_count; i++) {
+        const float *rows = (const float *)w->nodes + floats * i;
+        const uint32_t *child = (const uint32_t *)(rows + 6 * wd), *perm = child + wd;
+        int k = 0;
+        while (k < wd && child[k] != WIDE_EMPTY) k++;
+        int ok = 1;
+        for (int o = 0; o < 8; o++) {
+            int base = o < 4 ? o : 7 - o;
+            float prev = -INFINITY;
+            for (int r = 0; r < k; r++) {
+                int c = (int)(perm[r] >> (3 * o) & 7);
+                float cx = 0.5f * rows[0 * wd + c] + 0.5f * rows[1 * wd + c];
+                float cy = 0.5f * rows[2 * wd + c] + 0.5f * rows[3 * wd + c];
+                float cz = 0.5f * rows[4 * wd + c] + 0.5f * rows[5 * wd + c];
+                float key = (base & 1 ? -cx : cx) + (base & 2 ? -cy : cy) + cz;
+                if (o >= 4) key = -key;
+                if (c >= k || key < prev) ok = 0;
+                prev = key;
+            }
+        }
+        bad += !ok;
+    }
+    return bad;
+}
+
+/* After a refit the octant orders follow the moved boxes. */
+TEST(bvh_refit_wide_octant_orders)
+{
+    accel_scene s0, s20;
+    if (!make_frame(0, &s0) || !make_frame(20, &s20)) return;
+    const accel_kind *k;
+    void *a = NULL;
+    accel_build_stats st;
+    accel_error err = {0};
+    CHECKF(accel_build_spec("bvh:width=8", &s0, 1, &k, &a, &st, &err) == 0, "%s", err.msg);
+    if (a) {
+        CHECK(misordered_nodes(a) == 0);
+        accel_update_stats us;
+        CHECK(k->update(a, &s20, 1, &us, &err) == 0);
+        uint32_t bad = misordered_nodes(a);
+        CHECKF(bad == 0, "%u of %u nodes misordered after the refit", bad,
+               ((const bvh *)a)->wide->node_count);
         k->destroy(a);
     }
     scene_free(&s0);
