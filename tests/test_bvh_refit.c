@@ -281,3 +281,78 @@ TEST(bvh_refit_wide_octant_orders)
     scene_free(&s0);
     scene_free(&s20);
 }
+
+/* A 10 x 10 sheet of triangles in z = 0 and 5 spheres above it, moved by
+ * `shift` along x (spheres by 2 * shift: they move relative to the
+ * sheet); triangle `flat` (if < 100) collapsed onto a line. */
+static int sheet_scene(float shift, uint32_t flat, accel_scene *s)
+{
+    scene_builder b = {0};
+    accel_error err = {0};
+    for (uint32_t i = 0; i < 100; i++) {
+        vec3 p = v3(shift + (float)(i % 10), (float)(i / 10), 0.0f);
+        vec3 q = v3_add(p, v3(0.9f, 0, 0)), r = v3_add(p, v3(0, 0.9f, 0));
+        if (i == flat) r = v3_add(p, v3(0.45f, 0, 0));
+        test_add_tri(&b, p, q, r);
+    }
+    for (int i = 0; i < 5; i++)
+        CHECK(scene_builder_add_sphere(&b, v3(2 * shift + 2.0f * (float)i, 5.0f, 2.0f), 0.7f, &err) == 0);
+    return test_finish(&b, "sheet", s);
+}
+
+/* Rays straight down at every triangle's centroid and every sphere's centre. */
+static size_t sheet_bad(const accel_kind *k, const void *a, const accel_scene *s)
+{
+    accel_ray r[105];
+    size_t n = 0;
+    for (uint32_t i = 0; i < s->tri_count + s->sphere_count; i++) {
+        vec3 c = accel_prim_centroid(s, i);
+        memset(&r[n], 0, sizeof r[n]);
+        r[n].ox = c.x, r[n].oy = c.y, r[n].oz = 10.0f;
+        r[n].dx = 0.0f, r[n].dy = 0.0f, r[n].dz = -1.0f;
+        r[n].t_near = 0.0f;
+        r[n].t_far = INFINITY;
+        n++;
+    }
+    accel_hit *ref = test_oracle_hits(s, r, n, TEST_ORACLE_REFERENCE);
+    size_t bad = n;
+    if (ref) {
+        test_diff d = test_trace_diff(k, a, r, n, ref, 1, NULL, NULL);
+        bad = test_diff_bad(&d);
+    }
+    free(ref);
+    return bad;
+}
+
+/* Moved spheres are refit too; a triangle that stops (or starts) being
+ * degenerate changes the set of traced primitives, so update rebuilds. */
+TEST(bvh_refit_spheres_and_degenerate_changes)
+{
+    const char *const specs[] = {"bvh", "bvh:width=4", "bvh:width=8,traverse=packet"};
+    for (int i = 0; i < 3; i++) {
+        accel_scene a0, a1, b1, c1;
+        if (!sheet_scene(0.0f, 37, &a0) || !sheet_scene(0.3f, 37, &a1) ||
+            !sheet_scene(0.3f, 100, &b1) || !sheet_scene(2.0f, 37, &c1))
+            return;
+        CHECK(a0.live_count == 104 && b1.live_count == 105);
+        const accel_kind *k;
+        void *a = NULL;
+        accel_build_stats st;
+        accel_error err = {0};
+        CHECKF(accel_build_spec(specs[i], &a0, 1, &k, &a, &st, &err) == 0, "%s", err.msg);
+        if (!a) continue;
+        accel_update_stats us;
+        CHECK(k->update(a, &a1, 1, &us, &err) == 0 && us.meshes_refit == 1);
+        CHECKF(sheet_bad(k, a, &a1) == 0, "%s: moved spheres", specs[i]);
+        bvh_refit_stale(a, &c1); /* stale boxes: the spheres are missed */
+        CHECKF(sheet_bad(k, a, &c1) > 0, "%s: stale boxes not caught", specs[i]);
+        CHECK(k->update(a, &b1, 1, &us, &err) == 0);
+        CHECKF(us.meshes_rebuilt == 1 && us.meshes_refit == 0, "%s: refit %u rebuilt %u", specs[i],
+               us.meshes_refit, us.meshes_rebuilt);
+        CHECKF(sheet_bad(k, a, &b1) == 0, "%s: triangle 37 no longer degenerate", specs[i]);
+        CHECK(k->update(a, &c1, 1, &us, &err) == 0 && us.meshes_rebuilt == 1);
+        CHECKF(sheet_bad(k, a, &c1) == 0, "%s: triangle 37 degenerate again", specs[i]);
+        k->destroy(a);
+        scene_free(&a0), scene_free(&a1), scene_free(&b1), scene_free(&c1);
+    }
+}
