@@ -218,9 +218,10 @@ void bvh_release(bvh *b);
  * changed (the tree must be rebuilt: -1), or the error code of *err (other
  * primitive counts: refused). bvh_refit_run copies every primitive the tree
  * holds from s again and, with boxes = 1, recomputes every box bottom-up
- * (boxes = 0 leaves stale boxes: the broken refit a test shows failing). */
+ * (boxes = 0 leaves stale boxes: the broken refit a test shows failing);
+ * it fails (out of memory) before it changes anything. */
 int bvh_refit_compatible(const bvh *b, const accel_scene *s, accel_error *err);
-void bvh_refit_run(bvh *b, const accel_scene *s, int threads, int boxes);
+int bvh_refit_run(bvh *b, const accel_scene *s, int threads, int boxes, accel_error *err);
 
 /* Allocates n nodes aligned to BVH_NODE_ALIGN (NULL on failure or overflow). */
 bvh_node *bvh_alloc_nodes(size_t n);

@@ -200,7 +200,8 @@ static int bvh_update(void *a, const accel_scene *scene, int refit, accel_update
     int rc = bvh_refit_compatible(b, scene, err);
     if (rc > 0) return rc;
     if (refit && rc == 0) {
-        bvh_refit_run(b, scene, b->rebuild ? b->rebuild->threads : 1, 1);
+        rc = bvh_refit_run(b, scene, b->rebuild ? b->rebuild->threads : 1, 1, err);
+        if (rc) return rc;
         st->meshes_refit = 1;
     } else {
         rc = bvh_rebuild_on(b, scene, err);
@@ -213,7 +214,7 @@ static int bvh_update(void *a, const accel_scene *scene, int refit, accel_update
 
 void bvh_refit_stale(void *accel, const accel_scene *scene)
 {
-    bvh_refit_run(accel, scene, 1, 0);
+    bvh_refit_run(accel, scene, 1, 0, NULL);
 }
 
 static void bvh_intersect(const void *a, const accel_ray *rays, accel_hit *hits, size_t count,

@@ -141,7 +141,25 @@ static void refit_binary(bvh *b, const accel_scene *s, int threads, int boxes)
 typedef struct {
     bvh_wide *w;
     const accel_scene *s;
+    box3 *block_box; /* per block: its lanes' primitive bounds */
 } block_job;
+
+/* accel_prim_bounds of scene id `id` from its copied slot (the same
+ * operations on the same floats). */
+static box3 slot_bounds(const accel_scene *s, uint32_t id, const float *slot)
+{
+    box3 b = box3_empty();
+    if (id < s->tri_count) {
+        b = box3_grow(b, v3_load(slot));
+        b = box3_grow(b, v3_load(slot + 3));
+        b = box3_grow(b, v3_load(slot + 6));
+    } else {
+        vec3 r = v3(slot[3], slot[3], slot[3]);
+        b.min = v3_sub(v3_load(slot), r);
+        b.max = v3_add(v3_load(slot), r);
+    }
+    return b;
+}
 
 static void copy_blocks(void *p, size_t begin, size_t end, int thread)
 {
@@ -158,36 +176,44 @@ static void copy_blocks(void *p, size_t begin, size_t end, int thread)
             wide_block4 *blk = (wide_block4 *)j->w->blocks + k;
             v = blk->v[0][0], id = blk->id;
         }
+        box3 box = box3_empty();
         for (int lane = 0; lane < bs; lane++) {
             float slot[BVH_SLOT_FLOATS];
             slot_from(j->s, id[lane], slot);
             for (int vtx = 0; vtx < 3; vtx++)
                 for (int axis = 0; axis < 3; axis++)
                     v[(3 * vtx + axis) * bs + lane] = slot[3 * vtx + axis];
+            box = box3_union(box, slot_bounds(j->s, id[lane], slot));
         }
+        if (j->block_box) j->block_box[k] = box;
     }
 }
 
-/* The box of a leaf reference: its lanes' primitive bounds (padding lanes
- * repeat a primitive already counted). */
-static box3 leaf_box(const bvh_wide *w, const accel_scene *s, uint32_t ref)
+/* The box of a leaf reference: its blocks' boxes (padding lanes repeat a
+ * primitive already counted). */
+static box3 leaf_box(const box3 *block_box, uint32_t ref)
 {
     box3 box = box3_empty();
     uint32_t first = wide_leaf_first(ref), blocks = wide_leaf_blocks(ref);
-    for (uint32_t k = first; k < first + blocks; k++)
-        for (int lane = 0; lane < w->block; lane++) {
-            uint32_t id = w->block == 8 ? ((const wide_block8 *)w->blocks)[k].id[lane]
-                                        : ((const wide_block4 *)w->blocks)[k].id[lane];
-            box = box3_union(box, accel_prim_bounds(s, id));
-        }
+    for (uint32_t k = first; k < first + blocks; k++) box = box3_union(box, block_box[k]);
     return box;
 }
 
-static void refit_wide(bvh_wide *w, const accel_scene *s, int threads, int boxes)
+static int refit_wide(bvh_wide *w, const accel_scene *s, int threads, int boxes, accel_error *err)
 {
-    block_job job = {w, s};
+    /* The blocks' boxes come with the (parallel) copy. Allocated before
+     * anything changes, so a failure leaves the tree as it was. */
+    box3 *block_box = NULL;
+    if (boxes) {
+        block_box = malloc((w->block_count ? w->block_count : 1) * sizeof *block_box);
+        if (!block_box) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for the refit");
+    }
+    block_job job = {w, s, block_box};
     accel_parallel_for(w->block_count, 1024, threads, copy_blocks, &job);
-    if (!boxes || w->root == WIDE_EMPTY) return;
+    if (!boxes || w->root == WIDE_EMPTY) {
+        free(block_box);
+        return 0;
+    }
     const int wd = w->width;
     const size_t floats = (wd == 8 ? sizeof(wide_node8) : sizeof(wide_node4)) / sizeof(float);
     float *pool = w->nodes;
@@ -201,7 +227,7 @@ static void refit_wide(bvh_wide *w, const accel_scene *s, int threads, int boxes
             used = c + 1;
             box3 box;
             if (ref & WIDE_LEAF) {
-                box = leaf_box(w, s, ref);
+                box = leaf_box(block_box, ref);
             } else {
                 const float *cr = pool + floats * ref;
                 box = box3_empty();
@@ -222,13 +248,14 @@ static void refit_wide(bvh_wide *w, const accel_scene *s, int threads, int boxes
          * orders the traversal: stale, it is slower, never wrong). */
         bvh_wide_set_perm(rows, wd, used);
     }
+    free(block_box);
+    return 0;
 }
 
-void bvh_refit_run(bvh *b, const accel_scene *s, int threads, int boxes)
+int bvh_refit_run(bvh *b, const accel_scene *s, int threads, int boxes, accel_error *err)
 {
     if (threads < 1) threads = 1;
-    if (b->wide)
-        refit_wide(b->wide, s, threads, boxes);
-    else
-        refit_binary(b, s, threads, boxes);
+    if (b->wide) return refit_wide(b->wide, s, threads, boxes, err);
+    refit_binary(b, s, threads, boxes);
+    return 0;
 }
