@@ -61,18 +61,27 @@ static int prim_finite(const accel_scene *s, uint32_t id)
     return 1;
 }
 
-/* Marks the scene ids a tree holds (mark[id] = 1). */
-static void mark_ids(const bvh *b, uint8_t *mark)
+/* Marks the scene ids a tree holds (mark[id] = 1); 0 when one is not an id
+ * of a scene of `total` primitives (a tree loaded from a file does not know
+ * its scene's sphere count). */
+static int mark_ids(const bvh *b, uint8_t *mark, size_t total)
 {
     if (!b->wide) {
-        for (uint32_t i = 0; i < b->prim_count; i++) mark[b->prim_ids[i]] = 1;
-        return;
+        for (uint32_t i = 0; i < b->prim_count; i++) {
+            if (b->prim_ids[i] >= total) return 0;
+            mark[b->prim_ids[i]] = 1;
+        }
+        return 1;
     }
     const bvh_wide *w = b->wide;
     for (uint32_t k = 0; k < w->block_count; k++)
-        for (int lane = 0; lane < w->block; lane++)
-            mark[w->block == 8 ? ((const wide_block8 *)w->blocks)[k].id[lane]
-                               : ((const wide_block4 *)w->blocks)[k].id[lane]] = 1;
+        for (int lane = 0; lane < w->block; lane++) {
+            uint32_t id = w->block == 8 ? ((const wide_block8 *)w->blocks)[k].id[lane]
+                                        : ((const wide_block4 *)w->blocks)[k].id[lane];
+            if (id >= total) return 0;
+            mark[id] = 1;
+        }
+    return 1;
 }
 
 int bvh_refit_compatible(const bvh *b, const accel_scene *s, accel_error *err)
@@ -87,7 +96,13 @@ int bvh_refit_compatible(const bvh *b, const accel_scene *s, accel_error *err)
     size_t total = (size_t)s->tri_count + s->sphere_count;
     uint8_t *mark = calloc(total ? total : 1, 1);
     if (!mark) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory");
-    mark_ids(b, mark);
+    if (!mark_ids(b, mark, total)) {
+        free(mark);
+        return accel_fail(err, ACCEL_ERR_SPEC,
+                          "bvh: the tree holds primitive ids beyond the new scene's %zu (refit keeps "
+                          "the topology: same primitive counts and ids)",
+                          total);
+    }
     int same = 1;
     for (uint32_t i = 0; same && i < s->live_count; i++) {
         uint32_t id = s->live[i];
