@@ -91,7 +91,7 @@ int bvh_refit_compatible(const bvh *b, const accel_scene *s, accel_error *err)
         return accel_fail(err, ACCEL_ERR_SPEC,
                           "bvh: update from %u triangles and %u spheres to %u and %u (refit keeps the "
                           "topology: same primitive counts and ids)",
-                          b->tri_count, b->scene_prims - b->tri_count, s->tri_count,
+                          b->tri_count, b->scene_prims ? b->scene_prims - b->tri_count : 0, s->tri_count,
                           s->sphere_count);
     size_t total = (size_t)s->tri_count + s->sphere_count;
     uint8_t *mark = calloc(total ? total : 1, 1);
