@@ -158,10 +158,10 @@ vec3 accel_prim_centroid(const accel_scene *s, uint32_t prim);
  * traverses. When build returns, the built structure owns all it reads; the
  * caller's scene may be changed or freed at once, and the structure lives
  * until kind->destroy. Nothing a kind returns points into the scene.
- * The one exception is a kind with an `update` entry (instanced): it
- * follows a caller-owned animated scene frame by frame, so it reads that
- * scene, which must outlive it (its README says so; the ownership test
- * skips it with this reason).
+ * The one exception is instanced: its `update` entry follows a
+ * caller-owned animated scene frame by frame, so it reads that scene, which
+ * must outlive it (its README says so; the ownership test skips it with
+ * this reason). bvh's update copies again from the new scene instead.
  *
  * Every kind starts from the same copy, an accel_prim_store: the scene's
  * live primitives (degenerate triangles left out), triangles first and then

@@ -212,6 +212,17 @@ int bvh_build_run(const accel_scene *scene, const bvh_build_opts *opts, int thre
 /* Frees what bvh_build_run allocated in b. */
 void bvh_release(bvh *b);
 
+/* bvh_refit.c (the kind's update). bvh_refit_compatible: 0 when s holds the
+ * same primitives the tree traces (counts, and the same live, finite ids:
+ * the refit keeps the topology), -1 when the set of traced primitives
+ * changed (the tree must be rebuilt: -1), or the error code of *err (other
+ * primitive counts: refused). bvh_refit_run copies every primitive the tree
+ * holds from s again and, with boxes = 1, recomputes every box bottom-up
+ * (boxes = 0 leaves stale boxes: the broken refit a test shows failing);
+ * it fails (out of memory) before it changes anything. */
+int bvh_refit_compatible(const bvh *b, const accel_scene *s, accel_error *err);
+int bvh_refit_run(bvh *b, const accel_scene *s, int threads, int boxes, accel_error *err);
+
 /* Allocates n nodes aligned to BVH_NODE_ALIGN (NULL on failure or overflow). */
 bvh_node *bvh_alloc_nodes(size_t n);
 /* malloc(n * size) with the product checked (NULL on overflow); n = 0 allocates one byte. */

@@ -93,6 +93,14 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
     return 0;
 }
 
+/* What update needs to build the tree again (refit=0, or a scene whose set
+ * of traced primitives changed). */
+struct bvh_rebuild {
+    bvh_build_opts opts;
+    int traverse, frustum, threads;
+    wide_opts wo;
+};
+
 static size_t bvh_memory(const void *a)
 {
     const bvh *b = a;
@@ -105,6 +113,7 @@ static void bvh_destroy(void *a)
 {
     if (!a) return;
     bvh_wide_free(((bvh *)a)->wide);
+    free(((bvh *)a)->rebuild);
     bvh_release(a);
     free(a);
 }
@@ -133,9 +142,79 @@ static int bvh_kind_build(const accel_scene *scene, const accel_params *params, 
     b->naive = params->naive;
     b->traverse = traverse;
     b->frustum = frustum;
+    b->rebuild = malloc(sizeof *b->rebuild);
+    if (!b->rebuild) {
+        bvh_destroy(b);
+        return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory");
+    }
+    b->rebuild->opts = opts;
+    b->rebuild->traverse = traverse;
+    b->rebuild->frustum = frustum;
+    b->rebuild->threads = threads < 1 ? 1 : threads;
+    b->rebuild->wo = wo;
+    b->rebuild->wo.block = atoi(accel_param_str(params, "block")); /* auto again on a rebuild */
     stats->bytes = bvh_memory(b);
     *out = b;
     return 0;
+}
+
+/* Builds the tree again over `scene` with the options of its first build,
+ * in place (a failure leaves the old tree). */
+static int bvh_rebuild_on(bvh *b, const accel_scene *scene, accel_error *err)
+{
+    const struct bvh_rebuild *r = b->rebuild;
+    if (!r)
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: a tree loaded from a file cannot be rebuilt "
+                                               "(its build options are not stored)");
+    bvh nb;
+    accel_build_stats st;
+    memset(&st, 0, sizeof st);
+    int rc = bvh_build_run(scene, &r->opts, r->threads, &nb, &st, err);
+    int block = r->wo.block ? r->wo.block : scene->sphere_count ? 4 : 8;
+    if (rc == 0 && r->wo.width > 2) {
+        rc = bvh_wide_build(&nb, r->wo.width, block, r->wo.order, r->threads, &st, err);
+        if (rc == 0) nb.wide->packets = r->traverse == BVH_TRAVERSE_PACKET;
+        if (rc) bvh_release(&nb);
+    }
+    if (rc) return rc;
+    nb.naive = b->naive, nb.traverse = b->traverse, nb.frustum = b->frustum;
+    nb.rebuild = b->rebuild;
+    bvh_wide_free(b->wide);
+    bvh_release(b);
+    *b = nb;
+    return 0;
+}
+
+/* accel_kind.update (accel.h): refit = 1 copies the primitives again from
+ * the new scene and refits every box (bvh_refit.c), refit = 0 rebuilds. A
+ * scene with other primitive counts is refused; one whose set of traced
+ * primitives changed (a triangle became or stopped being degenerate, a
+ * coordinate became non-finite) is rebuilt even with refit = 1 (the stats
+ * say so). Nothing of the scene is kept after return. */
+static int bvh_update(void *a, const accel_scene *scene, int refit, accel_update_stats *st,
+                      accel_error *err)
+{
+    bvh *b = a;
+    memset(st, 0, sizeof *st);
+    double t0 = accel_now_ms();
+    int rc = bvh_refit_compatible(b, scene, err);
+    if (rc > 0) return rc;
+    if (refit && rc == 0) {
+        rc = bvh_refit_run(b, scene, b->rebuild ? b->rebuild->threads : 1, 1, err);
+        if (rc) return rc;
+        st->meshes_refit = 1;
+    } else {
+        rc = bvh_rebuild_on(b, scene, err);
+        if (rc) return rc;
+        st->meshes_rebuilt = 1;
+    }
+    st->bottom_ms = accel_now_ms() - t0;
+    return 0;
+}
+
+void bvh_refit_stale(void *accel, const accel_scene *scene)
+{
+    bvh_refit_run(accel, scene, 1, 0, NULL);
 }
 
 static void bvh_intersect(const void *a, const accel_ray *rays, accel_hit *hits, size_t count,
@@ -211,6 +290,7 @@ const accel_kind accel_kind_bvh = {
     .occluded = bvh_occluded,
     .memory = bvh_memory,
     .destroy = bvh_destroy,
+    .update = bvh_update,
     .walk = bvh_walk,
 };
 

@@ -50,6 +50,11 @@ double bvh_sah_cost(const bvh_node *nodes, uint32_t node_count, double ct, doubl
 int bvh_save(const void *accel, const char *path, accel_error *err);
 int bvh_load(const char *path, void **accel_out, accel_error *err);
 
+/* A deliberately broken refit, for tests only: copies the primitives of
+ * `scene` into the tree but leaves every box as it was, so rays miss what
+ * moved out of its old boxes (the kind's update refits the boxes too). */
+void bvh_refit_stale(void *accel, const accel_scene *scene);
+
 #ifdef __cplusplus
 }
 #endif

@@ -244,5 +244,6 @@ int bvh_build_run(const accel_scene *scene, const bvh_build_opts *opts, int thre
     if (rc) return rc;
     out->tri_count = scene->tri_count;
     out->has_spheres = scene->sphere_count > 0;
+    out->scene_prims = scene->tri_count + scene->sphere_count;
     return 0;
 }

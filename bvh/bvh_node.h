@@ -85,7 +85,8 @@ enum { BVH_TRAVERSE_SINGLE = 0, BVH_TRAVERSE_PACKET = 1 };
 #define BVH_AVX 0
 #endif
 
-/* The built structure. Immutable after build. */
+/* The built structure. Immutable after build, but for the kind's update
+ * (bvh_refit.c), which copies the primitives again and refits the boxes. */
 typedef struct bvh {
     bvh_node *nodes;      /* node_count nodes, BVH_NODE_ALIGN-aligned */
     uint32_t node_count;  /* 0 for an empty scene */
@@ -99,6 +100,8 @@ typedef struct bvh {
     int frustum;          /* packets: interval-arithmetic early-out */
     int depth;            /* levels of the tree (a lone leaf is 1) */
     struct bvh_wide *wide; /* width=4|8: the collapsed tree (wide_node.h), else NULL */
+    uint32_t scene_prims; /* the scene's triangles + spheres at build (0: loaded from a file) */
+    struct bvh_rebuild *rebuild; /* the build's options, for update's rebuild (bvh.c); NULL if loaded */
 } bvh;
 
 /* ---- pieces of the traversal kernels -------------------------------------- */

@@ -60,15 +60,14 @@ static uint32_t *node_children(collapse_ctx *x, uint32_t idx)
     return (uint32_t *)(node_rows(x, idx) + 6 * x->width);
 }
 
-/* The octant orders of a node's k used children (see wide_node.h):
+/* The octant orders of a node's k used children (see wide_node.h), the
+ * node's rows at `rows` (its child and perm arrays follow them):
  * children sorted by the projection of their box centre on each octant's
  * diagonal, nearest first (ties by slot); unused slots rank last. The
  * opposite octant (7 - o) gets the reverse order of the used slots. */
-static void set_perm(collapse_ctx *x, uint32_t idx, int k)
+void bvh_wide_set_perm(float *rows, int w, int k)
 {
-    const int w = x->width;
-    const float *rows = node_rows(x, idx);
-    uint32_t *perm = node_children(x, idx) + w;
+    uint32_t *perm = (uint32_t *)(rows + 6 * w) + w;
     float cen[8][3];
     for (int i = 0; i < k; i++)
         for (int axis = 0; axis < 3; axis++)
@@ -163,7 +162,7 @@ static uint32_t collapse(collapse_ctx *x, uint32_t n, int level)
             child[i] = WIDE_EMPTY;
         }
     }
-    set_perm(x, idx, k);
+    bvh_wide_set_perm(node_rows(x, idx), w, k);
     /* Children after their parent, each subtree in one run. */
     for (int i = 0; i < k; i++) {
         uint32_t ref = collapse(x, set[i], level + 1);

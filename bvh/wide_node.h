@@ -148,6 +148,9 @@ struct bvh;
  * kernels do not use. Fills stats->nodes, leaves and depth. */
 int bvh_wide_build(struct bvh *b, int width, int block, int order, int threads,
                    accel_build_stats *stats, accel_error *err);
+/* Recomputes a node's octant orders (perm) from its box rows; its first k
+ * child slots are used (wide_build.c; bvh_refit.c calls it after a refit). */
+void bvh_wide_set_perm(float *rows, int width, int k);
 /* Bytes held by the wide tree (nodes, blocks, the struct itself). */
 size_t bvh_wide_memory(const bvh_wide *w);
 void bvh_wide_free(bvh_wide *w);
