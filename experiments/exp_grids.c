@@ -46,12 +46,6 @@ static void count(study *st, int which, const char *outcome)
 
 static int is_mesh(const char *name) { return strstr(name, ".off") || strstr(name, ".obj") || strstr(name, ".ply"); }
 
-/* "met" when the interval of r lies at or under t, "not met" above it, else a tie. */
-static const char *at_most(const exp_est *r, double t)
-{
-    return r->hi <= t ? "met" : r->lo > t ? "not met" : "a tie with the target (inside the interval)";
-}
-
 /* Time of c relative to bvh on bit (> 1: slower than bvh), paired. */
 static exp_est rel_bvh(const exp_group *g, int bvh, int c, int bit)
 {
@@ -82,7 +76,7 @@ static void findings(exp_ctx *x, study *st, const exp_group *g, const accel_scen
     if (pk >= 0 && g->cfg[pk].ok && grid >= 0) {
         if (g->cfg[grid].ok) {
             exp_est r = exp_group_speedup(g, grid, pk, BENCH_PRIMARY);
-            const char *o = r.lo >= 5 ? "met" : r.hi < 5 ? "not met" : "a tie with the target";
+            const char *o = exp_target_outcome(&r, 5, 1);
             target_row(x, &st->findings, "speed of `grid:traverse=packet` over `grid`",
                        BENCH_PRIMARY, exp_fmt_x(a, sizeof a, &r), "at least 5x", o);
             count(st, 0, o);
@@ -115,9 +109,9 @@ static void findings(exp_ctx *x, study *st, const exp_group *g, const accel_scen
             snprintf(what, sizeof what, "time of the best single-ray grid `%s` over `bvh`",
                      g->cfg[best].spec);
             snprintf(tt, sizeof tt, t > 0 ? "at most %gx" : "-", t);
-            target_row(x, &st->findings, what, bit, exp_fmt_x(a, sizeof a, &r), tt,
-                       t > 0 ? at_most(&r, t) : "no target on this scene");
-            if (t > 0) count(st, 1, at_most(&r, t));
+            const char *o = t > 0 ? exp_target_outcome(&r, t, 0) : "no target on this scene";
+            target_row(x, &st->findings, what, bit, exp_fmt_x(a, sizeof a, &r), tt, o);
+            if (t > 0) count(st, 1, o);
         }
     }
     /* 3. Irregular against nested where nested beats the regular grid. */

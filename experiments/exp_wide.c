@@ -42,12 +42,6 @@ static const double target[3] = {2.8, 3.7, 3.7};
 static int is_coherent(const char *spec) { return strstr(spec, "traverse=packet") != NULL; }
 static int is_wide(const char *spec) { return strstr(spec, "width=4") || strstr(spec, "width=8"); }
 
-/* "met", "not met" or "a tie" of a ratio estimate against a target. */
-static const char *against(const exp_est *r, double t)
-{
-    return r->lo >= t ? "met" : r->hi < t ? "not met" : "a tie with the target (inside the interval)";
-}
-
 typedef struct {
     exp_text findings;
     int met[3], tie[3], scenes;
@@ -219,7 +213,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, cons
         if (best < 0) continue;
         char what[640];
         exp_est r = exp_group_speedup(&g, base, best, bit);
-        const char *v = against(&r, target[k]);
+        const char *v = exp_target_outcome(&r, target[k], 1);
         st->met[k] += !strcmp(v, "met");
         st->tie[k] += v[0] == 'a';
         snprintf(what, sizeof what, "best wide single `%s` over `bvh`", g.cfg[best].spec);
@@ -228,7 +222,8 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, cons
             exp_est rc = exp_group_speedup(&g, best, bestc, bit);
             snprintf(what, sizeof what, "best coherent `%s` over `%s`", g.cfg[bestc].spec,
                      g.cfg[best].spec);
-            target_row(x, &st->findings, what, bit, &rc, k == 0 ? 1.5 : 0, against(&rc, 1.5));
+            target_row(x, &st->findings, what, bit, &rc, k == 0 ? 1.5 : 0,
+                       exp_target_outcome(&rc, 1.5, 1));
         }
         for (int t = first_twin; t < g.count; t++) {
             if (!g.cfg[t].ok) continue;
@@ -238,7 +233,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, cons
             snprintf(what, sizeof what, "`%s` on 2 threads over 1", g.cfg[t].spec);
             /* A second thread needs a free core: on a busy machine
              * (exp_busy) a miss says nothing about the kernel. */
-            const char *v2 = against(&rt, 1.9);
+            const char *v2 = exp_target_outcome(&rt, 1.9, 1);
             if (exp_busy(x) && strcmp(v2, "met")) v2 = "not testable here (no free core)";
             target_row(x, &st->findings, what, bit, &rt, 1.9, v2);
         }
