@@ -151,8 +151,9 @@ void exp_verdict(exp_ctx *x, const char *claim, const char *verdict, const char 
  * otherwise not testable (the run was too noisy to tell). */
 #define EXP_NOISY 0.25
 const char *exp_no_difference(double floor);
-/* For a verdict that says "too slow": on a busy machine (exp_busy) a refutation is not testable here, since the
- * measured times are upper bounds of a quiet machine's. */
+/* For a verdict that says "too slow": on a busy machine (exp_busy) a
+ * refutation is not testable here, since the measured times are upper
+ * bounds of a quiet machine's. */
 const char *exp_slow_verdict(const exp_ctx *x, const char *verdict);
 /* 1 when other threads competed for the cores at the start (on average half
  * a runnable thread or more besides this experiment, or unknown): a
