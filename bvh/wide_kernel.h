@@ -1,9 +1,9 @@
 /*
  * wide_kernel.h - single-ray traversal of a wide BVH with WIDE_NW (4 or 8)
- * A kernel body (C only): included by the .c files of its folder, not part
- * of the interface a C++ program includes.
  * children per node and leaf blocks of WIDE_LB (4 or 8) primitives:
  * closest hit and any hit.
+ * A kernel body (C only): included by the .c files of its folder, not part
+ * of the interface a C++ program includes.
  *
  * A template: wide_trace.c includes it once per (WIDE_NW, WIDE_LB) pair
  * after wide_leaf.h for WIDE_LB (4 and 4 when included alone). It defines
@@ -41,10 +41,6 @@
 #include "core/variant.h"
 #include "wide_node.h"
 #include "wide_simd.h"
-
-#ifdef __cplusplus
-extern "C" {
-#endif
 
 #define WK_CAT_(a, b, c) a##_##b##_##c
 #define WK_CAT(a, b, c) WK_CAT_(a, b, c)
@@ -277,10 +273,6 @@ WIDE_INLINE int WK(visit_node_oct)(const KNODE *n, const WK(node_ray) *r, float 
         unsigned l = (n->perm[rank] >> shift) & 7u;
         if (mask >> l & 1u) sref[sp] = n->child[l], st[sp] = te[l], sp++;
     }
-#ifdef __cplusplus
-}
-#endif
-
 #endif
     *ref = sref[--sp];
     *sp_io = sp;

@@ -1,10 +1,10 @@
 /*
  * wide_leaf.h - one ray against a leaf block of WIDE_LB (4 or 8) primitives:
- * A kernel body (C only): included by the .c files of its folder, not part
- * of the interface a C++ program includes.
  * the watertight test of Woop, Benthin and Wald ("Watertight Ray/Triangle
  * Intersection", JCGT 2(1), 2013) on all lanes at once, with this project's
  * exact fallback.
+ * A kernel body (C only): included by the .c files of its folder, not part
+ * of the interface a C++ program includes.
  *
  * A template: wide_trace.c includes it once per block width, with WIDE_LB
  * defined (4 when included alone). It defines wide_leaf_ray_<LB>,
@@ -30,16 +30,8 @@
 #include "wide_node.h"
 #include "wide_simd.h"
 
-#ifdef __cplusplus
-extern "C" {
-#endif
-
 #ifndef WIDE_LB
 #define WIDE_LB 4
-#ifdef __cplusplus
-}
-#endif
-
 #endif
 
 #define WL_CAT_(a, b) a##_##b
@@ -143,18 +135,45 @@ WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_pr
     LF max_ = LV(add)(LV(abs)(ax_), LV(mul)(r->sxa, aaz)), may_ = LV(add)(LV(abs)(ay_), LV(mul)(r->sya, aaz));
     LF mbx_ = LV(add)(LV(abs)(bx_), LV(mul)(r->sxa, abz)), mby_ = LV(add)(LV(abs)(by_), LV(mul)(r->sya, abz));
     LF mcx_ = LV(add)(LV(abs)(cx_), LV(mul)(r->sxa, acz)), mcy_ = LV(add)(LV(abs)(cy_), LV(mul)(r->sya, acz));
+    /* The cheap bound first: 16u (M_cx M_by + M_cy M_bx), valid too (the
+     * sheared coordinates are at most about M). Lanes it leaves uncertain
+     * get the tight bound of ACCEL_EDGE_FILTER (accel_tri_watertight)
+     * before the double test; the smaller of the two is kept. */
     LF filter = LV(set1)(ACCEL_EDGE_FILTER);
     LF eu = LV(mul)(filter, LV(add)(LV(mul)(mcx_, mby_), LV(mul)(mcy_, mbx_)));
     LF ev = LV(mul)(filter, LV(add)(LV(mul)(max_, mcy_), LV(mul)(may_, mcx_)));
     LF ew = LV(mul)(filter, LV(add)(LV(mul)(mbx_, may_), LV(mul)(mby_, max_)));
-    LF zero = LV(set1)(0.0f);
-    LF neu = LV(sub)(zero, eu), nev = LV(sub)(zero, ev), new_ = LV(sub)(zero, ew);
-    LF sure_neg = LV(or)(LV(or)(LV(lt)(U, neu), LV(lt)(V, nev)), LV(lt)(W, new_));
-    LF sure_pos = LV(or)(LV(or)(LV(gt)(U, eu), LV(gt)(V, ev)), LV(gt)(W, ew));
-    LF edge_ok = LV(and)(LV(and)(LV(gt)(LV(abs)(U), eu), LV(gt)(LV(abs)(V), ev)), LV(gt)(LV(abs)(W), ew));
-    int miss = LV(mask)(LV(and)(sure_neg, sure_pos)) | spheres;
-    int ok = LV(mask)(edge_ok) & ~miss;
-    int unsure = all & ~miss & ~LV(mask)(edge_ok);
+    LF sure_neg, sure_pos, edge_ok;
+    int miss, ok, unsure;
+    for (int pass = 0;; pass++) {
+        LF zero = LV(set1)(0.0f);
+        LF neu = LV(sub)(zero, eu), nev = LV(sub)(zero, ev), new_ = LV(sub)(zero, ew);
+        sure_neg = LV(or)(LV(or)(LV(lt)(U, neu), LV(lt)(V, nev)), LV(lt)(W, new_));
+        sure_pos = LV(or)(LV(or)(LV(gt)(U, eu), LV(gt)(V, ev)), LV(gt)(W, ew));
+        edge_ok = LV(and)(LV(and)(LV(gt)(LV(abs)(U), eu), LV(gt)(LV(abs)(V), ev)), LV(gt)(LV(abs)(W), ew));
+        miss = LV(mask)(LV(and)(sure_neg, sure_pos)) | spheres;
+        ok = LV(mask)(edge_ok) & ~miss;
+        unsure = all & ~miss & ~LV(mask)(edge_ok);
+        if (!unsure || pass) break;
+        LF f2 = LV(set1)(ACCEL_EDGE_FILTER2 / ACCEL_EDGE_FILTER);
+        LF aax = LV(abs)(ax), aay = LV(abs)(ay), abx = LV(abs)(bx), aby = LV(abs)(by);
+        LF acx = LV(abs)(cx), acy = LV(abs)(cy);
+        LF tu = LV(add)(LV(mul)(filter, LV(add)(LV(add)(LV(mul)(acx, mby_), LV(mul)(aby, mcx_)),
+                                                LV(add)(LV(mul)(acy, mbx_), LV(mul)(abx, mcy_)))),
+                        LV(mul)(f2, eu));
+        LF tv = LV(add)(LV(mul)(filter, LV(add)(LV(add)(LV(mul)(aax, mcy_), LV(mul)(acy, max_)),
+                                                LV(add)(LV(mul)(aay, mcx_), LV(mul)(acx, may_)))),
+                        LV(mul)(f2, ev));
+        LF tw = LV(add)(LV(mul)(filter, LV(add)(LV(add)(LV(mul)(abx, may_), LV(mul)(aay, mbx_)),
+                                                LV(add)(LV(mul)(aby, max_), LV(mul)(aax, mby_)))),
+                        LV(mul)(f2, ew));
+        /* The smaller on the uncertain lanes only, as the scalar test does
+         * (a NaN bound stays NaN: the lane stays uncertain). */
+        LF keep = LV(or)(LV(and)(sure_neg, sure_pos), edge_ok);
+        eu = LV(blend)(LV(min)(tu, eu), eu, keep);
+        ev = LV(blend)(LV(min)(tv, ev), ev, keep);
+        ew = LV(blend)(LV(min)(tw, ew), ew, keep);
+    }
     int hit = 0;
     if (ok) {
         /* det and T, and T's bound; compared against [t_near, t] * |det|. */
@@ -168,9 +187,14 @@ WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_pr
         LF sum = LV(add)(LV(add)(LV(mul)(LV(abs)(U), za), LV(mul)(LV(abs)(V), zb)), LV(mul)(LV(abs)(W), zc));
         LF et = LV(add)(LV(add)(LV(add)(LV(mul)(filter, sum), LV(mul)(eu, za)), LV(mul)(ev, zb)),
                         LV(mul)(ew, zc));
-        LF lo = LV(mul)(r->t_near, det), hi = LV(mul)(LV(set1)(*t), det);
-        LF t_out = LV(or)(LV(lt)(T, LV(sub)(lo, et)), LV(gt)(T, LV(add)(hi, et)));
-        LF t_in = LV(and)(LV(gt)(T, LV(add)(lo, et)), LV(lt)(T, LV(sub)(hi, et)));
+        /* det's own error moves the range ends (accel_tri_watertight). */
+        LF ed = LV(add)(LV(add)(eu, ev), ew), dlo = LV(sub)(det, ed), dhi = LV(add)(det, ed);
+        int near_pos = p->t_near >= 0.0f, far_pos = *t >= 0.0f;
+        LF tc = LV(set1)(*t);
+        LF lo_out = LV(mul)(r->t_near, near_pos ? dlo : dhi), lo_in = LV(mul)(r->t_near, near_pos ? dhi : dlo);
+        LF hi_out = LV(mul)(tc, far_pos ? dhi : dlo), hi_in = LV(mul)(tc, far_pos ? dlo : dhi);
+        LF t_out = LV(or)(LV(lt)(T, LV(sub)(lo_out, et)), LV(gt)(T, LV(add)(hi_out, et)));
+        LF t_in = LV(and)(LV(gt)(T, LV(add)(lo_in, et)), LV(lt)(T, LV(sub)(hi_in, et)));
         /* The same classes as vector masks (sure_v) and as bits. */
         LF sure_v = LV(and)(LV(andnot)(t_out, LV(andnot)(LV(and)(sure_neg, sure_pos), edge_ok)), t_in);
         int live = ok & ~LV(mask)(t_out);

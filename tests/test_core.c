@@ -353,3 +353,59 @@ TEST(core_huge_triangle_grazing_origin)
     float t = INFINITY, u, v;
     CHECKF(accel_tri_watertight(&p, tri, &t, &u, &v) == 0, "false hit at t %g", t);
 }
+
+/* The float test decides only what the double test decides the same way:
+ * small triangles far from the origin and from the ray's origin (where the
+ * edge filter's tight bound matters: sheared coordinates tiny next to the
+ * distances), rays aimed at edges, vertices and points a few ULPs off them,
+ * t ranges ending at the hit. Every float answer (hit or miss, and the hit's
+ * t to 1e-3) must equal the double test's. */
+TEST(core_edge_filter_agrees_with_double)
+{
+    int disagree = 0, prepared = 0, total = 0;
+    for (int i = 0; i < 60000; i++) {
+        float rr[12];
+        for (int k = 0; k < 12; k++) rr[k] = rays_rand(11, (uint64_t)i, (uint32_t)k);
+        float scale = powf(10.0f, -4.0f + 4.0f * rr[0]);   /* triangle size 1e-4..1 */
+        float far = powf(10.0f, -1.0f + 5.0f * rr[1]);     /* origin distance 0.1..1e4 */
+        float cx = 1000.0f * (rr[2] - 0.5f), cy = -300.0f * rr[3], cz = 50.0f;
+        float tri[9];
+        for (int k = 0; k < 9; k++) tri[k] = (k % 3 == 0 ? cx : k % 3 == 1 ? cy : cz) +
+                                             scale * (rays_rand(12, (uint64_t)i, (uint32_t)k) - 0.5f);
+        /* Target: a vertex, an edge point or an inside point, nudged by 0..4 ULPs. */
+        int e = (int)(rr[4] * 3.0f) % 3, kind = (int)(rr[5] * 3.0f) % 3;
+        const float *p0 = tri + 3 * e, *p1 = tri + 3 * ((e + 1) % 3), *p2 = tri + 3 * ((e + 2) % 3);
+        float s = rr[6], w = kind == 2 ? 0.3f : 0.0f;
+        float tgt[3];
+        for (int k = 0; k < 3; k++) {
+            float x = kind == 0 ? p0[k] : (1 - s - w) * p0[k] + s * p1[k] + w * p2[k];
+            for (int n = (int)(rr[7] * 5.0f); n > 0; n--) x = nextafterf(x, rr[8] < 0.5f ? -INFINITY : INFINITY);
+            tgt[k] = x;
+        }
+        float d0 = rr[9] - 0.5f, d1 = rr[10] - 0.5f, d2 = rr[11] - 0.5f;
+        float dl = sqrtf(d0 * d0 + d1 * d1 + d2 * d2) + 1e-6f;
+        accel_ray r = {tgt[0] - far * d0 / dl, tgt[1] - far * d1 / dl, tgt[2] - far * d2 / dl, 0,
+                       d0, d1, d2, INFINITY};
+        accel_ray_prep p;
+        if (!accel_prep_ray(&r, &p)) continue;
+        for (int range = 0; range < 2; range++) {
+            float tf = INFINITY, uf, vf;
+            double td = INFINITY, ud, vd;
+            accel_ray_d rd;
+            accel_prep_ray_d(&p, &rd);
+            if (range) { /* a t range ending about at the hit: t decided at its end */
+                if (!accel_tri_watertight_d(&rd, tri, &td, &ud, &vd)) continue;
+                tf = (float)td;
+                td = tf;
+            }
+            int hf = accel_tri_watertight(&p, tri, &tf, &uf, &vf);
+            int hd = accel_tri_watertight_d(&rd, tri, &td, &ud, &vd);
+            total++;
+            /* t: float's T / det on slivers is good to about 1e-5 only */
+            if (hf != hd || (hf && fabs(tf - td) > 1e-3 * fabs(td))) disagree++;
+        }
+        prepared++;
+    }
+    CHECKF(disagree == 0, "%d of %d float answers differ from the double test", disagree, total);
+    CHECKF(prepared > 50000 && total > 80000, "only %d rays prepared, %d answers", prepared, total);
+}
