@@ -50,11 +50,18 @@ static const accel_param_def bvh_params[] = {
      "width=4|8: primitives per SIMD leaf block (auto: 8, or 4 when the scene has spheres)"},
     {"order", ACCEL_PARAM_ENUM, "octant", 0, 0, "dist|octant",
      "width=4|8: hit children sorted by entry distance per ray, or in the node's octant order (compress-store)"},
+    {"first", ACCEL_PARAM_ENUM, "near", 0, 0, "near|left",
+     "width=2, single rays: of two hit children visit the nearer first (the lecture's \"better\"), "
+     "or always the left one (a control for that claim)"},
+    {"pairs", ACCEL_PARAM_ENUM, "line", 0, 0, "line|split",
+     "width=2: sibling pairs in one 64-byte cache line (the lecture's layout), or the node pool "
+     "shifted by 32 bytes so that every pair straddles two lines (a control for that claim)"},
 };
 #define BVH_PARAM_COUNT (sizeof bvh_params / sizeof bvh_params[0])
 
 typedef struct {
     int width, block, order; /* width 2: the binary tree */
+    int first_left, split_pairs; /* width 2: first=left, pairs=split */
 } wide_opts;
 
 static int options_from_params(const accel_params *p, bvh_build_opts *o, int *traverse,
@@ -88,6 +95,12 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
     wo->order = (int)accel_param_num(p, "order");
     if (wo->width == 2 && (accel_param_given(p, "block") || accel_param_given(p, "order")))
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: block and order apply to width=4|8 only");
+    wo->first_left = (int)accel_param_num(p, "first") == 1;
+    wo->split_pairs = (int)accel_param_num(p, "pairs") == 1;
+    if (wo->width > 2 && (accel_param_given(p, "first") || accel_param_given(p, "pairs")))
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: first and pairs apply to width=2 only");
+    if (accel_param_given(p, "first") && *traverse != BVH_TRAVERSE_SINGLE)
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: first applies to traverse=single only");
     if (wo->width > 2 && *frustum)
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: frustum applies to width=2 (wide packets always use it)");
     return 0;
@@ -123,12 +136,13 @@ static int bvh_kind_build(const accel_scene *scene, const accel_params *params, 
 {
     bvh_build_opts opts;
     int traverse, frustum;
-    wide_opts wo = {2, 4, 1};
+    wide_opts wo = {2, 4, 1, 0, 0};
     int rc = options_from_params(params, &opts, &traverse, &frustum, &wo, err);
     if (rc) return rc;
     bvh *b = calloc(1, sizeof *b);
     if (!b) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory");
     rc = bvh_build_run(scene, &opts, threads, b, stats, err);
+    if (rc == 0 && wo.width == 2 && wo.split_pairs) rc = bvh_split_pairs(b, err);
     if (wo.block == 0) wo.block = scene->sphere_count ? 4 : 8;
     if (rc == 0 && wo.width > 2) {
         rc = bvh_wide_build(b, wo.width, wo.block, wo.order, threads < 1 ? 1 : threads, stats, err);
@@ -142,6 +156,7 @@ static int bvh_kind_build(const accel_scene *scene, const accel_params *params, 
     b->naive = params->naive;
     b->traverse = traverse;
     b->frustum = frustum;
+    b->first_left = wo.first_left;
     b->rebuild = malloc(sizeof *b->rebuild);
     if (!b->rebuild) {
         bvh_destroy(b);
@@ -170,6 +185,7 @@ static int bvh_rebuild_on(bvh *b, const accel_scene *scene, accel_error *err)
     accel_build_stats st;
     memset(&st, 0, sizeof st);
     int rc = bvh_build_run(scene, &r->opts, r->threads, &nb, &st, err);
+    if (rc == 0 && r->wo.width == 2 && r->wo.split_pairs) rc = bvh_split_pairs(&nb, err);
     int block = r->wo.block ? r->wo.block : scene->sphere_count ? 4 : 8;
     if (rc == 0 && r->wo.width > 2) {
         rc = bvh_wide_build(&nb, r->wo.width, block, r->wo.order, r->threads, &st, err);
@@ -178,6 +194,7 @@ static int bvh_rebuild_on(bvh *b, const accel_scene *scene, accel_error *err)
     }
     if (rc) return rc;
     nb.naive = b->naive, nb.traverse = b->traverse, nb.frustum = b->frustum;
+    nb.first_left = b->first_left;
     nb.rebuild = b->rebuild;
     bvh_wide_free(b->wide);
     bvh_release(b);
@@ -275,6 +292,10 @@ static const char *const bvh_variants[] = {
     "build=sbvh,width=8",
     "build=sbvh,width=4,traverse=packet",
     "build=sbvh,width=8,traverse=packet",
+    "first=left",
+    "pairs=split",
+    "first=left,pairs=split,traverse=single",
+    "pairs=split,traverse=packet",
     NULL,
 };
 

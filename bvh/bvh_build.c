@@ -128,7 +128,8 @@ static void gather_chunk(void *p, size_t begin, size_t end, int thread)
 
 void bvh_release(bvh *b)
 {
-    free(b->nodes);
+    free(b->nodes_block ? b->nodes_block : (void *)b->nodes);
+    b->nodes_block = NULL;
     free(b->prim_data);
     free(b->prim_ids);
     b->nodes = NULL;
@@ -245,5 +246,22 @@ int bvh_build_run(const accel_scene *scene, const bvh_build_opts *opts, int thre
     out->tri_count = scene->tri_count;
     out->has_spheres = scene->sphere_count > 0;
     out->scene_prims = scene->tri_count + scene->sphere_count;
+    return 0;
+}
+
+/* pairs=split: the nodes moved into a pool that starts 32 bytes past a
+ * 64-byte boundary, so that every sibling pair (nodes 2k and 2k+1, 64 bytes
+ * together) straddles two cache lines. The tree and its answers are
+ * unchanged; only the memory layout differs (the control of exp_sah's
+ * layout verdict). */
+int bvh_split_pairs(bvh *b, accel_error *err)
+{
+    if (b->node_count == 0 || b->nodes_block) return 0;
+    bvh_node *block = bvh_alloc_nodes((size_t)b->node_count + 2);
+    if (!block) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for pairs=split");
+    memcpy(block + 1, b->nodes, (size_t)b->node_count * sizeof(bvh_node));
+    free(b->nodes);
+    b->nodes = block + 1;
+    b->nodes_block = block;
     return 0;
 }

@@ -102,6 +102,8 @@ typedef struct bvh {
     struct bvh_wide *wide; /* width=4|8: the collapsed tree (wide_node.h), else NULL */
     uint32_t scene_prims; /* the scene's triangles + spheres at build (0: loaded from a file) */
     struct bvh_rebuild *rebuild; /* the build's options, for update's rebuild (bvh.c); NULL if loaded */
+    int first_left;       /* first=left: single rays always visit the left hit child first */
+    void *nodes_block;    /* pairs=split: the allocation nodes points 32 bytes into, else NULL */
 } bvh;
 
 /* ---- pieces of the traversal kernels -------------------------------------- */
@@ -184,7 +186,9 @@ static inline box3 bvh_node_box(const bvh_node *n)
  * the packet frustum. */
 static inline unsigned bvh_variant_flags(const bvh *b)
 {
-    return accel_variant_flags(b->naive, b->has_spheres, b->frustum);
+    /* ACCEL_V_OPT: frustum for packets, first=left for single rays */
+    return accel_variant_flags(b->naive, b->has_spheres,
+                               b->traverse == BVH_TRAVERSE_PACKET ? b->frustum : b->first_left);
 }
 
 /* Kernels in bvh_single.c (single rays) and bvh_packet.c (64-ray packets). */

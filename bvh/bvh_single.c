@@ -25,7 +25,7 @@ typedef struct {
 
 static inline __attribute__((always_inline)) void
 trace_ray(const bvh *b, const accel_ray *ray, accel_hit *hit_out, uint8_t *occ_out,
-          accel_counters *c, size_t ray_idx, int naive, int has_spheres, int any_hit)
+          accel_counters *c, size_t ray_idx, int naive, int has_spheres, int any_hit, int left_first)
 {
     accel_hit hit = accel_hit_miss();
     uint32_t steps = 0, boxes = 0, prims = 0;
@@ -63,7 +63,8 @@ trace_ray(const bvh *b, const accel_ray *ray, accel_hit *hit_out, uint8_t *occ_o
                            bvh_slab(&nodes[left + 1], &r, p.t_near, t, &e1) << 1;
                 boxes += 2;
                 if (hits) {
-                    int second = hits == 2 || (hits == 3 && e1 < e0);
+                    /* first=left (a control): the left one whenever it is hit */
+                    int second = hits == 2 || (!left_first && hits == 3 && e1 < e0);
                     stack[sp].node = left + !second;
                     stack[sp].t_entry = second ? e0 : e1;
                     sp += hits == 3;
@@ -102,16 +103,19 @@ trace_ray(const bvh *b, const accel_ray *ray, accel_hit *hit_out, uint8_t *occ_o
  * instructions on shadow rays than either a per-ray or a per-batch test. */
 static inline __attribute__((always_inline)) void
 trace_batch(const bvh *b, const accel_ray *rays, accel_hit *hits, uint8_t *occ, size_t count,
-            accel_counters *c, int naive, int has_spheres, int any_hit)
+            accel_counters *c, int naive, int has_spheres, int any_hit, int left_first)
 {
     for (size_t i = 0; i < count; i++)
-        trace_ray(b, &rays[i], hits, occ, c, i, naive, has_spheres, any_hit);
+        trace_ray(b, &rays[i], hits, occ, c, i, naive, has_spheres, any_hit, left_first);
 }
 
+/* ACCEL_V_OPT selects first=left (bvh_variant_flags). */
 #define SINGLE_HIT(a, r, o, n, c, f)                                                        \
-    trace_batch(a, r, o, NULL, n, c, ((f) & ACCEL_V_NAIVE) != 0, ((f) & ACCEL_V_SPHERES) != 0, 0)
+    trace_batch(a, r, o, NULL, n, c, ((f) & ACCEL_V_NAIVE) != 0, ((f) & ACCEL_V_SPHERES) != 0, 0, \
+                ((f) & ACCEL_V_OPT) != 0)
 #define SINGLE_OCC(a, r, o, n, c, f)                                                        \
-    trace_batch(a, r, NULL, o, n, c, ((f) & ACCEL_V_NAIVE) != 0, ((f) & ACCEL_V_SPHERES) != 0, 1)
+    trace_batch(a, r, NULL, o, n, c, ((f) & ACCEL_V_NAIVE) != 0, ((f) & ACCEL_V_SPHERES) != 0, 1, \
+                ((f) & ACCEL_V_OPT) != 0)
 ACCEL_KERNEL_TABLE(single_hit_table, SINGLE_HIT)
 ACCEL_KERNEL_TABLE(single_occ_table, SINGLE_OCC)
 

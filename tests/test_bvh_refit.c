@@ -71,7 +71,7 @@ static size_t bad_rays(const accel_kind *k, const void *a, const accel_scene *s,
 
 static const char *const refit_specs[] = {
     "bvh", "bvh:width=4", "bvh:width=8", "bvh:width=8,traverse=packet", "bvh:build=sbvh",
-    "bvh:traverse=packet", NULL,
+    "bvh:traverse=packet", "bvh:pairs=split,first=left", NULL,
 };
 
 TEST(bvh_refit_frames_match_oracle)
