@@ -48,8 +48,9 @@ static const accel_param_def bvh_params[] = {
      "children per node: 2 = the lecture's binary tree; 4, 8 = collapsed SIMD nodes (wide_build.c)"},
     {"block", ACCEL_PARAM_ENUM, "auto", 0, 0, "auto|4|8",
      "width=4|8: primitives per SIMD leaf block (auto: 8, or 4 when the scene has spheres)"},
-    {"order", ACCEL_PARAM_ENUM, "octant", 0, 0, "dist|octant",
-     "width=4|8: hit children sorted by entry distance per ray, or in the node's octant order (compress-store)"},
+    {"order", ACCEL_PARAM_ENUM, "octant", 0, 0, "dist|octant|branchy",
+     "width=4|8: hit children sorted by entry distance per ray, or in the node's octant order "
+     "pushed by a compress-store (octant) or by one branch per child (branchy: single rays)"},
     {"first", ACCEL_PARAM_ENUM, "near", 0, 0, "near|left",
      "width=2, single rays: of two hit children visit the nearer first (the lecture's \"better\"), "
      "or always the left one (a control for that claim)"},
@@ -101,6 +102,8 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: first and pairs apply to width=2 only");
     if (accel_param_given(p, "first") && *traverse != BVH_TRAVERSE_SINGLE)
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: first applies to traverse=single only");
+    if (wo->order == WIDE_ORDER_BRANCHY && *traverse != BVH_TRAVERSE_SINGLE)
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: order=branchy applies to traverse=single only");
     if (wo->width > 2 && *frustum)
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: frustum applies to width=2 (wide packets always use it)");
     return 0;
@@ -282,6 +285,8 @@ static const char *const bvh_variants[] = {
     "width=4,build=sah,leaf=256,ct=0",
     "width=8,build=median",
     "width=8,order=dist",
+    "width=8,order=branchy",
+    "width=4,block=4,order=branchy",
     "width=4,block=8,order=dist",
     "width=8,traverse=packet",
     "width=4,block=4,traverse=packet",

@@ -233,7 +233,7 @@ WIDE_INLINE void WK(trace_ray)(const bvh_wide *w, const accel_ray *ray, void *ou
  * branches and the sort of visit_node; the nearest is then entered.
  */
 WIDE_INLINE int WK(visit_node_oct)(const KNODE *n, const WK(node_ray) *r, float t, uint32_t *ref,
-                                   uint32_t *sref, float *st, int *sp_io, int shift)
+                                   uint32_t *sref, float *st, int *sp_io, int shift, int branchy)
 {
     const float *b = n->box[0];
     NF t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->nx), r->ox), r->ix), r->t_near);
@@ -251,6 +251,7 @@ WIDE_INLINE int WK(visit_node_oct)(const KNODE *n, const WK(node_ray) *r, float 
     }
     int sp = *sp_io;
 #if WIDE_AVX && WIDE_NW == 8
+    if (!branchy) {
     /* rank -> child lane for this octant; hit bits in rank order; the
      * ranks of the hits, farthest first (the compress table); composed,
      * the child lane of each stack slot. */
@@ -266,14 +267,24 @@ WIDE_INLINE int WK(visit_node_oct)(const KNODE *n, const WK(node_ray) *r, float 
                         _mm256_permutevar8x32_epi32(_mm256_load_si256((const __m256i *)n->child), lane));
     _mm256_storeu_ps(st + sp, _mm256_permutevar8x32_ps(t0, lane));
     sp += __builtin_popcount(mask);
-#else
+    *ref = sref[--sp];
+    *sp_io = sp;
+    return 1;
+    }
+#endif
+    /* order=branchy (and every build without AVX2): the ranks farthest
+     * first, one branch per child on "hit". The next node's address then
+     * hangs on predicted branches instead of the compress-store's chain of
+     * dependent shuffles (the form of W. Jakob's kernels in tinybvh): it
+     * pays where consecutive rays hit the same children (primary and
+     * shadow rays) and loses to mispredictions on incoherent ones. */
+    (void)branchy;
     float te[WIDE_NW] __attribute__((aligned(32)));
     NV(store)(te, t0);
     for (int rank = WIDE_NW - 1; rank >= 0; rank--) {
         unsigned l = (n->perm[rank] >> shift) & 7u;
         if (mask >> l & 1u) sref[sp] = n->child[l], st[sp] = te[l], sp++;
     }
-#endif
     *ref = sref[--sp];
     *sp_io = sp;
     return 1;
@@ -281,8 +292,9 @@ WIDE_INLINE int WK(visit_node_oct)(const KNODE *n, const WK(node_ray) *r, float 
 
 /* One ray with order=octant. */
 /* One prepared ray (p == NULL: a ray that cannot hit) with order=octant. */
-WIDE_INLINE void WK(trace_prepped_oct)(const bvh_wide *w, const accel_ray_prep *pp, void *out,
-                                       accel_counters *c, size_t ray_idx, unsigned flags, int any_hit)
+WIDE_INLINE void WK(trace_prepped_oct_)(const bvh_wide *w, const accel_ray_prep *pp, void *out,
+                                        accel_counters *c, size_t ray_idx, unsigned flags, int any_hit,
+                                        int branchy)
 {
     accel_hit hit = accel_hit_miss();
     uint32_t steps = 0, boxes = 0, prims = 0, hit_id = ACCEL_MISS;
@@ -309,7 +321,7 @@ WIDE_INLINE void WK(trace_prepped_oct)(const bvh_wide *w, const accel_ray_prep *
             if (ACCEL_STEP_BOUND_BROKEN(c, steps, w->step_bound)) break;
             if (!(ref & WIDE_LEAF)) {
                 boxes += WIDE_NW;
-                if (WK(visit_node_oct)(&nodes[ref], &nr, t, &ref, sref, st, &sp, shift)) continue;
+                if (WK(visit_node_oct)(&nodes[ref], &nr, t, &ref, sref, st, &sp, shift, branchy)) continue;
             } else if (WK(visit_leaf)(w, ref, &lr, p, &t, &hit.u, &hit.v, &hit_id, &prims, c != NULL,
                                       flags, any_hit)) {
                 break;
@@ -330,12 +342,18 @@ WIDE_INLINE void WK(trace_prepped_oct)(const bvh_wide *w, const accel_ray_prep *
     WK(finish)(hit, hit_id, t, out, c, ray_idx, steps, boxes, prims, any_hit);
 }
 
+WIDE_INLINE void WK(trace_prepped_oct)(const bvh_wide *w, const accel_ray_prep *pp, void *out,
+                                       accel_counters *c, size_t ray_idx, unsigned flags, int any_hit)
+{
+    WK(trace_prepped_oct_)(w, pp, out, c, ray_idx, flags, any_hit, 0);
+}
+
 WIDE_INLINE void WK(trace_ray_oct)(const bvh_wide *w, const accel_ray *ray, void *out, accel_counters *c,
-                                   size_t ray_idx, unsigned flags, int any_hit)
+                                   size_t ray_idx, unsigned flags, int any_hit, int branchy)
 {
     accel_ray_prep p;
     int ok = w->root != WIDE_EMPTY && wide_prep_ray(ray, &p);
-    WK(trace_prepped_oct)(w, ok ? &p : NULL, out, c, ray_idx, flags, any_hit);
+    WK(trace_prepped_oct_)(w, ok ? &p : NULL, out, c, ray_idx, flags, any_hit, branchy);
 }
 
 /* The kernels of the variant tables; ACCEL_V_OPT selects order=octant. */
@@ -343,7 +361,7 @@ WIDE_INLINE void WK(wide_closest)(const void *a, const accel_ray *rays, void *ou
                                   accel_counters *c, unsigned flags)
 {
     if (flags & ACCEL_V_OPT)
-        for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 0);
+        for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 0, 0);
     else
         for (size_t i = 0; i < count; i++) WK(trace_ray)(a, &rays[i], out, c, i, flags, 0);
 }
@@ -352,9 +370,22 @@ WIDE_INLINE void WK(wide_any)(const void *a, const accel_ray *rays, void *out, s
                               accel_counters *c, unsigned flags)
 {
     if (flags & ACCEL_V_OPT)
-        for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 1);
+        for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 1, 0);
     else
         for (size_t i = 0; i < count; i++) WK(trace_ray)(a, &rays[i], out, c, i, flags, 1);
+}
+
+/* order=branchy: the octant order with branches (visit_node_oct). */
+WIDE_INLINE void WK(wide_closest_br)(const void *a, const accel_ray *rays, void *out, size_t count,
+                                     accel_counters *c, unsigned flags)
+{
+    for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 0, 1);
+}
+
+WIDE_INLINE void WK(wide_any_br)(const void *a, const accel_ray *rays, void *out, size_t count,
+                                 accel_counters *c, unsigned flags)
+{
+    for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 1, 1);
 }
 
 #undef WK_CAT_

@@ -120,9 +120,10 @@ typedef struct {
 } wide_stack_entry;
 
 /* Ordering of the hit children (parameter order=): per-ray entry
- * distances with branches on the hit count, or the node's precomputed
- * octant order with a compress-store onto the stack. */
-enum { WIDE_ORDER_DIST = 0, WIDE_ORDER_OCTANT = 1 };
+ * distances with branches on the hit count, the node's precomputed octant
+ * order with a compress-store onto the stack, or the octant order pushed
+ * with one branch per child (branchy; single rays only). */
+enum { WIDE_ORDER_DIST = 0, WIDE_ORDER_OCTANT = 1, WIDE_ORDER_BRANCHY = 2 };
 
 /* The wide form of a built bvh (bvh.wide). Immutable after the build. */
 typedef struct bvh_wide {

@@ -43,6 +43,14 @@ ACCEL_KERNEL_TABLE(any_4_4, wide_any_4_4)
 ACCEL_KERNEL_TABLE(any_4_8, wide_any_4_8)
 ACCEL_KERNEL_TABLE(any_8_4, wide_any_8_4)
 ACCEL_KERNEL_TABLE(any_8_8, wide_any_8_8)
+ACCEL_KERNEL_TABLE(bclosest_4_4, wide_closest_br_4_4)
+ACCEL_KERNEL_TABLE(bclosest_4_8, wide_closest_br_4_8)
+ACCEL_KERNEL_TABLE(bclosest_8_4, wide_closest_br_8_4)
+ACCEL_KERNEL_TABLE(bclosest_8_8, wide_closest_br_8_8)
+ACCEL_KERNEL_TABLE(bany_4_4, wide_any_br_4_4)
+ACCEL_KERNEL_TABLE(bany_4_8, wide_any_br_4_8)
+ACCEL_KERNEL_TABLE(bany_8_4, wide_any_br_8_4)
+ACCEL_KERNEL_TABLE(bany_8_8, wide_any_br_8_8)
 ACCEL_KERNEL_TABLE(pclosest_4_4, wide_pclosest_4_4)
 ACCEL_KERNEL_TABLE(pclosest_4_8, wide_pclosest_4_8)
 ACCEL_KERNEL_TABLE(pclosest_8_4, wide_pclosest_8_4)
@@ -52,29 +60,38 @@ ACCEL_KERNEL_TABLE(pany_4_8, wide_pany_4_8)
 ACCEL_KERNEL_TABLE(pany_8_4, wide_pany_8_4)
 ACCEL_KERNEL_TABLE(pany_8_8, wide_pany_8_8)
 
-/* [packets][any hit][width 8][block 8] */
-static const accel_kernel_table *const tables[2][2][2][2] = {
+/* [single | packets | single with order=branchy][any hit][width 8][block 8] */
+static const accel_kernel_table *const tables[3][2][2][2] = {
     {{{&closest_4_4, &closest_4_8}, {&closest_8_4, &closest_8_8}},
      {{&any_4_4, &any_4_8}, {&any_8_4, &any_8_8}}},
     {{{&pclosest_4_4, &pclosest_4_8}, {&pclosest_8_4, &pclosest_8_8}},
      {{&pany_4_4, &pany_4_8}, {&pany_8_4, &pany_8_8}}},
+    {{{&bclosest_4_4, &bclosest_4_8}, {&bclosest_8_4, &bclosest_8_8}},
+     {{&bany_4_4, &bany_4_8}, {&bany_8_4, &bany_8_8}}},
 };
+
+/* Packets keep their own order (octant); order=branchy selects the third
+ * single-ray table. */
+static int table_row(const bvh_wide *w)
+{
+    return w->packets ? 1 : w->order == WIDE_ORDER_BRANCHY ? 2 : 0;
+}
 
 static unsigned kernel_flags(const bvh_wide *w, int naive, int has_spheres)
 {
-    return accel_variant_flags(naive, has_spheres, w->order == WIDE_ORDER_OCTANT);
+    return accel_variant_flags(naive, has_spheres, w->order != WIDE_ORDER_DIST);
 }
 
 void bvh_wide_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hits, size_t count,
                         accel_counters *c, int naive, int has_spheres)
 {
-    accel_run_kernel(tables[w->packets][0][w->width == 8][w->block == 8], w, rays, hits, count, c,
+    accel_run_kernel(tables[table_row(w)][0][w->width == 8][w->block == 8], w, rays, hits, count, c,
                      kernel_flags(w, naive, has_spheres));
 }
 
 void bvh_wide_occluded(const bvh_wide *w, const accel_ray *rays, uint8_t *occ, size_t count,
                        accel_counters *c, int naive, int has_spheres)
 {
-    accel_run_kernel(tables[w->packets][1][w->width == 8][w->block == 8], w, rays, occ, count, c,
+    accel_run_kernel(tables[table_row(w)][1][w->width == 8][w->block == 8], w, rays, occ, count, c,
                      kernel_flags(w, naive, has_spheres));
 }
