@@ -51,6 +51,10 @@ static const accel_param_def bvh_params[] = {
     {"order", ACCEL_PARAM_ENUM, "octant", 0, 0, "dist|octant|branchy",
      "width=4|8: hit children sorted by entry distance per ray, or in the node's octant order "
      "pushed by a compress-store (octant) or by one branch per child (branchy: single rays)"},
+    {"quant", ACCEL_PARAM_BOOL, "0", 0, 1, NULL,
+     "width=8, single rays: child boxes as 8-bit steps from the node's corner, rounded outward "
+     "(128-byte nodes instead of 256; the octant order pushed by branches, as order=branchy; "
+     "update rebuilds) (0/1)"},
     {"first", ACCEL_PARAM_ENUM, "near", 0, 0, "near|left",
      "width=2, single rays: of two hit children visit the nearer first (the lecture's \"better\"), "
      "or always the left one (a control for that claim)"},
@@ -63,6 +67,7 @@ static const accel_param_def bvh_params[] = {
 typedef struct {
     int width, block, order; /* width 2: the binary tree */
     int first_left, split_pairs; /* width 2: first=left, pairs=split */
+    int quant;                   /* width 8: quantized nodes */
 } wide_opts;
 
 static int options_from_params(const accel_params *p, bvh_build_opts *o, int *traverse,
@@ -102,6 +107,10 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: first and pairs apply to width=2 only");
     if (accel_param_given(p, "first") && *traverse != BVH_TRAVERSE_SINGLE)
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: first applies to traverse=single only");
+    wo->quant = (int)accel_param_num(p, "quant");
+    if (wo->quant && (wo->width != 8 || *traverse != BVH_TRAVERSE_SINGLE || accel_param_given(p, "order")))
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: quant=1 applies to width=8 with single rays and "
+                                               "its own order (no order=, no traverse=packet)");
     if (wo->order == WIDE_ORDER_BRANCHY && *traverse != BVH_TRAVERSE_SINGLE)
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: order=branchy applies to traverse=single only");
     if (wo->width > 2 && *frustum)
@@ -139,7 +148,7 @@ static int bvh_kind_build(const accel_scene *scene, const accel_params *params, 
 {
     bvh_build_opts opts;
     int traverse, frustum;
-    wide_opts wo = {2, 4, 1, 0, 0};
+    wide_opts wo = {2, 4, 1, 0, 0, 0};
     int rc = options_from_params(params, &opts, &traverse, &frustum, &wo, err);
     if (rc) return rc;
     bvh *b = calloc(1, sizeof *b);
@@ -148,7 +157,8 @@ static int bvh_kind_build(const accel_scene *scene, const accel_params *params, 
     if (rc == 0 && wo.width == 2 && wo.split_pairs) rc = bvh_split_pairs(b, err);
     if (wo.block == 0) wo.block = scene->sphere_count ? 4 : 8;
     if (rc == 0 && wo.width > 2) {
-        rc = bvh_wide_build(b, wo.width, wo.block, wo.order, threads < 1 ? 1 : threads, stats, err);
+        rc = bvh_wide_build(b, wo.width, wo.block, wo.order, wo.quant, threads < 1 ? 1 : threads, stats,
+                            err);
         if (rc == 0) b->wide->packets = traverse == BVH_TRAVERSE_PACKET;
         if (rc) bvh_release(b);
     }
@@ -191,7 +201,7 @@ static int bvh_rebuild_on(bvh *b, const accel_scene *scene, accel_error *err)
     if (rc == 0 && r->wo.width == 2 && r->wo.split_pairs) rc = bvh_split_pairs(&nb, err);
     int block = r->wo.block ? r->wo.block : scene->sphere_count ? 4 : 8;
     if (rc == 0 && r->wo.width > 2) {
-        rc = bvh_wide_build(&nb, r->wo.width, block, r->wo.order, r->threads, &st, err);
+        rc = bvh_wide_build(&nb, r->wo.width, block, r->wo.order, r->wo.quant, r->threads, &st, err);
         if (rc == 0) nb.wide->packets = r->traverse == BVH_TRAVERSE_PACKET;
         if (rc) bvh_release(&nb);
     }
@@ -219,7 +229,8 @@ static int bvh_update(void *a, const accel_scene *scene, int refit, accel_update
     double t0 = accel_now_ms();
     int rc = bvh_refit_compatible(b, scene, err);
     if (rc > 0) return rc;
-    if (refit && rc == 0) {
+    /* quantized nodes keep no float boxes to refit: rebuilt (the stats say so) */
+    if (refit && rc == 0 && !(b->wide && b->wide->quant)) {
         rc = bvh_refit_run(b, scene, b->rebuild ? b->rebuild->threads : 1, 1, err);
         if (rc) return rc;
         st->meshes_refit = 1;
@@ -297,6 +308,8 @@ static const char *const bvh_variants[] = {
     "build=sbvh,width=8",
     "build=sbvh,width=4,traverse=packet",
     "build=sbvh,width=8,traverse=packet",
+    "width=8,quant=1",
+    "width=8,quant=1,block=4,build=sbvh",
     "first=left",
     "pairs=split",
     "first=left,pairs=split,traverse=single",

@@ -106,15 +106,21 @@ static void walk_wide(const bvh_wide *w, const accel_ray_prep *p, float pad,
             }
             continue;
         }
-        const char *nd = (const char *)w->nodes + node_bytes * top.node;
+        const char *nd = (const char *)w->nodes + (w->quant ? sizeof(wide_qnode8) : node_bytes) * top.node;
         const float *rows = (const float *)nd;
-        const uint32_t *child = (const uint32_t *)(nd + (size_t)6 * W * sizeof(float));
+        const uint32_t *child = w->quant ? ((const wide_qnode8 *)nd)->child
+                                         : (const uint32_t *)(nd + (size_t)6 * W * sizeof(float));
         walk_entry hit[8];
         int n = 0;
         for (int c = 0; c < W; c++) {
             if (child[c] == WIDE_EMPTY) continue;
-            float lo[3] = {rows[0 * W + c], rows[2 * W + c], rows[4 * W + c]};
-            float hi[3] = {rows[1 * W + c], rows[3 * W + c], rows[5 * W + c]};
+            float lo[3], hi[3];
+            if (w->quant) {
+                bvh_wide_qbox((const wide_qnode8 *)nd, c, lo, hi);
+            } else {
+                lo[0] = rows[0 * W + c], lo[1] = rows[2 * W + c], lo[2] = rows[4 * W + c];
+                hi[0] = rows[1 * W + c], hi[1] = rows[3 * W + c], hi[2] = rows[5 * W + c];
+            }
             float e;
             if (!padded_slab(lo, hi, pad, p, t_max, &e)) continue;
             /* Insertion by entry, farthest first: the nearest is pushed last. */

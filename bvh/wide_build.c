@@ -24,6 +24,7 @@
  * Node and block indices depend only on the binary tree, so the wide tree
  * is as deterministic as the binary one (identical for any thread count).
  */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -218,6 +219,91 @@ static void pack_chunk(void *p, size_t begin, size_t end, int thread)
 }
 
 static size_t node_size(int width) { return width == 8 ? sizeof(wide_node8) : sizeof(wide_node4); }
+static size_t tree_node_size(const bvh_wide *w)
+{
+    return w->quant ? sizeof(wide_qnode8) : node_size(w->width);
+}
+
+/* ---- quantized nodes (quant=1) -------------------------------------------------- */
+
+/* 2^e as a float, e in [-126, 127]. */
+static float pow2f(int e)
+{
+    uint32_t u = (uint32_t)(e + 127) << 23;
+    float f;
+    memcpy(&f, &u, 4);
+    return f;
+}
+
+/* The plane the kernel decodes: org + q * step (the product is exact). */
+static float decode(float org, int q, float step)
+{
+    float prod = (float)q * step;
+    return org + prod;
+}
+
+void bvh_wide_qbox(const wide_qnode8 *n, int c, float *lo, float *hi)
+{
+    for (int a = 0; a < 3; a++) {
+        float step = pow2f(n->ex[a]);
+        lo[a] = decode(n->org[a], n->q[2 * a][c], step);
+        hi[a] = decode(n->org[a], n->q[2 * a + 1][c], step);
+    }
+}
+
+/* One axis of a node: the smallest step 2^e whose 255 steps from org reach
+ * every child's upper plane after rounding, and each child's planes rounded
+ * outward. Returns 0 when no exponent up to 127 fits (not for finite boxes). */
+static int quantize_axis(const float *lo, const float *hi, int k, float org, uint8_t *qlo,
+                         uint8_t *qhi, int8_t *ex_out)
+{
+    double top = -INFINITY;
+    for (int i = 0; i < k; i++) top = hi[i] > top ? hi[i] : top;
+    double ext = top - (double)org;
+    int e = -126;
+    if (ext > 0) {
+        e = (int)ceil(log2(ext / 255.0));
+        if (e < -126) e = -126;
+    }
+    for (; e <= 127; e++) {
+        float step = pow2f(e);
+        int ok = 1;
+        for (int i = 0; i < k && ok; i++) {
+            double fl = floor(((double)lo[i] - org) / step), fh = ceil(((double)hi[i] - org) / step);
+            int a = fl < 0 ? 0 : fl > 255 ? 255 : (int)fl;
+            int b = fh < 0 ? 0 : fh > 255 ? 255 : (int)fh;
+            while (a > 0 && !(decode(org, a, step) <= lo[i])) a--;
+            while (b < 255 && !(decode(org, b, step) >= hi[i])) b++;
+            if (!(decode(org, a, step) <= lo[i]) || !(decode(org, b, step) >= hi[i])) ok = 0;
+            qlo[i] = (uint8_t)a, qhi[i] = (uint8_t)b;
+        }
+        if (ok) {
+            *ex_out = (int8_t)e;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* The float node f (k used slots) as a quantized node. */
+static int quantize_node(const wide_node8 *f, wide_qnode8 *q)
+{
+    int k = 0;
+    while (k < 8 && f->child[k] != WIDE_EMPTY) k++;
+    memset(q, 0, sizeof *q);
+    q->count = (uint8_t)k;
+    memcpy(q->child, f->child, sizeof q->child);
+    memcpy(q->perm, f->perm, sizeof q->perm);
+    for (int a = 0; a < 3; a++) {
+        const float *lo = f->box[2 * a], *hi = f->box[2 * a + 1];
+        float org = INFINITY;
+        for (int i = 0; i < k; i++) org = lo[i] < org ? lo[i] : org;
+        if (k == 0) org = 0.0f;
+        q->org[a] = org;
+        if (!quantize_axis(lo, hi, k, org, q->q[2 * a], q->q[2 * a + 1], &q->ex[a])) return 0;
+    }
+    return 1;
+}
 static size_t block_size(int block) { return block == 8 ? sizeof(wide_block8) : sizeof(wide_block4); }
 
 static void *alloc_aligned(size_t n, size_t size)
@@ -230,7 +316,7 @@ static void *alloc_aligned(size_t n, size_t size)
 
 size_t bvh_wide_memory(const bvh_wide *w)
 {
-    return sizeof *w + (size_t)w->node_count * node_size(w->width) +
+    return sizeof *w + (size_t)w->node_count * tree_node_size(w) +
            (size_t)w->block_count * block_size(w->block);
 }
 
@@ -289,13 +375,22 @@ static int collapse_tree(const bvh *b, bvh_wide *w, int threads, accel_error *er
     }
     if (rc == 0) {
         /* Keep exactly the nodes used, aligned. */
-        w->nodes = alloc_aligned(x.node_count, node_size(w->width));
+        w->nodes = alloc_aligned(x.node_count, tree_node_size(w));
         w->blocks = alloc_aligned(x.block_count, block_size(w->block));
         if (!w->nodes || !w->blocks) {
             rc = accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for %u leaf blocks",
                             x.block_count);
+        } else if (w->quant) {
+            const wide_node8 *f = (const wide_node8 *)x.node_box;
+            wide_qnode8 *q = w->nodes;
+            for (uint32_t i = 0; i < x.node_count && rc == 0; i++)
+                if (!quantize_node(&f[i], &q[i]))
+                    rc = accel_fail(err, ACCEL_ERR_RANGE, "bvh: quant=1: a node's boxes do not fit "
+                                                          "8-bit steps of 2^127");
         } else {
             memcpy(w->nodes, x.node_box, (size_t)x.node_count * node_size(w->width));
+        }
+        if (rc == 0 && w->nodes && w->blocks) {
             w->node_count = x.node_count;
             w->leaf_count = x.leaf_count;
             w->block_count = x.block_count;
@@ -310,11 +405,12 @@ static int collapse_tree(const bvh *b, bvh_wide *w, int threads, accel_error *er
     return rc;
 }
 
-int bvh_wide_build(bvh *b, int width, int block, int order, int threads, accel_build_stats *stats,
-                   accel_error *err)
+int bvh_wide_build(bvh *b, int width, int block, int order, int quant, int threads,
+                   accel_build_stats *stats, accel_error *err)
 {
     bvh_wide *w = calloc(1, sizeof *w);
     if (!w) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory");
+    w->quant = quant && width == 8;
     w->width = width;
     w->block = block;
     w->order = order;

@@ -290,15 +290,60 @@ WIDE_INLINE int WK(visit_node_oct)(const KNODE *n, const WK(node_ray) *r, float 
     return 1;
 }
 
+#if WIDE_NW == 8
+/*
+ * quant=1: visit_node_oct on a quantized node. Each plane row is decoded
+ * as org + q * 2^ex (the product exact, the sum rounded as the build
+ * checked it), then the same slab test and the same compress-store; the
+ * lanes past the node's count are masked off.
+ */
+WIDE_INLINE int WK(visit_node_q)(const wide_qnode8 *n, const WK(node_ray) *r, float t, uint32_t *ref,
+                                 uint32_t *sref, float *st, int *sp_io, int shift)
+{
+    const uint8_t *q = n->q[0];
+    NF sx = NV(set1)(wide_pow2f(n->ex[0])), sy = NV(set1)(wide_pow2f(n->ex[1])),
+       sz = NV(set1)(wide_pow2f(n->ex[2]));
+    NF gx = NV(set1)(n->org[0]), gy = NV(set1)(n->org[1]), gz = NV(set1)(n->org[2]);
+    /* node_ray's row offsets count floats of 8-lane rows: here bytes of 8-byte rows */
+    NF nx = NV(add)(gx, NV(mul)(f8_from_u8(q + r->nx), sx)), fx = NV(add)(gx, NV(mul)(f8_from_u8(q + r->fx), sx));
+    NF ny = NV(add)(gy, NV(mul)(f8_from_u8(q + r->ny), sy)), fy = NV(add)(gy, NV(mul)(f8_from_u8(q + r->fy), sy));
+    NF nz = NV(add)(gz, NV(mul)(f8_from_u8(q + r->nz), sz)), fz = NV(add)(gz, NV(mul)(f8_from_u8(q + r->fz), sz));
+    NF t0 = NV(max)(NV(mul)(NV(sub)(nx, r->ox), r->ix), r->t_near);
+    t0 = NV(max)(NV(mul)(NV(sub)(ny, r->oy), r->iy), t0);
+    t0 = NV(max)(NV(mul)(NV(sub)(nz, r->oz), r->iz), t0);
+    NF t1 = NV(min)(NV(mul)(NV(sub)(fx, r->ox), r->ix), NV(set1)(t));
+    t1 = NV(min)(NV(mul)(NV(sub)(fy, r->oy), r->iy), t1);
+    t1 = NV(min)(NV(mul)(NV(sub)(fz, r->oz), r->iz), t1);
+    NF hit = NV(le)(t0, NV(add)(t1, NV(mul)(NV(abs)(t1), NV(set1)(ACCEL_SLAB_PAD))));
+    unsigned mask = (unsigned)NV(mask)(hit) & ((1u << n->count) - 1u);
+    if (!mask) return 0;
+    if (!(mask & (mask - 1))) {
+        *ref = n->child[__builtin_ctz(mask)];
+        return 1;
+    }
+    int sp = *sp_io;
+    float te[WIDE_NW] __attribute__((aligned(32)));
+    NV(store)(te, t0);
+    for (int rank = WIDE_NW - 1; rank >= 0; rank--) {
+        unsigned l = (n->perm[rank] >> shift) & 7u;
+        if (mask >> l & 1u) sref[sp] = n->child[l], st[sp] = te[l], sp++;
+    }
+    *ref = sref[--sp];
+    *sp_io = sp;
+    return 1;
+}
+#endif
+
 /* One ray with order=octant. */
 /* One prepared ray (p == NULL: a ray that cannot hit) with order=octant. */
 WIDE_INLINE void WK(trace_prepped_oct_)(const bvh_wide *w, const accel_ray_prep *pp, void *out,
                                         accel_counters *c, size_t ray_idx, unsigned flags, int any_hit,
-                                        int branchy)
+                                        int branchy, int quant)
 {
     accel_hit hit = accel_hit_miss();
     uint32_t steps = 0, boxes = 0, prims = 0, hit_id = ACCEL_MISS;
     float t = INFINITY;
+    (void)quant; /* used by width 8 only */
     if (pp && w->root != WIDE_EMPTY) {
         /* *pp is read field by field, not copied whole: a struct copy
          * loads in vectors what the prep just stored as scalars, and the
@@ -321,6 +366,13 @@ WIDE_INLINE void WK(trace_prepped_oct_)(const bvh_wide *w, const accel_ray_prep 
             if (ACCEL_STEP_BOUND_BROKEN(c, steps, w->step_bound)) break;
             if (!(ref & WIDE_LEAF)) {
                 boxes += WIDE_NW;
+#if WIDE_NW == 8
+                if (quant) {
+                    if (WK(visit_node_q)((const wide_qnode8 *)w->nodes + ref, &nr, t, &ref, sref, st, &sp,
+                                         shift))
+                        continue;
+                } else
+#endif
                 if (WK(visit_node_oct)(&nodes[ref], &nr, t, &ref, sref, st, &sp, shift, branchy)) continue;
             } else if (WK(visit_leaf)(w, ref, &lr, p, &t, &hit.u, &hit.v, &hit_id, &prims, c != NULL,
                                       flags, any_hit)) {
@@ -345,15 +397,15 @@ WIDE_INLINE void WK(trace_prepped_oct_)(const bvh_wide *w, const accel_ray_prep 
 WIDE_INLINE void WK(trace_prepped_oct)(const bvh_wide *w, const accel_ray_prep *pp, void *out,
                                        accel_counters *c, size_t ray_idx, unsigned flags, int any_hit)
 {
-    WK(trace_prepped_oct_)(w, pp, out, c, ray_idx, flags, any_hit, 0);
+    WK(trace_prepped_oct_)(w, pp, out, c, ray_idx, flags, any_hit, 0, 0);
 }
 
 WIDE_INLINE void WK(trace_ray_oct)(const bvh_wide *w, const accel_ray *ray, void *out, accel_counters *c,
-                                   size_t ray_idx, unsigned flags, int any_hit, int branchy)
+                                   size_t ray_idx, unsigned flags, int any_hit, int branchy, int quant)
 {
     accel_ray_prep p;
     int ok = w->root != WIDE_EMPTY && wide_prep_ray(ray, &p);
-    WK(trace_prepped_oct_)(w, ok ? &p : NULL, out, c, ray_idx, flags, any_hit, branchy);
+    WK(trace_prepped_oct_)(w, ok ? &p : NULL, out, c, ray_idx, flags, any_hit, branchy, quant);
 }
 
 /* The kernels of the variant tables; ACCEL_V_OPT selects order=octant. */
@@ -361,7 +413,7 @@ WIDE_INLINE void WK(wide_closest)(const void *a, const accel_ray *rays, void *ou
                                   accel_counters *c, unsigned flags)
 {
     if (flags & ACCEL_V_OPT)
-        for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 0, 0);
+        for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 0, 0, 0);
     else
         for (size_t i = 0; i < count; i++) WK(trace_ray)(a, &rays[i], out, c, i, flags, 0);
 }
@@ -370,22 +422,35 @@ WIDE_INLINE void WK(wide_any)(const void *a, const accel_ray *rays, void *out, s
                               accel_counters *c, unsigned flags)
 {
     if (flags & ACCEL_V_OPT)
-        for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 1, 0);
+        for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 1, 0, 0);
     else
         for (size_t i = 0; i < count; i++) WK(trace_ray)(a, &rays[i], out, c, i, flags, 1);
+}
+
+/* quant=1 (width 8): quantized nodes, octant order with branches. */
+WIDE_INLINE void WK(wide_closest_q)(const void *a, const accel_ray *rays, void *out, size_t count,
+                                    accel_counters *c, unsigned flags)
+{
+    for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 0, 1, 1);
+}
+
+WIDE_INLINE void WK(wide_any_q)(const void *a, const accel_ray *rays, void *out, size_t count,
+                                accel_counters *c, unsigned flags)
+{
+    for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 1, 1, 1);
 }
 
 /* order=branchy: the octant order with branches (visit_node_oct). */
 WIDE_INLINE void WK(wide_closest_br)(const void *a, const accel_ray *rays, void *out, size_t count,
                                      accel_counters *c, unsigned flags)
 {
-    for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 0, 1);
+    for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 0, 1, 0);
 }
 
 WIDE_INLINE void WK(wide_any_br)(const void *a, const accel_ray *rays, void *out, size_t count,
                                  accel_counters *c, unsigned flags)
 {
-    for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 1, 1);
+    for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 1, 1, 0);
 }
 
 #undef WK_CAT_

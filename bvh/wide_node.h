@@ -83,6 +83,30 @@ typedef struct {
     uint32_t id[4];
 } wide_block4;
 
+/*
+ * quant=1 (width 8, single rays): the node's child boxes as 8-bit offsets
+ * from the node's own lower corner org, in steps of 2^ex[axis] per axis,
+ * rounded outward (a decoded box always holds the child's box: the build
+ * checks every decoded plane with the kernel's own float operations,
+ * org + q * 2^ex, whose product is exact). 128 bytes, two cache lines:
+ *   offset  0  uint8 q[6][8]   rows lo_x, hi_x, lo_y, hi_y, lo_z, hi_z
+ *   offset 48  float org[3]
+ *   offset 60  int8 ex[3], uint8 count (used child slots, the first ones)
+ *   offset 64  uint32 child[8], offset 96 uint32 perm[8] (as wide_node8)
+ * After the collapse the float nodes are freed: the quantized pool is the
+ * only one (refit rebuilds such a tree; the walk decodes the boxes).
+ */
+typedef struct {
+    uint8_t q[6][8];
+    float org[3];
+    int8_t ex[3];
+    uint8_t count;
+    uint32_t child[8];
+    uint32_t perm[8];
+} wide_qnode8;
+
+static_assert(sizeof(wide_qnode8) == 128, "a quantized 8-wide node is two cache lines");
+static_assert(offsetof(wide_qnode8, child) == 64, "child references start the second line");
 static_assert(sizeof(wide_node8) == 256, "an 8-wide node is four cache lines");
 static_assert(offsetof(wide_node8, child) == 192, "child references follow the 6 box rows");
 static_assert(sizeof(wide_node4) == 128, "a 4-wide node is two cache lines");
@@ -131,6 +155,7 @@ typedef struct bvh_wide {
     int block;            /* primitives per leaf block: 4 or 8 */
     int order;            /* WIDE_ORDER_*: how hit children are ordered */
     int packets;          /* traverse=packet: 64-ray packets (wide_packet.h) */
+    int quant;            /* quant=1: nodes are wide_qnode8 (width 8 only) */
     uint32_t root;        /* reference of the root, WIDE_EMPTY for an empty scene */
     uint32_t node_count;  /* wide nodes */
     uint32_t leaf_count;  /* leaves */
@@ -147,11 +172,13 @@ struct bvh;
 /* Collapses the built binary tree of b into b->wide (width 4 or 8, leaf
  * blocks of `block` primitives) and frees the binary pools, which the wide
  * kernels do not use. Fills stats->nodes, leaves and depth. */
-int bvh_wide_build(struct bvh *b, int width, int block, int order, int threads,
+int bvh_wide_build(struct bvh *b, int width, int block, int order, int quant, int threads,
                    accel_build_stats *stats, accel_error *err);
 /* Recomputes a node's octant orders (perm) from its box rows; its first k
  * child slots are used (wide_build.c; bvh_refit.c calls it after a refit). */
 void bvh_wide_set_perm(float *rows, int width, int k);
+/* The decoded box of child c of a quantized node (lo[3], hi[3]). */
+void bvh_wide_qbox(const wide_qnode8 *n, int c, float *lo, float *hi);
 /* Bytes held by the wide tree (nodes, blocks, the struct itself). */
 size_t bvh_wide_memory(const bvh_wide *w);
 void bvh_wide_free(bvh_wide *w);

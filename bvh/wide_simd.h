@@ -166,6 +166,30 @@ WIDE_INLINE float f8_hmin(f8 a)
 WIDE_GENERIC(8)
 #endif
 
+/* 2^e as a float, e in [-126, 127] (quantized node steps). */
+WIDE_INLINE float wide_pow2f(int e)
+{
+    uint32_t u = (uint32_t)(e + 127) << 23;
+    float f;
+    memcpy(&f, &u, 4);
+    return f;
+}
+
+/* Eight unsigned bytes as eight floats (exact): quantized node rows. */
+#if WIDE_AVX
+WIDE_INLINE f8 f8_from_u8(const uint8_t *p)
+{
+    return _mm256_cvtepi32_ps(_mm256_cvtepu8_epi32(_mm_loadl_epi64((const __m128i *)p)));
+}
+#else
+WIDE_INLINE f8 f8_from_u8(const uint8_t *p)
+{
+    float x[8];
+    for (int i = 0; i < 8; i++) x[i] = (float)p[i];
+    return f8_load(x);
+}
+#endif
+
 /* |a| and the sign bits of a, both widths. */
 WIDE_INLINE f4 f4_abs(f4 a) { return f4_andnot(f4_set1(-0.0f), a); }
 WIDE_INLINE f4 f4_signs(f4 a) { return f4_and(f4_set1(-0.0f), a); }

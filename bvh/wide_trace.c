@@ -51,6 +51,10 @@ ACCEL_KERNEL_TABLE(bany_4_4, wide_any_br_4_4)
 ACCEL_KERNEL_TABLE(bany_4_8, wide_any_br_4_8)
 ACCEL_KERNEL_TABLE(bany_8_4, wide_any_br_8_4)
 ACCEL_KERNEL_TABLE(bany_8_8, wide_any_br_8_8)
+ACCEL_KERNEL_TABLE(qclosest_8_4, wide_closest_q_8_4)
+ACCEL_KERNEL_TABLE(qclosest_8_8, wide_closest_q_8_8)
+ACCEL_KERNEL_TABLE(qany_8_4, wide_any_q_8_4)
+ACCEL_KERNEL_TABLE(qany_8_8, wide_any_q_8_8)
 ACCEL_KERNEL_TABLE(pclosest_4_4, wide_pclosest_4_4)
 ACCEL_KERNEL_TABLE(pclosest_4_8, wide_pclosest_4_8)
 ACCEL_KERNEL_TABLE(pclosest_8_4, wide_pclosest_8_4)
@@ -60,21 +64,24 @@ ACCEL_KERNEL_TABLE(pany_4_8, wide_pany_4_8)
 ACCEL_KERNEL_TABLE(pany_8_4, wide_pany_8_4)
 ACCEL_KERNEL_TABLE(pany_8_8, wide_pany_8_8)
 
-/* [single | packets | single with order=branchy][any hit][width 8][block 8] */
-static const accel_kernel_table *const tables[3][2][2][2] = {
+/* [single | packets | single with order=branchy | quantized (width 8 only:
+ * the width-4 slots are never selected)][any hit][width 8][block 8] */
+static const accel_kernel_table *const tables[4][2][2][2] = {
     {{{&closest_4_4, &closest_4_8}, {&closest_8_4, &closest_8_8}},
      {{&any_4_4, &any_4_8}, {&any_8_4, &any_8_8}}},
     {{{&pclosest_4_4, &pclosest_4_8}, {&pclosest_8_4, &pclosest_8_8}},
      {{&pany_4_4, &pany_4_8}, {&pany_8_4, &pany_8_8}}},
     {{{&bclosest_4_4, &bclosest_4_8}, {&bclosest_8_4, &bclosest_8_8}},
      {{&bany_4_4, &bany_4_8}, {&bany_8_4, &bany_8_8}}},
+    {{{&bclosest_4_4, &bclosest_4_8}, {&qclosest_8_4, &qclosest_8_8}},
+     {{&bany_4_4, &bany_4_8}, {&qany_8_4, &qany_8_8}}},
 };
 
 /* Packets keep their own order (octant); order=branchy selects the third
- * single-ray table. */
+ * single-ray table, quant=1 the fourth (quantized nodes, branchy push). */
 static int table_row(const bvh_wide *w)
 {
-    return w->packets ? 1 : w->order == WIDE_ORDER_BRANCHY ? 2 : 0;
+    return w->packets ? 1 : w->quant ? 3 : w->order == WIDE_ORDER_BRANCHY ? 2 : 0;
 }
 
 static unsigned kernel_flags(const bvh_wide *w, int naive, int has_spheres)

@@ -7,7 +7,8 @@
  *
  * Every kernel of a scene is measured in the same interleaved rounds
  * (group.h): one exp_group per scene holds bvh, bvh:width=4|8 single and
- * coherent, the 8-wide single-ray kernel with order=branchy, and the 8-wide kernels again on 2 threads, so every ratio is a
+ * coherent, the 8-wide single-ray kernel with order=branchy and on
+ * quantized nodes (quant=1), and the 8-wide kernels again on 2 threads, so every ratio is a
  * paired per-round ratio with its bootstrap interval. Builds are timed
  * apart, in their own interleaved rounds, once per tree (the coherent
  * kernels trace the same tree). Slow scenes get fewer rounds: a measured
@@ -28,11 +29,15 @@
  * branches instead of the compress-store: the same tree and counts, so
  * measured although exp_group would call it "the same structure". */
 #define BRANCHY "bvh:width=8,order=branchy"
+/* The 8-wide tree with quantized child boxes (128-byte nodes; its push is
+ * order=branchy's, so that is the kernel to compare it with). */
+#define QUANT "bvh:width=8,quant=1"
 
 static const char *const configs[] = {"bvh",
                                       "bvh:width=4",
                                       "bvh:width=8",
                                       BRANCHY,
+                                      QUANT,
                                       "bvh:traverse=packet",
                                       "bvh:width=4,traverse=packet",
                                       "bvh:width=8,traverse=packet"};
@@ -160,7 +165,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, cons
     g.collapse_ms = x->quick ? 500 : 3000;
     g.min_rounds = 3; /* every ratio gets an interval, on the big scenes too */
     for (int i = 0; i < list->count; i++) {
-        g.keep_same = !strcmp(list->spec[i], BRANCHY);
+        g.keep_same = !strcmp(list->spec[i], BRANCHY) || !strcmp(list->spec[i], QUANT);
         exp_group_add(&g, list->spec[i], 1);
         g.keep_same = 0;
     }

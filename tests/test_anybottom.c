@@ -65,6 +65,7 @@ TEST(anybottom_every_kind_exact)
         if (accel_kinds[i]->walk) snprintf(bottoms[nb++], 64, "%s:", accel_kinds[i]->name);
     snprintf(bottoms[nb++], 64, "bvh:width=4");
     snprintf(bottoms[nb++], 64, "bvh:width=8;leaf=1");
+    snprintf(bottoms[nb++], 64, "bvh:width=8;quant=1"); /* decoded boxes */
     snprintf(bottoms[nb++], 64, "nested_grid:layout=compact"); /* no nodes: the store's walk */
     CHECKF(nb >= 7, "only %zu bottom kinds with a walk", nb);
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
