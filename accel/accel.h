@@ -178,6 +178,20 @@ typedef struct {
     uint32_t *scene_id; /* local id -> the scene's primitive id */
 } accel_prim_store;
 
+/* Writes ray i's answer h, found over the store's local ids: to hits[i]
+ * with its primitive mapped back to the scene's id, or, when occ is not
+ * NULL (an any-hit query), whether it hit to occ[i]. */
+static inline void accel_prim_store_answer(const accel_prim_store *st, accel_hit h, accel_hit *hits,
+                                           uint8_t *occ, size_t i)
+{
+    if (occ) {
+        occ[i] = h.prim != ACCEL_MISS;
+        return;
+    }
+    if (h.prim != ACCEL_MISS) h.prim = st->scene_id[h.prim];
+    hits[i] = h;
+}
+
 int accel_prim_store_build(const accel_scene *scene, int reorder, accel_prim_store *out,
                            accel_error *err);
 void accel_prim_store_free(accel_prim_store *st);

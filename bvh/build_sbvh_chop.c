@@ -26,18 +26,6 @@ static inline box3 box_clip(box3 a, box3 b)
     return a;
 }
 
-static inline float round_down(double d)
-{
-    float f = (float)d;
-    return (double)f > d ? nextafterf(f, -INFINITY) : f;
-}
-
-static inline float round_up(double d)
-{
-    float f = (float)d;
-    return (double)f < d ? nextafterf(f, INFINITY) : f;
-}
-
 typedef struct {
     double lo[3], hi[3];
 } dbox;
@@ -61,8 +49,8 @@ static box3 dbox_to_box3(const dbox *b, int outward)
 {
     box3 r;
     if (outward) {
-        r.min = v3(round_down(b->lo[0]), round_down(b->lo[1]), round_down(b->lo[2]));
-        r.max = v3(round_up(b->hi[0]), round_up(b->hi[1]), round_up(b->hi[2]));
+        r.min = v3(accel_float_down(b->lo[0]), accel_float_down(b->lo[1]), accel_float_down(b->lo[2]));
+        r.max = v3(accel_float_up(b->hi[0]), accel_float_up(b->hi[1]), accel_float_up(b->hi[2]));
     } else {
         r.min = v3((float)b->lo[0], (float)b->lo[1], (float)b->lo[2]);
         r.max = v3((float)b->hi[0], (float)b->hi[1], (float)b->hi[2]);

@@ -144,11 +144,7 @@ igrid_kernel(const igrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
             }
         }
     done:
-        if (h.prim != ACCEL_MISS) h.prim = g->store.scene_id[h.prim];
-        if (occ)
-            occ[i] = h.prim != ACCEL_MISS;
-        else
-            hits[i] = h;
+        accel_prim_store_answer(&g->store, h, hits, occ, i);
         if (c) accel_count_ray(c, i, steps, empty, boxes, tests, skips);
     }
 }

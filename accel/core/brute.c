@@ -83,11 +83,7 @@ brute_kernel(const brute_accel *b, const accel_ray *rays, accel_hit *hits, uint8
                 }
             }
         }
-        if (h.prim != ACCEL_MISS) h.prim = b->store.scene_id[h.prim];
-        if (occ)
-            occ[i] = h.prim != ACCEL_MISS;
-        else
-            hits[i] = h;
+        accel_prim_store_answer(&b->store, h, hits, occ, i);
         if (c) accel_count_ray(c, i, 0, 0, 0, tests, 0);
     }
 }
