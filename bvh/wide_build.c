@@ -226,28 +226,12 @@ static size_t tree_node_size(const bvh_wide *w)
 
 /* ---- quantized nodes (quant=1) -------------------------------------------------- */
 
-/* 2^e as a float, e in [-126, 127]. */
-static float pow2f(int e)
-{
-    uint32_t u = (uint32_t)(e + 127) << 23;
-    float f;
-    memcpy(&f, &u, 4);
-    return f;
-}
-
-/* The plane the kernel decodes: org + q * step (the product is exact). */
-static float decode(float org, int q, float step)
-{
-    float prod = (float)q * step;
-    return org + prod;
-}
-
 void bvh_wide_qbox(const wide_qnode8 *n, int c, float *lo, float *hi)
 {
     for (int a = 0; a < 3; a++) {
-        float step = pow2f(n->ex[a]);
-        lo[a] = decode(n->org[a], n->q[2 * a][c], step);
-        hi[a] = decode(n->org[a], n->q[2 * a + 1][c], step);
+        float step = wide_qstep(n->ex[a]);
+        lo[a] = wide_qdecode(n->org[a], n->q[2 * a][c], step);
+        hi[a] = wide_qdecode(n->org[a], n->q[2 * a + 1][c], step);
     }
 }
 
@@ -266,15 +250,15 @@ static int quantize_axis(const float *lo, const float *hi, int k, float org, uin
         if (e < -126) e = -126;
     }
     for (; e <= 127; e++) {
-        float step = pow2f(e);
+        float step = wide_qstep(e);
         int ok = 1;
         for (int i = 0; i < k && ok; i++) {
             double fl = floor(((double)lo[i] - org) / step), fh = ceil(((double)hi[i] - org) / step);
             int a = fl < 0 ? 0 : fl > 255 ? 255 : (int)fl;
             int b = fh < 0 ? 0 : fh > 255 ? 255 : (int)fh;
-            while (a > 0 && !(decode(org, a, step) <= lo[i])) a--;
-            while (b < 255 && !(decode(org, b, step) >= hi[i])) b++;
-            if (!(decode(org, a, step) <= lo[i]) || !(decode(org, b, step) >= hi[i])) ok = 0;
+            while (a > 0 && !(wide_qdecode(org, a, step) <= lo[i])) a--;
+            while (b < 255 && !(wide_qdecode(org, b, step) >= hi[i])) b++;
+            if (!(wide_qdecode(org, a, step) <= lo[i]) || !(wide_qdecode(org, b, step) >= hi[i])) ok = 0;
             qlo[i] = (uint8_t)a, qhi[i] = (uint8_t)b;
         }
         if (ok) {

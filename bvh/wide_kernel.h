@@ -73,6 +73,31 @@ WIDE_INLINE void WK(node_setup)(WK(node_ray) *r, const accel_ray_prep *p)
 }
 
 /*
+ * The slab test of one ray against the W children of a node, given as the
+ * six plane rows the ray's signs pick (near and far on each axis): the
+ * entry distances in *t0 and the hit lanes as a mask vector.
+ */
+WIDE_INLINE NF WK(slab_planes)(NF nx, NF fx, NF ny, NF fy, NF nz, NF fz, const WK(node_ray) *r, float t,
+                               NF *t0_out)
+{
+    NF t0 = NV(max)(NV(mul)(NV(sub)(nx, r->ox), r->ix), r->t_near);
+    t0 = NV(max)(NV(mul)(NV(sub)(ny, r->oy), r->iy), t0);
+    t0 = NV(max)(NV(mul)(NV(sub)(nz, r->oz), r->iz), t0);
+    NF t1 = NV(min)(NV(mul)(NV(sub)(fx, r->ox), r->ix), NV(set1)(t));
+    t1 = NV(min)(NV(mul)(NV(sub)(fy, r->oy), r->iy), t1);
+    t1 = NV(min)(NV(mul)(NV(sub)(fz, r->oz), r->iz), t1);
+    *t0_out = t0;
+    return NV(le)(t0, NV(add)(t1, NV(mul)(NV(abs)(t1), NV(set1)(ACCEL_SLAB_PAD))));
+}
+
+/* The same on a float node's box rows. */
+WIDE_INLINE NF WK(slab_rows)(const float *b, const WK(node_ray) *r, float t, NF *t0)
+{
+    return WK(slab_planes)(NV(load)(b + r->nx), NV(load)(b + r->fx), NV(load)(b + r->ny),
+                           NV(load)(b + r->fy), NV(load)(b + r->nz), NV(load)(b + r->fz), r, t, t0);
+}
+
+/*
  * One interior node: all children's boxes at once, then the hit children
  * near to far. Sets *ref to the child to visit next and returns 1, or
  * returns 0 when no child is hit (the caller pops).
@@ -80,15 +105,8 @@ WIDE_INLINE void WK(node_setup)(WK(node_ray) *r, const accel_ray_prep *p)
 WIDE_INLINE int WK(visit_node)(const KNODE *n, const WK(node_ray) *r, float t, uint32_t *ref,
                                wide_stack_entry *stack, int *sp_io)
 {
-    const float *b = n->box[0];
-    NF t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->nx), r->ox), r->ix), r->t_near);
-    t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->ny), r->oy), r->iy), t0);
-    t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->nz), r->oz), r->iz), t0);
-    NF t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fx), r->ox), r->ix), NV(set1)(t));
-    t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fy), r->oy), r->iy), t1);
-    t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fz), r->oz), r->iz), t1);
-    NF far = NV(add)(t1, NV(mul)(NV(abs)(t1), NV(set1)(ACCEL_SLAB_PAD)));
-    unsigned mask = (unsigned)NV(mask)(NV(le)(t0, far));
+    NF t0;
+    unsigned mask = (unsigned)NV(mask)(WK(slab_rows)(n->box[0], r, t, &t0));
     if (!mask) return 0;
     unsigned i = (unsigned)__builtin_ctz(mask);
     mask &= mask - 1;
@@ -226,50 +244,41 @@ WIDE_INLINE void WK(trace_ray)(const bvh_wide *w, const accel_ray *ray, void *ou
 }
 
 /*
- * order=octant: one interior node with its children in the node's
- * precomputed order for the ray's octant (bits `shift`.. of perm[]). The
- * hit children are compress-stored onto the stack farthest first, with
- * one branch on "none" and one on "exactly one" instead of the per-count
- * branches and the sort of visit_node; the nearest is then entered.
+ * The hit children (mask; hit, its vector form, must hold exactly those
+ * lanes when !branchy) of a node pushed in the node's octant order for the
+ * ray (bits `shift`.. of perm[]), farthest first, and the nearest entered:
+ * a branch on "exactly one", then either a compress-store (the default) or
+ * one branch per child (branchy). Returns 0 when none is hit.
  */
-WIDE_INLINE int WK(visit_node_oct)(const KNODE *n, const WK(node_ray) *r, float t, uint32_t *ref,
-                                   uint32_t *sref, float *st, int *sp_io, int shift, int branchy)
+WIDE_INLINE int WK(push_octant)(const uint32_t *child, const uint32_t *perm, NF hit, NF t0, unsigned mask,
+                                uint32_t *ref, uint32_t *sref, float *st, int *sp_io, int shift, int branchy)
 {
-    const float *b = n->box[0];
-    NF t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->nx), r->ox), r->ix), r->t_near);
-    t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->ny), r->oy), r->iy), t0);
-    t0 = NV(max)(NV(mul)(NV(sub)(NV(load)(b + r->nz), r->oz), r->iz), t0);
-    NF t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fx), r->ox), r->ix), NV(set1)(t));
-    t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fy), r->oy), r->iy), t1);
-    t1 = NV(min)(NV(mul)(NV(sub)(NV(load)(b + r->fz), r->oz), r->iz), t1);
-    NF hit = NV(le)(t0, NV(add)(t1, NV(mul)(NV(abs)(t1), NV(set1)(ACCEL_SLAB_PAD))));
-    unsigned mask = (unsigned)NV(mask)(hit);
     if (!mask) return 0;
     if (!(mask & (mask - 1))) {
-        *ref = n->child[__builtin_ctz(mask)];
+        *ref = child[__builtin_ctz(mask)];
         return 1;
     }
     int sp = *sp_io;
 #if WIDE_AVX && WIDE_NW == 8
     if (!branchy) {
-    /* rank -> child lane for this octant; hit bits in rank order; the
-     * ranks of the hits, farthest first (the compress table); composed,
-     * the child lane of each stack slot. */
-    __m256i perm = _mm256_and_si256(_mm256_srl_epi32(_mm256_load_si256((const __m256i *)n->perm),
-                                                     _mm_cvtsi32_si128(shift)),
-                                    _mm256_set1_epi32(7));
-    unsigned ranked = (unsigned)_mm256_movemask_ps(_mm256_permutevar8x32_ps(hit, perm));
-    __m256i sel = _mm256_and_si256(_mm256_srlv_epi32(_mm256_set1_epi32((int)wide_compress_lut[ranked]),
-                                                     _mm256_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28)),
-                                   _mm256_set1_epi32(15));
-    __m256i lane = _mm256_permutevar8x32_epi32(perm, sel);
-    _mm256_storeu_si256((__m256i *)(sref + sp),
-                        _mm256_permutevar8x32_epi32(_mm256_load_si256((const __m256i *)n->child), lane));
-    _mm256_storeu_ps(st + sp, _mm256_permutevar8x32_ps(t0, lane));
-    sp += __builtin_popcount(mask);
-    *ref = sref[--sp];
-    *sp_io = sp;
-    return 1;
+        /* rank -> child lane for this octant; hit bits in rank order; the
+         * ranks of the hits, farthest first (the compress table); composed,
+         * the child lane of each stack slot. */
+        __m256i pv = _mm256_and_si256(_mm256_srl_epi32(_mm256_load_si256((const __m256i *)perm),
+                                                       _mm_cvtsi32_si128(shift)),
+                                      _mm256_set1_epi32(7));
+        unsigned ranked = (unsigned)_mm256_movemask_ps(_mm256_permutevar8x32_ps(hit, pv));
+        __m256i sel = _mm256_and_si256(_mm256_srlv_epi32(_mm256_set1_epi32((int)wide_compress_lut[ranked]),
+                                                         _mm256_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28)),
+                                       _mm256_set1_epi32(15));
+        __m256i lane = _mm256_permutevar8x32_epi32(pv, sel);
+        _mm256_storeu_si256((__m256i *)(sref + sp),
+                            _mm256_permutevar8x32_epi32(_mm256_load_si256((const __m256i *)child), lane));
+        _mm256_storeu_ps(st + sp, _mm256_permutevar8x32_ps(t0, lane));
+        sp += __builtin_popcount(mask);
+        *ref = sref[--sp];
+        *sp_io = sp;
+        return 1;
     }
 #endif
     /* order=branchy (and every build without AVX2): the ranks farthest
@@ -278,59 +287,55 @@ WIDE_INLINE int WK(visit_node_oct)(const KNODE *n, const WK(node_ray) *r, float 
      * dependent shuffles (the form of W. Jakob's kernels in tinybvh): it
      * pays where consecutive rays hit the same children (primary and
      * shadow rays) and loses to mispredictions on incoherent ones. */
-    (void)branchy;
+    (void)branchy, (void)hit;
     float te[WIDE_NW] __attribute__((aligned(32)));
     NV(store)(te, t0);
     for (int rank = WIDE_NW - 1; rank >= 0; rank--) {
-        unsigned l = (n->perm[rank] >> shift) & 7u;
-        if (mask >> l & 1u) sref[sp] = n->child[l], st[sp] = te[l], sp++;
+        unsigned l = (perm[rank] >> shift) & 7u;
+        if (mask >> l & 1u) sref[sp] = child[l], st[sp] = te[l], sp++;
     }
     *ref = sref[--sp];
     *sp_io = sp;
     return 1;
 }
 
+/*
+ * order=octant (and branchy): one interior node, its hit children pushed
+ * in the node's precomputed order for the ray's octant (push_octant),
+ * instead of the per-count branches and the sort of visit_node.
+ */
+WIDE_INLINE int WK(visit_node_oct)(const KNODE *n, const WK(node_ray) *r, float t, uint32_t *ref,
+                                   uint32_t *sref, float *st, int *sp_io, int shift, int branchy)
+{
+    NF t0, hit = WK(slab_rows)(n->box[0], r, t, &t0);
+    return WK(push_octant)(n->child, n->perm, hit, t0, (unsigned)NV(mask)(hit), ref, sref, st, sp_io, shift,
+                           branchy);
+}
+
 #if WIDE_NW == 8
 /*
- * quant=1: visit_node_oct on a quantized node. Each plane row is decoded
- * as org + q * 2^ex (the product exact, the sum rounded as the build
- * checked it), then the same slab test and the same compress-store; the
- * lanes past the node's count are masked off.
+ * quant=1: each plane row decoded as org + q * 2^ex (wide_qdecode: the
+ * product exact, the sum rounded as the build checked it), then the same
+ * slab test; the lanes past the node's count are masked off, and the
+ * children pushed by branches (the mask then decides alone).
  */
+WIDE_INLINE NF WK(qplane)(const uint8_t *row, float org, float step)
+{
+    return NV(add)(NV(set1)(org), NV(mul)(f8_from_u8(row), NV(set1)(step)));
+}
+
 WIDE_INLINE int WK(visit_node_q)(const wide_qnode8 *n, const WK(node_ray) *r, float t, uint32_t *ref,
                                  uint32_t *sref, float *st, int *sp_io, int shift)
 {
-    const uint8_t *q = n->q[0];
-    NF sx = NV(set1)(wide_pow2f(n->ex[0])), sy = NV(set1)(wide_pow2f(n->ex[1])),
-       sz = NV(set1)(wide_pow2f(n->ex[2]));
-    NF gx = NV(set1)(n->org[0]), gy = NV(set1)(n->org[1]), gz = NV(set1)(n->org[2]);
     /* node_ray's row offsets count floats of 8-lane rows: here bytes of 8-byte rows */
-    NF nx = NV(add)(gx, NV(mul)(f8_from_u8(q + r->nx), sx)), fx = NV(add)(gx, NV(mul)(f8_from_u8(q + r->fx), sx));
-    NF ny = NV(add)(gy, NV(mul)(f8_from_u8(q + r->ny), sy)), fy = NV(add)(gy, NV(mul)(f8_from_u8(q + r->fy), sy));
-    NF nz = NV(add)(gz, NV(mul)(f8_from_u8(q + r->nz), sz)), fz = NV(add)(gz, NV(mul)(f8_from_u8(q + r->fz), sz));
-    NF t0 = NV(max)(NV(mul)(NV(sub)(nx, r->ox), r->ix), r->t_near);
-    t0 = NV(max)(NV(mul)(NV(sub)(ny, r->oy), r->iy), t0);
-    t0 = NV(max)(NV(mul)(NV(sub)(nz, r->oz), r->iz), t0);
-    NF t1 = NV(min)(NV(mul)(NV(sub)(fx, r->ox), r->ix), NV(set1)(t));
-    t1 = NV(min)(NV(mul)(NV(sub)(fy, r->oy), r->iy), t1);
-    t1 = NV(min)(NV(mul)(NV(sub)(fz, r->oz), r->iz), t1);
-    NF hit = NV(le)(t0, NV(add)(t1, NV(mul)(NV(abs)(t1), NV(set1)(ACCEL_SLAB_PAD))));
+    const uint8_t *q = n->q[0];
+    float sx = wide_qstep(n->ex[0]), sy = wide_qstep(n->ex[1]), sz = wide_qstep(n->ex[2]);
+    NF t0, hit = WK(slab_planes)(WK(qplane)(q + r->nx, n->org[0], sx), WK(qplane)(q + r->fx, n->org[0], sx),
+                                 WK(qplane)(q + r->ny, n->org[1], sy), WK(qplane)(q + r->fy, n->org[1], sy),
+                                 WK(qplane)(q + r->nz, n->org[2], sz), WK(qplane)(q + r->fz, n->org[2], sz),
+                                 r, t, &t0);
     unsigned mask = (unsigned)NV(mask)(hit) & ((1u << n->count) - 1u);
-    if (!mask) return 0;
-    if (!(mask & (mask - 1))) {
-        *ref = n->child[__builtin_ctz(mask)];
-        return 1;
-    }
-    int sp = *sp_io;
-    float te[WIDE_NW] __attribute__((aligned(32)));
-    NV(store)(te, t0);
-    for (int rank = WIDE_NW - 1; rank >= 0; rank--) {
-        unsigned l = (n->perm[rank] >> shift) & 7u;
-        if (mask >> l & 1u) sref[sp] = n->child[l], st[sp] = te[l], sp++;
-    }
-    *ref = sref[--sp];
-    *sp_io = sp;
-    return 1;
+    return WK(push_octant)(n->child, n->perm, hit, t0, mask, ref, sref, st, sp_io, shift, 1);
 }
 #endif
 
@@ -427,31 +432,22 @@ WIDE_INLINE void WK(wide_any)(const void *a, const accel_ray *rays, void *out, s
         for (size_t i = 0; i < count; i++) WK(trace_ray)(a, &rays[i], out, c, i, flags, 1);
 }
 
-/* quant=1 (width 8): quantized nodes, octant order with branches. */
-WIDE_INLINE void WK(wide_closest_q)(const void *a, const accel_ray *rays, void *out, size_t count,
-                                    accel_counters *c, unsigned flags)
-{
-    for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 0, 1, 1);
-}
-
-WIDE_INLINE void WK(wide_any_q)(const void *a, const accel_ray *rays, void *out, size_t count,
-                                accel_counters *c, unsigned flags)
-{
-    for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 1, 1, 1);
-}
-
-/* order=branchy: the octant order with branches (visit_node_oct). */
-WIDE_INLINE void WK(wide_closest_br)(const void *a, const accel_ray *rays, void *out, size_t count,
-                                     accel_counters *c, unsigned flags)
-{
-    for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 0, 1, 0);
-}
-
-WIDE_INLINE void WK(wide_any_br)(const void *a, const accel_ray *rays, void *out, size_t count,
-                                 accel_counters *c, unsigned flags)
-{
-    for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 1, 1, 0);
-}
+/* The single-ray batches of the octant kernels other than the default:
+ * order=branchy, and quant=1 (width 8; its push is branchy's). */
+#define WK_OCT_BATCHES(closest, any, branchy, quant)                                                     \
+    WIDE_INLINE void WK(closest)(const void *a, const accel_ray *rays, void *out, size_t count,         \
+                                 accel_counters *c, unsigned flags)                                    \
+    {                                                                                                  \
+        for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 0, branchy, quant); \
+    }                                                                                                  \
+    WIDE_INLINE void WK(any)(const void *a, const accel_ray *rays, void *out, size_t count,            \
+                             accel_counters *c, unsigned flags)                                        \
+    {                                                                                                  \
+        for (size_t i = 0; i < count; i++) WK(trace_ray_oct)(a, &rays[i], out, c, i, flags, 1, branchy, quant); \
+    }
+WK_OCT_BATCHES(wide_closest_br, wide_any_br, 1, 0)
+WK_OCT_BATCHES(wide_closest_q, wide_any_q, 1, 1)
+#undef WK_OCT_BATCHES
 
 #undef WK_CAT_
 #undef WK_CAT

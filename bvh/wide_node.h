@@ -54,6 +54,7 @@
 #include <assert.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "bvh_node.h"
 
@@ -106,6 +107,23 @@ typedef struct {
 } wide_qnode8;
 
 static_assert(sizeof(wide_qnode8) == 128, "a quantized 8-wide node is two cache lines");
+
+/* A quantized axis's step 2^e as a float, e in [-126, 127]. */
+static inline float wide_qstep(int e)
+{
+    uint32_t u = (uint32_t)(e + 127) << 23;
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return f;
+}
+
+/* A decoded plane, as the kernel computes it lane by lane: q * step is
+ * exact (8 bits times a power of two), the sum is rounded once. */
+static inline float wide_qdecode(float org, int q, float step)
+{
+    float prod = (float)q * step;
+    return org + prod;
+}
 static_assert(offsetof(wide_qnode8, child) == 64, "child references start the second line");
 static_assert(sizeof(wide_node8) == 256, "an 8-wide node is four cache lines");
 static_assert(offsetof(wide_node8, child) == 192, "child references follow the 6 box rows");

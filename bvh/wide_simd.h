@@ -166,15 +166,6 @@ WIDE_INLINE float f8_hmin(f8 a)
 WIDE_GENERIC(8)
 #endif
 
-/* 2^e as a float, e in [-126, 127] (quantized node steps). */
-WIDE_INLINE float wide_pow2f(int e)
-{
-    uint32_t u = (uint32_t)(e + 127) << 23;
-    float f;
-    memcpy(&f, &u, 4);
-    return f;
-}
-
 /* Eight unsigned bytes as eight floats (exact): quantized node rows. */
 #if WIDE_AVX
 WIDE_INLINE f8 f8_from_u8(const uint8_t *p)

@@ -362,7 +362,10 @@ TEST(wide_collapse_merges_levels)
 TEST(wide_spec_errors)
 {
     static const char *const bad[] = {"bvh:block=8", "bvh:width=4,traverse=packet,frustum=1", "bvh:width=3",
-                                      "bvh:width=8,block=2"};
+                                      "bvh:width=8,block=2", "bvh:width=4,quant=1",
+                                      "bvh:width=8,quant=1,traverse=packet", "bvh:width=8,quant=1,order=dist",
+                                      "bvh:quant=1", "bvh:width=8,order=branchy,traverse=packet",
+                                      "bvh:width=8,first=left", "bvh:width=4,pairs=split"};
     accel_scene s;
     accel_error err = {0};
     if (scene_create("soup:tris=100", &s, &err)) return;
@@ -388,7 +391,7 @@ TEST(wide_spec_errors)
 
 /* quant=1: the same collapse as the float tree (same node numbering), and
  * every decoded child box holds the float one, at most about two steps
- * looser per axis; the refusals; memory of 128-byte nodes. */
+ * looser per axis; memory of 128-byte nodes (its refusals: wide_spec_errors). */
 TEST(wide_quant_boxes_contain)
 {
     static const char *const scenes[] = {"soup:tris=4000", "slivers:tris=2000,slivers=100",
@@ -440,19 +443,4 @@ TEST(wide_quant_boxes_contain)
         k->destroy(qa);
         scene_free(&s);
     }
-    static const char *const refused[] = {"bvh:width=4,quant=1", "bvh:width=8,quant=1,traverse=packet",
-                                          "bvh:width=8,quant=1,order=dist", "bvh:quant=1"};
-    accel_scene s;
-    accel_error err = {0};
-    if (scene_create("soup:tris=100", &s, &err)) return;
-    for (size_t i = 0; i < sizeof refused / sizeof *refused; i++) {
-        const accel_kind *k;
-        void *a;
-        accel_build_stats st;
-        memset(&err, 0, sizeof err);
-        int rc = accel_build_spec(refused[i], &s, 1, &k, &a, &st, &err);
-        CHECKF(rc == ACCEL_ERR_SPEC && err.msg[0], "%s: rc %d (%s)", refused[i], rc, err.msg);
-        if (rc == 0) k->destroy(a);
-    }
-    scene_free(&s);
 }

@@ -279,7 +279,8 @@ static inline int accel_sphere_hit_d(const accel_ray_d *r, const float *s, doubl
  * term scales with the sheared coordinates, which are small next to the
  * distances M for a triangle near the ray: an earlier bound,
  * 16u (M_cx M_by + M_cy M_bx), sent 0.4 of the primary rays that hit the
- * armadillo to the double test, against 1 in 200 or so with this one.
+ * armadillo to the double test (41,900 calls for 110,631 hits, callgrind,
+ * 800x600), against 1 in 90 with this one (1,267 calls).
  */
 #define ACCEL_EDGE_FILTER (16.0f * 0x1p-24f)
 #define ACCEL_EDGE_FILTER2 (32.0f * 0x1p-48f)
