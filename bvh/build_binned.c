@@ -167,59 +167,54 @@ static void clear_bins(bin_set *s, const bin_plan *p)
     }
 }
 
+/* One reference into its bin on axis a. */
+static inline void bin_add(bin_set *s, int a, const ref_view *v)
+{
+    s->count[a][v->bin[a]]++;
+    box4_union(&s->box[a][v->bin[a]], &v->box);
+}
+
+/* src's bins into dst's (min, max and integer sums: exact in any order). */
+static void merge_bins(bin_set *dst, const bin_set *src, const bin_plan *p)
+{
+    for (int k = 0; k < p->axis_count; k++) {
+        int a = p->axis[k];
+        for (int b = 0; b < p->bins; b++) {
+            dst->count[a][b] += src->count[a][b];
+            box4_union(&dst->box[a][b], &src->box[a][b]);
+        }
+    }
+}
+
 static void bin_range(const bvh_ref *refs, size_t begin, size_t end, const bin_plan *p, bin_set *s)
 {
-    ref_view v;
+    ref_view v, w;
+    size_t i = begin;
     if (p->axis_count == 3 && end - begin >= 8 * (size_t)p->bins) {
         /* Neighbouring references of a mesh mostly fall in the same bin, so
          * each bin update waited on the previous one through memory. Odd
-         * references go to a second set, merged at the end (min, max and
-         * integer sums: the same bins exactly); build time about -5% on bunny. */
+         * references go to a second set, merged after the pairs (the same
+         * bins exactly); build time about -5% on bunny. At most one
+         * reference is left for the loop below. */
         static _Thread_local bin_set odd;
         clear_bins(&odd, p);
-        size_t i = begin;
         for (; i + 1 < end; i += 2) {
-            ref_view w;
             view_ref(p, &refs[i], &v);
             view_ref(p, &refs[i + 1], &w);
-            for (int a = 0; a < 3; a++) {
-                s->count[a][v.bin[a]]++;
-                box4_union(&s->box[a][v.bin[a]], &v.box);
-                odd.count[a][w.bin[a]]++;
-                box4_union(&odd.box[a][w.bin[a]], &w.box);
-            }
+            for (int a = 0; a < 3; a++) bin_add(s, a, &v), bin_add(&odd, a, &w);
         }
-        if (i < end) {
-            view_ref(p, &refs[i], &v);
-            for (int a = 0; a < 3; a++) {
-                s->count[a][v.bin[a]]++;
-                box4_union(&s->box[a][v.bin[a]], &v.box);
-            }
-        }
-        for (int a = 0; a < 3; a++)
-            for (int b = 0; b < p->bins; b++) {
-                s->count[a][b] += odd.count[a][b];
-                box4_union(&s->box[a][b], &odd.box[a][b]);
-            }
-        return;
+        merge_bins(s, &odd, p);
     }
     if (p->axis_count == 3) { /* the common case, with constant axes */
-        for (size_t i = begin; i < end; i++) {
+        for (; i < end; i++) {
             view_ref(p, &refs[i], &v);
-            for (int a = 0; a < 3; a++) {
-                s->count[a][v.bin[a]]++;
-                box4_union(&s->box[a][v.bin[a]], &v.box);
-            }
+            for (int a = 0; a < 3; a++) bin_add(s, a, &v);
         }
         return;
     }
-    for (size_t i = begin; i < end; i++) {
+    for (; i < end; i++) {
         view_ref(p, &refs[i], &v);
-        for (int k = 0; k < p->axis_count; k++) {
-            int a = p->axis[k];
-            s->count[a][v.bin[a]]++;
-            box4_union(&s->box[a][v.bin[a]], &v.box);
-        }
+        for (int k = 0; k < p->axis_count; k++) bin_add(s, p->axis[k], &v);
     }
 }
 
@@ -283,15 +278,7 @@ static void groups_from_bins(bvh_build *ctx, const bvh_task *t, int threads, con
         size_t chunks = (size_t)threads * BIN_SPLITS;
         bin_job job = {ctx->refs, t->first, t->count, chunks, plan, sets};
         accel_parallel_for(chunks, 1, threads, bin_chunk, &job);
-        /* min, max and integer sums: exact in any order */
-        for (size_t c = 1; c < chunks; c++)
-            for (int k = 0; k < plan->axis_count; k++) {
-                int a = plan->axis[k];
-                for (int b = 0; b < plan->bins; b++) {
-                    sets[0].count[a][b] += sets[c].count[a][b];
-                    box4_union(&sets[0].box[a][b], &sets[c].box[a][b]);
-                }
-            }
+        for (size_t c = 1; c < chunks; c++) merge_bins(&sets[0], &sets[c], plan);
     } else {
         clear_bins(sets, plan);
         bin_range(ctx->refs, t->first, (size_t)t->first + t->count, plan, sets);
