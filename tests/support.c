@@ -587,3 +587,11 @@ int test_quick_report(void)
     }
     return 1;
 }
+
+int test_stiff_case(int ci, stiff_case *c)
+{
+    accel_error err = {0};
+    if (stiff_case_make(ci, c, &err) == 0) return 1;
+    test_fail(__FILE__, __LINE__, "stiff case %d: %s", ci, err.msg);
+    return 0;
+}

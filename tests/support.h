@@ -20,6 +20,7 @@
 #include <stdint.h>
 
 #include "accel.h"
+#include "bench/stiff.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
 #include "test.h"
@@ -149,6 +150,10 @@ typedef enum {
     TEST_ORACLE_REFERENCE,  /* accel_reference_trace: exact, in double */
     TEST_ORACLE_FLOAT_BRUTE /* the brute kind: the same float kernels without a structure */
 } test_oracle;
+
+/* Stiff case ci (bench/stiff.h) into *c: 1, or 0 after failing the test
+ * with the reason (a case that cannot be made). */
+int test_stiff_case(int ci, stiff_case *c);
 
 /* The oracle's closest hits for rays (malloc'd, free with free()); NULL
  * after a failed check. The float brute force is the oracle where the

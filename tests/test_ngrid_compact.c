@@ -58,11 +58,7 @@ TEST(ngrid_compact_stiff_cases)
 {
     for (int ci = 0; ci < stiff_case_count(); ci++) {
         stiff_case c;
-        accel_error err = {0};
-        if (stiff_case_make(ci, &c, &err)) {
-            test_fail(__FILE__, __LINE__, "stiff case %d: %s", ci, err.msg);
-            continue;
-        }
+        if (!test_stiff_case(ci, &c)) continue;
         accel_hit *ref = test_oracle_hits(&c.scene, c.rays.rays, c.rays.count,
                                           TEST_ORACLE_REFERENCE);
         if (ref) {

@@ -59,11 +59,7 @@ TEST(stability_stiff_cases)
 {
     for (int ci = 0; ci < stiff_case_count(); ci++) {
         stiff_case c;
-        accel_error err = {0};
-        if (stiff_case_make(ci, &c, &err)) {
-            test_fail(__FILE__, __LINE__, "stiff case %d: %s", ci, err.msg);
-            continue;
-        }
+        if (!test_stiff_case(ci, &c)) continue;
         size_t n = c.rays.count;
         accel_hit *ref = test_oracle_hits(&c.scene, c.rays.rays, n, TEST_ORACLE_REFERENCE);
         if (!ref) {
