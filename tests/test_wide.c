@@ -309,10 +309,59 @@ static void check_wide(const accel_scene *s, const char *spec)
     k->destroy(a);
 }
 
+/* quant=1: the same collapse as the float tree (same node numbering), and
+ * every decoded child box holds the float one, at most about two steps
+ * looser per axis; memory of 128-byte nodes (its refusals: wide_spec_errors). */
+static void check_quant(const accel_scene *s)
+{
+    accel_error err = {0};
+    const accel_kind *k;
+    void *fa, *qa;
+    accel_build_stats fs, qs;
+    if (accel_build_spec("bvh:width=8", s, 1, &k, &fa, &fs, &err)) {
+        test_fail(__FILE__, __LINE__, "%s: %s", s->name, err.msg);
+        return;
+    }
+    if (accel_build_spec("bvh:width=8,quant=1", s, 1, &k, &qa, &qs, &err)) {
+        test_fail(__FILE__, __LINE__, "%s, quant=1: %s", s->name, err.msg);
+        k->destroy(fa);
+        return;
+    }
+    const bvh_wide *fw = ((const bvh *)fa)->wide, *qw = ((const bvh *)qa)->wide;
+    CHECK(qw->quant == 1 && fw->node_count == qw->node_count && fw->root == qw->root);
+    int bad = 0, loose = 0;
+    for (uint32_t n = 0; n < fw->node_count && n < qw->node_count; n++) {
+        const wide_node8 *f = (const wide_node8 *)fw->nodes + n;
+        const wide_qnode8 *q = (const wide_qnode8 *)qw->nodes + n;
+        int used = 0;
+        while (used < 8 && f->child[used] != WIDE_EMPTY) used++;
+        bad += q->count != used || memcmp(q->child, f->child, sizeof q->child) != 0;
+        for (int c = 0; c < used; c++) {
+            float lo[3], hi[3];
+            bvh_wide_qbox(q, c, lo, hi);
+            for (int a = 0; a < 3; a++) {
+                float flo = f->box[2 * a][c], fhi = f->box[2 * a + 1][c];
+                bad += !(lo[a] <= flo && hi[a] >= fhi);
+                double step = ldexp(1.0, q->ex[a]);
+                loose += (double)(hi[a] - lo[a]) - (double)(fhi - flo) >
+                         2.01 * step + 1e-6 * fabs((double)q->org[a]) + 1e-30;
+            }
+        }
+    }
+    CHECKF(bad == 0, "%s: %d decoded boxes or child lists differ from the float tree", s->name, bad);
+    CHECKF(loose == 0, "%s: %d decoded planes looser than two steps", s->name, loose);
+    size_t expect = sizeof(bvh) + sizeof(bvh_wide) + (size_t)qw->node_count * sizeof(wide_qnode8) +
+                    (size_t)qw->block_count * (qw->block == 8 ? sizeof(wide_block8) : sizeof(wide_block4));
+    CHECKF(qs.bytes == expect && qs.bytes < fs.bytes, "%s: %zu bytes, %zu expected (float tree %zu)",
+           s->name, qs.bytes, expect, fs.bytes);
+    k->destroy(fa);
+    k->destroy(qa);
+}
+
 TEST(wide_tree_invariants)
 {
     static const char *const scenes[] = {"soup:tris=4000", "sphereflake:level=2", "slivers:tris=2000,slivers=100",
-                                         "cube:n=4"};
+                                         "cube:n=4", "teapot_stadium:n=2"};
     static const char *const specs[] = {"bvh:width=4", "bvh:width=8", "bvh:width=4,block=4",
                                         "bvh:width=8,block=4", "bvh:width=8,leaf=1",
                                         "bvh:width=4,ct=0,leaf=256", "bvh:width=8,build=median",
@@ -325,6 +374,7 @@ TEST(wide_tree_invariants)
             continue;
         }
         for (size_t k = 0; k < sizeof specs / sizeof *specs; k++) check_wide(&s, specs[k]);
+        check_quant(&s);
         scene_free(&s);
     }
 }
@@ -389,58 +439,4 @@ TEST(wide_spec_errors)
     scene_free(&s);
 }
 
-/* quant=1: the same collapse as the float tree (same node numbering), and
- * every decoded child box holds the float one, at most about two steps
- * looser per axis; memory of 128-byte nodes (its refusals: wide_spec_errors). */
-TEST(wide_quant_boxes_contain)
-{
-    static const char *const scenes[] = {"soup:tris=4000", "slivers:tris=2000,slivers=100",
-                                         "sphereflake:level=2", "teapot_stadium:n=2"};
-    for (size_t i = 0; i < sizeof scenes / sizeof *scenes; i++) {
-        accel_scene s;
-        accel_error err = {0};
-        if (scene_create(scenes[i], &s, &err)) {
-            test_fail(__FILE__, __LINE__, "%s: %s", scenes[i], err.msg);
-            continue;
-        }
-        const accel_kind *k;
-        void *fa, *qa;
-        accel_build_stats fs, qs;
-        if (accel_build_spec("bvh:width=8", &s, 1, &k, &fa, &fs, &err) ||
-            accel_build_spec("bvh:width=8,quant=1", &s, 1, &k, &qa, &qs, &err)) {
-            test_fail(__FILE__, __LINE__, "%s: %s", scenes[i], err.msg);
-            scene_free(&s);
-            continue;
-        }
-        const bvh_wide *fw = ((const bvh *)fa)->wide, *qw = ((const bvh *)qa)->wide;
-        CHECK(qw->quant == 1 && fw->node_count == qw->node_count && fw->root == qw->root);
-        int bad = 0, loose = 0;
-        for (uint32_t n = 0; n < fw->node_count && n < qw->node_count; n++) {
-            const wide_node8 *f = (const wide_node8 *)fw->nodes + n;
-            const wide_qnode8 *q = (const wide_qnode8 *)qw->nodes + n;
-            int used = 0;
-            while (used < 8 && f->child[used] != WIDE_EMPTY) used++;
-            bad += q->count != used || memcmp(q->child, f->child, sizeof q->child) != 0;
-            for (int c = 0; c < used; c++) {
-                float lo[3], hi[3];
-                bvh_wide_qbox(q, c, lo, hi);
-                for (int a = 0; a < 3; a++) {
-                    float flo = f->box[2 * a][c], fhi = f->box[2 * a + 1][c];
-                    bad += !(lo[a] <= flo && hi[a] >= fhi);
-                    double step = ldexp(1.0, q->ex[a]);
-                    loose += (double)(hi[a] - lo[a]) - (double)(fhi - flo) >
-                             2.01 * step + 1e-6 * fabs((double)q->org[a]) + 1e-30;
-                }
-            }
-        }
-        CHECKF(bad == 0, "%s: %d decoded boxes or child lists differ from the float tree", scenes[i], bad);
-        CHECKF(loose == 0, "%s: %d decoded planes looser than two steps", scenes[i], loose);
-        size_t expect = sizeof(bvh) + sizeof(bvh_wide) + (size_t)qw->node_count * sizeof(wide_qnode8) +
-                        (size_t)qw->block_count * (qw->block == 8 ? sizeof(wide_block8) : sizeof(wide_block4));
-        CHECKF(qs.bytes == expect && qs.bytes < fs.bytes, "%s: %zu bytes, %zu expected (float tree %zu)",
-               scenes[i], qs.bytes, expect, fs.bytes);
-        k->destroy(fa);
-        k->destroy(qa);
-        scene_free(&s);
-    }
-}
+
