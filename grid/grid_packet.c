@@ -81,121 +81,37 @@
  * Packets traced by the single-ray kernel count as in grid_trace.c. The
  * step bound is res[K] slices per packet (ACCEL_STEP_BOUND_BROKEN).
  */
-#include <string.h>
-
-#include "grid_packet_filter.h"
+#include "grid_packet_walk.h"
 
 #define P GRID_PACKET_SIZE
-#define GRID_PACKET_MAIL 256 /* per-packet mailbox entries (power of two) */
 
 _Static_assert(P == 64, "the active-ray mask is one uint64_t");
-
-/* Counted runs: packet totals so far, and each ray's share when it stops. */
-typedef struct {
-    uint64_t visits, empty, skips, evals;
-    uint32_t r_visits[P], r_empty[P], r_skips[P], r_tests[P];
-} packet_count;
-
-static inline void retire(grid_packet *pk, packet_count *cn, int i, const accel_counters *c)
-{
-    pk->active &= ~((uint64_t)1 << i);
-    if (c) {
-        cn->r_visits[i] = (uint32_t)cn->visits;
-        cn->r_empty[i] = (uint32_t)cn->empty;
-        cn->r_skips[i] = (uint32_t)cn->skips;
-    }
-}
-
-/* Tests primitive `prim` against the packet's active rays. */
-static inline __attribute__((always_inline)) void
-test_prim(const accel_scene *s, grid_packet *pk, packet_count *cn, accel_counters *c,
-          uint32_t prim, int naive, int spheres, int any_hit)
-{
-    uint64_t cand;
-    if (spheres && prim >= s->tri_count) {
-        const float *sph = s->spheres + 4 * (size_t)(prim - s->tri_count);
-        if (grid_packet_sphere_outside(pk, sph)) return;
-        cand = grid_packet_sphere_filter(pk, sph, &cn->evals);
-    } else if (naive) {
-        cand = pk->active; /* no error analysis of Moller-Trumbore to filter by */
-    } else {
-        const float *tri = s->tris + 9 * (size_t)prim;
-        if (grid_packet_tri_outside(pk, tri)) return;
-        grid_packet_tri t;
-        grid_packet_tri_prepare(pk, tri, &t);
-        if (grid_packet_tri_culled(pk, &t)) return;
-        cand = grid_packet_tri_filter(pk, &t, &cn->evals);
-    }
-    for (; cand; cand &= cand - 1) {
-        const int l = __builtin_ctzll(cand);
-        if (c) cn->r_tests[l]++;
-        if (!(pk->prepped >> l & 1)) {
-            accel_prep_ray(&pk->rays[l], &pk->prep[l]); /* live: accepted */
-            pk->prepped |= (uint64_t)1 << l;
-        }
-        if (!accel_prim_hit(s, prim, &pk->prep[l], &pk->t[l], &pk->u[l], &pk->v[l], naive, spheres))
-            continue;
-        pk->prim[l] = prim;
-        if (any_hit)
-            retire(pk, cn, l, c);
-        else
-            grid_packet_hit_end(pk, l);
-    }
-}
 
 /* Tests the primitives of slice k's cells [lo, hi] against the packet.
  * Returns 0 when an any-hit packet has no active ray left. */
 static inline __attribute__((always_inline)) int
-walk_slice(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counters *c,
+walk_slice(const grid_accel *g, grid_packet *pk, grid_packet_count *cn, accel_counters *c,
            uint32_t *mail, int k, const int lo[2], const int hi[2], const double hull[2][2],
            int naive, int spheres, int mailbox, int any_hit)
 {
     const grid_frame *f = &g->frame;
-    const accel_scene *s = &g->store.prims;
     const uint32_t *offsets = g->cells.offsets, *refs = g->cells.refs;
     const uint32_t st1 = f->stride[pk->axis[1]], st2 = f->stride[pk->axis[2]];
     for (int j = lo[1]; j <= hi[1]; j++) {
         const uint32_t row = (uint32_t)k * f->stride[pk->axis[0]] + (uint32_t)j * st2;
         for (int i = lo[0]; i <= hi[0]; i++) {
-            const uint32_t cell = row + (uint32_t)i * st1;
-            uint32_t r = offsets[cell];
-            const uint32_t end = offsets[cell + 1];
-            if (c) {
-                cn->visits++;
-                cn->empty += r == end;
-            }
-            for (; r < end; r++) {
-                const uint32_t prim = refs[r];
-                uint32_t *slot = &mail[prim & (GRID_PACKET_MAIL - 1)];
-                if (mailbox && *slot == prim) {
-                    if (c) cn->skips++;
-                    continue;
-                }
-                /* Out of every ray's reach in this slice: left out of the
-                 * mailbox, so that a later slice looks again. */
-                if (!naive && grid_packet_slice_outside(pk, s, prim, spheres, hull)) continue;
-                if (mailbox) *slot = prim;
-                test_prim(s, pk, cn, c, prim, naive, spheres, any_hit);
-                if (any_hit && !pk->active) return 0;
-            }
+            const uint32_t cell = row + (uint32_t)i * st1, r = offsets[cell];
+            if (!grid_packet_test_list(&g->store.prims, pk, cn, c, mail, refs + r,
+                                       offsets[cell + 1] - r, hull, naive, spheres, mailbox,
+                                       any_hit))
+                return 0;
         }
     }
     return 1;
 }
 
-/* Retires the rays that need nothing past slice k; 0 when none is left. */
-static inline int leave_slice(const grid_frame *f, grid_packet *pk, packet_count *cn,
-                              const accel_counters *c, int k)
-{
-    const double w_out = pk->kstep * (double)f->planes[pk->axis[0]][pk->kstep > 0 ? k + 1 : k];
-    if (w_out >= pk->w_next)
-        for (uint64_t m = grid_packet_leaving(pk, w_out); m; m &= m - 1)
-            retire(pk, cn, __builtin_ctzll(m), c);
-    return pk->active != 0;
-}
-
 static inline __attribute__((always_inline)) void
-packet_walk(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counters *c, int naive,
+packet_walk(const grid_accel *g, grid_packet *pk, grid_packet_count *cn, accel_counters *c, int naive,
             int spheres, int mailbox, int any_hit)
 {
     const grid_frame *f = &g->frame;
@@ -217,7 +133,7 @@ packet_walk(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counte
                            !grid_macro_any(g, K, pk->axis[1], pk->axis[2], layer, lo, hi))) {
             slices += (uint32_t)(pk->kstep * (k_end - k) + 1);
             if (ACCEL_STEP_BOUND_BROKEN(c, slices, nk)) return;
-            if (!leave_slice(f, pk, cn, c, k_end)) return;
+            if (!grid_packet_leave_slice(f, pk, cn, c, k_end)) return;
             k = k_end + pk->kstep;
             continue;
         }
@@ -227,47 +143,10 @@ packet_walk(const grid_accel *g, grid_packet *pk, packet_count *cn, accel_counte
             if (grid_packet_span(f, pk, k, k, lo, hi, hull) &&
                 !walk_slice(g, pk, cn, c, mail, k, lo, hi, hull, naive, spheres, mailbox, any_hit))
                 return;
-            if (!leave_slice(f, pk, cn, c, k)) return;
+            if (!grid_packet_leave_slice(f, pk, cn, c, k)) return;
             if (k == k_end) break;
         }
         k += pk->kstep;
-    }
-}
-
-/* Packets that do not qualify: the single-ray kernel, with the per-ray
- * counter arrays shifted to the packet. */
-static void trace_single(const grid_accel *g, const accel_ray *rays, accel_hit *hits,
-                         uint8_t *occ, size_t n, accel_counters *c, size_t base)
-{
-    accel_counters sub, *cs = NULL;
-    if (c) {
-        memset(&sub, 0, sizeof sub);
-        sub.ray_steps = c->ray_steps ? c->ray_steps + base : NULL;
-        sub.ray_prims = c->ray_prims ? c->ray_prims + base : NULL;
-        cs = &sub;
-    }
-    if (occ)
-        grid_occluded(g, rays, occ, n, cs);
-    else
-        grid_intersect(g, rays, hits, n, cs);
-    if (c) accel_counters_add(c, &sub);
-}
-
-static void count_packet(const grid_packet *pk, packet_count *cn, accel_counters *c, size_t base,
-                         int walked)
-{
-    c->rays += pk->n;
-    c->box_tests += pk->boxes;
-    c->packet_box_tests += cn->evals;
-    for (uint32_t i = 0; i < pk->n; i++) {
-        const int on = walked && (pk->live >> i & 1);
-        const uint32_t steps = on ? cn->r_visits[i] : 0, tests = on ? cn->r_tests[i] : 0;
-        c->steps += steps;
-        c->empty_steps += on ? cn->r_empty[i] : 0;
-        c->mailbox_skips += on ? cn->r_skips[i] : 0;
-        c->prim_tests += tests;
-        if (c->ray_steps) c->ray_steps[base + i] = steps;
-        if (c->ray_prims) c->ray_prims[base + i] = tests;
     }
 }
 
@@ -276,35 +155,22 @@ packet_batch(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_
              size_t count, accel_counters *c, int naive, int spheres, int mailbox)
 {
     grid_packet pk; /* about 24 KB, aligned by its members */
-    packet_count cn;
+    grid_packet_count cn;
     for (size_t base = 0; base < count; base += P) {
         const uint32_t n = (uint32_t)(count - base < P ? count - base : P);
         for (size_t i = base + P; i < base + 2 * P && i < count; i += 2)
             __builtin_prefetch(&rays[i]); /* the next packet: 2 rays per cache line */
-        const int mode = grid_packet_setup(g, &pk, rays + base, n);
+        const int mode = grid_packet_setup(&g->frame, g->cells.ref_count, &pk, rays + base, n);
         if (mode == GRID_PACKET_SINGLE) {
-            trace_single(g, rays + base, hits ? hits + base : NULL, occ ? occ + base : NULL, n, c,
-                         base);
+            grid_packet_trace_single(g, grid_intersect, grid_occluded, rays + base,
+                                     hits ? hits + base : NULL, occ ? occ + base : NULL, n, c,
+                                     base);
             continue;
         }
         if (c) memset(&cn, 0, sizeof cn);
         if (mode == GRID_PACKET_WALK)
             packet_walk(g, &pk, &cn, c, naive, spheres, mailbox, occ != NULL);
-        for (uint32_t i = 0; i < n; i++) {
-            const uint32_t prim = pk.prim[i];
-            if (occ) {
-                occ[base + i] = prim != ACCEL_MISS;
-            } else if (prim != ACCEL_MISS) {
-                const accel_hit h = {pk.t[i], g->store.scene_id[prim], pk.u[i], pk.v[i]};
-                hits[base + i] = h;
-            } else {
-                hits[base + i] = accel_hit_miss();
-            }
-        }
-        if (!c) continue;
-        for (uint64_t m = pk.active; mode == GRID_PACKET_WALK && m; m &= m - 1)
-            retire(&pk, &cn, __builtin_ctzll(m), c);
-        count_packet(&pk, &cn, c, base, mode == GRID_PACKET_WALK);
+        grid_packet_finish(&g->store, &pk, &cn, hits, occ, c, base, mode == GRID_PACKET_WALK);
     }
 }
 

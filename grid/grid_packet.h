@@ -106,13 +106,18 @@ static inline __m256d grid_packet_lanes(uint64_t bits)
 
 enum { GRID_PACKET_EMPTY, GRID_PACKET_WALK, GRID_PACKET_SINGLE };
 
-/* Prepares packet pk from rays[0..n-1] (n <= GRID_PACKET_SIZE): the live
- * rays (those the single-ray kernel traces: valid, accepted by box3_slab
- * against the grid box), the axis K from their mean direction, the start
- * slice, the arrays and bounds. Returns GRID_PACKET_EMPTY when no ray is
- * live, GRID_PACKET_SINGLE when the live rays do not all move the same
- * way along K (the single-ray kernel then traces the packet). */
-int grid_packet_setup(const grid_accel *g, grid_packet *pk, const accel_ray *rays, uint32_t n);
+/* Prepares packet pk from rays[0..n-1] (n <= GRID_PACKET_SIZE) for a walk
+ * of frame f (a regular grid, or a nested grid's top level) holding
+ * ref_count references: the live rays (those the single-ray kernel traces:
+ * valid, accepted by box3_slab against the grid box; none when ref_count is
+ * 0), the axis K from their mean direction, the start slice, the arrays and
+ * bounds. Returns GRID_PACKET_EMPTY when no ray is live, GRID_PACKET_SINGLE
+ * when the live rays do not all move the same way along K or would sweep
+ * more than GRID_PACKET_MAX_CELLS cells of f per axis (the single-ray
+ * kernel then traces the packet). The bounds' margins hold for every frame
+ * inside f whose cells are no larger than f's (a nested grid's levels). */
+int grid_packet_setup(const grid_frame *f, uint64_t ref_count, grid_packet *pk,
+                      const accel_ray *rays, uint32_t n);
 
 /* Recomputes the bounds over the active rays. */
 void grid_packet_bound(grid_packet *pk);

@@ -121,14 +121,13 @@ static uint64_t live_block(const grid_frame *f, const accel_ray *rays, uint32_t 
 #endif
 
 /* The live rays and their float data; sums their directions into mean. */
-static uint64_t live_rays(const grid_accel *g, const accel_ray *rays, uint32_t n, ray_floats *rf,
-                          double mean[3], uint32_t *boxes)
+static uint64_t live_rays(const grid_frame *f, uint64_t ref_count, const accel_ray *rays,
+                          uint32_t n, ray_floats *rf, double mean[3], uint32_t *boxes)
 {
-    const grid_frame *f = &g->frame;
     uint64_t live = 0;
     *boxes = 0;
     mean[0] = mean[1] = mean[2] = 0.0;
-    if (g->cells.ref_count == 0) n = 0; /* nothing to hit: no ray is traced */
+    if (ref_count == 0) n = 0; /* nothing to hit: no ray is traced */
 #if GRID_PACKET_AVX
     __m256 sum[3] = {_mm256_setzero_ps(), _mm256_setzero_ps(), _mm256_setzero_ps()};
     for (int b = 0; b < P / 8; b++) live |= live_block(f, rays, n, b, rf, sum, boxes);
@@ -198,15 +197,15 @@ static void choose_ref(grid_packet *pk, const ray_floats *rf, int first)
     if (line_spread(pk, rf, end) < 0.5 * spread) memcpy(pk->ref, end, sizeof end);
 }
 
-int grid_packet_setup(const grid_accel *g, grid_packet *pk, const accel_ray *rays, uint32_t n)
+int grid_packet_setup(const grid_frame *f, uint64_t ref_count, grid_packet *pk,
+                      const accel_ray *rays, uint32_t n)
 {
-    const grid_frame *f = &g->frame;
     ray_floats rf;
     double mean[3];
     pk->rays = rays;
     pk->n = n;
     pk->prepped = 0;
-    pk->live = live_rays(g, rays, n, &rf, mean, &pk->boxes);
+    pk->live = live_rays(f, ref_count, rays, n, &rf, mean, &pk->boxes);
     for (int i = 0; i < P; i++) {
         pk->prim[i] = ACCEL_MISS;
         pk->t[i] = pk->live >> i & 1 ? rf.tf[i] : -INFINITY;
