@@ -27,7 +27,8 @@
 #define CLIFF 10.0
 
 static const char *const extras[] = {"bvh:traverse=packet", "bvh:width=4", "bvh:width=8",
-                                     "grid:traverse=packet", "grid:skip=macro", "irregular_grid"};
+                                     "grid:traverse=packet", "grid:skip=macro", "irregular_grid",
+                                     "nested_grid:traverse=packet"};
 
 typedef struct {
     double value;

@@ -160,7 +160,7 @@ packet_batch(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_
         const uint32_t n = (uint32_t)(count - base < P ? count - base : P);
         for (size_t i = base + P; i < base + 2 * P && i < count; i += 2)
             __builtin_prefetch(&rays[i]); /* the next packet: 2 rays per cache line */
-        const int mode = grid_packet_setup(&g->frame, g->cells.ref_count, &pk, rays + base, n);
+        const int mode = grid_packet_setup(&g->frame, g->cells.ref_count, GRID_PACKET_MAX_CELLS, &pk, rays + base, n);
         if (mode == GRID_PACKET_SINGLE) {
             grid_packet_trace_single(g, grid_intersect, grid_occluded, rays + base,
                                      hits ? hits + base : NULL, occ ? occ + base : NULL, n, c,

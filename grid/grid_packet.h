@@ -113,10 +113,11 @@ enum { GRID_PACKET_EMPTY, GRID_PACKET_WALK, GRID_PACKET_SINGLE };
  * 0), the axis K from their mean direction, the start slice, the arrays and
  * bounds. Returns GRID_PACKET_EMPTY when no ray is live, GRID_PACKET_SINGLE
  * when the live rays do not all move the same way along K or would sweep
- * more than GRID_PACKET_MAX_CELLS cells of f per axis (the single-ray
+ * more than max_cells cells of f per axis (GRID_PACKET_MAX_CELLS for the
+ * regular grid) (the single-ray
  * kernel then traces the packet). The bounds' margins hold for every frame
  * inside f whose cells are no larger than f's (a nested grid's levels). */
-int grid_packet_setup(const grid_frame *f, uint64_t ref_count, grid_packet *pk,
+int grid_packet_setup(const grid_frame *f, uint64_t ref_count, double max_cells, grid_packet *pk,
                       const accel_ray *rays, uint32_t n);
 
 /* Recomputes the bounds over the active rays. */

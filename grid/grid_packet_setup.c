@@ -197,7 +197,7 @@ static void choose_ref(grid_packet *pk, const ray_floats *rf, int first)
     if (line_spread(pk, rf, end) < 0.5 * spread) memcpy(pk->ref, end, sizeof end);
 }
 
-int grid_packet_setup(const grid_frame *f, uint64_t ref_count, grid_packet *pk,
+int grid_packet_setup(const grid_frame *f, uint64_t ref_count, double max_cells, grid_packet *pk,
                       const accel_ray *rays, uint32_t n)
 {
     ray_floats rf;
@@ -287,7 +287,7 @@ int grid_packet_setup(const grid_frame *f, uint64_t ref_count, grid_packet *pk,
     for (int j = 0; j < 2; j++) {
         const int a = pk->axis[1 + j];
         const double w = pk->u0_hi[j] - pk->u0_lo[j] + (pk->s_hi[j] - pk->s_lo[j]) * pk->zext;
-        if (w * f->inv_cell[a] > GRID_PACKET_MAX_CELLS) return GRID_PACKET_SINGLE;
+        if (w * f->inv_cell[a] > max_cells) return GRID_PACKET_SINGLE;
     }
     return GRID_PACKET_WALK;
 }

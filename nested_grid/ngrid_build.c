@@ -70,6 +70,9 @@ static const accel_param_def ngrid_params[] = {
      "words: cell words and count-prefixed lists, any depth; compact: two levels, 8-byte top "
      "cells with their own sub-grid resolution (at most 256 per axis), 4-byte leaf cells, one "
      "reference array (Kalojanov et al. 2011; depth defaults to 2, others refused)"},
+    {"traverse", ACCEL_PARAM_ENUM, "single", 0, 0, "single|packet",
+     "single rays (hierarchical 3D-DDA), or coherent grid traversal of 64 consecutive rays "
+     "(8x8 tiles) slice by slice through every level, as grid:traverse=packet"},
 };
 
 /* ---- the flat structure ------------------------------------------------------------ */
@@ -292,6 +295,8 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
     if (!rc) {
         g->naive = params->naive;
         g->mailbox = accel_param_num(params, "mailbox") != 0.0;
+        g->traverse = (int)accel_param_num(params, "traverse") == 1 ? NGRID_TRAVERSE_PACKET
+                                                                     : NGRID_TRAVERSE_SINGLE;
         g->has_spheres = scene->sphere_count > 0;
         rc = flatten(&b, g, err);
     }
@@ -350,11 +355,15 @@ void ngrid_get_view(const void *accel, ngrid_view *v)
 
 /* The conformance suite runs each: defaults, the cost model, a single
  * level (the regular grid), subdividing almost every cell (with a small
- * depth), never subdividing, bounding-box membership, no mailbox. */
+ * depth), never subdividing, bounding-box membership, no mailbox; the
+ * packet walk on both layouts, deep, without its mailbox, with naive
+ * triangles, and with sub-grids so fine that packets give up. */
 static const char *const ngrid_variants[] = {
     "", "auto", "depth=1", "threshold=1,depth=2", "threshold=100000", "overlap=bbox,mailbox=0",
     "layout=compact", "layout=compact,auto", "layout=compact,threshold=1,sub_res=6",
-    NULL,
+    "traverse=packet", "traverse=packet,threshold=1,depth=4,sub_res=3",
+    "traverse=packet,mailbox=0", "traverse=packet,tri=naive", "traverse=packet,layout=compact",
+    "traverse=packet,threshold=2,sub_res=24", NULL,
 };
 
 const accel_kind accel_kind_nested_grid = {

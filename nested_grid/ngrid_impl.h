@@ -57,6 +57,7 @@ typedef struct {
     uint64_t step_bound; /* most cells (all levels) one ray can visit */
     int levels;
     int naive, mailbox, has_spheres;
+    int traverse;           /* NGRID_TRAVERSE_SINGLE / NGRID_TRAVERSE_PACKET */
     ngrid_compact *compact; /* layout=compact: the only arrays kept (nodes etc. freed) */
 } ngrid_accel;
 
@@ -164,11 +165,27 @@ int ngrid_compact_build(ngrid_accel *g, double max_bytes, accel_error *err);
 void ngrid_compact_free(ngrid_compact *k);
 size_t ngrid_compact_bytes(const ngrid_compact *k);
 
-/* Traversal entry points (ngrid_trace.c; the compact layout's in ngrid_compact.c). */
+/* Traversal modes (parameter traverse=). */
+enum { NGRID_TRAVERSE_SINGLE = 0, NGRID_TRAVERSE_PACKET = 1 };
+
+/* Traversal entry points (ngrid_trace.c): the kind's, which pick the
+ * packet walk (traverse=packet) or the single-ray walk of the layout. */
 void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
                      accel_counters *counters);
 void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                     accel_counters *counters);
+/* The single-ray walks of either layout (ngrid_trace.c; the compact
+ * layout's in ngrid_compact.c). */
+void ngrid_single_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
+                            size_t count, accel_counters *counters);
+void ngrid_single_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded,
+                           size_t count, accel_counters *counters);
+/* Coherent grid traversal over the levels, 64-ray packets (ngrid_packet.c);
+ * packets that do not qualify go to the single-ray walks. */
+void ngrid_packet_intersect(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits,
+                            size_t count, accel_counters *counters);
+void ngrid_packet_occluded(const ngrid_accel *g, const accel_ray *rays, uint8_t *occluded,
+                           size_t count, accel_counters *counters);
 void ngrid_compact_intersect(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits,
                              size_t count, accel_counters *counters);
 void ngrid_compact_occluded(const ngrid_accel *g, const accel_ray *rays, uint8_t *occluded,

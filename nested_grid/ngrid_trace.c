@@ -135,8 +135,8 @@ static unsigned ngrid_flags(const ngrid_accel *g)
     return accel_variant_flags(g->naive, g->has_spheres, g->mailbox);
 }
 
-void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
-                     accel_counters *counters)
+void ngrid_single_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
+                            size_t count, accel_counters *counters)
 {
     const ngrid_accel *g = accel;
     if (g->compact) {
@@ -146,8 +146,8 @@ void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, 
     accel_run_kernel(&ngrid_hit_table, accel, rays, hits, count, counters, ngrid_flags(accel));
 }
 
-void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
-                    accel_counters *counters)
+void ngrid_single_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded,
+                           size_t count, accel_counters *counters)
 {
     const ngrid_accel *g = accel;
     if (g->compact) {
@@ -155,6 +155,26 @@ void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded,
         return;
     }
     accel_run_kernel(&ngrid_occ_table, accel, rays, occluded, count, counters, ngrid_flags(accel));
+}
+
+void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
+                     accel_counters *counters)
+{
+    const ngrid_accel *g = accel;
+    if (g->traverse == NGRID_TRAVERSE_PACKET)
+        ngrid_packet_intersect(g, rays, hits, count, counters);
+    else
+        ngrid_single_intersect(g, rays, hits, count, counters);
+}
+
+void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
+                    accel_counters *counters)
+{
+    const ngrid_accel *g = accel;
+    if (g->traverse == NGRID_TRAVERSE_PACKET)
+        ngrid_packet_occluded(g, rays, occluded, count, counters);
+    else
+        ngrid_single_occluded(g, rays, occluded, count, counters);
 }
 
 /* ---- accel.h's conservative walk --------------------------------------------

@@ -140,7 +140,12 @@ TEST(grid_packet_coherent_packets_match_reference)
     static const char *const specs[] = {"grid:traverse=packet", "grid:traverse=packet,res=64",
                                         "grid:traverse=packet,res=7x1x13",
                                         "grid:traverse=packet,mailbox=0",
-                                        "grid:traverse=packet,lambda=0.5"};
+                                        "grid:traverse=packet,lambda=0.5",
+                                        /* the nested grid's levels (ngrid_packet.c) */
+                                        "nested_grid:traverse=packet",
+                                        "nested_grid:traverse=packet,threshold=1,depth=4,sub_res=3",
+                                        "nested_grid:traverse=packet,layout=compact,threshold=1",
+                                        "nested_grid:traverse=packet,mailbox=0,threshold=2"};
     for (size_t si = 0; si < sizeof scenes / sizeof scenes[0]; si++) {
         accel_scene s;
         accel_error err = {0};
@@ -183,6 +188,8 @@ TEST(grid_packet_far_from_origin)
         accel_counters c = check_spec(&s, "grid:traverse=packet", rays, n, ref);
         CHECKF(c.packet_box_tests > 0, "offset %g: no packet was walked", (double)off);
         check_spec(&s, "grid:traverse=packet,res=32", rays, n, ref);
+        c = check_spec(&s, "nested_grid:traverse=packet,threshold=1,sub_res=4", rays, n, ref);
+        CHECKF(c.packet_box_tests > 0, "offset %g: no nested packet was walked", (double)off);
         free(ref);
         free(rays);
         scene_free(&s);
