@@ -31,6 +31,8 @@
  *   layout      words (cell words, any depth) | compact (two levels: 8-byte top
  *               cells with their own sub-grid resolution, 4-byte leaf cells,
  *               one reference array; ngrid_compact.c)
+ *   traverse    single | packet (64-ray coherent grid traversal through every
+ *               level, ngrid_packet.c)
  *   tri         watertight | naive (common to all kinds)
  */
 #ifndef NESTED_GRID_NGRID_H

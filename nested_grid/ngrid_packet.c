@@ -15,7 +15,10 @@
  * retired only after a whole top slice, with the regular grid's rule on the
  * top slice's exit plane. A sub-slice is skipped when its entry plane lies
  * beyond the end of every active ray (w_end: nearest hit so far, box exit or
- * t_far, each widened by its rounding).
+ * t_far, each widened by its rounding). A packet too wide for a sub-grid's
+ * cells, or over its visit budget, gives up (below): its active rays are
+ * traced again from the start by the single-ray walk, whose answers replace
+ * theirs; retired rays keep theirs, which are final.
  *
  * Why the answer is the single-ray walk's and the reference's: the argument
  * of grid_packet.c, level by level. Let the ray's nearest accepted hit p
