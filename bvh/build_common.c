@@ -152,7 +152,7 @@ static int split_task(bvh_build *ctx, const bvh_task *t, int threads, bvh_task *
     bvh_node *node = &ctx->nodes[t->node];
     bvh_split s;
     s.left_count = 0;
-    if (t->count > 1) {
+    if (t->count > 1 && t->count > (uint32_t)ctx->opts.leaf_below) {
         ctx->split(ctx, t, threads, &s);
         /* A split function must split an oversized task; the median always can. */
         if (s.left_count == 0 && t->count > (uint32_t)ctx->opts.max_leaf)

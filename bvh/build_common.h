@@ -60,6 +60,9 @@ typedef struct {
     double max_mb;       /* memory limit of the build, MiB (bvh_build.c checks it up front) */
     double alpha;        /* sbvh: spatial splits only where the object split's children overlap
                           * by more than alpha times the root's (half) area */
+    int leaf_below;      /* a task of at most this many references is a leaf, unsplit (0: none;
+                          * the wide builds' block size: the collapse makes any subtree that
+                          * fits one block a single leaf, so splitting it is wasted) */
 } bvh_build_opts;
 
 /* A node to build: its place in the temporary pool and its references. */

@@ -48,6 +48,7 @@ typedef struct {
     uint32_t leaf_count, leaf_cap;
     uint32_t block_count;
     int depth;
+    double node_area, leaf_area; /* sums over the wide tree: nodes' areas, leaves' area x count */
     const char *failure;  /* set when a limit of the layout is exceeded */
 } collapse_ctx;
 
@@ -109,6 +110,7 @@ static uint32_t make_leaf(collapse_ctx *x, uint32_t n)
         x->failure = "more than 2^25 leaf blocks";
         return WIDE_EMPTY;
     }
+    x->leaf_area += bvh_half_area(bvh_node_box(&x->bin[n])) * count; /* double: no overflow */
     leaf_job *j = &x->leaves[x->leaf_count++];
     j->first_slot = x->sub_first[n];
     j->count = count;
@@ -145,6 +147,7 @@ static uint32_t collapse(collapse_ctx *x, uint32_t n, int level)
         return WIDE_EMPTY;
     }
     uint32_t idx = x->node_count++;
+    x->node_area += bvh_half_area(bvh_node_box(&x->bin[n]));
     const int w = x->width;
     for (int i = 0; i < w; i++) {
         float *rows = node_rows(x, idx);
@@ -313,7 +316,8 @@ void bvh_wide_free(bvh_wide *w)
 }
 
 /* Collapses b's binary tree; fills w (nodes, blocks, counts, root). */
-static int collapse_tree(const bvh *b, bvh_wide *w, int threads, accel_error *err)
+static int collapse_tree(const bvh *b, bvh_wide *w, int threads, double ct, double ci, double *sah,
+                         accel_error *err)
 {
     const uint32_t nc = b->node_count;
     const bvh_node *bin = b->nodes;
@@ -353,6 +357,10 @@ static int collapse_tree(const bvh *b, bvh_wide *w, int threads, accel_error *er
         rc = accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for %u wide nodes", x.node_cap);
     } else {
         w->root = collapse(&x, 0, 1);
+        /* The SAH cost of the wide tree, bvh_sah_cost's formula over its
+         * nodes and leaves (a wide node visit counts ct, like a binary one). */
+        const double root = bvh_half_area(bvh_node_box(&bin[0]));
+        *sah = root > 0.0 ? (ct * x.node_area + ci * x.leaf_area) / root : NAN;
         if (x.failure)
             rc = accel_fail(err, ACCEL_ERR_RANGE, "bvh: width=%d,block=%d: %s", w->width, w->block,
                             x.failure);
@@ -389,8 +397,8 @@ static int collapse_tree(const bvh *b, bvh_wide *w, int threads, accel_error *er
     return rc;
 }
 
-int bvh_wide_build(bvh *b, int width, int block, int order, int quant, int threads,
-                   accel_build_stats *stats, accel_error *err)
+int bvh_wide_build(bvh *b, int width, int block, int order, int quant, int threads, double ct,
+                   double ci, accel_build_stats *stats, accel_error *err)
 {
     bvh_wide *w = calloc(1, sizeof *w);
     if (!w) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory");
@@ -402,7 +410,7 @@ int bvh_wide_build(bvh *b, int width, int block, int order, int quant, int threa
     w->prim_count = b->prim_count;
     w->root = WIDE_EMPTY;
     if (b->node_count > 0) {
-        int rc = collapse_tree(b, w, threads, err);
+        int rc = collapse_tree(b, w, threads, ct, ci, &stats->sah_cost, err);
         if (rc) {
             bvh_wide_free(w);
             return rc;

@@ -189,9 +189,13 @@ typedef struct bvh_wide {
 struct bvh;
 /* Collapses the built binary tree of b into b->wide (width 4 or 8, leaf
  * blocks of `block` primitives) and frees the binary pools, which the wide
- * kernels do not use. Fills stats->nodes, leaves and depth. */
-int bvh_wide_build(struct bvh *b, int width, int block, int order, int quant, int threads,
-                   accel_build_stats *stats, accel_error *err);
+ * kernels do not use. Fills stats->nodes, leaves and depth, and
+ * stats->sah_cost with the wide tree's SAH cost under node cost ct and
+ * primitive cost ci (the binary tree's formula over the wide nodes and
+ * leaves). The binary tree is best built with leaf_below = block
+ * (build_common.h): a subtree that fits one block becomes one leaf. */
+int bvh_wide_build(struct bvh *b, int width, int block, int order, int quant, int threads, double ct,
+                   double ci, accel_build_stats *stats, accel_error *err);
 /* Recomputes a node's octant orders (perm) from its box rows; its first k
  * child slots are used (wide_build.c; bvh_refit.c calls it after a refit). */
 void bvh_wide_set_perm(float *rows, int width, int k);
