@@ -117,7 +117,8 @@ static inline int sub_slice(const nwalk *w, const grid_frame *f, int i)
  * than the cells (shadow rays from a finely meshed surface to a light,
  * whose 8x8 tile covers thousands of sub-cells), and it would visit cells
  * no ray passes through. Its active rays are traced again by the
- * single-ray walk (retrace below). Measured in nested_grid/README.md. */
+ * single-ray walk (retrace below). Measured in grid/README.md ("Nested
+ * grid"). */
 #ifndef NGRID_PACKET_WIDE
 #define NGRID_PACKET_WIDE 8
 #endif
@@ -128,42 +129,34 @@ static inline int sub_slice(const nwalk *w, const grid_frame *f, int i)
 #define NGRID_PACKET_BUDGET 4096
 #endif
 
-/* 1 when the packet is too wide for sub-grid f: its first slice reached
- * spans more than NGRID_PACKET_WIDE cells on an axis. */
-static int too_wide(const nwalk *w, const grid_frame *f)
-{
-    const int n = f->res[w->pk->axis[0]];
-    for (int i = 0; i < n; i++) {
-        const int k = sub_slice(w, f, i);
-        if (k < 0) return 0;
-        int lo[2], hi[2];
-        double hull[2][2];
-        if (grid_packet_span(f, w->pk, k, k, lo, hi, hull))
-            return hi[0] - lo[0] >= NGRID_PACKET_WIDE || hi[1] - lo[1] >= NGRID_PACKET_WIDE;
-    }
-    return 0;
-}
+/* ---- sub-grids, both layouts ------------------------------------------------------ */
 
-/* ---- the word layout (any depth) ------------------------------------------------- */
+static int walk_sub(nwalk *w, const grid_frame *f, const ngrid_node *node, const uint32_t *leaf);
 
-static int walk_words(nwalk *w, const ngrid_node *node);
-
-/* The cells [lo, hi] of slice k of a word-layout grid. */
-static int visit_words(nwalk *w, const ngrid_node *node, int k, const int lo[2], const int hi[2],
-                       const double hull[2][2])
+/* The cells [lo, hi] of slice k of grid f: a word-layout grid (node: cell
+ * words, a child word walks its sub-grid) or a compact sub-grid (leaf:
+ * leaf cell k holds refs[leaf[k] .. leaf[k+1])). */
+static int visit_cells(nwalk *w, const grid_frame *f, const ngrid_node *node, const uint32_t *leaf,
+                       int k, const int lo[2], const int hi[2], const double hull[2][2])
 {
     const grid_packet *pk = w->pk;
-    const grid_frame *f = &node->frame;
-    const uint32_t *words = w->g->cells + node->cell_base;
+    const uint32_t *words = node ? w->g->cells + node->cell_base : NULL;
     const uint32_t st1 = f->stride[pk->axis[1]], st2 = f->stride[pk->axis[2]];
     for (int j = lo[1]; j <= hi[1]; j++) {
         const uint32_t row = (uint32_t)k * f->stride[pk->axis[0]] + (uint32_t)j * st2;
         for (int i = lo[0]; i <= hi[0]; i++) {
-            const uint32_t word = words[row + (uint32_t)i * st1];
+            const uint32_t cell = row + (uint32_t)i * st1;
             if (!spend(w)) return 0;
+            if (leaf) {
+                if (!test_list(w, w->g->compact->refs + leaf[cell], leaf[cell + 1] - leaf[cell], hull))
+                    return 0;
+                continue;
+            }
+            const uint32_t word = words[cell];
             if (word & NGRID_CHILD) {
                 count_grid_cell(w);
-                if (!walk_words(w, &w->g->nodes[word & ~NGRID_CHILD])) return 0;
+                const ngrid_node *child = &w->g->nodes[word & ~NGRID_CHILD];
+                if (!walk_sub(w, &child->frame, child, NULL)) return 0;
                 continue;
             }
             const uint32_t *list = w->g->lists + word;
@@ -173,33 +166,35 @@ static int visit_words(nwalk *w, const ngrid_node *node, int k, const int lo[2],
     return 1;
 }
 
-/* A sub-grid, slice by slice in the walk's direction. */
-static int walk_words(nwalk *w, const ngrid_node *node)
+/* A sub-grid (cells as in visit_cells), slice by slice in the walk's
+ * direction. The packet gives up when the first slice it reaches spans
+ * more than NGRID_PACKET_WIDE cells on an axis. */
+static int walk_sub(nwalk *w, const grid_frame *f, const ngrid_node *node, const uint32_t *leaf)
 {
-    const grid_frame *f = &node->frame;
-    if (too_wide(w, f)) return give_up(w);
     const int n = f->res[w->pk->axis[0]];
+    int first = 1;
     for (int i = 0; i < n; i++) {
         const int k = sub_slice(w, f, i);
         if (k < 0) break;
         int lo[2], hi[2];
         double hull[2][2];
-        if (grid_packet_span(f, w->pk, k, k, lo, hi, hull) && !visit_words(w, node, k, lo, hi, hull))
-            return 0;
+        if (!grid_packet_span(f, w->pk, k, k, lo, hi, hull)) continue;
+        if (first && (hi[0] - lo[0] >= NGRID_PACKET_WIDE || hi[1] - lo[1] >= NGRID_PACKET_WIDE))
+            return give_up(w);
+        first = 0;
+        if (!visit_cells(w, f, node, leaf, k, lo, hi, hull)) return 0;
     }
     return 1;
 }
 
-/* ---- the compact layout (two levels) ------------------------------------------------ */
+/* ---- the compact layout's top level ---------------------------------------------------- */
 
 /* A top cell's sub-grid: its frame remade from the top planes as the build
- * and the single-ray walk make it (ngrid_compact.c), then walked slice by
- * slice; leaf cells hold refs[leaf[c] .. leaf[c+1]). */
+ * and the single-ray walk make it (ngrid_compact.c), then walked. */
 static int walk_compact_sub(nwalk *w, const int idx[3], ngrid_top_cell tc)
 {
     const ngrid_compact *kc = w->g->compact;
     const grid_frame *top = &kc->top;
-    const grid_packet *pk = w->pk;
     float planes[3 * (NGRID_COMPACT_MAX_RES + 1)];
     grid_frame f;
     const int res[3] = {(int)(tc.res & 0xFF) + 1, (int)(tc.res >> 8 & 0xFF) + 1,
@@ -208,25 +203,7 @@ static int walk_compact_sub(nwalk *w, const int idx[3], ngrid_top_cell tc)
                      {top->planes[0][idx[0] + 1], top->planes[1][idx[1] + 1],
                       top->planes[2][idx[2] + 1]}};
     grid_frame_init(&f, cb, res, planes);
-    const uint32_t *leaf = kc->leaf + tc.first;
-    if (too_wide(w, &f)) return give_up(w);
-    const uint32_t st1 = f.stride[pk->axis[1]], st2 = f.stride[pk->axis[2]];
-    for (int i = 0; i < res[pk->axis[0]]; i++) {
-        const int k = sub_slice(w, &f, i);
-        if (k < 0) break;
-        int lo[2], hi[2];
-        double hull[2][2];
-        if (!grid_packet_span(&f, pk, k, k, lo, hi, hull)) continue;
-        for (int jj = lo[1]; jj <= hi[1]; jj++) {
-            const uint32_t row = (uint32_t)k * f.stride[pk->axis[0]] + (uint32_t)jj * st2;
-            for (int ii = lo[0]; ii <= hi[0]; ii++) {
-                const uint32_t cell = row + (uint32_t)ii * st1, b = leaf[cell];
-                if (!spend(w)) return 0;
-                if (!test_list(w, kc->refs + b, leaf[cell + 1] - b, hull)) return 0;
-            }
-        }
-    }
-    return 1;
+    return walk_sub(w, &f, NULL, kc->leaf + tc.first);
 }
 
 /* The cells [lo, hi] of top slice k of the compact layout. */
@@ -277,7 +254,7 @@ static void packet_walk(nwalk *w, const grid_frame *top)
         if (grid_packet_span(top, pk, k, k, lo, hi, hull)) {
             w->w_max = active_w_max(pk);
             if (!(w->g->compact ? visit_compact(w, k, lo, hi, hull)
-                                : visit_words(w, &w->g->nodes[0], k, lo, hi, hull)))
+                                : visit_cells(w, top, &w->g->nodes[0], NULL, k, lo, hi, hull)))
                 return;
         }
         if (!grid_packet_leave_slice(top, pk, w->cn, w->c, k)) return;
