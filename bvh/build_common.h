@@ -23,6 +23,9 @@
 #define BVH_BUILD_COMMON_H
 
 #include <assert.h>
+#include <math.h>
+#include <string.h>
+
 #include "bvh_node.h"
 
 #ifdef __cplusplus
@@ -39,6 +42,31 @@ typedef struct {
 } bvh_ref;
 
 static_assert(sizeof(bvh_ref) == 32, "bvh_ref is one half cache line");
+
+/* Whether all of primitive `prim`'s coordinates are finite (the build
+ * leaves out the others: no finite ray hits them, and their boxes would
+ * poison every area above them; refit checks the same). */
+static inline int bvh_prim_finite(const accel_scene *s, uint32_t prim)
+{
+    const float *p = prim < s->tri_count ? s->tris + 9 * (size_t)prim
+                                         : s->spheres + 4 * (size_t)(prim - s->tri_count);
+    int n = prim < s->tri_count ? 9 : 4;
+    for (int i = 0; i < n; i++)
+        if (!isfinite(p[i])) return 0;
+    return 1;
+}
+
+/* The BVH_SLOT_FLOATS floats of a primitive slot: a triangle's 9, or a
+ * sphere's 4 followed by zeros. */
+static inline void bvh_prim_slot(const accel_scene *s, uint32_t prim, float *dst)
+{
+    if (prim < s->tri_count) {
+        memcpy(dst, s->tris + 9 * (size_t)prim, 9 * sizeof(float));
+    } else {
+        memcpy(dst, s->spheres + 4 * (size_t)(prim - s->tri_count), 4 * sizeof(float));
+        memset(dst + 4, 0, 5 * sizeof(float));
+    }
+}
 
 typedef enum {
     BVH_BUILD_BINNED = 0,

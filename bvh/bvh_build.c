@@ -14,17 +14,6 @@
 
 /* ---- references, final layout, statistics --------------------------------- */
 
-/* Whether all of a primitive's coordinates are finite. */
-static int prim_finite(const accel_scene *s, uint32_t prim)
-{
-    const float *p = prim < s->tri_count ? s->tris + 9 * (size_t)prim
-                                         : s->spheres + 4 * (size_t)(prim - s->tri_count);
-    int n = prim < s->tri_count ? 9 : 4;
-    for (int i = 0; i < n; i++)
-        if (!isfinite(p[i])) return 0;
-    return 1;
-}
-
 /* One reference per live primitive. A primitive with a non-finite
  * coordinate is left out: no finite ray can hit it (the reference never
  * reports one), and its box would poison every area and bin above it. */
@@ -33,7 +22,7 @@ static uint32_t make_refs(const accel_scene *s, bvh_ref *refs)
     uint32_t n = 0;
     for (uint32_t i = 0; i < s->live_count; i++) {
         uint32_t prim = s->live[i];
-        if (!prim_finite(s, prim)) continue;
+        if (!bvh_prim_finite(s, prim)) continue;
         box3 b = accel_prim_bounds(s, prim);
         bvh_ref *r = &refs[n++];
         r->lo[0] = b.min.x, r->lo[1] = b.min.y, r->lo[2] = b.min.z;
@@ -115,14 +104,8 @@ static void gather_chunk(void *p, size_t begin, size_t end, int thread)
     const accel_scene *s = j->scene;
     for (size_t i = begin; i < end; i++) {
         uint32_t prim = j->refs[i].prim;
-        float *dst = j->out->prim_data + BVH_SLOT_FLOATS * i;
         j->out->prim_ids[i] = j->scene_id[prim];
-        if (prim < s->tri_count) {
-            memcpy(dst, s->tris + 9 * (size_t)prim, 9 * sizeof(float));
-        } else {
-            memcpy(dst, s->spheres + 4 * (size_t)(prim - s->tri_count), 4 * sizeof(float));
-            memset(dst + 4, 0, 5 * sizeof(float));
-        }
+        bvh_prim_slot(s, prim, j->out->prim_data + BVH_SLOT_FLOATS * i);
     }
 }
 

@@ -40,27 +40,6 @@
 #include "bvh.h"
 #include "wide_node.h"
 
-/* The 9 floats of a slot for scene id `id` (a sphere: its 4, then zeros). */
-static void slot_from(const accel_scene *s, uint32_t id, float *dst)
-{
-    if (id < s->tri_count) {
-        memcpy(dst, s->tris + 9 * (size_t)id, 9 * sizeof(float));
-    } else {
-        memcpy(dst, s->spheres + 4 * (size_t)(id - s->tri_count), 4 * sizeof(float));
-        memset(dst + 4, 0, 5 * sizeof(float));
-    }
-}
-
-static int prim_finite(const accel_scene *s, uint32_t id)
-{
-    const float *p = id < s->tri_count ? s->tris + 9 * (size_t)id
-                                       : s->spheres + 4 * (size_t)(id - s->tri_count);
-    int n = id < s->tri_count ? 9 : 4;
-    for (int i = 0; i < n; i++)
-        if (!isfinite(p[i])) return 0;
-    return 1;
-}
-
 /* Marks the scene ids a tree holds (mark[id] = 1); 0 when one is not an id
  * of a scene of `total` primitives (a tree loaded from a file does not know
  * its scene's sphere count). */
@@ -74,13 +53,15 @@ static int mark_ids(const bvh *b, uint8_t *mark, size_t total)
         return 1;
     }
     const bvh_wide *w = b->wide;
-    for (uint32_t k = 0; k < w->block_count; k++)
+    for (uint32_t k = 0; k < w->block_count; k++) {
+        float *v;
+        uint32_t *id;
+        wide_block_rows(w, k, &v, &id);
         for (int lane = 0; lane < w->block; lane++) {
-            uint32_t id = w->block == 8 ? ((const wide_block8 *)w->blocks)[k].id[lane]
-                                        : ((const wide_block4 *)w->blocks)[k].id[lane];
-            if (id >= total) return 0;
-            mark[id] = 1;
+            if (id[lane] >= total) return 0;
+            mark[id[lane]] = 1;
         }
+    }
     return 1;
 }
 
@@ -106,7 +87,7 @@ int bvh_refit_compatible(const bvh *b, const accel_scene *s, accel_error *err)
     int same = 1;
     for (uint32_t i = 0; same && i < s->live_count; i++) {
         uint32_t id = s->live[i];
-        if (!prim_finite(s, id)) continue; /* left out by the build as well */
+        if (!bvh_prim_finite(s, id)) continue; /* left out by the build as well */
         if (mark[id] != 1) same = 0;       /* not in the tree */
         mark[id] = 2;
     }
@@ -128,7 +109,7 @@ static void copy_slots(void *p, size_t begin, size_t end, int thread)
     (void)thread;
     copy_job *j = p;
     for (size_t i = begin; i < end; i++)
-        slot_from(j->s, j->b->prim_ids[i], j->b->prim_data + BVH_SLOT_FLOATS * i);
+        bvh_prim_slot(j->s, j->b->prim_ids[i], j->b->prim_data + BVH_SLOT_FLOATS * i);
 }
 
 static void refit_binary(bvh *b, const accel_scene *s, int threads, int boxes)
@@ -161,21 +142,6 @@ typedef struct {
 
 /* accel_prim_bounds of scene id `id` from its copied slot (the same
  * operations on the same floats). */
-static box3 slot_bounds(const accel_scene *s, uint32_t id, const float *slot)
-{
-    box3 b = box3_empty();
-    if (id < s->tri_count) {
-        b = box3_grow(b, v3_load(slot));
-        b = box3_grow(b, v3_load(slot + 3));
-        b = box3_grow(b, v3_load(slot + 6));
-    } else {
-        vec3 r = v3(slot[3], slot[3], slot[3]);
-        b.min = v3_sub(v3_load(slot), r);
-        b.max = v3_add(v3_load(slot), r);
-    }
-    return b;
-}
-
 static void copy_blocks(void *p, size_t begin, size_t end, int thread)
 {
     (void)thread;
@@ -183,22 +149,14 @@ static void copy_blocks(void *p, size_t begin, size_t end, int thread)
     const int bs = j->w->block;
     for (size_t k = begin; k < end; k++) {
         float *v;
-        const uint32_t *id;
-        if (bs == 8) {
-            wide_block8 *blk = (wide_block8 *)j->w->blocks + k;
-            v = blk->v[0][0], id = blk->id;
-        } else {
-            wide_block4 *blk = (wide_block4 *)j->w->blocks + k;
-            v = blk->v[0][0], id = blk->id;
-        }
+        uint32_t *id;
+        wide_block_rows(j->w, (uint32_t)k, &v, &id);
         box3 box = box3_empty();
         for (int lane = 0; lane < bs; lane++) {
             float slot[BVH_SLOT_FLOATS];
-            slot_from(j->s, id[lane], slot);
-            for (int vtx = 0; vtx < 3; vtx++)
-                for (int axis = 0; axis < 3; axis++)
-                    v[(3 * vtx + axis) * bs + lane] = slot[3 * vtx + axis];
-            box = box3_union(box, slot_bounds(j->s, id[lane], slot));
+            bvh_prim_slot(j->s, id[lane], slot);
+            wide_put_lane(v, bs, lane, slot);
+            box = box3_union(box, accel_prim_bounds(j->s, id[lane]));
         }
         if (j->block_box) j->block_box[k] = box;
     }

@@ -181,15 +181,6 @@ typedef struct {
     const leaf_job *leaves;
 } pack_job;
 
-/* One lane of a block from slot s (9 floats: a triangle, or a sphere's 4
- * followed by zeros). */
-static void put_lane(float *v, int block, int lane, const float *slot)
-{
-    for (int vtx = 0; vtx < 3; vtx++)
-        for (int axis = 0; axis < 3; axis++)
-            v[(3 * vtx + axis) * block + lane] = slot[3 * vtx + axis];
-}
-
 /* Leaves to SoA blocks; the last block of a leaf is padded with copies of
  * the leaf's last primitive. */
 static void pack_chunk(void *p, size_t begin, size_t end, int thread)
@@ -201,20 +192,13 @@ static void pack_chunk(void *p, size_t begin, size_t end, int thread)
         const leaf_job *leaf = &j->leaves[l];
         uint32_t blocks = (leaf->count + (uint32_t)bs - 1) / (uint32_t)bs;
         for (uint32_t k = 0; k < blocks; k++) {
-            uint32_t bi = leaf->first_block + k;
             float *v;
             uint32_t *id;
-            if (bs == 8) {
-                wide_block8 *blk = (wide_block8 *)j->w->blocks + bi;
-                v = blk->v[0][0], id = blk->id;
-            } else {
-                wide_block4 *blk = (wide_block4 *)j->w->blocks + bi;
-                v = blk->v[0][0], id = blk->id;
-            }
+            wide_block_rows(j->w, leaf->first_block + k, &v, &id);
             for (int lane = 0; lane < bs; lane++) {
                 uint32_t i = k * (uint32_t)bs + (uint32_t)lane;
                 uint32_t slot = leaf->first_slot + (i < leaf->count ? i : leaf->count - 1);
-                put_lane(v, bs, lane, j->b->prim_data + (size_t)BVH_SLOT_FLOATS * slot);
+                wide_put_lane(v, bs, lane, j->b->prim_data + (size_t)BVH_SLOT_FLOATS * slot);
                 id[lane] = j->b->prim_ids[slot];
             }
         }

@@ -201,6 +201,27 @@ int bvh_wide_build(struct bvh *b, int width, int block, int order, int quant, in
 void bvh_wide_set_perm(float *rows, int width, int k);
 /* The decoded box of child c of a quantized node (lo[3], hi[3]). */
 void bvh_wide_qbox(const wide_qnode8 *n, int c, float *lo, float *hi);
+/* Block k of w's pool as its rows (v[(3 * vertex + axis) * block + lane])
+ * and ids, for either block size. */
+static inline void wide_block_rows(const bvh_wide *w, uint32_t k, float **v, uint32_t **id)
+{
+    if (w->block == 8) {
+        wide_block8 *blk = (wide_block8 *)w->blocks + k;
+        *v = blk->v[0][0], *id = blk->id;
+    } else {
+        wide_block4 *blk = (wide_block4 *)w->blocks + k;
+        *v = blk->v[0][0], *id = blk->id;
+    }
+}
+
+/* One lane of a block's rows from a primitive slot (9 floats). */
+static inline void wide_put_lane(float *v, int block, int lane, const float *slot)
+{
+    for (int vtx = 0; vtx < 3; vtx++)
+        for (int axis = 0; axis < 3; axis++)
+            v[(3 * vtx + axis) * block + lane] = slot[3 * vtx + axis];
+}
+
 /* Bytes held by the wide tree (nodes, blocks, the struct itself). */
 size_t bvh_wide_memory(const bvh_wide *w);
 void bvh_wide_free(bvh_wide *w);
