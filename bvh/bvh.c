@@ -144,6 +144,30 @@ static void bvh_destroy(void *a)
     free(a);
 }
 
+/* The tree over `scene` with the given options: the binary build, then
+ * pairs=split or the collapse to width 4|8 (block 0: auto, 4 with spheres,
+ * else 8). Used by the build and by update's rebuild. On failure nothing
+ * is left allocated in out. */
+static int build_tree(const accel_scene *scene, const bvh_build_opts *opts, const wide_opts *wo,
+                      int traverse, int threads, bvh *out, accel_build_stats *stats, accel_error *err)
+{
+    const int block = wo->block ? wo->block : scene->sphere_count ? 4 : 8;
+    bvh_build_opts o = *opts;
+    /* The collapse makes every subtree of at most one block one leaf: the
+     * binary build does not split those (the same wide tree, about a fifth
+     * less build time on bunny). */
+    if (wo->width > 2) o.leaf_below = block;
+    int rc = bvh_build_run(scene, &o, threads, out, stats, err);
+    if (rc == 0 && wo->width == 2 && wo->split_pairs) rc = bvh_split_pairs(out, err);
+    if (rc == 0 && wo->width > 2) {
+        rc = bvh_wide_build(out, wo->width, block, wo->order, wo->quant, threads < 1 ? 1 : threads, o.ct,
+                            o.ci, stats, err);
+        if (rc == 0) out->wide->packets = traverse == BVH_TRAVERSE_PACKET;
+        if (rc) bvh_release(out);
+    }
+    return rc;
+}
+
 static int bvh_kind_build(const accel_scene *scene, const accel_params *params, int threads,
                           void **out, accel_build_stats *stats, accel_error *err)
 {
@@ -154,19 +178,7 @@ static int bvh_kind_build(const accel_scene *scene, const accel_params *params, 
     if (rc) return rc;
     bvh *b = calloc(1, sizeof *b);
     if (!b) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory");
-    if (wo.block == 0) wo.block = scene->sphere_count ? 4 : 8;
-    /* The collapse makes every subtree of at most one block one leaf: the
-     * binary build does not split those (the same wide tree, about a fifth
-     * less build time on bunny). */
-    if (wo.width > 2) opts.leaf_below = wo.block;
-    rc = bvh_build_run(scene, &opts, threads, b, stats, err);
-    if (rc == 0 && wo.width == 2 && wo.split_pairs) rc = bvh_split_pairs(b, err);
-    if (rc == 0 && wo.width > 2) {
-        rc = bvh_wide_build(b, wo.width, wo.block, wo.order, wo.quant, threads < 1 ? 1 : threads, opts.ct,
-                            opts.ci, stats, err);
-        if (rc == 0) b->wide->packets = traverse == BVH_TRAVERSE_PACKET;
-        if (rc) bvh_release(b);
-    }
+    rc = build_tree(scene, &opts, &wo, traverse, threads, b, stats, err);
     if (rc) {
         free(b);
         return rc;
@@ -185,7 +197,6 @@ static int bvh_kind_build(const accel_scene *scene, const accel_params *params, 
     b->rebuild->frustum = frustum;
     b->rebuild->threads = threads < 1 ? 1 : threads;
     b->rebuild->wo = wo;
-    b->rebuild->wo.block = atoi(accel_param_str(params, "block")); /* auto again on a rebuild */
     stats->bytes = bvh_memory(b);
     *out = b;
     return 0;
@@ -202,17 +213,7 @@ static int bvh_rebuild_on(bvh *b, const accel_scene *scene, accel_error *err)
     bvh nb;
     accel_build_stats st;
     memset(&st, 0, sizeof st);
-    int block = r->wo.block ? r->wo.block : scene->sphere_count ? 4 : 8;
-    bvh_build_opts opts = r->opts;
-    if (r->wo.width > 2) opts.leaf_below = block;
-    int rc = bvh_build_run(scene, &opts, r->threads, &nb, &st, err);
-    if (rc == 0 && r->wo.width == 2 && r->wo.split_pairs) rc = bvh_split_pairs(&nb, err);
-    if (rc == 0 && r->wo.width > 2) {
-        rc = bvh_wide_build(&nb, r->wo.width, block, r->wo.order, r->wo.quant, r->threads, r->opts.ct,
-                            r->opts.ci, &st, err);
-        if (rc == 0) nb.wide->packets = r->traverse == BVH_TRAVERSE_PACKET;
-        if (rc) bvh_release(&nb);
-    }
+    int rc = build_tree(scene, &r->opts, &r->wo, r->traverse, r->threads, &nb, &st, err);
     if (rc) return rc;
     nb.naive = b->naive, nb.traverse = b->traverse, nb.frustum = b->frustum;
     nb.first_left = b->first_left;
