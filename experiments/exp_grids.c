@@ -66,6 +66,22 @@ static void target_row(exp_ctx *x, exp_text *f, const char *what, int bit, const
         exp_text_add(f, " %s, %s: %s (target %s: %s);", what, bench_set_name(bit), value, target, outcome);
 }
 
+/* The configuration with the lowest median time on ray set `bit` among
+ * the packet kernels (packets = 1: specs with traverse=packet) or the
+ * single-ray ones (packets = 0), leaving out `skip`; -1 when none. */
+static int fastest(const exp_group *g, int bit, int packets, int skip)
+{
+    int best = -1;
+    for (int c = 0; c < g->count; c++) {
+        const exp_cfg *cf = &g->cfg[c];
+        if (!cf->ok || c == skip || (strstr(cf->spec, "traverse=packet") != NULL) != packets ||
+            !cf->set[exp_set_index(bit)].have)
+            continue;
+        if (best < 0 || exp_group_ns(g, c, bit).median < exp_group_ns(g, best, bit).median) best = c;
+    }
+    return best;
+}
+
 static void findings(exp_ctx *x, study *st, const exp_group *g, const accel_scene *s)
 {
     char a[96], what[640], tt[32];
@@ -109,16 +125,7 @@ static void findings(exp_ctx *x, study *st, const exp_group *g, const accel_scen
      * BVH's packets (no target: the fair coherent comparison). */
     if (bpk >= 0 && g->cfg[bpk].ok) {
         for (int k = 0; k < 2; k++) {
-            const int bit = set_bits[k];
-            int best = -1;
-            for (int c = 0; c < g->count; c++) {
-                const exp_cfg *cf = &g->cfg[c];
-                if (!cf->ok || c == bpk || !strstr(cf->spec, "traverse=packet") ||
-                    !cf->set[exp_set_index(bit)].have)
-                    continue;
-                if (best < 0 || exp_group_ns(g, c, bit).median < exp_group_ns(g, best, bit).median)
-                    best = c;
-            }
+            const int bit = set_bits[k], best = fastest(g, bit, 1, bpk);
             if (best < 0) continue;
             exp_est r = exp_group_speedup(g, bpk, best, bit); /* > 1: the grid is faster */
             const int cmp = exp_ratio_cmp(&r, g->floor);
@@ -132,15 +139,7 @@ static void findings(exp_ctx *x, study *st, const exp_group *g, const accel_scen
     if (bvh >= 0 && g->cfg[bvh].ok) {
         double t = is_mesh(s->name) ? 1.3 : strstr(s->name, "teapot_stadium") ? 2.0 : 0;
         for (int k = 0; k < 3; k += 2) {
-            int bit = set_bits[k], best = -1;
-            for (int c = 0; c < g->count; c++) {
-                const exp_cfg *cf = &g->cfg[c];
-                if (!cf->ok || c == bvh || strstr(cf->spec, "traverse=packet") ||
-                    !cf->set[exp_set_index(bit)].have)
-                    continue;
-                if (best < 0 || exp_group_ns(g, c, bit).median < exp_group_ns(g, best, bit).median)
-                    best = c;
-            }
+            int bit = set_bits[k], best = fastest(g, bit, 0, bvh);
             if (best < 0) continue;
             exp_est r = rel_bvh(g, bvh, best, bit);
             snprintf(what, sizeof what, "time of the best single-ray grid `%s` over `bvh`",
