@@ -5,7 +5,8 @@
  * traversal (grid_packet.c): which active rays of a packet may hit a
  * primitive. A filter only drops a (ray, primitive) pair that the exact test
  * accel_prim_hit (core/prim.h) would reject; the argument for each bound is
- * in grid_packet.c's header. Private to grid/.
+ * in grid_packet.c's header. Private to grid/, but for nested_grid/ through
+ * grid_packet_walk.h.
  */
 #ifndef GRID_GRID_PACKET_FILTER_H
 #define GRID_GRID_PACKET_FILTER_H
