@@ -10,11 +10,17 @@
  * defined (4 when included alone). It defines wide_leaf_ray_<LB>,
  * leaf_setup_<LB>() and leaf_block_<LB>().
  *
- * Every lane computes exactly what accel_tri_watertight (core/prim.h)
- * computes, with the same operations in the same order and no fused
- * multiply-add: the shear, the edge functions U, V, W, their error bounds,
- * the scaled distance T and its bound. Each lane then falls in one of
- * three classes, decided as the scalar test decides it:
+ * Every lane computes what accel_tri_watertight (core/prim.h) computes,
+ * in the same order: the shear, the edge functions U, V, W, their error
+ * bounds, the scaled distance T and its bound. Where the target has FMA,
+ * each "a - b c" or "a b + c" of those is one fused operation (wide_simd.h)
+ * where the scalar test rounds twice: 21 vector operations fewer per
+ * block. The bounds of ACCEL_EDGE_FILTER count a rounding for the product
+ * and one for the sum; a fused step has only the second, so every bound
+ * holds as it stands. A lane's U, V, W and T may then differ from the
+ * scalar test's in their last bits, never in a decided sign. Each lane
+ * then falls in one of three classes, decided as the scalar test decides
+ * it:
  *   - sure miss: an edge function is surely negative and another surely
  *     positive, or T lies surely outside [t_near, t] * det;
  *   - sure hit: all edge functions surely of one sign and T surely inside;
@@ -23,8 +29,9 @@
  *     itself runs, after the sure hits have lowered t, exactly as the
  *     scalar test would redo them.
  * So a block answers what the scalar test, run on its primitives in turn,
- * would answer: the same hits, possibly a different one among primitives
- * hit at the same distance (a tie the FORMATS.md rule accepts).
+ * would answer: the same hits (t within a few ulps), possibly a different
+ * one among primitives hit at the same distance (a tie the FORMATS.md
+ * rule accepts).
  * Spheres (lanes with id >= tri_count) go through the scalar sphere test.
  */
 #include "wide_node.h"
@@ -123,34 +130,40 @@ WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_pr
     LF bz_ = LV(sub)(LV(load)(v1 + r->ofs_z), r->okz);
     LF cx_ = LV(sub)(LV(load)(v2 + r->ofs_x), r->okx), cy_ = LV(sub)(LV(load)(v2 + r->ofs_y), r->oky);
     LF cz_ = LV(sub)(LV(load)(v2 + r->ofs_z), r->okz);
-    /* Shear and the edge functions. */
-    LF ax = LV(sub)(ax_, LV(mul)(r->sx, az_)), ay = LV(sub)(ay_, LV(mul)(r->sy, az_));
-    LF bx = LV(sub)(bx_, LV(mul)(r->sx, bz_)), by = LV(sub)(by_, LV(mul)(r->sy, bz_));
-    LF cx = LV(sub)(cx_, LV(mul)(r->sx, cz_)), cy = LV(sub)(cy_, LV(mul)(r->sy, cz_));
-    LF U = LV(sub)(LV(mul)(cx, by), LV(mul)(cy, bx));
-    LF V = LV(sub)(LV(mul)(ax, cy), LV(mul)(ay, cx));
-    LF W = LV(sub)(LV(mul)(bx, ay), LV(mul)(by, ax));
-    /* Their error bounds (ACCEL_EDGE_FILTER, as in accel_tri_watertight). */
+    /* Shear and the edge functions, fused where the target has FMA (the
+     * header: each fused step rounds once where the bound counts two). */
+    LF ax = LV(fnmadd)(r->sx, az_, ax_), ay = LV(fnmadd)(r->sy, az_, ay_);
+    LF bx = LV(fnmadd)(r->sx, bz_, bx_), by = LV(fnmadd)(r->sy, bz_, by_);
+    LF cx = LV(fnmadd)(r->sx, cz_, cx_), cy = LV(fnmadd)(r->sy, cz_, cy_);
+    LF U = LV(fmsub)(cx, by, LV(mul)(cy, bx));
+    LF V = LV(fmsub)(ax, cy, LV(mul)(ay, cx));
+    LF W = LV(fmsub)(bx, ay, LV(mul)(by, ax));
+    /* Their error bounds (ACCEL_EDGE_FILTER, as in accel_tri_watertight;
+     * 16u leaves room for the bound's own rounding, fused or not). */
     LF aaz = LV(abs)(az_), abz = LV(abs)(bz_), acz = LV(abs)(cz_);
-    LF max_ = LV(add)(LV(abs)(ax_), LV(mul)(r->sxa, aaz)), may_ = LV(add)(LV(abs)(ay_), LV(mul)(r->sya, aaz));
-    LF mbx_ = LV(add)(LV(abs)(bx_), LV(mul)(r->sxa, abz)), mby_ = LV(add)(LV(abs)(by_), LV(mul)(r->sya, abz));
-    LF mcx_ = LV(add)(LV(abs)(cx_), LV(mul)(r->sxa, acz)), mcy_ = LV(add)(LV(abs)(cy_), LV(mul)(r->sya, acz));
+    LF max_ = LV(fmadd)(r->sxa, aaz, LV(abs)(ax_)), may_ = LV(fmadd)(r->sya, aaz, LV(abs)(ay_));
+    LF mbx_ = LV(fmadd)(r->sxa, abz, LV(abs)(bx_)), mby_ = LV(fmadd)(r->sya, abz, LV(abs)(by_));
+    LF mcx_ = LV(fmadd)(r->sxa, acz, LV(abs)(cx_)), mcy_ = LV(fmadd)(r->sya, acz, LV(abs)(cy_));
     /* The cheap bound first: 16u (M_cx M_by + M_cy M_bx), valid too (the
      * sheared coordinates are at most about M). Lanes it leaves uncertain
      * get the tight bound of ACCEL_EDGE_FILTER (accel_tri_watertight)
      * before the double test; the smaller of the two is kept. */
     LF filter = LV(set1)(ACCEL_EDGE_FILTER);
-    LF eu = LV(mul)(filter, LV(add)(LV(mul)(mcx_, mby_), LV(mul)(mcy_, mbx_)));
-    LF ev = LV(mul)(filter, LV(add)(LV(mul)(max_, mcy_), LV(mul)(may_, mcx_)));
-    LF ew = LV(mul)(filter, LV(add)(LV(mul)(mbx_, may_), LV(mul)(mby_, max_)));
+    LF eu = LV(mul)(filter, LV(fmadd)(mcx_, mby_, LV(mul)(mcy_, mbx_)));
+    LF ev = LV(mul)(filter, LV(fmadd)(max_, mcy_, LV(mul)(may_, mcx_)));
+    LF ew = LV(mul)(filter, LV(fmadd)(mbx_, may_, LV(mul)(mby_, max_)));
     LF sure_neg, sure_pos, edge_ok;
     int miss, ok, unsure;
     for (int pass = 0;; pass++) {
         LF zero = LV(set1)(0.0f);
         LF neu = LV(sub)(zero, eu), nev = LV(sub)(zero, ev), new_ = LV(sub)(zero, ew);
-        sure_neg = LV(or)(LV(or)(LV(lt)(U, neu), LV(lt)(V, nev)), LV(lt)(W, new_));
-        sure_pos = LV(or)(LV(or)(LV(gt)(U, eu), LV(gt)(V, ev)), LV(gt)(W, ew));
-        edge_ok = LV(and)(LV(and)(LV(gt)(LV(abs)(U), eu), LV(gt)(LV(abs)(V), ev)), LV(gt)(LV(abs)(W), ew));
+        /* Ordered compares: a NaN lane is neither, so uncertain. |U| > eu
+         * is "surely negative or surely positive". */
+        LF nu = LV(lt)(U, neu), nv = LV(lt)(V, nev), nw = LV(lt)(W, new_);
+        LF pu = LV(gt)(U, eu), pv = LV(gt)(V, ev), pw = LV(gt)(W, ew);
+        sure_neg = LV(or)(LV(or)(nu, nv), nw);
+        sure_pos = LV(or)(LV(or)(pu, pv), pw);
+        edge_ok = LV(and)(LV(and)(LV(or)(nu, pu), LV(or)(nv, pv)), LV(or)(nw, pw));
         miss = LV(mask)(LV(and)(sure_neg, sure_pos)) | spheres;
         ok = LV(mask)(edge_ok) & ~miss;
         unsure = all & ~miss & ~LV(mask)(edge_ok);
@@ -158,15 +171,15 @@ WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_pr
         LF f2 = LV(set1)(ACCEL_EDGE_FILTER2 / ACCEL_EDGE_FILTER);
         LF aax = LV(abs)(ax), aay = LV(abs)(ay), abx = LV(abs)(bx), aby = LV(abs)(by);
         LF acx = LV(abs)(cx), acy = LV(abs)(cy);
-        LF tu = LV(add)(LV(mul)(filter, LV(add)(LV(add)(LV(mul)(acx, mby_), LV(mul)(aby, mcx_)),
-                                                LV(add)(LV(mul)(acy, mbx_), LV(mul)(abx, mcy_)))),
-                        LV(mul)(f2, eu));
-        LF tv = LV(add)(LV(mul)(filter, LV(add)(LV(add)(LV(mul)(aax, mcy_), LV(mul)(acy, max_)),
-                                                LV(add)(LV(mul)(aay, mcx_), LV(mul)(acx, may_)))),
-                        LV(mul)(f2, ev));
-        LF tw = LV(add)(LV(mul)(filter, LV(add)(LV(add)(LV(mul)(abx, may_), LV(mul)(aay, mbx_)),
-                                                LV(add)(LV(mul)(aby, max_), LV(mul)(aax, mby_)))),
-                        LV(mul)(f2, ew));
+        LF tu = LV(fmadd)(filter, LV(add)(LV(fmadd)(acx, mby_, LV(mul)(aby, mcx_)),
+                                          LV(fmadd)(acy, mbx_, LV(mul)(abx, mcy_))),
+                          LV(mul)(f2, eu));
+        LF tv = LV(fmadd)(filter, LV(add)(LV(fmadd)(aax, mcy_, LV(mul)(acy, max_)),
+                                          LV(fmadd)(aay, mcx_, LV(mul)(acx, may_))),
+                          LV(mul)(f2, ev));
+        LF tw = LV(fmadd)(filter, LV(add)(LV(fmadd)(abx, may_, LV(mul)(aay, mbx_)),
+                                          LV(fmadd)(aby, max_, LV(mul)(aax, mby_))),
+                          LV(mul)(f2, ew));
         /* The smaller on the uncertain lanes only, as the scalar test does
          * (a NaN bound stays NaN: the lane stays uncertain). */
         LF keep = LV(or)(LV(and)(sure_neg, sure_pos), edge_ok);
@@ -179,14 +192,13 @@ WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_pr
         /* det and T, and T's bound; compared against [t_near, t] * |det|. */
         LF det = LV(add)(LV(add)(U, V), W);
         LF zaz = LV(mul)(r->sz, az_), zbz = LV(mul)(r->sz, bz_), zcz = LV(mul)(r->sz, cz_);
-        LF T = LV(add)(LV(add)(LV(mul)(U, zaz), LV(mul)(V, zbz)), LV(mul)(W, zcz));
+        LF T = LV(fmadd)(U, zaz, LV(fmadd)(V, zbz, LV(mul)(W, zcz)));
         LF sgn = LV(signs)(det);
         det = LV(xor)(det, sgn);
         T = LV(xor)(T, sgn);
         LF za = LV(abs)(zaz), zb = LV(abs)(zbz), zc = LV(abs)(zcz);
-        LF sum = LV(add)(LV(add)(LV(mul)(LV(abs)(U), za), LV(mul)(LV(abs)(V), zb)), LV(mul)(LV(abs)(W), zc));
-        LF et = LV(add)(LV(add)(LV(add)(LV(mul)(filter, sum), LV(mul)(eu, za)), LV(mul)(ev, zb)),
-                        LV(mul)(ew, zc));
+        LF sum = LV(fmadd)(LV(abs)(U), za, LV(fmadd)(LV(abs)(V), zb, LV(mul)(LV(abs)(W), zc)));
+        LF et = LV(fmadd)(filter, sum, LV(fmadd)(eu, za, LV(fmadd)(ev, zb, LV(mul)(ew, zc))));
         /* det's own error moves the range ends (accel_tri_watertight). */
         LF ed = LV(add)(LV(add)(eu, ev), ew), dlo = LV(sub)(det, ed), dhi = LV(add)(det, ed);
         int near_pos = p->t_near >= 0.0f, far_pos = *t >= 0.0f;

@@ -15,8 +15,13 @@
  *   fN_max(x, acc) = x > acc ? x : acc     (maxf)
  *   fN_lt / fN_le / fN_gt: ordered, false when either side is NaN
  *   masks are all-ones or all-zero lanes; fN_mask packs their sign bits.
- * No fused multiply-add anywhere: every product is rounded before the sum,
- * as in the scalar tests of core/prim.h whose error bounds they share.
+ * fN_fmadd(a, b, c) = a b + c, fN_fnmadd(a, b, c) = c - a b and
+ * fN_fmsub(a, b, c) = a b - c are fused (one rounding) where the compiler
+ * targets FMA, and a rounded product then a rounded sum elsewhere. Only
+ * the leaf test uses them, where the error bounds of core/prim.h assume
+ * the two roundings: the fused form errs less, so every bound still
+ * holds (wide_leaf.h). The slab test and everything else round every
+ * product before the sum, as the scalar tests do.
  */
 #ifndef BVH_WIDE_SIMD_H
 #define BVH_WIDE_SIMD_H
@@ -59,6 +64,9 @@ extern "C" {
     WIDE_INLINE f##N f##N##_sub(f##N a, f##N b) { for (int i = 0; i < N; i++) a.v[i] -= b.v[i]; return a; } \
     WIDE_INLINE f##N f##N##_mul(f##N a, f##N b) { for (int i = 0; i < N; i++) a.v[i] *= b.v[i]; return a; } \
     WIDE_INLINE f##N f##N##_div(f##N a, f##N b) { for (int i = 0; i < N; i++) a.v[i] /= b.v[i]; return a; } \
+    WIDE_INLINE f##N f##N##_fmadd(f##N a, f##N b, f##N c) { return f##N##_add(f##N##_mul(a, b), c); } \
+    WIDE_INLINE f##N f##N##_fnmadd(f##N a, f##N b, f##N c) { return f##N##_sub(c, f##N##_mul(a, b)); } \
+    WIDE_INLINE f##N f##N##_fmsub(f##N a, f##N b, f##N c) { return f##N##_sub(f##N##_mul(a, b), c); } \
     WIDE_INLINE f##N f##N##_min(f##N x, f##N acc)                                           \
     { for (int i = 0; i < N; i++) acc.v[i] = x.v[i] < acc.v[i] ? x.v[i] : acc.v[i]; return acc; } \
     WIDE_INLINE f##N f##N##_max(f##N x, f##N acc)                                           \
@@ -104,6 +112,15 @@ WIDE_INLINE f4 f4_add(f4 a, f4 b) { return _mm_add_ps(a, b); }
 WIDE_INLINE f4 f4_sub(f4 a, f4 b) { return _mm_sub_ps(a, b); }
 WIDE_INLINE f4 f4_mul(f4 a, f4 b) { return _mm_mul_ps(a, b); }
 WIDE_INLINE f4 f4_div(f4 a, f4 b) { return _mm_div_ps(a, b); }
+#ifdef __FMA__
+WIDE_INLINE f4 f4_fmadd(f4 a, f4 b, f4 c) { return _mm_fmadd_ps(a, b, c); }
+WIDE_INLINE f4 f4_fnmadd(f4 a, f4 b, f4 c) { return _mm_fnmadd_ps(a, b, c); }
+WIDE_INLINE f4 f4_fmsub(f4 a, f4 b, f4 c) { return _mm_fmsub_ps(a, b, c); }
+#else
+WIDE_INLINE f4 f4_fmadd(f4 a, f4 b, f4 c) { return _mm_add_ps(_mm_mul_ps(a, b), c); }
+WIDE_INLINE f4 f4_fnmadd(f4 a, f4 b, f4 c) { return _mm_sub_ps(c, _mm_mul_ps(a, b)); }
+WIDE_INLINE f4 f4_fmsub(f4 a, f4 b, f4 c) { return _mm_sub_ps(_mm_mul_ps(a, b), c); }
+#endif
 /* minps/maxps return their second operand when either is NaN. */
 WIDE_INLINE f4 f4_min(f4 x, f4 acc) { return _mm_min_ps(x, acc); }
 WIDE_INLINE f4 f4_max(f4 x, f4 acc) { return _mm_max_ps(x, acc); }
@@ -144,6 +161,15 @@ WIDE_INLINE f8 f8_add(f8 a, f8 b) { return _mm256_add_ps(a, b); }
 WIDE_INLINE f8 f8_sub(f8 a, f8 b) { return _mm256_sub_ps(a, b); }
 WIDE_INLINE f8 f8_mul(f8 a, f8 b) { return _mm256_mul_ps(a, b); }
 WIDE_INLINE f8 f8_div(f8 a, f8 b) { return _mm256_div_ps(a, b); }
+#ifdef __FMA__
+WIDE_INLINE f8 f8_fmadd(f8 a, f8 b, f8 c) { return _mm256_fmadd_ps(a, b, c); }
+WIDE_INLINE f8 f8_fnmadd(f8 a, f8 b, f8 c) { return _mm256_fnmadd_ps(a, b, c); }
+WIDE_INLINE f8 f8_fmsub(f8 a, f8 b, f8 c) { return _mm256_fmsub_ps(a, b, c); }
+#else
+WIDE_INLINE f8 f8_fmadd(f8 a, f8 b, f8 c) { return _mm256_add_ps(_mm256_mul_ps(a, b), c); }
+WIDE_INLINE f8 f8_fnmadd(f8 a, f8 b, f8 c) { return _mm256_sub_ps(c, _mm256_mul_ps(a, b)); }
+WIDE_INLINE f8 f8_fmsub(f8 a, f8 b, f8 c) { return _mm256_sub_ps(_mm256_mul_ps(a, b), c); }
+#endif
 WIDE_INLINE f8 f8_min(f8 x, f8 acc) { return _mm256_min_ps(x, acc); }
 WIDE_INLINE f8 f8_max(f8 x, f8 acc) { return _mm256_max_ps(x, acc); }
 WIDE_INLINE f8 f8_and(f8 a, f8 b) { return _mm256_and_ps(a, b); }
