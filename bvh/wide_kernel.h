@@ -14,9 +14,11 @@
  * "Embree: A Kernel Framework for Efficient CPU Ray Tracing", SIGGRAPH
  * 2014) and the stack discipline of Aila and Laine (HPG 2009):
  *  - one ray against all W child boxes with the robust slab test of
- *    bvh_slab (Ize 2013) lane by lane: the same subtractions, products,
- *    NaN-dropping min/max and 2*gamma(3) padding of the far distance, so a
- *    wide node accepts exactly the boxes the binary kernel would;
+ *    bvh_slab (Ize 2013) lane by lane: the same subtractions, products and
+ *    NaN-dropping min/max, with the far distance's padding folded into
+ *    the ray (WIDE_FAR_PAD below), so a wide node accepts every box the
+ *    exact test accepts (and the binary kernel's, give or take a few ulps
+ *    of padding);
  *  - the hit children visited near to far: one hit child is entered
  *    directly; of two, the nearer is entered and the farther pushed with
  *    its entry distance; three or more are pushed, sorted by entry distance
@@ -55,17 +57,42 @@
 #define KNODE WK_JOIN(wide_node, WIDE_NW)
 #define KBLOCK WK_JOIN(wide_block, WIDE_LB)
 
-/* Per-ray constants of the slab test: origin, 1/dir, and the float offset
- * of each axis's near and far plane row, picked by the direction's sign. */
+/*
+ * The far planes' padding folded into the ray (the "far" reciprocals):
+ * Ize's robust slab test (2013) pads the far distance t1 to
+ * t1 + |t1| 2 gamma(3) after the minimum, three dependent operations on
+ * every node's path from its load to the next. Here the far planes are
+ * multiplied by ixf = 1/d (1 + WIDE_FAR_PAD) instead of 1/d, and t by
+ * 1 + WIDE_FAR_PAD before the minimum, which the node's load does not
+ * wait for. The same guarantee: a computed far distance (plane - o) ixf
+ * is the exact one times (1 + p)(1 +- u)^4 (the difference, 1/d, its
+ * padding and the product each rounded once), a near one the exact one
+ * times (1 +- u)^3, and every sign is exact (fl(plane - o) has the sign
+ * of plane - o); so with p = 2^-20 = 16u >= 7u + O(u^2) a computed near
+ * distance never exceeds a computed far one the exact ones are ordered
+ * by, whenever the far one is >= 0. A negative far distance only matters
+ * to a ray with t_near < 0 (otherwise t0 >= t_near >= 0 rejects the box
+ * either way); such rays keep the padding after the minimum (old).
+ */
+#define WIDE_FAR_PAD 0x1p-20f
+
+/* Per-ray constants of the slab test: origin, 1/dir (near planes) and the
+ * padded far reciprocals, and the float offset of each axis's near and far
+ * plane row, picked by the direction's sign. */
 typedef struct {
-    NF ox, oy, oz, ix, iy, iz, t_near;
+    NF ox, oy, oz, ix, iy, iz, fix, fiy, fiz, t_near;
     int nx, fx, ny, fy, nz, fz;
+    int old; /* t_near < 0: the far reciprocals are 1/d, t1 padded after the minimum */
 } WK(node_ray);
 
 WIDE_INLINE void WK(node_setup)(WK(node_ray) *r, const accel_ray_prep *p)
 {
     r->ox = NV(set1)(p->org.x), r->oy = NV(set1)(p->org.y), r->oz = NV(set1)(p->org.z);
     r->ix = NV(set1)(p->inv_dir.x), r->iy = NV(set1)(p->inv_dir.y), r->iz = NV(set1)(p->inv_dir.z);
+    r->old = !(p->t_near >= 0.0f);
+    float pf = r->old ? 1.0f : 1.0f + WIDE_FAR_PAD;
+    r->fix = NV(set1)(p->inv_dir.x * pf), r->fiy = NV(set1)(p->inv_dir.y * pf);
+    r->fiz = NV(set1)(p->inv_dir.z * pf);
     r->t_near = NV(set1)(p->t_near);
     r->nx = (0 + p->neg[0]) * WIDE_NW, r->fx = (1 - p->neg[0]) * WIDE_NW;
     r->ny = (2 + p->neg[1]) * WIDE_NW, r->fy = (3 - p->neg[1]) * WIDE_NW;
@@ -83,11 +110,13 @@ WIDE_INLINE NF WK(slab_planes)(NF nx, NF fx, NF ny, NF fy, NF nz, NF fz, const W
     NF t0 = NV(max)(NV(mul)(NV(sub)(nx, r->ox), r->ix), r->t_near);
     t0 = NV(max)(NV(mul)(NV(sub)(ny, r->oy), r->iy), t0);
     t0 = NV(max)(NV(mul)(NV(sub)(nz, r->oz), r->iz), t0);
-    NF t1 = NV(min)(NV(mul)(NV(sub)(fx, r->ox), r->ix), NV(set1)(t));
-    t1 = NV(min)(NV(mul)(NV(sub)(fy, r->oy), r->iy), t1);
-    t1 = NV(min)(NV(mul)(NV(sub)(fz, r->oz), r->iz), t1);
+    /* t >= 0 unless old (t >= t_near >= 0): padded by the power of two */
+    NF t1 = NV(min)(NV(mul)(NV(sub)(fx, r->ox), r->fix), NV(set1)(r->old ? t : t + t * WIDE_FAR_PAD));
+    t1 = NV(min)(NV(mul)(NV(sub)(fy, r->oy), r->fiy), t1);
+    t1 = NV(min)(NV(mul)(NV(sub)(fz, r->oz), r->fiz), t1);
     *t0_out = t0;
-    return NV(le)(t0, NV(add)(t1, NV(mul)(NV(abs)(t1), NV(set1)(ACCEL_SLAB_PAD))));
+    if (r->old) t1 = NV(add)(t1, NV(mul)(NV(abs)(t1), NV(set1)(ACCEL_SLAB_PAD)));
+    return NV(le)(t0, t1);
 }
 
 /* The same on a float node's box rows. */

@@ -450,9 +450,11 @@ static inline int accel_sphere_hit(const accel_ray_prep *p, const float *s, floa
     t1 = q != 0.0f ? t1 / q : t0;
     if (t0 > t1) { float tmp = t0; t0 = t1; t1 = tmp; }
     /* A root within rounding of t_near (a ray leaving the sphere's surface)
-     * is decided in double, as by the reference. */
+     * or of *t (a hit at the ray's end t_far, or at the current closest
+     * distance) is decided in double, as by the reference. */
     float et = ACCEL_EDGE_FILTER * (sqrtf(v3_dot(f, f)) + r) / sqrtf(a);
-    if (fabsf(t0 - p->t_near) <= et || fabsf(t1 - p->t_near) <= et)
+    if (fabsf(t0 - p->t_near) <= et || fabsf(t1 - p->t_near) <= et || fabsf(t0 - *t) <= et ||
+        fabsf(t1 - *t) <= et)
         return accel_sphere_fallback(p, s, t, u, v);
     float tt = t0 >= p->t_near ? t0 : t1;
     if (!(tt >= p->t_near && tt <= *t)) return 0;
