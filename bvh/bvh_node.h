@@ -113,14 +113,19 @@ typedef struct bvh {
 typedef struct {
     float ox, oy, oz;
     float ix, iy, iz;     /* 1/dir, IEEE: +-inf for a +-0 component */
+    float fix, fiy, fiz;  /* far planes: 1/dir (1 + ACCEL_FAR_PAD), or 1/dir when old */
     int nx, ny, nz;       /* float index of the near plane on each axis: 0 or BVH_BMAX_OFS */
     int fx, fy, fz;       /* ... and of the far plane: the other one */
+    int old;              /* t_near < 0: the far distance padded after the minimum (geom.h) */
 } bvh_slab_ray;
 
 static inline void bvh_slab_setup(bvh_slab_ray *s, const accel_ray_prep *p)
 {
     s->ox = p->org.x, s->oy = p->org.y, s->oz = p->org.z;
     s->ix = p->inv_dir.x, s->iy = p->inv_dir.y, s->iz = p->inv_dir.z;
+    s->old = !(p->t_near >= 0.0f);
+    float pf = s->old ? 1.0f : 1.0f + ACCEL_FAR_PAD;
+    s->fix = s->ix * pf, s->fiy = s->iy * pf, s->fiz = s->iz * pf;
     s->nx = p->neg[0] ? BVH_BMAX_OFS : 0;
     s->ny = p->neg[1] ? BVH_BMAX_OFS : 0;
     s->nz = p->neg[2] ? BVH_BMAX_OFS : 0;
@@ -132,23 +137,27 @@ static inline void bvh_slab_setup(bvh_slab_ray *s, const accel_ray_prep *p)
  * Traversal", JCGT 2(2), 2013) with the planes addressed by offset: the same
  * products (plane - origin) * inv_dir, the same NaN handling (a 0*inf from a
  * zero direction component with the origin on a plane is dropped by
- * maxf/minf, so the ray counts as inside that slab), the same 2*gamma(3)
- * padding of the far distance. Returns nonzero when the box overlaps
+ * maxf/minf, so the ray counts as inside that slab). The far distance's
+ * padding is folded into the ray (ACCEL_FAR_PAD, core/geom.h: the far
+ * planes' reciprocals and t_far scaled before the minimum, off the path
+ * from the node's load to the answer), or for a ray with t_near < 0 the
+ * 2*gamma(3) padding after it. Returns nonzero when the box overlaps
  * [t_near, t_far]; *t_entry gets the entry distance.
  */
 static inline __attribute__((always_inline)) int
 bvh_slab(const bvh_node *node, const bvh_slab_ray *r, float t_near, float t_far, float *t_entry)
 {
     const float *b = (const float *)node;
-    float t0 = t_near, t1 = t_far;
+    float t0 = t_near, t1 = r->old ? t_far : t_far + t_far * ACCEL_FAR_PAD;
     t0 = maxf(t0, (b[r->nx] - r->ox) * r->ix);
     t0 = maxf(t0, (b[1 + r->ny] - r->oy) * r->iy);
     t0 = maxf(t0, (b[2 + r->nz] - r->oz) * r->iz);
-    t1 = minf(t1, (b[r->fx] - r->ox) * r->ix);
-    t1 = minf(t1, (b[1 + r->fy] - r->oy) * r->iy);
-    t1 = minf(t1, (b[2 + r->fz] - r->oz) * r->iz);
+    t1 = minf(t1, (b[r->fx] - r->ox) * r->fix);
+    t1 = minf(t1, (b[1 + r->fy] - r->oy) * r->fiy);
+    t1 = minf(t1, (b[2 + r->fz] - r->oz) * r->fiz);
     *t_entry = t0;
-    return t0 <= t1 + fabsf(t1) * ACCEL_SLAB_PAD;
+    if (r->old) t1 += fabsf(t1) * ACCEL_SLAB_PAD;
+    return t0 <= t1;
 }
 
 /* A box entered at t_entry can still hold a hit closer than t: the same

@@ -16,7 +16,7 @@
  *  - one ray against all W child boxes with the robust slab test of
  *    bvh_slab (Ize 2013) lane by lane: the same subtractions, products and
  *    NaN-dropping min/max, with the far distance's padding folded into
- *    the ray (WIDE_FAR_PAD below), so a wide node accepts every box the
+ *    the ray (ACCEL_FAR_PAD, core/geom.h), so a wide node accepts every box the
  *    exact test accepts (and the binary kernel's, give or take a few ulps
  *    of padding);
  *  - the hit children visited near to far: one hit child is entered
@@ -57,24 +57,7 @@
 #define KNODE WK_JOIN(wide_node, WIDE_NW)
 #define KBLOCK WK_JOIN(wide_block, WIDE_LB)
 
-/*
- * The far planes' padding folded into the ray (the "far" reciprocals):
- * Ize's robust slab test (2013) pads the far distance t1 to
- * t1 + |t1| 2 gamma(3) after the minimum, three dependent operations on
- * every node's path from its load to the next. Here the far planes are
- * multiplied by ixf = 1/d (1 + WIDE_FAR_PAD) instead of 1/d, and t by
- * 1 + WIDE_FAR_PAD before the minimum, which the node's load does not
- * wait for. The same guarantee: a computed far distance (plane - o) ixf
- * is the exact one times (1 + p)(1 +- u)^4 (the difference, 1/d, its
- * padding and the product each rounded once), a near one the exact one
- * times (1 +- u)^3, and every sign is exact (fl(plane - o) has the sign
- * of plane - o); so with p = 2^-20 = 16u >= 7u + O(u^2) a computed near
- * distance never exceeds a computed far one the exact ones are ordered
- * by, whenever the far one is >= 0. A negative far distance only matters
- * to a ray with t_near < 0 (otherwise t0 >= t_near >= 0 rejects the box
- * either way); such rays keep the padding after the minimum (old).
- */
-#define WIDE_FAR_PAD 0x1p-20f
+/* The far planes' padding folded into the ray: ACCEL_FAR_PAD (core/geom.h). */
 
 /* Per-ray constants of the slab test: origin, 1/dir (near planes) and the
  * padded far reciprocals, and the float offset of each axis's near and far
@@ -90,7 +73,7 @@ WIDE_INLINE void WK(node_setup)(WK(node_ray) *r, const accel_ray_prep *p)
     r->ox = NV(set1)(p->org.x), r->oy = NV(set1)(p->org.y), r->oz = NV(set1)(p->org.z);
     r->ix = NV(set1)(p->inv_dir.x), r->iy = NV(set1)(p->inv_dir.y), r->iz = NV(set1)(p->inv_dir.z);
     r->old = !(p->t_near >= 0.0f);
-    float pf = r->old ? 1.0f : 1.0f + WIDE_FAR_PAD;
+    float pf = r->old ? 1.0f : 1.0f + ACCEL_FAR_PAD;
     r->fix = NV(set1)(p->inv_dir.x * pf), r->fiy = NV(set1)(p->inv_dir.y * pf);
     r->fiz = NV(set1)(p->inv_dir.z * pf);
     r->t_near = NV(set1)(p->t_near);
@@ -111,7 +94,7 @@ WIDE_INLINE NF WK(slab_planes)(NF nx, NF fx, NF ny, NF fy, NF nz, NF fz, const W
     t0 = NV(max)(NV(mul)(NV(sub)(ny, r->oy), r->iy), t0);
     t0 = NV(max)(NV(mul)(NV(sub)(nz, r->oz), r->iz), t0);
     /* t >= 0 unless old (t >= t_near >= 0): padded by the power of two */
-    NF t1 = NV(min)(NV(mul)(NV(sub)(fx, r->ox), r->fix), NV(set1)(r->old ? t : t + t * WIDE_FAR_PAD));
+    NF t1 = NV(min)(NV(mul)(NV(sub)(fx, r->ox), r->fix), NV(set1)(r->old ? t : t + t * ACCEL_FAR_PAD));
     t1 = NV(min)(NV(mul)(NV(sub)(fy, r->oy), r->fiy), t1);
     t1 = NV(min)(NV(mul)(NV(sub)(fz, r->oz), r->fiz), t1);
     *t0_out = t0;

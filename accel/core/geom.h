@@ -101,6 +101,26 @@ static inline float accel_float_up(double x)
 #define ACCEL_SLAB_PAD (2.0f * ACCEL_GAMMA(3))
 
 /*
+ * The far planes' padding folded into the ray (the "far" reciprocals):
+ * Ize's robust slab test (2013) pads the far distance t1 to
+ * t1 + |t1| 2 gamma(3) after the minimum, three dependent operations on
+ * every node's path from its load to the next. The BVH kernels (binary
+ * bvh_slab and the wide slab_planes) multiply the far planes' distances
+ * by ixf = 1/d (1 + ACCEL_FAR_PAD) instead of 1/d, and t_far by
+ * 1 + ACCEL_FAR_PAD before the minimum, which the node's load does not
+ * wait for. The same guarantee: a computed far distance (plane - o) ixf
+ * is the exact one times (1 + p)(1 +- u)^4 (the difference, 1/d, its
+ * padding and the product each rounded once), a near one the exact one
+ * times (1 +- u)^3, and every sign is exact (fl(plane - o) has the sign
+ * of plane - o); so with p = 2^-20 = 16u >= 7u + O(u^2) a computed near
+ * distance never exceeds a computed far one the exact ones are ordered
+ * by, whenever the far one is >= 0. A negative far distance only matters
+ * to a ray with t_near < 0 (otherwise t0 >= t_near >= 0 rejects the box
+ * either way); such rays keep the padding after the minimum (old).
+ */
+#define ACCEL_FAR_PAD 0x1p-20f
+
+/*
  * Robust slab test against box [lo, hi] (given as two float[3]).
  * inv_dir = 1/dir per component (±inf for a ±0 component); neg[a] = 1 when
  * the direction's sign bit is set on axis a, which picks the near plane.
