@@ -163,10 +163,7 @@ bvh_slab(const bvh_node *node, const bvh_slab_ray *r, float t_near, float t_far,
 /* A box entered at t_entry can still hold a hit closer than t: the same
  * padded comparison as the slab test, so a far child pushed earlier is
  * skipped only when the slab test itself would now reject it. */
-static inline int bvh_entry_before(float t_entry, float t)
-{
-    return t_entry <= t + fabsf(t) * ACCEL_SLAB_PAD;
-}
+static inline int bvh_entry_before(float t_entry, float t) { return box3_entry_before(t_entry, t); }
 
 /* Intersects slot `slot` (flags are constants in every kernel copy). */
 static inline __attribute__((always_inline)) int

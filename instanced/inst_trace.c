@@ -141,7 +141,7 @@ INLINE void walk_bvh(const inst_accel *a, const inst_item *it, const inst_bottom
             --sp;
             float hi_t = (float)((double)r->t - shift);
             if (slack != 0.0f) hi_t += fabsf(hi_t) * slack;
-            if (stack[sp].entry <= hi_t) break;
+            if (box3_entry_before(stack[sp].entry, hi_t)) break;
         }
         node = stack[sp].node;
     }
@@ -445,7 +445,7 @@ INLINE void top_bvh(const inst_accel *a, ray_state *r, int naive, int spheres)
         do {
             if (sp == 0) return;
             --sp;
-        } while (stack[sp].entry > r->t);
+        } while (!box3_entry_before(stack[sp].entry, r->t));
         node = stack[sp].node;
     }
 }

@@ -395,6 +395,29 @@ void test_rays_shortened(test_rays *r, const accel_ray *rays, const accel_hit *r
     }
 }
 
+void test_rays_ending_at_hit(test_rays *r, const accel_ray *rays, const accel_hit *ref, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        if (ref[i].prim == ACCEL_MISS) continue;
+        accel_ray ray = rays[i];
+        ray.t_far = ref[i].t;
+        test_rays_push(r, ray);
+    }
+}
+
+void test_rays_behind(test_rays *r, const accel_ray *rays, const accel_hit *ref, size_t n)
+{
+    for (size_t i = 0; i < n; i++) {
+        if (ref[i].prim == ACCEL_MISS) continue;
+        accel_ray ray = rays[i];
+        float m = 1.5f * ref[i].t;
+        ray.ox += m * ray.dx, ray.oy += m * ray.dy, ray.oz += m * ray.dz;
+        ray.t_near = -m;
+        ray.t_far = (i % 2) ? INFINITY : 0.25f * m;
+        test_rays_push(r, ray);
+    }
+}
+
 /* ---- the oracle and the comparison ----------------------------------------------------- */
 
 accel_hit *test_oracle_hits(const accel_scene *s, const accel_ray *rays, size_t n, test_oracle o)

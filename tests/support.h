@@ -143,6 +143,13 @@ void test_rays_random(test_rays *r, box3 b, size_t count);
  * t_far = t * (1 - 1e-3). Not occluded, unless something else lies in
  * front (which the oracle decides). */
 void test_rays_shortened(test_rays *r, const accel_ray *rays, const accel_hit *ref, size_t n);
+/* The rays that hit, ending exactly at their hit (t_far = its t): a hit at
+ * the range's end is decided as the reference decides it. */
+void test_rays_ending_at_hit(test_rays *r, const accel_ray *rays, const accel_hit *ref, size_t n);
+/* The rays that hit, moved 1.5 times their hit distance forward, their
+ * range reaching back to where they started (t_near < 0, as a .rays file
+ * may give): the first hit now lies behind the origin. */
+void test_rays_behind(test_rays *r, const accel_ray *rays, const accel_hit *ref, size_t n);
 
 /* ---- the oracle and the comparison ----------------------------------------------------- */
 

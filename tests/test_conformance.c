@@ -8,8 +8,10 @@
  * Ray sets per scene: primary (the scene's camera), shadow and diffuse from
  * the reference's primary hits, rays aimed exactly at mesh vertices and at
  * edge midpoints, rays along the axes (with +0 and -0 components) starting
- * on the bounding box faces, and random rays starting inside the scene with
- * finite t ranges.
+ * on the bounding box faces, random rays starting inside the scene with
+ * finite t ranges, and the primary rays that hit ending exactly at their
+ * hit (t_far = its t) and moved past it with t_near < 0 (the hit behind
+ * the origin).
  * Required for the watertight kernels: zero holes, zero false hits, zero
  * disagreements (FORMATS.md rule). The naive kernels' counts are printed
  * and held to a loose sanity bound: their failures are the study's subject.
@@ -24,7 +26,7 @@
 
 #include "support.h"
 
-#define SET_COUNT 8
+#define SET_COUNT 10
 
 typedef struct {
     const char *name;
@@ -89,6 +91,12 @@ static int prepare_scene(test_scene *ts, const char *spec, int size)
     r = (test_rays){0};
     test_rays_shortened(&r, primary->rays.rays, primary->ref, primary->rays.count);
     add_set(ts, "shortened", &r);
+    r = (test_rays){0};
+    test_rays_ending_at_hit(&r, primary->rays.rays, primary->ref, primary->rays.count);
+    add_set(ts, "ending at the hit", &r);
+    r = (test_rays){0};
+    test_rays_behind(&r, primary->rays.rays, primary->ref, primary->rays.count);
+    add_set(ts, "behind the origin", &r);
     return 1;
 }
 
@@ -183,7 +191,8 @@ static size_t check_variant(test_scene *ts, const char *spec, int naive, int inv
              * rays) fails: rays aimed at vertices, edges and along axes are
              * the naive test's known weakness, counted by the stability suite. */
             int stiff =
-                !strcmp(t->name, "vertex") || !strcmp(t->name, "edge") || !strcmp(t->name, "axis");
+                !strcmp(t->name, "vertex") || !strcmp(t->name, "edge") || !strcmp(t->name, "axis") ||
+                !strcmp(t->name, "ending at the hit");
             if (bad)
                 test_note("%s: %zu holes, %zu false hits, %zu disagreements, %zu occluded "
                           "mismatches of %zu rays",

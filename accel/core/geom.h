@@ -147,6 +147,15 @@ static inline int box3_slab(const float *lo, const float *hi, vec3 org, vec3 inv
     return t0 <= t1 + fabsf(t1) * ACCEL_SLAB_PAD;
 }
 
+/* A box whose slab test gave entry distance t_entry can still hold a hit
+ * at or before t: the slab test's own padding, so that a box entered at
+ * exactly t (a hit at t_far, before any other) is not dropped for its
+ * entry's rounding. */
+static inline int box3_entry_before(float t_entry, float t)
+{
+    return t_entry <= t + fabsf(t) * ACCEL_SLAB_PAD;
+}
+
 #ifdef __cplusplus
 }
 #endif
