@@ -60,6 +60,14 @@ for e in $order; do
 done
 end=$(date +%s)
 read -r load_end _ < /proc/loadavg || load_end="?"
+note=""
+if [ -n "$only" ]; then
+  # One section rerun: the report is assembled from every section in $out,
+  # the others as an earlier run left them (their verdicts still count).
+  ran=()
+  for e in $order; do [ -f "$out/$e.md" ] && ran+=("$e"); done
+  note="; --only $only: the other sections are kept from an earlier run"
+fi
 commit=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
 dirty=$(git status --porcelain --untracked-files=no 2>/dev/null | grep -v -e ' REPORT.md' -e ' report/' | head -1 || true)
 [ -n "$dirty" ] && commit="$commit (with uncommitted changes)"
@@ -67,7 +75,7 @@ commit="$commit, $(git log -1 --format='%cd' --date=format:'%Y-%m-%d %H:%M' 2>/d
 cc_version=$(${CC:-cc} --version 2>/dev/null | head -1)
 "$bin/mkreport" --out "$out" --report "$report" --links "$links" --budget "$budget" \
   --commit "$commit" --flags "${GRIDBVH_CFLAGS:-see Makefile} (driver: $cc_version)" \
-  --run "$((end - start)) s; per experiment: $times (sum $sum s)${KINDS:+; KINDS=$KINDS}${ACCEL:+; ACCEL=$ACCEL}" \
+  --run "$((end - start)) s; per experiment: $times (sum $sum s)$note${KINDS:+; KINDS=$KINDS}${ACCEL:+; ACCEL=$ACCEL}" \
   --load "$load_start (1 minute) before the first experiment, $load_end after the last" \
   "${ran[@]}"
 echo "report.sh: wrote $report in $((end - start)) s" >&2
