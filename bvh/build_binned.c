@@ -344,7 +344,11 @@ static void groups_sparse(const bvh_build *ctx, const bvh_task *t, const bin_pla
  * 16% of the binned split on bunny). */
 static inline void ref_swap(bvh_ref *a, bvh_ref *b)
 {
-#if defined(__AVX__)
+#if !BVH_SSE /* -DBVH_NO_SIMD or no SSE2: the plain swap */
+    bvh_ref x = *a;
+    *a = *b;
+    *b = x;
+#elif defined(__AVX__)
     __m256i x = _mm256_loadu_si256((const __m256i *)a), y = _mm256_loadu_si256((const __m256i *)b);
     _mm256_storeu_si256((__m256i *)a, y);
     _mm256_storeu_si256((__m256i *)b, x);
