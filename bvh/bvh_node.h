@@ -113,18 +113,18 @@ typedef struct bvh {
 typedef struct {
     float ox, oy, oz;
     float ix, iy, iz;     /* 1/dir, IEEE: +-inf for a +-0 component */
-    float fix, fiy, fiz;  /* far planes: 1/dir (1 + ACCEL_FAR_PAD), or 1/dir when old */
+    float fix, fiy, fiz;  /* far planes: 1/dir accel_far_factor (core/geom.h) */
     int nx, ny, nz;       /* float index of the near plane on each axis: 0 or BVH_BMAX_OFS */
     int fx, fy, fz;       /* ... and of the far plane: the other one */
-    int old;              /* t_near < 0: the far distance padded after the minimum (geom.h) */
+    int folded;           /* accel_far_folded: else the far distance padded after the minimum */
 } bvh_slab_ray;
 
 static inline void bvh_slab_setup(bvh_slab_ray *s, const accel_ray_prep *p)
 {
     s->ox = p->org.x, s->oy = p->org.y, s->oz = p->org.z;
     s->ix = p->inv_dir.x, s->iy = p->inv_dir.y, s->iz = p->inv_dir.z;
-    s->old = !(p->t_near >= 0.0f);
-    float pf = s->old ? 1.0f : 1.0f + ACCEL_FAR_PAD;
+    s->folded = accel_far_folded(p->t_near);
+    float pf = accel_far_factor(s->folded);
     s->fix = s->ix * pf, s->fiy = s->iy * pf, s->fiz = s->iz * pf;
     s->nx = p->neg[0] ? BVH_BMAX_OFS : 0;
     s->ny = p->neg[1] ? BVH_BMAX_OFS : 0;
@@ -148,7 +148,7 @@ static inline __attribute__((always_inline)) int
 bvh_slab(const bvh_node *node, const bvh_slab_ray *r, float t_near, float t_far, float *t_entry)
 {
     const float *b = (const float *)node;
-    float t0 = t_near, t1 = r->old ? t_far : t_far + t_far * ACCEL_FAR_PAD;
+    float t0 = t_near, t1 = accel_far_limit(t_far, r->folded);
     t0 = maxf(t0, (b[r->nx] - r->ox) * r->ix);
     t0 = maxf(t0, (b[1 + r->ny] - r->oy) * r->iy);
     t0 = maxf(t0, (b[2 + r->nz] - r->oz) * r->iz);
@@ -156,14 +156,9 @@ bvh_slab(const bvh_node *node, const bvh_slab_ray *r, float t_near, float t_far,
     t1 = minf(t1, (b[1 + r->fy] - r->oy) * r->fiy);
     t1 = minf(t1, (b[2 + r->fz] - r->oz) * r->fiz);
     *t_entry = t0;
-    if (r->old) t1 += fabsf(t1) * ACCEL_SLAB_PAD;
+    if (!r->folded) t1 += fabsf(t1) * ACCEL_SLAB_PAD;
     return t0 <= t1;
 }
-
-/* A box entered at t_entry can still hold a hit closer than t: the same
- * padded comparison as the slab test, so a far child pushed earlier is
- * skipped only when the slab test itself would now reject it. */
-static inline int bvh_entry_before(float t_entry, float t) { return box3_entry_before(t_entry, t); }
 
 /* Intersects slot `slot` (flags are constants in every kernel copy). */
 static inline __attribute__((always_inline)) int

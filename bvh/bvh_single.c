@@ -76,7 +76,7 @@ trace_ray(const bvh *b, const accel_ray *ray, accel_hit *hit_out, uint8_t *occ_o
             node = NULL;
             while (sp > 0) {
                 sp--;
-                if (bvh_entry_before(stack[sp].t_entry, t)) {
+                if (box3_entry_before(stack[sp].t_entry, t)) {
                     node = &nodes[stack[sp].node];
                     break;
                 }

@@ -70,7 +70,7 @@ static void walk_binary(const bvh *b, const accel_ray_prep *p, float pad, accel_
         node = NULL;
         while (sp > 0) {
             sp--;
-            if (bvh_entry_before(stack[sp].entry, t_max)) {
+            if (box3_entry_before(stack[sp].entry, t_max)) {
                 node = &nodes[stack[sp].node];
                 break;
             }
@@ -93,7 +93,7 @@ static void walk_wide(const bvh_wide *w, const accel_ray_prep *p, float pad,
     stack[sp++].entry = -INFINITY;
     while (sp > 0) {
         walk_entry top = stack[--sp];
-        if (!bvh_entry_before(top.entry, t_max)) continue;
+        if (!box3_entry_before(top.entry, t_max)) continue;
         (*steps)++;
         if (top.node & WIDE_LEAF) {
             const char *blk = (const char *)w->blocks + block_bytes * wide_leaf_first(top.node);

@@ -15,10 +15,9 @@
  * 2014) and the stack discipline of Aila and Laine (HPG 2009):
  *  - one ray against all W child boxes with the robust slab test of
  *    bvh_slab (Ize 2013) lane by lane: the same subtractions, products and
- *    NaN-dropping min/max, with the far distance's padding folded into
- *    the ray (ACCEL_FAR_PAD, core/geom.h), so a wide node accepts every box the
- *    exact test accepts (and the binary kernel's, give or take a few ulps
- *    of padding);
+ *    NaN-dropping min/max, and the same far padding folded into the ray
+ *    (ACCEL_FAR_PAD, core/geom.h), so a wide node accepts exactly the boxes
+ *    the binary kernel would;
  *  - the hit children visited near to far: one hit child is entered
  *    directly; of two, the nearer is entered and the farther pushed with
  *    its entry distance; three or more are pushed, sorted by entry distance
@@ -57,23 +56,22 @@
 #define KNODE WK_JOIN(wide_node, WIDE_NW)
 #define KBLOCK WK_JOIN(wide_block, WIDE_LB)
 
-/* The far planes' padding folded into the ray: ACCEL_FAR_PAD (core/geom.h). */
-
 /* Per-ray constants of the slab test: origin, 1/dir (near planes) and the
- * padded far reciprocals, and the float offset of each axis's near and far
- * plane row, picked by the direction's sign. */
+ * far reciprocals with the padding folded in (ACCEL_FAR_PAD, core/geom.h),
+ * and the float offset of each axis's near and far plane row, picked by
+ * the direction's sign. */
 typedef struct {
     NF ox, oy, oz, ix, iy, iz, fix, fiy, fiz, t_near;
     int nx, fx, ny, fy, nz, fz;
-    int old; /* t_near < 0: the far reciprocals are 1/d, t1 padded after the minimum */
+    int folded; /* accel_far_folded: else t1 padded after the minimum */
 } WK(node_ray);
 
 WIDE_INLINE void WK(node_setup)(WK(node_ray) *r, const accel_ray_prep *p)
 {
     r->ox = NV(set1)(p->org.x), r->oy = NV(set1)(p->org.y), r->oz = NV(set1)(p->org.z);
     r->ix = NV(set1)(p->inv_dir.x), r->iy = NV(set1)(p->inv_dir.y), r->iz = NV(set1)(p->inv_dir.z);
-    r->old = !(p->t_near >= 0.0f);
-    float pf = r->old ? 1.0f : 1.0f + ACCEL_FAR_PAD;
+    r->folded = accel_far_folded(p->t_near);
+    float pf = accel_far_factor(r->folded);
     r->fix = NV(set1)(p->inv_dir.x * pf), r->fiy = NV(set1)(p->inv_dir.y * pf);
     r->fiz = NV(set1)(p->inv_dir.z * pf);
     r->t_near = NV(set1)(p->t_near);
@@ -93,12 +91,11 @@ WIDE_INLINE NF WK(slab_planes)(NF nx, NF fx, NF ny, NF fy, NF nz, NF fz, const W
     NF t0 = NV(max)(NV(mul)(NV(sub)(nx, r->ox), r->ix), r->t_near);
     t0 = NV(max)(NV(mul)(NV(sub)(ny, r->oy), r->iy), t0);
     t0 = NV(max)(NV(mul)(NV(sub)(nz, r->oz), r->iz), t0);
-    /* t >= 0 unless old (t >= t_near >= 0): padded by the power of two */
-    NF t1 = NV(min)(NV(mul)(NV(sub)(fx, r->ox), r->fix), NV(set1)(r->old ? t : t + t * ACCEL_FAR_PAD));
+    NF t1 = NV(min)(NV(mul)(NV(sub)(fx, r->ox), r->fix), NV(set1)(accel_far_limit(t, r->folded)));
     t1 = NV(min)(NV(mul)(NV(sub)(fy, r->oy), r->fiy), t1);
     t1 = NV(min)(NV(mul)(NV(sub)(fz, r->oz), r->fiz), t1);
     *t0_out = t0;
-    if (r->old) t1 = NV(add)(t1, NV(mul)(NV(abs)(t1), NV(set1)(ACCEL_SLAB_PAD)));
+    if (!r->folded) t1 = NV(add)(t1, NV(mul)(NV(abs)(t1), NV(set1)(ACCEL_SLAB_PAD)));
     return NV(le)(t0, t1);
 }
 
@@ -194,7 +191,7 @@ WIDE_INLINE int WK(pop)(const wide_stack_entry *stack, int *sp_io, float t, uint
     int sp = *sp_io;
     while (sp > 0) {
         sp--;
-        if (bvh_entry_before(stack[sp].t_entry, t)) {
+        if (box3_entry_before(stack[sp].t_entry, t)) {
             *ref = stack[sp].ref;
             *sp_io = sp;
             return 1;
@@ -399,7 +396,7 @@ WIDE_INLINE void WK(trace_prepped_oct_)(const bvh_wide *w, const accel_ray_prep 
             int more = 0;
             while (sp > 0) {
                 sp--;
-                if (bvh_entry_before(st[sp], t)) {
+                if (box3_entry_before(st[sp], t)) {
                     ref = sref[sp];
                     more = 1;
                     break;

@@ -52,6 +52,12 @@ extern "C" {
 
 /* ---- plain-C lanes ----------------------------------------------------------- */
 
+/* The multiply-adds as a rounded product then a rounded sum (no FMA). */
+#define WIDE_FMA_UNFUSED(N)                                                                 \
+    WIDE_INLINE f##N f##N##_fmadd(f##N a, f##N b, f##N c) { return f##N##_add(f##N##_mul(a, b), c); } \
+    WIDE_INLINE f##N f##N##_fnmadd(f##N a, f##N b, f##N c) { return f##N##_sub(c, f##N##_mul(a, b)); } \
+    WIDE_INLINE f##N f##N##_fmsub(f##N a, f##N b, f##N c) { return f##N##_sub(f##N##_mul(a, b), c); }
+
 /* Defines fN as a struct of N floats and every operation as a loop. */
 #define WIDE_GENERIC(N)                                                                     \
     typedef struct { float v[N]; } f##N;                                                    \
@@ -64,9 +70,7 @@ extern "C" {
     WIDE_INLINE f##N f##N##_sub(f##N a, f##N b) { for (int i = 0; i < N; i++) a.v[i] -= b.v[i]; return a; } \
     WIDE_INLINE f##N f##N##_mul(f##N a, f##N b) { for (int i = 0; i < N; i++) a.v[i] *= b.v[i]; return a; } \
     WIDE_INLINE f##N f##N##_div(f##N a, f##N b) { for (int i = 0; i < N; i++) a.v[i] /= b.v[i]; return a; } \
-    WIDE_INLINE f##N f##N##_fmadd(f##N a, f##N b, f##N c) { return f##N##_add(f##N##_mul(a, b), c); } \
-    WIDE_INLINE f##N f##N##_fnmadd(f##N a, f##N b, f##N c) { return f##N##_sub(c, f##N##_mul(a, b)); } \
-    WIDE_INLINE f##N f##N##_fmsub(f##N a, f##N b, f##N c) { return f##N##_sub(f##N##_mul(a, b), c); } \
+    WIDE_FMA_UNFUSED(N)                                                                     \
     WIDE_INLINE f##N f##N##_min(f##N x, f##N acc)                                           \
     { for (int i = 0; i < N; i++) acc.v[i] = x.v[i] < acc.v[i] ? x.v[i] : acc.v[i]; return acc; } \
     WIDE_INLINE f##N f##N##_max(f##N x, f##N acc)                                           \
@@ -117,9 +121,7 @@ WIDE_INLINE f4 f4_fmadd(f4 a, f4 b, f4 c) { return _mm_fmadd_ps(a, b, c); }
 WIDE_INLINE f4 f4_fnmadd(f4 a, f4 b, f4 c) { return _mm_fnmadd_ps(a, b, c); }
 WIDE_INLINE f4 f4_fmsub(f4 a, f4 b, f4 c) { return _mm_fmsub_ps(a, b, c); }
 #else
-WIDE_INLINE f4 f4_fmadd(f4 a, f4 b, f4 c) { return _mm_add_ps(_mm_mul_ps(a, b), c); }
-WIDE_INLINE f4 f4_fnmadd(f4 a, f4 b, f4 c) { return _mm_sub_ps(c, _mm_mul_ps(a, b)); }
-WIDE_INLINE f4 f4_fmsub(f4 a, f4 b, f4 c) { return _mm_sub_ps(_mm_mul_ps(a, b), c); }
+WIDE_FMA_UNFUSED(4)
 #endif
 /* minps/maxps return their second operand when either is NaN. */
 WIDE_INLINE f4 f4_min(f4 x, f4 acc) { return _mm_min_ps(x, acc); }
@@ -166,9 +168,7 @@ WIDE_INLINE f8 f8_fmadd(f8 a, f8 b, f8 c) { return _mm256_fmadd_ps(a, b, c); }
 WIDE_INLINE f8 f8_fnmadd(f8 a, f8 b, f8 c) { return _mm256_fnmadd_ps(a, b, c); }
 WIDE_INLINE f8 f8_fmsub(f8 a, f8 b, f8 c) { return _mm256_fmsub_ps(a, b, c); }
 #else
-WIDE_INLINE f8 f8_fmadd(f8 a, f8 b, f8 c) { return _mm256_add_ps(_mm256_mul_ps(a, b), c); }
-WIDE_INLINE f8 f8_fnmadd(f8 a, f8 b, f8 c) { return _mm256_sub_ps(c, _mm256_mul_ps(a, b)); }
-WIDE_INLINE f8 f8_fmsub(f8 a, f8 b, f8 c) { return _mm256_sub_ps(_mm256_mul_ps(a, b), c); }
+WIDE_FMA_UNFUSED(8)
 #endif
 WIDE_INLINE f8 f8_min(f8 x, f8 acc) { return _mm256_min_ps(x, acc); }
 WIDE_INLINE f8 f8_max(f8 x, f8 acc) { return _mm256_max_ps(x, acc); }

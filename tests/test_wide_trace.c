@@ -293,10 +293,7 @@ TEST(wide_negative_t_near)
     for (size_t si = 0; si < sizeof scenes / sizeof *scenes; si++) {
         accel_scene s;
         accel_error err = {0};
-        if (scene_create(scenes[si], &s, &err)) {
-            test_fail(__FILE__, __LINE__, "%s: %s", scenes[si], err.msg);
-            continue;
-        }
+        if (!test_make_scene(scenes[si], &s)) continue;
         ref_set primary = {"primary", {0}, NULL};
         if (rays_primary(&s.camera, 40, 40, &primary.rays, &err)) {
             test_fail(__FILE__, __LINE__, "%s: rays: %s", s.name, err.msg);

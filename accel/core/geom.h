@@ -116,9 +116,17 @@ static inline float accel_float_up(double x)
  * distance never exceeds a computed far one the exact ones are ordered
  * by, whenever the far one is >= 0. A negative far distance only matters
  * to a ray with t_near < 0 (otherwise t0 >= t_near >= 0 rejects the box
- * either way); such rays keep the padding after the minimum (old).
+ * either way); such rays (not folded) keep the padding after the minimum.
  */
 #define ACCEL_FAR_PAD 0x1p-20f
+
+/* Whether a ray's far padding is folded (t_near >= 0; false for NaN), the
+ * factor of its far planes' reciprocals, and its padded t (t >= t_near >= 0
+ * when folded). The binary and the wide slab tests share them, so that a
+ * wide node accepts exactly the boxes the binary kernel would. */
+static inline int accel_far_folded(float t_near) { return t_near >= 0.0f; }
+static inline float accel_far_factor(int folded) { return folded ? 1.0f + ACCEL_FAR_PAD : 1.0f; }
+static inline float accel_far_limit(float t, int folded) { return folded ? t + t * ACCEL_FAR_PAD : t; }
 
 /*
  * Robust slab test against box [lo, hi] (given as two float[3]).
@@ -148,9 +156,10 @@ static inline int box3_slab(const float *lo, const float *hi, vec3 org, vec3 inv
 }
 
 /* A box whose slab test gave entry distance t_entry can still hold a hit
- * at or before t: the slab test's own padding, so that a box entered at
- * exactly t (a hit at t_far, before any other) is not dropped for its
- * entry's rounding. */
+ * at or before t: the slab test's own padding, so that a far child pushed
+ * earlier is skipped only when the slab test itself would now reject it,
+ * and a box entered at exactly t (a hit at t_far, before any other) is not
+ * dropped for its entry's rounding. Every BVH walk's pop uses it. */
 static inline int box3_entry_before(float t_entry, float t)
 {
     return t_entry <= t + fabsf(t) * ACCEL_SLAB_PAD;
