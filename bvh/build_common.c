@@ -24,17 +24,12 @@
 
 bvh_node *bvh_alloc_nodes(size_t n)
 {
-    if (n == 0) n = 1;
-    if (n > SIZE_MAX / sizeof(bvh_node)) return NULL;
-    void *p = NULL;
-    if (posix_memalign(&p, BVH_NODE_ALIGN, n * sizeof(bvh_node)) != 0) return NULL;
-    return p;
+    return accel_alloc_large(n ? n : 1, sizeof(bvh_node), BVH_NODE_ALIGN);
 }
 
 void *bvh_alloc_array(size_t n, size_t size)
 {
-    if (size && n > SIZE_MAX / size) return NULL;
-    return malloc(n && size ? n * size : 1);
+    return accel_alloc_large(n, size, sizeof(void *));
 }
 
 int bvh_split_pays(const bvh_build *ctx, const bvh_task *t, double split_sum)

@@ -279,10 +279,7 @@ static size_t block_size(int block) { return block == 8 ? sizeof(wide_block8) : 
 
 static void *alloc_aligned(size_t n, size_t size)
 {
-    if (n == 0) n = 1;
-    if (n > SIZE_MAX / size) return NULL;
-    void *p = NULL;
-    return posix_memalign(&p, BVH_NODE_ALIGN, n * size) == 0 ? p : NULL;
+    return accel_alloc_large(n ? n : 1, size, BVH_NODE_ALIGN);
 }
 
 size_t bvh_wide_memory(const bvh_wide *w)

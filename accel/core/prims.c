@@ -110,12 +110,12 @@ int accel_prim_store_build(const accel_scene *scene, int reorder, accel_prim_sto
     l->bounds = scene->bounds;
     l->camera = scene->camera;
     l->light = scene->light;
-    l->tris = malloc(((size_t)tris * 9 + 1) * sizeof *l->tris);
+    l->tris = accel_alloc_large((size_t)tris * 9 + 1, sizeof *l->tris, sizeof(void *));
     l->spheres = malloc(((size_t)(n - tris) * 4 + 1) * sizeof *l->spheres);
     l->live = malloc(((size_t)n + 1) * sizeof *l->live);
     out->scene_id = malloc(((size_t)n + 1) * sizeof *out->scene_id);
-    uint64_t *order = malloc(((size_t)n + 1) * sizeof *order);
-    uint64_t *tmp = reorder ? malloc(((size_t)n + 1) * sizeof *tmp) : NULL;
+    uint64_t *order = accel_alloc_large((size_t)n + 1, sizeof *order, sizeof(void *));
+    uint64_t *tmp = reorder ? accel_alloc_large((size_t)n + 1, sizeof *tmp, sizeof(void *)) : NULL;
     if (!l->tris || !l->spheres || !l->live || !out->scene_id || !order || (reorder && !tmp)) {
         free(order);
         free(tmp);
