@@ -536,7 +536,8 @@ int grid_cells_build(const grid_frame *f, const accel_scene *s, const uint32_t *
     if (cells >= UINT32_MAX || (double)(cells + 1) * sizeof(uint32_t) > max_bytes)
         return accel_fail(err, ACCEL_ERR_RANGE, "grid: %llu cells exceed the memory limit",
                           (unsigned long long)cells);
-    uint32_t *offsets = calloc(cells + 1, sizeof *offsets);
+    uint32_t *offsets = accel_alloc_large(cells + 1, sizeof *offsets, sizeof(void *));
+    if (offsets) memset(offsets, 0, (cells + 1) * sizeof *offsets);
     if (!offsets)
         return accel_fail(err, ACCEL_ERR_NOMEM, "grid: out of memory for %llu cell offsets",
                           (unsigned long long)cells);
@@ -556,7 +557,7 @@ int grid_cells_build(const grid_frame *f, const accel_scene *s, const uint32_t *
                           (unsigned long long)cells, (unsigned long long)total, bytes / 1048576.0,
                           max_bytes / 1048576.0);
     }
-    uint32_t *refs = malloc((total ? total : 1) * sizeof *refs);
+    uint32_t *refs = accel_alloc_large(total ? total : 1, sizeof *refs, sizeof(void *));
     if (!refs) {
         free(offsets);
         return accel_fail(err, ACCEL_ERR_NOMEM, "grid: out of memory for %llu references",

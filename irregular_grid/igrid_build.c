@@ -281,7 +281,7 @@ static int gather(chunk_out *out, size_t chunks, uint64_t top_cells, igrid_bcell
     b->list = malloc((leaves ? leaves : 1) * sizeof *b->list);
     b->len = malloc((leaves ? leaves : 1) * sizeof *b->len);
     b->owned = calloc(leaves ? leaves : 1, 1);
-    b->pool = malloc((refs ? refs : 1) * sizeof *b->pool);
+    b->pool = accel_alloc_large(refs ? refs : 1, sizeof *b->pool, sizeof(void *));
     if (!b->map || !b->box || !b->exit || !b->list || !b->len || !b->owned || !b->pool)
         return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory for the cells");
     uint64_t node_base = top_cells, leaf_base = 0, ref_base = 0, top = 0;
@@ -461,8 +461,8 @@ static int flatten(igrid_accel *g, igrid_bcells *b, accel_error *err)
 {
     uint64_t refs = 0;
     for (uint32_t c = 0; c < b->count; c++) refs += b->len[c];
-    g->cells = malloc((b->count ? b->count : 1) * sizeof *g->cells);
-    g->refs = malloc((refs ? refs : 1) * sizeof *g->refs);
+    g->cells = accel_alloc_large(b->count ? b->count : 1, sizeof *g->cells, sizeof(void *));
+    g->refs = accel_alloc_large(refs ? refs : 1, sizeof *g->refs, sizeof(void *));
     if (!g->cells || !g->refs)
         return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory for the cells");
     uint64_t at = 0;

@@ -143,8 +143,8 @@ static int flatten(const ngrid_builder *b, ngrid_accel *g, accel_error *err)
                           (unsigned long long)cells, (unsigned long long)refs, bytes / 1048576.0,
                           b->max_bytes / 1048576.0);
     g->nodes = malloc((size_t)b->grid_count * sizeof *g->nodes);
-    g->cells = malloc((size_t)cells * sizeof *g->cells);
-    g->lists = malloc((size_t)list_len * sizeof *g->lists);
+    g->cells = accel_alloc_large(cells, sizeof *g->cells, sizeof(void *));
+    g->lists = accel_alloc_large(list_len, sizeof *g->lists, sizeof(void *));
     g->planes = malloc(planes * sizeof *g->planes);
     if (!g->nodes || !g->cells || !g->lists || !g->planes)
         return accel_fail(err, ACCEL_ERR_NOMEM, "nested_grid: out of memory for %.1f MiB",

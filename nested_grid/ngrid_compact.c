@@ -110,8 +110,8 @@ int ngrid_compact_build(ngrid_accel *g, double max_bytes, accel_error *err)
     if (!k) return accel_fail(err, ACCEL_ERR_NOMEM, "nested_grid: out of memory");
     k->top_planes = malloc(grid_plane_count(tf->res) * sizeof *k->top_planes);
     k->tops = malloc((size_t)tops * sizeof *k->tops);
-    k->leaf = malloc((size_t)(leaves + 1) * sizeof *k->leaf);
-    k->refs = malloc((size_t)(g->ref_count ? g->ref_count : 1) * sizeof *k->refs);
+    k->leaf = accel_alloc_large((size_t)leaves + 1, sizeof *k->leaf, sizeof(void *));
+    k->refs = accel_alloc_large(g->ref_count ? g->ref_count : 1, sizeof *k->refs, sizeof(void *));
     if (!k->top_planes || !k->tops || !k->leaf || !k->refs) {
         ngrid_compact_free(k);
         return accel_fail(err, ACCEL_ERR_NOMEM, "nested_grid: out of memory for %.1f MiB",
