@@ -286,13 +286,17 @@ static void groups_from_bins(bvh_build *ctx, const bvh_task *t, int threads, con
     for (int k = 0; k < plan->axis_count; k++) {
         int a = plan->axis[k];
         ng[k] = 0;
+        /* Branch-free: every bin is written to the next slot, which only a
+         * non-empty bin keeps (an empty one is a coin flip to predict). */
+        int m = 0;
         for (int b = 0; b < plan->bins; b++) {
-            if (!sets->count[a][b]) continue;
-            bin_group *x = &g[k][ng[k]++];
+            bin_group *x = &g[k][m];
             x->box = sets->box[a][b];
             x->count = sets->count[a][b];
             x->bin = b;
+            m += sets->count[a][b] != 0;
         }
+        ng[k] = m;
     }
 }
 
@@ -313,17 +317,19 @@ static void groups_sparse(const bvh_build *ctx, const bvh_task *t, const bin_pla
         uint64_t used[BINS_MAX / 64] = {0};
         box4 box[BINS_MAX];
         uint32_t count[BINS_MAX];
+        /* Two branch-free passes: whether a reference is the first of its
+         * bin is a coin flip for the branch predictor (a first version
+         * branched on it and spent most of this function in mispredictions). */
         for (uint32_t i = 0; i < n; i++) {
             int x = v[i].bin[a];
-            uint64_t bit = (uint64_t)1 << (x & 63);
-            if (!(used[x >> 6] & bit)) {
-                used[x >> 6] |= bit;
-                box[x] = v[i].box;
-                count[x] = 1;
-            } else {
-                box4_union(&box[x], &v[i].box);
-                count[x]++;
-            }
+            used[x >> 6] |= (uint64_t)1 << (x & 63);
+            box4_clear(&box[x]);
+            count[x] = 0;
+        }
+        for (uint32_t i = 0; i < n; i++) {
+            int x = v[i].bin[a];
+            box4_union(&box[x], &v[i].box);
+            count[x]++;
         }
         ng[k] = 0;
         for (int w = 0; w < words; w++)
@@ -382,6 +388,13 @@ static uint32_t partition(bvh_ref *r, uint32_t n, const bin_plan *plan, int axis
         __m128 c = v.c;
         __m128 m = _mm_castsi128_ps(_mm_set1_epi32(-left));
         /* grow the chosen side's centroid box: min/max with c, or with +-inf */
+#ifdef __SSE4_1__
+        const __m128 inf = _mm_set1_ps(INFINITY), ninf = _mm_set1_ps(-INFINITY);
+        llo = _mm_min_ps(llo, _mm_blendv_ps(inf, c, m));
+        rlo = _mm_min_ps(rlo, _mm_blendv_ps(c, inf, m));
+        lhi = _mm_max_ps(lhi, _mm_blendv_ps(ninf, c, m));
+        rhi = _mm_max_ps(rhi, _mm_blendv_ps(c, ninf, m));
+#else
         __m128 cl = _mm_or_ps(_mm_and_ps(m, c), _mm_andnot_ps(m, _mm_set1_ps(INFINITY)));
         __m128 cr = _mm_or_ps(_mm_andnot_ps(m, c), _mm_and_ps(m, _mm_set1_ps(INFINITY)));
         llo = _mm_min_ps(llo, cl);
@@ -390,6 +403,7 @@ static uint32_t partition(bvh_ref *r, uint32_t n, const bin_plan *plan, int axis
         cr = _mm_or_ps(_mm_andnot_ps(m, c), _mm_and_ps(m, _mm_set1_ps(-INFINITY)));
         lhi = _mm_max_ps(lhi, cl);
         rhi = _mm_max_ps(rhi, cr);
+#endif
         ref_swap(r + i, r + l);
         l += (uint32_t)left;
     }
