@@ -141,8 +141,13 @@ void bvh_split_median(bvh_build *ctx, const bvh_task *t, bvh_split *out)
 /* ---- the driver ---------------------------------------------------------- */
 
 /* Splits one task (or makes it a leaf). Returns 1 and fills the children
- * tasks when it split. */
-static int split_task(bvh_build *ctx, const bvh_task *t, int threads, bvh_task *l, bvh_task *r)
+ * tasks when it split. The children's pair goes to the task's region
+ * start, or, when `bump` is given (inside one subtree, built by one
+ * thread), to the next free pair of the subtree's region: its nodes then
+ * lie together at the region's start, in depth-first order, and the pages
+ * of the region's unused tail are never touched. */
+static int split_task(bvh_build *ctx, const bvh_task *t, int threads, bvh_task *l, bvh_task *r,
+                      uint32_t *bump)
 {
     bvh_node *node = &ctx->nodes[t->node];
     bvh_split s;
@@ -161,6 +166,7 @@ static int split_task(bvh_build *ctx, const bvh_task *t, int threads, bvh_task *
     assert(s.left_count < t->count);
     assert(t->level < BVH_MAX_DEPTH);
     uint32_t pair = t->region;
+    if (bump) pair = *bump, *bump += 2;
     uint32_t nl = s.left_count, nr = t->count - nl;
     node->left_first = pair;
     node->count = 0;
@@ -172,15 +178,18 @@ static int split_task(bvh_build *ctx, const bvh_task *t, int threads, bvh_task *
     return 1;
 }
 
-/* Depth-first, one thread. Pending right siblings: at most one per level. */
+/* Depth-first, one thread. Pending right siblings: at most one per level.
+ * The subtree's pairs are handed out in the order of its splits (left
+ * first, depth-first): at most 2(count - 1) nodes, inside its region. */
 static void build_subtree(bvh_build *ctx, const bvh_task *root)
 {
     bvh_task stack[BVH_MAX_DEPTH + 1];
     int sp = 0;
+    uint32_t bump = root->region;
     stack[sp++] = *root;
     while (sp > 0) {
         bvh_task t = stack[--sp], l, r;
-        if (!split_task(ctx, &t, 1, &l, &r)) continue;
+        if (!split_task(ctx, &t, 1, &l, &r, &bump)) continue;
         assert(sp + 2 <= BVH_MAX_DEPTH + 1);
         stack[sp++] = r;
         stack[sp++] = l;
@@ -232,7 +241,7 @@ void bvh_build_tree(bvh_build *ctx)
             if (tasks[i].count > tasks[big].count) big = i;
         if (tasks[big].count < BVH_PAR_MIN_REFS) break;
         bvh_task l, r;
-        if (split_task(ctx, &tasks[big], threads, &l, &r)) {
+        if (split_task(ctx, &tasks[big], threads, &l, &r, NULL)) {
             tasks[big] = l;
             tasks[n++] = r;
         } else {

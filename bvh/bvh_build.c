@@ -49,8 +49,9 @@ double bvh_sah_cost(const bvh_node *nodes, uint32_t node_count, double ct, doubl
 
 /*
  * Removes the gaps of the region layout in place. The regions put every
- * subtree's child pairs after its own pair, left subtree first, so the
- * pairs already lie in depth-first order; visiting them in that order and
+ * subtree's child pairs after its own pair, left subtree first (inside a
+ * one-thread subtree, packed at its region's start in the same order), so
+ * the pairs already lie in depth-first order; visiting them in that order and
  * moving each down to the next free slot never overwrites a pair not yet
  * moved (its new place is at or below its old one, and every pair still to
  * come lies above). Returns the node count; fills the depth and the leaves.
