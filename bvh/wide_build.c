@@ -31,6 +31,10 @@
 #include "build_common.h"
 #include "wide_node.h"
 
+#if defined(__AVX__) && !defined(BVH_NO_SIMD)
+#include <immintrin.h>
+#endif
+
 /* A leaf to pack: its primitive slots in the binary tree's leaf order. */
 typedef struct {
     uint32_t first_slot, count, first_block;
@@ -78,12 +82,35 @@ void bvh_wide_set_perm(float *rows, int w, int k)
     for (int o = 0; o < 4; o++) {
         float key[8];
         int order[8];
-        for (int i = 0; i < k; i++) {
+        for (int i = 0; i < k; i++)
             key[i] = (o & 1 ? -cen[i][0] : cen[i][0]) + (o & 2 ? -cen[i][1] : cen[i][1]) + cen[i][2];
-            int b = i; /* insertion: stable, so ties keep slot order */
-            while (b > 0 && key[order[b - 1]] > key[i]) order[b] = order[b - 1], b--;
-            order[b] = i;
+        /* Each child's rank counted without branches: the children before
+         * it by (key, slot), which is the stable sort's order (ties keep
+         * slot order). No key is a NaN: three finite terms may overflow to
+         * an infinity, never to inf - inf. An insertion sort here spent
+         * most of its time in mispredicted compares (perf: 3% of an 8-wide
+         * build on soup 1M). */
+#if defined(__AVX__) && !defined(BVH_NO_SIMD)
+        for (int i = k; i < 8; i++) key[i] = INFINITY; /* unused: after every used slot (j >= k) */
+        const __m256 kv = _mm256_loadu_ps(key);
+        const __m256i slot = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+        for (int i = 0; i < k; i++) {
+            __m256 ki = _mm256_set1_ps(key[i]);
+            __m256 before = _mm256_or_ps(_mm256_cmp_ps(kv, ki, _CMP_LT_OQ),
+                                         _mm256_and_ps(_mm256_cmp_ps(kv, ki, _CMP_EQ_OQ),
+                                                       _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+                                                           _mm256_set1_epi32(i), slot))));
+            /* unused lanes hold +inf: before a used key only if it is
+             * +inf too, and then by slot (j >= k > i): never */
+            order[__builtin_popcount((unsigned)_mm256_movemask_ps(before))] = i;
         }
+#else
+        for (int i = 0; i < k; i++) {
+            int rank = 0;
+            for (int j = 0; j < k; j++) rank += key[j] < key[i] || (key[j] == key[i] && j < i);
+            order[rank] = i;
+        }
+#endif
         for (int r = 0; r < w; r++) {
             int fwd = r < k ? order[r] : r, rev = r < k ? order[k - 1 - r] : r;
             perm[r] |= (uint32_t)fwd << (3 * o) | (uint32_t)rev << (3 * (7 - o));
