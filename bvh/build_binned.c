@@ -317,9 +317,9 @@ static void groups_sparse(const bvh_build *ctx, const bvh_task *t, const bin_pla
         uint64_t used[BINS_MAX / 64] = {0};
         box4 box[BINS_MAX];
         uint32_t count[BINS_MAX];
-        /* Two branch-free passes: whether a reference is the first of its
-         * bin is a coin flip for the branch predictor (a first version
-         * branched on it and spent most of this function in mispredictions). */
+        /* Two branch-free passes (clear each touched bin, then fill it)
+         * instead of a branch on "first reference of its bin", which is a
+         * coin flip for the branch predictor. */
         for (uint32_t i = 0; i < n; i++) {
             int x = v[i].bin[a];
             used[x >> 6] |= (uint64_t)1 << (x & 63);

@@ -537,10 +537,10 @@ int grid_cells_build(const grid_frame *f, const accel_scene *s, const uint32_t *
         return accel_fail(err, ACCEL_ERR_RANGE, "grid: %llu cells exceed the memory limit",
                           (unsigned long long)cells);
     uint32_t *offsets = accel_alloc_large(cells + 1, sizeof *offsets, sizeof(void *));
-    if (offsets) memset(offsets, 0, (cells + 1) * sizeof *offsets);
     if (!offsets)
         return accel_fail(err, ACCEL_ERR_NOMEM, "grid: out of memory for %llu cell offsets",
                           (unsigned long long)cells);
+    memset(offsets, 0, (cells + 1) * sizeof *offsets);
     grid_count_pass(f, s, prims, prim_count, mode, offsets, threads);
     uint64_t total;
     int rc = grid_prefix_sum(offsets, cells, threads, &total, err);
