@@ -51,6 +51,9 @@ static const accel_param_def bvh_params[] = {
     {"order", ACCEL_PARAM_ENUM, "octant", 0, 0, "dist|octant|branchy",
      "width=4|8: hit children sorted by entry distance per ray, or in the node's octant order "
      "pushed by a compress-store (octant) or by one branch per child (branchy: single rays)"},
+    {"hybrid", ACCEL_PARAM_INT, "16", 0, 64, NULL,
+     "width=4|8, traverse=packet: a subtree whose hitting rays span at most this many of the "
+     "packet's 64 (first to last) is traced ray by ray from there (0: never)"},
     {"quant", ACCEL_PARAM_BOOL, "0", 0, 1, NULL,
      "width=8, single rays: child boxes as 8-bit steps from the node's corner, rounded outward "
      "(128-byte nodes instead of 256; the octant order pushed by branches, as order=branchy; "
@@ -68,6 +71,7 @@ typedef struct {
     int width, block, order; /* width 2: the binary tree */
     int first_left, split_pairs; /* width 2: first=left, pairs=split */
     int quant;                   /* width 8: quantized nodes */
+    int hybrid;                  /* wide packets: hand-over span (wide_packet.h) */
 } wide_opts;
 
 static int options_from_params(const accel_params *p, bvh_build_opts *o, int *traverse,
@@ -112,6 +116,9 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
     if (wo->quant && (wo->width != 8 || *traverse != BVH_TRAVERSE_SINGLE || accel_param_given(p, "order")))
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: quant=1 applies to width=8 with single rays and "
                                                "its own order (no order=, no traverse=packet)");
+    wo->hybrid = (int)accel_param_num(p, "hybrid");
+    if (accel_param_given(p, "hybrid") && (wo->width == 2 || *traverse != BVH_TRAVERSE_PACKET))
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: hybrid applies to width=4|8 with traverse=packet");
     if (wo->order == WIDE_ORDER_BRANCHY && *traverse != BVH_TRAVERSE_SINGLE)
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: order=branchy applies to traverse=single only");
     if (wo->width > 2 && *frustum)
@@ -162,7 +169,7 @@ static int build_tree(const accel_scene *scene, const bvh_build_opts *opts, cons
     if (rc == 0 && wo->width > 2) {
         rc = bvh_wide_build(out, wo->width, block, wo->order, wo->quant, threads < 1 ? 1 : threads, o.ct,
                             o.ci, stats, err);
-        if (rc == 0) out->wide->packets = traverse == BVH_TRAVERSE_PACKET;
+        if (rc == 0) out->wide->packets = traverse == BVH_TRAVERSE_PACKET, out->wide->hybrid = wo->hybrid;
         if (rc) bvh_release(out);
     }
     return rc;
@@ -173,7 +180,7 @@ static int bvh_kind_build(const accel_scene *scene, const accel_params *params, 
 {
     bvh_build_opts opts;
     int traverse, frustum;
-    wide_opts wo = {2, 4, 1, 0, 0, 0};
+    wide_opts wo = {2, 4, 1, 0, 0, 0, 0};
     int rc = options_from_params(params, &opts, &traverse, &frustum, &wo, err);
     if (rc) return rc;
     bvh *b = calloc(1, sizeof *b);

@@ -348,7 +348,69 @@ WIDE_INLINE int WK(visit_node_q)(const wide_qnode8 *n, const WK(node_ray) *r, fl
 }
 #endif
 
-/* One ray with order=octant. */
+/*
+ * The walk of one prepared ray with order=octant (and branchy, quant) from
+ * `ref` down, on the ray's running answer (*t, *u, *v, *hit_id): the
+ * whole trace from the root, or a subtree the packet kernel hands to single
+ * rays (wide_packet.h). Returns 1 when any_hit found a hit or the step
+ * bound broke (the caller stops).
+ */
+WIDE_INLINE int WK(walk_oct)(const bvh_wide *w, const accel_ray_prep *p, uint32_t ref, float *t_io, float *u,
+                             float *v, uint32_t *hit_id, uint32_t *steps_io, uint32_t *boxes_io,
+                             uint32_t *prims, accel_counters *c, unsigned flags, int any_hit, int branchy,
+                             int quant)
+{
+    (void)quant; /* used by width 8 only */
+    /* *p is read field by field, not copied whole: a struct copy loads in
+     * vectors what the prep just stored as scalars, and the failed store
+     * forwarding cost about a tenth of the kernel's time on primary rays
+     * (perf). */
+    WK(node_ray) nr;
+    WK(node_setup)(&nr, p);
+    KL(wide_leaf_ray) lr;
+    KL(leaf_setup)(&lr, p);
+    const KNODE *nodes = w->nodes;
+    /* W slack: a node stores all W lanes at the top of the stack */
+    uint32_t sref[WIDE_STACK(WIDE_NW) + WIDE_NW];
+    float st[WIDE_STACK(WIDE_NW) + WIDE_NW];
+    int sp = 0, shift = 3 * (p->neg[0] | p->neg[1] << 1 | p->neg[2] << 2), stop = 0;
+    uint32_t steps = *steps_io, boxes = *boxes_io;
+    float t = *t_io;
+    for (;;) {
+        steps++;
+        if (ACCEL_STEP_BOUND_BROKEN(c, steps, w->step_bound)) {
+            stop = 1;
+            break;
+        }
+        if (!(ref & WIDE_LEAF)) {
+            boxes += WIDE_NW;
+#if WIDE_NW == 8
+            if (quant) {
+                if (WK(visit_node_q)((const wide_qnode8 *)w->nodes + ref, &nr, t, &ref, sref, st, &sp, shift))
+                    continue;
+            } else
+#endif
+            if (WK(visit_node_oct)(&nodes[ref], &nr, t, &ref, sref, st, &sp, shift, branchy)) continue;
+        } else if (WK(visit_leaf)(w, ref, &lr, p, &t, u, v, hit_id, prims, c != NULL, flags, any_hit)) {
+            stop = 1;
+            break;
+        }
+        /* Pop the next entry that can still hold a closer hit. */
+        int more = 0;
+        while (sp > 0) {
+            sp--;
+            if (box3_entry_before(st[sp], t)) {
+                ref = sref[sp];
+                more = 1;
+                break;
+            }
+        }
+        if (!more) break;
+    }
+    *t_io = t, *steps_io = steps, *boxes_io = boxes;
+    return stop;
+}
+
 /* One prepared ray (p == NULL: a ray that cannot hit) with order=octant. */
 WIDE_INLINE void WK(trace_prepped_oct_)(const bvh_wide *w, const accel_ray_prep *pp, void *out,
                                         accel_counters *c, size_t ray_idx, unsigned flags, int any_hit,
@@ -357,53 +419,10 @@ WIDE_INLINE void WK(trace_prepped_oct_)(const bvh_wide *w, const accel_ray_prep 
     accel_hit hit = accel_hit_miss();
     uint32_t steps = 0, boxes = 0, prims = 0, hit_id = ACCEL_MISS;
     float t = INFINITY;
-    (void)quant; /* used by width 8 only */
     if (pp && w->root != WIDE_EMPTY) {
-        /* *pp is read field by field, not copied whole: a struct copy
-         * loads in vectors what the prep just stored as scalars, and the
-         * failed store forwarding cost about a tenth of the kernel's time
-         * on primary rays (perf). */
-        const accel_ray_prep *p = pp;
-        WK(node_ray) nr;
-        WK(node_setup)(&nr, p);
-        KL(wide_leaf_ray) lr;
-        KL(leaf_setup)(&lr, p);
-        const KNODE *nodes = w->nodes;
-        /* W slack: a node stores all W lanes at the top of the stack */
-        uint32_t sref[WIDE_STACK(WIDE_NW) + WIDE_NW];
-        float st[WIDE_STACK(WIDE_NW) + WIDE_NW];
-        int sp = 0, shift = 3 * (p->neg[0] | p->neg[1] << 1 | p->neg[2] << 2);
-        uint32_t ref = w->root;
-        t = p->t_far;
-        for (;;) {
-            steps++;
-            if (ACCEL_STEP_BOUND_BROKEN(c, steps, w->step_bound)) break;
-            if (!(ref & WIDE_LEAF)) {
-                boxes += WIDE_NW;
-#if WIDE_NW == 8
-                if (quant) {
-                    if (WK(visit_node_q)((const wide_qnode8 *)w->nodes + ref, &nr, t, &ref, sref, st, &sp,
-                                         shift))
-                        continue;
-                } else
-#endif
-                if (WK(visit_node_oct)(&nodes[ref], &nr, t, &ref, sref, st, &sp, shift, branchy)) continue;
-            } else if (WK(visit_leaf)(w, ref, &lr, p, &t, &hit.u, &hit.v, &hit_id, &prims, c != NULL,
-                                      flags, any_hit)) {
-                break;
-            }
-            /* Pop the next entry that can still hold a closer hit. */
-            int more = 0;
-            while (sp > 0) {
-                sp--;
-                if (box3_entry_before(st[sp], t)) {
-                    ref = sref[sp];
-                    more = 1;
-                    break;
-                }
-            }
-            if (!more) break;
-        }
+        t = pp->t_far;
+        WK(walk_oct)(w, pp, w->root, &t, &hit.u, &hit.v, &hit_id, &steps, &boxes, &prims, c, flags, any_hit,
+                     branchy, quant);
     }
     WK(finish)(hit, hit_id, t, out, c, ray_idx, steps, boxes, prims, any_hit);
 }

@@ -173,6 +173,7 @@ typedef struct bvh_wide {
     int block;            /* primitives per leaf block: 4 or 8 */
     int order;            /* WIDE_ORDER_*: how hit children are ordered */
     int packets;          /* traverse=packet: 64-ray packets (wide_packet.h) */
+    int hybrid;           /* packets: entries spanning at most this many rays go ray by ray */
     int quant;            /* quant=1: nodes are wide_qnode8 (width 8 only) */
     uint32_t root;        /* reference of the root, WIDE_EMPTY for an empty scene */
     uint32_t node_count;  /* wide nodes */

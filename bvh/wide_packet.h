@@ -63,15 +63,17 @@ typedef struct {
 } wide_packet;
 
 typedef struct {
-    uint32_t ref, first;   /* reference; first ray that hit its box */
+    uint32_t ref;          /* reference */
+    uint32_t first, last;  /* first and last ray that hit its box */
     uint32_t parent, lane; /* where its box is (a leaf's box culls rays) */
 } wide_packet_entry;
 
-/* Rays from `first` on as a mask of group g (8 rays). */
-static inline unsigned wp_range(uint64_t alive, unsigned g, unsigned first)
+/* Rays `first` to `last` as a mask of group g (8 rays). */
+static inline unsigned wp_range(uint64_t alive, unsigned g, unsigned first, unsigned last)
 {
     uint64_t from = first >= WP_RAYS ? 0 : ~(uint64_t)0 << first;
-    return (unsigned)((alive & from) >> (8 * g)) & 0xFFu;
+    uint64_t to = last >= WP_RAYS - 1 ? ~(uint64_t)0 : ((uint64_t)2 << last) - 1;
+    return (unsigned)((alive & from & to) >> (8 * g)) & 0xFFu;
 }
 #ifdef __cplusplus
 }
@@ -114,18 +116,36 @@ WIDE_INLINE unsigned PK(group_hits)(const wide_packet *pk, unsigned g, unsigned 
     return (unsigned)f8_mask(f8_le(t0, far)) & m;
 }
 
-/* The first ray from `first` on that hits the child, or WP_RAYS. */
-WIDE_INLINE unsigned PK(first_hit)(const wide_packet *pk, unsigned first, const float *rows,
-                                   unsigned lane, uint32_t *tests)
+/* The first ray of `first`..`last` that hits the child, or WP_RAYS. */
+WIDE_INLINE unsigned PK(first_hit)(const wide_packet *pk, unsigned first, unsigned last, const float *rows,
+                                   unsigned lane, uint32_t *tests, unsigned *group_mask)
 {
-    for (unsigned g = first / 8; g < WP_RAYS / 8; g++) {
-        unsigned m = wp_range(pk->alive, g, first);
+    for (unsigned g = first / 8; g <= last / 8; g++) {
+        unsigned m = wp_range(pk->alive, g, first, last);
         if (!m) continue;
         (*tests)++;
         unsigned h = PK(group_hits)(pk, g, m, rows, lane);
-        if (h) return 8 * g + (unsigned)__builtin_ctz(h);
+        if (h) {
+            *group_mask = h;
+            return 8 * g + (unsigned)__builtin_ctz(h);
+        }
     }
     return WP_RAYS;
+}
+
+/* The last ray of `first`..`last` that hits the child, given `first`, the
+ * first that does, and the hits of its group (first_hit's group_mask). */
+WIDE_INLINE unsigned PK(last_hit)(const wide_packet *pk, unsigned first, unsigned last, const float *rows,
+                                  unsigned lane, uint32_t *tests, unsigned group_mask)
+{
+    for (unsigned g = last / 8; g > first / 8; g--) {
+        unsigned m = wp_range(pk->alive, g, first, last);
+        if (!m) continue;
+        (*tests)++;
+        unsigned h = PK(group_hits)(pk, g, m, rows, lane);
+        if (h) return 8 * g + 31u - (unsigned)__builtin_clz(h);
+    }
+    return 8 * (first / 8) + 31u - (unsigned)__builtin_clz(group_mask);
 }
 
 /* Children that some ray may hit, by interval arithmetic (see above). */
@@ -185,10 +205,11 @@ WIDE_INLINE int PK(packet_load)(wide_packet *pk, const bvh_wide *w, const accel_
     return ok;
 }
 
-/* Charges one visit to the rays from `first` on. */
-WIDE_INLINE void PK(charge)(wide_packet *pk, unsigned first)
+/* Charges one visit to the rays `first` to `last`. */
+WIDE_INLINE void PK(charge)(wide_packet *pk, unsigned first, unsigned last)
 {
-    uint64_t m = pk->alive & (first >= WP_RAYS ? 0 : ~(uint64_t)0 << first);
+    uint64_t m = pk->alive & (first >= WP_RAYS ? 0 : ~(uint64_t)0 << first) &
+                 (last >= WP_RAYS - 1 ? ~(uint64_t)0 : ((uint64_t)2 << last) - 1);
     while (m) {
         pk->steps[__builtin_ctzll(m)]++;
         m &= m - 1;
@@ -206,38 +227,50 @@ WIDE_INLINE void PK(packet_trace)(wide_packet *pk, const bvh_wide *w, accel_coun
     wide_packet_entry stack[WIDE_STACK(WIDE_NW)];
     int sp = 0;
     uint32_t visits = 0, tests = 0;
+    uint64_t single_boxes = 0;
     if (!pk->alive) return;
-    stack[sp++] = (wide_packet_entry){w->root, (uint32_t)__builtin_ctzll(pk->alive), WIDE_EMPTY, 0};
+    stack[sp++] = (wide_packet_entry){w->root, (uint32_t)__builtin_ctzll(pk->alive),
+                                      63u - (uint32_t)__builtin_clzll(pk->alive), WIDE_EMPTY, 0};
+    const uint32_t hybrid = (uint32_t)w->hybrid;
     while (sp > 0 && pk->alive) {
         wide_packet_entry e = stack[--sp];
-        visits++;
-        if (ACCEL_STEP_BOUND_BROKEN(c, visits, w->step_bound)) break;
-        if (c) PK(charge)(pk, e.first);
-        if (!(e.ref & WIDE_LEAF)) {
+        const int single = !(e.ref & WIDE_LEAF) && e.last - e.first < hybrid;
+        if (!single) {
+            visits++;
+            if (ACCEL_STEP_BOUND_BROKEN(c, visits, w->step_bound)) break;
+            if (c) PK(charge)(pk, e.first, e.last);
+        }
+        if (!(e.ref & WIDE_LEAF) && !single) {
             const PNODE *n = &nodes[e.ref];
             const float *rows = n->box[0];
             unsigned cand = PK(frustum)(pk, rows);
             if (c) c->packet_box_tests += WIDE_NW;
-            uint32_t first_of[WIDE_NW];
+            uint32_t first_of[WIDE_NW], last_of[WIDE_NW];
             unsigned hit = 0;
             while (cand) {
                 unsigned l = (unsigned)__builtin_ctz(cand);
                 cand &= cand - 1;
-                first_of[l] = PK(first_hit)(pk, e.first, rows, l, &tests);
-                if (first_of[l] < WP_RAYS) hit |= 1u << l;
+                unsigned gm = 0;
+                first_of[l] = PK(first_hit)(pk, e.first, e.last, rows, l, &tests, &gm);
+                if (first_of[l] < WP_RAYS) {
+                    hit |= 1u << l;
+                    last_of[l] = PK(last_hit)(pk, first_of[l], e.last, rows, l, &tests, gm);
+                }
             }
             for (int rank = WIDE_NW - 1; rank >= 0; rank--) { /* farthest first */
                 unsigned l = (n->perm[rank] >> shift) & 7u;
-                if (hit >> l & 1u) stack[sp++] = (wide_packet_entry){n->child[l], first_of[l], e.ref, l};
+                if (hit >> l & 1u)
+                    stack[sp++] = (wide_packet_entry){n->child[l], first_of[l], last_of[l], e.ref, l};
             }
             continue;
         }
-        /* Leaf: the rays from `first` on that hit its box. */
+        /* A leaf, or a subtree handed to single rays: the rays `first` to
+         * `last` that hit its box. */
         const PBLOCK *blk = &blocks[wide_leaf_first(e.ref)];
         uint32_t nb = wide_leaf_blocks(e.ref);
         const float *prow = e.parent == WIDE_EMPTY ? NULL : nodes[e.parent].box[0];
-        for (unsigned g = e.first / 8; g < WP_RAYS / 8; g++) {
-            unsigned m = wp_range(pk->alive, g, e.first);
+        for (unsigned g = e.first / 8; g <= e.last / 8; g++) {
+            unsigned m = wp_range(pk->alive, g, e.first, e.last);
             if (!m) continue;
             if (prow) {
                 tests++;
@@ -246,6 +279,17 @@ WIDE_INLINE void PK(packet_trace)(wide_packet *pk, const bvh_wide *w, accel_coun
             while (m) {
                 unsigned r = 8 * g + (unsigned)__builtin_ctz(m);
                 m &= m - 1;
+                if (single) {
+                    uint32_t boxes = 0;
+                    if (PK_CAT(walk_oct, WIDE_NW, WIDE_LB)(w, &pk->p[r], e.ref, &pk->t[r], &pk->u[r], &pk->v[r],
+                                                           &pk->id[r], &pk->steps[r], &boxes, &pk->prims[r], c,
+                                                           flags, any_hit, 0, 0) &&
+                        any_hit) {
+                        if (pk->id[r] != ACCEL_MISS) pk->alive &= ~((uint64_t)1 << r);
+                    }
+                    single_boxes += boxes;
+                    continue;
+                }
                 PKL(wide_leaf_ray) lr;
                 PKL(leaf_setup)(&lr, &pk->p[r]);
                 for (uint32_t k = 0; k < nb; k++) {
@@ -263,7 +307,7 @@ WIDE_INLINE void PK(packet_trace)(wide_packet *pk, const bvh_wide *w, accel_coun
             }
         }
     }
-    if (c) c->box_tests += 8 * (uint64_t)tests;
+    if (c) c->box_tests += 8 * (uint64_t)tests + single_boxes;
 }
 
 WIDE_INLINE void PK(packet_batch)(const void *a, const accel_ray *rays, void *out, size_t count,
