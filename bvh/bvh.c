@@ -316,6 +316,8 @@ static const char *const bvh_variants[] = {
     "width=4,block=4,order=branchy",
     "width=4,block=8,order=dist",
     "width=8,traverse=packet",
+    "width=8,traverse=packet,hybrid=0",
+    "width=4,block=8,traverse=packet,hybrid=64",
     "width=4,block=4,traverse=packet",
     "build=median,term=none,leaf=4",
     "build=sbvh",

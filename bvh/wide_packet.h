@@ -27,8 +27,15 @@
  *      tested until one ray hits: it is the child's `first`;
  *   3. the hit children are pushed in the node's octant order (all rays of
  *      a packet share the octant), farthest first.
- * At a leaf, the rays from `first` on that hit the leaf's box (groups of
- * 8 again) run the single-ray leaf test (wide_leaf.h) on its blocks. With
+ * Each entry also carries `last`, the last ray that hit its box (found by
+ * scanning the groups from the back), and every scan stops there. At a
+ * leaf, the rays `first` to `last` that hit the leaf's box (groups of 8
+ * again) run the single-ray leaf test (wide_leaf.h) on its blocks. An
+ * interior entry whose span last - first is below w->hybrid (spec key
+ * hybrid=, 0: never) is not walked as a packet: each ray of the span that
+ * hits its box walks the subtree alone (walk_oct of wide_kernel.h, the
+ * single-ray loop), the hybrid of Benthin et al. (HPG 2012) with the span
+ * as a bound on the active rays instead of an exact count. With
  * any hit, an occluded ray leaves the packet. A packet whose valid rays do
  * not share one octant, or has a zero direction component (no finite
  * interval), is traced ray by ray with the single-ray kernel instead.
@@ -68,12 +75,18 @@ typedef struct {
     uint32_t parent, lane; /* where its box is (a leaf's box culls rays) */
 } wide_packet_entry;
 
-/* Rays `first` to `last` as a mask of group g (8 rays). */
-static inline unsigned wp_range(uint64_t alive, unsigned g, unsigned first, unsigned last)
+/* The live rays `first` to `last` as a mask of the packet. */
+static inline uint64_t wp_span(uint64_t alive, unsigned first, unsigned last)
 {
     uint64_t from = first >= WP_RAYS ? 0 : ~(uint64_t)0 << first;
     uint64_t to = last >= WP_RAYS - 1 ? ~(uint64_t)0 : ((uint64_t)2 << last) - 1;
-    return (unsigned)((alive & from & to) >> (8 * g)) & 0xFFu;
+    return alive & from & to;
+}
+
+/* The same as a mask of group g (8 rays). */
+static inline unsigned wp_range(uint64_t alive, unsigned g, unsigned first, unsigned last)
+{
+    return (unsigned)(wp_span(alive, first, last) >> (8 * g)) & 0xFFu;
 }
 #ifdef __cplusplus
 }
@@ -208,8 +221,7 @@ WIDE_INLINE int PK(packet_load)(wide_packet *pk, const bvh_wide *w, const accel_
 /* Charges one visit to the rays `first` to `last`. */
 WIDE_INLINE void PK(charge)(wide_packet *pk, unsigned first, unsigned last)
 {
-    uint64_t m = pk->alive & (first >= WP_RAYS ? 0 : ~(uint64_t)0 << first) &
-                 (last >= WP_RAYS - 1 ? ~(uint64_t)0 : ((uint64_t)2 << last) - 1);
+    uint64_t m = wp_span(pk->alive, first, last);
     while (m) {
         pk->steps[__builtin_ctzll(m)]++;
         m &= m - 1;
@@ -266,8 +278,8 @@ WIDE_INLINE void PK(packet_trace)(wide_packet *pk, const bvh_wide *w, accel_coun
         }
         /* A leaf, or a subtree handed to single rays: the rays `first` to
          * `last` that hit its box. */
-        const PBLOCK *blk = &blocks[wide_leaf_first(e.ref)];
-        uint32_t nb = wide_leaf_blocks(e.ref);
+        const PBLOCK *blk = single ? NULL : &blocks[wide_leaf_first(e.ref)];
+        uint32_t nb = single ? 0 : wide_leaf_blocks(e.ref);
         const float *prow = e.parent == WIDE_EMPTY ? NULL : nodes[e.parent].box[0];
         for (unsigned g = e.first / 8; g <= e.last / 8; g++) {
             unsigned m = wp_range(pk->alive, g, e.first, e.last);
@@ -284,9 +296,8 @@ WIDE_INLINE void PK(packet_trace)(wide_packet *pk, const bvh_wide *w, accel_coun
                     if (PK_CAT(walk_oct, WIDE_NW, WIDE_LB)(w, &pk->p[r], e.ref, &pk->t[r], &pk->u[r], &pk->v[r],
                                                            &pk->id[r], &pk->steps[r], &boxes, &pk->prims[r], c,
                                                            flags, any_hit, 0, 0) &&
-                        any_hit) {
-                        if (pk->id[r] != ACCEL_MISS) pk->alive &= ~((uint64_t)1 << r);
-                    }
+                        any_hit && pk->id[r] != ACCEL_MISS) /* occluded (not a broken step bound) */
+                        pk->alive &= ~((uint64_t)1 << r);
                     single_boxes += boxes;
                     continue;
                 }
