@@ -32,6 +32,10 @@
 /* The 8-wide tree with quantized child boxes (128-byte nodes; its push is
  * order=branchy's, so that is the kernel to compare it with). */
 #define QUANT "bvh:width=8,quant=1"
+/* The 8-wide packets without the hand-over to single rays (hybrid=0; the
+ * default hands a subtree hit by at most 16 rays of the packet to single
+ * rays): the same tree, measured to show what the hand-over pays. */
+#define HYBRID0 "bvh:width=8,traverse=packet,hybrid=0"
 
 static const char *const configs[] = {"bvh",
                                       "bvh:width=4",
@@ -40,7 +44,8 @@ static const char *const configs[] = {"bvh",
                                       QUANT,
                                       "bvh:traverse=packet",
                                       "bvh:width=4,traverse=packet",
-                                      "bvh:width=8,traverse=packet"};
+                                      "bvh:width=8,traverse=packet",
+                                      HYBRID0};
 /* Kernels measured again on 2 threads (the best wide kernels of the last
  * report: 8-wide single on 5 of 6 scene/set pairs, and its coherent mode). */
 static const char *const threaded[] = {"bvh:width=8", "bvh:width=8,traverse=packet"};
@@ -71,12 +76,12 @@ static void target_row(exp_ctx *x, exp_text *f, const char *what, int bit, const
 }
 
 /* The tree a spec builds: the spec without its traversal choices
- * (traverse=packet, order=branchy). */
+ * (traverse=packet, order=branchy, hybrid=0). */
 static void tree_of(const char *spec, char *out, size_t n)
 {
     snprintf(out, n, "%s", spec);
-    static const char *const drop[] = {"traverse=packet", "order=branchy"};
-    for (int d = 0; d < 2; d++) {
+    static const char *const drop[] = {"traverse=packet", "order=branchy", "hybrid=0"};
+    for (int d = 0; d < 3; d++) {
         char *p = strstr(out, drop[d]);
         if (!p) continue;
         size_t len = strlen(drop[d]);
@@ -165,7 +170,8 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, cons
     g.collapse_ms = x->quick ? 500 : 3000;
     g.min_rounds = 3; /* every ratio gets an interval, on the big scenes too */
     for (int i = 0; i < list->count; i++) {
-        g.keep_same = !strcmp(list->spec[i], BRANCHY) || !strcmp(list->spec[i], QUANT);
+        g.keep_same = !strcmp(list->spec[i], BRANCHY) || !strcmp(list->spec[i], QUANT) ||
+                      !strcmp(list->spec[i], HYBRID0);
         exp_group_add(&g, list->spec[i], 1);
         g.keep_same = 0;
     }
@@ -242,6 +248,15 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, cons
                      g.cfg[best].spec);
             target_row(x, &st->findings, what, bit, &rc, k == 0 ? 1.5 : 0,
                        exp_target_outcome(&rc, 1.5, 1));
+        }
+        /* What the hand-over to single rays pays, on its own: the default
+         * 8-wide packets over the same packets with hybrid=0. */
+        int hy = exp_group_find(&g, "bvh:width=8,traverse=packet"), h0 = exp_group_find(&g, HYBRID0);
+        if (k < 2 && hy >= 0 && h0 >= 0 && g.cfg[hy].ok && g.cfg[h0].ok && g.cfg[hy].threads == 1) {
+            exp_est rh = exp_group_speedup(&g, h0, hy, bit);
+            snprintf(what, sizeof what, "hand-over to single rays: `%s` (hybrid=16) over `%s`", g.cfg[hy].spec,
+                     HYBRID0);
+            target_row(x, &st->findings, what, bit, &rh, 0, exp_target_outcome(&rh, 1.0, 1));
         }
         for (int t = first_twin; t < g.count; t++) {
             if (!g.cfg[t].ok) continue;
