@@ -278,7 +278,7 @@ typedef struct {
     const char *help;    /* meaning, with its unit */
 } accel_param_def;
 
-#define ACCEL_MAX_PARAMS 24
+#define ACCEL_MAX_PARAMS 32
 
 struct accel_kind;
 

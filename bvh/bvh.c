@@ -51,6 +51,18 @@ static const accel_param_def bvh_params[] = {
     {"order", ACCEL_PARAM_ENUM, "octant", 0, 0, "dist|octant|branchy",
      "width=4|8: hit children sorted by entry distance per ray, or in the node's octant order "
      "pushed by a compress-store (octant) or by one branch per child (branchy: single rays)"},
+    {"collapse", ACCEL_PARAM_ENUM, "dp", 0, 0, "greedy|dp",
+     "width=4|8: binary tree to wide nodes by opening the largest child first, every subtree of "
+     "one block a leaf (greedy), or the forests of least SAH cost by dynamic programming (dp; "
+     "Ylitie et al. 2017)"},
+    {"leaf_cost", ACCEL_PARAM_FLOAT, "1.5", 0.01, 100, NULL,
+     "collapse=dp: cost of one leaf block test, in wide node visits"},
+    {"leaf_blocks", ACCEL_PARAM_INT, "2", 1, 64, NULL,
+     "collapse=dp: most blocks in a leaf the collapse makes (larger binary leaves stay whole)"},
+    {"leaf_below", ACCEL_PARAM_INT, "0", 0, 256, NULL,
+     "width=4|8: the binary build makes every subtree of at most this many primitives a leaf, "
+     "unsplit (0: the block size; smaller lets collapse=dp choose smaller leaves, for more build "
+     "time)"},
     {"hybrid", ACCEL_PARAM_INT, "16", 0, 64, NULL,
      "width=4|8, traverse=packet: a subtree whose hitting rays span at most this many of the "
      "packet's 64 (first to last) is traced ray by ray from there (0: never)"},
@@ -72,6 +84,8 @@ typedef struct {
     int first_left, split_pairs; /* width 2: first=left, pairs=split */
     int quant;                   /* width 8: quantized nodes */
     int hybrid;                  /* wide packets: hand-over span (wide_packet.h) */
+    bvh_wide_collapse collapse;  /* wide: greedy or dp */
+    int leaf_below;              /* wide: the binary build's leaf_below (0: block) */
 } wide_opts;
 
 static int options_from_params(const accel_params *p, bvh_build_opts *o, int *traverse,
@@ -116,6 +130,14 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
     if (wo->quant && (wo->width != 8 || *traverse != BVH_TRAVERSE_SINGLE || accel_param_given(p, "order")))
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: quant=1 applies to width=8 with single rays and "
                                                "its own order (no order=, no traverse=packet)");
+    wo->collapse.dp = (int)accel_param_num(p, "collapse") == 1;
+    wo->collapse.leaf_cost = accel_param_num(p, "leaf_cost");
+    wo->collapse.leaf_blocks = (int)accel_param_num(p, "leaf_blocks");
+    wo->leaf_below = (int)accel_param_num(p, "leaf_below");
+    if ((wo->width == 2 && (accel_param_given(p, "collapse") || accel_param_given(p, "leaf_below"))) ||
+        (!wo->collapse.dp && (accel_param_given(p, "leaf_cost") || accel_param_given(p, "leaf_blocks"))))
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: collapse and leaf_below apply to width=4|8, "
+                                               "leaf_cost and leaf_blocks to collapse=dp");
     wo->hybrid = (int)accel_param_num(p, "hybrid");
     if (accel_param_given(p, "hybrid") && (wo->width == 2 || *traverse != BVH_TRAVERSE_PACKET))
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: hybrid applies to width=4|8 with traverse=packet");
@@ -160,14 +182,15 @@ static int build_tree(const accel_scene *scene, const bvh_build_opts *opts, cons
 {
     const int block = wo->block ? wo->block : scene->sphere_count ? 4 : 8;
     bvh_build_opts o = *opts;
-    /* The collapse makes every subtree of at most one block one leaf: the
-     * binary build does not split those (the same wide tree, about a fifth
-     * less build time on bunny). */
-    if (wo->width > 2) o.leaf_below = block;
+    /* The greedy collapse makes every subtree of at most one block one
+     * leaf, so the binary build does not split those (the same wide tree,
+     * about a fifth less build time on bunny). collapse=dp keeps every
+     * binary leaf a leaf: leaf_below < block lets it choose smaller ones. */
+    if (wo->width > 2) o.leaf_below = wo->leaf_below ? wo->leaf_below : block;
     int rc = bvh_build_run(scene, &o, threads, out, stats, err);
     if (rc == 0 && wo->width == 2 && wo->split_pairs) rc = bvh_split_pairs(out, err);
     if (rc == 0 && wo->width > 2) {
-        rc = bvh_wide_build(out, wo->width, block, wo->order, wo->quant, threads < 1 ? 1 : threads, o.ct,
+        rc = bvh_wide_build(out, wo->width, block, wo->order, wo->quant, &wo->collapse, threads < 1 ? 1 : threads, o.ct,
                             o.ci, stats, err);
         if (rc == 0) out->wide->packets = traverse == BVH_TRAVERSE_PACKET, out->wide->hybrid = wo->hybrid;
         if (rc) bvh_release(out);
@@ -180,7 +203,7 @@ static int bvh_kind_build(const accel_scene *scene, const accel_params *params, 
 {
     bvh_build_opts opts;
     int traverse, frustum;
-    wide_opts wo = {2, 4, 1, 0, 0, 0, 0};
+    wide_opts wo = {2, 4, 1, 0, 0, 0, 0, {1, 1.5, 2}, 0};
     int rc = options_from_params(params, &opts, &traverse, &frustum, &wo, err);
     if (rc) return rc;
     bvh *b = calloc(1, sizeof *b);
@@ -313,6 +336,9 @@ static const char *const bvh_variants[] = {
     "width=8,build=median",
     "width=8,order=dist",
     "width=8,order=branchy",
+    "width=8,collapse=greedy",
+    "width=4,collapse=dp,leaf_below=2,leaf_blocks=4,leaf_cost=0.3",
+    "width=8,block=4,collapse=dp,leaf_below=1,leaf_cost=5,order=branchy",
     "width=4,block=4,order=branchy",
     "width=4,block=8,order=dist",
     "width=8,traverse=packet",

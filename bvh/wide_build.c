@@ -4,19 +4,26 @@
  * of 4 or 8 primitives (layout in wide_node.h). Both passes run inside
  * the kind's build, so they are part of the build time it reports.
  *
- * Collapse (Wald et al., "Embree", SIGGRAPH 2014, section 4.2; Pinto,
- * "Fast BVH construction and refit", 2010): a wide node made at binary
- * node n starts from n's two children and repeatedly opens (replaces by
- * its two children) the interior child of largest surface area, until it
- * has W children or none can be opened. Opening the largest box first
- * removes the most expected node visits per opening under the SAH: a
- * child is visited with probability proportional to its area, so the
- * largest one is the costliest to leave as a separate level. Every binary
- * subtree of at most B primitives becomes one leaf (one block): a block
- * test costs about what one box test costs, so under the SAH such a
- * subtree is never worth a node of its own (its node visit plus at least
- * one block test against one block test). Larger binary leaves keep their
- * primitives (one leaf of several blocks).
+ * Two collapses. The greedy one (collapse=greedy; Wald et al., "Embree",
+ * SIGGRAPH 2014, section 4.2; Pinto, "Fast BVH construction and refit",
+ * 2010): a wide node made at binary node n starts from n's two children
+ * and repeatedly opens (replaces by its two children) the interior child
+ * of largest surface area, until it has W children or none can be opened.
+ * Opening the largest box first removes the most expected node visits per
+ * opening under the SAH: a child is visited with probability proportional
+ * to its area, so the largest one is the costliest to leave as a separate
+ * level. Every binary subtree of at most B primitives becomes one leaf
+ * (one block): a block test costs about what one box test costs, so under
+ * the SAH such a subtree is never worth a node of its own. Larger binary
+ * leaves keep their primitives (one leaf of several blocks).
+ *
+ * The default, collapse=dp, chooses instead for every wide node the forest
+ * of at most W subtrees of least SAH cost, leaves counted in blocks
+ * (plan_dp below): it may leave a slot empty, open a small child before a
+ * large one, or keep a subtree of two blocks as one leaf where that costs
+ * less. The greedy tree is one of the forests it compares, so its SAH
+ * cost under the DP's own measure is never higher (tests/test_wide_collapse.c
+ * checks that).
  *
  * Nodes are numbered in depth-first order (a node before its children, a
  * child's subtree before its next sibling's), leaves' blocks in the order
@@ -54,6 +61,11 @@ typedef struct {
     int depth;
     double node_area, leaf_area; /* sums over the wide tree: nodes' areas, leaves' area x count */
     const char *failure;  /* set when a limit of the layout is exceeded */
+    /* collapse=dp: per binary node n, dec[n * width + i - 1] is the choice
+     * that gives the cheapest forest of at most i roots for n's subtree
+     * (see plan_dp); split[n] the choice for n's own wide node. NULL for
+     * the greedy collapse. */
+    const uint8_t *dec, *split;
 } collapse_ctx;
 
 static float *node_rows(collapse_ctx *x, uint32_t idx)
@@ -145,18 +157,100 @@ static uint32_t make_leaf(collapse_ctx *x, uint32_t n)
     return wide_leaf_ref(j->first_block, blocks);
 }
 
+/* ---- collapse=dp ------------------------------------------------------------- */
+
+/*
+ * The optimal collapse under a SAH cost (Ylitie, Karras and Laine,
+ * "Efficient incoherent ray traversal on GPUs through compressed wide
+ * BVHs", HPG 2017, section 3.1), with a leaf cost counted in blocks.
+ * With A the half area, W the width, B the block size, for binary node n:
+ *
+ *   C(n, 1) = min(leaf(n), node(n))        n as one child: a leaf or a wide node
+ *   C(n, i) = min(C(n, i - 1), dist(n, i))  at most i roots, i = 2..W
+ *   dist(n, j) = min over 0 < k < j of C(left, k) + C(right, j - k)
+ *   node(n) = A(n) + dist(n, W)            a wide node visit costs 1
+ *   leaf(n) = A(n) * leaf_cost * ceil(N(n) / B)  (infinite over leaf_blocks blocks)
+ *
+ * A binary leaf is always a leaf: C(n, i) = leaf(n) for every i. Each
+ * binary node costs (W - 1) W / 2 sums; one backward pass (children after
+ * their parent) fills the table. dec[n][i - 1] records the choice: for
+ * i = 1, 1 = wide node and 0 = leaf; for i > 1, 0 = "as i - 1" and k =
+ * "k roots from the left child, i - k from the right". split[n] is the k
+ * of dist(n, W) for n's own wide node.
+ */
+static void plan_dp(const bvh_node *bin, uint32_t nc, const uint32_t *sub_count, const float *area,
+                    int width, int block, double leaf_cost, int leaf_blocks, float *cost, uint8_t *dec,
+                    uint8_t *split)
+{
+    const int w = width;
+    for (uint32_t n = nc; n-- > 0;) {
+        float *c = cost + (size_t)n * w;
+        uint8_t *d = dec + (size_t)n * w;
+        uint32_t blocks = (sub_count[n] + (uint32_t)block - 1) / (uint32_t)block;
+        float leaf = blocks <= (uint32_t)leaf_blocks || bin[n].count
+                         ? (float)((double)area[n] * leaf_cost * blocks) : INFINITY;
+        split[n] = 0;
+        if (bin[n].count || (n == 1 && nc > 1)) { /* a binary leaf, or the padding node */
+            for (int i = 0; i < w; i++) c[i] = leaf, d[i] = 0;
+            continue;
+        }
+        const float *cl = cost + (size_t)bin[n].left_first * w, *cr = cl + w;
+        float dist[9] = {0};
+        uint8_t arg[9] = {0};
+        for (int j = 2; j <= w; j++) {
+            dist[j] = INFINITY, arg[j] = 1;
+            for (int k = 1; k < j; k++) {
+                float s = cl[k - 1] + cr[j - k - 1];
+                if (s < dist[j]) dist[j] = s, arg[j] = (uint8_t)k;
+            }
+        }
+        float node = area[n] + dist[w];
+        split[n] = arg[w];
+        /* Ties (and two infinities) go to the leaf when one is allowed. */
+        int as_node = node < leaf || leaf == INFINITY;
+        c[0] = as_node ? node : leaf, d[0] = (uint8_t)as_node;
+        for (int i = 2; i <= w; i++) {
+            int spread = dist[i] < c[i - 2];
+            c[i - 1] = spread ? dist[i] : c[i - 2];
+            d[i - 1] = spread ? arg[i] : 0;
+        }
+    }
+}
+
+/* Appends to set the roots of the cheapest forest of at most i roots for
+ * binary node n's subtree (plan_dp's choices). */
+static void dp_roots(const collapse_ctx *x, uint32_t n, int i, uint32_t *set, int *k)
+{
+    while (i > 1 && x->dec[(size_t)n * x->width + i - 1] == 0) i--;
+    if (i == 1) {
+        set[(*k)++] = n;
+        return;
+    }
+    int left = x->dec[(size_t)n * x->width + i - 1];
+    dp_roots(x, x->bin[n].left_first, left, set, k);
+    dp_roots(x, x->bin[n].left_first + 1, i - left, set, k);
+}
+
 /* The wide node made at binary node n (or its leaf), at wide level `level`. */
 static uint32_t collapse(collapse_ctx *x, uint32_t n, int level)
 {
     if (level > x->depth) x->depth = level;
     if (x->failure) return WIDE_EMPTY;
-    if (is_leaf(x, n)) return make_leaf(x, n);
-    /* Open the interior child of largest area until the node is full. */
     uint32_t set[8];
-    int k = 2;
-    set[0] = x->bin[n].left_first;
-    set[1] = set[0] + 1;
-    while (k < x->width) {
+    int k = 0;
+    if (x->dec) {
+        if (x->bin[n].count || x->dec[(size_t)n * x->width] == 0) return make_leaf(x, n);
+        int left = x->split[n];
+        dp_roots(x, x->bin[n].left_first, left, set, &k);
+        dp_roots(x, x->bin[n].left_first + 1, x->width - left, set, &k);
+    } else {
+        if (is_leaf(x, n)) return make_leaf(x, n);
+        k = 2;
+        set[0] = x->bin[n].left_first;
+        set[1] = set[0] + 1;
+    }
+    /* Greedy: open the interior child of largest area until the node is full. */
+    while (!x->dec && k < x->width) {
         int best = -1;
         float best_area = -1.0f;
         for (int i = 0; i < k; i++) {
@@ -323,8 +417,8 @@ void bvh_wide_free(bvh_wide *w)
 }
 
 /* Collapses b's binary tree; fills w (nodes, blocks, counts, root). */
-static int collapse_tree(const bvh *b, bvh_wide *w, int threads, double ct, double ci, double *sah,
-                         accel_error *err)
+static int collapse_tree(const bvh *b, bvh_wide *w, const bvh_wide_collapse *cc, int threads, double ct,
+                         double ci, double *sah, accel_error *err)
 {
     const uint32_t nc = b->node_count;
     const bvh_node *bin = b->nodes;
@@ -352,6 +446,20 @@ static int collapse_tree(const bvh *b, bvh_wide *w, int threads, double ct, doub
     memset(&x, 0, sizeof x);
     x.bin = bin, x.sub_first = sub_first, x.sub_count = sub_count, x.area = area;
     x.width = w->width, x.block = w->block;
+    float *dp_cost = NULL;
+    uint8_t *dp_dec = NULL;
+    if (cc->dp) {
+        dp_cost = bvh_alloc_array(nc, (size_t)w->width * sizeof(float));
+        dp_dec = bvh_alloc_array(nc, (size_t)w->width + 1);
+        if (!dp_cost || !dp_dec) {
+            free(dp_cost), free(dp_dec), free(sub);
+            return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for the collapse");
+        }
+        plan_dp(bin, nc, sub_count, area, w->width, w->block, cc->leaf_cost, cc->leaf_blocks, dp_cost,
+                dp_dec, dp_dec + (size_t)nc * w->width);
+        free(dp_cost);
+        x.dec = dp_dec, x.split = dp_dec + (size_t)nc * w->width;
+    }
     x.node_floats = node_size(w->width) / sizeof(float);
     /* A wide node has at least two children, so there are fewer wide nodes
      * than binary interior nodes, and fewer leaves than binary leaves. */
@@ -400,12 +508,13 @@ static int collapse_tree(const bvh *b, bvh_wide *w, int threads, double ct, doub
     }
     free(x.node_box);
     free(x.leaves);
+    free(dp_dec);
     free(sub);
     return rc;
 }
 
-int bvh_wide_build(bvh *b, int width, int block, int order, int quant, int threads, double ct,
-                   double ci, accel_build_stats *stats, accel_error *err)
+int bvh_wide_build(bvh *b, int width, int block, int order, int quant, const bvh_wide_collapse *cc,
+                   int threads, double ct, double ci, accel_build_stats *stats, accel_error *err)
 {
     bvh_wide *w = calloc(1, sizeof *w);
     if (!w) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory");
@@ -417,7 +526,7 @@ int bvh_wide_build(bvh *b, int width, int block, int order, int quant, int threa
     w->prim_count = b->prim_count;
     w->root = WIDE_EMPTY;
     if (b->node_count > 0) {
-        int rc = collapse_tree(b, w, threads, ct, ci, &stats->sah_cost, err);
+        int rc = collapse_tree(b, w, cc, threads, ct, ci, &stats->sah_cost, err);
         if (rc) {
             bvh_wide_free(w);
             return rc;

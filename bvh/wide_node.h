@@ -188,6 +188,15 @@ typedef struct bvh_wide {
 } bvh_wide;
 
 struct bvh;
+/* How the binary tree is collapsed: greedy (dp = 0: open the largest
+ * child, every subtree of one block a leaf) or the optimal collapse under
+ * the SAH (dp = 1, wide_build.c's plan_dp), with a leaf block costing
+ * leaf_cost wide node visits and leaves of at most leaf_blocks blocks. */
+typedef struct {
+    int dp;
+    double leaf_cost;
+    int leaf_blocks;
+} bvh_wide_collapse;
 /* Collapses the built binary tree of b into b->wide (width 4 or 8, leaf
  * blocks of `block` primitives) and frees the binary pools, which the wide
  * kernels do not use. Fills stats->nodes, leaves and depth, and
@@ -195,8 +204,8 @@ struct bvh;
  * primitive cost ci (the binary tree's formula over the wide nodes and
  * leaves). The binary tree is best built with leaf_below = block
  * (build_common.h): a subtree that fits one block becomes one leaf. */
-int bvh_wide_build(struct bvh *b, int width, int block, int order, int quant, int threads, double ct,
-                   double ci, accel_build_stats *stats, accel_error *err);
+int bvh_wide_build(struct bvh *b, int width, int block, int order, int quant, const bvh_wide_collapse *cc,
+                   int threads, double ct, double ci, accel_build_stats *stats, accel_error *err);
 /* Recomputes a node's octant orders (perm) from its box rows; its first k
  * child slots are used (wide_build.c; bvh_refit.c calls it after a refit). */
 void bvh_wide_set_perm(float *rows, int width, int k);

@@ -8,7 +8,9 @@
  * Every kernel of a scene is measured in the same interleaved rounds
  * (group.h): one exp_group per scene holds bvh, bvh:width=4|8 single and
  * coherent, the 8-wide single-ray kernel with order=branchy and on
- * quantized nodes (quant=1), and the 8-wide kernels again on 2 threads, so every ratio is a
+ * quantized nodes (quant=1), the 8-wide trees with blocks of 4, collapsed
+ * greedily, and from binary leaves of at most 4 (leaf_below=4), and the
+ * 8-wide kernels again on 2 threads, so every ratio is a
  * paired per-round ratio with its bootstrap interval. Builds are timed
  * apart, in their own interleaved rounds, once per tree (the coherent
  * kernels trace the same tree). Slow scenes get fewer rounds: a measured
@@ -24,7 +26,7 @@
 
 #define MASK (BENCH_PRIMARY | BENCH_SHADOW | BENCH_DIFFUSE)
 #define MAX_SCENES 16
-#define MAX_TREES 8
+#define MAX_TREES 8 /* distinct trees of a scene: 7 today */
 /* The 8-wide tree's single-ray kernel with the octant order pushed by
  * branches instead of the compress-store: the same tree and counts, so
  * measured although exp_group would call it "the same structure". */
@@ -43,6 +45,15 @@
  * packet): the same tree, measured to show what the hand-over pays. */
 #define PACKET8 "bvh:width=8,traverse=packet"
 #define HYBRID0 PACKET8 ",hybrid=0"
+/* The 8-wide tree collapsed greedily (largest child opened first, every
+ * subtree of one block a leaf) instead of by the default dynamic
+ * programme (collapse=dp): a control that prices the DP collapse on its
+ * own, same binary tree. And the default collapse given binary leaves of
+ * at most 4 primitives to choose from (leaf_below=4): it may keep two of
+ * them apart in two padded blocks where the SAH says so, for a longer
+ * binary build. */
+#define GREEDY "bvh:width=8,collapse=greedy"
+#define LEAF4 "bvh:width=8,leaf_below=4"
 
 static const char *const configs[] = {"bvh",
                                       "bvh:width=4",
@@ -51,6 +62,8 @@ static const char *const configs[] = {"bvh",
                                       QUANT,
                                       BLOCK4,
                                       BRANCHY4,
+                                      GREEDY,
+                                      LEAF4,
                                       "bvh:traverse=packet",
                                       "bvh:width=4,traverse=packet",
                                       PACKET8,
@@ -242,6 +255,8 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, cons
     st->scenes++;
     int hy = exp_group_find(&g, PACKET8), h0 = exp_group_find(&g, HYBRID0);
     int hand_over = hy >= 0 && h0 >= 0 && g.cfg[hy].ok && g.cfg[h0].ok && g.cfg[hy].threads == 1;
+    int dp = exp_group_find(&g, "bvh:width=8"), gr = exp_group_find(&g, GREEDY);
+    int dp_pair = dp >= 0 && gr >= 0 && g.cfg[dp].ok && g.cfg[gr].ok && g.cfg[dp].threads == 1;
     for (int k = 0; k < 3; k++) {
         int bit = set_bits[k], best = -1, bestc = -1;
         for (int c = 0; c < first_twin; c++) {
@@ -272,6 +287,13 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, cons
             snprintf(what, sizeof what, "hand-over to single rays: `%s` (default hybrid) over `%s`", PACKET8,
                      HYBRID0);
             target_row(x, &st->findings, what, bit, &rh, 0, "-");
+        }
+        /* What the DP collapse pays, on its own: the default 8-wide tree
+         * over the greedy collapse of the same binary tree. */
+        if (dp_pair) {
+            exp_est rd = exp_group_speedup(&g, gr, dp, bit);
+            snprintf(what, sizeof what, "DP collapse: `bvh:width=8` (collapse=dp) over `%s`", GREEDY);
+            target_row(x, &st->findings, what, bit, &rd, 0, "-");
         }
         for (int t = first_twin; t < g.count; t++) {
             if (!g.cfg[t].ok) continue;

@@ -430,7 +430,10 @@ TEST(wide_tree_invariants)
     static const char *const specs[] = {"bvh:width=4", "bvh:width=8", "bvh:width=4,block=4",
                                         "bvh:width=8,block=4", "bvh:width=8,leaf=1",
                                         "bvh:width=4,ct=0,leaf=256", "bvh:width=8,build=median",
-                                        "bvh:width=8,order=dist"};
+                                        "bvh:width=8,order=dist", "bvh:width=8,collapse=greedy",
+                                        "bvh:width=4,collapse=dp,leaf_below=2,leaf_blocks=4",
+                                        "bvh:width=8,collapse=dp,leaf_cost=0.05,leaf_blocks=1",
+                                        "bvh:width=8,collapse=dp,leaf_cost=50"};
     for (size_t i = 0; i < sizeof scenes / sizeof *scenes; i++) {
         accel_scene s;
         accel_error err = {0};
@@ -472,59 +475,6 @@ TEST(wide_collapse_merges_levels)
     CHECKF(st[2].nodes < st[1].nodes && st[1].nodes * 2 < st[0].nodes, "nodes %llu %llu %llu",
            (unsigned long long)st[0].nodes, (unsigned long long)st[1].nodes, (unsigned long long)st[2].nodes);
     scene_free(&s);
-}
-
-/* The binary build of a wide tree stops at tasks of one block (leaf_below):
- * the collapse makes the same wide tree as from the fully split binary
- * tree: the same node, leaf and block counts, depth and wide SAH cost (the
- * same boxes and leaf sets), on 1 and 2 threads. */
-static void wide_counts(const accel_scene *s, int width, int leaf_below, int threads, accel_build_stats *st,
-                        uint32_t *blocks)
-{
-    bvh_build_opts o;
-    memset(&o, 0, sizeof o);
-    o.builder = BVH_BUILD_BINNED, o.bins = 16, o.axes = 3, o.max_leaf = 4, o.ct = 1.0f, o.ci = 1.0f;
-    o.reorder = 1, o.max_mb = 4096, o.leaf_below = leaf_below;
-    bvh b;
-    accel_error err = {0};
-    memset(st, 0, sizeof *st);
-    *blocks = 0;
-    if (bvh_build_run(s, &o, threads, &b, st, &err) ||
-        bvh_wide_build(&b, width, 8, WIDE_ORDER_OCTANT, 0, threads, 1.0, 1.0, st, &err)) {
-        test_fail(__FILE__, __LINE__, "%s: %s", s->name, err.msg);
-        return;
-    }
-    *blocks = b.wide->block_count;
-    bvh_wide_free(b.wide);
-}
-
-TEST(wide_binary_stops_at_one_block)
-{
-    static const char *const scenes[] = {"soup:tris=6000", "sphereflake:level=2,spheres=0",
-                                         "teapot_stadium:n=2", "slivers:tris=2000,slivers=100"};
-    for (size_t i = 0; i < sizeof scenes / sizeof *scenes; i++) {
-        accel_scene s;
-        accel_error err = {0};
-        if (scene_create(scenes[i], &s, &err)) {
-            test_fail(__FILE__, __LINE__, "%s: %s", scenes[i], err.msg);
-            continue;
-        }
-        for (int width = 4; width <= 8; width += 4)
-            for (int threads = 1; threads <= 2; threads++) {
-                accel_build_stats a, b;
-                uint32_t ba, bb;
-                wide_counts(&s, width, 0, threads, &a, &ba);
-                wide_counts(&s, width, 8, threads, &b, &bb);
-                CHECKF(a.nodes == b.nodes && a.leaves == b.leaves && ba == bb && a.depth == b.depth &&
-                           a.sah_cost == b.sah_cost,
-                       "%s width %d, %d threads: nodes %llu/%llu, leaves %llu/%llu, blocks %u/%u, depth "
-                       "%d/%d, SAH %.9g/%.9g",
-                       s.name, width, threads, (unsigned long long)a.nodes, (unsigned long long)b.nodes,
-                       (unsigned long long)a.leaves, (unsigned long long)b.leaves, ba, bb, a.depth, b.depth,
-                       a.sah_cost, b.sah_cost);
-            }
-        scene_free(&s);
-    }
 }
 
 TEST(wide_spec_errors)
