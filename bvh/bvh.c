@@ -187,10 +187,12 @@ static int build_tree(const accel_scene *scene, const bvh_build_opts *opts, cons
      * about a fifth less build time on bunny). collapse=dp keeps every
      * binary leaf a leaf: leaf_below < block lets it choose smaller ones. */
     if (wo->width > 2) o.leaf_below = wo->leaf_below ? wo->leaf_below : block;
+    bvh_wide_collapse cc = wo->collapse;
+    cc.max_mb = o.max_mb;
     int rc = bvh_build_run(scene, &o, threads, out, stats, err);
     if (rc == 0 && wo->width == 2 && wo->split_pairs) rc = bvh_split_pairs(out, err);
     if (rc == 0 && wo->width > 2) {
-        rc = bvh_wide_build(out, wo->width, block, wo->order, wo->quant, &wo->collapse, threads < 1 ? 1 : threads, o.ct,
+        rc = bvh_wide_build(out, wo->width, block, wo->order, wo->quant, &cc, threads < 1 ? 1 : threads, o.ct,
                             o.ci, stats, err);
         if (rc == 0) out->wide->packets = traverse == BVH_TRAVERSE_PACKET, out->wide->hybrid = wo->hybrid;
         if (rc) bvh_release(out);
@@ -203,7 +205,7 @@ static int bvh_kind_build(const accel_scene *scene, const accel_params *params, 
 {
     bvh_build_opts opts;
     int traverse, frustum;
-    wide_opts wo = {2, 4, 1, 0, 0, 0, 0, {1, 1.5, 2}, 0};
+    wide_opts wo = {2, 4, 1, 0, 0, 0, 0, {1, 1.5, 2, 0}, 0};
     int rc = options_from_params(params, &opts, &traverse, &frustum, &wo, err);
     if (rc) return rc;
     bvh *b = calloc(1, sizeof *b);
@@ -337,6 +339,7 @@ static const char *const bvh_variants[] = {
     "width=8,order=dist",
     "width=8,order=branchy",
     "width=8,collapse=greedy",
+    "width=8,leaf_below=4,order=branchy",
     "width=4,collapse=dp,leaf_below=2,leaf_blocks=4,leaf_cost=0.3",
     "width=8,block=4,collapse=dp,leaf_below=1,leaf_cost=5,order=branchy",
     "width=4,block=4,order=branchy",

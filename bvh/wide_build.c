@@ -416,6 +416,22 @@ void bvh_wide_free(bvh_wide *w)
     free(w);
 }
 
+/* The collapse's memory against the build's limit (max_mb, MiB; 0: none):
+ * the binary tree it reads (nodes and leaf-order slots) plus `more` bytes
+ * of its own. Fails with the whole account in the message. */
+static int collapse_within(const bvh *b, const bvh_wide *w, double max_mb, double more, const char *what,
+                           accel_error *err)
+{
+    double binary = (double)b->node_count * sizeof(bvh_node) +
+                    (double)b->prim_count * (BVH_SLOT_FLOATS * sizeof(float) + sizeof(uint32_t));
+    if (max_mb <= 0 || binary + more <= max_mb * 1048576.0) return 0;
+    return accel_fail(err, ACCEL_ERR_RANGE,
+                      "bvh: the width=%d,block=%d tree needs %.1f MiB (binary tree %.1f, %s %.1f), over "
+                      "max_mb = %.1f MiB (raise max_mb, or larger leaves: leaf=, leaf_below=)",
+                      w->width, w->block, (binary + more) / 1048576.0, binary / 1048576.0, what,
+                      more / 1048576.0, max_mb);
+}
+
 /* Collapses b's binary tree; fills w (nodes, blocks, counts, root). */
 static int collapse_tree(const bvh *b, bvh_wide *w, const bvh_wide_collapse *cc, int threads, double ct,
                          double ci, double *sah, accel_error *err)
@@ -441,6 +457,15 @@ static int collapse_tree(const bvh *b, bvh_wide *w, const bvh_wide_collapse *cc,
             sub_first[i] = sub_first[l], sub_count[i] = sub_count[l] + sub_count[l + 1];
             interior++;
         }
+    }
+    /* The scratch, known before it is taken: the subtree table, the DP's
+     * table, the wide nodes' upper bound and the leaf list. */
+    const double scratch = 12.0 * nc + (cc->dp ? (double)nc * (5 * w->width + 1) : 0.0) +
+                           (double)(interior > 0 ? interior : 1) * node_size(w->width) +
+                           (double)leaves * sizeof(leaf_job);
+    if (collapse_within(b, w, cc->max_mb, scratch, "collapse tables", err)) {
+        free(sub);
+        return ACCEL_ERR_RANGE;
     }
     collapse_ctx x;
     memset(&x, 0, sizeof x);
@@ -480,6 +505,13 @@ static int collapse_tree(const bvh *b, bvh_wide *w, const bvh_wide_collapse *cc,
             rc = accel_fail(err, ACCEL_ERR_RANGE, "bvh: width=%d,block=%d: %s", w->width, w->block,
                             x.failure);
     }
+    /* Before the final pools are taken: all of the scratch counted, an
+     * upper bound (the DP's table is already freed). */
+    if (rc == 0)
+        rc = collapse_within(b, w, cc->max_mb,
+                             scratch + (double)x.node_count * tree_node_size(w) +
+                                 (double)x.block_count * block_size(w->block),
+                             "collapse tables, wide nodes and leaf blocks", err);
     if (rc == 0) {
         /* Keep exactly the nodes used, aligned. */
         w->nodes = alloc_aligned(x.node_count, tree_node_size(w));

@@ -196,6 +196,7 @@ typedef struct {
     int dp;
     double leaf_cost;
     int leaf_blocks;
+    double max_mb; /* the build's memory limit (bvh's max_mb), MiB; 0: none */
 } bvh_wide_collapse;
 /* Collapses the built binary tree of b into b->wide (width 4 or 8, leaf
  * blocks of `block` primitives) and frees the binary pools, which the wide

@@ -433,7 +433,7 @@ TEST(wide_tree_invariants)
                                         "bvh:width=8,order=dist", "bvh:width=8,collapse=greedy",
                                         "bvh:width=4,collapse=dp,leaf_below=2,leaf_blocks=4",
                                         "bvh:width=8,collapse=dp,leaf_cost=0.05,leaf_blocks=1",
-                                        "bvh:width=8,collapse=dp,leaf_cost=50"};
+                                        "bvh:width=8,collapse=dp,leaf_cost=50", "bvh:width=8,leaf_below=4"};
     for (size_t i = 0; i < sizeof scenes / sizeof *scenes; i++) {
         accel_scene s;
         accel_error err = {0};

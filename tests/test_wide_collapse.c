@@ -30,7 +30,7 @@ static void wide_counts(const accel_scene *s, int width, int leaf_below, int thr
     o.reorder = 1, o.max_mb = 4096, o.leaf_below = leaf_below;
     bvh b;
     accel_error err = {0};
-    const bvh_wide_collapse greedy = {0, 1.5, 2};
+    const bvh_wide_collapse greedy = {0, 1.5, 2, 0};
     memset(st, 0, sizeof *st);
     *blocks = 0;
     if (bvh_build_run(s, &o, threads, &b, st, &err) ||
@@ -165,3 +165,49 @@ TEST(wide_dp_collapse_costs_least)
            compared);
 }
 
+
+/* max_mb covers the collapse too: with leaves of one primitive, blocks of
+ * 8 (320 bytes a triangle) and the collapse's tables cost far more than
+ * the binary build's peak, so a limit the binary build fits is refused by
+ * the collapse with a message that names the limit and the account, never
+ * built past it; a limit that fits builds the same tree as no limit. */
+TEST(wide_collapse_within_max_mb)
+{
+    accel_scene s;
+    accel_error err = {0};
+    if (scene_create("soup:tris=20000", &s, &err)) {
+        test_fail(__FILE__, __LINE__, "%s", err.msg);
+        return;
+    }
+    /* binary peak: 20000 x (32 + 64 + 40) bytes, about 2.6 MiB */
+    static const char *const refused[] = {"bvh:width=8,leaf=1,leaf_below=1,max_mb=4",
+                                          "bvh:width=8,leaf=1,leaf_below=1,collapse=greedy,max_mb=4",
+                                          "bvh:width=4,leaf=1,leaf_below=1,block=8,max_mb=3.5"};
+    for (size_t i = 0; i < sizeof refused / sizeof *refused; i++) {
+        const accel_kind *k;
+        void *a;
+        accel_build_stats st;
+        memset(&err, 0, sizeof err);
+        int rc = accel_build_spec(refused[i], &s, 1, &k, &a, &st, &err);
+        CHECKF(rc == ACCEL_ERR_RANGE && strstr(err.msg, "max_mb") && strstr(err.msg, "binary tree"),
+               "%s: rc %d (%s)", refused[i], rc, err.msg);
+        if (rc == 0) k->destroy(a);
+    }
+    const accel_kind *k;
+    void *a, *b;
+    accel_build_stats sa, sb;
+    if (accel_build_spec("bvh:width=8,leaf=1,leaf_below=1,max_mb=64", &s, 1, &k, &a, &sa, &err) ||
+        accel_build_spec("bvh:width=8,leaf=1,leaf_below=1", &s, 1, &k, &b, &sb, &err)) {
+        test_fail(__FILE__, __LINE__, "%s", err.msg);
+        scene_free(&s);
+        return;
+    }
+    CHECKF(sa.nodes == sb.nodes && sa.bytes == sb.bytes && sa.sah_cost == sb.sah_cost,
+           "max_mb=64 changed the tree: %llu/%llu nodes", (unsigned long long)sa.nodes,
+           (unsigned long long)sb.nodes);
+    /* the limit held: the tree kept is well under it */
+    CHECKF(sa.bytes < 64.0 * 1048576.0, "%zu bytes", (size_t)sa.bytes);
+    k->destroy(a);
+    k->destroy(b);
+    scene_free(&s);
+}
