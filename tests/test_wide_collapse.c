@@ -15,7 +15,14 @@
 #include "bvh/bvh.h"
 #include "bvh/wide_node.h"
 #include "scene/scene.h"
+#include "support.h"
 #include "test.h"
+
+/* The scenes of the collapse tests: a soup, closed meshes, a huge stadium
+ * round a small teapot, long slivers among small triangles. */
+static const char *const collapse_scenes[] = {"soup:tris=6000", "sphereflake:level=2,spheres=0",
+                                              "teapot_stadium:n=2", "slivers:tris=2000,slivers=100"};
+#define COLLAPSE_SCENES (sizeof collapse_scenes / sizeof *collapse_scenes)
 
 /* The binary build of a wide tree stops at tasks of one block (leaf_below):
  * the collapse makes the same wide tree as from the fully split binary
@@ -44,15 +51,9 @@ static void wide_counts(const accel_scene *s, int width, int leaf_below, int thr
 
 TEST(wide_binary_stops_at_one_block)
 {
-    static const char *const scenes[] = {"soup:tris=6000", "sphereflake:level=2,spheres=0",
-                                         "teapot_stadium:n=2", "slivers:tris=2000,slivers=100"};
-    for (size_t i = 0; i < sizeof scenes / sizeof *scenes; i++) {
+    for (size_t i = 0; i < COLLAPSE_SCENES; i++) {
         accel_scene s;
-        accel_error err = {0};
-        if (scene_create(scenes[i], &s, &err)) {
-            test_fail(__FILE__, __LINE__, "%s: %s", scenes[i], err.msg);
-            continue;
-        }
+        if (!test_make_scene(collapse_scenes[i], &s)) continue;
         for (int width = 4; width <= 8; width += 4)
             for (int threads = 1; threads <= 2; threads++) {
                 accel_build_stats a, b;
@@ -115,17 +116,12 @@ static int wide_stats(const accel_scene *s, const char *spec, double leaf_cost, 
  * one under another name). Its leaf_blocks bound holds. */
 TEST(wide_dp_collapse_costs_least)
 {
-    static const char *const scenes[] = {"soup:tris=6000", "sphereflake:level=2,spheres=0",
-                                         "teapot_stadium:n=2", "slivers:tris=2000,slivers=100"};
     static const double costs[] = {0.5, 1.5, 4.0};
     int cheaper = 0, compared = 0;
-    for (size_t i = 0; i < sizeof scenes / sizeof *scenes; i++) {
+    for (size_t i = 0; i < COLLAPSE_SCENES; i++) {
         accel_scene s;
         accel_error err = {0};
-        if (scene_create(scenes[i], &s, &err)) {
-            test_fail(__FILE__, __LINE__, "%s: %s", scenes[i], err.msg);
-            continue;
-        }
+        if (!test_make_scene(collapse_scenes[i], &s)) continue;
         for (int width = 4; width <= 8; width += 4)
             for (size_t c = 0; c < sizeof costs / sizeof *costs; c++) {
                 char greedy[96], dp[128];
@@ -175,10 +171,7 @@ TEST(wide_collapse_within_max_mb)
 {
     accel_scene s;
     accel_error err = {0};
-    if (scene_create("soup:tris=20000", &s, &err)) {
-        test_fail(__FILE__, __LINE__, "%s", err.msg);
-        return;
-    }
+    if (!test_make_scene("soup:tris=20000", &s)) return;
     /* binary peak: 20000 x (32 + 64 + 40) bytes, about 2.6 MiB */
     static const char *const refused[] = {"bvh:width=8,leaf=1,leaf_below=1,max_mb=4",
                                           "bvh:width=8,leaf=1,leaf_below=1,collapse=greedy,max_mb=4",
