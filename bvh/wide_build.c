@@ -19,9 +19,9 @@
  *
  * The default, collapse=dp, chooses instead for every wide node the forest
  * of at most W subtrees of least SAH cost, leaves counted in blocks
- * (plan_dp below): it may leave a slot empty, open a small child before a
- * large one, or keep a subtree of two blocks as one leaf where that costs
- * less. The greedy tree is one of the forests it compares, so its SAH
+ * (plan_dp below): it may open a small child before a large one, or keep
+ * a subtree of two blocks as one leaf where that costs less (its
+ * recurrence allows nodes of fewer than W children too). The greedy tree is one of the forests it compares, so its SAH
  * cost under the DP's own measure is never higher (tests/test_wide_collapse.c
  * checks that).
  *
@@ -249,7 +249,8 @@ static uint32_t collapse(collapse_ctx *x, uint32_t n, int level)
         set[0] = x->bin[n].left_first;
         set[1] = set[0] + 1;
     }
-    /* Greedy: open the interior child of largest area until the node is full. */
+    /* Greedy: open the interior child of largest area until the node is
+     * full (collapse=dp has chosen its k roots already). */
     while (!x->dec && k < x->width) {
         int best = -1;
         float best_area = -1.0f;
@@ -460,7 +461,8 @@ static int collapse_tree(const bvh *b, bvh_wide *w, const bvh_wide_collapse *cc,
     }
     /* The scratch, known before it is taken: the subtree table, the DP's
      * table, the wide nodes' upper bound and the leaf list. */
-    const double scratch = 12.0 * nc + (cc->dp ? (double)nc * (5 * w->width + 1) : 0.0) +
+    const double scratch = (double)nc * 3 * sizeof(uint32_t) +
+                           (cc->dp ? (double)nc * (w->width * sizeof(float) + w->width + 1) : 0.0) +
                            (double)(interior > 0 ? interior : 1) * node_size(w->width) +
                            (double)leaves * sizeof(leaf_job);
     if (collapse_within(b, w, cc->max_mb, scratch, "collapse tables", err)) {

@@ -483,7 +483,10 @@ TEST(wide_spec_errors)
                                       "bvh:width=8,block=2", "bvh:width=4,quant=1",
                                       "bvh:width=8,quant=1,traverse=packet", "bvh:width=8,quant=1,order=dist",
                                       "bvh:quant=1", "bvh:width=8,order=branchy,traverse=packet",
-                                      "bvh:width=8,first=left", "bvh:width=4,pairs=split"};
+                                      "bvh:width=8,first=left", "bvh:width=4,pairs=split",
+                                      "bvh:collapse=dp", "bvh:leaf_below=4",
+                                      "bvh:width=8,collapse=greedy,leaf_cost=2",
+                                      "bvh:width=4,collapse=greedy,leaf_blocks=1"};
     accel_scene s;
     accel_error err = {0};
     if (scene_create("soup:tris=100", &s, &err)) return;
