@@ -446,7 +446,9 @@ void accel_trace_occluded(const accel_kind *kind, const void *accel, const accel
 
 /* Runs fn(ctx, begin, end, thread) over [0, count) in chunks of `chunk`
  * items, handed out dynamically to `threads` pthreads (the calling thread
- * is one of them; threads <= 1 runs inline). `thread` is in [0, threads). */
+ * is one of them; threads <= 1 runs inline). `thread` is in [0, threads).
+ * The helper threads are kept asleep between calls (core/parallel.c), so a
+ * process that once asked for N threads keeps N - 1 idle ones. */
 void accel_parallel_for(size_t count, size_t chunk, int threads,
                         void (*fn)(void *ctx, size_t begin, size_t end, int thread), void *ctx);
 /* Items finished by every accel_parallel_for of the process so far (all
