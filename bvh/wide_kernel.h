@@ -274,13 +274,14 @@ WIDE_INLINE int WK(push_octant)(const uint32_t *child, const uint32_t *perm, NF 
     if (!branchy && !(rest & (rest - 1))) {
         /* Two hit children: the nearer entered, the farther pushed. The
          * two entry distances come out of the register by a permute each,
-         * so the next address waits for a compare and a conditional move
-         * instead of the compress-store's shuffles and a store forwarded
-         * to a load (2026-12-03: 1.00-1.18x primary and shadow, 0.98-1.10x
-         * diffuse; order=branchy and width 4 lose on coherent rays with it,
-         * so their predicted branches stay). */
+         * so the next address waits for a compare and a predicted branch
+         * (gcc's form; a choice by masks measured 0.81-0.93x) instead of
+         * the compress-store's shuffles and a store forwarded to a load
+         * (2026-12-03: 1.00-1.18x primary and shadow, 0.98-1.13x diffuse;
+         * order=branchy and width 4 lose on coherent rays with it, so their
+         * predicted branches stay; bvh/README, "each idea"). */
         unsigned i = (unsigned)__builtin_ctz(mask), j = (unsigned)__builtin_ctz(rest);
-        float ti = NV(lane)(t0, i), tj = NV(lane)(t0, j);
+        float ti = f8_lane(t0, i), tj = f8_lane(t0, j);
         int j_near = tj < ti;
         sref[sp] = child[j_near ? i : j], st[sp] = j_near ? ti : tj;
         *sp_io = sp + 1;

@@ -103,8 +103,7 @@ extern "C" {
     WIDE_INLINE f##N f##N##_blend(f##N a, f##N b, f##N m)                                   \
     { for (int i = 0; i < N; i++) if (f##N##_bits_(m.v[i]) >> 31) a.v[i] = b.v[i]; return a; } \
     WIDE_INLINE float f##N##_hmin(f##N a)                                                   \
-    { float m = a.v[0]; for (int i = 1; i < N; i++) m = a.v[i] < m ? a.v[i] : m; return m; } \
-    WIDE_INLINE float f##N##_lane(f##N a, unsigned i) { return a.v[i]; }
+    { float m = a.v[0]; for (int i = 1; i < N; i++) m = a.v[i] < m ? a.v[i] : m; return m; }
 
 /* ---- 4 lanes ----------------------------------------------------------------- */
 
@@ -149,18 +148,6 @@ WIDE_INLINE float f4_hmin(f4 a)
     a = _mm_min_ps(a, _mm_shuffle_ps(a, a, _MM_SHUFFLE(2, 3, 0, 1)));
     return _mm_cvtss_f32(a);
 }
-/* Lane i (< 4) of a, without a round trip through memory where AVX's
- * variable permute exists. */
-WIDE_INLINE float f4_lane(f4 a, unsigned i)
-{
-#ifdef __AVX__
-    return _mm_cvtss_f32(_mm_permutevar_ps(a, _mm_cvtsi32_si128((int)i)));
-#else
-    float x[4] __attribute__((aligned(16)));
-    _mm_store_ps(x, a);
-    return x[i];
-#endif
-}
 #else
 WIDE_GENERIC(4)
 #endif
@@ -201,7 +188,8 @@ WIDE_INLINE float f8_hmin(f8 a)
     m = _mm_min_ps(m, _mm_shuffle_ps(m, m, _MM_SHUFFLE(2, 3, 0, 1)));
     return _mm_cvtss_f32(m);
 }
-/* Lane i (< 8) of a by one variable permute. */
+/* Lane i (< 8) of a by one variable permute (the two-hit path of
+ * wide_kernel.h, AVX2 only). */
 WIDE_INLINE float f8_lane(f8 a, unsigned i)
 {
     return _mm256_cvtss_f32(_mm256_permutevar8x32_ps(a, _mm256_castsi128_si256(_mm_cvtsi32_si128((int)i))));

@@ -69,6 +69,17 @@ int test_make_scene(const char *spec, accel_scene *s)
     return rc == 0;
 }
 
+int test_build_rc(const char *spec, const accel_scene *s, accel_error *err)
+{
+    const accel_kind *k;
+    void *a;
+    accel_build_stats st;
+    memset(err, 0, sizeof *err);
+    int rc = accel_build_spec(spec, s, 1, &k, &a, &st, err);
+    if (rc == 0) k->destroy(a);
+    return rc;
+}
+
 /* qsort order of fixed-size name buffers. */
 static int by_name(const void *a, const void *b)
 {

@@ -51,6 +51,10 @@ int test_add_tri(scene_builder *b, vec3 p, vec3 q, vec3 r);
 int test_finish(scene_builder *b, const char *name, accel_scene *s);
 /* scene_create(spec); a failure is a failed check. Returns 1 on success. */
 int test_make_scene(const char *spec, accel_scene *s);
+/* Builds `spec` on s with one thread and destroys what it built: the
+ * build's return code, its message in *err (cleared first). For specs a
+ * test expects refused. */
+int test_build_rc(const char *spec, const accel_scene *s, accel_error *err);
 
 /* Paths of the files of ../shared/scenes whose extension is one of `exts`
  * (space-separated, e.g. ".off .obj"), sorted, at most max. Returns the

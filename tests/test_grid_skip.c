@@ -14,6 +14,7 @@
 #include "grid/grid_skip.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
+#include "support.h"
 #include "test.h"
 
 static uint64_t rng = 0x2545F4914F6CDD1Dull;
@@ -209,17 +210,14 @@ TEST(grid_skip_refusals)
     accel_build_stats st;
     accel_error err = {0};
     /* 60^3 cells: 0.82 MiB of offsets fit 1 MiB; the cloud's 0.21 MiB does not. */
-    int rc = accel_build_spec("grid:res=60,max_mb=1", &s, 1, &kind, &accel, &st, &err);
+    int rc = test_build_rc("grid:res=60,max_mb=1", &s, &err);
     CHECKF(rc == 0, "plain grid refused: %s", err.msg);
-    if (rc == 0) kind->destroy(accel);
-    rc = accel_build_spec("grid:res=60,max_mb=1,skip=cloud", &s, 1, &kind, &accel, &st, &err);
+    rc = test_build_rc("grid:res=60,max_mb=1,skip=cloud", &s, &err);
     CHECKF(rc == ACCEL_ERR_RANGE && strstr(err.msg, "skip=cloud") && strstr(err.msg, "max_mb"),
            "cloud over max_mb: rc %d, %s", rc, err.msg);
-    if (rc == 0) kind->destroy(accel);
-    rc = accel_build_spec("grid:skip=macro,macro=6", &s, 1, &kind, &accel, &st, &err);
+    rc = test_build_rc("grid:skip=macro,macro=6", &s, &err);
     CHECKF(rc == ACCEL_ERR_RANGE && strstr(err.msg, "power of two"), "macro=6: rc %d, %s", rc,
            err.msg);
-    if (rc == 0) kind->destroy(accel);
     /* The reported memory holds the table. */
     size_t bytes[2];
     for (int k = 0; k < 2; k++) {

@@ -17,6 +17,7 @@
 #include "irregular_grid/igrid.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
+#include "support.h"
 #include "test.h"
 
 static uint64_t rng = 0x853C49E6748FEA9Bull;
@@ -399,14 +400,11 @@ TEST(igrid_refusals_and_threads)
     void *a1, *a2;
     accel_build_stats st;
     accel_error err = {0};
-    int rc = accel_build_spec("irregular_grid:max_depth=8,sub_lambda=1000,max_mb=1", &s, 1, &kind,
-                              &a1, &st, &err);
+    int rc = test_build_rc("irregular_grid:max_depth=8,sub_lambda=1000,max_mb=1", &s, &err);
     CHECKF(rc == ACCEL_ERR_RANGE && strstr(err.msg, "max_mb"), "deep octrees in 1 MiB: rc %d, %s",
            rc, err.msg);
-    if (rc == 0) kind->destroy(a1);
-    rc = accel_build_spec("irregular_grid:top_lambda=100,max_mb=1", &s, 1, &kind, &a1, &st, &err);
+    rc = test_build_rc("irregular_grid:top_lambda=100,max_mb=1", &s, &err);
     CHECKF(rc == ACCEL_ERR_RANGE, "fine top grid in 1 MiB: rc %d, %s", rc, err.msg);
-    if (rc == 0) kind->destroy(a1);
     static const char *const specs[] = {"irregular_grid", "irregular_grid:top_lambda=1,expand=6"};
     for (int k = 0; k < 2; k++) {
         if (accel_build_spec(specs[k], &s, 1, &kind, &a1, &st, &err) ||
