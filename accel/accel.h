@@ -166,13 +166,14 @@ vec3 accel_prim_centroid(const accel_scene *s, uint32_t prim);
  * Every kind starts from the same copy, an accel_prim_store: the scene's
  * live primitives (degenerate triangles left out), triangles first and then
  * spheres, each group in Morton order of the centroids (the common
- * parameter reorder=1, the default for every kind) or in scene order
- * (reorder=0). Its `prims` is itself a scene in which every primitive is
+ * parameter reorder=1, the default for every kind but bvh) or in scene
+ * order (reorder=0). Its `prims` is itself a scene in which every primitive is
  * live (live[i] == i), so a kind builds and traverses over local ids and
  * maps a hit back with scene_id[] once per ray. A kind may keep the store
  * (grid, nested_grid, brute) or copy it once more into its own layout and
- * free it (bvh: 9-float slots in leaf order); each backend README says what
- * it keeps. */
+ * free it; bvh, which copies the primitives into 9-float slots in leaf
+ * order, builds over the scene in place unless reorder=1 is given. Each
+ * backend README says what it keeps. */
 typedef struct {
     accel_scene prims;  /* local ids: 0..tri_count-1 triangles, then spheres; all live */
     uint32_t *scene_id; /* local id -> the scene's primitive id */

@@ -99,7 +99,11 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
     o->ct = (float)accel_param_num(p, "ct");
     o->ci = (float)accel_param_num(p, "ci");
     o->term_none = (int)accel_param_num(p, "term") == 1;
-    o->reorder = p->reorder;
+    /* The common reorder defaults to 1 (a Morton-ordered store) for every
+     * kind but this one: the tree copies the primitives in leaf order, a
+     * spatial order of its own, so a Morton copy would only cost build time
+     * (bvh_build_run). reorder=1 given explicitly still builds over it. */
+    o->reorder = accel_param_given(p, "reorder") ? p->reorder : 0;
     o->split_budget = accel_param_num(p, "split_budget");
     o->alpha = accel_param_num(p, "alpha");
     o->max_mb = accel_param_num(p, "max_mb");

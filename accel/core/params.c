@@ -20,7 +20,8 @@ const accel_param_def accel_common_params[] = {
     {"tri", ACCEL_PARAM_ENUM, "watertight", 0, 0, "watertight|naive",
      "triangle test: watertight (Woop et al. 2013) or naive (Moller-Trumbore)"},
     {"reorder", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
-     "primitive store: copy the primitives in Morton order of their centroids (0: scene order)"},
+     "primitive store: copy the primitives in Morton order of their centroids (0: scene order; "
+     "bvh alone defaults to 0: its tree copies them in leaf order itself)"},
 };
 const size_t accel_common_param_count = sizeof accel_common_params / sizeof accel_common_params[0];
 
