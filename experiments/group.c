@@ -293,11 +293,53 @@ static double time_sample(const exp_cfg *c, int bit, const exp_group *g, scratch
     return (accel_now_ms() - t0) / t->batch;
 }
 
+/* The thread probe (group.h): PROBE_ITEMS items of `iters` dependent
+ * multiply-adds each, on no memory but the item's result. */
+#define PROBE_ITEMS 32
+
+typedef struct {
+    long iters;
+    volatile float out[PROBE_ITEMS];
+} probe_job;
+
+static void probe_items(void *p, size_t begin, size_t end, int thread)
+{
+    (void)thread;
+    probe_job *j = p;
+    for (size_t i = begin; i < end; i++) {
+        float v = (float)i, a = 1.0f - 1.0f / 65536.0f;
+        for (long k = 0; k < j->iters; k++) v = v * a + 1.0f;
+        j->out[i] = v;
+    }
+}
+
+static double probe_ms(probe_job *j, int threads)
+{
+    double t0 = accel_now_ms();
+    accel_parallel_for(PROBE_ITEMS, 1, threads, probe_items, j);
+    return accel_now_ms() - t0;
+}
+
+/* Iterations for a 1-thread probe of about x->sample_ms. */
+static long probe_size(const exp_ctx *x)
+{
+    probe_job j = {.iters = 1 << 14};
+    double ms = probe_ms(&j, 1);
+    for (int i = 0; i < 8 && ms < 1.0; i++) j.iters *= 4, ms = probe_ms(&j, 1);
+    double want = x->sample_ms > 1.0 ? x->sample_ms : 1.0;
+    return ms > 0 ? (long)fmax(1.0, (double)j.iters * want / ms) : j.iters;
+}
+
 void exp_group_run(exp_group *g)
 {
     exp_ctx *x = g->x;
     if (g->time_builds) build_rounds(g);
-    int most = 0, slots = g->count + (g->control && g->count && g->cfg[0].ok);
+    g->probe_threads = 1;
+    for (int c = 0; g->thread_probe && c < g->count; c++)
+        if (g->cfg[c].ok && g->cfg[c].threads > g->probe_threads) g->probe_threads = g->cfg[c].threads;
+    probe_job probe = {.iters = g->probe_threads > 1 ? probe_size(x) : 0};
+    int aa = g->control && g->count && g->cfg[0].ok;
+    int most = 0, slots = g->count + aa + (g->probe_threads > 1);
     double total_ms = 0;
     for (int c = 0; c < g->count; c++) {
         if (!g->cfg[c].ok) continue;
@@ -310,7 +352,12 @@ void exp_group_run(exp_group *g)
     for (int r = 0; r < most; r++)
         for (int k = 0; k < slots; k++) {
             int slot = (k + r) % slots;
-            int c = slot == g->count ? 0 : slot; /* the last slot is the A/A control */
+            if (slot == g->count + aa) { /* the probe's slot: 1 thread, then all */
+                g->probe_samples[0][r] = probe_ms(&probe, 1);
+                g->probe_samples[1][r] = probe_ms(&probe, g->probe_threads);
+                continue;
+            }
+            int c = slot == g->count ? 0 : slot; /* slot count: the A/A control */
             exp_cfg *cf = &g->cfg[c];
             if (!cf->ok || r >= cf->want) continue;
             for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
@@ -336,9 +383,11 @@ void exp_group_run(exp_group *g)
         for (int i = 0; i < 4; i++)
             if (g->cfg[c].ok && g->cfg[c].set[i].have)
                 exp_est_of(g->cfg[c].set[i].samples, g->cfg[c].set[i].n, &g->cfg[c].set[i].ms);
+    if (g->probe_threads > 1 && most >= 3)
+        exp_est_ratio(g->probe_samples[0], g->probe_samples[1], most, &g->probe);
     /* The floor: how far configuration 0 strays from itself. */
     g->floor = 0.05;
-    if (slots > g->count && g->cfg[0].want >= 3) {
+    if (aa && g->cfg[0].want >= 3) {
         double a[EXP_MAX_SAMPLES], b[EXP_MAX_SAMPLES];
         int n = exp_group_round_ms(g, 0, g->mask, a);
         for (int r = 0; r < n; r++) {

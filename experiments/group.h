@@ -17,6 +17,15 @@
  * the paired ratio of the two is what an identical configuration differs
  * by here and now, and its interval gives the group's noise floor.
  *
+ * The thread probe, when asked for (thread_probe) and a configuration runs
+ * on more threads than one:
+ * work that touches no memory (dependent multiply-adds) timed on 1 thread
+ * and on that many threads, in one more slot of the same rotation. Its
+ * paired ratio is what the machine gave those threads during these rounds,
+ * the ceiling of any kernel's scaling: a kernel that scales less than 1.9x
+ * on a machine whose probe also stays under it says nothing about the
+ * kernel.
+ *
  * Configurations that mean nothing are left out with their reason, never
  * measured into rows: a spec that does not parse or build in this build,
  * the same structure as an earlier configuration (equal build statistics
@@ -73,9 +82,13 @@ typedef struct {
                            difference the counts cannot show, e.g. instanced:world=flat) */
     int add_mask;       /* sets of the next exp_group_add (0: every set of mask) */
     int min_rounds;     /* timed rounds even for slow passes (default 1; an interval needs 3) */
+    int thread_probe;   /* time the thread probe in the rounds (default 0) */
     /* Results of exp_group_run. */
     double aa_samples[4][EXP_MAX_SAMPLES];
     exp_est aa;         /* configuration 0 against itself: paired ratio over the mask */
+    int probe_threads;  /* the most threads of a configuration; the probe runs when > 1 */
+    double probe_samples[2][EXP_MAX_SAMPLES]; /* ms of the probe on 1 and on probe_threads */
+    exp_est probe;      /* time(1 thread) / time(probe_threads), paired per round (n 0: none) */
     double floor;       /* the noise floor of this group, relative */
     int rounds;
 } exp_group;

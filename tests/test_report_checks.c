@@ -306,7 +306,18 @@ TEST(report_quick_issue_tables)
     if (!test_quick_report()) return;
     static const char *const wide[] = {"bvh", "bvh:width=4", "bvh:width=8", "bvh:traverse=packet",
                                        "bvh:width=4,traverse=packet", "bvh:width=8,traverse=packet"};
-    check_rows(DIR_OUT "/exp_wide.md", wide, 6, "on 2 threads over 1 |");
+    /* The 2-thread rows, each with the thread probe of its rounds. */
+    check_rows(DIR_OUT "/exp_wide.md", wide, 6, "on 2 threads over 1 (thread probe: ");
+    /* The probe is a ratio of 2 threads to 1 with its interval: above 1
+     * and at most 2 give or take the noise on a machine with 2 free cores,
+     * and a machine with one would have said "no free core" instead. */
+    char *t = test_read_file(DIR_OUT "/exp_wide.md", NULL);
+    const char *p = t ? strstr(t, "(thread probe: ") : NULL;
+    double x = 0, lo = 0, hi = 0;
+    CHECKF(p && sscanf(p, "(thread probe: %lfx [%lf, %lf])", &x, &lo, &hi) == 3,
+           "exp_wide.md: no thread probe ratio");
+    CHECKF(x > 0.5 && x < 2.3 && lo <= x && x <= hi, "thread probe %.2fx [%.2f, %.2f]", x, lo, hi);
+    free(t);
     static const char *const grids[] = {"bvh", "grid", "grid:skip=cloud", "grid:skip=macro",
                                         "grid:traverse=packet", "nested_grid", "irregular_grid",
                                         "irregular_grid:subdivide=0", "irregular_grid:merge=0",
