@@ -381,12 +381,33 @@ static uint32_t partition(bvh_ref *r, uint32_t n, const bin_plan *plan, int axis
 #if BVH_SSE
     __m128 llo = _mm_set1_ps(INFINITY), lhi = _mm_set1_ps(-INFINITY);
     __m128 rlo = llo, rhi = lhi;
+#ifdef __AVX__
+    /* The side without the bin's integer: view_ref's bin is the truncation
+     * of a clamped f in [0, bins-1], so bin <= best_bin exactly when
+     * f < best_bin + 1. Comparing f and spreading lane `axis` to every lane
+     * gives the mask in registers, where the integer bins went through the
+     * stack and back (a store forwarded to a load on every reference). */
+    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
+    const __m128 half = _mm_set1_ps(0.5f), cmin = _mm_load_ps(plan->cmin);
+    const __m128 scale = _mm_load_ps(plan->scale), top = _mm_set1_ps((float)(plan->bins - 1));
+    const __m128 limit = _mm_set1_ps((float)best_bin + 1.0f);
+    const __m128i lane = _mm_set1_epi32(axis);
+#endif
     for (uint32_t i = 0; i < n; i++) {
+#ifdef __AVX__
+        __m128 lo = _mm_and_ps(_mm_loadu_ps(r[i].lo), xyz), hi = _mm_and_ps(_mm_loadu_ps(r[i].hi), xyz);
+        __m128 c = _mm_add_ps(_mm_mul_ps(lo, half), _mm_mul_ps(hi, half));
+        __m128 f = _mm_mul_ps(_mm_sub_ps(c, cmin), scale);
+        f = _mm_min_ps(_mm_max_ps(f, _mm_setzero_ps()), top);
+        __m128 m = _mm_permutevar_ps(_mm_cmplt_ps(f, limit), lane);
+        int left = _mm_movemask_ps(m) & 1;
+#else
         ref_view v;
         view_ref(plan, &r[i], &v);
         int left = v.bin[axis] <= best_bin;
         __m128 c = v.c;
         __m128 m = _mm_castsi128_ps(_mm_set1_epi32(-left));
+#endif
         /* grow the chosen side's centroid box: min/max with c, or with +-inf */
 #ifdef __SSE4_1__
         const __m128 inf = _mm_set1_ps(INFINITY), ninf = _mm_set1_ps(-INFINITY);
