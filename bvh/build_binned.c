@@ -142,9 +142,37 @@ static inline void view_ref(const bin_plan *p, const bvh_ref *r, ref_view *v)
 
 /* ---- bins ------------------------------------------------------------------- */
 
+/* A bin's box. With AVX, lo and -hi side by side in one 256-bit vector, so
+ * that one min grows both halves: a bin update is one load, one min and
+ * one store instead of two of each (max(hi, x) = -min(-hi, -x) exactly;
+ * binned references are finite). */
+#if BVH_SSE && defined(__AVX__)
+typedef struct {
+    __m256 v; /* lanes 0-3: lo, lanes 4-7: -hi */
+} bin_box;
+
+static inline void bin_box_clear(bin_box *b) { b->v = _mm256_set1_ps(INFINITY); }
+static inline void bin_box_union(bin_box *b, const bin_box *o) { b->v = _mm256_min_ps(b->v, o->v); }
+static inline void bin_box_of(bin_box *b, const box4 *x)
+{
+    b->v = _mm256_insertf128_ps(_mm256_castps128_ps256(x->lo), _mm_xor_ps(x->hi, _mm_set1_ps(-0.0f)), 1);
+}
+static inline box4 bin_box_get(const bin_box *b)
+{
+    box4 r = {_mm256_castps256_ps128(b->v), _mm_xor_ps(_mm256_extractf128_ps(b->v, 1), _mm_set1_ps(-0.0f))};
+    return r;
+}
+#else
+typedef box4 bin_box;
+static inline void bin_box_clear(bin_box *b) { box4_clear(b); }
+static inline void bin_box_union(bin_box *b, const bin_box *o) { box4_union(b, o); }
+static inline void bin_box_of(bin_box *b, const box4 *x) { *b = *x; }
+static inline box4 bin_box_get(const bin_box *b) { return *b; }
+#endif
+
 /* Bins of all three axes. */
 typedef struct {
-    box4 box[3][BINS_MAX];
+    bin_box box[3][BINS_MAX];
     uint32_t count[3][BINS_MAX];
 } bin_set;
 
@@ -163,15 +191,15 @@ static void clear_bins(bin_set *s, const bin_plan *p)
     for (int k = 0; k < p->axis_count; k++) {
         int a = p->axis[k];
         memset(s->count[a], 0, (size_t)p->bins * sizeof(uint32_t));
-        for (int i = 0; i < p->bins; i++) box4_clear(&s->box[a][i]);
+        for (int i = 0; i < p->bins; i++) bin_box_clear(&s->box[a][i]);
     }
 }
 
-/* One reference into its bin on axis a. */
-static inline void bin_add(bin_set *s, int a, const ref_view *v)
+/* One reference (its view v, its box as a bin box b) into its bin on axis a. */
+static inline void bin_add(bin_set *s, int a, const ref_view *v, const bin_box *b)
 {
     s->count[a][v->bin[a]]++;
-    box4_union(&s->box[a][v->bin[a]], &v->box);
+    bin_box_union(&s->box[a][v->bin[a]], b);
 }
 
 /* src's bins into dst's (min, max and integer sums: exact in any order). */
@@ -181,7 +209,7 @@ static void merge_bins(bin_set *dst, const bin_set *src, const bin_plan *p)
         int a = p->axis[k];
         for (int b = 0; b < p->bins; b++) {
             dst->count[a][b] += src->count[a][b];
-            box4_union(&dst->box[a][b], &src->box[a][b]);
+            bin_box_union(&dst->box[a][b], &src->box[a][b]);
         }
     }
 }
@@ -189,6 +217,7 @@ static void merge_bins(bin_set *dst, const bin_set *src, const bin_plan *p)
 static void bin_range(const bvh_ref *refs, size_t begin, size_t end, const bin_plan *p, bin_set *s)
 {
     ref_view v, w;
+    bin_box vb, wb;
     size_t i = begin;
     if (p->axis_count == 3 && end - begin >= 8 * (size_t)p->bins) {
         /* Neighbouring references of a mesh mostly fall in the same bin, so
@@ -201,20 +230,23 @@ static void bin_range(const bvh_ref *refs, size_t begin, size_t end, const bin_p
         for (; i + 1 < end; i += 2) {
             view_ref(p, &refs[i], &v);
             view_ref(p, &refs[i + 1], &w);
-            for (int a = 0; a < 3; a++) bin_add(s, a, &v), bin_add(&odd, a, &w);
+            bin_box_of(&vb, &v.box), bin_box_of(&wb, &w.box);
+            for (int a = 0; a < 3; a++) bin_add(s, a, &v, &vb), bin_add(&odd, a, &w, &wb);
         }
         merge_bins(s, &odd, p);
     }
     if (p->axis_count == 3) { /* the common case, with constant axes */
         for (; i < end; i++) {
             view_ref(p, &refs[i], &v);
-            for (int a = 0; a < 3; a++) bin_add(s, a, &v);
+            bin_box_of(&vb, &v.box);
+            for (int a = 0; a < 3; a++) bin_add(s, a, &v, &vb);
         }
         return;
     }
     for (; i < end; i++) {
         view_ref(p, &refs[i], &v);
-        for (int k = 0; k < p->axis_count; k++) bin_add(s, p->axis[k], &v);
+        bin_box_of(&vb, &v.box);
+        for (int k = 0; k < p->axis_count; k++) bin_add(s, p->axis[k], &v, &vb);
     }
 }
 
@@ -291,7 +323,7 @@ static void groups_from_bins(bvh_build *ctx, const bvh_task *t, int threads, con
         int m = 0;
         for (int b = 0; b < plan->bins; b++) {
             bin_group *x = &g[k][m];
-            x->box = sets->box[a][b];
+            x->box = bin_box_get(&sets->box[a][b]);
             x->count = sets->count[a][b];
             x->bin = b;
             m += sets->count[a][b] != 0;
@@ -531,7 +563,8 @@ static void binned_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_spl
 int bvh_build_binned(bvh_build *ctx, accel_error *err)
 {
     int sets = ctx->threads > 1 ? ctx->threads * BIN_SPLITS : 1;
-    bin_set *bins = bvh_alloc_array((size_t)sets, sizeof(bin_set));
+    /* Aligned for the bins' vectors (bin_box: 32 bytes with AVX). */
+    bin_set *bins = accel_alloc_large((size_t)sets, sizeof(bin_set), 64);
     if (!bins) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for %d bin sets", sets);
     ctx->data = bins;
     ctx->split = binned_split;
