@@ -60,6 +60,7 @@ static void scaling(exp_ctx *x, study *st, int max_t, const exp_machine *mach)
     exp_group g;
     exp_group_init(&g, x, &s, &sets, SCALE_MASK);
     g.collapse_ms = x->quick ? 1000 : 4000;
+    g.thread_probe = 1; /* what the machine gave the threads in these rounds (group.h) */
     for (int i = 0; i < list.count; i++)
         for (int t = 1; t <= max_t; t++) {
             int c = exp_group_add(&g, list.spec[i], t);
@@ -112,6 +113,18 @@ static void scaling(exp_ctx *x, study *st, int max_t, const exp_machine *mach)
                     st->ht_gain = fmax(st->ht_gain, h.median - 1), st->ht_tested = 1;
                 }
         }
+    }
+    if (g.probe.n) {
+        char pr[96];
+        exp_fmt_x(pr, sizeof pr, &g.probe);
+        exp_md(x, "\nThread probe (work that touches no memory, timed on 1 and on %d threads in the "
+                  "same rounds): %s, efficiency %.0f%%: what this machine gave %d threads while "
+                  "the table was measured (a kernel can pass it: two cores also bring two "
+                  "caches).\n",
+               g.probe_threads, pr, 100 * g.probe.median / g.probe_threads, g.probe_threads);
+        exp_text_add(&st->findings, "- Thread probe (no memory traffic): %d threads %s as fast as 1 "
+                     "(efficiency %.0f%%).\n", g.probe_threads, pr,
+                     100 * g.probe.median / g.probe_threads);
     }
     exp_group_note(&g);
     exp_group_free(&g);

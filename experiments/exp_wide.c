@@ -197,7 +197,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, cons
     g.time_builds = 0; /* build_table times each tree once per round */
     g.collapse_ms = x->quick ? 500 : 3000;
     g.min_rounds = 3; /* every ratio gets an interval, on the big scenes too */
-    g.thread_probe = 1; /* the ceiling of the 2-thread rows (group.h) */
+    g.thread_probe = 1; /* what the machine gave 2 threads in these rounds (group.h) */
     for (int i = 0; i < list->count; i++) {
         for (size_t k = 0; k < sizeof same_tree / sizeof same_tree[0]; k++)
             g.keep_same |= !strcmp(list->spec[i], same_tree[k]);
@@ -380,7 +380,7 @@ int main(int argc, char **argv)
                "2 threads against 1 is not testable when other threads were runnable at the start "
                "(half a thread or more on average: no free core), nor when the thread probe "
                "(work that touches no memory, timed on 1 and on 2 threads in the same rounds) "
-               "did not reach 1.9x either: the machine, not the kernel, set that ceiling.",
+               "did not reach 1.9x either: then the machine, not the kernel, held the ratio down.",
                x.rt_size[0], x.rt_size[1]);
     exp_csv(&x, "scene,spec,set,threads,rays,mrays,mrays_lo,mrays_hi,ratio,ratio_lo,ratio_hi,"
                 "build_ms,build_ms_lo,build_ms_hi,build_mtri_per_s,bytes_per_tri,steps_per_ray,"

@@ -320,13 +320,15 @@ static double probe_ms(probe_job *j, int threads)
     return accel_now_ms() - t0;
 }
 
-/* Iterations for a 1-thread probe of about x->sample_ms. */
+/* Iterations for a 1-thread probe of about x->sample_ms, at least 10 ms:
+ * shorter, the wake-up of the other threads (tens of microseconds on a
+ * VM) would weigh on the ratio. */
 static long probe_size(const exp_ctx *x)
 {
     probe_job j = {.iters = 1 << 14};
     double ms = probe_ms(&j, 1);
     for (int i = 0; i < 8 && ms < 1.0; i++) j.iters *= 4, ms = probe_ms(&j, 1);
-    double want = x->sample_ms > 1.0 ? x->sample_ms : 1.0;
+    double want = x->sample_ms > 10.0 ? x->sample_ms : 10.0;
     return ms > 0 ? (long)fmax(1.0, (double)j.iters * want / ms) : j.iters;
 }
 

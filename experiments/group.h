@@ -18,13 +18,13 @@
  * by here and now, and its interval gives the group's noise floor.
  *
  * The thread probe, when asked for (thread_probe) and a configuration runs
- * on more threads than one:
- * work that touches no memory (dependent multiply-adds) timed on 1 thread
- * and on that many threads, in one more slot of the same rotation. Its
- * paired ratio is what the machine gave those threads during these rounds,
- * the ceiling of any kernel's scaling: a kernel that scales less than 1.9x
+ * on more threads than one: work that touches no memory (dependent
+ * multiply-adds) timed on 1 thread and on that many threads, in one more
+ * slot of the same rotation. Its paired ratio is what the machine gave
+ * those threads during these rounds: a kernel that scales less than 1.9x
  * on a machine whose probe also stays under it says nothing about the
- * kernel.
+ * kernel. (A kernel can scale past the probe: two cores also bring two
+ * caches.)
  *
  * Configurations that mean nothing are left out with their reason, never
  * measured into rows: a spec that does not parse or build in this build,
