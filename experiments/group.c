@@ -293,9 +293,13 @@ static double time_sample(const exp_cfg *c, int bit, const exp_group *g, scratch
     return (accel_now_ms() - t0) / t->batch;
 }
 
-/* The thread probe (group.h): PROBE_ITEMS items of `iters` dependent
- * multiply-adds each, on no memory but the item's result. */
+/* The thread probe (group.h): PROBE_ITEMS items of `iters` steps each, a
+ * step 256 independent multiply-adds (vectorized: enough independent
+ * chains to fill a core's floating-point units, so that two threads
+ * sharing one physical core would show it), on no memory but the item's
+ * own registers. */
 #define PROBE_ITEMS 32
+#define PROBE_LANES 256
 
 typedef struct {
     long iters;
@@ -306,10 +310,14 @@ static void probe_items(void *p, size_t begin, size_t end, int thread)
 {
     (void)thread;
     probe_job *j = p;
+    const float a = 1.0f - 1.0f / 65536.0f;
     for (size_t i = begin; i < end; i++) {
-        float v = (float)i, a = 1.0f - 1.0f / 65536.0f;
-        for (long k = 0; k < j->iters; k++) v = v * a + 1.0f;
-        j->out[i] = v;
+        float v[PROBE_LANES], sum = 0.0f;
+        for (int l = 0; l < PROBE_LANES; l++) v[l] = (float)(i + (size_t)l);
+        for (long k = 0; k < j->iters; k++)
+            for (int l = 0; l < PROBE_LANES; l++) v[l] = v[l] * a + 1.0f;
+        for (int l = 0; l < PROBE_LANES; l++) sum += v[l];
+        j->out[i] = sum;
     }
 }
 

@@ -18,8 +18,9 @@
  * by here and now, and its interval gives the group's noise floor.
  *
  * The thread probe, when asked for (thread_probe) and a configuration runs
- * on more threads than one: work that touches no memory (dependent
- * multiply-adds) timed on 1 thread and on that many threads, in one more
+ * on more threads than one: work that touches no memory (independent
+ * multiply-adds that fill a core's floating-point units) timed on 1 thread
+ * and on that many threads, in one more
  * slot of the same rotation. Its paired ratio is what the machine gave
  * those threads during these rounds: a kernel that scales less than 1.9x
  * on a machine whose probe also stays under it says nothing about the
