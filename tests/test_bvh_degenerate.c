@@ -136,3 +136,45 @@ TEST(bvh_empty_and_nonfinite)
         scene_free(&s);
     }
 }
+
+/* bvh builds over the scene in place by default (reorder=0) and over the
+ * Morton-ordered primitive store with reorder=1: the same tree (nodes and
+ * SAH cost) and exact answers either way, on a scene whose live ids have
+ * gaps (degenerate and non-finite triangles between the live ones) and
+ * whose spheres follow the triangles, binary and 8-wide. */
+TEST(bvh_in_place_and_store_builds_agree)
+{
+    scene_builder b = {0};
+    test_seed(41);
+    for (int i = 0; i < 300; i++) {
+        vec3 p = v3(test_rand(), test_rand(), test_rand());
+        test_add_tri(&b, p, v3_add(p, v3(0.06f, 0, 0.01f)), v3_add(p, v3(0, 0.05f, 0.02f)));
+        if (i % 37 == 0) test_add_tri(&b, p, p, v3_add(p, v3(0.1f, 0, 0))); /* degenerate: dead */
+        if (i == 150) test_add_tri(&b, p, v3(NAN, 0, 0), v3(0, 1, 0));      /* non-finite */
+    }
+    accel_error err;
+    for (int i = 0; i < 20; i++)
+        CHECK(scene_builder_add_sphere(&b, v3(test_rand(), test_rand(), test_rand()), 0.03f, &err) == 0);
+    accel_scene s;
+    if (!test_finish(&b, "gaps", &s)) return;
+    CHECK(s.live_count < s.prim_count); /* the gaps this test is about */
+    test_rays r = {0};
+    test_rays_random(&r, s.bounds, 600);
+    static const char *const specs[][2] = {{"bvh", "bvh:reorder=1"},
+                                           {"bvh:build=sah", "bvh:build=sah,reorder=1"},
+                                           {"bvh:width=8", "bvh:width=8,reorder=1"},
+                                           {"bvh:width=4", "bvh:width=4,reorder=1"}};
+    for (size_t k = 0; k < sizeof specs / sizeof specs[0]; k++) {
+        accel_build_stats in_place, store;
+        CHECK(test_check_spec(&s, specs[k][0], r.rays, r.count, NULL, &in_place, NULL) == 0);
+        CHECK(test_check_spec(&s, specs[k][1], r.rays, r.count, NULL, &store, NULL) == 0);
+        CHECKF(in_place.nodes == store.nodes && in_place.refs == store.refs &&
+                   in_place.sah_cost == store.sah_cost,
+               "%s: %llu nodes, %llu refs, SAH %.6f; %s: %llu, %llu, %.6f", specs[k][0],
+               (unsigned long long)in_place.nodes, (unsigned long long)in_place.refs,
+               in_place.sah_cost, specs[k][1], (unsigned long long)store.nodes,
+               (unsigned long long)store.refs, store.sah_cost);
+    }
+    test_rays_free(&r);
+    scene_free(&s);
+}
