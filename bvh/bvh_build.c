@@ -225,9 +225,9 @@ int bvh_build_run(const accel_scene *scene, const bvh_build_opts *opts, int thre
      * its local ids back; the store is freed here. With reorder=0 (bvh's
      * default) they read the scene's live primitives in place: the same
      * tree as the store in scene order would give, without copying every
-     * primitive and faulting in its pages (build time -5% on armadillo,
-     * -25% on a 1M-triangle soup whose Morton sort reads the scene at
-     * random; measured 2026-12-03). */
+     * primitive and faulting in its pages (8-wide build time about -4% on
+     * armadillo, -10% to -20% on a 1M-triangle soup whose Morton sort
+     * reads the scene at random; measured 2026-12-03, bvh/README). */
     int rc;
     if (opts->reorder) {
         accel_prim_store store;
