@@ -4,7 +4,7 @@
  * of the interface a C++ program includes.
  * width=4|8): the coherent mode for primary and shadow rays.
  *
- * A template: wide_packet.c includes it once per (WIDE_NW, WIDE_LB) pair
+ * A template: wide_trace.c includes it once per (WIDE_NW, WIDE_LB) pair
  * after wide_kernel.h for the same pair, whose single-ray kernel it falls
  * back to. It defines wide_pclosest_<NW>_<LB> and wide_pany_<NW>_<LB>.
  *
