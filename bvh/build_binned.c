@@ -114,19 +114,31 @@ typedef struct {
     int bin[4];
 } ref_view;
 
-static inline void view_ref(const bin_plan *p, const bvh_ref *r, ref_view *v)
-{
 #if BVH_SSE
+/* A reference's box (lo, hi), centroid c and bin coordinates per axis,
+ * clamped to [0, bins-1] (`top`): the bin is their truncation. cmin and
+ * scale are the plan's, passed in so that a loop keeps them in registers. */
+static inline __m128 view_coords(const bvh_ref *r, __m128 cmin, __m128 scale, __m128 top, box4 *box,
+                                 __m128 *c)
+{
     /* Lane 3 (id bits: a denormal as a float) is cleared before any
      * arithmetic: denormal operands cost a microcode assist each. */
     const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
     const __m128 half = _mm_set1_ps(0.5f);
-    v->box.lo = _mm_and_ps(_mm_loadu_ps(r->lo), xyz);
-    v->box.hi = _mm_and_ps(_mm_loadu_ps(r->hi), xyz);
-    v->c = _mm_add_ps(_mm_mul_ps(v->box.lo, half), _mm_mul_ps(v->box.hi, half));
-    __m128 f = _mm_mul_ps(_mm_sub_ps(v->c, _mm_load_ps(p->cmin)), _mm_load_ps(p->scale));
+    box->lo = _mm_and_ps(_mm_loadu_ps(r->lo), xyz);
+    box->hi = _mm_and_ps(_mm_loadu_ps(r->hi), xyz);
+    *c = _mm_add_ps(_mm_mul_ps(box->lo, half), _mm_mul_ps(box->hi, half));
+    __m128 f = _mm_mul_ps(_mm_sub_ps(*c, cmin), scale);
     f = _mm_max_ps(f, _mm_setzero_ps()); /* also turns a NaN into 0 */
-    f = _mm_min_ps(f, _mm_set1_ps((float)(p->bins - 1)));
+    return _mm_min_ps(f, top);
+}
+#endif
+
+static inline void view_ref(const bin_plan *p, const bvh_ref *r, ref_view *v)
+{
+#if BVH_SSE
+    __m128 f = view_coords(r, _mm_load_ps(p->cmin), _mm_load_ps(p->scale),
+                           _mm_set1_ps((float)(p->bins - 1)), &v->box, &v->c);
     _mm_storeu_si128((__m128i *)v->bin, _mm_cvttps_epi32(f));
 #else
     v->box.b = bvh_ref_box(r);
@@ -419,18 +431,15 @@ static uint32_t partition(bvh_ref *r, uint32_t n, const bin_plan *plan, int axis
      * f < best_bin + 1. Comparing f and spreading lane `axis` to every lane
      * gives the mask in registers, where the integer bins went through the
      * stack and back (a store forwarded to a load on every reference). */
-    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
-    const __m128 half = _mm_set1_ps(0.5f), cmin = _mm_load_ps(plan->cmin);
-    const __m128 scale = _mm_load_ps(plan->scale), top = _mm_set1_ps((float)(plan->bins - 1));
+    const __m128 cmin = _mm_load_ps(plan->cmin), scale = _mm_load_ps(plan->scale);
+    const __m128 top = _mm_set1_ps((float)(plan->bins - 1));
     const __m128 limit = _mm_set1_ps((float)best_bin + 1.0f);
     const __m128i lane = _mm_set1_epi32(axis);
 #endif
     for (uint32_t i = 0; i < n; i++) {
 #ifdef __AVX__
-        __m128 lo = _mm_and_ps(_mm_loadu_ps(r[i].lo), xyz), hi = _mm_and_ps(_mm_loadu_ps(r[i].hi), xyz);
-        __m128 c = _mm_add_ps(_mm_mul_ps(lo, half), _mm_mul_ps(hi, half));
-        __m128 f = _mm_mul_ps(_mm_sub_ps(c, cmin), scale);
-        f = _mm_min_ps(_mm_max_ps(f, _mm_setzero_ps()), top);
+        box4 box;
+        __m128 c, f = view_coords(&r[i], cmin, scale, top, &box, &c);
         __m128 m = _mm_permutevar_ps(_mm_cmplt_ps(f, limit), lane);
         int left = _mm_movemask_ps(m) & 1;
 #else

@@ -318,7 +318,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, cons
             else if (g.probe.n && strcmp(v2, "met") && strcmp(exp_target_outcome(&g.probe, 1.9, 1), "met"))
                 v2 = "not testable here (the probe did not reach 1.9x either)";
             st->two[0] += !strcmp(v2, "met");
-            st->two[1] += v2[0] == 'n' && v2[4] == 'm'; /* "not met" */
+            st->two[1] += !strcmp(v2, "not met");
             st->two[2]++;
             target_row(x, &st->findings, what, bit, &rt, 1.9, v2);
         }
