@@ -360,12 +360,6 @@ const char *exp_slow_verdict(const exp_ctx *x, const char *verdict)
     return !strcmp(verdict, EXP_REFUTED) && exp_busy(x) ? EXP_UNTESTABLE : verdict;
 }
 
-const char *exp_target_outcome(const exp_est *r, double t, int at_least)
-{
-    int met = at_least ? r->lo >= t : r->hi <= t, missed = at_least ? r->hi < t : r->lo > t;
-    return met ? "met" : missed ? "not met" : "a tie with the target (inside the interval)";
-}
-
 int exp_busy(const exp_ctx *x) { return !(x->others_start >= 0 && x->others_start < 0.5); }
 
 void exp_note_left(exp_ctx *x, int why)

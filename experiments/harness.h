@@ -160,12 +160,6 @@ const char *exp_slow_verdict(const exp_ctx *x, const char *verdict);
  * 2-thread measurement has no free core, a "too slow" verdict is an upper
  * bound. */
 int exp_busy(const exp_ctx *x);
-/* A paired ratio estimate against an issue's target: "met" when its whole
- * 95% interval lies on the target's side, "not met" when it lies wholly on
- * the other, else "a tie with the target (inside the interval)". at_least:
- * the ratio must reach t (speed-ups, lo >= t); otherwise stay at or under t
- * (time ratios, hi <= t). */
-const char *exp_target_outcome(const exp_est *r, double t, int at_least);
 /* 1 the first time spec is reported as not in this build in this section. */
 int exp_note_unparsed(exp_ctx *x, const char *spec);
 /* Counts a configuration left out (exp_group does it for its own). */

@@ -332,3 +332,21 @@ double exp_corr(const double *a, const double *b, int n)
     }
     return saa > 0 && sbb > 0 ? sab / sqrt(saa * sbb) : 0;
 }
+
+const char *exp_target_outcome(const exp_est *r, double t, int at_least)
+{
+    int met = at_least ? r->lo >= t : r->hi <= t, missed = at_least ? r->hi < t : r->lo > t;
+    return met ? "met" : missed ? "not met" : "a tie with the target (inside the interval)";
+}
+
+const char *exp_threads_outcome(const exp_est *row, const exp_est *probe, int busy, double t)
+{
+    const char *v = exp_target_outcome(row, t, 1);
+    int has_probe = probe && probe->n;
+    if (!strcmp(v, "met")) return v;
+    if (busy) return "not testable here (no free core)";
+    if (has_probe && probe->median < t) return "not testable here (the probe's median stayed below the target too)";
+    if (!strcmp(v, "not met") && has_probe && probe->lo < t)
+        return "not met (the probe's interval reaches below the target too, its median does not)";
+    return v;
+}

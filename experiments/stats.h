@@ -89,4 +89,19 @@ double exp_cv(const double *v, int n);
 /* Pearson correlation of two columns (0 when either is constant). */
 double exp_corr(const double *a, const double *b, int n);
 
+/* A paired ratio estimate against an issue's target: "met" when its whole
+ * 95% interval lies on the target's side, "not met" when it lies wholly on
+ * the other, else "a tie with the target (inside the interval)". at_least:
+ * the ratio must reach t (speed-ups, lo >= t); otherwise stay at or under t
+ * (time ratios, hi <= t). */
+const char *exp_target_outcome(const exp_est *r, double t, int at_least);
+/* A 2-thread over 1-thread ratio against target t: exp_target_outcome,
+ * except that a miss is "not testable here" on a busy machine (busy: no
+ * free core) or when the thread probe of the same rounds (probe, NULL or
+ * n == 0 when there is none: work that touches no memory, group.h) has its
+ * median under t too: then the machine held the ratio down. A probe at t or
+ * more whose interval reaches below t excuses nothing: the row stays "not
+ * met" and says so. Verdicts that miss start with "not met". */
+const char *exp_threads_outcome(const exp_est *row, const exp_est *probe, int busy, double t);
+
 #endif
