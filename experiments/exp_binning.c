@@ -62,7 +62,8 @@ static void bins_against_quality(exp_ctx *x, exp_text *findings)
     exp_md_table(x, "builder|build ms [95% CI]|build speed-up over the sweep|SAH cost|SAH excess|"
                     "trace ms [95% CI]|trace time against the sweep");
     double ref_sah = g.cfg[0].build.sah_cost;
-    int chosen = -1;
+    int chosen = -1, fastest1 = -1, tie3 = -1;
+    double fastest1_speed = 0;
     for (int c = 0; c < g.count; c++) {
         const exp_cfg *cf = &g.cfg[c];
         if (!cf->ok) continue;
@@ -81,9 +82,15 @@ static void bins_against_quality(exp_ctx *x, exp_text *findings)
         exp_csv(x, "bins,%s,%s,1,%u,%.4f,%.4f,%.4f,%.5f,%.3f,%.4f,%.4f,%.4f,%.3f\n", s.name,
                 cf->spec, s.live_count, bt.median, bt.lo, bt.hi, cf->build.sah_cost, se,
                 tr.median, tr.lo, tr.hi, 100 * (tc.median - 1));
-        /* The lecture's builder at its cheapest tie with the sweep. */
-        if (c && strstr(cf->spec, "axes=1") && tie && (chosen < 0 || bt.median < g.cfg[chosen].build_ms.median))
+        /* The lecture's builder at its cheapest tie with the sweep; else
+         * its fastest tree, and the cheapest 3-axis tie. */
+        int one = strstr(cf->spec, "axes=1") != NULL;
+        if (c && one && tie && (chosen < 0 || bt.median < g.cfg[chosen].build_ms.median))
             chosen = c;
+        if (c && one && (fastest1 < 0 || tc.median > fastest1_speed))
+            fastest1 = c, fastest1_speed = tc.median;
+        if (c && !one && tie && (tie3 < 0 || bt.median < g.cfg[tie3].build_ms.median))
+            tie3 = c;
     }
     exp_group_note(&g);
     svg_plot pl;
@@ -107,9 +114,9 @@ static void bins_against_quality(exp_ctx *x, exp_text *findings)
     svg_add(&pl, "full sweep (reference)", &rx, &ry, NULL, NULL, 1, SVG_POINTS);
     exp_svg(x, &pl, "binning_quality", "Build time against SAH cost, one point per bin count "
             "(more bins: right and down)");
-    exp_group_compare_head(&g);
     if (chosen >= 0) {
         char t[128], b[128];
+        exp_group_compare_head(&g);
         exp_group_compare(&g, chosen, 0, MASK, t, sizeof t);
         int bc = exp_group_compare_build(&g, chosen, 0, b, sizeof b);
         double se = 100 * (g.cfg[chosen].build.sah_cost / ref_sah - 1);
@@ -119,11 +126,36 @@ static void bins_against_quality(exp_ctx *x, exp_text *findings)
         exp_verdict(x, "binned-quality", bc < 0 ? EXP_CONFIRMED : EXP_PARTLY, s.name,
                     "`%s` traces as fast as the full sweep (time %s), build time %s against it "
                     "(SAH cost %+.1f%%)", g.cfg[chosen].spec, t, b, se);
-    } else {
+    } else if (fastest1 >= 0) {
+        /* The claim has two halves, "high quality" and "little time":
+         * the lecture's builder keeps the second and misses the first;
+         * binning every axis may still reach the sweep's trees. */
+        char t[128], b[128], t3[128] = "", b3[128] = "", ev3[400] = "";
+        exp_group_compare_head(&g);
+        exp_group_compare(&g, fastest1, 0, MASK, t, sizeof t);
+        int bc = exp_group_compare_build(&g, fastest1, 0, b, sizeof b);
+        double se = 100 * (g.cfg[fastest1].build.sah_cost / ref_sah - 1);
+        int bc3 = 1;
+        if (tie3 >= 0) {
+            exp_group_compare(&g, tie3, 0, MASK, t3, sizeof t3);
+            bc3 = exp_group_compare_build(&g, tie3, 0, b3, sizeof b3);
+            snprintf(ev3, sizeof ev3, "; binning all three axes, `%s` ties with it (time %s) "
+                     "at build time %s (SAH cost %+.1f%%)", g.cfg[tie3].spec, t3, b3,
+                     100 * (g.cfg[tie3].build.sah_cost / ref_sah - 1));
+        } else {
+            snprintf(ev3, sizeof ev3, "; no 3-axis binned tree ties with it either");
+        }
         exp_text_add(findings, "- %s: no longest-axis binned tree traces as fast as the full "
-                     "sweep's within the noise.\n", s.name);
-        exp_verdict(x, "binned-quality", EXP_REFUTED, s.name,
-                    "no longest-axis binned configuration ties with the full sweep's trace time");
+                     "sweep's within the noise; the fastest, `%s`: trace time %s against the sweep's, "
+                     "build time %s (SAH cost %+.1f%%)%s.\n", s.name, g.cfg[fastest1].spec, t, b,
+                     se, ev3);
+        /* Quick builds with trees short of the sweep's: partly; neither
+         * half (slower builds): refuted. */
+        int quick = bc < 0 || (tie3 >= 0 && bc3 < 0);
+        exp_verdict(x, "binned-quality", quick ? EXP_PARTLY : EXP_REFUTED, s.name,
+                    "no longest-axis binned tree ties with the full sweep's trace time: the "
+                    "fastest, `%s`: trace time %s, build time %s against it (SAH cost %+.1f%%)%s",
+                    g.cfg[fastest1].spec, t, b, se, ev3);
     }
     exp_group_free(&g);
     bench_sets_free(&sets);
