@@ -24,6 +24,7 @@
 
 #include <assert.h>
 #include <math.h>
+#include <float.h>
 #include <string.h>
 
 #include "bvh_node.h"
@@ -54,6 +55,44 @@ static inline int bvh_prim_finite(const accel_scene *s, uint32_t prim)
     for (int i = 0; i < n; i++)
         if (!isfinite(p[i])) return 0;
     return 1;
+}
+
+/*
+ * Every box the BVH stores is a primitive's bounds grown by box3_hit_pad
+ * (core/geom.h), with delta from the scene's largest coordinate magnitude,
+ * so that the exact slab test never rejects a hit the exact triangle test
+ * claims (found by a hostile-ray audit: rays starting on a surface 1e-30
+ * from a shared edge at z = 0 leaked through the closed cube). The pads are
+ * far under a float ulp of the scene's extent: trees do not change
+ * measurably.
+ */
+static inline float bvh_box_delta(const accel_scene *s)
+{
+    box3 b = s->bounds;
+    float m = 0.0f;
+    const float *c[2] = {&b.min.x, &b.max.x};
+    for (int k = 0; k < 2; k++)
+        for (int a = 0; a < 3; a++) m = fmaxf(m, fabsf(c[k][a]));
+    if (!(m <= FLT_MAX)) { /* a non-finite primitive: the finite ones decide */
+        m = 0.0f;
+        for (uint32_t i = 0; i < s->live_count; i++) {
+            uint32_t prim = s->live[i];
+            if (!bvh_prim_finite(s, prim)) continue;
+            box3 pb = accel_prim_bounds(s, prim);
+            const float *q[2] = {&pb.min.x, &pb.max.x};
+            for (int k = 0; k < 2; k++)
+                for (int a = 0; a < 3; a++) m = fmaxf(m, fabsf(q[k][a]));
+        }
+    }
+    return box3_hit_delta(m);
+}
+
+static inline box3 bvh_pad_box(box3 b, float delta) { return box3_hit_pad(b, delta); }
+
+/* The box the BVH stores for a primitive (above). */
+static inline box3 bvh_prim_box(const accel_scene *s, uint32_t prim, float delta)
+{
+    return box3_hit_pad(accel_prim_bounds(s, prim), delta);
 }
 
 /* The BVH_SLOT_FLOATS floats of a primitive slot: a triangle's 9, or a

@@ -69,6 +69,7 @@ typedef struct {
     uint8_t *side;       /* scratch: where each reference of a spatial split goes */
     double root_area;    /* half area of the root box */
     double alpha;
+    float delta;         /* bvh_box_delta: the pad of every stored box */
     int bins;
     sbvh_bin bin[3][SBVH_BINS_MAX];
     double right_area[SBVH_BINS_MAX];
@@ -114,6 +115,10 @@ static void chop_ref(const sbvh_ctx *x, const bvh_ref *ref, int axis, double pla
     box3 box = bvh_ref_box(ref);
     if (ref->prim < s->tri_count) {
         bvh_sbvh_chop(s->tris + 9 * (size_t)ref->prim, box, axis, plane, 1, left, right);
+        /* A part's box is grown like every stored box (build_common.h),
+         * inside the reference's own (grown) box. */
+        if (box_valid(*left)) *left = box_intersect(bvh_pad_box(*left, x->delta), box);
+        if (box_valid(*right)) *right = box_intersect(bvh_pad_box(*right, x->delta), box);
         return;
     }
     bvh_sbvh_chop_box(box, axis, plane, left, right);
@@ -550,6 +555,7 @@ int bvh_build_sbvh(bvh_build *ctx, accel_error *err)
     x->cap = cap;
     x->bins = ctx->opts.bins;
     x->alpha = ctx->opts.alpha;
+    x->delta = bvh_box_delta(ctx->scene);
     sbvh_task root;
     root.t.node = 0, root.t.first = 0, root.t.count = n, root.t.region = 2, root.t.level = 1;
     root.cap = cap;

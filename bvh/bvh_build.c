@@ -20,10 +20,11 @@
 static uint32_t make_refs(const accel_scene *s, bvh_ref *refs)
 {
     uint32_t n = 0;
+    float delta = bvh_box_delta(s);
     for (uint32_t i = 0; i < s->live_count; i++) {
         uint32_t prim = s->live[i];
         if (!bvh_prim_finite(s, prim)) continue;
-        box3 b = accel_prim_bounds(s, prim);
+        box3 b = bvh_prim_box(s, prim, delta);
         bvh_ref *r = &refs[n++];
         r->lo[0] = b.min.x, r->lo[1] = b.min.y, r->lo[2] = b.min.z;
         r->hi[0] = b.max.x, r->hi[1] = b.max.y, r->hi[2] = b.max.z;

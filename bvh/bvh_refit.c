@@ -14,8 +14,8 @@
  *     padding lane repeats its leaf's last primitive and id, so it is
  *     copied again the same way).
  * The boxes are then what the build computes: a leaf's box is the union of
- * accel_prim_bounds of its primitives (the references' boxes of
- * bvh_build.c's make_refs, unpadded), an interior box the union of its
+ * bvh_prim_box of its primitives (the references' boxes of bvh_build.c's
+ * make_refs, grown as build_common.h explains), an interior box the union of its
  * children's. A spatial-split tree (build=sbvh) clipped its references to
  * split planes; refit boxes hold whole primitives, so they are larger
  * (still conservative, the tree only gets slower).
@@ -117,13 +117,14 @@ static void refit_binary(bvh *b, const accel_scene *s, int threads, int boxes)
     copy_job job = {b, s};
     accel_parallel_for(b->prim_count, 16384, threads, copy_slots, &job);
     if (!boxes) return;
+    float delta = bvh_box_delta(s);
     for (uint32_t i = b->node_count; i-- > 0;) {
         if (i == 1) continue; /* padding */
         bvh_node *n = &b->nodes[i];
         box3 box = box3_empty();
         if (n->count) {
             for (uint32_t k = 0; k < n->count; k++)
-                box = box3_union(box, accel_prim_bounds(s, b->prim_ids[n->left_first + k]));
+                box = box3_union(box, bvh_prim_box(s, b->prim_ids[n->left_first + k], delta));
         } else {
             box = box3_union(bvh_node_box(&b->nodes[n->left_first]),
                              bvh_node_box(&b->nodes[n->left_first + 1]));
@@ -137,7 +138,8 @@ static void refit_binary(bvh *b, const accel_scene *s, int threads, int boxes)
 typedef struct {
     bvh_wide *w;
     const accel_scene *s;
-    box3 *block_box; /* per block: its lanes' primitive bounds */
+    box3 *block_box; /* per block: its lanes' primitive boxes (bvh_prim_box) */
+    float delta;     /* bvh_box_delta */
 } block_job;
 
 /* accel_prim_bounds of scene id `id` from its copied slot (the same
@@ -156,7 +158,7 @@ static void copy_blocks(void *p, size_t begin, size_t end, int thread)
             float slot[BVH_SLOT_FLOATS];
             bvh_prim_slot(j->s, id[lane], slot);
             wide_put_lane(v, bs, lane, slot);
-            box = box3_union(box, accel_prim_bounds(j->s, id[lane]));
+            box = box3_union(box, bvh_prim_box(j->s, id[lane], j->delta));
         }
         if (j->block_box) j->block_box[k] = box;
     }
@@ -181,7 +183,7 @@ static int refit_wide(bvh_wide *w, const accel_scene *s, int threads, int boxes,
         block_box = malloc((w->block_count ? w->block_count : 1) * sizeof *block_box);
         if (!block_box) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for the refit");
     }
-    block_job job = {w, s, block_box};
+    block_job job = {w, s, block_box, bvh_box_delta(s)};
     accel_parallel_for(w->block_count, 1024, threads, copy_blocks, &job);
     if (!boxes || w->root == WIDE_EMPTY) {
         free(block_box);

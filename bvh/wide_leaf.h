@@ -149,9 +149,10 @@ WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_pr
      * get the tight bound of ACCEL_EDGE_FILTER (accel_tri_watertight)
      * before the double test; the smaller of the two is kept. */
     LF filter = LV(set1)(ACCEL_EDGE_FILTER);
-    LF eu = LV(mul)(filter, LV(fmadd)(mcx_, mby_, LV(mul)(mcy_, mbx_)));
-    LF ev = LV(mul)(filter, LV(fmadd)(max_, mcy_, LV(mul)(may_, mcx_)));
-    LF ew = LV(mul)(filter, LV(fmadd)(mbx_, may_, LV(mul)(mby_, max_)));
+    LF tiny = LV(set1)(ACCEL_EDGE_TINY); /* underflow (core/prim.h) */
+    LF eu = LV(fmadd)(filter, LV(fmadd)(mcx_, mby_, LV(mul)(mcy_, mbx_)), tiny);
+    LF ev = LV(fmadd)(filter, LV(fmadd)(max_, mcy_, LV(mul)(may_, mcx_)), tiny);
+    LF ew = LV(fmadd)(filter, LV(fmadd)(mbx_, may_, LV(mul)(mby_, max_)), tiny);
     LF sure_neg, sure_pos, edge_ok;
     int miss, ok, unsure;
     for (int pass = 0;; pass++) {
@@ -173,13 +174,13 @@ WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_pr
         LF acx = LV(abs)(cx), acy = LV(abs)(cy);
         LF tu = LV(fmadd)(filter, LV(add)(LV(fmadd)(acx, mby_, LV(mul)(aby, mcx_)),
                                           LV(fmadd)(acy, mbx_, LV(mul)(abx, mcy_))),
-                          LV(mul)(f2, eu));
+                          LV(fmadd)(f2, eu, tiny));
         LF tv = LV(fmadd)(filter, LV(add)(LV(fmadd)(aax, mcy_, LV(mul)(acy, max_)),
                                           LV(fmadd)(aay, mcx_, LV(mul)(acx, may_))),
-                          LV(mul)(f2, ev));
+                          LV(fmadd)(f2, ev, tiny));
         LF tw = LV(fmadd)(filter, LV(add)(LV(fmadd)(abx, may_, LV(mul)(aay, mbx_)),
                                           LV(fmadd)(aby, max_, LV(mul)(aax, mby_))),
-                          LV(mul)(f2, ew));
+                          LV(fmadd)(f2, ew, tiny));
         /* The smaller on the uncertain lanes only, as the scalar test does
          * (a NaN bound stays NaN: the lane stays uncertain). */
         LF keep = LV(or)(LV(and)(sure_neg, sure_pos), edge_ok);
@@ -198,15 +199,19 @@ WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_pr
         T = LV(xor)(T, sgn);
         LF za = LV(abs)(zaz), zb = LV(abs)(zbz), zc = LV(abs)(zcz);
         LF sum = LV(fmadd)(LV(abs)(U), za, LV(fmadd)(LV(abs)(V), zb, LV(mul)(LV(abs)(W), zc)));
-        LF et = LV(fmadd)(filter, sum, LV(fmadd)(eu, za, LV(fmadd)(ev, zb, LV(mul)(ew, zc))));
+        LF et = LV(fmadd)(filter, sum, LV(fmadd)(eu, za, LV(fmadd)(ev, zb, LV(fmadd)(ew, zc, tiny))));
         /* det's own error moves the range ends (accel_tri_watertight). */
         LF ed = LV(add)(LV(add)(eu, ev), ew), dlo = LV(sub)(det, ed), dhi = LV(add)(det, ed);
         int near_pos = p->t_near >= 0.0f, far_pos = *t >= 0.0f;
         LF tc = LV(set1)(*t);
         LF lo_out = LV(mul)(r->t_near, near_pos ? dlo : dhi), lo_in = LV(mul)(r->t_near, near_pos ? dhi : dlo);
         LF hi_out = LV(mul)(tc, far_pos ? dhi : dlo), hi_in = LV(mul)(tc, far_pos ? dlo : dhi);
-        LF t_out = LV(or)(LV(lt)(T, LV(sub)(lo_out, et)), LV(gt)(T, LV(add)(hi_out, et)));
-        LF t_in = LV(and)(LV(gt)(T, LV(add)(lo_in, et)), LV(lt)(T, LV(sub)(hi_in, et)));
+        /* A subnormal det has no finite reciprocal and underflows the
+         * range products: such lanes are neither in nor out, so the double
+         * test decides them (accel_tri_watertight). */
+        LF det_ok = LV(le)(LV(set1)(0x1p-126f), det);
+        LF t_out = LV(and)(det_ok, LV(or)(LV(lt)(T, LV(sub)(lo_out, et)), LV(gt)(T, LV(add)(hi_out, et))));
+        LF t_in = LV(and)(det_ok, LV(and)(LV(gt)(T, LV(add)(lo_in, et)), LV(lt)(T, LV(sub)(hi_in, et))));
         /* The same classes as vector masks (sure_v) and as bits. */
         LF sure_v = LV(and)(LV(andnot)(t_out, LV(andnot)(LV(and)(sure_neg, sure_pos), edge_ok)), t_in);
         int live = ok & ~LV(mask)(t_out);

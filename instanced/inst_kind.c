@@ -173,6 +173,10 @@ int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *e
         free(boxes);
         return build_walk_bottom(a, b, err);
     }
+    if (a->bottom_kind == INST_BVH) { /* the BVH's boxes are grown as bvh's are (core/geom.h) */
+        float delta = box3_hit_delta((float)b->abs_max);
+        for (uint32_t k = 0; k < n; k++) boxes[k] = box3_hit_pad(boxes[k], delta);
+    }
     int rc = a->bottom_kind == INST_BVH
                  ? inst_bvh_build(boxes, n, a->leaf, &b->bvh, err)
                  : inst_grid_build(boxes, n, a->lambda, b->grid_pad, &b->grid, err);
@@ -242,7 +246,18 @@ int inst_build_top(inst_accel *a, accel_error *err)
 {
     inst_bvh_free(&a->top_bvh);
     inst_grid_free(&a->top_grid);
-    if (a->top == INST_BVH) return inst_bvh_build(a->item_boxes, a->item_count, 1, &a->top_bvh, err);
+    if (a->top == INST_BVH) {
+        /* Instance boxes grown as every BVH box is (core/geom.h). */
+        float m = 0.0f;
+        for (uint32_t k = 0; k < a->item_count; k++) m = fmaxf(m, (float)box_abs_max(a->item_boxes[k]));
+        box3 *grown = malloc((a->item_count ? a->item_count : 1) * sizeof *grown);
+        if (!grown) return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
+        for (uint32_t k = 0; k < a->item_count; k++)
+            grown[k] = box3_hit_pad(a->item_boxes[k], box3_hit_delta(m));
+        int rc = inst_bvh_build(grown, a->item_count, 1, &a->top_bvh, err);
+        free(grown);
+        return rc;
+    }
     double top_pad = 0.0;
     for (uint32_t k = 0; k < a->item_count; k++)
         top_pad = fmax(top_pad, 0x1p-30 * box_abs_max(a->item_boxes[k]));

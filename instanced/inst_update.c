@@ -54,6 +54,15 @@ static void refit_bvh(inst_bottom *b)
         b->box_lo[k] = lo[k], b->box_hi[k] = hi[k];
         if (h->node_count) b->abs_max = fmax(b->abs_max, fmax(fabs(lo[k]), fabs(hi[k])));
     }
+    /* Then every box grown as the build grows them (core/geom.h): the pad
+     * is monotone, so growing each union is growing the leaves. */
+    float delta = box3_hit_delta((float)b->abs_max);
+    for (uint32_t i = 0; i < h->node_count; i++) {
+        inst_node *n = &h->nodes[i];
+        box3 g = box3_hit_pad((box3){{n->lo[0], n->lo[1], n->lo[2]}, {n->hi[0], n->hi[1], n->hi[2]}}, delta);
+        n->lo[0] = g.min.x, n->lo[1] = g.min.y, n->lo[2] = g.min.z;
+        n->hi[0] = g.max.x, n->hi[1] = g.max.y, n->hi[2] = g.max.z;
+    }
 }
 
 int inst_update(void *acc, const accel_scene *scene, int refit, accel_update_stats *st,

@@ -22,6 +22,12 @@ static int two_far_tris(accel_scene *s)
     return test_finish(&b, "two_far_tris", s);
 }
 
+/* The stored boxes are the primitives' bounds grown by 2^-22 of each
+ * coordinate plus 2^-40 of the scene's size (build_common.h: so that the
+ * box test never rejects a hit the exact triangle test claims): costs match
+ * the hand computation to about 1e-6. */
+#define SAH_TOL 1e-5
+
 TEST(bvh_sah_cost_hand_made)
 {
     accel_scene s;
@@ -32,7 +38,7 @@ TEST(bvh_sah_cost_hand_made)
         /* split: ct*1 + ci*(1*1 + 1*1)/11 = 1 + 2/11 < leaf ci*2 = 2 */
         void *a = test_build(test_bvh_builders[i], &s, 1, &st);
         if (a) {
-            CHECKF(fabs(st.sah_cost - (1.0 + 2.0 / 11.0)) < 1e-9, "%s: sah %.9g",
+            CHECKF(fabs(st.sah_cost - (1.0 + 2.0 / 11.0)) < SAH_TOL, "%s: sah %.9g",
                    test_bvh_builders[i], st.sah_cost);
             CHECK(st.depth == 2 && st.nodes == 4 && st.leaves == 2);
             accel_kind_bvh.destroy(a);
@@ -41,7 +47,7 @@ TEST(bvh_sah_cost_hand_made)
         snprintf(spec, sizeof spec, "%s,ct=5", test_bvh_builders[i]);
         a = test_build(spec, &s, 1, &st);
         if (a) {
-            CHECKF(fabs(st.sah_cost - 2.0) < 1e-9, "%s: sah %.9g", spec, st.sah_cost);
+            CHECKF(fabs(st.sah_cost - 2.0) < SAH_TOL, "%s: sah %.9g", spec, st.sah_cost);
             CHECK(st.depth == 1 && st.nodes == 1 && st.leaves == 1);
             accel_kind_bvh.destroy(a);
         }
@@ -49,7 +55,7 @@ TEST(bvh_sah_cost_hand_made)
         snprintf(spec, sizeof spec, "%s,ct=5,ci=0.5,leaf=1", test_bvh_builders[i]);
         a = test_build(spec, &s, 1, &st);
         if (a) {
-            CHECKF(fabs(st.sah_cost - (5.0 + 1.0 / 11.0)) < 1e-9, "%s: sah %.9g", spec,
+            CHECKF(fabs(st.sah_cost - (5.0 + 1.0 / 11.0)) < SAH_TOL, "%s: sah %.9g", spec,
                    st.sah_cost);
             accel_kind_bvh.destroy(a);
         }

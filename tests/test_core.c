@@ -247,6 +247,10 @@ TEST(core_compare_rule)
     CHECK(hits_agree(&a, &b));  /* different triangle, same t within 1e-4 relative */
     CHECK(!hits_agree(&a, &c));
     CHECK(!hits_agree(&a, &m) && !hits_agree(&m, &a) && hits_agree(&m, &m));
+    /* Two triangles hit beyond FLT_MAX (t rounded to +inf in both) are at
+     * the same distance (FORMATS.md's |t1 - t2| is NaN there). */
+    accel_hit fi = {INFINITY, 3, 0, 0}, gi = {INFINITY, 4, 0, 0};
+    CHECK(hits_agree(&fi, &gi) && hits_agree(&gi, &fi));
     accel_hit x[3] = {a, a, m}, y[3] = {c, m, a};
     hits_diff d = hits_compare(x, y, 3);
     CHECK(d.disagreements == 1 && d.holes == 1 && d.false_hits == 1 && d.first_bad == 0);

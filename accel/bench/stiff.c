@@ -172,6 +172,40 @@ static void inside_box_rays(ray_sink *k, const accel_scene *s, size_t count)
     }
 }
 
+/* Rays starting on the surface of the box b (a closed cube's faces) next to
+ * the edges of its n x n faces: offsets 0, 1e-30, 1e-20, 1e-10 and 1e-7
+ * from a grid line (0 among them), random directions, half of them nearly
+ * parallel to the face (a component of 1e-38, subnormal, or 1e-30) with a
+ * negative t_near. The float test loses such offsets while the box test
+ * keeps them (a hostile-ray audit found rays like these leaking through
+ * the BVHs' exact boxes, and a subnormal determinant giving t = NaN). */
+static void surface_rays(ray_sink *k, box3 b, int n, size_t count)
+{
+    static const float offs[] = {0.0f, 1e-30f, -1e-30f, 1e-20f, -1e-20f, 1e-10f, -1e-10f, 1e-7f, -1e-7f};
+    static const float tiny[] = {1e-38f, -1e-38f, 1e-30f, -1e-30f};
+    const float lo[3] = {b.min.x, b.min.y, b.min.z}, hi[3] = {b.max.x, b.max.y, b.max.z};
+    for (size_t i = 0; i < count; i++) {
+        int axis = (int)(rays_rand(37, i, 0) * 3) % 3, side = rays_rand(37, i, 1) < 0.5f;
+        float o[3], d[3];
+        for (int a = 0; a < 3; a++) o[a] = lo[a] + (hi[a] - lo[a]) * rays_rand(37, i, 2 + (uint64_t)a);
+        o[axis] = side ? hi[axis] : lo[axis];
+        /* next to a grid line of the face, on one of its two axes */
+        int a1 = (axis + 1 + (rays_rand(37, i, 5) < 0.5f)) % 3;
+        float cell = (hi[a1] - lo[a1]) / (float)n;
+        float line = lo[a1] + cell * floorf(rays_rand(37, i, 6) * (float)(n + 1));
+        o[a1] = line + offs[(int)(rays_rand(37, i, 7) * 9) % 9];
+        float z = 2 * rays_rand(37, i, 8) - 1, ph = 6.2831853f * rays_rand(37, i, 9);
+        float rr = sqrtf(fmaxf(0, 1 - z * z));
+        d[0] = rr * cosf(ph), d[1] = rr * sinf(ph), d[2] = z;
+        float t_near = 0.0f;
+        if (i & 1) { /* nearly parallel to the face */
+            d[axis] = tiny[(i >> 1) & 3];
+            t_near = -0.5f * rays_rand(37, i, 10);
+        }
+        add(k, v3(o[0], o[1], o[2]), v3(d[0], d[1], d[2]), t_near, INFINITY);
+    }
+}
+
 typedef struct {
     const char *name;
     const char *what;
@@ -181,7 +215,7 @@ typedef struct {
     float offset;
 } case_def;
 
-enum { RAYS_CLOSED, RAYS_LATTICE, RAYS_GRAZING, RAYS_INSIDE_BOXES, RAYS_MIXED };
+enum { RAYS_CLOSED, RAYS_LATTICE, RAYS_GRAZING, RAYS_INSIDE_BOXES, RAYS_MIXED, RAYS_SURFACE };
 
 static const case_def cases[] = {
     {"cube_edges", "closed cube: rays exactly at shared vertices and edge midpoints; leak rays from inside",
@@ -202,6 +236,8 @@ static const case_def cases[] = {
      "cube:n=4", RAYS_LATTICE, 1, 0},
     {"cube_grazing", "rays lying in the cube's face planes and along its edges", "cube:n=4",
      RAYS_GRAZING, 1, 0},
+    {"cube_surface", "rays starting on the closed cube's faces 0 to 1e-7 from its edges, half of them "
+     "nearly parallel to the face (a 1e-38 or 1e-30 component)", "cube:n=8", RAYS_SURFACE, 1, 0},
     {"soup_inside_boxes", "random rays starting inside primitives' bounding boxes",
      "soup:tris=3000,size=3", RAYS_INSIDE_BOXES, 1, 0},
     {"flat", "zero-thickness scene: every triangle in the plane z = 0, rays across and in it",
@@ -319,6 +355,9 @@ int stiff_case_make(int i, stiff_case *c, accel_error *err)
         break;
     case RAYS_INSIDE_BOXES:
         inside_box_rays(&k, s, 2000);
+        break;
+    case RAYS_SURFACE:
+        surface_rays(&k, s->bounds, 8, 4000);
         break;
     case RAYS_MIXED:
         for (int e = 0; e < 3; e++) vertex_rays(&k, s, outside_eye(s->bounds, 3, (uint64_t)e), 300, 40 + (uint64_t)e);

@@ -128,6 +128,45 @@ static inline int accel_far_folded(float t_near) { return t_near >= 0.0f; }
 static inline float accel_far_factor(int folded) { return folded ? 1.0f + ACCEL_FAR_PAD : 1.0f; }
 static inline float accel_far_limit(float t, int folded) { return folded ? t + t * ACCEL_FAR_PAD : t; }
 
+
+/*
+ * A box grown outward by delta plus 2^-22 of each coordinate's magnitude
+ * (clamped to the finite range): what a tree stores so that its exact box
+ * test never rejects a hit the exact triangle test (core/prim.h) claims.
+ * That test decides on coordinates sheared relative to the ray origin, so it
+ * may place a hit about 8 * 2^-53 * |vertex - origin| outside the
+ * triangle's box: for a ray that starts on a surface next to a shared edge,
+ * the triangle across the edge can own the hit while its box is missed.
+ * Callers pass delta = box3_hit_delta(largest coordinate magnitude of the
+ * structure); the relative part covers errors that grow with the distance
+ * along the ray.
+ */
+static inline float box3_hit_delta(float abs_max)
+{
+    return 0x1p-40f * (abs_max <= 3.4028234e38f ? abs_max : 3.4028234e38f) + 0x1p-126f;
+}
+
+static inline float box3_hit_pad_lo(float v, float delta)
+{
+    float r = v - (delta + fabsf(v) * 0x1p-22f);
+    return r < -3.4028234e38f ? -3.4028234e38f : r;
+}
+
+static inline float box3_hit_pad_hi(float v, float delta)
+{
+    float r = v + (delta + fabsf(v) * 0x1p-22f);
+    return r > 3.4028234e38f ? 3.4028234e38f : r;
+}
+
+static inline box3 box3_hit_pad(box3 b, float delta)
+{
+    b.min = v3(box3_hit_pad_lo(b.min.x, delta), box3_hit_pad_lo(b.min.y, delta),
+               box3_hit_pad_lo(b.min.z, delta));
+    b.max = v3(box3_hit_pad_hi(b.max.x, delta), box3_hit_pad_hi(b.max.y, delta),
+               box3_hit_pad_hi(b.max.z, delta));
+    return b;
+}
+
 /*
  * Robust slab test against box [lo, hi] (given as two float[3]).
  * inv_dir = 1/dir per component (±inf for a ±0 component); neg[a] = 1 when

@@ -284,6 +284,13 @@ static inline int accel_sphere_hit_d(const accel_ray_d *r, const float *s, doubl
  */
 #define ACCEL_EDGE_FILTER (16.0f * 0x1p-24f)
 #define ACCEL_EDGE_FILTER2 (32.0f * 0x1p-48f)
+/* The bounds above are relative: a product or difference that falls into
+ * the subnormal range errs by up to half a subnormal step (2^-150) instead,
+ * whatever its size. Every bound adds ACCEL_EDGE_TINY (2^-140, 1024 such
+ * steps) for that: a ray within ~1e-38 of a triangle's plane (a direction
+ * component of 1e-38) made sheared coordinates subnormal and a float sign
+ * "sure" that the double test contradicts (a hostile-ray audit). */
+#define ACCEL_EDGE_TINY 0x1p-140f
 
 static int accel_tri_fallback(const accel_ray_prep *p, const float *tri, float *t, float *u,
                               float *v) __attribute__((noinline, cold));
@@ -331,9 +338,9 @@ static inline int accel_tri_watertight(const accel_ray_prep *p, const float *tri
     /* The cheap bound 16u (M_cx M_by + M_cy M_bx) first (valid too: the
      * sheared coordinates are at most about M); when it leaves a sign
      * uncertain, the tight bound of ACCEL_EDGE_FILTER, the smaller kept. */
-    float eu = ACCEL_EDGE_FILTER * (mcx_ * mby_ + mcy_ * mbx_);
-    float ev = ACCEL_EDGE_FILTER * (max_ * mcy_ + may_ * mcx_);
-    float ew = ACCEL_EDGE_FILTER * (mbx_ * may_ + mby_ * max_);
+    float eu = ACCEL_EDGE_FILTER * (mcx_ * mby_ + mcy_ * mbx_) + ACCEL_EDGE_TINY;
+    float ev = ACCEL_EDGE_FILTER * (max_ * mcy_ + may_ * mcx_) + ACCEL_EDGE_TINY;
+    float ew = ACCEL_EDGE_FILTER * (mbx_ * may_ + mby_ * max_) + ACCEL_EDGE_TINY;
     for (int pass = 0;; pass++) {
         int sure_neg = U < -eu || V < -ev || W < -ew;
         int sure_pos = U > eu || V > ev || W > ew;
@@ -342,11 +349,11 @@ static inline int accel_tri_watertight(const accel_ray_prep *p, const float *tri
         if (pass) return accel_tri_fallback(p, tri, t, u, v);
         const float f2 = ACCEL_EDGE_FILTER2 / ACCEL_EDGE_FILTER;
         float tu = ACCEL_EDGE_FILTER * (fabsf(cx) * mby_ + fabsf(by) * mcx_ + fabsf(cy) * mbx_ +
-                                        fabsf(bx) * mcy_) + f2 * eu;
+                                        fabsf(bx) * mcy_) + f2 * eu + ACCEL_EDGE_TINY;
         float tv = ACCEL_EDGE_FILTER * (fabsf(ax) * mcy_ + fabsf(cy) * max_ + fabsf(ay) * mcx_ +
-                                        fabsf(cx) * may_) + f2 * ev;
+                                        fabsf(cx) * may_) + f2 * ev + ACCEL_EDGE_TINY;
         float tw = ACCEL_EDGE_FILTER * (fabsf(bx) * may_ + fabsf(ay) * mbx_ + fabsf(by) * max_ +
-                                        fabsf(ax) * mby_) + f2 * ew;
+                                        fabsf(ax) * mby_) + f2 * ew + ACCEL_EDGE_TINY;
         /* the smaller; a NaN bound stays NaN (the sign stays uncertain) */
         eu = tu < eu ? tu : eu, ev = tv < ev ? tv : ev, ew = tw < ew ? tw : ew;
     }
@@ -357,6 +364,11 @@ static inline int accel_tri_watertight(const accel_ray_prep *p, const float *tri
     float sgn = det < 0.0f ? -1.0f : 1.0f;
     det *= sgn;
     T *= sgn;
+    /* A subnormal det (a ray within ~1e-38 of the triangle's plane) has no
+     * finite reciprocal, and the range products below would underflow:
+     * 1/det was infinite and t = T/det NaN (a hostile-ray audit: a 1e-38
+     * direction component along a cube face). The double test decides. */
+    if (!(det >= 0x1p-126f)) return accel_tri_fallback(p, tri, t, u, v);
     /* T carries rounding too: a hit within its error of either end of the
      * t range (a secondary ray re-hitting its own surface at t ~ 0, a hit
      * at the current closest distance) is decided in double as well. */
@@ -365,7 +377,7 @@ static inline int accel_tri_watertight(const accel_ray_prep *p, const float *tri
      * just above its plane sums large terms to a tiny T). */
     float za = fabsf(p->sz * az_), zb = fabsf(p->sz * bz_), zc = fabsf(p->sz * cz_);
     float et = ACCEL_EDGE_FILTER * (fabsf(U) * za + fabsf(V) * zb + fabsf(W) * zc) +
-               eu * za + ev * zb + ew * zc;
+               eu * za + ev * zb + ew * zc + ACCEL_EDGE_TINY;
     /* det errs by at most ed = eu + ev + ew, plus its sum's rounding
      * (covered by et's slack): the exact det lies in [dlo, dhi], and each
      * end of the t range times det in the product's range for its sign. */

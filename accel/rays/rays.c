@@ -383,6 +383,10 @@ int hits_agree(const accel_hit *a, const accel_hit *b)
     int ha = a->prim != ACCEL_MISS, hb = b->prim != ACCEL_MISS;
     if (!ha || !hb) return ha == hb;
     if (a->prim == b->prim) return 1;
+    /* Equal distances are the same distance, +infinity included: a hit
+     * beyond FLT_MAX (a ray from 1e38 away) rounds t to +infinity in every
+     * tracer, where FORMATS.md's |t1 - t2| would be NaN. */
+    if (a->t == b->t) return 1;
     return fabsf(a->t - b->t) <= 1e-4f * fmaxf(1.0f, fabsf(a->t));
 }
 
