@@ -205,7 +205,13 @@ static inline double grid_plane_t(const grid_dda *d, int a, float plane)
  * the box's near planes; the cell per axis is guessed from the entry point
  * and then corrected against the plane distances (contract point 3), so that
  * neither rounding in the entry point nor an origin exactly on a boundary
- * can start the walk past a cell the ray passes through. An axis with a
+ * can start the walk past a cell the ray passes through. Where several
+ * planes give the very same distance t_entry (cells thinner than the
+ * rounding of plane - org: a paper-thin box seen from afar, whose planes
+ * the ray crosses all "at once") the walk starts in the first cell of that
+ * run, not the last: the steps then visit every cell of it at t_entry
+ * (their primitives, resolved by the exact membership, are not covered by
+ * any padding). An axis with a
  * zero direction component (+0 or -0) does not move: its cell is the one
  * whose planes bracket the origin. Returns the entry distance.
  */
@@ -244,6 +250,8 @@ grid_dda_init(grid_dda *d, const grid_frame *f, const accel_ray_prep *p, double 
             /* Entry plane pl[i] crossed at or before t_entry, exit plane after. */
             while (i > 0 && grid_plane_t(d, a, pl[i]) > t_entry) i--;
             while (i < n - 1 && grid_plane_t(d, a, pl[i + 1]) <= t_entry) i++;
+            /* Planes tied at t_entry: start in the first cell of the run. */
+            while (i > 0 && grid_plane_t(d, a, pl[i - 1]) == t_entry) i--;
             d->step[a] = 1;
             d->out[a] = n;
             d->cell_step[a] = f->stride[a];
@@ -252,6 +260,7 @@ grid_dda_init(grid_dda *d, const grid_frame *f, const accel_ray_prep *p, double 
         } else {
             while (i < n - 1 && grid_plane_t(d, a, pl[i + 1]) > t_entry) i++;
             while (i > 0 && grid_plane_t(d, a, pl[i]) <= t_entry) i--;
+            while (i < n - 1 && grid_plane_t(d, a, pl[i + 2]) == t_entry) i++;
             d->step[a] = -1;
             d->out[a] = -1;
             d->cell_step[a] = 0u - f->stride[a];

@@ -69,12 +69,15 @@ settle(grid_dda *d, const grid_frame *f, int a, float dir, const igrid_cell *cel
     const int lo = step > 0 ? near : cell->lo[a], hi = step > 0 ? cell->hi[a] - 1 : near;
     double g = (d->org[a] + t_exit * dir - f->lo[a]) * f->inv_cell[a];
     int i = g >= hi ? hi : (g > lo ? (int)g : lo);
+    /* Planes tied at t_exit (grid_dda_init): the first voxel of the run. */
     if (step > 0) {
         while (i > lo && grid_plane_t(d, a, pl[i]) > t_exit) i--;
         while (i < hi && grid_plane_t(d, a, pl[i + 1]) <= t_exit) i++;
+        while (i > lo && grid_plane_t(d, a, pl[i - 1]) == t_exit) i--;
     } else {
         while (i < hi && grid_plane_t(d, a, pl[i + 1]) > t_exit) i++;
         while (i > lo && grid_plane_t(d, a, pl[i]) <= t_exit) i--;
+        while (i < hi && grid_plane_t(d, a, pl[i + 2]) == t_exit) i++;
     }
     d->idx[a] = i;
     return 1;
