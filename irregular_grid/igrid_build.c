@@ -3,7 +3,11 @@
  * kind (Perard-Gayot, Kalojanov & Slusallek, EG 2017; igrid.h).
  *
  * Build, step by step:
- *   1. the top grid: the resolution rule at top_lambda, a count pass, and
+ *   0. coincident copies of a primitive are grouped; steps 1-3 run on one
+ *      representative per group, and a leaf holds every copy of its
+ *      representatives (igrid_top.c);
+ *   1. the top grid: the resolution rule at top_lambda (no cell longer
+ *      than twice its middle side: igrid_top.c), a count pass, and
  *      per top cell an octree depth: log2 of the largest axis the rule gives
  *      for sub_lambda on the cell's own count (the paper's second-level
  *      density), capped by max_depth. The deepest cell sets the virtual
@@ -134,6 +138,8 @@ typedef struct {
     int adaptive;            /* split=adaptive: the per-node rule below the paper's depth */
     double split_min;        /* split=adaptive: smallest count worth a split below that depth */
     double split_ratio;      /* split=adaptive: most references per primitive after a split */
+    const uint32_t *copy_off; /* coincident copies (group_copies), or NULL: */
+    const uint32_t *copies;   /* representative r stands for copies[copy_off[r]..copy_off[r+1]) */
     chunk_out *out;          /* per chunk */
     double max_bytes;
     uint64_t used;           /* bytes of lists and entries so far (atomic) */
@@ -158,10 +164,26 @@ static int charge(split_job *j, size_t bytes)
     return (double)used <= j->max_bytes;
 }
 
+static int cmp_u32(const void *a, const void *b)
+{
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
 static uint32_t emit_leaf(split_job *j, chunk_out *o, const int v0[3], int size,
                           const uint32_t *ids, uint32_t n)
 {
     if (o->failed) return 0;
+    uint32_t reps = n;
+    if (j->copies) {
+        uint64_t total = 0;
+        for (uint32_t k = 0; k < reps; k++) total += j->copy_off[ids[k] + 1] - j->copy_off[ids[k]];
+        if (total >= 0xFFFFFFFFu) {
+            o->failed = ACCEL_ERR_RANGE;
+            return 0;
+        }
+        n = (uint32_t)total;
+    }
     if (!grow((void **)&o->box, &o->box_cap, o->leaf_len + 1, sizeof *o->box) ||
         !grow((void **)&o->leaf_off, &o->off_cap, o->leaf_len + 2, sizeof *o->leaf_off) ||
         !grow((void **)&o->refs, &o->ref_cap, o->ref_len + n, sizeof *o->refs)) {
@@ -174,7 +196,14 @@ static uint32_t emit_leaf(split_job *j, chunk_out *o, const int v0[3], int size,
         o->box[o->leaf_len][3 + a] = v0[a] + size;
     }
     o->leaf_off[o->leaf_len] = (uint32_t)o->ref_len;
-    if (n) memcpy(o->refs + o->ref_len, ids, (size_t)n * sizeof *ids);
+    if (!j->copies) {
+        if (n) memcpy(o->refs + o->ref_len, ids, (size_t)n * sizeof *ids);
+    } else if (n) {
+        uint32_t *at = o->refs + o->ref_len;
+        for (uint32_t k = 0; k < reps; k++)
+            for (uint32_t c = j->copy_off[ids[k]]; c < j->copy_off[ids[k] + 1]; c++) *at++ = j->copies[c];
+        qsort(o->refs + o->ref_len, n, sizeof *o->refs, cmp_u32); /* lists stay sorted */
+    }
     o->ref_len += n;
     o->leaf_off[o->leaf_len + 1] = (uint32_t)o->ref_len;
     return (uint32_t)(o->leaf_len++) << 1;
@@ -357,11 +386,17 @@ static int subdivide(igrid_accel *g, const accel_params *params, int threads, do
 {
     const accel_scene *s = &g->store.prims;
     box3 box = grid_frame_box(s->bounds);
+    uint32_t *reps, rep_count, *copy_off, *copies;
+    if (igrid_group_copies(s, &reps, &rep_count, &copy_off, &copies))
+        return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory for the copies");
     int t[3];
-    grid_resolution(s->bounds, (double)s->prim_count, accel_param_num(params, "top_lambda"), t);
+    igrid_top_resolution(s->bounds, box, rep_count, accel_param_num(params, "top_lambda"), t);
     uint64_t top_cells;
     int rc = grid_cell_count("irregular_grid: top grid", t, max_bytes, &top_cells, err);
-    if (rc) return rc;
+    if (rc) {
+        free(reps), free(copy_off), free(copies);
+        return rc;
+    }
     int max_depth = accel_param_num(params, "subdivide") != 0.0
                         ? (int)accel_param_num(params, "max_depth") : 0;
     for (int a = 0; a < 3; a++)
@@ -369,7 +404,7 @@ static int subdivide(igrid_accel *g, const accel_params *params, int threads, do
     uint8_t *depth = calloc(top_cells, 1);
     float *top_planes = malloc(grid_plane_count(t) * sizeof *top_planes);
     if (!depth || !top_planes) {
-        free(depth), free(top_planes);
+        free(depth), free(top_planes), free(reps), free(copy_off), free(copies);
         return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory for the top grid");
     }
     /* The top grid's lists, padded by 1/1024 of a top cell: a superset of
@@ -379,10 +414,10 @@ static int subdivide(igrid_accel *g, const accel_params *params, int threads, do
     grid_frame f;
     grid_frame_init(&f, box, t, top_planes);
     grid_cells top;
-    rc = grid_cells_build(&f, s, NULL, s->prim_count, GRID_OVERLAP_EXACT, threads, max_bytes, &top,
-                          err);
+    rc = grid_cells_build(&f, s, reps, rep_count, GRID_OVERLAP_EXACT, threads, max_bytes, &top, err);
+    free(reps);
     if (rc) {
-        free(depth), free(top_planes);
+        free(depth), free(top_planes), free(copy_off), free(copies);
         return rc;
     }
     /* The paper's depth of every top cell; the lattice is as deep as the
@@ -401,18 +436,18 @@ static int subdivide(igrid_accel *g, const accel_params *params, int threads, do
     int v[3] = {t[0] << shift, t[1] << shift, t[2] << shift};
     g->planes = malloc(grid_plane_count(v) * sizeof *g->planes);
     if (!g->planes) {
-        grid_cells_free(&top), free(depth), free(top_planes);
+        grid_cells_free(&top), free(depth), free(top_planes), free(copy_off), free(copies);
         return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory for the lattice");
     }
     grid_frame_init(&g->frame, box, v, g->planes);
     size_t chunks = (size_t)((top_cells + IGRID_CHUNK - 1) / IGRID_CHUNK);
     chunk_out *out = calloc(chunks ? chunks : 1, sizeof *out);
     if (!out) {
-        grid_cells_free(&top), free(depth), free(top_planes);
+        grid_cells_free(&top), free(depth), free(top_planes), free(copy_off), free(copies);
         return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory");
     }
     split_job j = {&g->frame, s, &top, t, depth, shift, adaptive, accel_param_num(params, "split_min"),
-                   accel_param_num(params, "split_ratio"), out, max_bytes,
+                   accel_param_num(params, "split_ratio"), copy_off, copies, out, max_bytes,
                    (uint64_t)(top.cell_count + 1) * 4};
     accel_parallel_for(top_cells, IGRID_CHUNK, threads, split_chunk, &j);
     int failed = 0;
@@ -436,6 +471,8 @@ static int subdivide(igrid_accel *g, const accel_params *params, int threads, do
     grid_cells_free(&top);
     free(depth);
     free(top_planes);
+    free(copy_off);
+    free(copies);
     return rc;
 }
 

@@ -53,6 +53,26 @@ static inline uint32_t igrid_bcell_at(const igrid_bcells *b, int x, int y, int z
     return igrid_lookup(b->map, b->top_res, b->shift, x, y, z);
 }
 
+/*
+ * The top grid (igrid_top.c): the resolution rule at `lambda` cells per
+ * primitive over `count` primitives in `bounds`, with no cell longer than
+ * twice its middle side (`box`, the frame's box with flat axes widened,
+ * gives the sides): the octree refines a cell's axes together.
+ */
+void igrid_top_resolution(box3 bounds, box3 box, uint32_t count, double lambda, int t[3]);
+
+/*
+ * Coincident copies (igrid_top.c): primitives with the same geometry, bit
+ * for bit, grouped; the subdivision runs on one representative per group
+ * (the smallest local id) and a leaf's list holds every copy of its
+ * representatives. All distinct: *reps = NULL, *rep_count = prim_count.
+ * Otherwise reps[0..*rep_count) ascending, and representative r's group is
+ * copies[copy_off[r] .. copy_off[r+1]) (empty for the others). Returns
+ * ACCEL_ERR_NOMEM or 0.
+ */
+int igrid_group_copies(const accel_scene *s, uint32_t **reps, uint32_t *rep_count,
+                       uint32_t **copy_off, uint32_t **copies);
+
 /* Frees everything b owns (map included, unless moved out: set to NULL). */
 void igrid_bcells_free(igrid_bcells *b);
 

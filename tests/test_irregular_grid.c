@@ -475,3 +475,68 @@ TEST(igrid_paper_thin_against_reference)
         scene_free(&s);
     }
 }
+
+/* Builds spec on s, which must succeed within the spec's max_mb and stay
+ * below max_bytes and max_cells; then answers against the reference. */
+static void check_small(const accel_scene *s, const char *spec, size_t max_bytes,
+                        uint64_t max_cells)
+{
+    const accel_kind *kind;
+    void *accel;
+    accel_build_stats st;
+    accel_error err = {0};
+    if (accel_build_spec(spec, s, 1, &kind, &accel, &st, &err)) {
+        test_fail(__FILE__, __LINE__, "%s on %s: %s", spec, s->name, err.msg);
+        return;
+    }
+    CHECKF(st.bytes < max_bytes && st.nodes <= max_cells,
+           "%s on %s: %zu bytes, %llu cells (expected below %zu bytes, at most %llu cells)", spec,
+           s->name, (size_t)st.bytes, (unsigned long long)st.nodes, max_bytes,
+           (unsigned long long)max_cells);
+    kind->destroy(accel);
+    rng = 4242;
+    size_t n = 600;
+    accel_ray *rays = box_rays(s, n);
+    accel_hit *ref = malloc(n * sizeof *ref);
+    accel_reference_trace(s, rays, ref, n, 1);
+    check_answers(s, spec, rays, n, ref);
+    free(ref);
+    free(rays);
+}
+
+/* Coincident copies and needles: 1000 copies of one triangle (a mesh's
+ * duplicate faces), 100 instances of a sphere placed over each other, and a
+ * sphere stretched 3000 times along y. The subdivision used to take the
+ * copies for a dense cluster and split every node they touch down to the
+ * depth their count asks for (1000 copies: over 30 s and 575 MB; 30
+ * instances: 34 s, 213 MB), and to refine a needle's short axes as finely as
+ * its long one (3000x: 59k cells, 17 MB, 245 MB during the build). Each
+ * build must now fit a small max_mb and stay small. */
+TEST(igrid_copies_and_needles_stay_small)
+{
+    scene_builder b = {0};
+    accel_scene s;
+    for (int i = 0; i < 1000; i++) test_add_tri(&b, v3(0, 0, 0), v3(1, 0, 0), v3(0, 1, 0));
+    if (test_finish(&b, "1000 copies", &s)) {
+        check_small(&s, "irregular_grid:max_mb=16", 1 << 20, 64);
+        scene_free(&s);
+    }
+    static const char *const texts[] = {NULL, "mesh s sphere:segments=8\ninstance s scale 1 3e3 1\n"};
+    char inst[2048];
+    int len = snprintf(inst, sizeof inst, "mesh s sphere:segments=8\n");
+    for (int i = 0; i < 100; i++) len += snprintf(inst + len, sizeof inst - (size_t)len, "instance s\n");
+    for (int k = 0; k < 2; k++) {
+        const char *text = k ? texts[1] : inst;
+        accel_error err = {0};
+        if (scene_parse_scene(k ? "needle" : "100 instances", "", text, strlen(text), NULL, &s,
+                              &err)) {
+            test_fail(__FILE__, __LINE__, "%s", err.msg);
+            continue;
+        }
+        if (k == 0)
+            check_small(&s, "irregular_grid:max_mb=32", 16u << 20, 20000);
+        else
+            check_small(&s, "irregular_grid:max_mb=64", 8u << 20, 20000);
+        scene_free(&s);
+    }
+}
