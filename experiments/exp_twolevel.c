@@ -151,6 +151,13 @@ static void compare_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     for (int c = 0; c < g.count; c++)
         if (g.cfg[c].ok && g.cfg[c].want < least) g.cfg[c].want = least;
     exp_group_run(&g);
+    if (g.count == 0) { /* --kinds left none of the section's configurations */
+        exp_md(x, "\nLeft out: no configuration of this section is of the kinds asked for.\n");
+        exp_group_free(&g);
+        bench_sets_free(&sets);
+        scene_free(&s);
+        return;
+    }
     long long (*dis)[3] = calloc((size_t)g.count + 1, sizeof *dis);
     if (!dis) exit(CLI_EXIT_INTERNAL);
     agreement(x, &g, dis);
