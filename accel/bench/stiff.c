@@ -176,7 +176,8 @@ static void inside_box_rays(ray_sink *k, const accel_scene *s, size_t count)
  * the edges of its n x n faces: offsets 0, 1e-30, 1e-20, 1e-10 and 1e-7
  * from a grid line (0 among them), random directions, half of them nearly
  * parallel to the face (a component of 1e-38, subnormal, or 1e-30) with a
- * negative t_near. The float test loses such offsets while the box test
+ * negative t_near; one in 16 from outside with its whole direction scaled
+ * by 2^-124 (1/d overflows). The float test loses such offsets while the box test
  * keeps them (a hostile-ray audit found rays like these leaking through
  * the BVHs' exact boxes, and a subnormal determinant giving t = NaN). */
 static void surface_rays(ray_sink *k, box3 b, int n, size_t count)
@@ -201,6 +202,16 @@ static void surface_rays(ray_sink *k, box3 b, int n, size_t count)
         if (i & 1) { /* nearly parallel to the face */
             d[axis] = tiny[(i >> 1) & 3];
             t_near = -0.5f * rays_rand(37, i, 10);
+        }
+        if (i % 16 == 2) {
+            /* From 3 outside the face, 0.01 aside, to the surface point,
+             * with the whole direction scaled by 2^-124: the hit lies at
+             * t ~ 2^124 and 1/d overflows on the 0.01 axis. */
+            float q[3] = {o[0], o[1], o[2]};
+            q[axis] += side ? 3.0f : -3.0f;
+            q[a1] += (i & 4) ? 0.01f : -0.01f;
+            for (int a = 0; a < 3; a++) d[a] = ldexpf(o[a] - q[a], -124), o[a] = q[a];
+            t_near = 0.0f;
         }
         add(k, v3(o[0], o[1], o[2]), v3(d[0], d[1], d[2]), t_near, INFINITY);
     }
@@ -237,7 +248,7 @@ static const case_def cases[] = {
     {"cube_grazing", "rays lying in the cube's face planes and along its edges", "cube:n=4",
      RAYS_GRAZING, 1, 0},
     {"cube_surface", "rays starting on the closed cube's faces 0 to 1e-7 from its edges, half of them "
-     "nearly parallel to the face (a 1e-38 or 1e-30 component)", "cube:n=8", RAYS_SURFACE, 1, 0},
+     "nearly parallel to the face (a 1e-38 or 1e-30 component), some with directions of 1e-37", "cube:n=8", RAYS_SURFACE, 1, 0},
     {"soup_inside_boxes", "random rays starting inside primitives' bounding boxes",
      "soup:tris=3000,size=3", RAYS_INSIDE_BOXES, 1, 0},
     {"flat", "zero-thickness scene: every triangle in the plane z = 0, rays across and in it",

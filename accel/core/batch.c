@@ -6,6 +6,7 @@
  * counters are summed after the join (no atomics in kernels), so results and
  * counts are identical for any thread count.
  */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -24,6 +25,37 @@ typedef struct {
     accel_counters *per_thread;
 } trace_job;
 
+/*
+ * A direction whose largest component is under 2^-64 (all of it tiny, e.g.
+ * 2^-125: hits at t ~ 1e38) overflows the kernels' 1/d and loses the hits a
+ * slab test would see at such t (a hostile-ray audit: every kind but brute
+ * missed them). Such a ray is traced as o + t' (d 2^k) with t' = t 2^-k,
+ * 2^k bringing its largest component to [1, 2): the same line and the same
+ * points, scaled exactly (powers of two; t bounds only lose bits if they
+ * fall to subnormals), and each hit's t is scaled back. Ordinary rays are
+ * only read: no copy, no change.
+ */
+static int tiny_dir_scale(const accel_ray *r)
+{
+    float m = fmaxf(fabsf(r->dx), fmaxf(fabsf(r->dy), fabsf(r->dz)));
+    return m > 0.0f && m < 0x1p-64f ? -ilogbf(m) : 0;
+}
+
+static int rescaled(const accel_ray *rays, size_t n, accel_ray *out, int *k)
+{
+    int any = 0;
+    for (size_t i = 0; i < n; i++) any |= (k[i] = tiny_dir_scale(&rays[i])) != 0;
+    if (!any) return 0;
+    for (size_t i = 0; i < n; i++) {
+        out[i] = rays[i];
+        if (!k[i]) continue;
+        out[i].dx = ldexpf(rays[i].dx, k[i]), out[i].dy = ldexpf(rays[i].dy, k[i]);
+        out[i].dz = ldexpf(rays[i].dz, k[i]);
+        out[i].t_near = ldexpf(rays[i].t_near, -k[i]), out[i].t_far = ldexpf(rays[i].t_far, -k[i]);
+    }
+    return 1;
+}
+
 static void trace_chunk(void *p, size_t begin, size_t end, int thread)
 {
     trace_job *j = p;
@@ -34,10 +66,28 @@ static void trace_chunk(void *p, size_t begin, size_t end, int thread)
         local.ray_prims = j->total->ray_prims ? j->total->ray_prims + begin : NULL;
         c = &local;
     }
+    size_t n = end - begin;
+    const accel_ray *rays = j->rays + begin;
+    accel_ray *scaled = NULL;
+    int *k = NULL;
+    for (size_t i = 0; i < n; i++)
+        if (tiny_dir_scale(&rays[i])) {
+            scaled = malloc(n * sizeof *scaled), k = malloc(n * sizeof *k);
+            if (scaled && k && rescaled(rays, n, scaled, k)) rays = scaled;
+            /* without memory the rays go as they are: only such far hits
+             * are lost, as before */
+            break;
+        }
     if (j->hits)
-        j->kind->intersect(j->accel, j->rays + begin, j->hits + begin, end - begin, c);
+        j->kind->intersect(j->accel, rays, j->hits + begin, n, c);
     else
-        j->kind->occluded(j->accel, j->rays + begin, j->occluded + begin, end - begin, c);
+        j->kind->occluded(j->accel, rays, j->occluded + begin, n, c);
+    if (rays == scaled && j->hits)
+        for (size_t i = 0; i < n; i++)
+            if (k[i] && j->hits[begin + i].prim != ACCEL_MISS)
+                j->hits[begin + i].t = ldexpf(j->hits[begin + i].t, k[i]);
+    free(scaled);
+    free(k);
     if (c) accel_counters_add(&j->per_thread[thread], c);
 }
 
