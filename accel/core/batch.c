@@ -35,10 +35,20 @@ typedef struct {
  * fall to subnormals), and each hit's t is scaled back. Ordinary rays are
  * only read: no copy, no change.
  */
+static inline int tiny_dir(const accel_ray *r)
+{
+    /* plain compares (fmaxf is a libm call without -ffinite-math-only);
+     * a NaN component is not tiny (the kernels miss such rays) */
+    float x = fabsf(r->dx), y = fabsf(r->dy), z = fabsf(r->dz);
+    return (x < 0x1p-64f) & (y < 0x1p-64f) & (z < 0x1p-64f) & ((x > 0.0f) | (y > 0.0f) | (z > 0.0f));
+}
+
 static int tiny_dir_scale(const accel_ray *r)
 {
-    float m = fmaxf(fabsf(r->dx), fmaxf(fabsf(r->dy), fabsf(r->dz)));
-    return m > 0.0f && m < 0x1p-64f ? -ilogbf(m) : 0;
+    if (!tiny_dir(r)) return 0;
+    float x = fabsf(r->dx), y = fabsf(r->dy), z = fabsf(r->dz);
+    float m = x > y ? x : y;
+    return -ilogbf(m > z ? m : z);
 }
 
 static int rescaled(const accel_ray *rays, size_t n, accel_ray *out, int *k)
@@ -70,14 +80,20 @@ static void trace_chunk(void *p, size_t begin, size_t end, int thread)
     const accel_ray *rays = j->rays + begin;
     accel_ray *scaled = NULL;
     int *k = NULL;
+    /* |dx| alone first: almost never tiny, one predicted branch per ray
+     * (the full test on every ray cost 3-5% of 8-wide primary packets) */
+    int any = 0;
     for (size_t i = 0; i < n; i++)
-        if (tiny_dir_scale(&rays[i])) {
-            scaled = malloc(n * sizeof *scaled), k = malloc(n * sizeof *k);
-            if (scaled && k && rescaled(rays, n, scaled, k)) rays = scaled;
-            /* without memory the rays go as they are: only such far hits
-             * are lost, as before */
+        if (fabsf(rays[i].dx) < 0x1p-64f && tiny_dir(&rays[i])) {
+            any = 1;
             break;
         }
+    if (any) {
+        scaled = malloc(n * sizeof *scaled), k = malloc(n * sizeof *k);
+        if (scaled && k && rescaled(rays, n, scaled, k)) rays = scaled;
+        /* without memory the rays go as they are: only such far hits are
+         * lost, as before */
+    }
     if (j->hits)
         j->kind->intersect(j->accel, rays, j->hits + begin, n, c);
     else
