@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "test_loaders.h"
 
@@ -252,6 +253,18 @@ TEST(loader_files_and_dispatch)
     accel_error err = {0};
     CHECK(scene_load_file("tests/data/no_such_file.off", &s, &err) == ACCEL_ERR_IO);
     CHECKF(strstr(err.msg, "tests/data/no_such_file.off: cannot open") != NULL, "%s", err.msg);
+    /* A device is refused at once (a z.obj linked to /dev/zero was read
+     * until memory ran out). */
+    remove("build/test_zero.obj");
+    if (symlink("/dev/zero", "build/test_zero.obj") == 0) {
+        if (scene_load_file("build/test_zero.obj", &s, &err) == 0) {
+            test_fail(__FILE__, __LINE__, "/dev/zero loaded as a scene");
+            scene_free(&s);
+        } else {
+            CHECKF(strstr(err.msg, "build/test_zero.obj: not a regular file") != NULL, "%s", err.msg);
+        }
+        remove("build/test_zero.obj");
+    }
     FILE *f = fopen("tests/data/bad_index.off", "rb");
     if (f) {
         fclose(f);

@@ -30,6 +30,8 @@ typedef struct {
 static const bad_case bad_cases[] = {
     /* OFF */
     {"t.off", OFF_HEAD "3 0 1 3\n", 0, "t.off:6: face index 3 >= vertex count 3"},
+    {"t.off", OFF_HEAD "3 0 1 2\n3 2 1 0\n3 0 1 7\n", 0,
+     "t.off:7: data after the 1 faces the header declares"},
     {"t.off", "OFF\n3 1 0\n0 0 0\nnan 0 0\n0 1 0\n3 0 1 2\n", 0, "t.off:4: x coordinate 'nan' is NaN"},
     {"t.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 -inf\n3 0 1 2\n", 0, "t.off:5: z coordinate '-inf' is NaN or infinite"},
     {"t.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1e39 0\n3 0 1 2\n", 0, "t.off:5: y coordinate '1e39' is NaN or infinite"},

@@ -22,7 +22,15 @@ int load_read_file(const char *path, char **data, size_t *size, accel_error *err
      * until EOF, growing when the hint was short. */
     size_t cap = 65536;
     struct stat st;
-    if (fstat(fileno(f), &st) == 0 && S_ISREG(st.st_mode) && st.st_size >= 0 &&
+    int have_st = fstat(fileno(f), &st) == 0;
+    /* A directory, or a device such as /dev/zero (which would be read until
+     * memory runs out), is no scene file; regular files and pipes are. */
+    if (have_st && (S_ISDIR(st.st_mode) || S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode))) {
+        fclose(f);
+        return accel_fail(err, ACCEL_ERR_IO, "%s: not a regular file (a %s)", path,
+                          S_ISDIR(st.st_mode) ? "directory" : "device");
+    }
+    if (have_st && S_ISREG(st.st_mode) && st.st_size >= 0 &&
         (unsigned long long)st.st_size < (unsigned long long)SIZE_MAX - 1)
         cap = (size_t)st.st_size + 1;
     char *buf = malloc(cap);

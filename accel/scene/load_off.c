@@ -144,6 +144,14 @@ static int parse_off(load_text *t, scene_builder *b, float **verts_out)
         }
         load_next_line(t); /* optional face colour */
     }
+    /* Faces past the declared count would be dropped without a word (a
+     * header that undercounts them): refused, with the line. */
+    load_skip_space(t);
+    if (t->p < t->end)
+        return load_fail(t, ACCEL_ERR_PARSE,
+                         "data after the %lld faces the header declares (is the face count "
+                         "too small?)",
+                         (long long)nf);
     return 0;
 }
 
