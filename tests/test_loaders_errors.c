@@ -84,6 +84,8 @@ static const bad_case bad_cases[] = {
     {"t.obj", "f 1 2 3\n", 0, "t.obj:1: face index 1 > vertex count 0"},
     /* PLY ascii: the header has 9 lines */
     {"t.ply", PLY_HEAD "0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", 0, "t.ply:13: face index 3 >= vertex count 3"},
+    {"t.ply", PLY_HEAD "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n3 2 1 0\n", 0,
+     "t.ply:14: data after the declared elements"},
     {"t.ply", PLY_HEAD "0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n", 0, "t.ply:11: y coordinate 'nan' is NaN"},
     {"t.ply", PLY_HEAD "0 0 0\n1 a 0\n0 1 0\n3 0 1 2\n", 0, "t.ply:11: expected y coordinate, found 'a'"},
     {"t.ply", PLY_HEAD "0.0 0.0 0.0\n1 0 0\n0 1 0\n2 0 1\n", 0, "t.ply:13: face with 2 vertices"},

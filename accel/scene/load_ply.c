@@ -558,6 +558,23 @@ static int parse_ply(ply_file *f, scene_builder *b)
         rc = f->format == PLY_ASCII ? ascii_element(f, e, b) : binary_element(f, e, b);
         if (rc) return rc;
     }
+    /* Data after the last declared element would be dropped without a word
+     * (a count that is too small): refused. Binary files may end in a
+     * newline or two. */
+    if (f->format == PLY_ASCII) {
+        load_skip_space(&f->t);
+        if (f->t.p < f->t.end)
+            return load_fail(&f->t, ACCEL_ERR_PARSE,
+                             "data after the declared elements (is an element count too small?)");
+    } else {
+        size_t left = (size_t)(f->t.end - f->t.p), nl = 0;
+        while (nl < left && nl < 2 && (f->t.p[nl] == '\n' || f->t.p[nl] == '\r')) nl++;
+        if (left > nl)
+            return accel_fail(f->t.err, ACCEL_ERR_PARSE,
+                              "%s: %zu bytes after the declared elements at byte %zu (is an "
+                              "element count too small?)",
+                              f->t.name, left, (size_t)(f->t.p - f->t.begin));
+    }
     return 0;
 }
 
