@@ -319,15 +319,14 @@ static int parse_camera(parser *ps)
     }
     if (!given[0] || !given[1])
         return load_fail(t, ACCEL_ERR_PARSE, "camera needs eye and look");
-    vec3 fwd = v3_sub(val[1], val[0]);
-    if (!(v3_dot(fwd, fwd) > 0.0f) || !isfinite(v3_dot(fwd, fwd)))
-        return load_fail(t, ACCEL_ERR_RANGE, "camera eye and look must be distinct");
-    vec3 side = v3_cross(fwd, val[2]);
-    if (!(v3_dot(side, side) > 0.0f))
-        return load_fail(t, ACCEL_ERR_RANGE, "camera up is zero or along the view direction");
     if (!(fov > 0.0 && fov < 180.0))
         return load_fail(t, ACCEL_ERR_RANGE, "camera fov %g is not in (0, 180) degrees", fov);
+    /* The ray generators' own check (in double: a far eye or a tiny view
+     * vector is fine, an up within 0.006 degrees of the view is not), here
+     * where the line is known. */
     ps->camera = (accel_camera){val[0], val[1], val[2], (float)fov};
+    int crc = scene_camera_check(&ps->camera, t->err);
+    if (crc) return load_prefix(t->err, crc, "%s:%zu", t->name, t->line);
     ps->camera_line = t->line;
     return 0;
 }

@@ -273,3 +273,33 @@ int scene_transform(const accel_scene *s, float scale, vec3 offset, accel_scene 
     out->light = v3_add(v3_scale(s->light, scale), offset);
     return 0;
 }
+
+static int cam_finite3(vec3 v) { return isfinite(v.x) && isfinite(v.y) && isfinite(v.z); }
+
+int scene_camera_check(const accel_camera *cam, accel_error *err)
+{
+    if (!cam_finite3(cam->eye) || !cam_finite3(cam->look_at) || !cam_finite3(cam->up))
+        return accel_fail(err, ACCEL_ERR_RANGE, "camera: eye, look and up must be finite");
+    if (!(cam->fov_deg > 0 && cam->fov_deg < 180))
+        return accel_fail(err, ACCEL_ERR_RANGE, "camera: field of view %g is not in (0, 180) degrees",
+                          cam->fov_deg);
+    /* In double, so that a tiny but valid view vector is not lost to
+     * float underflow of its squared length. */
+    double f[3] = {(double)cam->look_at.x - cam->eye.x, (double)cam->look_at.y - cam->eye.y,
+                   (double)cam->look_at.z - cam->eye.z};
+    double u[3] = {cam->up.x, cam->up.y, cam->up.z};
+    double fl = sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+    double ul = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+    if (!(fl > 0))
+        return accel_fail(err, ACCEL_ERR_RANGE, "camera: eye and look are the same point (%g, %g, %g)",
+                          cam->eye.x, cam->eye.y, cam->eye.z);
+    if (!(ul > 0)) return accel_fail(err, ACCEL_ERR_RANGE, "camera: the up vector is zero");
+    double c[3] = {f[1] * u[2] - f[2] * u[1], f[2] * u[0] - f[0] * u[2], f[0] * u[1] - f[1] * u[0]};
+    double sine = sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) / (fl * ul);
+    /* 1e-4: under 0.006 degrees apart the image's right axis is mostly rounding noise. */
+    if (!(sine > 1e-4))
+        return accel_fail(err, ACCEL_ERR_RANGE,
+                          "camera: up (%g, %g, %g) is parallel to the view direction", cam->up.x,
+                          cam->up.y, cam->up.z);
+    return 0;
+}

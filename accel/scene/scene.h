@@ -49,6 +49,10 @@ accel_camera scene_camera_framing(box3 bounds, vec3 from, float fov_deg);
 
 /* Loads OBJ, PLY or OFF by extension (case-insensitive). Errors name the
  * file and the line (text) or byte offset (binary). */
+/* A camera the ray generators can use: finite, a field of view in
+ * (0, 180) degrees, eye and look distinct, up not along the view (checked
+ * in double). Messages start with "camera: ". */
+int scene_camera_check(const accel_camera *cam, accel_error *err);
 int scene_load_file(const char *path, accel_scene *s, accel_error *err);
 int scene_load_obj(const char *path, scene_builder *b, accel_error *err);
 int scene_load_ply(const char *path, scene_builder *b, accel_error *err);
