@@ -584,3 +584,18 @@ TEST(tools_exp_threads_takes_threads_as_largest_count)
         free(text);
     }
 }
+
+TEST(tools_render_parses_numbers_strictly)
+{
+    /* atoi took "2abc" as 2 and 99999999999 as 1215752191. */
+    static const char *const bad[] = {"--frames 2abc", "--size 8x8junk", "--threads 2xyz",
+                                      "--first 99999999999", "--size x8", "--step 0"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
+        char cmd[256], *err = NULL;
+        snprintf(cmd, sizeof cmd, "bin/render --scene animated --out " DIR "/r %s", bad[i]);
+        int rc = run(cmd, NULL, &err);
+        CHECKF(rc == 2 && err && strstr(err, "bad value for"), "render %s: exit %d, '%s'", bad[i],
+               rc, err ? err : "");
+        free(err);
+    }
+}

@@ -17,6 +17,7 @@
  * the animation system's, reported apart). --verify compares every frame
  * against a structure built from scratch on that frame (FORMATS.md rule).
  */
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -53,6 +54,19 @@ static void usage(FILE *f)
             "                    boxes and primitives per ray, the time-free cost of a refit tree\n");
 }
 
+
+/* A whole decimal number in [lo, hi], nothing after it ("2abc" and
+ * "99999999999" are bad values, not 2 and an overflow). */
+static int whole(const char *v, long lo, long hi, int *out)
+{
+    char *end;
+    errno = 0;
+    long n = strtol(v, &end, 10);
+    if (end == v || *end || errno || n < lo || n > hi) return 0;
+    *out = (int)n;
+    return 1;
+}
+
 static int parse(int argc, char **argv, options *o)
 {
     *o = (options){"animated", "instanced", NULL, 10, 0, 1, 800, 600, accel_cpu_count(), 0, 0, 0};
@@ -75,13 +89,19 @@ static int parse(int argc, char **argv, options *o)
         if (!strcmp(a, "--scene")) o->scene = v;
         else if (!strcmp(a, "--accel")) o->accel = v;
         else if (!strcmp(a, "--out")) o->out = v;
-        else if (!strcmp(a, "--frames")) bad = (o->frames = atoi(v)) < 1 || o->frames > 100000;
-        else if (!strcmp(a, "--first")) bad = (o->first = atoi(v)) < 0;
-        else if (!strcmp(a, "--step")) bad = (o->step = atoi(v)) < 1;
-        else if (!strcmp(a, "--threads")) bad = (o->threads = atoi(v)) < 1 || o->threads > 256;
-        else if (!strcmp(a, "--size"))
-            bad = sscanf(v, "%dx%d", &o->width, &o->height) != 2 || o->width < 1 ||
-                  o->height < 1 || o->width > 16384 || o->height > 16384;
+        else if (!strcmp(a, "--frames")) bad = !whole(v, 1, 100000, &o->frames);
+        else if (!strcmp(a, "--first")) bad = !whole(v, 0, 100000000, &o->first);
+        else if (!strcmp(a, "--step")) bad = !whole(v, 1, 100000000, &o->step);
+        else if (!strcmp(a, "--threads")) bad = !whole(v, 1, 256, &o->threads);
+        else if (!strcmp(a, "--size")) {
+            char w[32], *x = strchr(v, 'x');
+            size_t wl = x ? (size_t)(x - v) : 0;
+            bad = !x || wl == 0 || wl >= sizeof w;
+            if (!bad) {
+                memcpy(w, v, wl), w[wl] = 0;
+                bad = !whole(w, 1, 16384, &o->width) || !whole(x + 1, 1, 16384, &o->height);
+            }
+        }
         else if (!strcmp(a, "--update")) {
             o->mode = !strcmp(v, "refit") ? 0 : !strcmp(v, "rebuild") ? 1 : !strcmp(v, "full") ? 2 : -1;
             bad = o->mode < 0;
