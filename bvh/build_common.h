@@ -23,8 +23,8 @@
 #define BVH_BUILD_COMMON_H
 
 #include <assert.h>
-#include <math.h>
 #include <float.h>
+#include <math.h>
 #include <string.h>
 
 #include "bvh_node.h"
@@ -68,26 +68,14 @@ static inline int bvh_prim_finite(const accel_scene *s, uint32_t prim)
  */
 static inline float bvh_box_delta(const accel_scene *s)
 {
-    box3 b = s->bounds;
-    float m = 0.0f;
-    const float *c[2] = {&b.min.x, &b.max.x};
-    for (int k = 0; k < 2; k++)
-        for (int a = 0; a < 3; a++) m = fmaxf(m, fabsf(c[k][a]));
+    float m = box3_abs_max(s->bounds);
     if (!(m <= FLT_MAX)) { /* a non-finite primitive: the finite ones decide */
         m = 0.0f;
-        for (uint32_t i = 0; i < s->live_count; i++) {
-            uint32_t prim = s->live[i];
-            if (!bvh_prim_finite(s, prim)) continue;
-            box3 pb = accel_prim_bounds(s, prim);
-            const float *q[2] = {&pb.min.x, &pb.max.x};
-            for (int k = 0; k < 2; k++)
-                for (int a = 0; a < 3; a++) m = fmaxf(m, fabsf(q[k][a]));
-        }
+        for (uint32_t i = 0; i < s->live_count; i++)
+            if (bvh_prim_finite(s, s->live[i])) m = fmaxf(m, box3_abs_max(accel_prim_bounds(s, s->live[i])));
     }
     return box3_hit_delta(m);
 }
-
-static inline box3 bvh_pad_box(box3 b, float delta) { return box3_hit_pad(b, delta); }
 
 /* The box the BVH stores for a primitive (above). */
 static inline box3 bvh_prim_box(const accel_scene *s, uint32_t prim, float delta)

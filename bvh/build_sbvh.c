@@ -117,8 +117,8 @@ static void chop_ref(const sbvh_ctx *x, const bvh_ref *ref, int axis, double pla
         bvh_sbvh_chop(s->tris + 9 * (size_t)ref->prim, box, axis, plane, 1, left, right);
         /* A part's box is grown like every stored box (build_common.h),
          * inside the reference's own (grown) box. */
-        if (box_valid(*left)) *left = box_intersect(bvh_pad_box(*left, x->delta), box);
-        if (box_valid(*right)) *right = box_intersect(bvh_pad_box(*right, x->delta), box);
+        if (box_valid(*left)) *left = box_intersect(box3_hit_pad(*left, x->delta), box);
+        if (box_valid(*right)) *right = box_intersect(box3_hit_pad(*right, x->delta), box);
         return;
     }
     bvh_sbvh_chop_box(box, axis, plane, left, right);

@@ -249,11 +249,11 @@ int inst_build_top(inst_accel *a, accel_error *err)
     if (a->top == INST_BVH) {
         /* Instance boxes grown as every BVH box is (core/geom.h). */
         float m = 0.0f;
-        for (uint32_t k = 0; k < a->item_count; k++) m = fmaxf(m, (float)box_abs_max(a->item_boxes[k]));
+        for (uint32_t k = 0; k < a->item_count; k++) m = fmaxf(m, box3_abs_max(a->item_boxes[k]));
+        float delta = box3_hit_delta(m);
         box3 *grown = malloc((a->item_count ? a->item_count : 1) * sizeof *grown);
         if (!grown) return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
-        for (uint32_t k = 0; k < a->item_count; k++)
-            grown[k] = box3_hit_pad(a->item_boxes[k], box3_hit_delta(m));
+        for (uint32_t k = 0; k < a->item_count; k++) grown[k] = box3_hit_pad(a->item_boxes[k], delta);
         int rc = inst_bvh_build(grown, a->item_count, 1, &a->top_bvh, err);
         free(grown);
         return rc;

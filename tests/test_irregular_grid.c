@@ -79,6 +79,19 @@ static int lattice_scene(accel_scene *s)
 
 /* ---- structure ------------------------------------------------------------------------ */
 
+/* Builds spec on s on one thread; NULL (and a failed check) when it fails. */
+static void *build_or_fail(const char *spec, const accel_scene *s, const accel_kind **kind,
+                           accel_build_stats *st)
+{
+    void *accel;
+    accel_error err = {0};
+    if (accel_build_spec(spec, s, 1, kind, &accel, st, &err)) {
+        test_fail(__FILE__, __LINE__, "%s on %s: %s", spec, s->name, err.msg);
+        return NULL;
+    }
+    return accel;
+}
+
 static int sorted_find(const uint32_t *v, uint32_t n, uint32_t x)
 {
     uint32_t lo = 0, hi = n;
@@ -92,13 +105,9 @@ static int sorted_find(const uint32_t *v, uint32_t n, uint32_t x)
 static void check_structure(const accel_scene *s, const char *spec)
 {
     const accel_kind *kind;
-    void *accel;
     accel_build_stats st;
-    accel_error err = {0};
-    if (accel_build_spec(spec, s, 1, &kind, &accel, &st, &err)) {
-        test_fail(__FILE__, __LINE__, "%s on %s: %s", spec, s->name, err.msg);
-        return;
-    }
+    void *accel = build_or_fail(spec, s, &kind, &st);
+    if (!accel) return;
     igrid_view v;
     igrid_get_view(accel, &v);
     const int *res = v.frame->res;
@@ -209,13 +218,9 @@ static void check_answers(const accel_scene *s, const char *spec, const accel_ra
                           const accel_hit *ref)
 {
     const accel_kind *kind;
-    void *accel;
     accel_build_stats st;
-    accel_error err = {0};
-    if (accel_build_spec(spec, s, 1, &kind, &accel, &st, &err)) {
-        test_fail(__FILE__, __LINE__, "%s on %s: %s", spec, s->name, err.msg);
-        return;
-    }
+    void *accel = build_or_fail(spec, s, &kind, &st);
+    if (!accel) return;
     accel_hit *h = malloc(n * sizeof *h), *hc = malloc(n * sizeof *hc);
     uint8_t *occ = malloc(n);
     accel_counters c = {0};
@@ -482,13 +487,9 @@ static void check_small(const accel_scene *s, const char *spec, size_t max_bytes
                         uint64_t max_cells)
 {
     const accel_kind *kind;
-    void *accel;
     accel_build_stats st;
-    accel_error err = {0};
-    if (accel_build_spec(spec, s, 1, &kind, &accel, &st, &err)) {
-        test_fail(__FILE__, __LINE__, "%s on %s: %s", spec, s->name, err.msg);
-        return;
-    }
+    void *accel = build_or_fail(spec, s, &kind, &st);
+    if (!accel) return;
     CHECKF(st.bytes < max_bytes && st.nodes <= max_cells,
            "%s on %s: %zu bytes, %llu cells (expected below %zu bytes, at most %llu cells)", spec,
            s->name, (size_t)st.bytes, (unsigned long long)st.nodes, max_bytes,

@@ -43,27 +43,21 @@ static inline int tiny_dir(const accel_ray *r)
     return (x < 0x1p-64f) & (y < 0x1p-64f) & (z < 0x1p-64f) & ((x > 0.0f) | (y > 0.0f) | (z > 0.0f));
 }
 
-static int tiny_dir_scale(const accel_ray *r)
+/* Copies the chunk with every tiny direction scaled by 2^k[i] (k[i] = 0
+ * for the others). */
+static void rescale(const accel_ray *rays, size_t n, accel_ray *out, int *k)
 {
-    if (!tiny_dir(r)) return 0;
-    float x = fabsf(r->dx), y = fabsf(r->dy), z = fabsf(r->dz);
-    float m = x > y ? x : y;
-    return -ilogbf(m > z ? m : z);
-}
-
-static int rescaled(const accel_ray *rays, size_t n, accel_ray *out, int *k)
-{
-    int any = 0;
-    for (size_t i = 0; i < n; i++) any |= (k[i] = tiny_dir_scale(&rays[i])) != 0;
-    if (!any) return 0;
     for (size_t i = 0; i < n; i++) {
         out[i] = rays[i];
-        if (!k[i]) continue;
+        k[i] = 0;
+        if (!tiny_dir(&rays[i])) continue;
+        float x = fabsf(rays[i].dx), y = fabsf(rays[i].dy), z = fabsf(rays[i].dz);
+        float m = x > y ? x : y;
+        k[i] = -ilogbf(m > z ? m : z);
         out[i].dx = ldexpf(rays[i].dx, k[i]), out[i].dy = ldexpf(rays[i].dy, k[i]);
         out[i].dz = ldexpf(rays[i].dz, k[i]);
         out[i].t_near = ldexpf(rays[i].t_near, -k[i]), out[i].t_far = ldexpf(rays[i].t_far, -k[i]);
     }
-    return 1;
 }
 
 static void trace_chunk(void *p, size_t begin, size_t end, int thread)
@@ -90,7 +84,7 @@ static void trace_chunk(void *p, size_t begin, size_t end, int thread)
         }
     if (any) {
         scaled = malloc(n * sizeof *scaled), k = malloc(n * sizeof *k);
-        if (scaled && k && rescaled(rays, n, scaled, k)) rays = scaled;
+        if (scaled && k) rescale(rays, n, scaled, k), rays = scaled;
         /* without memory the rays go as they are: only such far hits are
          * lost, as before */
     }

@@ -14,6 +14,7 @@
 #ifndef ACCEL_GEOM_H
 #define ACCEL_GEOM_H
 
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 
@@ -143,19 +144,34 @@ static inline float accel_far_limit(float t, int folded) { return folded ? t + t
  */
 static inline float box3_hit_delta(float abs_max)
 {
-    return 0x1p-40f * (abs_max <= 3.4028234e38f ? abs_max : 3.4028234e38f) + 0x1p-126f;
+    return 0x1p-40f * (abs_max <= FLT_MAX ? abs_max : FLT_MAX) + 0x1p-126f;
+}
+
+/* The largest coordinate magnitude of a box (0 for an empty one, +inf
+ * for a box with an infinite or NaN bound). */
+static inline float box3_abs_max(box3 b)
+{
+    if (!(b.min.x <= b.max.x)) return b.min.x == INFINITY ? 0.0f : INFINITY;
+    float m = 0.0f;
+    const float *c[2] = {&b.min.x, &b.max.x};
+    for (int k = 0; k < 2; k++)
+        for (int a = 0; a < 3; a++) {
+            float v = fabsf(c[k][a]);
+            m = v > m || v != v ? v : m;
+        }
+    return m;
 }
 
 static inline float box3_hit_pad_lo(float v, float delta)
 {
     float r = v - (delta + fabsf(v) * 0x1p-22f);
-    return r < -3.4028234e38f ? -3.4028234e38f : r;
+    return r < -FLT_MAX ? -FLT_MAX : r;
 }
 
 static inline float box3_hit_pad_hi(float v, float delta)
 {
     float r = v + (delta + fabsf(v) * 0x1p-22f);
-    return r > 3.4028234e38f ? 3.4028234e38f : r;
+    return r > FLT_MAX ? FLT_MAX : r;
 }
 
 static inline box3 box3_hit_pad(box3 b, float delta)
