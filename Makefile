@@ -93,7 +93,7 @@ $(BIN)/run_tests: $(TEST_OBJ) $(LIB)
 -include $(shell find $(BUILD) -name '*.d' 2>/dev/null)
 
 test: all
-	./$(BIN)/run_tests $(T)
+	./$(BIN)/run_tests $(if $(J),-j $(J)) $(T)
 
 report: all
 	GRIDBVH_CFLAGS="$(ALL_CFLAGS)" CC="$(CC)" KINDS="$(KINDS)" ACCEL="$(ACCEL)" \

@@ -1,23 +1,33 @@
 /*
  * main.c - runs the registered tests.
  *
- * Usage: run_tests [--list] [FILTER]
+ * Usage: run_tests [--list] [-j N] [FILTER]
  *   FILTER   run the tests whose name contains it (all without one);
- *   --list   print the names (those matching FILTER) and run nothing.
+ *   --list   print the names (those matching FILTER) and run nothing;
+ *   -j N     run them in N processes (default: one per online CPU, at most
+ *            8). A unit of work is one family of test files (test_report*.c
+ *            is one: its tests share build/quick-report) or one per-kind
+ *            test; each unit runs in a forked child whose output is printed
+ *            whole when it ends, so a crash fails its unit, not the run.
  * The environment variable KINDS (comma-separated kind names) limits the
  * suites that iterate over kinds, and the per-kind tests, to those kinds.
  * A FILTER matching no test and a KINDS naming an unknown kind are errors
  * (exit status 2) before anything runs; failed checks give exit status 1.
  */
+#include <fcntl.h>
+#include <signal.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "support.h"
 
 typedef struct {
     const char *name;
+    const char *file; /* source file (NULL for per-kind tests) */
     void (*fn)(void);
     void (*kind_fn)(const accel_kind *kind); /* per-kind tests: fn is NULL */
     const accel_kind *kind;
@@ -46,9 +56,9 @@ static void add_test(test_case t)
         dropped++;
 }
 
-void test_register(const char *name, void (*fn)(void))
+void test_register(const char *name, void (*fn)(void), const char *file)
 {
-    add_test((test_case){name, fn, NULL, NULL});
+    add_test((test_case){name, file, fn, NULL, NULL});
 }
 
 void test_register_per_kind(const char *prefix, void (*fn)(const accel_kind *kind))
@@ -154,7 +164,7 @@ static void expand_families(void)
                 continue;
             }
             snprintf(name, len, "%s_%s", families[f].prefix, kind->name);
-            add_test((test_case){name, NULL, families[f].fn, kind});
+            add_test((test_case){name, NULL, NULL, families[f].fn, kind});
         }
 }
 
@@ -163,16 +173,191 @@ static int by_name(const void *a, const void *b)
     return strcmp(((const test_case *)a)->name, ((const test_case *)b)->name);
 }
 
+/* Runs test i in this process; counts it in *passed or *failed. */
+static void run_one(int i, int *passed, int *failed)
+{
+    current_failures = 0;
+    test_seed(TEST_SEED);
+    double t0 = accel_now_ms();
+    printf("%s\n", tests[i].name);
+    if (tests[i].fn)
+        tests[i].fn();
+    else
+        tests[i].kind_fn(tests[i].kind);
+    double ms = accel_now_ms() - t0;
+    if (current_failures) {
+        printf("  FAIL %s (%d failed checks, %.0f ms)\n", tests[i].name, current_failures, ms);
+        ++*failed;
+    } else {
+        printf("  ok   %s (%.0f ms)\n", tests[i].name, ms);
+        ++*passed;
+    }
+}
+
+/* The unit test i belongs to: a per-kind test is its own; a file's tests
+ * belong to its family, the file name up to the first '_' after "test_"
+ * (test_report_checks.c and test_report.c are both "report"). */
+static void unit_key(int i, char *key, size_t size)
+{
+    if (!tests[i].file) {
+        snprintf(key, size, "%s", tests[i].name);
+        return;
+    }
+    const char *base = strrchr(tests[i].file, '/');
+    base = base ? base + 1 : tests[i].file;
+    if (!strncmp(base, "test_", 5)) base += 5;
+    size_t n = strcspn(base, "_.");
+    snprintf(key, size, "file %.*s", (int)n, base);
+}
+
+typedef struct {
+    int first, count; /* its tests: order[first .. first+count-1] */
+    pid_t pid;
+    int result_fd;    /* the child's counts arrive here */
+    char out[64];     /* the child's output file */
+} unit;
+
+/* Copies a finished unit's output file to stdout and removes it. */
+static void print_output(const char *path)
+{
+    FILE *f = fopen(path, "r");
+    if (f) {
+        char buf[8192];
+        size_t n;
+        while ((n = fread(buf, 1, sizeof buf, f)) > 0) fwrite(buf, 1, n, stdout);
+        fclose(f);
+    }
+    remove(path);
+    fflush(stdout);
+}
+
+/* Starts unit u in a forked child writing its output to u->out. */
+static int start_unit(unit *u, const int *order)
+{
+    int fds[2];
+    if (pipe(fds) != 0) return -1;
+    fflush(stdout);
+    pid_t pid = fork();
+    if (pid < 0) {
+        close(fds[0]);
+        close(fds[1]);
+        return -1;
+    }
+    if (pid == 0) {
+        close(fds[0]);
+        int fd = open(u->out, O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        if (fd < 0 || dup2(fd, STDOUT_FILENO) < 0) _exit(3);
+        close(fd);
+        int counts[2] = {0, 0};
+        for (int k = 0; k < u->count; k++) run_one(order[u->first + k], &counts[0], &counts[1]);
+        fflush(stdout);
+        /* exit, not _exit: a sanitizer build checks for leaks at exit. */
+        exit(write(fds[1], counts, sizeof counts) == (ssize_t)sizeof counts ? 0 : 3);
+    }
+    close(fds[1]);
+    u->pid = pid;
+    u->result_fd = fds[0];
+    return 0;
+}
+
+/* Runs the selected tests (order[0..n-1], by name) in `jobs` processes,
+ * unit by unit in the order of their first test; returns the counts. */
+static void run_parallel(const int *order, int n, int jobs, int *passed, int *failed)
+{
+    unit *units = calloc((size_t)n, sizeof *units);
+    int *sorted = malloc((size_t)n * sizeof *sorted);
+    char (*keys)[128] = malloc((size_t)n * sizeof *keys);
+    if (!units || !sorted || !keys) {
+        fprintf(stderr, "run_tests: out of memory; running the tests in one process\n");
+        for (int k = 0; k < n; k++) run_one(order[k], passed, failed);
+        free(units), free(sorted), free(keys);
+        return;
+    }
+    /* Units: tests grouped by key, each unit's tests in name order. */
+    int unit_count = 0, placed = 0;
+    for (int k = 0; k < n; k++) unit_key(order[k], keys[k], sizeof keys[k]);
+    for (int k = 0; k < n; k++) {
+        int seen = 0;
+        for (int j = 0; j < k && !seen; j++) seen = !strcmp(keys[j], keys[k]);
+        if (seen) continue;
+        unit *u = &units[unit_count++];
+        u->first = placed;
+        for (int j = k; j < n; j++)
+            if (!strcmp(keys[j], keys[k])) sorted[placed++] = order[j];
+        u->count = placed - u->first;
+        snprintf(u->out, sizeof u->out, "build/run_tests.%ld.%d.out", (long)getpid(), unit_count);
+    }
+    mkdir("build", 0777);
+    int next = 0, running = 0;
+    while (next < unit_count || running > 0) {
+        while (running < jobs && next < unit_count) {
+            if (start_unit(&units[next], sorted) != 0) {
+                if (running > 0) break; /* wait for a child to end, then try again */
+                fprintf(stderr, "run_tests: cannot fork: running unit %d here\n", next + 1);
+                for (int k = 0; k < units[next].count; k++)
+                    run_one(sorted[units[next].first + k], passed, failed);
+                units[next].pid = 0;
+            } else {
+                running++;
+            }
+            next++;
+        }
+        if (running == 0) continue;
+        int status;
+        pid_t pid = wait(&status);
+        if (pid < 0) break;
+        unit *u = NULL;
+        for (int k = 0; k < next && !u; k++)
+            if (units[k].pid == pid) u = &units[k];
+        if (!u) continue;
+        running--;
+        u->pid = 0;
+        int counts[2];
+        ssize_t got = read(u->result_fd, counts, sizeof counts);
+        close(u->result_fd);
+        print_output(u->out);
+        if (got == (ssize_t)sizeof counts && WIFEXITED(status) && WEXITSTATUS(status) == 0) {
+            *passed += counts[0];
+            *failed += counts[1];
+        } else {
+            /* Its last test, the one printed without an "ok" line, crashed. */
+            printf("  FAIL the process running %s..%s died (%s %d): the whole unit counts as "
+                   "failed\n",
+                   tests[sorted[u->first]].name, tests[sorted[u->first + u->count - 1]].name,
+                   WIFSIGNALED(status) ? "signal" : "exit status",
+                   WIFSIGNALED(status) ? WTERMSIG(status) : WEXITSTATUS(status));
+            *failed += u->count;
+        }
+    }
+    free(units), free(sorted), free(keys);
+}
+
+static int default_jobs(void)
+{
+    long n = sysconf(_SC_NPROCESSORS_ONLN);
+    return n < 1 ? 1 : n > 8 ? 8 : (int)n;
+}
+
 int main(int argc, char **argv)
 {
-    int list = 0;
+    int list = 0, jobs = default_jobs();
     const char *filter = "";
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--list")) {
             list = 1;
+        } else if (!strcmp(argv[i], "-j") || !strncmp(argv[i], "-j", 2)) {
+            const char *v = argv[i][2] ? argv[i] + 2 : i + 1 < argc ? argv[++i] : "";
+            char *end;
+            long j = strtol(v, &end, 10);
+            if (!*v || *end || j < 1 || j > 64) {
+                fprintf(stderr, "run_tests: -j wants a process count from 1 to 64, not '%s'\n", v);
+                return 2;
+            }
+            jobs = (int)j;
         } else if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            printf("usage: run_tests [--list] [FILTER]\n"
+            printf("usage: run_tests [--list] [-j N] [FILTER]\n"
                    "  runs (or with --list, names) the tests whose name contains FILTER;\n"
+                   "  -j N runs them in N processes (default: one per CPU, at most 8);\n"
                    "  KINDS=a,b in the environment limits the kind suites to those kinds.\n"
                    "exit status: 0 all passed, 1 a check failed, 2 usage error (unknown\n"
                    "option or kind, or no test matching FILTER)\n");
@@ -193,38 +378,24 @@ int main(int argc, char **argv)
         return 2;
     }
     qsort(tests, (size_t)test_count, sizeof tests[0], by_name);
+    static int order[MAX_TESTS];
     int matched = 0;
-    for (int i = 0; i < test_count; i++) matched += strstr(tests[i].name, filter) != NULL;
+    for (int i = 0; i < test_count; i++)
+        if (strstr(tests[i].name, filter)) order[matched++] = i;
     if (!matched) {
         fprintf(stderr, "run_tests: no test name contains '%s' (run_tests --list names them)\n",
                 filter);
         return 2;
     }
     if (list) {
-        for (int i = 0; i < test_count; i++)
-            if (strstr(tests[i].name, filter)) printf("%s\n", tests[i].name);
+        for (int k = 0; k < matched; k++) printf("%s\n", tests[order[k]].name);
         return 0;
     }
     int passed = 0, failed = 0;
-    for (int i = 0; i < test_count; i++) {
-        if (!strstr(tests[i].name, filter)) continue;
-        current_failures = 0;
-        test_seed(TEST_SEED);
-        double t0 = accel_now_ms();
-        printf("%s\n", tests[i].name);
-        if (tests[i].fn)
-            tests[i].fn();
-        else
-            tests[i].kind_fn(tests[i].kind);
-        double ms = accel_now_ms() - t0;
-        if (current_failures) {
-            printf("  FAIL %s (%d failed checks, %.0f ms)\n", tests[i].name, current_failures, ms);
-            failed++;
-        } else {
-            printf("  ok   %s (%.0f ms)\n", tests[i].name, ms);
-            passed++;
-        }
-    }
+    if (jobs > 1)
+        run_parallel(order, matched, jobs, &passed, &failed);
+    else
+        for (int k = 0; k < matched; k++) run_one(order[k], &passed, &failed);
     printf("%d passed, %d failed\n", passed, failed);
     return failed ? 1 : 0;
 }

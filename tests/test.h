@@ -3,7 +3,8 @@
  * list to edit), TEST_PER_KIND(prefix) one test per registered accelerator
  * kind, CHECK records a failure and continues. Output ends with "N passed,
  * N failed"; `bin/run_tests FILTER` runs the tests whose name contains
- * FILTER (make test T=FILTER), `bin/run_tests --list` lists them.
+ * FILTER (make test T=FILTER), `bin/run_tests --list` lists them, and
+ * `bin/run_tests -j N` runs them in N processes (default: one per CPU).
  */
 #ifndef TESTS_TEST_H
 #define TESTS_TEST_H
@@ -12,7 +13,10 @@
 
 #include "accel.h"
 
-void test_register(const char *name, void (*fn)(void));
+/* file: the source file of the test; the tests of one file family
+ * (test_report*.c, test_loaders*.c, ...) share temporary paths, so the
+ * runner's workers take such a family as one unit. */
+void test_register(const char *name, void (*fn)(void), const char *file);
 /* Registers fn as one test per kind of accel_kinds[] (main.c expands it
  * when it starts), named prefix_<kind>: a new kind gets its own tests. */
 void test_register_per_kind(const char *prefix, void (*fn)(const accel_kind *kind));
@@ -24,7 +28,10 @@ void test_note(const char *fmt, ...) __attribute__((format(printf, 1, 2)));
 
 #define TEST(name)                                                                       \
     static void name(void);                                                              \
-    __attribute__((constructor)) static void test_reg_##name(void) { test_register(#name, name); } \
+    __attribute__((constructor)) static void test_reg_##name(void)                       \
+    {                                                                                    \
+        test_register(#name, name, __FILE__);                                            \
+    }                                                                                    \
     static void name(void)
 
 /* TEST_PER_KIND(conformance) { ... kind ... } defines conformance_brute,

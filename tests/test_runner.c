@@ -5,6 +5,7 @@
  * with a message and exit status 2 before any test runs, and KINDS limits
  * the per-kind tests to the kinds it names.
  */
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
@@ -71,5 +72,42 @@ TEST(runner_list_kinds_and_filters)
     rc = run_self("KINDS=", "--frobnicate", &out);
     CHECKF(rc == 2 && out && strstr(out, "unknown option"), "unknown option: exit %d, '%s'", rc,
            out ? out : "");
+    free(out);
+}
+
+/* Run only by runner_processes_isolate_and_agree (below), which sets the
+ * variable: a test that crashes its process. */
+TEST(runner_crash_probe)
+{
+    if (getenv("GRIDBVH_TEST_CRASH")) raise(SIGABRT);
+}
+
+TEST(runner_processes_isolate_and_agree)
+{
+    /* One process or two: the same tests pass, with the same summary. */
+    char *one, *two;
+    int rc1 = run_self("KINDS=", "-j 1 image_", &one);
+    int rc2 = run_self("KINDS=", "-j 2 image_", &two);
+    CHECKF(rc1 == 0 && rc2 == 0 && one && two, "exit %d and %d", rc1, rc2);
+    if (one && two) {
+        const char *s1 = strrchr(one, '\n'), *s2 = strrchr(two, '\n');
+        CHECK(strstr(one, "10 passed, 0 failed\n") && strstr(two, "10 passed, 0 failed\n"));
+        CHECK(s1 && s2 && strlen(s1) == 1 && strlen(s2) == 1); /* the summary is the last line */
+        for (const char *p = one; (p = strstr(p, "  ok   ")) != NULL; p++) {
+            char name[128];
+            if (sscanf(p, "  ok   %127s", name) == 1) {
+                char line[160];
+                snprintf(line, sizeof line, "  ok   %s (", name);
+                CHECKF(strstr(two, line) != NULL, "-j 2 lacks '%s'", line);
+            }
+        }
+    }
+    free(one);
+    free(two);
+    /* A crash fails its unit and the run goes on to its summary. */
+    char *out;
+    int rc = run_self("KINDS= GRIDBVH_TEST_CRASH=1", "-j 2 runner_crash_probe", &out);
+    CHECKF(rc == 1 && out && strstr(out, "died (signal 6)") && strstr(out, "0 passed, 1 failed\n"),
+           "crash: exit %d, '%s'", rc, out ? out : "");
     free(out);
 }
