@@ -3,11 +3,13 @@
  * helpers, ray constructors, the oracle and the comparison with it.
  */
 #include <dirent.h>
+#include <stdio.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <time.h>
 
 #include "support.h"
@@ -190,6 +192,21 @@ char *test_read_file(const char *path, size_t *size)
     buf[n] = 0;
     if (size) *size = (size_t)n;
     return buf;
+}
+
+int test_run(const char *dir, const char *cmd, char **out, char **err)
+{
+    mkdir("build", 0777);
+    mkdir(dir, 0777);
+    char full[4096];
+    snprintf(full, sizeof full, "%s >%s/out.txt 2>%s/err.txt", cmd, dir, dir);
+    int st = system(full);
+    char path[1024];
+    snprintf(path, sizeof path, "%s/out.txt", dir);
+    if (out) *out = test_read_file(path, NULL);
+    snprintf(path, sizeof path, "%s/err.txt", dir);
+    if (err) *err = test_read_file(path, NULL);
+    return st != -1 && WIFEXITED(st) ? WEXITSTATUS(st) : -1;
 }
 
 /* ---- rays ------------------------------------------------------------------------ */

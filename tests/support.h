@@ -72,6 +72,11 @@ int test_backend_folders(char (*names)[256], int max);
  * NULL when it cannot be read. */
 char *test_read_file(const char *path, size_t *size);
 
+/* Runs a shell command with its stdout and stderr captured in files of
+ * `dir` (made if absent); returns its exit status (-1 if it did not exit).
+ * *out and *err (either may be NULL) are malloc'd copies, or NULL. */
+int test_run(const char *dir, const char *cmd, char **out, char **err);
+
 /* ---- rays ------------------------------------------------------------------------ */
 
 accel_ray test_ray(vec3 o, vec3 d, float t_near, float t_far);

@@ -15,6 +15,7 @@
 #include "bench/cli.h"
 #include "bench/csv.h"
 #include "bench/progress.h"
+#include "rays/rays.h"
 #include "scene/scene.h"
 #include "support.h"
 #include "test.h"
@@ -30,19 +31,8 @@ static void slurp(FILE *f, char *text, size_t size)
     fclose(f);
 }
 
-/* Runs a shell command with stdout and stderr captured; returns its exit
- * status (-1 if it did not exit). *out and *err are malloc'd (may be NULL). */
-static int run(const char *cmd, char **out, char **err)
-{
-    mkdir("build", 0777);
-    mkdir(DIR, 0777);
-    char full[4096];
-    snprintf(full, sizeof full, "%s >" DIR "/out.txt 2>" DIR "/err.txt", cmd);
-    int st = system(full);
-    if (out) *out = test_read_file(DIR "/out.txt", NULL);
-    if (err) *err = test_read_file(DIR "/err.txt", NULL);
-    return st != -1 && WIFEXITED(st) ? WEXITSTATUS(st) : -1;
-}
+/* Runs a shell command in DIR's sense (support.h: test_run). */
+static int run(const char *cmd, char **out, char **err) { return test_run(DIR, cmd, out, err); }
 
 /* ---- a small RFC 4180 reader -------------------------------------------- */
 
@@ -365,6 +355,43 @@ TEST(tools_trace_refuses_silent_success)
                  "pixels");
 }
 
+/* Rays that can hit nothing are traced as misses, with a warning naming the
+ * file, how many, and the first one's index, byte offset and fault. */
+TEST(tools_trace_warns_of_rays_that_hit_nothing)
+{
+    mkdir("build", 0777);
+    mkdir(DIR, 0777);
+    const float inf = INFINITY;
+    accel_ray rays[5] = {
+        {0, 0, 5, 0, 0, 0, -1, inf},    /* a good ray, straight at the sphereflake */
+        {NAN, 0, 5, 0, 0, 0, -1, inf},  /* NaN origin */
+        {0, 0, 5, 0, 0, 0, 0, inf},     /* zero direction */
+        {0, 0, 5, 0, 0, 0, -1, inf},    /* good */
+        {0, 0, 5, 10, 0, 0, -1, 1},     /* tnear > tfar */
+    };
+    accel_error e = {0};
+    CHECK(rays_write(DIR "/bad.rays", rays, 5, &e) == 0);
+    char *err = NULL;
+    int rc = run(TRACE "--rays " DIR "/bad.rays --accel bvh --dump-hits " DIR "/bad.hits --check",
+                 NULL, &err);
+    CHECKF(rc == 0 && err && strstr(err, "bad.rays: 3 of 5 rays can hit nothing") &&
+               strstr(err, "ray 1, byte 48, has a NaN or infinite origin"),
+           "exit %d: %s", rc, err ? err : "");
+    free(err);
+    accel_hit *hits = NULL;
+    size_t n = 0;
+    CHECK(hits_read(DIR "/bad.hits", &hits, &n, &e) == 0 && n == 5);
+    for (size_t i = 0; hits && i < n; i++)
+        CHECKF((hits[i].prim != ACCEL_MISS) == (i == 0 || i == 3), "ray %zu: prim %u", i,
+               hits[i].prim);
+    free(hits);
+    /* A file of good rays gets no warning. */
+    CHECK(rays_write(DIR "/good.rays", rays, 1, &e) == 0);
+    rc = run(TRACE "--rays " DIR "/good.rays --accel bvh", NULL, &err);
+    CHECKF(rc == 0 && err && !strstr(err, "warning"), "exit %d: %s", rc, err ? err : "");
+    free(err);
+}
+
 /* Reads "word (a, b, c)" after `key` in text. */
 static int read_vec(const char *text, const char *key, double v[3])
 {
@@ -582,20 +609,5 @@ TEST(tools_exp_threads_takes_threads_as_largest_count)
         CHECKF(most == t, "--threads %d: largest count measured %d", t, most);
         csv_doc_free(&d);
         free(text);
-    }
-}
-
-TEST(tools_render_parses_numbers_strictly)
-{
-    /* atoi took "2abc" as 2 and 99999999999 as 1215752191. */
-    static const char *const bad[] = {"--frames 2abc", "--size 8x8junk", "--threads 2xyz",
-                                      "--first 99999999999", "--size x8", "--step 0"};
-    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++) {
-        char cmd[256], *err = NULL;
-        snprintf(cmd, sizeof cmd, "bin/render --scene animated --out " DIR "/r %s", bad[i]);
-        int rc = run(cmd, NULL, &err);
-        CHECKF(rc == 2 && err && strstr(err, "bad value for"), "render %s: exit %d, '%s'", bad[i],
-               rc, err ? err : "");
-        free(err);
     }
 }

@@ -114,6 +114,12 @@ static int parse(int argc, char **argv, options *o)
             return 1;
         }
     }
+    long long last = o->first + (long long)(o->frames - 1) * o->step;
+    if (last > 100000000) {
+        fprintf(stderr, "render: the last frame, --first %d + (--frames %d - 1) x --step %d = %lld, "
+                "is past 100000000\n", o->first, o->frames, o->step, last);
+        return 1;
+    }
     if (strstr(o->scene, "frame=")) {
         fprintf(stderr, "render: --scene %s: leave frame= out, the tool sets it\n", o->scene);
         return 1;
@@ -165,6 +171,16 @@ int main(int argc, char **argv)
         return 1;
     }
     double scene_ms = accel_now_ms() - t;
+    /* The last frame is made once here, so that a range the scene refuses
+     * fails before any work instead of after the frames before it. */
+    int last = o.first + (o.frames - 1) * o.step;
+    if (o.frames > 1) {
+        if (make_frame(&o, last, &slot[1], &err)) {
+            fprintf(stderr, "render: frame %d, the last one: %s\n", last, err.msg);
+            return 1;
+        }
+        scene_free(&slot[1]);
+    }
     const accel_kind *kind;
     void *accel;
     accel_build_stats st;

@@ -298,6 +298,14 @@ static int make_rays(const options *o, run *r, accel_error *err)
         rc = rays_read(o->rays, &r->file_rays, err);
         if (!rc && r->file_rays.count == 0)
             rc = accel_fail(err, ACCEL_ERR_RANGE, "%s holds no rays", o->rays);
+        size_t first, n = rc ? 0 : r->file_rays.count;
+        const char *why;
+        size_t bad = rays_invalid_count(r->file_rays.rays, n, &first, &why);
+        /* Traced as misses, as FORMATS.md's rule gives them, but never silently. */
+        if (bad)
+            fprintf(stderr, "warning: %s: %zu of %zu rays can hit nothing and are traced as misses "
+                    "(the first: ray %zu, byte %llu, has %s)\n", o->rays, bad,
+                    r->file_rays.count, first, 16ull + 32ull * first, why);
     } else {
         int mask = 0;
         for (int s = 0; s < r->set_count; s++) mask |= r->bits[s];

@@ -7,6 +7,7 @@
  */
 #include <errno.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -337,6 +338,33 @@ int rays_read(const char *path, rays_set *out, accel_error *err)
     int rc = read_file(path, "RAYS", sizeof(accel_ray), &data, &out->count, err);
     out->rays = data;
     return rc;
+}
+
+/* The fault of a ray that can hit nothing, or NULL for a traceable one. */
+static const char *ray_fault(const accel_ray *r)
+{
+    float o[3] = {r->ox, r->oy, r->oz}, d[3] = {r->dx, r->dy, r->dz};
+    for (int k = 0; k < 3; k++)
+        if (!isfinite(o[k])) return "a NaN or infinite origin";
+    for (int k = 0; k < 3; k++)
+        if (!isfinite(d[k])) return "a NaN or infinite direction";
+    if (d[0] == 0.0f && d[1] == 0.0f && d[2] == 0.0f) return "a zero direction";
+    if (isnan(r->t_near) || isnan(r->t_far)) return "a NaN tnear or tfar";
+    if (r->t_near > r->t_far) return "tnear > tfar";
+    return NULL;
+}
+
+size_t rays_invalid_count(const accel_ray *rays, size_t count, size_t *first, const char **why)
+{
+    size_t n = 0;
+    *first = SIZE_MAX;
+    *why = NULL;
+    for (size_t i = 0; i < count; i++) {
+        const char *f = ray_fault(&rays[i]);
+        if (!f) continue;
+        if (!n++) *first = i, *why = f;
+    }
+    return n;
 }
 
 int hits_write(const char *path, const accel_hit *hits, size_t count, accel_error *err)
