@@ -1,7 +1,7 @@
 /*
  * wide_node.h - the memory layout of the wide BVHs (`bvh:width=4|8`),
  * shared by the collapse (wide_build.c) and the kernels (wide_trace.c,
- * wide_kernel.h, wide_leaf.h). Internal to bvh/.
+ * wide_trace8.c, wide_kernel.h, wide_leaf.h). Internal to bvh/.
  *
  * A wide node holds the boxes of its up to W children in SoA form, one row
  * of W floats per box plane, so that one ray meets all W boxes in one
@@ -57,6 +57,7 @@
 #include <string.h>
 
 #include "bvh_node.h"
+#include "core/variant.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -237,11 +238,14 @@ static inline void wide_put_lane(float *v, int block, int lane, const float *slo
 size_t bvh_wide_memory(const bvh_wide *w);
 void bvh_wide_free(bvh_wide *w);
 
-/* Kernels (wide_trace.c). */
+/* Kernels (wide_trace.c; the 8-wide tables in wide_trace8.c). */
 void bvh_wide_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hits, size_t count,
                         accel_counters *c, int naive, int has_spheres);
 void bvh_wide_occluded(const bvh_wide *w, const accel_ray *rays, uint8_t *occ, size_t count,
                        accel_counters *c, int naive, int has_spheres);
+/* The 8-wide kernel table of a row (0 single, 1 packets, 2 order=branchy,
+ * 3 quant=1), query and block size (wide_trace8.c). */
+const accel_kernel_table *bvh_wide_kernels8(int row, int any_hit, int block8);
 
 #ifdef __cplusplus
 }

@@ -2,7 +2,8 @@
  * wide_trace.c - the wide BVH's batch entries: one kernel table
  * (core/variant.h) per width, block size and query, each compiled from the
  * templates wide_leaf.h (the SIMD watertight leaf test) and wide_kernel.h
- * (the traversal).
+ * (the traversal). The 4-wide tables are here, the 8-wide ones in
+ * wide_trace8.c (bvh_wide_kernels8).
  */
 #include "wide_node.h"
 
@@ -24,58 +25,34 @@
 #undef WIDE_LB
 #undef WIDE_NW
 
-#define WIDE_NW 8
-#define WIDE_LB 4
-#include "wide_kernel.h"
-#include "wide_packet.h"
-#undef WIDE_LB
-#define WIDE_LB 8
-#include "wide_kernel.h"
-#include "wide_packet.h"
-#undef WIDE_LB
-#undef WIDE_NW
 
 ACCEL_KERNEL_TABLE(closest_4_4, wide_closest_4_4)
 ACCEL_KERNEL_TABLE(closest_4_8, wide_closest_4_8)
-ACCEL_KERNEL_TABLE(closest_8_4, wide_closest_8_4)
-ACCEL_KERNEL_TABLE(closest_8_8, wide_closest_8_8)
 ACCEL_KERNEL_TABLE(any_4_4, wide_any_4_4)
 ACCEL_KERNEL_TABLE(any_4_8, wide_any_4_8)
-ACCEL_KERNEL_TABLE(any_8_4, wide_any_8_4)
-ACCEL_KERNEL_TABLE(any_8_8, wide_any_8_8)
 ACCEL_KERNEL_TABLE(bclosest_4_4, wide_closest_br_4_4)
 ACCEL_KERNEL_TABLE(bclosest_4_8, wide_closest_br_4_8)
-ACCEL_KERNEL_TABLE(bclosest_8_4, wide_closest_br_8_4)
-ACCEL_KERNEL_TABLE(bclosest_8_8, wide_closest_br_8_8)
 ACCEL_KERNEL_TABLE(bany_4_4, wide_any_br_4_4)
 ACCEL_KERNEL_TABLE(bany_4_8, wide_any_br_4_8)
-ACCEL_KERNEL_TABLE(bany_8_4, wide_any_br_8_4)
-ACCEL_KERNEL_TABLE(bany_8_8, wide_any_br_8_8)
-ACCEL_KERNEL_TABLE(qclosest_8_4, wide_closest_q_8_4)
-ACCEL_KERNEL_TABLE(qclosest_8_8, wide_closest_q_8_8)
-ACCEL_KERNEL_TABLE(qany_8_4, wide_any_q_8_4)
-ACCEL_KERNEL_TABLE(qany_8_8, wide_any_q_8_8)
 ACCEL_KERNEL_TABLE(pclosest_4_4, wide_pclosest_4_4)
 ACCEL_KERNEL_TABLE(pclosest_4_8, wide_pclosest_4_8)
-ACCEL_KERNEL_TABLE(pclosest_8_4, wide_pclosest_8_4)
-ACCEL_KERNEL_TABLE(pclosest_8_8, wide_pclosest_8_8)
 ACCEL_KERNEL_TABLE(pany_4_4, wide_pany_4_4)
 ACCEL_KERNEL_TABLE(pany_4_8, wide_pany_4_8)
-ACCEL_KERNEL_TABLE(pany_8_4, wide_pany_8_4)
-ACCEL_KERNEL_TABLE(pany_8_8, wide_pany_8_8)
 
 /* [single | packets | single with order=branchy | quantized (width 8 only:
- * the width-4 slots are never selected)][any hit][width 8][block 8] */
-static const accel_kernel_table *const tables[4][2][2][2] = {
-    {{{&closest_4_4, &closest_4_8}, {&closest_8_4, &closest_8_8}},
-     {{&any_4_4, &any_4_8}, {&any_8_4, &any_8_8}}},
-    {{{&pclosest_4_4, &pclosest_4_8}, {&pclosest_8_4, &pclosest_8_8}},
-     {{&pany_4_4, &pany_4_8}, {&pany_8_4, &pany_8_8}}},
-    {{{&bclosest_4_4, &bclosest_4_8}, {&bclosest_8_4, &bclosest_8_8}},
-     {{&bany_4_4, &bany_4_8}, {&bany_8_4, &bany_8_8}}},
-    {{{&bclosest_4_4, &bclosest_4_8}, {&qclosest_8_4, &qclosest_8_8}},
-     {{&bany_4_4, &bany_4_8}, {&qany_8_4, &qany_8_8}}},
+ * its width-4 slots are never selected)][any hit][block 8] */
+static const accel_kernel_table *const tables4[4][2][2] = {
+    {{&closest_4_4, &closest_4_8}, {&any_4_4, &any_4_8}},
+    {{&pclosest_4_4, &pclosest_4_8}, {&pany_4_4, &pany_4_8}},
+    {{&bclosest_4_4, &bclosest_4_8}, {&bany_4_4, &bany_4_8}},
+    {{&bclosest_4_4, &bclosest_4_8}, {&bany_4_4, &bany_4_8}},
 };
+
+static const accel_kernel_table *table_of(const bvh_wide *w, int row, int any_hit)
+{
+    return w->width == 8 ? bvh_wide_kernels8(row, any_hit, w->block == 8)
+                         : tables4[row][any_hit][w->block == 8];
+}
 
 /* Packets keep their own order (octant); order=branchy selects the third
  * single-ray table, quant=1 the fourth (quantized nodes, branchy push). */
@@ -92,13 +69,13 @@ static unsigned kernel_flags(const bvh_wide *w, int naive, int has_spheres)
 void bvh_wide_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hits, size_t count,
                         accel_counters *c, int naive, int has_spheres)
 {
-    accel_run_kernel(tables[table_row(w)][0][w->width == 8][w->block == 8], w, rays, hits, count, c,
+    accel_run_kernel(table_of(w, table_row(w), 0), w, rays, hits, count, c,
                      kernel_flags(w, naive, has_spheres));
 }
 
 void bvh_wide_occluded(const bvh_wide *w, const accel_ray *rays, uint8_t *occ, size_t count,
                        accel_counters *c, int naive, int has_spheres)
 {
-    accel_run_kernel(tables[table_row(w)][1][w->width == 8][w->block == 8], w, rays, occ, count, c,
+    accel_run_kernel(table_of(w, table_row(w), 1), w, rays, occ, count, c,
                      kernel_flags(w, naive, has_spheres));
 }
