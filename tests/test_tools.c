@@ -346,6 +346,14 @@ TEST(tools_trace_refuses_silent_success)
     if (f) fputs("OFF\n3 1 0\n0 0 0\n1 1 1\n2 2 2\n3 0 1 2\n", f), fclose(f);
     expect_error(TRACE "--scene " DIR "/empty.off", CLI_EXIT_INPUT, "nothing to hit");
     expect_error(TRACE "--scene " DIR "/flat.off", CLI_EXIT_INPUT, "nothing to hit");
+    /* Bounds of 6e38 leave float no room for a default camera: the file is
+     * named and the way out given; and --eye takes any finite float. */
+    f = fopen(DIR "/huge.off", "w");
+    if (f) fputs("OFF\n3 1 0\n3e38 0 0\n-3e38 0 0\n0 1 0\n3 0 1 2\n", f), fclose(f);
+    expect_error(TRACE "--scene " DIR "/huge.off", CLI_EXIT_INPUT, "huge.off: the scene's camera");
+    expect_error(TRACE "--scene " DIR "/huge.off", CLI_EXIT_INPUT, "give --eye, --look and --up");
+    CHECK(run(TRACE "--scene " DIR "/huge.off --eye 0,0.5,3e38 --look 0,0.5,0 --check", NULL,
+              NULL) == 0);
     /* Up parallel to the scene's own view (sphereflake looks from (2.1, 1.3, 1.7) at 0). */
     expect_error(TRACE "--up 2.1,1.3,1.7", CLI_EXIT_USAGE, "parallel");
     /* .rays files carry no pixels: neither an image nor a heatmap. */

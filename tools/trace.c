@@ -278,8 +278,16 @@ static int set_camera(const options *o, run *r, accel_error *err)
     int rc = rays_camera_check(c, err);
     if (rc) {
         /* Options the user gave make a usage error; the scene's own camera an input one. */
-        if (o->eye.given || o->look.given || o->up.given || o->fov > 0) err->code = ACCEL_ERR_SPEC;
-        return rc;
+        if (o->eye.given || o->look.given || o->up.given || o->fov > 0) {
+            err->code = ACCEL_ERR_SPEC;
+            return rc;
+        }
+        /* The scene's own view: name the scene, and the way out. */
+        char msg[sizeof err->msg];
+        snprintf(msg, sizeof msg, "%s", err->msg);
+        return accel_fail(err, err->code, "%s: the scene's camera (its file's, or the default that "
+                          "frames its bounds) is not usable: %s; give --eye, --look and --up",
+                          o->scene, msg);
     }
     FILE *info = o->csv ? (o->quiet ? NULL : stderr) : stdout;
     if (info)

@@ -3,6 +3,7 @@
  */
 #include <ctype.h>
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -174,8 +175,10 @@ int cli_vec(const cli_option *o, void *field, char **v, accel_error *err)
             return accel_fail(err, ACCEL_ERR_SPEC, "%s %s: expected X,Y,Z", o->name, v[0]);
         memcpy(num, p, len);
         num[len] = 0;
-        if (!cli_to_double(num, -1e30, 1e30, &c[i]))
-            return accel_fail(err, ACCEL_ERR_SPEC, "%s %s: expected X,Y,Z", o->name, v[0]);
+        if (!cli_to_double(num, -FLT_MAX, FLT_MAX, &c[i]))
+            return accel_fail(err, ACCEL_ERR_SPEC,
+                              "%s %s: expected X,Y,Z, three numbers each a finite float (at most "
+                              "3.4e38 in size)", o->name, v[0]);
         p = end ? end + 1 : p + len;
     }
     dst->v = v3((float)c[0], (float)c[1], (float)c[2]);
