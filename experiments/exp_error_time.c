@@ -207,7 +207,8 @@ static void error_against_time(exp_ctx *x, study *st)
     exp_est_of(totals, nok, &med);
     double budget = med.median;
     exp_md(x, "\n#### Within a budget of %.1f ms (build + trace: the median structure's time at %d "
-              "samples per pixel)\n", budget, (int)spp_v[q]);
+              "samples per pixel)\n\nA count fits when the upper end of its total's 95%% interval "
+              "is within the budget (surely within, not only its median).\n", budget, (int)spp_v[q]);
     exp_md_table(x, "configuration|most samples per pixel within the budget|RMSE there|its total ms");
     int best_spp = 0, winners = 0, fewest = 1 << 30;
     exp_text win = {0};

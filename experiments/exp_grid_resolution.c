@@ -250,8 +250,8 @@ static void measure_scene(exp_ctx *x, study *st, int si, const char *spec, const
         if (r->region_lambdas)
             exp_md(x, "\nBy region (model, primary rays, %dx%d screen regions): choosing lambda "
                       "per region would cost %.1f%% less than the best single lambda; the regions "
-                      "choose %d different lambdas.\n", REGIONS, REGIONS, 100 * r->region_gain,
-                   r->region_lambdas);
+                      "choose %d different lambda%s.\n", REGIONS, REGIONS, 100 * r->region_gain,
+                   r->region_lambdas, r->region_lambdas == 1 ? "" : "s");
     }
     sweep_plot(x, st, &g, si, s.name);
     if (si == 1 || (x->quick && si == 0)) {

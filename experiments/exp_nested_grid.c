@@ -206,7 +206,10 @@ int main(int argc, char **argv)
     exp_md(&x, "\n**Findings:**\n\n%s", exp_text_str(&st.findings));
     int n = st.d + st.a + st.t;
     if (n)
-        exp_verdict(&x, "nested-tweaking", st.t ? EXP_CONFIRMED : st.a ? EXP_PARTLY
+        /* Every scene needing hand-set parameters confirms the claim, some
+         * of them (or `auto`, tuned for the scene) partly: the rule of the
+         * report's other verdicts. */
+        exp_verdict(&x, "nested-tweaking", st.t == n ? EXP_CONFIRMED : st.t || st.a ? EXP_PARTLY
                     : exp_no_difference(exp_section_floor(&x)),
                     exp_text_str(&st.scenes), "on %d of %d scenes the defaults tie with the best "
                     "nested grid, on %d more `auto` does, on %d only hand-set parameters reach it "

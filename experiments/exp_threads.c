@@ -27,8 +27,11 @@
 #define TARGET_FPS 20.0
 #define NEAR_LINEAR 0.85
 
+/* The fastest kernel of exp_wide (8-wide packets) is among them, so that
+ * the 100M rays/s verdict rests on the study's fastest primary rays. */
 static const char *const scale_specs[] = {"bvh", "grid", "nested_grid", "bvh:traverse=packet",
-                                          "bvh:width=8", "irregular_grid"};
+                                          "bvh:width=8", "bvh:width=8,traverse=packet",
+                                          "irregular_grid"};
 static const char *const frame_specs[] = {"bvh", "bvh:traverse=packet",
                                           "bvh:traverse=packet,frustum=1", "bvh:width=4",
                                           "bvh:width=8", "grid:traverse=packet", "instanced"};
@@ -36,7 +39,7 @@ static const char *const frame_specs[] = {"bvh", "bvh:traverse=packet",
 typedef struct {
     int linear, kinds;
     double best_mrays, best_per_thread;
-    char best_spec[320];
+    char best_spec[512];
     exp_text lin_ev, findings;
     int rt_yes, rt_scenes;
     exp_text rt_ev, rt_names, left;
@@ -93,17 +96,19 @@ static void scaling(exp_ctx *x, study *st, int max_t, const exp_machine *mach)
                 pm.median, pm.lo, pm.hi, ps.median, dm.median, dm.lo, dm.hi, ds.median);
         if (pm.median > st->best_mrays)
             st->best_mrays = pm.median, st->best_per_thread = pm.median / t,
-            snprintf(st->best_spec, sizeof st->best_spec, "%s on %d thread%s", cf->spec,
-                     cf->threads, cf->threads > 1 ? "s" : "");
+            snprintf(st->best_spec, sizeof st->best_spec, "%s on %d thread%s, %s", cf->spec,
+                     cf->threads, cf->threads > 1 ? "s" : "", s.name);
         if (cf->threads == max_t && max_t > 1) {
-            /* Near-linear: the efficiency's interval reaches NEAR_LINEAR on both sets. */
-            int ok = ps.hi / t >= NEAR_LINEAR && ds.hi / t >= NEAR_LINEAR;
+            /* Near-linear: the efficiency's whole interval at NEAR_LINEAR or
+             * above on both sets (the report's rule for every target). */
+            int ok = ps.lo / t >= NEAR_LINEAR && ds.lo / t >= NEAR_LINEAR;
             st->kinds++, st->linear += ok;
             exp_text_add(&st->findings, "- `%s`: %d threads trace primary rays %s and diffuse rays "
                          "%s as fast as 1 (efficiency %.0f%% / %.0f%%); build %s.\n", cf->spec,
                          cf->threads, p2, d2, 100 * ps.median / t, 100 * ds.median / t, b2);
-            exp_text_add(&st->lin_ev, "%s%s %.0f%%/%.0f%%", st->lin_ev.len ? ", " : "", cf->spec,
-                         100 * ps.median / t, 100 * ds.median / t);
+            exp_text_add(&st->lin_ev, "%s%s %.0f%%/%.0f%% (interval lower ends %.0f%%/%.0f%%)",
+                         st->lin_ev.len ? ", " : "", cf->spec, 100 * ps.median / t,
+                         100 * ds.median / t, 100 * ps.lo / t, 100 * ds.lo / t);
         }
         /* SMT: from one thread per core to every logical CPU. */
         if (mach->threads_per_core > 1 && cf->threads == max_t && max_t > mach->cores) {
@@ -206,7 +211,7 @@ static void verdicts(exp_ctx *x, study *st, int max_t, const exp_machine *m)
     else
         exp_verdict(x, "threads-linear", st->linear == st->kinds ? EXP_CONFIRMED
                     : st->linear ? EXP_PARTLY : EXP_REFUTED, x->quick ? "soup:tris=20000" : "see the table",
-                    "%d of %d configurations reach %.0f%% efficiency on %d threads on primary and "
+                    "%d of %d configurations reach %.0f%% efficiency (the whole 95%% interval) on %d threads on primary and "
                     "diffuse rays (%s)", st->linear, st->kinds, 100 * NEAR_LINEAR, max_t,
                     exp_text_str(&st->lin_ev));
     if (!st->ht_tested)
