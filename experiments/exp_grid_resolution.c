@@ -242,8 +242,8 @@ static void measure_scene(exp_ctx *x, study *st, int si, const char *spec, const
                      g.cfg[best].spec, g.cfg[pick].spec, pick == best ? " (the same)" : ", ",
                      pick == best ? "" : e);
         if (pick != best)
-            exp_text_add(&st->model_ev, "%s%s %+.1f%%", st->model_ev.len ? ", " : "", s.name,
-                         100 * (ex.median - 1));
+            exp_text_add(&st->model_ev, "%s%s %+.1f%% (%s)", st->model_ev.len ? ", " : "", s.name,
+                         100 * (ex.median - 1), hit ? "a hit: tied or within 5%" : "a miss");
     }
     if (st->calibrated) {
         region_test(st, &g, r);
@@ -332,7 +332,7 @@ static void verdicts(exp_ctx *x, study *st)
         exp_verdict(x, "grid-model-optimum", v, "every scene of the sweep",
                     "the calibrated model's pick is tied with or within %.0f%% of the measured "
                     "best on %d of %d scenes%s%s%s", 100 * WITHIN, st->model_hits,
-                    st->model_scenes, st->model_ev.len ? " (misses and near misses: " : "",
+                    st->model_scenes, st->model_ev.len ? " (where the pick is not the best: " : "",
                     exp_text_str(&st->model_ev), st->model_ev.len ? ")" : "");
     } else {
         exp_verdict(x, "grid-model-optimum", EXP_UNTESTABLE, "-",
