@@ -5,9 +5,8 @@
  * A kernel body (C only): included by the .c files of its folder, not part
  * of the interface a C++ program includes.
  *
- * A template: wide_trace.c (width 4) and wide_trace8.c (width 8) include
- * it once per (WIDE_NW, WIDE_LB) pair
- * after wide_leaf.h for WIDE_LB (4 and 4 when included alone). It defines
+ * A template: wide_tables.h (for wide_trace.c and wide_trace8.c) includes
+ * it once per (WIDE_NW, WIDE_LB) pair after wide_leaf.h for WIDE_LB (4 and 4 when included alone). It defines
  * the always-inline kernels wide_closest_<NW>_<LB> and wide_any_<NW>_<LB>
  * in the form core/variant.h's ACCEL_KERNEL_TABLE expects.
  *

@@ -6,8 +6,8 @@
  * A kernel body (C only): included by the .c files of its folder, not part
  * of the interface a C++ program includes.
  *
- * A template: wide_trace.c and wide_trace8.c include it once per block
- * width, with WIDE_LB defined (4 when included alone). It defines wide_leaf_ray_<LB>,
+ * A template: wide_tables.h includes it once per block width, with WIDE_LB
+ * defined (4 when included alone). It defines wide_leaf_ray_<LB>,
  * leaf_setup_<LB>() and leaf_block_<LB>().
  *
  * Every lane computes what accel_tri_watertight (core/prim.h) computes,

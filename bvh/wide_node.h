@@ -1,7 +1,7 @@
 /*
  * wide_node.h - the memory layout of the wide BVHs (`bvh:width=4|8`),
  * shared by the collapse (wide_build.c) and the kernels (wide_trace.c,
- * wide_trace8.c, wide_kernel.h, wide_leaf.h). Internal to bvh/.
+ * wide_trace8.c, wide_tables.h, wide_kernel.h, wide_leaf.h). Internal to bvh/.
  *
  * A wide node holds the boxes of its up to W children in SoA form, one row
  * of W floats per box plane, so that one ray meets all W boxes in one

@@ -4,8 +4,8 @@
  * of the interface a C++ program includes.
  * width=4|8): the coherent mode for primary and shadow rays.
  *
- * A template: wide_trace.c (width 4) and wide_trace8.c (width 8) include
- * it once per (WIDE_NW, WIDE_LB) pair after wide_kernel.h for the same pair, whose single-ray kernel it falls
+ * A template: wide_tables.h includes it once per (WIDE_NW, WIDE_LB) pair
+ * after wide_kernel.h for the same pair, whose single-ray kernel it falls
  * back to. It defines wide_pclosest_<NW>_<LB> and wide_pany_<NW>_<LB>.
  *
  * A packet is 64 consecutive rays (8x8 screen tiles in the primary sets),

@@ -2,56 +2,18 @@
  * wide_trace.c - the wide BVH's batch entries: one kernel table
  * (core/variant.h) per width, block size and query, each compiled from the
  * templates wide_leaf.h (the SIMD watertight leaf test) and wide_kernel.h
- * (the traversal). The 4-wide tables are here, the 8-wide ones in
- * wide_trace8.c (bvh_wide_kernels8).
+ * (the traversal), instantiated by wide_tables.h: the 4-wide tables are
+ * here, the 8-wide ones in wide_trace8.c (bvh_wide_kernels8).
  */
 #include "wide_node.h"
 
-#define WIDE_LB 4
-#include "wide_leaf.h"
-#undef WIDE_LB
-#define WIDE_LB 8
-#include "wide_leaf.h"
-#undef WIDE_LB
-
 #define WIDE_NW 4
-#define WIDE_LB 4
-#include "wide_kernel.h"
-#include "wide_packet.h"
-#undef WIDE_LB
-#define WIDE_LB 8
-#include "wide_kernel.h"
-#include "wide_packet.h"
-#undef WIDE_LB
-#undef WIDE_NW
-
-
-ACCEL_KERNEL_TABLE(closest_4_4, wide_closest_4_4)
-ACCEL_KERNEL_TABLE(closest_4_8, wide_closest_4_8)
-ACCEL_KERNEL_TABLE(any_4_4, wide_any_4_4)
-ACCEL_KERNEL_TABLE(any_4_8, wide_any_4_8)
-ACCEL_KERNEL_TABLE(bclosest_4_4, wide_closest_br_4_4)
-ACCEL_KERNEL_TABLE(bclosest_4_8, wide_closest_br_4_8)
-ACCEL_KERNEL_TABLE(bany_4_4, wide_any_br_4_4)
-ACCEL_KERNEL_TABLE(bany_4_8, wide_any_br_4_8)
-ACCEL_KERNEL_TABLE(pclosest_4_4, wide_pclosest_4_4)
-ACCEL_KERNEL_TABLE(pclosest_4_8, wide_pclosest_4_8)
-ACCEL_KERNEL_TABLE(pany_4_4, wide_pany_4_4)
-ACCEL_KERNEL_TABLE(pany_4_8, wide_pany_4_8)
-
-/* [single | packets | single with order=branchy | quantized (width 8 only:
- * its width-4 slots are never selected)][any hit][block 8] */
-static const accel_kernel_table *const tables4[4][2][2] = {
-    {{&closest_4_4, &closest_4_8}, {&any_4_4, &any_4_8}},
-    {{&pclosest_4_4, &pclosest_4_8}, {&pany_4_4, &pany_4_8}},
-    {{&bclosest_4_4, &bclosest_4_8}, {&bany_4_4, &bany_4_8}},
-    {{&bclosest_4_4, &bclosest_4_8}, {&bany_4_4, &bany_4_8}},
-};
+#include "wide_tables.h"
 
 static const accel_kernel_table *table_of(const bvh_wide *w, int row, int any_hit)
 {
     return w->width == 8 ? bvh_wide_kernels8(row, any_hit, w->block == 8)
-                         : tables4[row][any_hit][w->block == 8];
+                         : wide_tables[row][any_hit][w->block == 8];
 }
 
 /* Packets keep their own order (octant); order=branchy selects the third

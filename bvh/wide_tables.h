@@ -1,0 +1,67 @@
+/*
+ * wide_tables.h - one width's kernels and kernel tables (core/variant.h).
+ * A kernel body (C only), included once per translation unit with WIDE_NW
+ * defined: by wide_trace.c (4) and wide_trace8.c (8), two files so that a
+ * 2-core build compiles the two widths in parallel.
+ *
+ * It instantiates the templates wide_leaf.h (blocks of 4 and 8),
+ * wide_kernel.h and wide_packet.h (width WIDE_NW, blocks of 4 and 8) and
+ * defines wide_tables[row][any hit][block 8], the rows being single rays,
+ * packets, order=branchy and quant=1 (width 8 only: width 4 repeats the
+ * branchy row there, never selected).
+ */
+#define WIDE_LB 4
+#include "wide_leaf.h"
+#undef WIDE_LB
+#define WIDE_LB 8
+#include "wide_leaf.h"
+#undef WIDE_LB
+
+#define WIDE_LB 4
+#include "wide_kernel.h"
+#include "wide_packet.h"
+#undef WIDE_LB
+#define WIDE_LB 8
+#include "wide_kernel.h"
+#include "wide_packet.h"
+#undef WIDE_LB
+
+#define WT_CAT_(a, n, b) a##_##n##_##b
+#define WT_CAT(a, n, b) WT_CAT_(a, n, b)
+/* A layer of its own, so that the pasted names are expanded before
+ * ACCEL_KERNEL_TABLE pastes again. */
+#define WT_TABLE(name, kernel) ACCEL_KERNEL_TABLE(name, kernel)
+#define WT_BOTH(name, kernel)                                                                       \
+    WT_TABLE(WT_CAT(name, WIDE_NW, 4), WT_CAT(kernel, WIDE_NW, 4))                               \
+    WT_TABLE(WT_CAT(name, WIDE_NW, 8), WT_CAT(kernel, WIDE_NW, 8))
+#define WT_ROW(closest, any)                                                                        \
+    {{&WT_CAT(closest, WIDE_NW, 4), &WT_CAT(closest, WIDE_NW, 8)},                                 \
+     {&WT_CAT(any, WIDE_NW, 4), &WT_CAT(any, WIDE_NW, 8)}}
+
+WT_BOTH(closest, wide_closest)
+WT_BOTH(any, wide_any)
+WT_BOTH(bclosest, wide_closest_br)
+WT_BOTH(bany, wide_any_br)
+#if WIDE_NW == 8
+WT_BOTH(qclosest, wide_closest_q)
+WT_BOTH(qany, wide_any_q)
+#endif
+WT_BOTH(pclosest, wide_pclosest)
+WT_BOTH(pany, wide_pany)
+
+static const accel_kernel_table *const wide_tables[4][2][2] = {
+    WT_ROW(closest, any),
+    WT_ROW(pclosest, pany),
+    WT_ROW(bclosest, bany),
+#if WIDE_NW == 8
+    WT_ROW(qclosest, qany),
+#else
+    WT_ROW(bclosest, bany),
+#endif
+};
+
+#undef WT_ROW
+#undef WT_BOTH
+#undef WT_TABLE
+#undef WT_CAT
+#undef WT_CAT_
