@@ -49,7 +49,7 @@ static const char *const builders[] = {
 
 /* The lecture's "double": a speed-up counts when it is outside the noise
  * and its whole 95% interval lies at 2x or above, the rule of every
- * target in the report (exp_target_outcome); an interval holding 2 is a
+ * target in the report (exp_target_cmp); an interval holding 2 is a
  * tie with the claim. */
 #define DOUBLE 2.0
 
@@ -69,7 +69,7 @@ typedef struct {
 
 /* "Several times faster": a paired speed-up of spatial splits on the
  * slivers scene counts when it is outside the noise and its whole interval
- * reaches this (exp_target_outcome). */
+ * reaches this (exp_target_cmp). */
 #define SEVERAL 3.0
 
 static void table(exp_ctx *x, const exp_group *g, const accel_scene *s)
@@ -112,9 +112,9 @@ static void claim(exp_group *g, study *st, const char *scene)
         int cmp = exp_group_compare(g, sah, pure, bit, buf, sizeof buf);
         exp_est e = exp_group_speedup(g, pure, sah, bit);
         sets++;
-        const char *o = exp_target_outcome(&e, DOUBLE, 1);
-        if (cmp < 0 && !strcmp(o, "met")) reach++;
-        else if (cmp < 0) gain++, st->sets_tie2 += strcmp(o, "not met") != 0;
+        int o = exp_target_cmp(&e, DOUBLE, 1);
+        if (cmp < 0 && o > 0) reach++;
+        else if (cmp < 0) gain++, st->sets_tie2 += o == 0;
         exp_text_add(&line, "%s%s %s", line.len ? ", " : "", bench_set_name(bit),
                      exp_fmt_x(sp, sizeof sp, &e));
     }
@@ -136,9 +136,9 @@ static void claim(exp_group *g, study *st, const char *scene)
                                                                 : g->cfg[pure].build_ms.n;
     exp_est_ratio(g->cfg[sah].build_samples, g->cfg[pure].build_samples, m, &r);
     st->build_scenes++;
-    const char *o = exp_target_outcome(&r, DOUBLE, 1);
-    st->build_much += bc > 0 && !strcmp(o, "met");
-    st->build_tie2 += bc > 0 && strcmp(o, "met") && strcmp(o, "not met");
+    int o = exp_target_cmp(&r, DOUBLE, 1);
+    st->build_much += bc > 0 && o > 0;
+    st->build_tie2 += bc > 0 && o == 0;
     st->build_slower += bc > 0;
     char rb[96];
     exp_text_add(&st->build_ev, "%s%s %s", st->build_ev.len ? ", " : "", scene,
@@ -292,9 +292,9 @@ static void spatial_splits(exp_ctx *x, study *st)
             exp_est e = exp_group_speedup(&g, base, c, bit);
             pairs++;
             faster += cmp < 0;
-            const char *o = exp_target_outcome(&e, SEVERAL, 1);
-            several += cmp < 0 && !strcmp(o, "met");
-            tie += cmp < 0 && strcmp(o, "met") && strcmp(o, "not met");
+            int o = exp_target_cmp(&e, SEVERAL, 1);
+            several += cmp < 0 && o > 0;
+            tie += cmp < 0 && o == 0;
             exp_text_add(&ev, "%s%s %s %s", ev.len ? ", " : "", w ? "8-wide" : "binary",
                          bench_set_name(bit), exp_fmt_x(sp, sizeof sp, &e));
         }
@@ -310,8 +310,8 @@ static void spatial_splits(exp_ctx *x, study *st)
                     st->sb_meshes ? "slivers and the scanned meshes" : "slivers",
                     "on %s, %d of %d ray sets (binary and 8-wide) %.0fx or more faster with spatial "
                     "splits (the whole 95%% interval), a tie with %.0fx on %d (%s); on the scanned "
-                    "meshes slower outside the noise on %d of %d (%s)",
-                    s.name, several, pairs, SEVERAL, SEVERAL, tie, exp_text_str(&ev), st->sb_mesh_slower,
+                    "meshes slower outside the noise on %d of %d (%s)", s.name, several, pairs,
+                    SEVERAL, SEVERAL, tie, exp_text_str(&ev), st->sb_mesh_slower,
                     st->sb_meshes, st->sb_ev.len ? exp_text_str(&st->sb_ev) : "none measured");
     exp_text_free(&ev);
     exp_group_free(&g);

@@ -363,8 +363,8 @@ int main(int argc, char **argv)
                 "rate below %.1f per million at 95%% if none); naive kernels "
                 "up to %.0f holes per million rays and %.0f leaks per million leak rays%s",
                 (unsigned long long)st.robust_bad_cases, (unsigned long long)st.cases,
-                (unsigned long long)st.distinct_rays, bound, st.holes.value, st.leaks.value, st.cliffs.len ? "; performance cliffs: "
-                "see the findings" : "");
+                (unsigned long long)st.distinct_rays, bound, st.holes.value, st.leaks.value,
+                st.cliffs.len ? "; performance cliffs: see the findings" : "");
     exp_text_free(&findings);
     exp_text_free(&st.clean);
     exp_text_free(&st.cliffs);

@@ -211,8 +211,8 @@ static void verdicts(exp_ctx *x, study *st, int max_t, const exp_machine *m)
     else
         exp_verdict(x, "threads-linear", st->linear == st->kinds ? EXP_CONFIRMED
                     : st->linear ? EXP_PARTLY : EXP_REFUTED, x->quick ? "soup:tris=20000" : "see the table",
-                    "%d of %d configurations reach %.0f%% efficiency (the whole 95%% interval) on %d threads on primary and "
-                    "diffuse rays (%s)", st->linear, st->kinds, 100 * NEAR_LINEAR, max_t,
+                    "%d of %d configurations reach %.0f%% efficiency (the whole 95%% interval) "
+                    "on %d threads on primary and diffuse rays (%s)", st->linear, st->kinds, 100 * NEAR_LINEAR, max_t,
                     exp_text_str(&st->lin_ev));
     if (!st->ht_tested)
         exp_verdict(x, "threads-ht", EXP_UNTESTABLE, "-", "the CPU presents %d thread%s per core "

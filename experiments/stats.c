@@ -333,10 +333,16 @@ double exp_corr(const double *a, const double *b, int n)
     return saa > 0 && sbb > 0 ? sab / sqrt(saa * sbb) : 0;
 }
 
-const char *exp_target_outcome(const exp_est *r, double t, int at_least)
+int exp_target_cmp(const exp_est *r, double t, int at_least)
 {
     int met = at_least ? r->lo >= t : r->hi <= t, missed = at_least ? r->hi < t : r->lo > t;
-    return met ? "met" : missed ? "not met" : "a tie with the target (inside the interval)";
+    return met ? 1 : missed ? -1 : 0;
+}
+
+const char *exp_target_outcome(const exp_est *r, double t, int at_least)
+{
+    int o = exp_target_cmp(r, t, at_least);
+    return o > 0 ? "met" : o < 0 ? "not met" : "a tie with the target (inside the interval)";
 }
 
 const char *exp_threads_outcome(const exp_est *row, const exp_est *probe, int busy, double t)

@@ -95,6 +95,8 @@ double exp_corr(const double *a, const double *b, int n);
  * the ratio must reach t (speed-ups, lo >= t); otherwise stay at or under t
  * (time ratios, hi <= t). */
 const char *exp_target_outcome(const exp_est *r, double t, int at_least);
+/* The same as a number: 1 met, 0 a tie, -1 not met. */
+int exp_target_cmp(const exp_est *r, double t, int at_least);
 /* A 2-thread over 1-thread ratio against target t: exp_target_outcome,
  * except that a miss is "not testable here" on a busy machine (busy: no
  * free core) or when the thread probe of the same rounds (probe, NULL or

@@ -15,7 +15,6 @@
  * (exit status 2) before anything runs; failed checks give exit status 1.
  */
 #include <fcntl.h>
-#include <signal.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -296,7 +295,6 @@ static void run_parallel(const int *order, int n, int jobs, int *passed, int *fa
                 fprintf(stderr, "run_tests: cannot fork: running unit %d here\n", next + 1);
                 for (int k = 0; k < units[next].count; k++)
                     run_one(sorted[units[next].first + k], passed, failed);
-                units[next].pid = 0;
             } else {
                 running++;
             }
@@ -345,7 +343,7 @@ int main(int argc, char **argv)
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--list")) {
             list = 1;
-        } else if (!strcmp(argv[i], "-j") || !strncmp(argv[i], "-j", 2)) {
+        } else if (!strncmp(argv[i], "-j", 2)) {
             const char *v = argv[i][2] ? argv[i] + 2 : i + 1 < argc ? argv[++i] : "";
             char *end;
             long j = strtol(v, &end, 10);

@@ -3,8 +3,8 @@
  * helpers, ray constructors, the oracle and the comparison with it.
  */
 #include <dirent.h>
-#include <stdio.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 

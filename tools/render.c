@@ -31,6 +31,7 @@ typedef struct {
     const char *scene, *accel, *out;
     int frames, first, step, width, height, threads, verify, counters;
     int mode; /* 0 refit, 1 rebuild (bottom levels), 2 full build */
+    int last; /* first + (frames - 1) * step, checked by parse */
 } options;
 
 static void usage(FILE *f)
@@ -69,7 +70,7 @@ static int whole(const char *v, long lo, long hi, int *out)
 
 static int parse(int argc, char **argv, options *o)
 {
-    *o = (options){"animated", "instanced", NULL, 10, 0, 1, 800, 600, accel_cpu_count(), 0, 0, 0};
+    *o = (options){"animated", "instanced", NULL, 10, 0, 1, 800, 600, accel_cpu_count(), 0, 0, 0, 0};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
@@ -120,6 +121,7 @@ static int parse(int argc, char **argv, options *o)
                 "is past 100000000\n", o->first, o->frames, o->step, last);
         return 1;
     }
+    o->last = (int)last;
     if (strstr(o->scene, "frame=")) {
         fprintf(stderr, "render: --scene %s: leave frame= out, the tool sets it\n", o->scene);
         return 1;
@@ -173,10 +175,9 @@ int main(int argc, char **argv)
     double scene_ms = accel_now_ms() - t;
     /* The last frame is made once here, so that a range the scene refuses
      * fails before any work instead of after the frames before it. */
-    int last = o.first + (o.frames - 1) * o.step;
     if (o.frames > 1) {
-        if (make_frame(&o, last, &slot[1], &err)) {
-            fprintf(stderr, "render: frame %d, the last one: %s\n", last, err.msg);
+        if (make_frame(&o, o.last, &slot[1], &err)) {
+            fprintf(stderr, "render: frame %d, the last one: %s\n", o.last, err.msg);
             return 1;
         }
         scene_free(&slot[1]);

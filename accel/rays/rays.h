@@ -64,13 +64,13 @@ float rays_rand(uint64_t seed, uint64_t index, uint32_t dim);
 int rays_write(const char *path, const accel_ray *rays, size_t count, accel_error *err);
 int rays_read(const char *path, rays_set *out, accel_error *err);
 int hits_write(const char *path, const accel_hit *hits, size_t count, accel_error *err);
+int hits_read(const char *path, accel_hit **hits, size_t *count, accel_error *err);
 
 /* Rays that can hit nothing by FORMATS.md's rule and are traced as misses:
  * a NaN or infinite origin or direction component, a zero direction, a NaN
  * tnear or tfar, or tnear > tfar. Returns how many; *first is the index of
  * the first (SIZE_MAX if none) and *why names its fault. */
 size_t rays_invalid_count(const accel_ray *rays, size_t count, size_t *first, const char **why);
-int hits_read(const char *path, accel_hit **hits, size_t *count, accel_error *err);
 
 /* ---- comparison (FORMATS.md rule) ----------------------------------------- */
 
