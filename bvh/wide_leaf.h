@@ -106,15 +106,45 @@ WL(lanes_scalar)(const LBLOCK *blk, int mask, const accel_ray_prep *p, float *t,
     return hit;
 }
 
+/* A block's vertices relative to the ray's origin, on its permuted axes,
+ * and their magnitudes: the part of the leaf test that depends on the ray
+ * only through its origin and axes, so that rays sharing both (the primary
+ * rays of a pinhole camera, in a packet) compute it once per block. */
+typedef struct {
+    LF ax_, ay_, az_, bx_, by_, bz_, cx_, cy_, cz_;
+    LF aax_, aay_, aaz, abx_, aby_, abz, acx_, acy_, acz;
+} WL(wide_leaf_rel);
+
+WIDE_INLINE void WL(leaf_rel)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, WL(wide_leaf_rel) *q)
+{
+    const float *v0 = blk->v[0][0], *v1 = blk->v[1][0], *v2 = blk->v[2][0];
+    q->ax_ = LV(sub)(LV(load)(v0 + r->ofs_x), r->okx), q->ay_ = LV(sub)(LV(load)(v0 + r->ofs_y), r->oky);
+    q->az_ = LV(sub)(LV(load)(v0 + r->ofs_z), r->okz);
+    q->bx_ = LV(sub)(LV(load)(v1 + r->ofs_x), r->okx), q->by_ = LV(sub)(LV(load)(v1 + r->ofs_y), r->oky);
+    q->bz_ = LV(sub)(LV(load)(v1 + r->ofs_z), r->okz);
+    q->cx_ = LV(sub)(LV(load)(v2 + r->ofs_x), r->okx), q->cy_ = LV(sub)(LV(load)(v2 + r->ofs_y), r->oky);
+    q->cz_ = LV(sub)(LV(load)(v2 + r->ofs_z), r->okz);
+}
+
+/* The magnitudes of *q, for leaf_block_rel with `mags` set. */
+WIDE_INLINE void WL(leaf_rel_mags)(WL(wide_leaf_rel) *q)
+{
+    q->aax_ = LV(abs)(q->ax_), q->aay_ = LV(abs)(q->ay_), q->aaz = LV(abs)(q->az_);
+    q->abx_ = LV(abs)(q->bx_), q->aby_ = LV(abs)(q->by_), q->abz = LV(abs)(q->bz_);
+    q->acx_ = LV(abs)(q->cx_), q->acy_ = LV(abs)(q->cy_), q->acz = LV(abs)(q->cz_);
+}
+
 /*
- * Intersects one block. On a hit closer than *t (within [t_near, *t])
- * updates *t, *u, *v, *id and returns 1; with any_hit it returns 1 at the
- * first hit found. has_spheres and naive are constants in every copy.
+ * Intersects one block whose relative vertices are *q (leaf_rel of the
+ * same origin and axes as r; with `mags`, a constant, their magnitudes
+ * too, from leaf_rel_mags). On a hit closer than *t (within [t_near,
+ * *t]) updates *t, *u, *v, *id and returns 1; with any_hit it returns 1 at
+ * the first hit found. has_spheres and naive are constants in every copy.
  */
 static inline __attribute__((always_inline)) int
-WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_prep *p, float *t,
-               float *u, float *v, uint32_t *id, uint32_t tri_count, int naive, int has_spheres,
-               int any_hit)
+WL(leaf_block_rel)(const LBLOCK *blk, const WL(wide_leaf_rel) *q, const WL(wide_leaf_ray) *r,
+                   int mags, const accel_ray_prep *p, float *t, float *u, float *v, uint32_t *id,
+                   uint32_t tri_count, int naive, int has_spheres, int any_hit)
 {
     const int all = (1 << WIDE_LB) - 1;
     int spheres = 0;
@@ -122,14 +152,8 @@ WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_pr
         for (int lane = 0; lane < WIDE_LB; lane++) spheres |= (blk->id[lane] >= tri_count) << lane;
     if (naive) return WL(lanes_scalar)(blk, all, p, t, u, v, id, tri_count, 1, has_spheres, any_hit);
 
-    /* Vertices relative to the origin, on the permuted axes. */
-    const float *v0 = blk->v[0][0], *v1 = blk->v[1][0], *v2 = blk->v[2][0];
-    LF ax_ = LV(sub)(LV(load)(v0 + r->ofs_x), r->okx), ay_ = LV(sub)(LV(load)(v0 + r->ofs_y), r->oky);
-    LF az_ = LV(sub)(LV(load)(v0 + r->ofs_z), r->okz);
-    LF bx_ = LV(sub)(LV(load)(v1 + r->ofs_x), r->okx), by_ = LV(sub)(LV(load)(v1 + r->ofs_y), r->oky);
-    LF bz_ = LV(sub)(LV(load)(v1 + r->ofs_z), r->okz);
-    LF cx_ = LV(sub)(LV(load)(v2 + r->ofs_x), r->okx), cy_ = LV(sub)(LV(load)(v2 + r->ofs_y), r->oky);
-    LF cz_ = LV(sub)(LV(load)(v2 + r->ofs_z), r->okz);
+    const LF ax_ = q->ax_, ay_ = q->ay_, az_ = q->az_, bx_ = q->bx_, by_ = q->by_, bz_ = q->bz_;
+    const LF cx_ = q->cx_, cy_ = q->cy_, cz_ = q->cz_;
     /* Shear and the edge functions, fused where the target has FMA (the
      * header: each fused step rounds once where the bound counts two). */
     LF ax = LV(fnmadd)(r->sx, az_, ax_), ay = LV(fnmadd)(r->sy, az_, ay_);
@@ -140,10 +164,14 @@ WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_pr
     LF W = LV(fmsub)(bx, ay, LV(mul)(by, ax));
     /* Their error bounds (ACCEL_EDGE_FILTER, as in accel_tri_watertight;
      * 16u leaves room for the bound's own rounding, fused or not). */
-    LF aaz = LV(abs)(az_), abz = LV(abs)(bz_), acz = LV(abs)(cz_);
-    LF max_ = LV(fmadd)(r->sxa, aaz, LV(abs)(ax_)), may_ = LV(fmadd)(r->sya, aaz, LV(abs)(ay_));
-    LF mbx_ = LV(fmadd)(r->sxa, abz, LV(abs)(bx_)), mby_ = LV(fmadd)(r->sya, abz, LV(abs)(by_));
-    LF mcx_ = LV(fmadd)(r->sxa, acz, LV(abs)(cx_)), mcy_ = LV(fmadd)(r->sya, acz, LV(abs)(cy_));
+    LF aaz = mags ? q->aaz : LV(abs)(az_), abz = mags ? q->abz : LV(abs)(bz_);
+    LF acz = mags ? q->acz : LV(abs)(cz_);
+    LF max_ = LV(fmadd)(r->sxa, aaz, mags ? q->aax_ : LV(abs)(ax_));
+    LF may_ = LV(fmadd)(r->sya, aaz, mags ? q->aay_ : LV(abs)(ay_));
+    LF mbx_ = LV(fmadd)(r->sxa, abz, mags ? q->abx_ : LV(abs)(bx_));
+    LF mby_ = LV(fmadd)(r->sya, abz, mags ? q->aby_ : LV(abs)(by_));
+    LF mcx_ = LV(fmadd)(r->sxa, acz, mags ? q->acx_ : LV(abs)(cx_));
+    LF mcy_ = LV(fmadd)(r->sya, acz, mags ? q->acy_ : LV(abs)(cy_));
     /* The cheap bound first: 16u (M_cx M_by + M_cy M_bx), valid too (the
      * sheared coordinates are at most about M). Lanes it leaves uncertain
      * get the tight bound of ACCEL_EDGE_FILTER (accel_tri_watertight)
@@ -250,6 +278,18 @@ WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_pr
     if (has_spheres && spheres && WL(lanes_scalar)(blk, spheres, p, t, u, v, id, tri_count, 0, 1, any_hit))
         hit = 1;
     return hit;
+}
+
+/* One block against one ray: leaf_rel, then leaf_block_rel. */
+static inline __attribute__((always_inline)) int
+WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_prep *p, float *t,
+               float *u, float *v, uint32_t *id, uint32_t tri_count, int naive, int has_spheres,
+               int any_hit)
+{
+    if (naive) return WL(lanes_scalar)(blk, (1 << WIDE_LB) - 1, p, t, u, v, id, tri_count, 1, has_spheres, any_hit);
+    WL(wide_leaf_rel) q;
+    WL(leaf_rel)(blk, r, &q);
+    return WL(leaf_block_rel)(blk, &q, r, 0, p, t, u, v, id, tri_count, naive, has_spheres, any_hit);
 }
 
 #undef WL_CAT_

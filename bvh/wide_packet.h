@@ -70,6 +70,7 @@ typedef struct {
     accel_ray_prep p[WP_RAYS];
     uint64_t alive; /* valid rays still looking for a hit */
     int octant;
+    int shared; /* every valid ray has the same origin and permuted axes */
     float o_lo[3], o_hi[3], i_lo[3], i_hi[3], tn_min, t_max;
 } wide_packet;
 
@@ -191,6 +192,7 @@ WIDE_INLINE int PK(packet_load)(wide_packet *pk, const bvh_wide *w, const accel_
 {
     pk->alive = 0;
     pk->octant = -1;
+    pk->shared = 1;
     int ok = 1;
     for (unsigned r = 0; r < WP_RAYS; r++) {
         accel_ray_prep *p = &pk->p[r];
@@ -206,7 +208,11 @@ WIDE_INLINE int PK(packet_load)(wide_packet *pk, const bvh_wide *w, const accel_
         pk->tn[r] = p->t_near, pk->t[r] = p->t_far;
         int oct = p->neg[0] | p->neg[1] << 1 | p->neg[2] << 2;
         const float o3[3] = {p->org.x, p->org.y, p->org.z}, i3[3] = {p->inv_dir.x, p->inv_dir.y, p->inv_dir.z};
-        if (!pk->alive) {
+        if (pk->alive) {
+            const accel_ray_prep *p0 = &pk->p[__builtin_ctzll(pk->alive)];
+            pk->shared &= memcmp(&p->org, &p0->org, sizeof p->org) == 0 && p->kx == p0->kx &&
+                          p->ky == p0->ky && p->kz == p0->kz;
+        } else {
             pk->octant = oct;
             for (int a = 0; a < 3; a++) pk->o_lo[a] = pk->o_hi[a] = o3[a], pk->i_lo[a] = pk->i_hi[a] = i3[a];
             pk->tn_min = p->t_near, pk->t_max = p->t_far;
@@ -230,6 +236,78 @@ WIDE_INLINE void PK(charge)(wide_packet *pk, unsigned first, unsigned last)
         pk->steps[__builtin_ctzll(m)]++;
         m &= m - 1;
     }
+}
+
+/* Ray r of the packet against one block whose relative vertices are *q;
+ * with any hit, a ray that hits leaves the packet and *rays. */
+WIDE_INLINE void PK(ray_block)(wide_packet *pk, unsigned r, const PBLOCK *blk, const PKL(wide_leaf_rel) *q,
+                               uint32_t tri_count, accel_counters *c, int has_spheres, int any_hit,
+                               uint64_t *rays)
+{
+    if (c) {
+        pk->prims[r]++;
+        for (int l = 1; l < WIDE_LB; l++) pk->prims[r] += blk->id[l] != blk->id[l - 1];
+    }
+    PKL(wide_leaf_ray) lr;
+    PKL(leaf_setup)(&lr, &pk->p[r]);
+    if (PKL(leaf_block_rel)(blk, q, &lr, 1, &pk->p[r], &pk->t[r], &pk->u[r], &pk->v[r], &pk->id[r], tri_count, 0,
+                            has_spheres, any_hit) &&
+        any_hit) {
+        pk->id[r] = 0;
+        pk->alive &= ~((uint64_t)1 << r);
+        *rays &= ~((uint64_t)1 << r);
+    }
+}
+
+/*
+ * A leaf for the packet: the rays `first` to `last` that hit its box
+ * (prow, lane: its parent's box row, or NULL at the root) test its blocks
+ * block by block, every ray in turn, instead of ray by ray. When the rays
+ * share their origin and permuted axes (pk->shared: the primary rays of a
+ * pinhole camera), each block's vertices relative to the origin and their
+ * magnitudes (leaf_rel, the part of the test that depends on the ray only
+ * through them) are computed once for all of them. Every ray still tests
+ * the blocks in their order with its own t, so the answers are those of
+ * the ray-by-ray loop, bit for bit.
+ */
+WIDE_INLINE void PK(leaf_by_block)(wide_packet *pk, const wide_packet_entry *e, const PBLOCK *blk, uint32_t nb,
+                                 const float *prow, uint32_t tri_count, accel_counters *c, int has_spheres,
+                                 int any_hit, uint32_t *tests)
+{
+    uint64_t rays = 0;
+    for (unsigned g = e->first / 8; g <= e->last / 8; g++) {
+        unsigned m = wp_range(pk->alive, g, e->first, e->last);
+        if (!m) continue;
+        if (prow) {
+            (*tests)++;
+            m = PK(group_hits)(pk, g, m, prow, e->lane);
+        }
+        rays |= (uint64_t)m << (8 * g);
+    }
+    if (!rays) return;
+    if (pk->shared) {
+        PKL(wide_leaf_ray) lr0; /* the shared origin and axes */
+        PKL(leaf_setup)(&lr0, &pk->p[__builtin_ctzll(rays)]);
+        for (uint32_t k = 0; k < nb && rays; k++) {
+            PKL(wide_leaf_rel) q;
+            PKL(leaf_rel)(&blk[k], &lr0, &q);
+            PKL(leaf_rel_mags)(&q);
+            for (uint64_t m = rays; m; m &= m - 1)
+                PK(ray_block)(pk, (unsigned)__builtin_ctzll(m), &blk[k], &q, tri_count, c, has_spheres, any_hit,
+                              &rays);
+        }
+        return;
+    }
+    for (uint32_t k = 0; k < nb && rays; k++)
+        for (uint64_t m = rays; m; m &= m - 1) {
+            unsigned r = (unsigned)__builtin_ctzll(m);
+            PKL(wide_leaf_ray) lr;
+            PKL(leaf_setup)(&lr, &pk->p[r]);
+            PKL(wide_leaf_rel) q;
+            PKL(leaf_rel)(&blk[k], &lr, &q);
+            PKL(leaf_rel_mags)(&q);
+            PK(ray_block)(pk, r, &blk[k], &q, tri_count, c, has_spheres, any_hit, &rays);
+        }
 }
 
 /* The packet from the root to every ray's answer. */
@@ -278,6 +356,12 @@ WIDE_INLINE void PK(packet_trace)(wide_packet *pk, const bvh_wide *w, accel_coun
                 if (hit >> l & 1u)
                     stack[sp++] = (wide_packet_entry){n->child[l], first_of[l], last_of[l], e.ref, l};
             }
+            continue;
+        }
+        if (!single && !naive) {
+            PK(leaf_by_block)(pk, &e, &blocks[wide_leaf_first(e.ref)], wide_leaf_blocks(e.ref),
+                            e.parent == WIDE_EMPTY ? NULL : nodes[e.parent].box[0], w->tri_count, c,
+                            has_spheres, any_hit, &tests);
             continue;
         }
         /* A leaf, or a subtree handed to single rays: the rays `first` to
