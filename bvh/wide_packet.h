@@ -30,7 +30,9 @@
  * Each entry also carries `last`, the last ray that hit its box (found by
  * scanning the groups from the back), and every scan stops there. At a
  * leaf, the rays `first` to `last` that hit the leaf's box (groups of 8
- * again) run the single-ray leaf test (wide_leaf.h) on its blocks. An
+ * again) run the single-ray leaf test (wide_leaf.h) on its blocks, block
+ * by block (leaf_by_block: rays sharing their origin and axes share the
+ * block's relative vertices). An
  * interior entry whose span last - first is below w->hybrid (spec key
  * hybrid=, 0: never) is not walked as a packet: each ray of the span that
  * hits its box walks the subtree alone (walk_oct of wide_kernel.h, the

@@ -335,3 +335,67 @@ TEST(wide_negative_t_near)
         scene_free(&s);
     }
 }
+
+/* The packet class of a ray: its octant and dominant axis (rays of one
+ * class from one origin share the watertight test's permuted axes). */
+static int packet_class(const accel_ray *r)
+{
+    float d[3] = {r->dx, r->dy, r->dz};
+    int kz = fabsf(d[0]) >= fabsf(d[1]) && fabsf(d[0]) >= fabsf(d[2]) ? 0 : fabsf(d[1]) >= fabsf(d[2]) ? 1 : 2;
+    return (signbit(d[0]) != 0) | (signbit(d[1]) != 0) << 1 | (signbit(d[2]) != 0) << 2 | kz << 3;
+}
+
+static int by_class(const void *a, const void *b)
+{
+    int ca = packet_class(a), cb = packet_class(b);
+    return (ca > cb) - (ca < cb);
+}
+
+/* Packets whose rays share their origin and permuted axes test a leaf's
+ * blocks with the block's vertices relative to that origin computed once
+ * (wide_packet.h, leaf_by_block). Rays from one eye aimed exactly at
+ * vertices and edge midpoints, grouped by class so that most packets of
+ * 64 are such packets, put every lane's error bounds and the double
+ * fallback to work there; hybrid=0 keeps every leaf in the packet. */
+TEST(wide_packets_shared_origin_at_vertices)
+{
+    static const char *const specs[] = {"bvh:width=8,traverse=packet,hybrid=0",
+                                        "bvh:width=4,block=4,traverse=packet,hybrid=0",
+                                        "bvh:width=8,block=4,traverse=packet"};
+    static const char *const scenes[] = {"teapot_stadium:n=4,stadium=16,tiers=3", "sphereflake:level=2,spheres=0"};
+    for (size_t si = 0; si < sizeof scenes / sizeof *scenes; si++) {
+        accel_scene s;
+        accel_error err = {0};
+        if (!test_make_scene(scenes[si], &s)) continue;
+        ref_set set = {"vertex, one eye", {0}, NULL};
+        if (stiff_add_vertex_rays(&s, s.camera.eye, 6000, 5, &set.rays, &err)) {
+            test_fail(__FILE__, __LINE__, "%s: rays: %s", s.name, err.msg);
+            scene_free(&s);
+            continue;
+        }
+        qsort(set.rays.rays, set.rays.count, sizeof *set.rays.rays, by_class);
+        size_t shared = 0;
+        for (size_t b = 0; b + 64 <= set.rays.count; b += 64)
+            shared += packet_class(&set.rays.rays[b]) == packet_class(&set.rays.rays[b + 63]);
+        CHECKF(shared >= set.rays.count / 64 / 2, "%s: %zu of %zu packets of one class", s.name, shared,
+               set.rays.count / 64);
+        ref_of(&s, &set);
+        size_t hits = 0;
+        for (size_t i = 0; i < set.rays.count; i++) hits += set.ref[i].prim != ACCEL_MISS;
+        CHECKF(hits > set.rays.count / 2, "%s: %zu hits of %zu rays", s.name, hits, set.rays.count);
+        for (size_t k = 0; k < sizeof specs / sizeof *specs; k++) {
+            const accel_kind *kind;
+            void *a;
+            accel_build_stats st;
+            if (accel_build_spec(specs[k], &s, 1, &kind, &a, &st, &err)) {
+                test_fail(__FILE__, __LINE__, "%s on %s: %s", specs[k], s.name, err.msg);
+                continue;
+            }
+            check_set(kind, a, &s, &set, specs[k]);
+            kind->destroy(a);
+        }
+        rays_free(&set.rays);
+        free(set.ref);
+        scene_free(&s);
+    }
+}
