@@ -273,8 +273,8 @@ WIDE_INLINE void PK(ray_block)(wide_packet *pk, unsigned r, const PBLOCK *blk, c
  * the ray-by-ray loop, bit for bit.
  */
 WIDE_INLINE void PK(leaf_by_block)(wide_packet *pk, const wide_packet_entry *e, const PBLOCK *blk, uint32_t nb,
-                                 const float *prow, uint32_t tri_count, accel_counters *c, int has_spheres,
-                                 int any_hit, uint32_t *tests)
+                                   const float *prow, uint32_t tri_count, accel_counters *c, int has_spheres,
+                                   int any_hit, uint32_t *tests)
 {
     uint64_t rays = 0;
     for (unsigned g = e->first / 8; g <= e->last / 8; g++) {
@@ -362,8 +362,8 @@ WIDE_INLINE void PK(packet_trace)(wide_packet *pk, const bvh_wide *w, accel_coun
         }
         if (!single && !naive) {
             PK(leaf_by_block)(pk, &e, &blocks[wide_leaf_first(e.ref)], wide_leaf_blocks(e.ref),
-                            e.parent == WIDE_EMPTY ? NULL : nodes[e.parent].box[0], w->tri_count, c,
-                            has_spheres, any_hit, &tests);
+                              e.parent == WIDE_EMPTY ? NULL : nodes[e.parent].box[0], w->tri_count, c,
+                              has_spheres, any_hit, &tests);
             continue;
         }
         /* A leaf, or a subtree handed to single rays: the rays `first` to
