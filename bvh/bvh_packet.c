@@ -74,6 +74,7 @@ typedef struct {
     _Alignas(32) int32_t negy[P];
     _Alignas(32) int32_t negz[P];
     uint64_t alive; /* bit i: ray i is still traced */
+    int shared;     /* every live ray has the same origin and watertight axes */
     uint32_t n;
     uint32_t slot[P];
     float u[P], v[P];
@@ -120,11 +121,17 @@ static void packet_setup(packet *pk, const accel_ray *rays, uint32_t n, int frus
 {
     pk->n = n;
     pk->alive = 0;
+    pk->shared = 1;
     for (uint32_t i = 0; i < P; i++) {
         pk->slot[i] = ACCEL_MISS;
         pk->u[i] = pk->v[i] = 0.0f;
         accel_ray_prep *p = &pk->prep[i];
         if (i < n && accel_prep_ray(&rays[i], p)) {
+            if (pk->alive) {
+                const accel_ray_prep *p0 = &pk->prep[__builtin_ctzll(pk->alive)];
+                pk->shared &= memcmp(&p->org, &p0->org, sizeof p->org) == 0 && p->kx == p0->kx &&
+                              p->ky == p0->ky && p->kz == p0->kz;
+            }
             pk->alive |= (uint64_t)1 << i;
             pk->ox[i] = p->org.x, pk->oy[i] = p->org.y, pk->oz[i] = p->org.z;
             pk->ix[i] = p->inv_dir.x, pk->iy[i] = p->inv_dir.y, pk->iz[i] = p->inv_dir.z;
@@ -307,6 +314,46 @@ trace_packet(const bvh *b, packet *pk, accel_counters *c, uint32_t *ray_steps,
         if (c) {
             steps += n - f;
             step_diff[f]++;
+        }
+        if (node->count && pk->shared && !naive) {
+            /* Leaf, rays sharing their origin and axes: the rays from f on
+             * that hit its box, primitive by primitive, each triangle's
+             * vertices relative to the origin computed once for all of them
+             * (accel_tri_watertight_rel). Every ray tests the primitives in
+             * their order with its own t: the answers of the loop below. */
+            uint64_t rays = 0;
+            for (uint32_t g = f / GROUP; g < groups; g++) {
+                uint32_t range = group_range(pk, g, f);
+                if (!range) continue;
+                rays |= (uint64_t)(group_hits(pk, node, g) & range) << (GROUP * g);
+                if (c) boxes += (uint64_t)__builtin_popcount(range);
+            }
+            const accel_ray_prep *p0 = rays ? &pk->prep[__builtin_ctzll(rays)] : NULL;
+            for (uint32_t k = node->left_first, end = k + node->count; k < end && rays; k++) {
+                const float *data = b->prim_data + (size_t)BVH_SLOT_FLOATS * k;
+                const int sphere = has_spheres && b->prim_ids[k] >= b->tri_count;
+                accel_tri_rel q;
+                if (!sphere) accel_tri_rel_of(p0, data, &q);
+                for (uint64_t m = rays; m; m &= m - 1) {
+                    uint32_t i = (uint32_t)__builtin_ctzll(m);
+                    if (c) {
+                        prims++;
+                        if (ray_prims) ray_prims[i]++;
+                    }
+                    if (!(sphere ? accel_sphere_hit(&pk->prep[i], data, &pk->t[i], &pk->u[i], &pk->v[i])
+                                 : accel_tri_watertight_rel(&pk->prep[i], data, &q, &pk->t[i], &pk->u[i],
+                                                            &pk->v[i])))
+                        continue;
+                    pk->slot[i] = k;
+                    if (any_hit) {
+                        kill_ray(pk, i);
+                        rays &= ~((uint64_t)1 << i);
+                        if (!pk->alive) goto out;
+                    }
+                }
+            }
+            if (frustum && pk->ia) pk->t_max = packet_t_max(pk);
+            goto pop;
         }
         if (node->count) {
             /* Leaf: the rays from f on that hit its box, against each of

@@ -353,7 +353,8 @@ static int by_class(const void *a, const void *b)
 
 /* Packets whose rays share their origin and permuted axes test a leaf's
  * blocks with the block's vertices relative to that origin computed once
- * (wide_packet.h, leaf_by_block). Rays from one eye aimed exactly at
+ * (wide_packet.h, leaf_by_block; the binary packets likewise per
+ * triangle, bvh_packet.c). Rays from one eye aimed exactly at
  * vertices and edge midpoints, grouped by class so that most packets of
  * 64 are such packets, put every lane's error bounds and the double
  * fallback to work there; hybrid=0 keeps every leaf in the packet. */
@@ -361,7 +362,8 @@ TEST(wide_packets_shared_origin_at_vertices)
 {
     static const char *const specs[] = {"bvh:width=8,traverse=packet,hybrid=0",
                                         "bvh:width=4,block=4,traverse=packet,hybrid=0",
-                                        "bvh:width=8,block=4,traverse=packet"};
+                                        "bvh:width=8,block=4,traverse=packet", "bvh:traverse=packet",
+                                        "bvh:traverse=packet,frustum=1"};
     static const char *const scenes[] = {"teapot_stadium:n=4,stadium=16,tiers=3", "sphereflake:level=2,spheres=0"};
     for (size_t si = 0; si < sizeof scenes / sizeof *scenes; si++) {
         accel_scene s;

@@ -309,21 +309,51 @@ static int accel_tri_fallback(const accel_ray_prep *p, const float *tri, float *
     return 1;
 }
 
-/* Watertight triangle test. On a hit within [t_near, *t] stores t, u, v and
- * returns 1. The edge functions are computed in float; when one of them is
- * too close to zero for its sign to be certain (a ray through an edge, a
- * vertex or a silhouette), the whole test is redone in double exactly as the
- * reference does it, so float and reference never disagree on coverage. */
-static inline int accel_tri_watertight(const accel_ray_prep *p, const float *tri, float *t,
-                                       float *u, float *v)
+/* A triangle's vertices relative to a ray's origin, on its permuted axes:
+ * the part of the watertight test that depends on the ray only through its
+ * origin and kx, ky, kz, so that rays sharing them (a packet of primary
+ * rays from a pinhole camera) compute it once per triangle. */
+typedef struct {
+    float ax_, ay_, az_, bx_, by_, bz_, cx_, cy_, cz_;
+} accel_tri_rel;
+
+static inline void accel_tri_rel_of(const accel_ray_prep *p, const float *tri, accel_tri_rel *q)
 {
     vec3 a = v3_sub(v3_load(tri), p->org);
     vec3 b = v3_sub(v3_load(tri + 3), p->org);
     vec3 c = v3_sub(v3_load(tri + 6), p->org);
-    float az_ = v3_idx(a, p->kz), bz_ = v3_idx(b, p->kz), cz_ = v3_idx(c, p->kz);
-    float ax_ = v3_idx(a, p->kx), ay_ = v3_idx(a, p->ky);
-    float bx_ = v3_idx(b, p->kx), by_ = v3_idx(b, p->ky);
-    float cx_ = v3_idx(c, p->kx), cy_ = v3_idx(c, p->ky);
+    q->az_ = v3_idx(a, p->kz), q->bz_ = v3_idx(b, p->kz), q->cz_ = v3_idx(c, p->kz);
+    q->ax_ = v3_idx(a, p->kx), q->ay_ = v3_idx(a, p->ky);
+    q->bx_ = v3_idx(b, p->kx), q->by_ = v3_idx(b, p->ky);
+    q->cx_ = v3_idx(c, p->kx), q->cy_ = v3_idx(c, p->ky);
+}
+
+/* Watertight triangle test; accel_tri_watertight_rel takes the triangle's
+ * relative vertices *q, accel_tri_rel_of(p, tri) or of a ray with p's
+ * origin and axes, and accel_tri_watertight computes them. On a hit
+ * within [t_near, *t] stores t, u, v and returns 1. The edge functions are
+ * computed in float; when one of them is too close to zero for its sign to
+ * be certain (a ray through an edge, a vertex or a silhouette), the whole
+ * test is redone in double exactly as the reference does it, so float and
+ * reference never disagree on coverage. */
+static inline __attribute__((always_inline)) int
+accel_tri_watertight_impl(const accel_ray_prep *p, const float *tri, const accel_tri_rel *given, float *t,
+                          float *u, float *v)
+{
+    float az_, bz_, cz_, ax_, ay_, bx_, by_, cx_, cy_;
+    if (given) {
+        az_ = given->az_, bz_ = given->bz_, cz_ = given->cz_;
+        ax_ = given->ax_, ay_ = given->ay_, bx_ = given->bx_, by_ = given->by_;
+        cx_ = given->cx_, cy_ = given->cy_;
+    } else {
+        vec3 a = v3_sub(v3_load(tri), p->org);
+        vec3 b = v3_sub(v3_load(tri + 3), p->org);
+        vec3 c = v3_sub(v3_load(tri + 6), p->org);
+        az_ = v3_idx(a, p->kz), bz_ = v3_idx(b, p->kz), cz_ = v3_idx(c, p->kz);
+        ax_ = v3_idx(a, p->kx), ay_ = v3_idx(a, p->ky);
+        bx_ = v3_idx(b, p->kx), by_ = v3_idx(b, p->ky);
+        cx_ = v3_idx(c, p->kx), cy_ = v3_idx(c, p->ky);
+    }
     float ax = ax_ - p->sx * az_, ay = ay_ - p->sy * az_;
     float bx = bx_ - p->sx * bz_, by = by_ - p->sy * bz_;
     float cx = cx_ - p->sx * cz_, cy = cy_ - p->sy * cz_;
@@ -395,6 +425,20 @@ static inline int accel_tri_watertight(const accel_ray_prep *p, const float *tri
     *u = V * sgn * rcp;
     *v = W * sgn * rcp;
     return 1;
+}
+
+/* The watertight test of one ray and triangle (the body above, with the
+ * relative vertices computed in it: the same code as before the split). */
+static inline int accel_tri_watertight(const accel_ray_prep *p, const float *tri, float *t,
+                                       float *u, float *v)
+{
+    return accel_tri_watertight_impl(p, tri, NULL, t, u, v);
+}
+
+static inline int accel_tri_watertight_rel(const accel_ray_prep *p, const float *tri,
+                                           const accel_tri_rel *q, float *t, float *u, float *v)
+{
+    return accel_tri_watertight_impl(p, tri, q, t, u, v);
 }
 
 /* Moller-Trumbore, single precision, no epsilon tricks beyond a zero
