@@ -47,6 +47,14 @@
 #ifndef IGRID_SPLIT_GUARD
 #define IGRID_SPLIT_GUARD 3.0
 #endif
+/* split=adaptive, above the paper's depth too, for nodes of at least this
+ * many primitives: its depth assumes primitives small against the cell, and
+ * 1,000 near-coincident triangles (vertices moved by up to 1e-6) counted
+ * whole in every top cell built in 158 s and 898 MB (now 41 ms, 155 KB).
+ * The report's scenes get the same cells and bytes with it and without. */
+#ifndef IGRID_MUST_GUARD_MIN
+#define IGRID_MUST_GUARD_MIN 64
+#endif
 /* Top cells per work item of the subdivision. */
 #define IGRID_CHUNK 64
 
@@ -67,8 +75,8 @@ static const accel_param_def igrid_params[] = {
      "split=adaptive: below the paper's depth, only nodes holding at least this many primitives "
      "are split"},
     {"split_ratio", ACCEL_PARAM_FLOAT, STR(IGRID_SPLIT_GUARD), 1.0, 8.0, NULL,
-     "split=adaptive: below the paper's depth, a split is undone when its octants hold more than "
-     "this many references per primitive of the node"},
+     "split=adaptive: a split is undone when its octants hold more than this many references per "
+     "primitive of the node (below the paper's depth; above it too for nodes of 64 or more)"},
     {"merge", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
      "step 2: merge neighbouring cells while the surface-area cost does not grow"},
     {"alpha", ACCEL_PARAM_FLOAT, STR(IGRID_DEFAULT_ALPHA), 0.0, 1.0, NULL,
@@ -231,7 +239,8 @@ static uint32_t split_node(split_job *j, chunk_out *o, const int v0[3], int size
         o->failed = rc == ACCEL_ERR_NOMEM ? ACCEL_ERR_NOMEM : ACCEL_ERR_RANGE;
         return 0;
     }
-    if (optional && (double)kids.ref_count > j->split_ratio * n) {
+    if ((optional || (j->adaptive && n >= IGRID_MUST_GUARD_MIN)) &&
+        (double)kids.ref_count > j->split_ratio * n) {
         /* The octants share most primitives: splitting separates nothing. */
         grid_cells_free(&kids);
         return emit_leaf(j, o, v0, size, ids, n);
