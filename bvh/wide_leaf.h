@@ -286,7 +286,8 @@ WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_pr
                float *u, float *v, uint32_t *id, uint32_t tri_count, int naive, int has_spheres,
                int any_hit)
 {
-    if (naive) return WL(lanes_scalar)(blk, (1 << WIDE_LB) - 1, p, t, u, v, id, tri_count, 1, has_spheres, any_hit);
+    if (naive)
+        return WL(lanes_scalar)(blk, (1 << WIDE_LB) - 1, p, t, u, v, id, tri_count, 1, has_spheres, any_hit);
     WL(wide_leaf_rel) q;
     WL(leaf_rel)(blk, r, &q);
     return WL(leaf_block_rel)(blk, &q, r, 0, p, t, u, v, id, tri_count, naive, has_spheres, any_hit);

@@ -252,8 +252,8 @@ WIDE_INLINE void PK(ray_block)(wide_packet *pk, unsigned r, const PBLOCK *blk, c
     }
     PKL(wide_leaf_ray) lr;
     PKL(leaf_setup)(&lr, &pk->p[r]);
-    if (PKL(leaf_block_rel)(blk, q, &lr, 1, &pk->p[r], &pk->t[r], &pk->u[r], &pk->v[r], &pk->id[r], tri_count, 0,
-                            has_spheres, any_hit) &&
+    if (PKL(leaf_block_rel)(blk, q, &lr, 1, &pk->p[r], &pk->t[r], &pk->u[r], &pk->v[r], &pk->id[r],
+                            tri_count, 0, has_spheres, any_hit) &&
         any_hit) {
         pk->id[r] = 0;
         pk->alive &= ~((uint64_t)1 << r);
@@ -272,9 +272,9 @@ WIDE_INLINE void PK(ray_block)(wide_packet *pk, unsigned r, const PBLOCK *blk, c
  * the blocks in their order with its own t, so the answers are those of
  * the ray-by-ray loop, bit for bit.
  */
-WIDE_INLINE void PK(leaf_by_block)(wide_packet *pk, const wide_packet_entry *e, const PBLOCK *blk, uint32_t nb,
-                                   const float *prow, uint32_t tri_count, accel_counters *c, int has_spheres,
-                                   int any_hit, uint32_t *tests)
+WIDE_INLINE void PK(leaf_by_block)(wide_packet *pk, const wide_packet_entry *e, const PBLOCK *blk,
+                                   uint32_t nb, const float *prow, uint32_t tri_count, accel_counters *c,
+                                   int has_spheres, int any_hit, uint32_t *tests)
 {
     uint64_t rays = 0;
     for (unsigned g = e->first / 8; g <= e->last / 8; g++) {
@@ -295,8 +295,8 @@ WIDE_INLINE void PK(leaf_by_block)(wide_packet *pk, const wide_packet_entry *e, 
             PKL(leaf_rel)(&blk[k], &lr0, &q);
             PKL(leaf_rel_mags)(&q);
             for (uint64_t m = rays; m; m &= m - 1)
-                PK(ray_block)(pk, (unsigned)__builtin_ctzll(m), &blk[k], &q, tri_count, c, has_spheres, any_hit,
-                              &rays);
+                PK(ray_block)(pk, (unsigned)__builtin_ctzll(m), &blk[k], &q, tri_count, c, has_spheres,
+                              any_hit, &rays);
         }
         return;
     }

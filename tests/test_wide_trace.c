@@ -341,7 +341,8 @@ TEST(wide_negative_t_near)
 static int packet_class(const accel_ray *r)
 {
     float d[3] = {r->dx, r->dy, r->dz};
-    int kz = fabsf(d[0]) >= fabsf(d[1]) && fabsf(d[0]) >= fabsf(d[2]) ? 0 : fabsf(d[1]) >= fabsf(d[2]) ? 1 : 2;
+    float ax = fabsf(d[0]), ay = fabsf(d[1]), az = fabsf(d[2]);
+    int kz = ax >= ay && ax >= az ? 0 : ay >= az ? 1 : 2;
     return (signbit(d[0]) != 0) | (signbit(d[1]) != 0) << 1 | (signbit(d[2]) != 0) << 2 | kz << 3;
 }
 
@@ -364,7 +365,8 @@ TEST(wide_packets_shared_origin_at_vertices)
                                         "bvh:width=4,block=4,traverse=packet,hybrid=0",
                                         "bvh:width=8,block=4,traverse=packet", "bvh:traverse=packet",
                                         "bvh:traverse=packet,frustum=1"};
-    static const char *const scenes[] = {"teapot_stadium:n=4,stadium=16,tiers=3", "sphereflake:level=2,spheres=0"};
+    static const char *const scenes[] = {"teapot_stadium:n=4,stadium=16,tiers=3",
+                                         "sphereflake:level=2,spheres=0"};
     for (size_t si = 0; si < sizeof scenes / sizeof *scenes; si++) {
         accel_scene s;
         accel_error err = {0};
