@@ -127,11 +127,7 @@ static void packet_setup(packet *pk, const accel_ray *rays, uint32_t n, int frus
         pk->u[i] = pk->v[i] = 0.0f;
         accel_ray_prep *p = &pk->prep[i];
         if (i < n && accel_prep_ray(&rays[i], p)) {
-            if (pk->alive) {
-                const accel_ray_prep *p0 = &pk->prep[__builtin_ctzll(pk->alive)];
-                pk->shared &= memcmp(&p->org, &p0->org, sizeof p->org) == 0 && p->kx == p0->kx &&
-                              p->ky == p0->ky && p->kz == p0->kz;
-            }
+            if (pk->alive) pk->shared &= accel_prep_same_frame(p, &pk->prep[__builtin_ctzll(pk->alive)]);
             pk->alive |= (uint64_t)1 << i;
             pk->ox[i] = p->org.x, pk->oy[i] = p->org.y, pk->oz[i] = p->org.z;
             pk->ix[i] = p->inv_dir.x, pk->iy[i] = p->inv_dir.y, pk->iz[i] = p->inv_dir.z;
@@ -315,12 +311,13 @@ trace_packet(const bvh *b, packet *pk, accel_counters *c, uint32_t *ray_steps,
             steps += n - f;
             step_diff[f]++;
         }
-        if (node->count && pk->shared && !naive) {
-            /* Leaf, rays sharing their origin and axes: the rays from f on
-             * that hit its box, primitive by primitive, each triangle's
-             * vertices relative to the origin computed once for all of them
-             * (accel_tri_watertight_rel). Every ray tests the primitives in
-             * their order with its own t: the answers of the loop below. */
+        if (node->count) {
+            /* Leaf: the rays from f on that hit its box, primitive by
+             * primitive, each ray in turn with its own t (each ray tests the
+             * primitives in their order, as it would alone). When the rays
+             * share their origin and axes (pk->shared), each triangle's
+             * vertices relative to the origin are computed once for all of
+             * them (accel_tri_watertight_rel). */
             uint64_t rays = 0;
             for (uint32_t g = f / GROUP; g < groups; g++) {
                 uint32_t range = group_range(pk, g, f);
@@ -328,58 +325,26 @@ trace_packet(const bvh *b, packet *pk, accel_counters *c, uint32_t *ray_steps,
                 rays |= (uint64_t)(group_hits(pk, node, g) & range) << (GROUP * g);
                 if (c) boxes += (uint64_t)__builtin_popcount(range);
             }
-            const accel_ray_prep *p0 = rays ? &pk->prep[__builtin_ctzll(rays)] : NULL;
             for (uint32_t k = node->left_first, end = k + node->count; k < end && rays; k++) {
                 const float *data = b->prim_data + (size_t)BVH_SLOT_FLOATS * k;
-                const int sphere = has_spheres && b->prim_ids[k] >= b->tri_count;
+                const int rel = pk->shared && !naive && !(has_spheres && b->prim_ids[k] >= b->tri_count);
                 accel_tri_rel q;
-                if (!sphere) accel_tri_rel_of(p0, data, &q);
+                if (rel) accel_tri_rel_of(&pk->prep[__builtin_ctzll(rays)], data, &q);
                 for (uint64_t m = rays; m; m &= m - 1) {
                     uint32_t i = (uint32_t)__builtin_ctzll(m);
                     if (c) {
                         prims++;
                         if (ray_prims) ray_prims[i]++;
                     }
-                    if (!(sphere ? accel_sphere_hit(&pk->prep[i], data, &pk->t[i], &pk->u[i], &pk->v[i])
-                                 : accel_tri_watertight_rel(&pk->prep[i], data, &q, &pk->t[i], &pk->u[i],
-                                                            &pk->v[i])))
+                    if (!(rel ? accel_tri_watertight_rel(&pk->prep[i], data, &q, &pk->t[i], &pk->u[i], &pk->v[i])
+                              : bvh_slot_hit(b, k, &pk->prep[i], &pk->t[i], &pk->u[i], &pk->v[i], naive,
+                                             has_spheres)))
                         continue;
                     pk->slot[i] = k;
                     if (any_hit) {
                         kill_ray(pk, i);
                         rays &= ~((uint64_t)1 << i);
                         if (!pk->alive) goto out;
-                    }
-                }
-            }
-            if (frustum && pk->ia) pk->t_max = packet_t_max(pk);
-            goto pop;
-        }
-        if (node->count) {
-            /* Leaf: the rays from f on that hit its box, against each of
-             * its primitives. */
-            uint32_t end = node->left_first + node->count;
-            for (uint32_t g = f / GROUP; g < groups; g++) {
-                uint32_t range = group_range(pk, g, f);
-                if (!range) continue;
-                uint32_t m = group_hits(pk, node, g) & range;
-                if (c) boxes += (uint64_t)__builtin_popcount(range);
-                for (; m; m &= m - 1) {
-                    uint32_t i = GROUP * g + (uint32_t)__builtin_ctz(m);
-                    for (uint32_t k = node->left_first; k < end; k++) {
-                        if (c) {
-                            prims++;
-                            if (ray_prims) ray_prims[i]++;
-                        }
-                        if (!bvh_slot_hit(b, k, &pk->prep[i], &pk->t[i], &pk->u[i], &pk->v[i],
-                                          naive, has_spheres))
-                            continue;
-                        pk->slot[i] = k;
-                        if (any_hit) {
-                            kill_ray(pk, i);
-                            if (!pk->alive) goto out;
-                            break;
-                        }
                     }
                 }
             }

@@ -139,18 +139,18 @@ WIDE_INLINE void WL(leaf_rel_mags)(WL(wide_leaf_rel) *q)
  * same origin and axes as r; with `mags`, a constant, their magnitudes
  * too, from leaf_rel_mags). On a hit closer than *t (within [t_near,
  * *t]) updates *t, *u, *v, *id and returns 1; with any_hit it returns 1 at
- * the first hit found. has_spheres and naive are constants in every copy.
+ * the first hit found. The watertight test (leaf_block takes tri=naive
+ * apart); has_spheres is a constant in every copy.
  */
 static inline __attribute__((always_inline)) int
 WL(leaf_block_rel)(const LBLOCK *blk, const WL(wide_leaf_rel) *q, const WL(wide_leaf_ray) *r,
                    int mags, const accel_ray_prep *p, float *t, float *u, float *v, uint32_t *id,
-                   uint32_t tri_count, int naive, int has_spheres, int any_hit)
+                   uint32_t tri_count, int has_spheres, int any_hit)
 {
     const int all = (1 << WIDE_LB) - 1;
     int spheres = 0;
     if (has_spheres)
         for (int lane = 0; lane < WIDE_LB; lane++) spheres |= (blk->id[lane] >= tri_count) << lane;
-    if (naive) return WL(lanes_scalar)(blk, all, p, t, u, v, id, tri_count, 1, has_spheres, any_hit);
 
     const LF ax_ = q->ax_, ay_ = q->ay_, az_ = q->az_, bx_ = q->bx_, by_ = q->by_, bz_ = q->bz_;
     const LF cx_ = q->cx_, cy_ = q->cy_, cz_ = q->cz_;
@@ -290,7 +290,7 @@ WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_pr
         return WL(lanes_scalar)(blk, (1 << WIDE_LB) - 1, p, t, u, v, id, tri_count, 1, has_spheres, any_hit);
     WL(wide_leaf_rel) q;
     WL(leaf_rel)(blk, r, &q);
-    return WL(leaf_block_rel)(blk, &q, r, 0, p, t, u, v, id, tri_count, naive, has_spheres, any_hit);
+    return WL(leaf_block_rel)(blk, &q, r, 0, p, t, u, v, id, tri_count, has_spheres, any_hit);
 }
 
 #undef WL_CAT_

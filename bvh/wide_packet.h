@@ -211,9 +211,7 @@ WIDE_INLINE int PK(packet_load)(wide_packet *pk, const bvh_wide *w, const accel_
         int oct = p->neg[0] | p->neg[1] << 1 | p->neg[2] << 2;
         const float o3[3] = {p->org.x, p->org.y, p->org.z}, i3[3] = {p->inv_dir.x, p->inv_dir.y, p->inv_dir.z};
         if (pk->alive) {
-            const accel_ray_prep *p0 = &pk->p[__builtin_ctzll(pk->alive)];
-            pk->shared &= memcmp(&p->org, &p0->org, sizeof p->org) == 0 && p->kx == p0->kx &&
-                          p->ky == p0->ky && p->kz == p0->kz;
+            pk->shared &= accel_prep_same_frame(p, &pk->p[__builtin_ctzll(pk->alive)]);
         } else {
             pk->octant = oct;
             for (int a = 0; a < 3; a++) pk->o_lo[a] = pk->o_hi[a] = o3[a], pk->i_lo[a] = pk->i_hi[a] = i3[a];
@@ -240,10 +238,11 @@ WIDE_INLINE void PK(charge)(wide_packet *pk, unsigned first, unsigned last)
     }
 }
 
-/* Ray r of the packet against one block whose relative vertices are *q;
- * with any hit, a ray that hits leaves the packet and *rays. */
+/* Ray r of the packet against one block: with q, whose relative vertices
+ * and magnitudes are *q (the shared origin's), else by leaf_block. With
+ * any hit, a ray that hits leaves the packet and *rays. */
 WIDE_INLINE void PK(ray_block)(wide_packet *pk, unsigned r, const PBLOCK *blk, const PKL(wide_leaf_rel) *q,
-                               uint32_t tri_count, accel_counters *c, int has_spheres, int any_hit,
+                               uint32_t tri_count, accel_counters *c, int naive, int has_spheres, int any_hit,
                                uint64_t *rays)
 {
     if (c) {
@@ -252,9 +251,11 @@ WIDE_INLINE void PK(ray_block)(wide_packet *pk, unsigned r, const PBLOCK *blk, c
     }
     PKL(wide_leaf_ray) lr;
     PKL(leaf_setup)(&lr, &pk->p[r]);
-    if (PKL(leaf_block_rel)(blk, q, &lr, 1, &pk->p[r], &pk->t[r], &pk->u[r], &pk->v[r], &pk->id[r],
-                            tri_count, 0, has_spheres, any_hit) &&
-        any_hit) {
+    int hit = q ? PKL(leaf_block_rel)(blk, q, &lr, 1, &pk->p[r], &pk->t[r], &pk->u[r], &pk->v[r], &pk->id[r],
+                                      tri_count, has_spheres, any_hit)
+                : PKL(leaf_block)(blk, &lr, &pk->p[r], &pk->t[r], &pk->u[r], &pk->v[r], &pk->id[r], tri_count,
+                                  naive, has_spheres, any_hit);
+    if (hit && any_hit) {
         pk->id[r] = 0;
         pk->alive &= ~((uint64_t)1 << r);
         *rays &= ~((uint64_t)1 << r);
@@ -274,7 +275,7 @@ WIDE_INLINE void PK(ray_block)(wide_packet *pk, unsigned r, const PBLOCK *blk, c
  */
 WIDE_INLINE void PK(leaf_by_block)(wide_packet *pk, const wide_packet_entry *e, const PBLOCK *blk,
                                    uint32_t nb, const float *prow, uint32_t tri_count, accel_counters *c,
-                                   int has_spheres, int any_hit, uint32_t *tests)
+                                   int naive, int has_spheres, int any_hit, uint32_t *tests)
 {
     uint64_t rays = 0;
     for (unsigned g = e->first / 8; g <= e->last / 8; g++) {
@@ -287,29 +288,23 @@ WIDE_INLINE void PK(leaf_by_block)(wide_packet *pk, const wide_packet_entry *e, 
         rays |= (uint64_t)m << (8 * g);
     }
     if (!rays) return;
-    if (pk->shared) {
-        PKL(wide_leaf_ray) lr0; /* the shared origin and axes */
+    if (pk->shared && !naive) {
+        PKL(wide_leaf_ray) lr0; /* the origin and axes of every ray */
         PKL(leaf_setup)(&lr0, &pk->p[__builtin_ctzll(rays)]);
         for (uint32_t k = 0; k < nb && rays; k++) {
             PKL(wide_leaf_rel) q;
             PKL(leaf_rel)(&blk[k], &lr0, &q);
             PKL(leaf_rel_mags)(&q);
             for (uint64_t m = rays; m; m &= m - 1)
-                PK(ray_block)(pk, (unsigned)__builtin_ctzll(m), &blk[k], &q, tri_count, c, has_spheres,
+                PK(ray_block)(pk, (unsigned)__builtin_ctzll(m), &blk[k], &q, tri_count, c, 0, has_spheres,
                               any_hit, &rays);
         }
         return;
     }
     for (uint32_t k = 0; k < nb && rays; k++)
-        for (uint64_t m = rays; m; m &= m - 1) {
-            unsigned r = (unsigned)__builtin_ctzll(m);
-            PKL(wide_leaf_ray) lr;
-            PKL(leaf_setup)(&lr, &pk->p[r]);
-            PKL(wide_leaf_rel) q;
-            PKL(leaf_rel)(&blk[k], &lr, &q);
-            PKL(leaf_rel_mags)(&q);
-            PK(ray_block)(pk, r, &blk[k], &q, tri_count, c, has_spheres, any_hit, &rays);
-        }
+        for (uint64_t m = rays; m; m &= m - 1)
+            PK(ray_block)(pk, (unsigned)__builtin_ctzll(m), &blk[k], NULL, tri_count, c, naive, has_spheres,
+                          any_hit, &rays);
 }
 
 /* The packet from the root to every ray's answer. */
@@ -360,16 +355,14 @@ WIDE_INLINE void PK(packet_trace)(wide_packet *pk, const bvh_wide *w, accel_coun
             }
             continue;
         }
-        if (!single && !naive) {
+        if (!single) {
             PK(leaf_by_block)(pk, &e, &blocks[wide_leaf_first(e.ref)], wide_leaf_blocks(e.ref),
-                              e.parent == WIDE_EMPTY ? NULL : nodes[e.parent].box[0], w->tri_count, c,
+                              e.parent == WIDE_EMPTY ? NULL : nodes[e.parent].box[0], w->tri_count, c, naive,
                               has_spheres, any_hit, &tests);
             continue;
         }
-        /* A leaf, or a subtree handed to single rays: the rays `first` to
-         * `last` that hit its box. */
-        const PBLOCK *blk = single ? NULL : &blocks[wide_leaf_first(e.ref)];
-        uint32_t nb = single ? 0 : wide_leaf_blocks(e.ref);
+        /* A subtree handed to single rays: each ray `first` to `last` that
+         * hits its box walks it alone. */
         const float *prow = e.parent == WIDE_EMPTY ? NULL : nodes[e.parent].box[0];
         for (unsigned g = e.first / 8; g <= e.last / 8; g++) {
             unsigned m = wp_range(pk->alive, g, e.first, e.last);
@@ -378,33 +371,15 @@ WIDE_INLINE void PK(packet_trace)(wide_packet *pk, const bvh_wide *w, accel_coun
                 tests++;
                 m = PK(group_hits)(pk, g, m, prow, e.lane);
             }
-            while (m) {
+            for (; m; m &= m - 1) {
                 unsigned r = 8 * g + (unsigned)__builtin_ctz(m);
-                m &= m - 1;
-                if (single) {
-                    uint32_t boxes = 0;
-                    if (PK_CAT(walk_oct, WIDE_NW, WIDE_LB)(w, &pk->p[r], e.ref, &pk->t[r], &pk->u[r], &pk->v[r],
-                                                           &pk->id[r], &pk->steps[r], &boxes, &pk->prims[r], c,
-                                                           flags, any_hit, 0, 0) &&
-                        any_hit && pk->id[r] != ACCEL_MISS) /* occluded (not a broken step bound) */
-                        pk->alive &= ~((uint64_t)1 << r);
-                    single_boxes += boxes;
-                    continue;
-                }
-                PKL(wide_leaf_ray) lr;
-                PKL(leaf_setup)(&lr, &pk->p[r]);
-                for (uint32_t k = 0; k < nb; k++) {
-                    if (c) {
-                        pk->prims[r]++;
-                        for (int q = 1; q < WIDE_LB; q++) pk->prims[r] += blk[k].id[q] != blk[k].id[q - 1];
-                    }
-                    if (PKL(leaf_block)(&blk[k], &lr, &pk->p[r], &pk->t[r], &pk->u[r], &pk->v[r], &pk->id[r],
-                                        w->tri_count, naive, has_spheres, any_hit) && any_hit) {
-                        pk->id[r] = 0;
-                        pk->alive &= ~((uint64_t)1 << r);
-                        break;
-                    }
-                }
+                uint32_t boxes = 0;
+                if (PK_CAT(walk_oct, WIDE_NW, WIDE_LB)(w, &pk->p[r], e.ref, &pk->t[r], &pk->u[r], &pk->v[r],
+                                                       &pk->id[r], &pk->steps[r], &boxes, &pk->prims[r], c, flags,
+                                                       any_hit, 0, 0) &&
+                    any_hit && pk->id[r] != ACCEL_MISS) /* occluded (not a broken step bound) */
+                    pk->alive &= ~((uint64_t)1 << r);
+                single_boxes += boxes;
             }
         }
     }

@@ -92,18 +92,20 @@ static void free_sets(ref_set *sets)
     }
 }
 
-static void check_specs(const accel_scene *s, ref_set *sets)
+/* Builds each spec (on `threads` threads) and checks it on every set. */
+static void check_specs_on(const accel_scene *s, const char *const *specs, size_t spec_count, int threads,
+                           const ref_set *sets, int set_count)
 {
-    for (int k = 0; k < WIDE_SPEC_COUNT; k++) {
+    for (size_t k = 0; k < spec_count; k++) {
         accel_error err = {0};
         const accel_kind *kind;
         void *a;
         accel_build_stats st;
-        if (accel_build_spec(wide_specs[k], s, 2, &kind, &a, &st, &err)) {
-            test_fail(__FILE__, __LINE__, "%s on %s: %s", wide_specs[k], s->name, err.msg);
+        if (accel_build_spec(specs[k], s, threads, &kind, &a, &st, &err)) {
+            test_fail(__FILE__, __LINE__, "%s on %s: %s", specs[k], s->name, err.msg);
             continue;
         }
-        for (int i = 0; i < 4; i++) check_set(kind, a, s, &sets[i], wide_specs[k]);
+        for (int i = 0; i < set_count; i++) check_set(kind, a, s, &sets[i], specs[k]);
         kind->destroy(a);
     }
 }
@@ -126,7 +128,7 @@ TEST(wide_shared_meshes_against_reference)
             continue;
         }
         ref_set sets[4];
-        if (make_sets(&s, 32, sets)) check_specs(&s, sets);
+        if (make_sets(&s, 32, sets)) check_specs_on(&s, wide_specs, WIDE_SPEC_COUNT, 2, sets, 4);
         free_sets(sets);
         scene_free(&s);
     }
@@ -152,7 +154,7 @@ TEST(wide_invariants)
             scene_free(&s);
             continue;
         }
-        check_specs(&s, sets);
+        check_specs_on(&s, wide_specs, WIDE_SPEC_COUNT, 2, sets, 4);
         for (int k = 0; k < WIDE_SPEC_COUNT; k++) {
             const accel_kind *kind, *k2;
             void *a, *a2;
@@ -315,17 +317,7 @@ TEST(wide_negative_t_near)
             back += sets[0].ref[i].prim != ACCEL_MISS && sets[0].ref[i].t < 0.0f;
         }
         CHECKF(back > hits / 2, "%s: %zu hits behind the origin of %zu hits", s.name, back, hits);
-        for (size_t k = 0; k < sizeof specs / sizeof *specs; k++) {
-            const accel_kind *kind;
-            void *a;
-            accel_build_stats st;
-            if (accel_build_spec(specs[k], &s, 1, &kind, &a, &st, &err)) {
-                test_fail(__FILE__, __LINE__, "%s on %s: %s", specs[k], s.name, err.msg);
-                continue;
-            }
-            for (int i = 0; i < 2; i++) check_set(kind, a, &s, &sets[i], specs[k]);
-            kind->destroy(a);
-        }
+        check_specs_on(&s, specs, sizeof specs / sizeof *specs, 1, sets, 2);
         for (int i = 0; i < 2; i++) {
             free(sets[i].rays.rays);
             free(sets[i].ref);
@@ -387,17 +379,7 @@ TEST(wide_packets_shared_origin_at_vertices)
         size_t hits = 0;
         for (size_t i = 0; i < set.rays.count; i++) hits += set.ref[i].prim != ACCEL_MISS;
         CHECKF(hits > set.rays.count / 2, "%s: %zu hits of %zu rays", s.name, hits, set.rays.count);
-        for (size_t k = 0; k < sizeof specs / sizeof *specs; k++) {
-            const accel_kind *kind;
-            void *a;
-            accel_build_stats st;
-            if (accel_build_spec(specs[k], &s, 1, &kind, &a, &st, &err)) {
-                test_fail(__FILE__, __LINE__, "%s on %s: %s", specs[k], s.name, err.msg);
-                continue;
-            }
-            check_set(kind, a, &s, &set, specs[k]);
-            kind->destroy(a);
-        }
+        check_specs_on(&s, specs, sizeof specs / sizeof *specs, 1, &set, 1);
         rays_free(&set.rays);
         free(set.ref);
         scene_free(&s);

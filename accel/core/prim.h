@@ -17,6 +17,8 @@
 #ifndef ACCEL_PRIM_H
 #define ACCEL_PRIM_H
 
+#include <string.h>
+
 #include "core/geom.h"
 #include "accel.h"
 
@@ -317,6 +319,14 @@ typedef struct {
     float ax_, ay_, az_, bx_, by_, bz_, cx_, cy_, cz_;
 } accel_tri_rel;
 
+/* 1 when accel_tri_rel_of gives the same for rays a and b: the same origin,
+ * bit for bit, and the same permuted axes. */
+static inline int accel_prep_same_frame(const accel_ray_prep *a, const accel_ray_prep *b)
+{
+    return memcmp(&a->org, &b->org, sizeof a->org) == 0 && a->kx == b->kx && a->ky == b->ky &&
+           a->kz == b->kz;
+}
+
 static inline void accel_tri_rel_of(const accel_ray_prep *p, const float *tri, accel_tri_rel *q)
 {
     vec3 a = v3_sub(v3_load(tri), p->org);
@@ -340,6 +350,8 @@ static inline __attribute__((always_inline)) int
 accel_tri_watertight_impl(const accel_ray_prep *p, const float *tri, const accel_tri_rel *given, float *t,
                           float *u, float *v)
 {
+    /* accel_tri_rel_of written out, not called: through a struct, gcc 12
+     * shuffled nine registers more on every kind's scalar test. */
     float az_, bz_, cz_, ax_, ay_, bx_, by_, cx_, cy_;
     if (given) {
         az_ = given->az_, bz_ = given->bz_, cz_ = given->cz_;
