@@ -45,6 +45,7 @@ typedef struct {
     exp_text rt_ev, rt_names, left;
     double ht_gain;
     int ht_tested;
+    double probe_eff; /* the thread probe's efficiency, or -1 */
 } study;
 
 static void scaling(exp_ctx *x, study *st, int max_t, const exp_machine *mach)
@@ -130,6 +131,7 @@ static void scaling(exp_ctx *x, study *st, int max_t, const exp_machine *mach)
         exp_text_add(&st->findings, "- Thread probe (no memory traffic): %d threads %s as fast as 1 "
                      "(efficiency %.0f%%).\n", g.probe_threads, pr,
                      100 * g.probe.median / g.probe_threads);
+        st->probe_eff = g.probe.median / g.probe_threads;
     }
     exp_group_note(&g);
     exp_group_free(&g);
@@ -208,6 +210,11 @@ static void verdicts(exp_ctx *x, study *st, int max_t, const exp_machine *m)
                     "start: other work held some of the %d CPUs, so efficiencies of %s measure "
                     "the sharing, not the scaling", x->others_start, m->logical,
                     exp_text_str(&st->lin_ev));
+    else if (st->probe_eff >= 0 && st->probe_eff < NEAR_LINEAR && st->linear < st->kinds)
+        exp_verdict(x, "threads-linear", EXP_UNTESTABLE, "-", "the thread probe (work that touches no "
+                    "memory) reached %.0f%% efficiency on %d threads, below the %.0f%% asked of the "
+                    "kernels: the machine, not the kernels, held them down (%s)", 100 * st->probe_eff,
+                    max_t, 100 * NEAR_LINEAR, exp_text_str(&st->lin_ev));
     else
         exp_verdict(x, "threads-linear", st->linear == st->kinds ? EXP_CONFIRMED
                     : st->linear ? EXP_PARTLY : EXP_REFUTED, x->quick ? "soup:tris=20000" : "see the table",
@@ -266,6 +273,7 @@ int main(int argc, char **argv)
     exp_csv(&x, "part,scene,spec,threads,build_or_frame_ms,lo,hi,primary_mrays_or_fps,lo2,hi2,"
                 "primary_speedup,diffuse_mrays,diffuse_lo,diffuse_hi,diffuse_speedup\n");
     study st = {0};
+    st.probe_eff = -1;
     if (!x.quick) x.set_budget_ms = 800; /* 800x600 passes: fewer, longer rounds */
     scaling(&x, &st, max_t, &mach);
     exp_md(&x, "\n### Real time: frames per second at %dx%d, primary plus shadow rays, %d "
