@@ -73,8 +73,15 @@ typedef struct {
     _Alignas(32) int32_t negx[P]; /* -1 when the direction's sign bit is set */
     _Alignas(32) int32_t negy[P];
     _Alignas(32) int32_t negz[P];
+    /* The shear constants of the watertight test (with shared: the cull). */
+    _Alignas(32) float sx[P];
+    _Alignas(32) float sy[P];
     uint64_t alive; /* bit i: ray i is still traced */
     int shared;     /* every live ray has the same origin and watertight axes */
+    /* The cull's record over the batch (aff_misses): rays tried and culled,
+     * triangles passed over while it stays under 1 in 4 (then every 16th
+     * tries). */
+    uint32_t cull_tries, cull_wins, cull_skips;
     uint32_t n;
     uint32_t slot[P];
     float u[P], v[P];
@@ -117,6 +124,43 @@ static inline float packet_t_max(const packet *pk)
 #endif
 }
 
+/* The rays of `rays` (sharing their origin and axes) that surely miss the
+ * triangle of relative vertices *q: its edge functions as affine functions
+ * of each ray's shear, 8 rays at a time (accel_tri_aff, core/prim.h). */
+static __attribute__((noinline)) uint64_t aff_misses(const packet *pk, const accel_tri_rel *q, uint64_t rays)
+{
+    accel_tri_aff f;
+    accel_tri_aff_of(q, &f);
+    uint64_t out = 0;
+#if BVH_AVX
+    const __m256 rel = _mm256_set1_ps(ACCEL_AFF_REL), tiny = _mm256_set1_ps(ACCEL_AFF_ABS);
+    const __m256 sign = _mm256_set1_ps(-0.0f);
+    for (uint32_t g = 0; g < GROUPS; g++) {
+        if (!((rays >> (GROUP * g)) & 0xFFu)) continue;
+        __m256 x = _mm256_load_ps(pk->sx + GROUP * g), y = _mm256_load_ps(pk->sy + GROUP * g);
+        __m256 xa = _mm256_andnot_ps(sign, x), ya = _mm256_andnot_ps(sign, y);
+        __m256 neg = _mm256_setzero_ps(), pos = neg;
+        for (int k = 0; k < 3; k++) {
+            __m256 e = _mm256_add_ps(_mm256_set1_ps(f.e0[k]), _mm256_mul_ps(x, _mm256_set1_ps(f.e1[k])));
+            e = _mm256_add_ps(e, _mm256_mul_ps(y, _mm256_set1_ps(f.e2[k])));
+            __m256 mg = _mm256_add_ps(_mm256_set1_ps(f.m0[k]), _mm256_mul_ps(xa, _mm256_set1_ps(f.m1[k])));
+            mg = _mm256_add_ps(mg, _mm256_mul_ps(ya, _mm256_set1_ps(f.m2[k])));
+            __m256 m = _mm256_add_ps(_mm256_mul_ps(rel, mg), tiny);
+            neg = _mm256_or_ps(neg, _mm256_cmp_ps(e, _mm256_xor_ps(m, sign), _CMP_LT_OQ));
+            pos = _mm256_or_ps(pos, _mm256_cmp_ps(e, m, _CMP_GT_OQ));
+        }
+        out |= (uint64_t)(uint32_t)_mm256_movemask_ps(_mm256_and_ps(neg, pos)) << (GROUP * g);
+    }
+    return out & rays;
+#else
+    for (uint64_t m = rays; m; m &= m - 1) {
+        uint32_t i = (uint32_t)__builtin_ctzll(m);
+        if (accel_tri_aff_miss(&f, pk->sx[i], pk->sy[i])) out |= (uint64_t)1 << i;
+    }
+    return out;
+#endif
+}
+
 static void packet_setup(packet *pk, const accel_ray *rays, uint32_t n, int frustum)
 {
     pk->n = n;
@@ -134,10 +178,12 @@ static void packet_setup(packet *pk, const accel_ray *rays, uint32_t n, int frus
             pk->negx[i] = -p->neg[0], pk->negy[i] = -p->neg[1], pk->negz[i] = -p->neg[2];
             pk->t_near[i] = p->t_near;
             pk->t[i] = p->t_far;
+            pk->sx[i] = p->sx, pk->sy[i] = p->sy;
         } else {
             pk->ox[i] = pk->oy[i] = pk->oz[i] = 0.0f;
             pk->ix[i] = pk->iy[i] = pk->iz[i] = 0.0f;
             pk->negx[i] = pk->negy[i] = pk->negz[i] = 0;
+            pk->sx[i] = pk->sy[i] = 0.0f;
             kill_ray(pk, i);
         }
     }
@@ -317,7 +363,10 @@ trace_packet(const bvh *b, packet *pk, accel_counters *c, uint32_t *ray_steps,
              * primitives in their order, as it would alone). When the rays
              * share their origin and axes (pk->shared), each triangle's
              * vertices relative to the origin are computed once for all of
-             * them (accel_tri_watertight_rel). */
+             * them (accel_tri_watertight_rel), and the rays whose edge
+             * functions, affine in their shear, are surely of mixed signs
+             * skip it (aff_misses: the exact test's first rule, so every
+             * answer stays as it was). */
             uint64_t rays = 0;
             for (uint32_t g = f / GROUP; g < groups; g++) {
                 uint32_t range = group_range(pk, g, f);
@@ -329,8 +378,24 @@ trace_packet(const bvh *b, packet *pk, accel_counters *c, uint32_t *ray_steps,
                 const float *data = b->prim_data + (size_t)BVH_SLOT_FLOATS * k;
                 const int rel = pk->shared && !naive && !(has_spheres && b->prim_ids[k] >= b->tri_count);
                 accel_tri_rel q;
-                if (rel) accel_tri_rel_of(&pk->prep[__builtin_ctzll(rays)], data, &q);
-                for (uint64_t m = rays; m; m &= m - 1) {
+                uint64_t todo = rays;
+                if (rel) {
+                    accel_tri_rel_of(&pk->prep[__builtin_ctzll(rays)], data, &q);
+                    if (pk->cull_tries < 256 || 4 * pk->cull_wins >= pk->cull_tries ||
+                        (++pk->cull_skips & 15) == 0) {
+                        uint64_t culled = aff_misses(pk, &q, rays);
+                        pk->cull_tries += (uint32_t)__builtin_popcountll(rays);
+                        pk->cull_wins += (uint32_t)__builtin_popcountll(culled);
+                        todo &= ~culled;
+                    }
+                    if (c) {
+                        uint64_t culled = rays & ~todo;
+                        prims += (uint64_t)__builtin_popcountll(culled);
+                        for (; ray_prims && culled; culled &= culled - 1)
+                            ray_prims[__builtin_ctzll(culled)]++;
+                    }
+                }
+                for (uint64_t m = todo; m; m &= m - 1) {
                     uint32_t i = (uint32_t)__builtin_ctzll(m);
                     if (c) {
                         prims++;
@@ -401,6 +466,7 @@ packet_batch(const bvh *b, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
 {
     const int any_hit = occ != NULL;
     packet pk; /* about 10 KB, aligned by its members */
+    pk.cull_tries = pk.cull_wins = pk.cull_skips = 0;
     for (size_t base = 0; base < count; base += P) {
         uint32_t n = (uint32_t)(count - base < P ? count - base : P);
         packet_setup(&pk, rays + base, n, frustum);

@@ -135,6 +135,89 @@ WIDE_INLINE void WL(leaf_rel_mags)(WL(wide_leaf_rel) *q)
 }
 
 /*
+ * Culling a block for rays that share an origin (packets of primary rays;
+ * the scalar form, with the same margins, is accel_tri_aff in core/prim.h).
+ *
+ * With the origin and axes fixed, an edge function of the watertight test
+ * is affine in the ray's shear (sx, sy): for the edge of vertices P, Q
+ * (relative, on the permuted axes),
+ *   (px - sx pz)(qy - sy qz) - (py - sy pz)(qx - sx qz)
+ *     = (px qy - py qx) + sx (py qz - pz qy) + sy (pz qx - px qz),
+ * the sx sy terms cancelling. So one set of coefficients per block gives
+ * each edge function for every ray of the packet, and its range over a
+ * rectangle of (sx, sy) by interval arithmetic. A lane whose edge functions
+ * are surely of mixed signs over the rectangle is missed by every ray whose
+ * shear lies in it (the exact test's first rule: mixed signs are a miss).
+ *
+ * "Surely" is decided with a margin of 2^-16 times the edge function's
+ * magnitude, m0 + |sx| m1 + |sy| m2 (the same sums taken of absolute
+ * values), plus 2^-120 for underflow: far above what separates these float
+ * values from the double test's own (its vertices relative to the origin
+ * rounded once in float here, its shear rounded once in float by the ray
+ * setup, about 10 roundings of u = 2^-24 in all), and still far below the
+ * size of any edge function that decides a miss. A NaN or an infinity
+ * anywhere fails every comparison: such a lane is never culled. Culling
+ * only lanes the exact test misses leaves every answer as it was, bit for
+ * bit: the kernel's float test would have rejected them anyway. Spheres
+ * are never culled (the caller leaves them out).
+ */
+typedef struct {
+    LF e0[3], e1[3], e2[3]; /* U, V, W = e0 + sx e1 + sy e2 */
+    LF a1[3], a2[3];        /* |e1|, |e2| */
+    LF m0[3], m1[3], m2[3]; /* the margin: m0 + |sx| m1 + |sy| m2 (ACCEL_AFF_REL, ACCEL_AFF_ABS in) */
+} WL(wide_leaf_aff);
+
+/* The edge (P, Q)'s coefficients into slot k of *f. */
+WIDE_INLINE void WL(aff_edge)(WL(wide_leaf_aff) *f, int k, LF px, LF py, LF pz, LF qx, LF qy, LF qz, LF apx,
+                              LF apy, LF apz, LF aqx, LF aqy, LF aqz)
+{
+    const LF rel = LV(set1)(ACCEL_AFF_REL);
+    f->e0[k] = LV(fmsub)(px, qy, LV(mul)(py, qx));
+    f->e1[k] = LV(fmsub)(py, qz, LV(mul)(pz, qy));
+    f->e2[k] = LV(fmsub)(pz, qx, LV(mul)(px, qz));
+    f->a1[k] = LV(abs)(f->e1[k]), f->a2[k] = LV(abs)(f->e2[k]);
+    f->m0[k] = LV(fmadd)(rel, LV(fmadd)(apx, aqy, LV(mul)(apy, aqx)), LV(set1)(ACCEL_AFF_ABS));
+    f->m1[k] = LV(mul)(rel, LV(fmadd)(apy, aqz, LV(mul)(apz, aqy)));
+    f->m2[k] = LV(mul)(rel, LV(fmadd)(apz, aqx, LV(mul)(apx, aqz)));
+}
+
+/* The coefficients of a block's three edge functions, from leaf_rel and
+ * leaf_rel_mags (U: C, B; V: A, C; W: B, A, as leaf_block_rel). */
+WIDE_INLINE void WL(leaf_aff)(const WL(wide_leaf_rel) *q, WL(wide_leaf_aff) *f)
+{
+    WL(aff_edge)(f, 0, q->cx_, q->cy_, q->cz_, q->bx_, q->by_, q->bz_, q->acx_, q->acy_, q->acz, q->abx_,
+                 q->aby_, q->abz);
+    WL(aff_edge)(f, 1, q->ax_, q->ay_, q->az_, q->cx_, q->cy_, q->cz_, q->aax_, q->aay_, q->aaz, q->acx_,
+                 q->acy_, q->acz);
+    WL(aff_edge)(f, 2, q->bx_, q->by_, q->bz_, q->ax_, q->ay_, q->az_, q->abx_, q->aby_, q->abz, q->aax_,
+                 q->aay_, q->aaz);
+}
+
+/*
+ * Lanes surely missed by every ray whose shear lies in the rectangle
+ * centred at (cx, cy) with half sizes (hx, hy), and |sx| <= xa, |sy| <= ya
+ * in it (a bit per lane). Over the rectangle an edge function lies within
+ * e0 + cx e1 + cy e2 +- (hx |e1| + hy |e2|); the caller rounds the half
+ * sizes up (wide_packet.h), and the margin takes the few roundings of
+ * these sums with room to spare.
+ */
+WIDE_INLINE int WL(aff_cull_rect)(const WL(wide_leaf_aff) *f, float cx, float cy, float hx, float hy, float xa,
+                                  float ya)
+{
+    const LF x = LV(set1)(cx), y = LV(set1)(cy), vhx = LV(set1)(hx), vhy = LV(set1)(hy);
+    const LF vxa = LV(set1)(xa), vya = LV(set1)(ya), zero = LV(set1)(0.0f);
+    LF neg = LV(lt)(zero, zero), pos = neg; /* all false */
+    for (int k = 0; k < 3; k++) {
+        LF e = LV(fmadd)(y, f->e2[k], LV(fmadd)(x, f->e1[k], f->e0[k]));
+        LF d = LV(fmadd)(vya, f->m2[k], LV(fmadd)(vxa, f->m1[k], f->m0[k]));
+        d = LV(fmadd)(vhy, f->a2[k], LV(fmadd)(vhx, f->a1[k], d));
+        neg = LV(or)(neg, LV(lt)(e, LV(sub)(zero, d)));
+        pos = LV(or)(pos, LV(gt)(e, d));
+    }
+    return LV(mask)(LV(and)(neg, pos));
+}
+
+/*
  * Intersects one block whose relative vertices are *q (leaf_rel of the
  * same origin and axes as r; with `mags`, a constant, their magnitudes
  * too, from leaf_rel_mags). On a hit closer than *t (within [t_near,
