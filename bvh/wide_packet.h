@@ -76,12 +76,13 @@ typedef struct {
     uint64_t alive; /* valid rays still looking for a hit */
     int octant;
     int shared; /* every valid ray has the same origin and permuted axes */
-    /* With shared: each group's rectangle of shear constants (sx, sy) over
-     * its valid rays, for the leaf cull (leaf_aff, wide_leaf.h). */
-    int rects; /* the rectangles below are made (packet_rects) */
     /* The cull's record over the batch: groups tried and culled, leaves
      * passed over while it stays under 1 in 4 (then every 16th tries). */
     uint32_t cull_tries, cull_wins, cull_skips;
+    /* With shared: each group's rectangle of shears (centre, half sizes,
+     * largest |sx| and |sy|) for the leaf cull, made by packet_rects at the
+     * first leaf that culls (rects set). */
+    int rects;
     float gcx[WP_RAYS / 8], gcy[WP_RAYS / 8], ghx[WP_RAYS / 8], ghy[WP_RAYS / 8], gxa[WP_RAYS / 8],
         gya[WP_RAYS / 8];
     float o_lo[3], o_hi[3], i_lo[3], i_hi[3], tn_min, t_max;

@@ -505,18 +505,11 @@ static void check_small(const accel_scene *s, const char *spec, size_t max_bytes
     free(rays);
 }
 
-/* The nested grid on the same 1000 near copies (here for check_small):
- * every top cell holds all of them, and each cell's sub-grid copied them
- * into most of its cells, then was dropped (more than 8 copies per
- * primitive). Planned sub-grids whose bounding-box counts pass that limit
- * now get an exact count that stops at it (ngrid_level.c, plan_sub), so
- * they are dropped before building: 22 s before, 0.3 s now, with the same
- * structure; and the memory check no longer counts them, so a small max_mb
- * builds where it was refused ("16.9 MiB on top of 4.1 MiB"). */
-TEST(ngrid_near_copies_drop_subgrids_before_building)
+/* 1000 near copies of one triangle, every vertex moved by up to 1e-6 so
+ * that no two are coincident (seeded: the same scene each time). */
+static int near_copies(accel_scene *s)
 {
     scene_builder near = {0};
-    accel_scene s;
     test_seed(77);
     for (int i = 0; i < 1000; i++) {
         vec3 v[3] = {v3(0, 0, 0), v3(1, 0, 0), v3(0, 1, 0)};
@@ -525,7 +518,22 @@ TEST(ngrid_near_copies_drop_subgrids_before_building)
                                    test_rand_in(-1e-6f, 1e-6f)));
         test_add_tri(&near, v[0], v[1], v[2]);
     }
-    if (test_finish(&near, "1000 near copies", &s)) {
+    return test_finish(&near, "1000 near copies", s);
+}
+
+/* The nested grid on the same 1000 near copies (here for check_small):
+ * every top cell holds all of them, and each cell's sub-grid copied them
+ * into most of its cells, then was dropped (more than 8 copies per
+ * primitive). Planned sub-grids whose first primitives' boxes span many of
+ * their cells now get an exact count that stops at that limit
+ * (ngrid_level.c, plan_sub), so they are dropped before building: 22 s
+ * before, 0.5 s now (with tracing and --check), with the same
+ * structure; and the memory check no longer counts them, so a small max_mb
+ * builds where it was refused ("16.9 MiB on top of 4.1 MiB"). */
+TEST(ngrid_near_copies_drop_subgrids_before_building)
+{
+    accel_scene s;
+    if (near_copies(&s)) {
         check_small(&s, "nested_grid:max_mb=8", 8u << 20, 4096);
         scene_free(&s);
     }
@@ -552,16 +560,7 @@ TEST(igrid_copies_and_needles_stay_small)
     /* Near copies: every vertex moved by up to 1e-6, so that no two are
      * coincident (158 s and 898 MB before the guard on large nodes above
      * the paper's depth, IGRID_MUST_GUARD_MIN). */
-    scene_builder near = {0};
-    test_seed(77);
-    for (int i = 0; i < 1000; i++) {
-        vec3 v[3] = {v3(0, 0, 0), v3(1, 0, 0), v3(0, 1, 0)};
-        for (int k = 0; k < 3; k++)
-            v[k] = v3_add(v[k], v3(test_rand_in(-1e-6f, 1e-6f), test_rand_in(-1e-6f, 1e-6f),
-                                   test_rand_in(-1e-6f, 1e-6f)));
-        test_add_tri(&near, v[0], v[1], v[2]);
-    }
-    if (test_finish(&near, "1000 near copies", &s)) {
+    if (near_copies(&s)) {
         check_small(&s, "irregular_grid:max_mb=16", 1 << 20, 2000);
         scene_free(&s);
     }
