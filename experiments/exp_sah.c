@@ -289,7 +289,9 @@ static void spatial_splits(exp_ctx *x, study *st)
             if (!(g.mask & bit)) continue;
             char buf[128], sp[96];
             int cmp = exp_group_compare(&g, c, base, bit, buf, sizeof buf);
-            exp_est e = exp_group_speedup(&g, base, c, bit);
+            /* the table's estimate (exp_group_compare): the inverse of the
+             * time ratio */
+            exp_est tr = exp_group_speedup(&g, c, base, bit), e = exp_est_inv(&tr, 1.0);
             pairs++;
             faster += cmp < 0;
             int o = exp_target_cmp(&e, SEVERAL, 1);

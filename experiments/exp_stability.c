@@ -179,7 +179,7 @@ static void measure_case(exp_ctx *x, study *st, stiff_case *c, const exp_list *l
     if (fast >= 0 && slow >= 0) {
         ratio = exp_group_mrays(&g, fast, BENCH_PRIMARY).median / exp_group_mrays(&g, slow, BENCH_PRIMARY).median;
         if (ratio >= CLIFF)
-            exp_text_add(&st->cliffs, "- A performance cliff on %s: `%s` traces %.0fx slower than "
+            exp_text_add(&st->cliffs, "- A performance cliff on %s: `%s` traces %.1fx slower than "
                          "`%s`.\n", c->name, g.cfg[slow].spec, ratio, g.cfg[fast].spec);
     }
     exp_text_add(&st->speeds, " | %.1f |\n", ratio);

@@ -60,13 +60,23 @@ void exp_est_of(const double *samples, int n, exp_est *out)
     out->hi = meds[BOOT_RESAMPLES - 1 - BOOT_RESAMPLES / 40];
 }
 
+/* Ratios are estimated in log space, so that a median of an even count is
+ * the geometric mean of the middle two: the estimate of b/a is then the
+ * inverse of that of a/b (exp_est_inv), median and interval alike. With the
+ * arithmetic mean a report's finding quoted 2.35x for a speed-up its table,
+ * which prints the inverse of the time ratio, showed as 1.98x [1.42, 3.29]
+ * (four rounds of a quick report). Odd counts give the same order
+ * statistics either way. */
 void exp_est_ratio(const double *a, const double *b, int n, exp_est *out)
 {
     double r[EXP_MAX_SAMPLES];
     int m = 0;
     for (int i = 0; i < n && m < EXP_MAX_SAMPLES; i++)
-        if (b[i] > 0) r[m++] = a[i] / b[i];
+        if (b[i] > 0) r[m++] = log(a[i] / b[i]);
     exp_est_of(r, m, out);
+    if (out->n == 0) return;
+    out->median = exp(out->median), out->lo = exp(out->lo), out->hi = exp(out->hi);
+    out->min = exp(out->min), out->max = exp(out->max);
 }
 
 exp_est exp_est_scale(const exp_est *e, double k)

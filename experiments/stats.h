@@ -35,7 +35,8 @@ typedef struct {
 #define EXP_MAX_SAMPLES 64
 
 void exp_est_of(const double *samples, int n, exp_est *out);
-/* Paired ratio a[i] / b[i] of the first n rounds (pairs with b[i] <= 0 are skipped). */
+/* Paired ratio a[i] / b[i] of the first n rounds (pairs with b[i] <= 0 are skipped),
+ * estimated in log space (an even count's median is a geometric mean). */
 void exp_est_ratio(const double *a, const double *b, int n, exp_est *out);
 /* k * e (k > 0) and k / e (e > 0): intervals follow (k / e swaps the ends). */
 exp_est exp_est_scale(const exp_est *e, double k);

@@ -124,17 +124,20 @@ box3 grid_frame_box(box3 bounds)
     }
     float lo[3] = {bounds.min.x, bounds.min.y, bounds.min.z};
     float hi[3] = {bounds.max.x, bounds.max.y, bounds.max.z};
-    float big = 0.0f;
-    for (int a = 0; a < 3; a++) big = maxf(big, hi[a] - lo[a]);
+    /* In double: an extent from -2e38 to 2e38 overflows a float, and an
+     * infinite half-size made the flat axis -inf..inf (NaN padding, holes
+     * on every ray). */
+    double big = 0.0;
+    for (int a = 0; a < 3; a++) big = fmax(big, (double)hi[a] - lo[a]);
     for (int a = 0; a < 3; a++) {
         if (hi[a] > lo[a]) continue;
         /* A flat axis: one thousandth of the largest extent, and at least
-         * a few ulps of the coordinate so that lo < hi survives rounding. */
-        float mag = maxf(fabsf(lo[a]), fabsf(hi[a]));
-        float half = maxf(5e-4f * big, 8.0f * FLT_EPSILON * mag);
-        half = maxf(half, FLT_MIN);
-        lo[a] -= half;
-        hi[a] += half;
+         * a few ulps of the coordinate so that lo < hi survives rounding;
+         * within the finite floats. */
+        double mag = fmax(fabs((double)lo[a]), fabs((double)hi[a]));
+        double half = fmax(fmax(5e-4 * big, 8.0 * FLT_EPSILON * mag), FLT_MIN);
+        lo[a] = (float)fmax((double)lo[a] - half, -FLT_MAX);
+        hi[a] = (float)fmin((double)hi[a] + half, FLT_MAX);
     }
     box3 b = {{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
     return b;
@@ -203,7 +206,9 @@ void grid_cell_box(const grid_frame *f, int x, int y, int z, double lo[3], doubl
 
 /* ---- membership ------------------------------------------------------------- */
 
-typedef enum { VISIT_COUNT, VISIT_FILL, VISIT_TALLY } visit_kind;
+/* COUNT: counts[cell]++; FILL: writes the reference; TALLY: one 64-bit
+ * total in *offsets; COUNT_TALLY: counts[cell]++ and the total in *refs. */
+typedef enum { VISIT_COUNT, VISIT_FILL, VISIT_TALLY, VISIT_COUNT_TALLY } visit_kind;
 
 /* min/max as compare-and-select (fmin/fmax are library calls without fast-math). */
 static inline double dmin(double a, double b) { return b < a ? b : a; }
@@ -241,6 +246,11 @@ emit_cell(const grid_frame *f, int x, int y, int z, uint32_t prim, visit_kind ki
         return;
     }
     uint32_t cell = (uint32_t)x + f->stride[1] * (uint32_t)y + f->stride[2] * (uint32_t)z;
+    if (kind == VISIT_COUNT_TALLY) {
+        offsets[cell]++;
+        ++*(uint64_t *)(void *)refs;
+        return;
+    }
     if (kind == VISIT_COUNT) {
         if (atomic)
             __atomic_fetch_add(&offsets[cell], 1u, __ATOMIC_RELAXED);
@@ -385,6 +395,17 @@ void grid_count_pass(const grid_frame *f, const accel_scene *s, const uint32_t *
                      uint32_t prim_count, grid_overlap mode, uint32_t *counts, int threads)
 {
     run_pass(f, s, prims, prim_count, mode, VISIT_COUNT, counts, NULL, threads);
+}
+
+uint64_t grid_count_pass_upto(const grid_frame *f, const accel_scene *s, const uint32_t *prims,
+                              uint32_t prim_count, grid_overlap mode, uint32_t *counts,
+                              uint64_t stop_above)
+{
+    uint64_t total = 0;
+    for (uint32_t i = 0; i < prim_count && total <= stop_above; i++)
+        visit_prim(f, s, PRIM_AT(prims, i), mode, VISIT_COUNT_TALLY, 0, counts,
+                   (uint32_t *)(void *)&total);
+    return total;
 }
 
 /* ---- prefix sum --------------------------------------------------------------- */

@@ -142,6 +142,13 @@ typedef struct {
 void grid_count_pass(const grid_frame *f, const accel_scene *s, const uint32_t *prims,
                      uint32_t prim_count, grid_overlap mode, uint32_t *counts, int threads);
 
+/* The count pass on one thread that also totals the references, and stops
+ * once the total exceeds stop_above (counts are then partial, and the
+ * result is only known to be above it). Returns the total. */
+uint64_t grid_count_pass_upto(const grid_frame *f, const accel_scene *s, const uint32_t *prims,
+                              uint32_t prim_count, grid_overlap mode, uint32_t *counts,
+                              uint64_t stop_above);
+
 /* The number of references the passes would make, without any cell array:
  * the same membership test, totalled. Stops counting once the total
  * exceeds stop_above (the result is then only known to be above it). */

@@ -28,6 +28,7 @@
  * the chosen sub-grid is then decided the same way.
  */
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -104,12 +105,13 @@ static double cell_cost(double n, int deeper, const ngrid_costs *m)
  * cell_cost(count * scale). Padded as a sub-grid of a grid padded by
  * parent_pad (ngrid_sub_pad), or as the top grid when parent_pad is NULL.
  * Returns 0, or 1 when the grid is too large for max_bytes (a candidate to
- * skip, not an error), or an error status.
+ * skip, not an error), 2 when it would hold more than max_refs references
+ * (the count stops there), or an error status.
  */
 static int grid_cost(const accel_scene *s, box3 box, const float *parent_pad, const int res[3],
                      const uint32_t *prims, uint32_t n, double scale, int deeper,
-                     grid_overlap mode, double max_bytes, const ngrid_costs *m, double *cost,
-                     accel_error *err)
+                     grid_overlap mode, double max_bytes, uint64_t max_refs,
+                     const ngrid_costs *m, double *cost, accel_error *err)
 {
     uint64_t cells;
     accel_error ignore;
@@ -126,7 +128,11 @@ static int grid_cost(const accel_scene *s, box3 box, const float *parent_pad, co
     grid_frame f;
     grid_frame_init(&f, box, res, planes);
     if (parent_pad) ngrid_sub_pad(&f, parent_pad);
-    grid_count_pass(&f, s, prims, n, mode, counts, 1);
+    if (grid_count_pass_upto(&f, s, prims, n, mode, counts, max_refs) > max_refs) {
+        free(counts);
+        free(planes);
+        return 2;
+    }
     double tests = 0.0;
     for (uint64_t c = 0; c < cells; c++)
         if (counts[c]) tests += cell_cost(counts[c] * scale, deeper, m);
@@ -167,8 +173,8 @@ int ngrid_auto_top_res(const accel_scene *s, box3 box, grid_overlap mode, int de
         if (same_res(r, prev)) continue;
         memcpy(prev, r, sizeof prev);
         double cost;
-        rc = grid_cost(s, box, NULL, r, sample, sample_n, scale, deeper, mode, max_bytes, m, &cost,
-                       err);
+        rc = grid_cost(s, box, NULL, r, sample, sample_n, scale, deeper, mode, max_bytes,
+                       UINT64_MAX, m, &cost, err);
         if (rc == 1) {
             rc = ACCEL_OK;
             continue;
@@ -202,8 +208,15 @@ int ngrid_auto_sub_res(const accel_scene *s, box3 box, const float parent_pad[3]
         if (same_res(r, prev)) continue;
         memcpy(prev, r, sizeof prev);
         double cost;
+        /* Primitives as large as the cell (1,000 near copies of one
+         * triangle: each top cell's candidates held all of them in most
+         * of their cells, and the sub-grid of 250 cells was priced as a
+         * small gain over the leaf and built, over 10 minutes for one
+         * build): the count stops at the guard, and finer candidates,
+         * which copy as much or more, are not tried. */
         int rc = grid_cost(s, box, parent_pad, r, prims, prim_count, 1.0, deeper, mode, max_bytes,
-                           m, &cost, err);
+                           NGRID_AUTO_MAX_COPIES * (uint64_t)prim_count, m, &cost, err);
+        if (rc == 2) break;
         if (rc == 1) continue;
         if (rc) return rc;
         cost += m->c_step * NGRID_ENTER_STEPS;

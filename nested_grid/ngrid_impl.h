@@ -86,6 +86,17 @@ typedef struct {
     double c_step, c_isect;
 } ngrid_costs;
 
+/* A sub-grid storing more than this many references per primitive costs
+ * memory without saving tests and is not kept (ngrid_level.c). */
+#define NGRID_MAX_COPIES 8
+/* The auto mode's guard of the same kind (ngrid_cost.c): a sub-grid
+ * candidate with more references per primitive than this is not priced,
+ * and neither are finer ones. A guard against primitives as large as the
+ * cell, not a tuning: at 128 every auto structure of the study's scenes is
+ * unchanged (at 32 one changes, at 8 most do: the cost model does choose
+ * sub-grids of 8-32 copies per primitive, and that is its call). */
+#define NGRID_AUTO_MAX_COPIES 128
+
 /*
  * Auto mode, top level: the resolution (among the rule's results for a
  * ladder of lambdas) with the least expected cost c_step*E[cells] +
@@ -102,7 +113,9 @@ int ngrid_auto_top_res(const accel_scene *s, box3 box, grid_overlap mode, int de
  * ray crossing the cell beats testing the cell's prim_count primitives, or
  * res = {0,0,0} when none does (the cell stays a leaf). parent_pad: the
  * padding of the grid the cell belongs to (ngrid_sub_pad); deeper: whether
- * the sub-grid's cells may get sub-grids in turn.
+ * the sub-grid's cells may get sub-grids in turn. A candidate with more
+ * than NGRID_AUTO_MAX_COPIES references per primitive ends the ladder
+ * unpriced.
  */
 int ngrid_auto_sub_res(const accel_scene *s, box3 box, const float parent_pad[3],
                        const uint32_t *prims, uint32_t prim_count, grid_overlap mode, int deeper,

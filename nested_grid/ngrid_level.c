@@ -44,9 +44,6 @@
 /* Cells per primitive above which a planned sub-grid's references are
  * counted ahead (cells). Below it building costs about what counting does. */
 #define NGRID_PRECOUNT_CELLS 64
-/* A sub-grid storing more than this many references per primitive costs
- * memory without saving tests and is not kept. */
-#define NGRID_MAX_COPIES 8
 /* A planned sub-grid whose first primitives' bounding boxes span more than
  * this many times NGRID_MAX_COPIES cells each gets its exact count ahead of
  * building (plan_sub): a flat triangle fills about half of its box's

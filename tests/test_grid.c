@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "grid/grid.h"
+#include "grid/grid_core.h"
 #include "support.h"
 
 /* ---- resolution rule and sizing --------------------------------------------- */
@@ -136,6 +137,37 @@ TEST(grid_overflow_refused)
         CHECKF(st.refs > 200 * 500, "refs %llu", (unsigned long long)st.refs);
         kind->destroy(accel);
     }
+    scene_free(&s);
+}
+
+/* A flat scene wider than the float range: one triangle in z = 0 from
+ * -2e38 to 2e38 in x. The frame's largest extent (4e38) overflowed a
+ * float, the flat axis got an infinite half-size, and every grid traced
+ * holes (96 of 256 camera rays, found by an audit, 2026-12-04). */
+TEST(grid_flat_scene_wider_than_floats)
+{
+    scene_builder b = {0};
+    test_add_tri(&b, v3(2e38f, 0, 0), v3(-2e38f, 1, 0), v3(0, 2e38f, 0));
+    accel_scene s;
+    if (!test_finish(&b, "flat 4e38", &s)) return;
+    box3 fb = grid_frame_box(s.bounds);
+    CHECKF(isfinite(fb.min.z) && isfinite(fb.max.z) && fb.min.z < 0 && fb.max.z > 0,
+           "flat axis framed as %g..%g", fb.min.z, fb.max.z);
+    test_rays r = {0};
+    test_seed(4);
+    for (int i = 0; i < 200; i++) {
+        /* points inside the triangle, from above and from a camera */
+        float u = test_rand(), v = test_rand();
+        if (u + v > 1) u = 1 - u, v = 1 - v;
+        vec3 p = v3(2e38f * (1 - u - v) - 2e38f * u, v * 2e38f, 0.0f);
+        test_rays_push(&r, test_ray(v3(p.x, p.y, 5), v3(0, 0, -1), 0, INFINITY));
+        test_rays_push(&r, test_ray(v3(0.1f, 0.1f, 5), v3_sub(p, v3(0.1f, 0.1f, 5)), 0, INFINITY));
+    }
+    static const char *const specs[] = {"grid", "grid:traverse=packet", "grid:skip=macro",
+                                        "grid:res=4", "nested_grid", "irregular_grid"};
+    for (size_t k = 0; k < sizeof specs / sizeof specs[0]; k++)
+        test_check_spec(&s, specs[k], r.rays, r.count, NULL, NULL, NULL);
+    test_rays_free(&r);
     scene_free(&s);
 }
 

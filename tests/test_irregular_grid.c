@@ -539,6 +539,21 @@ TEST(ngrid_near_copies_drop_subgrids_before_building)
     }
 }
 
+/* The same stack in auto mode: the cost model priced each top cell's
+ * sub-grid of 250 cells, every one holding all 1000 copies, as a small gain
+ * over the leaf, and built them all (over 10 minutes, gigabytes). Now a
+ * candidate with more than 128 references per primitive is not priced
+ * (NGRID_AUTO_MAX_COPIES): 23 MB, a few seconds. Before, max_mb=64 refused
+ * the build after 26 s ("level 1 sub-grids need 1388.0 MiB"). */
+TEST(ngrid_auto_near_copies_stay_bounded)
+{
+    accel_scene s;
+    if (near_copies(&s)) {
+        check_small(&s, "nested_grid:auto=1,max_mb=64", 32u << 20, 2000000);
+        scene_free(&s);
+    }
+}
+
 /* Coincident copies and needles: 1000 copies of one triangle (a mesh's
  * duplicate faces), 100 instances of a sphere placed over each other, and a
  * sphere stretched 3000 times along y. The subdivision used to take the

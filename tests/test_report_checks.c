@@ -371,6 +371,22 @@ TEST(report_stats_ties_and_intervals)
     exp_est q;
     exp_est_ratio(a, b, 7, &q);
     CHECK(q.median > 0.45 && q.median < 0.55 && exp_ratio_cmp(&q, 0.05) == -1);
+    /* An even count of paired ratios: the estimate of b/a is the inverse of
+     * that of a/b (a finding quoting one and a table the other must agree;
+     * arithmetic middle means gave 2.35 against 1 / 0.51 = 1.98). */
+    {
+        double ta[4] = {10, 20, 30, 12}, tb[4] = {4, 5, 13, 7};
+        exp_est ab, ba;
+        exp_est_ratio(ta, tb, 4, &ab);
+        exp_est_ratio(tb, ta, 4, &ba);
+        exp_est inv = exp_est_inv(&ba, 1.0);
+        CHECKF(fabs(ab.median - inv.median) < 1e-12 * ab.median &&
+                   fabs(ab.lo - inv.lo) < 1e-12 * ab.lo && fabs(ab.hi - inv.hi) < 1e-12 * ab.hi,
+               "ratio %.6f [%.6f, %.6f], inverse of the inverse %.6f [%.6f, %.6f]", ab.median, ab.lo,
+               ab.hi, inv.median, inv.lo, inv.hi);
+        /* middle ratios 30/13 and 10/4: their geometric mean */
+        CHECK(fabs(ab.median - sqrt((30.0 / 13) * (10.0 / 4))) < 1e-12);
+    }
     /* Clopper-Pearson: 0 in n is about 3/n; 5 in 1000 is 1.16%. */
     CHECK(fabs(exp_binom_upper(0, 3000) - 3.0 / 3000) < 0.05 * 3.0 / 3000);
     CHECK(fabs(exp_binom_upper(5, 1000) - 0.01164) < 2e-4);
