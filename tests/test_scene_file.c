@@ -271,6 +271,11 @@ TEST(scene_file_errors)
     check_error("frobnicate 1\n", P,
                 "t.scene:1: unknown keyword 'frobnicate' (expected mesh, instance, camera or light)", 0);
     check_error("# comment\r\n\r\n  Mesh a tri\r\n", P, "t.scene:3: unknown keyword 'Mesh'", 0);
+    /* Words quoted in a message show control and non-ASCII bytes escaped,
+     * as the mesh loaders do: no terminal escape reaches the screen. */
+    check_error("\x1b[31mred\x1b[0m 1\n", P,
+                "t.scene:1: unknown keyword '\\x1B[31mred\\x1B[0m' (expected mesh", 0);
+    check_error("mesh a tri\ninstance \xed\xa0\x80\n", P, "t.scene:2: unknown mesh '\\xED\\xA0\\x80'", 0);
     check_error("\rmesh a tri\rinstance a scale 0\r", R, "t.scene:3: instance a: the transform is singular", 0);
     check_error("camera eye 0 0 0\n", P, "t.scene:1: camera needs eye and look", 0);
     check_error("camera eye 0 0 1 look 0 0 1\n", R, "t.scene:1: camera: eye and look are the same point", 0);

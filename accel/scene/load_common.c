@@ -113,15 +113,31 @@ int load_check_text(const char *name, const char *data, size_t size, size_t text
     return 0;
 }
 
+/* msg with control characters and bytes above ASCII as \xNN, as
+ * load_token_text shows tokens: words quoted from a file (a .scene's
+ * unknown keyword) must not put terminal escapes on the screen. */
+static void escape_controls(const char *msg, char *out, size_t size)
+{
+    size_t n = 0;
+    for (const unsigned char *p = (const unsigned char *)msg; *p && n + 5 < size; p++) {
+        if (*p < 0x20 || *p >= 0x7F)
+            n += (size_t)snprintf(out + n, size - n, "\\x%02X", *p);
+        else
+            out[n++] = (char)*p;
+    }
+    out[n] = 0;
+}
+
 int load_fail(const load_text *t, int code, const char *fmt, ...)
 {
     if (!t->err) return code;
-    char msg[400];
+    char msg[400], shown[400];
     va_list ap;
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    return accel_fail(t->err, code, "%s:%zu: %s", t->name, t->line, msg);
+    escape_controls(msg, shown, sizeof shown);
+    return accel_fail(t->err, code, "%s:%zu: %s", t->name, t->line, shown);
 }
 
 int load_fail_eof(const load_text *t, const char *fmt, ...)
