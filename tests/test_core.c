@@ -249,6 +249,24 @@ TEST(core_ray_hit_files_round_trip)
     CHECK(rays_read(rp, &in, &err) == ACCEL_ERR_PARSE);
     CHECKF(strstr(err.msg, rp) != NULL, "message names the file: %s", err.msg);
     CHECK(rays_read("build/does_not_exist.rays", &in, &err) == ACCEL_ERR_IO);
+    /* A directory is named as one, not as a truncated header. */
+    CHECK(rays_read("build", &in, &err) == ACCEL_ERR_IO);
+    CHECKF(strstr(err.msg, "not a regular file (a directory)") != NULL, "%s", err.msg);
+    /* Records FORMATS.md does not allow: a miss with a distance, a NaN t
+     * (which no |t1 - t2| test would ever call a disagreement). */
+    accel_hit miss_at = accel_hit_miss(), nan_t = {NAN, 3, 0, 0};
+    miss_at.t = 2.0f;
+    const accel_hit *bad[2] = {&miss_at, &nan_t};
+    const char *why[2] = {"hit record 1 is a miss (prim 0xFFFFFFFF) whose t is not +infinity",
+                          "hit record 1 is a hit whose t is NaN"};
+    for (int k = 0; k < 2; k++) {
+        accel_hit two[2] = {{1.5f, 7, 0.25f, 0.5f}, *bad[k]};
+        CHECK(hits_write(hp, two, 2, &err) == 0);
+        h = NULL;
+        CHECK(hits_read(hp, &h, &n, &err) == ACCEL_ERR_PARSE && h == NULL && n == 0);
+        CHECKF(strstr(err.msg, why[k]) && strstr(err.msg, hp) && strstr(err.msg, "byte 32"), "%s",
+               err.msg);
+    }
 }
 
 TEST(core_compare_rule)

@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "rays/rays.h"
 #include "scene/scene.h"
@@ -274,6 +275,12 @@ static int read_file(const char *path, const char magic[4], size_t elem, void **
     *count = 0;
     FILE *f = fopen(path, "rb");
     if (!f) return accel_fail(err, ACCEL_ERR_IO, "%s: cannot open: %s", path, strerror(errno));
+    struct stat st;
+    if (fstat(fileno(f), &st) == 0 && !S_ISREG(st.st_mode)) { /* sizes below need a file */
+        fclose(f);
+        return accel_fail(err, ACCEL_ERR_IO, "%s: not a regular file (a %s)", path,
+                          S_ISDIR(st.st_mode) ? "directory" : S_ISFIFO(st.st_mode) ? "pipe" : "device");
+    }
     unsigned char head[16];
     if (fread(head, 1, 16, f) != 16) {
         fclose(f);
@@ -377,7 +384,28 @@ int hits_read(const char *path, accel_hit **hits, size_t *count, accel_error *er
     void *data;
     int rc = read_file(path, "HITS", sizeof(accel_hit), &data, count, err);
     *hits = data;
-    return rc;
+    if (rc) return rc;
+    /* FORMATS.md: a miss has t = +infinity; a hit has a distance. A NaN
+     * would agree with anything in a comparison (no |t1 - t2| is > 1e-4 of
+     * it), and a miss with a distance is a record from a broken writer. */
+    for (size_t i = 0; i < *count; i++) {
+        const accel_hit *h = &(*hits)[i];
+        const char *bad = NULL;
+        if (h->prim == ACCEL_MISS)
+            bad = h->t == INFINITY ? NULL : "a miss (prim 0xFFFFFFFF) whose t is not +infinity";
+        else if (isnan(h->t))
+            bad = "a hit whose t is NaN";
+        else if (isnan(h->u) || isnan(h->v))
+            bad = "a hit whose u or v is NaN";
+        if (!bad) continue;
+        accel_fail(err, ACCEL_ERR_PARSE, "%s: byte %llu: hit record %zu is %s (t %g, prim %u)", path,
+                   16ull + 16ull * i, i, bad, (double)h->t, h->prim);
+        free(*hits);
+        *hits = NULL;
+        *count = 0;
+        return ACCEL_ERR_PARSE;
+    }
+    return 0;
 }
 
 /* ---- comparison ------------------------------------------------------------ */
