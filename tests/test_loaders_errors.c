@@ -43,6 +43,9 @@ static const bad_case bad_cases[] = {
     {"t.off", "OFF\n3 2 0\n0.0000000 0.0000000 0.0000000\n1 0 0\n0 1 0\n3 0 1 2\n", 0,
      "t.off:6: unexpected end of file: 1 of 2 faces read"},
     {"t.off", "OFF\n3 1 0\n0.00000000000 0 0\n1 0 0\n0 1", 0, "t.off:5: unexpected end of file: expected z coordinate"},
+    /* a few bytes short of the counts' minimum: parsed, so the line is named */
+    {"t.off", OFF_HEAD "0\n", 0, "t.off:6: face with 0 vertices (at least 3 needed)"},
+    {"t.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1\n3 0 1 2\n", 0, "t.off:5: expected z coordinate, found end of line"},
     {"t.off", "OFF\n2147483648 1 0\n", 0, "t.off:2: 2147483648 vertices and 1 faces declared, but only 0 bytes follow"},
     {"t.off", "OFF\n# a kilobyte would not hold them\n3 4294967296\n0 0 0\n", 0, "t.off:3: 3 vertices and 4294967296 faces declared"},
     {"t.off", "OFF\n-3 1 0\n", 0, "t.off:2: negative count"},

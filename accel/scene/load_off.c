@@ -86,8 +86,13 @@ static int parse_off(load_text *t, scene_builder *b, float **verts_out)
     /* Bound the declared counts by what the rest of the file could hold
      * (the last line may lack its line end) before allocating anything. */
     uint64_t left = (uint64_t)(t->end - t->p) + 1;
+    /* Twice the bytes left, plus a little: a file a few bytes short of its
+     * counts' minimum (a short line "0" where a face belongs) is parsed, so
+     * that the error names that line; only counts far beyond the file are
+     * refused here, and the allocation stays within a few times its size. */
+    uint64_t room = 2 * left + 64;
     if ((uint64_t)nv > left || (uint64_t)nf > left ||
-        (uint64_t)nv * OFF_MIN_VERTEX_BYTES + (uint64_t)nf * OFF_MIN_FACE_BYTES > left) {
+        (uint64_t)nv * OFF_MIN_VERTEX_BYTES + (uint64_t)nf * OFF_MIN_FACE_BYTES > room) {
         t->line = counts_line;
         return load_fail(t, ACCEL_ERR_RANGE,
                          "%lld vertices and %lld faces declared, but only %zu bytes follow "
