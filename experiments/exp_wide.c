@@ -88,6 +88,7 @@ typedef struct {
     exp_text findings;
     int met[3], tie[3], scenes;
     int two[3]; /* rows of 2 threads over 1: met, not met, all */
+    int heat;   /* scenes with heatmaps so far (their images' numbers) */
 } study;
 
 /* One row of a scene's targets table, quoted by its finding (t == 0: no target). */
@@ -172,9 +173,38 @@ static void build_table(exp_ctx *x, const accel_scene *s, const exp_group *g)
 typedef struct {
     const char *spec;
     int div;
+    int heat; /* heatmaps of the widths on this scene (heatmaps()) */
 } scene_def;
 
-static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, const exp_list *list)
+/* Issue 11's "heatmaps of the wide trees look right": node visits and
+ * primitive tests per primary ray of each width, and of the 8-wide packets,
+ * on one colour scale per row so that the widths compare colour for
+ * colour, at 320x240 (the structure shows; the report stays small). */
+static const char *const heat_steps[] = {"bvh", "bvh:width=4", "bvh:width=8", PACKET8};
+static const char *const heat_prims[] = {"bvh", "bvh:width=4", "bvh:width=8"};
+
+static void heatmaps(exp_ctx *x, const accel_scene *s, int index)
+{
+    bench_sets sets;
+    exp_sets_wh(x, s, BENCH_PRIMARY, 320, 240, 1, &sets);
+    char prefix[64];
+    exp_md(x, "\nHeatmaps on %s, primary rays at 320x240 (brighter = more; one colour scale per "
+              "row, so the widths compare colour for colour). A step of a wide tree is the visit "
+              "of a node (its W child boxes tested at once) or of a leaf; its primitive tests "
+              "count the distinct primitives of every leaf block tested. The packets charge each of "
+              "their steps to the packet's rays from its first active ray on, so 8x8 tiles show:\n",
+           s->name);
+    snprintf(prefix, sizeof prefix, "wide_heat_steps_%d", index);
+    exp_heatmaps_shared(x, heat_steps, (int)(sizeof heat_steps / sizeof heat_steps[0]), s, &sets, 's',
+                        prefix);
+    snprintf(prefix, sizeof prefix, "wide_heat_prims_%d", index);
+    exp_heatmaps_shared(x, heat_prims, (int)(sizeof heat_prims / sizeof heat_prims[0]), s, &sets, 'p',
+                        prefix);
+    bench_sets_free(&sets);
+}
+
+static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, int heat,
+                          const exp_list *list)
 {
     accel_scene s;
     char why[640];
@@ -325,6 +355,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, cons
 done:
     exp_group_free(&g);
     bench_sets_free(&sets);
+    if (heat) heatmaps(x, &s, st->heat++);
     scene_free(&s);
 }
 
@@ -335,10 +366,12 @@ int main(int argc, char **argv)
     char *rest[64];
     int rest_count = 0;
     for (int i = 0; i < argc && rest_count < 63; i++) {
-        if (i + 1 < argc && !strcmp(argv[i], "--scene") && scene_count < MAX_SCENES)
-            scenes[scene_count++] = (scene_def){argv[++i], 1};
-        else
+        if (i + 1 < argc && !strcmp(argv[i], "--scene") && scene_count < MAX_SCENES) {
+            scenes[scene_count] = (scene_def){argv[++i], 1, scene_count == 0}; /* heatmaps of the first */
+            scene_count++;
+        } else {
             rest[rest_count++] = argv[i];
+        }
     }
     rest[rest_count] = NULL;
     exp_ctx x;
@@ -348,15 +381,15 @@ int main(int argc, char **argv)
              "                   teapot_stadium, sphereflake:spheres=0, slivers)\n");
     if (scene_count == 0) {
         if (x.quick) {
-            scenes[scene_count++] = (scene_def){"sphereflake:level=1,spheres=0", 1};
-            scenes[scene_count++] = (scene_def){"slivers:tris=3000,slivers=100", 1};
+            scenes[scene_count++] = (scene_def){"sphereflake:level=1,spheres=0", 1, 1};
+            scenes[scene_count++] = (scene_def){"slivers:tris=3000,slivers=100", 1, 0};
         } else {
             for (int i = 0; i < x.mesh_count && scene_count < MAX_SCENES - 4; i++)
-                scenes[scene_count++] = (scene_def){x.meshes[i], 1};
-            scenes[scene_count++] = (scene_def){"soup:tris=1000000", 2};
-            scenes[scene_count++] = (scene_def){"teapot_stadium", 1};
-            scenes[scene_count++] = (scene_def){"sphereflake:spheres=0", 2};
-            scenes[scene_count++] = (scene_def){"slivers", 4};
+                scenes[scene_count++] = (scene_def){x.meshes[i], 1, i == 0};
+            scenes[scene_count++] = (scene_def){"soup:tris=1000000", 2, 0};
+            scenes[scene_count++] = (scene_def){"teapot_stadium", 1, 1};
+            scenes[scene_count++] = (scene_def){"sphereflake:spheres=0", 2, 0};
+            scenes[scene_count++] = (scene_def){"slivers", 4, 0};
         }
     }
     /* 800x600 passes of 1.4M-triangle scenes: a measured budget per
@@ -386,7 +419,7 @@ int main(int argc, char **argv)
     exp_list list;
     exp_list_make(&x, configs, (int)(sizeof configs / sizeof configs[0]), NULL, &list);
     study st = {0};
-    for (int i = 0; i < scene_count; i++) measure_scene(&x, &st, scenes[i].spec, scenes[i].div, &list);
+    for (int i = 0; i < scene_count; i++) measure_scene(&x, &st, scenes[i].spec, scenes[i].div, scenes[i].heat, &list);
     exp_md(&x, "\n**Findings** (best wide single kernel = the 4- or 8-wide single-ray kernel with "
                "the lowest median time on that set; coherent compared with it in the same rounds):\n\n%s",
            exp_text_str(&st.findings));

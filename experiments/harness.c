@@ -497,13 +497,18 @@ void exp_svg(exp_ctx *x, void *plot, const char *name, const char *caption)
     svg_free(plot);
 }
 
-int exp_heatmap(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets *sets,
-                char what, const char *image_name, const char *caption, char *why, size_t why_n)
+/* The counted primary pass of exp_heatmap: steps ('s') or primitive tests
+ * ('p') per pixel into *values (malloc'ed, width*height of the set), their
+ * mean per ray and the kind. Returns 0 or nonzero (reason in why). */
+static int heat_values(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets *sets,
+                       char what, float **values, double *mean, const accel_kind **kind_out, char *why,
+                       size_t why_n)
 {
     accel_error err = {0};
     const accel_kind *kind;
     void *accel;
     accel_build_stats st;
+    *values = NULL;
     if (accel_build_spec(spec, s, x->threads, &kind, &accel, &st, &err)) {
         snprintf(why, why_n, "%s", err.msg);
         return 1;
@@ -522,42 +527,119 @@ int exp_heatmap(exp_ctx *x, const char *spec, const accel_scene *s, const bench_
         if (accel_counters_status(&c, &err)) {
             exp_internal(x, spec, &err);
             snprintf(why, why_n, "%s", err.msg);
-            goto done;
+        } else {
+            double total = 0;
+            for (size_t i = 0; i < n; i++) {
+                uint32_t val = what == 's' ? steps[i] : prims[i];
+                v[r->pixel[i]] = (float)val;
+                total += val;
+            }
+            *mean = n ? total / (double)n : 0.0;
+            *kind_out = kind;
+            *values = v;
+            v = NULL;
+            rc = 0;
         }
-        double total = 0;
-        for (size_t i = 0; i < n; i++) {
-            uint32_t val = what == 's' ? steps[i] : prims[i];
-            v[r->pixel[i]] = (float)val;
-            total += val;
-        }
-        image_rgb img;
-        char path[1024], title[256], scale[96];
-        const char *unit = what == 's' ? kind->step_name : "primitive tests";
-        snprintf(path, sizeof path, "%s/%s.png", x->out_dir, image_name);
-        image_heat_title(title, sizeof title, spec, kind, what != 's');
-        snprintf(scale, sizeof scale, "%s colour scale from 0 to %s",
-                 x->heat_scale.log ? "logarithmic" : "linear",
-                 x->heat_scale.max > 0 ? "a fixed maximum" : "the image's maximum");
-        if (image_heatmap(v, r->width, r->height, &x->heat_scale, title, &img, &err) == 0) {
-            rc = image_write(path, &img, &err);
-            image_free(&img);
-        }
-        if (rc == 0)
-            exp_md(x, "\n%s (mean %.1f %s per ray; %s, printed under the image):\n\n"
-                      "<!-- image: %s -->\n",
-                   caption, n ? total / (double)n : 0.0, unit, scale, image_name);
-        else
-            snprintf(why, why_n, "%s", err.msg);
     } else {
         snprintf(why, why_n, "out of memory");
     }
-done:
     free(steps);
     free(prims);
     free(v);
     free(hits);
     kind->destroy(accel);
     return rc;
+}
+
+/* Writes the values of heat_values as DIR/<image_name>.png on `scale` and
+ * adds it to the section. */
+static int heat_write(exp_ctx *x, const char *spec, const accel_kind *kind, const rays_set *r,
+                      const float *v, double mean, char what, const image_heat_scale *scale,
+                      const char *image_name, const char *caption, char *why, size_t why_n)
+{
+    accel_error err = {0};
+    image_rgb img;
+    char path[1024], title[256], scale_text[96];
+    const char *unit = what == 's' ? kind->step_name : "primitive tests";
+    snprintf(path, sizeof path, "%s/%s.png", x->out_dir, image_name);
+    image_heat_title(title, sizeof title, spec, kind, what != 's');
+    if (scale->max > 0)
+        snprintf(scale_text, sizeof scale_text, "%s colour scale from 0 to %g",
+                 scale->log ? "logarithmic" : "linear", (double)scale->max);
+    else
+        snprintf(scale_text, sizeof scale_text, "%s colour scale from 0 to the image's maximum",
+                 scale->log ? "logarithmic" : "linear");
+    int rc = image_heatmap(v, r->width, r->height, scale, title, &img, &err);
+    if (rc == 0) {
+        rc = image_write(path, &img, &err);
+        image_free(&img);
+    }
+    if (rc == 0)
+        exp_md(x, "\n%s (mean %.1f %s per ray; %s, printed under the image):\n\n"
+                  "<!-- image: %s -->\n",
+               caption, mean, unit, scale_text, image_name);
+    else
+        snprintf(why, why_n, "%s", err.msg);
+    return rc;
+}
+
+int exp_heatmap(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets *sets,
+                char what, const char *image_name, const char *caption, char *why, size_t why_n)
+{
+    float *v;
+    double mean;
+    const accel_kind *kind;
+    if (heat_values(x, spec, s, sets, what, &v, &mean, &kind, why, why_n)) return 1;
+    int rc = heat_write(x, spec, kind, &sets->primary, v, mean, what, &x->heat_scale, image_name, caption,
+                        why, why_n);
+    free(v);
+    return rc;
+}
+
+int exp_heatmaps_shared(exp_ctx *x, const char *const *specs, int count, const accel_scene *s,
+                        const bench_sets *sets, char what, const char *prefix)
+{
+    const rays_set *r = &sets->primary;
+    size_t pixels = (size_t)r->width * r->height;
+    float **v = calloc((size_t)count, sizeof *v);
+    double *mean = calloc((size_t)count, sizeof *mean);
+    const accel_kind **kind = calloc((size_t)count, sizeof *kind);
+    char why[600];
+    int written = 0;
+    if (!v || !mean || !kind) {
+        exp_md(x, "\nHeatmaps on %s: skipped (out of memory)\n", s->name);
+        goto done;
+    }
+    /* One scale for the row: a fixed --heat-scale max, else the largest
+     * value of any of its images. */
+    image_heat_scale scale = x->heat_scale;
+    float top = 0;
+    for (int i = 0; i < count; i++) {
+        if (heat_values(x, specs[i], s, sets, what, &v[i], &mean[i], &kind[i], why, sizeof why)) {
+            exp_md(x, "\n`%s` on %s: skipped (%s)\n", specs[i], s->name, why);
+            continue;
+        }
+        for (size_t p = 0; p < pixels; p++) top = v[i][p] > top ? v[i][p] : top;
+    }
+    if (scale.max <= 0) scale.max = top > 0 ? top : 1;
+    for (int i = 0; i < count; i++) {
+        if (!v[i]) continue;
+        char name[160], caption[256];
+        snprintf(name, sizeof name, "%s_%d", prefix, i);
+        snprintf(caption, sizeof caption, "`%s` on %s", specs[i], s->name);
+        if (heat_write(x, specs[i], kind[i], r, v[i], mean[i], what, &scale, name, caption, why,
+                       sizeof why))
+            exp_md(x, "\n`%s` on %s: skipped (%s)\n", specs[i], s->name, why);
+        else
+            written++;
+    }
+done:
+    if (v)
+        for (int i = 0; i < count; i++) free(v[i]);
+    free(v);
+    free(mean);
+    free(kind);
+    return written;
 }
 
 const char *exp_fmt_timing(char *buf, size_t n, const accel_timing *t, int decimals)
