@@ -14,7 +14,10 @@
  * paired per-round ratio with its bootstrap interval. Builds are timed
  * apart, in their own interleaved rounds, once per tree (the coherent
  * kernels trace the same tree). Slow scenes get fewer rounds: a measured
- * time budget per configuration (the footer gives the range).
+ * time budget per configuration (the footer gives the range). On the first
+ * mesh and teapot_stadium (or the first --scene), heatmaps of node visits
+ * and primitive tests per primary ray for widths 2, 4 and 8 on one colour
+ * scale per row.
  *
  *   bin/exp_wide [--scene SPEC]... [harness options]
  */
