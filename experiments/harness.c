@@ -555,17 +555,19 @@ static int heat_values(exp_ctx *x, const char *spec, const accel_scene *s, const
  * adds it to the section. */
 static int heat_write(exp_ctx *x, const char *spec, const accel_kind *kind, const rays_set *r,
                       const float *v, double mean, char what, const image_heat_scale *scale,
-                      const char *image_name, const char *caption, char *why, size_t why_n)
+                      const char *top_note, const char *image_name, const char *caption, char *why,
+                      size_t why_n)
 {
     accel_error err = {0};
     image_rgb img;
-    char path[1024], title[256], scale_text[96];
+    char path[1024], title[256], scale_text[160];
     const char *unit = what == 's' ? kind->step_name : "primitive tests";
     snprintf(path, sizeof path, "%s/%s.png", x->out_dir, image_name);
     image_heat_title(title, sizeof title, spec, kind, what != 's');
     if (scale->max > 0)
-        snprintf(scale_text, sizeof scale_text, "%s colour scale from 0 to %g",
-                 scale->log ? "logarithmic" : "linear", (double)scale->max);
+        snprintf(scale_text, sizeof scale_text, "%s colour scale from 0 to %g%s%s%s",
+                 scale->log ? "logarithmic" : "linear", (double)scale->max, top_note ? " (" : "",
+                 top_note ? top_note : "", top_note ? ")" : "");
     else
         snprintf(scale_text, sizeof scale_text, "%s colour scale from 0 to the image's maximum",
                  scale->log ? "logarithmic" : "linear");
@@ -590,10 +592,19 @@ int exp_heatmap(exp_ctx *x, const char *spec, const accel_scene *s, const bench_
     double mean;
     const accel_kind *kind;
     if (heat_values(x, spec, s, sets, what, &v, &mean, &kind, why, why_n)) return 1;
-    int rc = heat_write(x, spec, kind, &sets->primary, v, mean, what, &x->heat_scale, image_name, caption,
-                        why, why_n);
+    int rc = heat_write(x, spec, kind, &sets->primary, v, mean, what, &x->heat_scale, NULL, image_name,
+                        caption, why, why_n);
     free(v);
     return rc;
+}
+
+/* The share of a shared heatmap row's pixels below the top of its scale. */
+#define HEAT_ROW_QUANTILE 0.995
+
+static int cmp_float(const void *a, const void *b)
+{
+    float x = *(const float *)a, y = *(const float *)b;
+    return (x > y) - (x < y);
 }
 
 int exp_heatmaps_shared(exp_ctx *x, const char *const *specs, int count, const accel_scene *s,
@@ -610,25 +621,38 @@ int exp_heatmaps_shared(exp_ctx *x, const char *const *specs, int count, const a
         exp_md(x, "\nHeatmaps on %s: skipped (out of memory)\n", s->name);
         goto done;
     }
-    /* One scale for the row: a fixed --heat-scale max, else the largest
-     * value of any of its images. */
+    /* One scale for the row: a fixed --heat-scale max, else the 99.5th
+     * percentile of all its images' pixels (the largest value alone is one
+     * silhouette pixel that leaves every other image dark; the few above
+     * it saturate, and the legend says "N+"). */
     image_heat_scale scale = x->heat_scale;
-    float top = 0;
+    float *pool = malloc((size_t)count * pixels * sizeof *pool);
+    size_t pooled = 0;
     for (int i = 0; i < count; i++) {
         if (heat_values(x, specs[i], s, sets, what, &v[i], &mean[i], &kind[i], why, sizeof why)) {
             exp_md(x, "\n`%s` on %s: skipped (%s)\n", specs[i], s->name, why);
             continue;
         }
-        for (size_t p = 0; p < pixels; p++) top = v[i][p] > top ? v[i][p] : top;
+        if (pool) memcpy(pool + pooled, v[i], pixels * sizeof *pool), pooled += pixels;
     }
-    if (scale.max <= 0) scale.max = top > 0 ? top : 1;
+    if (scale.max <= 0) {
+        float top = 0;
+        if (pooled) {
+            qsort(pool, pooled, sizeof *pool, cmp_float);
+            top = pool[(size_t)ceil(HEAT_ROW_QUANTILE * (double)pooled) - 1];
+            if (top <= 0) top = pool[pooled - 1];
+        }
+        scale.max = top > 0 ? top : 1;
+    }
+    free(pool);
     for (int i = 0; i < count; i++) {
         if (!v[i]) continue;
         char name[160], caption[256];
         snprintf(name, sizeof name, "%s_%d", prefix, i);
         snprintf(caption, sizeof caption, "`%s` on %s", specs[i], s->name);
-        if (heat_write(x, specs[i], kind[i], r, v[i], mean[i], what, &scale, name, caption, why,
-                       sizeof why))
+        if (heat_write(x, specs[i], kind[i], r, v[i], mean[i], what, &scale,
+                       x->heat_scale.max > 0 ? NULL : "the row's 99.5th percentile, brighter pixels saturate",
+                       name, caption, why, sizeof why))
             exp_md(x, "\n`%s` on %s: skipped (%s)\n", specs[i], s->name, why);
         else
             written++;

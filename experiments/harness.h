@@ -196,8 +196,8 @@ void exp_svg(exp_ctx *x, void *plot, const char *name, const char *caption);
 int exp_heatmap(exp_ctx *x, const char *spec, const accel_scene *s, const bench_sets *sets,
                 char what, const char *image_name, const char *caption, char *why, size_t why_n);
 /* The same for each of `count` specs on one colour scale (a fixed
- * --heat-scale max, else the largest value of any of the images), so the
- * row compares colour for colour: DIR/<prefix>_<i>.png. A spec that
+ * --heat-scale max, else the 99.5th percentile of all the images'
+ * pixels; brighter ones saturate), so the row compares colour for colour: DIR/<prefix>_<i>.png. A spec that
  * cannot be built or traced is skipped with its reason in the section.
  * Returns the number of images written. */
 int exp_heatmaps_shared(exp_ctx *x, const char *const *specs, int count, const accel_scene *s,
