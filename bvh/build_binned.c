@@ -10,7 +10,9 @@
  * partition pass: O(N) per level, O(N log N) in all.
  *
  * Knobs: bins = K (2..256) and axes = 1 (only the axis of greatest centroid
- * extent, as the lecture describes) or 3 (all axes, the better plane).
+ * extent, as the lecture describes) or 3 (all axes, the better plane). A
+ * bin holding a large share of a big node's centroids is binned again
+ * (refine_cluster, below: the teapot in a stadium).
  * Near the root the binning pass is split across threads; the per-chunk
  * bins are merged with min/max and integer sums, which are exact, so the
  * chosen plane does not depend on the thread count.
@@ -18,139 +20,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "build_binned_view.h"
 #include "build_common.h"
-
-#if BVH_SSE
-#include <immintrin.h>
-#endif
 
 #define BINS_MAX 256
 /* Tasks of at least 2 * BIN_CHUNK references are binned by all threads. */
 #define BIN_CHUNK 16384
-
-/* ---- boxes and bin indices, 4-wide where the machine has SSE ------------- */
-
-#if BVH_SSE
-typedef struct {
-    __m128 lo, hi; /* lane 3 unused */
-} box4;
-
-static inline void box4_clear(box4 *b)
-{
-    b->lo = _mm_set1_ps(INFINITY);
-    b->hi = _mm_set1_ps(-INFINITY);
-}
-
-static inline void box4_union(box4 *b, const box4 *o)
-{
-    b->lo = _mm_min_ps(b->lo, o->lo);
-    b->hi = _mm_max_ps(b->hi, o->hi);
-}
-
-static inline box3 box4_to_box3(const box4 *b)
-{
-    float lo[4], hi[4];
-    _mm_storeu_ps(lo, b->lo);
-    _mm_storeu_ps(hi, b->hi);
-    box3 r = {{lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]}};
-    return r;
-}
-#else
-typedef struct {
-    box3 b;
-} box4;
-
-static inline void box4_clear(box4 *b) { b->b = box3_empty(); }
-static inline void box4_union(box4 *b, const box4 *o) { b->b = box3_union(b->b, o->b); }
-static inline box3 box4_to_box3(const box4 *b) { return b->b; }
-#endif
-
-/*
- * Half area of a box with its extents scaled by `scale` (1 / the node's
- * largest extent): the same factor on every axis keeps areas proportional,
- * and relative areas are at most 3, so the sweep can run in float without
- * overflow whatever the scene's size.
- */
-#if BVH_SSE
-static inline float box4_scaled_area(const box4 *b, __m128 scale)
-{
-    __m128 e = _mm_mul_ps(_mm_sub_ps(b->hi, b->lo), scale); /* lane 3: 0 */
-    __m128 p = _mm_mul_ps(e, _mm_shuffle_ps(e, e, _MM_SHUFFLE(3, 0, 2, 1))); /* xy yz zx 0 */
-    p = _mm_add_ps(p, _mm_movehl_ps(p, p));
-    return _mm_cvtss_f32(_mm_add_ss(p, _mm_shuffle_ps(p, p, 1)));
-}
-#else
-static inline float box4_scaled_area(const box4 *b, float scale)
-{
-    vec3 e = v3_scale(box3_extent(b->b), scale);
-    return e.x * e.y + e.y * e.z + e.z * e.x;
-}
-#endif
-
-/* Which axes to bin and how centroids map to bins, per axis (lane). */
-typedef struct {
-    int axis_count;
-    int axis[3];             /* the axes binned */
-    _Alignas(16) float cmin[4];
-    _Alignas(16) float scale[4]; /* bins per unit of centroid coordinate; 0 on unused axes */
-    int bins;
-} bin_plan;
-
-/*
- * A reference as the binner sees it: its box, its centroid, and its bin on
- * each axis (bin[axis]). Binning and partitioning both use this one
- * function, so that they can never disagree about a reference. The
- * centroid is 0.5*lo + 0.5*hi as bvh_ref_centroid computes it; a rounding
- * difference from the centroid bounds only moves a reference by a bin, and
- * the clamps keep every bin inside [0, bins-1].
- */
-typedef struct {
-    box4 box;
-#if BVH_SSE
-    __m128 c; /* lane 3: 0 */
-#else
-    vec3 c;
-#endif
-    int bin[4];
-} ref_view;
-
-#if BVH_SSE
-/* A reference's box (lo, hi), centroid c and bin coordinates per axis,
- * clamped to [0, bins-1] (`top`): the bin is their truncation. cmin and
- * scale are the plan's, passed in so that a loop keeps them in registers. */
-static inline __m128 view_coords(const bvh_ref *r, __m128 cmin, __m128 scale, __m128 top, box4 *box,
-                                 __m128 *c)
-{
-    /* Lane 3 (id bits: a denormal as a float) is cleared before any
-     * arithmetic: denormal operands cost a microcode assist each. */
-    const __m128 xyz = _mm_castsi128_ps(_mm_setr_epi32(-1, -1, -1, 0));
-    const __m128 half = _mm_set1_ps(0.5f);
-    box->lo = _mm_and_ps(_mm_loadu_ps(r->lo), xyz);
-    box->hi = _mm_and_ps(_mm_loadu_ps(r->hi), xyz);
-    *c = _mm_add_ps(_mm_mul_ps(box->lo, half), _mm_mul_ps(box->hi, half));
-    __m128 f = _mm_mul_ps(_mm_sub_ps(*c, cmin), scale);
-    f = _mm_max_ps(f, _mm_setzero_ps()); /* also turns a NaN into 0 */
-    return _mm_min_ps(f, top);
-}
-#endif
-
-static inline void view_ref(const bin_plan *p, const bvh_ref *r, ref_view *v)
-{
-#if BVH_SSE
-    __m128 f = view_coords(r, _mm_load_ps(p->cmin), _mm_load_ps(p->scale),
-                           _mm_set1_ps((float)(p->bins - 1)), &v->box, &v->c);
-    _mm_storeu_si128((__m128i *)v->bin, _mm_cvttps_epi32(f));
-#else
-    v->box.b = bvh_ref_box(r);
-    v->c = bvh_ref_center(r);
-    for (int a = 0; a < 3; a++) {
-        float f = (v3_get(v->c, a) - p->cmin[a]) * p->scale[a];
-        f = f > 0.0f ? f : 0.0f;
-        f = f < (float)(p->bins - 1) ? f : (float)(p->bins - 1);
-        v->bin[a] = (int)f;
-    }
-#endif
-}
 
 /* ---- bins ------------------------------------------------------------------- */
 
@@ -196,6 +71,7 @@ typedef struct {
     box4 box;
     uint32_t count;
     int bin;
+    int sub; /* a sub-bin of the refined bin (refine_cluster), -1: the whole bin */
 } bin_group;
 
 static void clear_bins(bin_set *s, const bin_plan *p)
@@ -338,6 +214,7 @@ static void groups_from_bins(bvh_build *ctx, const bvh_task *t, int threads, con
             x->box = bin_box_get(&sets->box[a][b]);
             x->count = sets->count[a][b];
             x->bin = b;
+            x->sub = -1;
             m += sets->count[a][b] != 0;
         }
         ng[k] = m;
@@ -383,6 +260,7 @@ static void groups_sparse(const bvh_build *ctx, const bvh_task *t, const bin_pla
                 gr->box = box[x];
                 gr->count = count[x];
                 gr->bin = x;
+                gr->sub = -1;
             }
     }
 }
@@ -492,6 +370,117 @@ static uint32_t partition(bvh_ref *r, uint32_t n, const bin_plan *plan, int axis
     return l;
 }
 
+/*
+ * Clustered centroids (Haines' "teapot in a stadium"): when one bin of an
+ * axis holds most of a large node's references, every plane the K bins
+ * offer either leaves the cluster whole among far larger primitives or
+ * cuts through it where a bin boundary happens to fall: with 16 bins over
+ * teapot_stadium's 8000 units, the root's best plane kept the first tier
+ * of the stands with the teapot, and the next one cut the teapot in half,
+ * so rays to its near half tested the 36 floor triangles under it first
+ * (REPORT.md's heatmaps showed it; the full sweep, build=sah, kept the
+ * teapot whole). Such a bin is binned again into K sub-bins of its own
+ * extent, and the sweep sees the planes between them too: more
+ * candidates, never a worse greedy choice, for one more pass over the
+ * node's references. Only nodes of at least REFINE_MIN references with
+ * more than a quarter of them in one bin qualify: the scanned meshes, the
+ * soups and slivers have none, and their trees are the ones before, bit
+ * for bit (bvh/README.md, "Clustered centroids").
+ */
+#define REFINE_MIN 1024
+
+/* The sub-plan of bin `bin` on axis a: the bin's extent cut in plan->bins. */
+static void sub_plan(const bin_plan *plan, int a, int bin, bin_plan *sp)
+{
+    *sp = *plan;
+    sp->axis_count = 1;
+    sp->axis[0] = a;
+    for (int k = 0; k < 4; k++) sp->scale[k] = 0.0f, sp->cmin[k] = 0.0f;
+    sp->cmin[a] = plan->cmin[a] + (float)bin / plan->scale[a];
+    sp->scale[a] = plan->scale[a] * (float)plan->bins;
+}
+
+/* If axis k's fullest group holds more than a quarter of t's references, the
+ * groups of that axis with its bin replaced by its non-empty sub-bins, in
+ * order. Returns 1 when it refined. */
+static int refine_cluster(const bvh_build *ctx, const bvh_task *t, const bin_plan *plan, int k,
+                          bin_group *g, int *ng)
+{
+    if (t->count < REFINE_MIN || *ng < 1 || *ng - 1 + plan->bins > BINS_MAX) return 0;
+    int c = 0;
+    for (int i = 1; i < *ng; i++) c = g[i].count > g[c].count ? i : c;
+    if ((uint64_t)g[c].count * 4 <= t->count) return 0;
+    int a = plan->axis[k], bin = g[c].bin;
+    bin_plan sp;
+    sub_plan(plan, a, bin, &sp);
+    if (!(sp.scale[a] > 0.0f) || !isfinite(sp.scale[a]) || !isfinite(sp.cmin[a])) return 0;
+    box4 box[BINS_MAX];
+    uint32_t count[BINS_MAX] = {0};
+    for (int i = 0; i < plan->bins; i++) box4_clear(&box[i]);
+    const bvh_ref *refs = ctx->refs + t->first;
+    for (uint32_t i = 0; i < t->count; i++) {
+        ref_view v, w;
+        view_ref(plan, &refs[i], &v);
+        if (v.bin[a] != bin) continue;
+        view_ref(&sp, &refs[i], &w);
+        box4_union(&box[w.bin[a]], &w.box);
+        count[w.bin[a]]++;
+    }
+    int subs = 0;
+    for (int i = 0; i < plan->bins; i++) subs += count[i] != 0;
+    if (subs < 2) return 0; /* one sub-bin: nothing new to cut */
+    /* shift the groups after the cluster to make room, then fill it */
+    memmove(&g[c + subs], &g[c + 1], (size_t)(*ng - c - 1) * sizeof *g);
+    int m = c;
+    for (int i = 0; i < plan->bins; i++) {
+        if (!count[i]) continue;
+        g[m].box = box[i];
+        g[m].count = count[i];
+        g[m].bin = bin;
+        g[m].sub = i;
+        m++;
+    }
+    *ng += subs - 1;
+    return 1;
+}
+
+/* partition() for a plane inside a refined bin: a reference goes left when
+ * its bin on `axis` is below `bin`, or is `bin` with its sub-bin at most
+ * `sub` (sub_plan, the same view_ref as refine_cluster's). Rare (the top of
+ * clustered scenes), so scalar. */
+static uint32_t partition_refined(bvh_ref *r, uint32_t n, const bin_plan *plan, int axis, int bin,
+                                  int sub, box3 *lc, box3 *rc)
+{
+    bin_plan sp;
+    sub_plan(plan, axis, bin, &sp);
+    *lc = box3_empty();
+    *rc = box3_empty();
+    uint32_t l = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        ref_view v, w;
+        view_ref(plan, &r[i], &v);
+        int left = v.bin[axis] < bin;
+        if (v.bin[axis] == bin) {
+            view_ref(&sp, &r[i], &w);
+            left = w.bin[axis] <= sub;
+        }
+#if BVH_SSE
+        float c4[4];
+        _mm_storeu_ps(c4, v.c);
+        vec3 c = v3(c4[0], c4[1], c4[2]);
+#else
+        vec3 c = v.c;
+#endif
+        if (left)
+            *lc = box3_grow(*lc, c);
+        else
+            *rc = box3_grow(*rc, c);
+        ref_swap(r + i, r + l);
+        l += (uint32_t)left;
+    }
+    return l;
+}
+
 static void binned_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_split *out)
 {
     out->left_count = 0;
@@ -512,6 +501,7 @@ static void binned_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_spl
         groups_sparse(ctx, t, &plan, groups, ng);
     else
         groups_from_bins(ctx, t, threads, &plan, groups, ng);
+    for (int k = 0; k < plan.axis_count; k++) refine_cluster(ctx, t, &plan, k, groups[k], &ng[k]);
 
     /* 2. Sweep: right-to-left suffix areas, then left-to-right costs. The
      * plane after group i sends groups 0..i left. Ties keep the first plane
@@ -555,9 +545,12 @@ static void binned_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_spl
 
     /* 3. Partition in place, growing the children's centroid bounds on the
      * way; their boxes come from the groups. */
-    int best_bin = groups[best_k][best_g].bin;
+    int best_bin = groups[best_k][best_g].bin, best_sub = groups[best_k][best_g].sub;
     box3 lc, rc;
-    uint32_t nl = partition(ctx->refs + t->first, t->count, &plan, plan.axis[best_k], best_bin, &lc, &rc);
+    uint32_t nl = best_sub < 0 ? partition(ctx->refs + t->first, t->count, &plan, plan.axis[best_k], best_bin,
+                                           &lc, &rc)
+                               : partition_refined(ctx->refs + t->first, t->count, &plan, plan.axis[best_k],
+                                                   best_bin, best_sub, &lc, &rc);
     box4 lb, rb;
     box4_clear(&lb);
     box4_clear(&rb);
