@@ -383,7 +383,8 @@ static uint32_t partition(bvh_ref *r, uint32_t n, const bin_plan *plan, int axis
  * extent, and the sweep sees the planes between them too: more
  * candidates, never a worse greedy choice, for one more pass over the
  * node's references. Only nodes of at least REFINE_MIN references with
- * more than a quarter of them in one bin qualify: the scanned meshes, the
+ * more than a quarter of them, and more than four times a bin's share, in
+ * one bin qualify (so never with 2 or 4 bins): the scanned meshes, the
  * soups and slivers have none, and their trees are the ones before, bit
  * for bit (bvh/README.md, "Clustered centroids").
  */
@@ -409,7 +410,11 @@ static int refine_cluster(const bvh_build *ctx, const bvh_task *t, const bin_pla
     if (t->count < REFINE_MIN || *ng < 1 || *ng - 1 + plan->bins > BINS_MAX) return 0;
     int c = 0;
     for (int i = 1; i < *ng; i++) c = g[i].count > g[c].count ? i : c;
-    if ((uint64_t)g[c].count * 4 <= t->count) return 0;
+    /* four times its share of the node and a quarter of it: with 2 or 4
+     * bins every node has such a bin, and those are the knob's own study
+     * (exp_binning), so they are never refined */
+    uint64_t most = g[c].count;
+    if (most * 4 <= t->count || most * (uint64_t)plan->bins <= 4ull * t->count) return 0;
     int a = plan->axis[k], bin = g[c].bin;
     bin_plan sp;
     sub_plan(plan, a, bin, &sp);
