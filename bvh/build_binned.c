@@ -290,6 +290,61 @@ static inline void ref_swap(bvh_ref *a, bvh_ref *b)
 #endif
 }
 
+/* The sub-plan of bin `bin` on axis a: the bin's extent cut in plan->bins. */
+static void sub_plan(const bin_plan *plan, int a, int bin, bin_plan *sp)
+{
+    *sp = *plan;
+    sp->axis_count = 1;
+    sp->axis[0] = a;
+    for (int k = 0; k < 4; k++) sp->scale[k] = 0.0f, sp->cmin[k] = 0.0f;
+    sp->cmin[a] = plan->cmin[a] + (float)bin / plan->scale[a];
+    sp->scale[a] = plan->scale[a] * (float)plan->bins;
+}
+
+/*
+ * The partition in scalar code, for any plane the sweep prices: a
+ * reference goes left when its bin on `axis` is below `bin`, or is `bin`
+ * with its sub-bin (sub_plan, the same view_ref as refine_cluster's) at
+ * most `sub`; sub = bins - 1 sends the whole bin left. The partition of
+ * builds without SSE, and of planes inside a refined bin (rare: the top of
+ * clustered scenes).
+ */
+static uint32_t partition_scalar(bvh_ref *r, uint32_t n, const bin_plan *plan, int axis, int bin,
+                                 int sub, box3 *lc, box3 *rc)
+{
+    bin_plan sp;
+    sub_plan(plan, axis, bin, &sp);
+    *lc = box3_empty();
+    *rc = box3_empty();
+    uint32_t l = 0;
+    for (uint32_t i = 0; i < n; i++) {
+        ref_view v, w;
+        view_ref(plan, &r[i], &v);
+        int left = v.bin[axis] < bin;
+        if (v.bin[axis] == bin) {
+            left = 1;
+            if (sub < plan->bins - 1) {
+                view_ref(&sp, &r[i], &w);
+                left = w.bin[axis] <= sub;
+            }
+        }
+#if BVH_SSE
+        float c4[4];
+        _mm_storeu_ps(c4, v.c);
+        vec3 c = v3(c4[0], c4[1], c4[2]);
+#else
+        vec3 c = v.c;
+#endif
+        if (left)
+            *lc = box3_grow(*lc, c);
+        else
+            *rc = box3_grow(*rc, c);
+        ref_swap(r + i, r + l);
+        l += (uint32_t)left;
+    }
+    return l;
+}
+
 /*
  * Branch-free Lomuto partition: every reference is swapped with the first
  * right-side slot, and that slot advances only for a left reference.
@@ -299,8 +354,8 @@ static inline void ref_swap(bvh_ref *a, bvh_ref *b)
 static uint32_t partition(bvh_ref *r, uint32_t n, const bin_plan *plan, int axis, int best_bin,
                           box3 *lc, box3 *rc)
 {
-    uint32_t l = 0;
 #if BVH_SSE
+    uint32_t l = 0;
     __m128 llo = _mm_set1_ps(INFINITY), lhi = _mm_set1_ps(-INFINITY);
     __m128 rlo = llo, rhi = lhi;
 #ifdef __AVX__
@@ -350,24 +405,10 @@ static uint32_t partition(bvh_ref *r, uint32_t n, const bin_plan *plan, int axis
     box4 L = {llo, lhi}, R = {rlo, rhi};
     *lc = box4_to_box3(&L);
     *rc = box4_to_box3(&R);
-#else
-    *lc = box3_empty();
-    *rc = box3_empty();
-    for (uint32_t i = 0; i < n; i++) {
-        ref_view v;
-        view_ref(plan, &r[i], &v);
-        int left = v.bin[axis] <= best_bin;
-        if (left)
-            *lc = box3_grow(*lc, v.c);
-        else
-            *rc = box3_grow(*rc, v.c);
-        bvh_ref tmp = r[i];
-        r[i] = r[l];
-        r[l] = tmp;
-        l += (uint32_t)left;
-    }
-#endif
     return l;
+#else
+    return partition_scalar(r, n, plan, axis, best_bin, plan->bins - 1, lc, rc);
+#endif
 }
 
 /*
@@ -390,35 +431,24 @@ static uint32_t partition(bvh_ref *r, uint32_t n, const bin_plan *plan, int axis
  */
 #define REFINE_MIN 1024
 
-/* The sub-plan of bin `bin` on axis a: the bin's extent cut in plan->bins. */
-static void sub_plan(const bin_plan *plan, int a, int bin, bin_plan *sp)
-{
-    *sp = *plan;
-    sp->axis_count = 1;
-    sp->axis[0] = a;
-    for (int k = 0; k < 4; k++) sp->scale[k] = 0.0f, sp->cmin[k] = 0.0f;
-    sp->cmin[a] = plan->cmin[a] + (float)bin / plan->scale[a];
-    sp->scale[a] = plan->scale[a] * (float)plan->bins;
-}
-
-/* If axis k's fullest group holds more than a quarter of t's references, the
- * groups of that axis with its bin replaced by its non-empty sub-bins, in
- * order. Returns 1 when it refined. */
-static int refine_cluster(const bvh_build *ctx, const bvh_task *t, const bin_plan *plan, int k,
+/* If axis k's fullest group holds more than a quarter of t's references
+ * and four times a bin's share, the groups of that axis with its bin
+ * replaced by its non-empty sub-bins, in order. */
+static void refine_cluster(const bvh_build *ctx, const bvh_task *t, const bin_plan *plan, int k,
                           bin_group *g, int *ng)
 {
-    if (t->count < REFINE_MIN || *ng < 1 || *ng - 1 + plan->bins > BINS_MAX) return 0;
+    if (t->count < REFINE_MIN || *ng < 1 || *ng - 1 + plan->bins > BINS_MAX) return;
     int c = 0;
     for (int i = 1; i < *ng; i++) c = g[i].count > g[c].count ? i : c;
     /* four times its share of the node and a quarter of it: with 2 or 4
      * bins every node has such a bin, and those are the knob's own study
      * (exp_binning), so they are never refined */
     uint64_t most = g[c].count;
-    if (most * 4 <= t->count || most * (uint64_t)plan->bins <= 4ull * t->count) return 0;
+    if (most * 4 <= t->count || most * (uint64_t)plan->bins <= 4ull * t->count) return;
     int a = plan->axis[k], bin = g[c].bin;
     bin_plan sp;
     sub_plan(plan, a, bin, &sp);
-    if (!(sp.scale[a] > 0.0f) || !isfinite(sp.scale[a]) || !isfinite(sp.cmin[a])) return 0;
+    if (!(sp.scale[a] > 0.0f) || !isfinite(sp.scale[a]) || !isfinite(sp.cmin[a])) return;
     box4 box[BINS_MAX];
     uint32_t count[BINS_MAX] = {0};
     for (int i = 0; i < plan->bins; i++) box4_clear(&box[i]);
@@ -433,7 +463,7 @@ static int refine_cluster(const bvh_build *ctx, const bvh_task *t, const bin_pla
     }
     int subs = 0;
     for (int i = 0; i < plan->bins; i++) subs += count[i] != 0;
-    if (subs < 2) return 0; /* one sub-bin: nothing new to cut */
+    if (subs < 2) return; /* one sub-bin: nothing new to cut */
     /* shift the groups after the cluster to make room, then fill it */
     memmove(&g[c + subs], &g[c + 1], (size_t)(*ng - c - 1) * sizeof *g);
     int m = c;
@@ -446,44 +476,6 @@ static int refine_cluster(const bvh_build *ctx, const bvh_task *t, const bin_pla
         m++;
     }
     *ng += subs - 1;
-    return 1;
-}
-
-/* partition() for a plane inside a refined bin: a reference goes left when
- * its bin on `axis` is below `bin`, or is `bin` with its sub-bin at most
- * `sub` (sub_plan, the same view_ref as refine_cluster's). Rare (the top of
- * clustered scenes), so scalar. */
-static uint32_t partition_refined(bvh_ref *r, uint32_t n, const bin_plan *plan, int axis, int bin,
-                                  int sub, box3 *lc, box3 *rc)
-{
-    bin_plan sp;
-    sub_plan(plan, axis, bin, &sp);
-    *lc = box3_empty();
-    *rc = box3_empty();
-    uint32_t l = 0;
-    for (uint32_t i = 0; i < n; i++) {
-        ref_view v, w;
-        view_ref(plan, &r[i], &v);
-        int left = v.bin[axis] < bin;
-        if (v.bin[axis] == bin) {
-            view_ref(&sp, &r[i], &w);
-            left = w.bin[axis] <= sub;
-        }
-#if BVH_SSE
-        float c4[4];
-        _mm_storeu_ps(c4, v.c);
-        vec3 c = v3(c4[0], c4[1], c4[2]);
-#else
-        vec3 c = v.c;
-#endif
-        if (left)
-            *lc = box3_grow(*lc, c);
-        else
-            *rc = box3_grow(*rc, c);
-        ref_swap(r + i, r + l);
-        l += (uint32_t)left;
-    }
-    return l;
 }
 
 static void binned_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_split *out)
@@ -554,8 +546,8 @@ static void binned_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_spl
     box3 lc, rc;
     uint32_t nl = best_sub < 0 ? partition(ctx->refs + t->first, t->count, &plan, plan.axis[best_k], best_bin,
                                            &lc, &rc)
-                               : partition_refined(ctx->refs + t->first, t->count, &plan, plan.axis[best_k],
-                                                   best_bin, best_sub, &lc, &rc);
+                               : partition_scalar(ctx->refs + t->first, t->count, &plan, plan.axis[best_k],
+                                                  best_bin, best_sub, &lc, &rc);
     box4 lb, rb;
     box4_clear(&lb);
     box4_clear(&rb);

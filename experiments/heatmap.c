@@ -147,7 +147,10 @@ int exp_heatmaps_shared(exp_ctx *x, const char *const *specs, int count, const a
             exp_md(x, "\n`%s` on %s: skipped (%s)\n", specs[i], s->name, why);
             continue;
         }
-        if (pool) memcpy(pool + pooled, v[i], pixels * sizeof *pool), pooled += pixels;
+        if (pool) {
+            memcpy(pool + pooled, v[i], pixels * sizeof *pool);
+            pooled += pixels;
+        }
     }
     if (scale.max <= 0) {
         float top = 0;

@@ -167,48 +167,45 @@ TEST(bvh_spec_errors)
 
 /* ---- clustered centroids: the teapot in the stadium ------------------------------ */
 
-/* Scene ids of the lowest node holding every triangle with in[id] set:
- * how many triangles without it share that subtree. */
-static uint32_t lca_others(const bvh_node *n, const uint32_t *ids, const uint8_t *in, uint32_t node,
-                           uint32_t want)
+/* Triangles below `node` in the set (in[id]) and outside it; a tree is
+ * at most 64 levels deep (BVH_MAX_DEPTH), so the stack cannot overflow. */
+static void subtree_counts(const bvh_node *n, const uint32_t *ids, const uint8_t *in, uint32_t node,
+                           uint32_t *inside, uint32_t *others)
 {
-    for (;;) {
-        const bvh_node *x = &n[node];
-        uint32_t counts[2] = {0, 0}, others = 0;
-        if (x->count) {
-            for (uint32_t k = 0; k < x->count; k++) others += !in[ids[x->left_first + k]];
-            return others;
-        }
-        /* the in-set triangles below each child (a walk of the child) */
-        for (int c = 0; c < 2; c++) {
-            uint32_t stack[128], sp = 0;
-            stack[sp++] = x->left_first + (uint32_t)c;
-            while (sp) {
-                const bvh_node *y = &n[stack[--sp]];
-                if (y->count) {
-                    for (uint32_t k = 0; k < y->count; k++) counts[c] += in[ids[y->left_first + k]];
-                } else if (sp + 2 <= 128) {
-                    stack[sp++] = y->left_first, stack[sp++] = y->left_first + 1;
-                }
-            }
-        }
-        if (counts[0] == want)
-            node = x->left_first;
-        else if (counts[1] == want)
-            node = x->left_first + 1;
-        else
-            break;
-    }
-    /* the set is split here: count the others below this node */
-    uint32_t others = 0, stack[128], sp = 0;
+    uint32_t stack[2 * 64 + 2], sp = 0;
+    *inside = *others = 0;
     stack[sp++] = node;
     while (sp) {
         const bvh_node *y = &n[stack[--sp]];
-        if (y->count)
-            for (uint32_t k = 0; k < y->count; k++) others += !in[ids[y->left_first + k]];
-        else if (sp + 2 <= 128)
+        if (y->count) {
+            for (uint32_t k = 0; k < y->count; k++) {
+                int i = in[ids[y->left_first + k]];
+                *inside += (uint32_t)i, *others += (uint32_t)!i;
+            }
+        } else {
             stack[sp++] = y->left_first, stack[sp++] = y->left_first + 1;
+        }
     }
+}
+
+/* Triangles outside the set below the lowest node that holds all `want`
+ * triangles of the set. */
+static uint32_t lca_others(const bvh_node *n, const uint32_t *ids, const uint8_t *in, uint32_t want)
+{
+    uint32_t node = 0, inside, others;
+    for (;;) {
+        const bvh_node *x = &n[node];
+        if (x->count) break;
+        subtree_counts(n, ids, in, x->left_first, &inside, &others);
+        if (inside == want) {
+            node = x->left_first;
+            continue;
+        }
+        subtree_counts(n, ids, in, x->left_first + 1, &inside, &others);
+        if (inside != want) break;
+        node = x->left_first + 1;
+    }
+    subtree_counts(n, ids, in, node, &inside, &others);
     return others;
 }
 
@@ -243,7 +240,7 @@ TEST(bvh_binned_keeps_a_clustered_object_whole)
         uint32_t nc, pc;
         const bvh_node *n = bvh_nodes(a, &nc);
         const uint32_t *ids = bvh_prim_ids(a, &pc);
-        uint32_t others = lca_others(n, ids, in, 0, want);
+        uint32_t others = lca_others(n, ids, in, want);
         CHECKF(others <= 128, "%s: the lowest node holding the whole teapot holds %u stadium triangles",
                specs[i], others);
         accel_kind_bvh.destroy(a);

@@ -32,8 +32,8 @@ static int heat_row(const char *md, const char *prefix, double *top, double *mea
         /* the caption is the paragraph before the tag */
         const char *c = img;
         while (c > md && !(c[-1] == '\n' && c[0] == '`')) c--;
-        if (sscanf(strstr(c, "(mean ") ? strstr(c, "(mean ") : "", "(mean %lf", &mean[n]) != 1) break;
-        const char *s = strstr(c, "colour scale from 0 to ");
+        const char *m = strstr(c, "(mean "), *s = strstr(c, "colour scale from 0 to ");
+        if (!m || m > img || sscanf(m, "(mean %lf", &mean[n]) != 1) break;
         if (!s || s > img || sscanf(s, "colour scale from 0 to %lf", &top[n]) != 1) break;
         n++;
     }
@@ -65,11 +65,12 @@ static long top_colour_pixels(const char *path, int want_w, int want_h)
 
 /* Issue 11's "look at the heatmaps of the wide trees": exp_wide draws node
  * visits and primitive tests per primary ray of widths 2, 4 and 8 (and the
- * 8-wide packets) on one scale per row, the largest value of the row, so
- * colours compare across widths: every caption of a row names the same
- * top, the top colour appears in the image that reaches it and nowhere
- * else where it is not reached (with each image on its own scale, every
- * image would have it), and wider trees visit fewer nodes. */
+ * 8-wide packets) on one scale per row, topped at the row's 99.5th
+ * percentile, so colours compare across widths: every caption of a row
+ * names the same top, the top colour appears in the binary tree's image
+ * (whose outline reaches it) and not in the 8-wide one's (with each image
+ * on its own scale, every image would have it), and wider trees visit
+ * fewer nodes. */
 TEST(tools_exp_wide_heatmaps_share_a_scale)
 {
     mkdir(DIR, 0755);
