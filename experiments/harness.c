@@ -14,8 +14,8 @@
 #include "harness.h"
 #include "machine.h"
 #include "svg.h"
-#include "bench/cli.h"
-#include "bench/image.h"
+#include "cli/cli.h"
+#include "image/image.h"
 
 static int opt_mesh(const cli_option *o, void *field, char **v, accel_error *err)
 {

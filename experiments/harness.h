@@ -15,7 +15,7 @@
  * section: claims.h) and what it left out to DIR/<name>.leftout.csv.
  * experiments/report.sh runs them; bin/mkreport assembles REPORT.md.
  *
- * Exit statuses are those of bench/cli.h: 2 for a bad option, 3 for a scene
+ * Exit statuses are those of cli/cli.h: 2 for a bad option, 3 for a scene
  * that cannot be made, 4 when a counted pass broke a traversal invariant or
  * a CSV record did not fit the header (the run goes on; exp_finish returns 4).
  */
@@ -24,9 +24,9 @@
 
 #include <stdio.h>
 
-#include "bench/bench.h"
-#include "bench/csv.h"
-#include "bench/image.h"
+#include "measure/bench.h"
+#include "measure/csv.h"
+#include "image/image.h"
 #include "scene/scene.h"
 #include "claims.h"
 #include "stats.h"

@@ -15,8 +15,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bench/bench.h"
-#include "bench/image.h"
+#include "measure/bench.h"
+#include "image/image.h"
 #include "check.h"
 #include "scene/scene.h"
 

@@ -20,7 +20,7 @@
 #include <stdint.h>
 
 #include "accel.h"
-#include "bench/stiff.h"
+#include "rays/stiff.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
 #include "test.h"
@@ -167,7 +167,7 @@ typedef enum {
     TEST_ORACLE_FLOAT_BRUTE /* the brute kind: the same float kernels without a structure */
 } test_oracle;
 
-/* Stiff case ci (bench/stiff.h) into *c: 1, or 0 after failing the test
+/* Stiff case ci (rays/stiff.h) into *c: 1, or 0 after failing the test
  * with the reason (a case that cannot be made). */
 int test_stiff_case(int ci, stiff_case *c);
 

@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bench/image.h"
+#include "image/image.h"
 #include "png_decode.h"
 #include "rays/rays.h"
 #include "scene/scene.h"

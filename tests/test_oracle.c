@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bench/stiff.h"
+#include "rays/stiff.h"
 #include "core/oracle_bvh.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
