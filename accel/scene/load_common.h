@@ -1,7 +1,8 @@
 /*
- * load_common.h - lexing shared by the mesh loaders (load_obj.c, load_ply.c,
- * load_off.c): whole-file reading, line tracking, exact number parsing and
- * error messages that name the file and the line or byte offset.
+ * load_common.h - lexing shared by the file readers (load_obj.c, load_ply.c,
+ * load_off.c, load_scene.c): whole-file reading, line tracking, exact number
+ * parsing and error messages that name the file and the line or byte
+ * offset; and the .scene reader's entry, which load.c calls.
  *
  * Every parser works on a buffer that is NOT NUL-terminated (fuzz inputs,
  * memory-mapped data): every read is bounded by `end`, never by a NUL.
@@ -139,6 +140,12 @@ int load_float_token(load_text *t, const char *what, float *out);
 /* Parses an integer token ending at a delimiter (unlike load_float_token the
  * caller may allow other terminators: see load_parse_int). */
 int load_int_token(load_text *t, const char *what, int64_t *out);
+
+/* The .scene reader (load_scene.c) on a buffer: scene_parse_scene with
+ * opt and opt->load_mesh given (load.c supplies the default mesh loader,
+ * which may load built-in scenes and mesh files through scene_create). */
+int load_scene_parse(const char *name, const char *dir, const char *data, size_t size,
+                     const scene_file_options *opt, accel_scene *s, accel_error *err);
 
 /* Appends triangle (a, c, d) of the vertex array v (3 floats per vertex). */
 static inline int load_add_tri(scene_builder *b, const float *v, size_t a, size_t c, size_t d,
