@@ -194,6 +194,30 @@ char *test_read_file(const char *path, size_t *size)
     return buf;
 }
 
+int test_write_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    int ok = f && fputs(text, f) >= 0;
+    if (f && fclose(f) != 0) ok = 0;
+    CHECKF(ok, "cannot write %s", path);
+    return ok;
+}
+
+int test_temp_dir(const char *stem, char *dir, size_t size)
+{
+    int n = snprintf(dir, size, "/tmp/gridbvh_%s_XXXXXX", stem);
+    int ok = n > 0 && (size_t)n < size && mkdtemp(dir) != NULL;
+    CHECKF(ok, "no temporary folder for %s", stem);
+    return ok;
+}
+
+void test_remove_dir(const char *dir)
+{
+    char cmd[1024];
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    if (system(cmd) != 0) test_note("could not remove %s", dir);
+}
+
 int test_run(const char *dir, const char *cmd, char **out, char **err)
 {
     mkdir("build", 0777);

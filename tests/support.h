@@ -72,6 +72,15 @@ int test_backend_folders(char (*names)[256], int max);
  * NULL when it cannot be read. */
 char *test_read_file(const char *path, size_t *size);
 
+/* Writes text to path, replacing the file: 1, or 0 after a failed check. */
+int test_write_file(const char *path, const char *text);
+
+/* A new empty folder /tmp/gridbvh_<stem>_XXXXXX, its path in dir (size
+ * bytes): 1, or 0 after a failed check. test_remove_dir removes it and all
+ * it holds (a note when it cannot). */
+int test_temp_dir(const char *stem, char *dir, size_t size);
+void test_remove_dir(const char *dir);
+
 /* Runs a shell command with its stdout and stderr captured in files of
  * `dir` (made if absent); returns its exit status (-1 if it did not exit).
  * *out and *err (either may be NULL) are malloc'd copies, or NULL. */
