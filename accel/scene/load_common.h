@@ -48,12 +48,23 @@ typedef struct {
  * An empty file gives a valid 1-byte allocation and *size == 0. */
 int load_read_file(const char *path, char **data, size_t *size, accel_error *err);
 
+/* A mesh parser on a buffer: scene_parse_obj, _ply or _off (scene.h). */
+typedef int (*load_parse_fn)(const char *name, const char *data, size_t size, scene_builder *b,
+                             accel_error *err);
+/* Reads the file at path and parses it with parse (messages name path):
+ * scene_load_obj, _ply and _off. */
+int load_parse_file(const char *path, load_parse_fn parse, scene_builder *b, accel_error *err);
+
 /* Rejects UTF-16/UTF-32 (byte order mark or NUL bytes) with a clear message
  * and returns in *skip the length of a UTF-8 byte order mark (0 or 3) to be
  * skipped. Only the first `text_size` bytes are scanned for NULs (PLY: the
  * header). */
 int load_check_text(const char *name, const char *data, size_t size, size_t text_size,
                     size_t *skip, accel_error *err);
+/* load_check_text, then *t over the buffer past the byte order mark, at
+ * line 1, with the format's comment character (0: none). */
+int load_text_begin(load_text *t, const char *name, const char *data, size_t size,
+                    size_t text_size, char comment, accel_error *err);
 
 /* "name:line: message" (text) */
 int load_fail(const load_text *t, int code, const char *fmt, ...)

@@ -348,12 +348,10 @@ int load_scene_parse(const char *name, const char *dir, const char *data, size_t
                      const scene_file_options *opt, accel_scene *s, accel_error *err)
 {
     memset(s, 0, sizeof *s);
-    size_t skip;
-    int rc = load_check_text(name, data, size, size, &skip, err);
-    if (rc) return rc;
     parser ps;
     memset(&ps, 0, sizeof ps);
-    ps.t = (load_text){name, data, data + skip, data + size, 1, '#', err};
+    int rc = load_text_begin(&ps.t, name, data, size, size, '#', err);
+    if (rc) return rc;
     ps.dir = dir ? dir : "";
     ps.opt = opt;
     ps.c.max_prims = opt->max_prims;
