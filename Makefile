@@ -42,7 +42,7 @@ EXP_LIB  := $(filter-out experiments/exp_%.c experiments/mkreport.c,$(wildcard e
 EXP_BINS := $(patsubst experiments/%.c,$(BIN)/%,$(wildcard experiments/exp_*.c))
 # The lab's checks and its untouched starter kind are part of the tests
 # (tests/test_lab.c: every check passes on the project and fails on the starter).
-TEST_SRC := $(wildcard tests/*.c) lab/check.c lab/check_step3.c lab/starter.c \
+TEST_SRC := $(wildcard tests/*.c) lab/check.c lab/check_common.c lab/check_step3.c lab/starter.c \
             experiments/claims.c experiments/stats.c experiments/svg.c
 
 .PHONY: all test report sanitize fuzz clean bench lab lab-report FORCE
@@ -75,7 +75,7 @@ $(BIN)/mkreport: $(BUILD)/experiments/mkreport.o $(BUILD)/experiments/claims.o
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $^ -o $@ $(LDLIBS)
 
-$(BIN)/lab: $(BUILD)/lab/lab.o $(BUILD)/lab/check.o $(BUILD)/lab/check_step3.o $(LIB)
+$(BIN)/lab: $(BUILD)/lab/lab.o $(BUILD)/lab/check.o $(BUILD)/lab/check_common.o $(BUILD)/lab/check_step3.o $(LIB)
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $^ -o $@ $(LDLIBS)
 

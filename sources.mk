@@ -7,7 +7,7 @@
 # line in accel/core/registry.c, nothing else.
 NOT_BACKENDS := accel experiments tests tools lab build build-san bin bin-san build-nocount bin-nocount
 BACKENDS     := $(filter-out $(NOT_BACKENDS),$(patsubst $(ROOT)%/,%,$(sort $(dir $(wildcard $(ROOT)*/*.c)))))
-ACCEL_LAYERS := core scene rays bench
+ACCEL_LAYERS := core scene rays measure image cli
 CORE_SRC     := $(foreach l,$(ACCEL_LAYERS),$(wildcard $(ROOT)accel/$(l)/*.c))
 BACKEND_SRC  := $(foreach d,$(BACKENDS),$(wildcard $(ROOT)$(d)/*.c))
 LIB_SRC      := $(CORE_SRC) $(BACKEND_SRC)

@@ -454,7 +454,7 @@ void accel_parallel_for(size_t count, size_t chunk, int threads,
                         void (*fn)(void *ctx, size_t begin, size_t end, int thread), void *ctx);
 /* Items finished by every accel_parallel_for of the process so far (all
  * callers, never reset): the difference of two readings measures a long
- * trace's progress (bench/progress.h) without touching its kernels. */
+ * trace's progress (measure/progress.h) without touching its kernels. */
 uint64_t accel_parallel_done(void);
 
 /* Memory for a large array of n items of `size` bytes (a build's

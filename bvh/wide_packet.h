@@ -1,8 +1,8 @@
 /*
  * wide_packet.h - 64-ray packets over a wide BVH (traverse=packet with
+ * width=4|8): the coherent mode for primary and shadow rays.
  * A kernel body (C only): included by the .c files of its folder, not part
  * of the interface a C++ program includes.
- * width=4|8): the coherent mode for primary and shadow rays.
  *
  * A template: wide_tables.h includes it once per (WIDE_NW, WIDE_LB) pair
  * after wide_kernel.h for the same pair, whose single-ray kernel it falls

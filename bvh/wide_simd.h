@@ -1,13 +1,13 @@
 /*
  * wide_simd.h - the few float-vector operations the wide BVH kernels use,
- * A kernel body (C only): included by the .c files of its folder, not part
- * of the interface a C++ program includes.
  * for 4 lanes (f4: SSE) and 8 lanes (f8: AVX2), each with a plain-C twin
  * (a struct of floats and a loop per operation) used when the compiler
  * does not target the instruction set, or with -DBVH_NO_SIMD. AVX-512 is
  * never used: the kernels must build and run on an AVX2-only machine, and
  * -march=native on an AVX-512 machine changes nothing here but the
  * encoding the compiler picks.
+ * A kernel body (C only): included by the .c files of its folder, not part
+ * of the interface a C++ program includes.
  *
  * Semantics every version keeps, lane by lane (the kernels' exactness
  * arguments rest on them):

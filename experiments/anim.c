@@ -8,7 +8,7 @@
 #include <string.h>
 
 #include "anim.h"
-#include "bench/cli.h"
+#include "cli/cli.h"
 #include "rays/rays.h"
 
 #define FRAME (BENCH_PRIMARY | BENCH_SHADOW)

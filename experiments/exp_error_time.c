@@ -25,8 +25,8 @@
 
 #include "group.h"
 #include "svg.h"
-#include "bench/cli.h"
-#include "bench/stiff.h"
+#include "cli/cli.h"
+#include "rays/stiff.h"
 
 #define MAX_KINDS 16
 #define MAX_LEVELS 10

@@ -170,10 +170,8 @@ static void measure_scene(exp_ctx *x, study *st, int si, const char *spec, const
     const double *ls = x->quick ? quick_l : full_l;
     int nl = x->quick ? 3 : 12;
     accel_scene s;
-    exp_scene(x, spec, &s);
     bench_sets sets;
-    exp_sets(x, &s, MASK, &sets);
-    exp_md(x, "\n### %s (%u primitives)\n", s.name, s.live_count);
+    exp_scene_section(x, spec, &s, MASK, 0, &sets);
     exp_group g;
     exp_group_init(&g, x, &s, &sets, MASK);
     g.per_ray = 1;

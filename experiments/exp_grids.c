@@ -182,10 +182,8 @@ static void findings(exp_ctx *x, study *st, const exp_group *g, const accel_scen
 static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_list *list)
 {
     accel_scene s;
-    exp_scene(x, spec, &s);
     bench_sets sets;
-    exp_sets_wh(x, &s, MASK, x->rt_size[0], x->rt_size[1], 1, &sets);
-    exp_md(x, "\n### %s (%u primitives)\n", s.name, s.live_count);
+    exp_scene_section(x, spec, &s, MASK, 1, &sets);
     exp_group g;
     exp_group_init(&g, x, &s, &sets, MASK);
     g.collapse_ms = x->quick ? 500 : 3000;

@@ -66,10 +66,8 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     const char *const *hands = x->quick ? hand_quick : hand_full;
     int nh = x->quick ? 2 : 10;
     accel_scene s;
-    exp_scene(x, spec, &s);
     bench_sets sets;
-    exp_sets(x, &s, MASK, &sets);
-    exp_md(x, "\n### %s (%u primitives)\n", s.name, s.live_count);
+    exp_scene_section(x, spec, &s, MASK, 0, &sets);
     exp_group g;
     exp_group_init(&g, x, &s, &sets, MASK);
     g.collapse_ms = x->quick ? 500 : 1500;

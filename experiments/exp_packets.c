@@ -43,10 +43,8 @@ static int base_of(const exp_group *g, int c)
 static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_list *list)
 {
     accel_scene s;
-    exp_scene(x, spec, &s);
     bench_sets sets;
-    exp_sets_wh(x, &s, MASK, x->rt_size[0], x->rt_size[1], 1, &sets);
-    exp_md(x, "\n### %s (%u primitives)\n", s.name, s.live_count);
+    exp_scene_section(x, spec, &s, MASK, 1, &sets);
     exp_text_add(&st->names, "%s%s", st->names.len ? ", " : "", s.name);
     exp_group g;
     exp_group_init(&g, x, &s, &sets, MASK);

@@ -216,10 +216,8 @@ static void layout_notes(exp_group *g, study *st, const char *scene)
 static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_list *list, int is_mesh)
 {
     accel_scene s;
-    exp_scene(x, spec, &s);
     bench_sets sets;
-    exp_sets(x, &s, MASK, &sets);
-    exp_md(x, "\n### %s (%u primitives)\n", s.name, s.live_count);
+    exp_scene_section(x, spec, &s, MASK, 0, &sets);
     exp_text_add(&st->names, "%s%s", st->names.len ? ", " : "", s.name);
     exp_group g;
     exp_group_init(&g, x, &s, &sets, MASK);

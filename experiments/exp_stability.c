@@ -4,7 +4,7 @@
  * Every kind (and the traversals and kinds this build adds: packets, wide
  * BVHs, grid packets and skipping, the irregular grid), with the
  * watertight (default) and the naive (Moller-Trumbore) triangle test, on
- * every case of bench/stiff.c and on the shared meshes: holes (the
+ * every case of rays/stiff.c and on the shared meshes: holes (the
  * reference hits, the tracer misses), false hits and disagreements per
  * million rays, and leaks per million of the rays that can leak (those
  * starting inside a closed mesh). A rate of zero is shown with its 95%
@@ -20,8 +20,8 @@
 #include <string.h>
 
 #include "group.h"
-#include "bench/cli.h"
-#include "bench/stiff.h"
+#include "cli/cli.h"
+#include "rays/stiff.h"
 
 #define MAX_CFG 32
 #define CLIFF 10.0

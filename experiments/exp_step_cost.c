@@ -131,10 +131,8 @@ static void measure_scene(exp_ctx *x, const char *spec, const exp_list *specs, e
                           tally *t)
 {
     accel_scene s;
-    exp_scene(x, spec, &s);
     bench_sets sets;
-    exp_sets(x, &s, BENCH_PRIMARY | BENCH_DIFFUSE, &sets);
-    exp_md(x, "\n### %s (%u primitives)\n", s.name, s.live_count);
+    exp_scene_section(x, spec, &s, BENCH_PRIMARY | BENCH_DIFFUSE, 0, &sets);
     exp_text_add(&t->scenes, "%s%s", t->scenes.len ? ", " : "", s.name);
     exp_group g;
     exp_group_init(&g, x, &s, &sets, BENCH_PRIMARY | BENCH_DIFFUSE);

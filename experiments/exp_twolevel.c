@@ -33,7 +33,7 @@
 
 #include "anim.h"
 #include "group.h"
-#include "bench/cli.h"
+#include "cli/cli.h"
 #include "rays/rays.h"
 
 #define SETS (BENCH_PRIMARY | BENCH_SHADOW | BENCH_DIFFUSE)

@@ -6,7 +6,7 @@
 #include <string.h>
 
 #include "group.h"
-#include "bench/cli.h"
+#include "cli/cli.h"
 
 void exp_group_init(exp_group *g, exp_ctx *x, const accel_scene *s, const bench_sets *sets,
                     int mask)

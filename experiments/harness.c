@@ -14,8 +14,8 @@
 #include "harness.h"
 #include "machine.h"
 #include "svg.h"
-#include "bench/cli.h"
-#include "bench/image.h"
+#include "cli/cli.h"
+#include "image/image.h"
 
 static int opt_mesh(const cli_option *o, void *field, char **v, accel_error *err)
 {
@@ -427,17 +427,11 @@ void exp_md_table(exp_ctx *x, const char *cols)
 
 void exp_scene(exp_ctx *x, const char *spec, accel_scene *s)
 {
-    accel_error err = {0};
-    char phase[300];
-    snprintf(phase, sizeof phase, "make scene %s", spec);
-    bench_progress_begin(x->progress, phase, 0, 0);
-    int rc = scene_create(spec, s, &err);
-    bench_progress_end(x->progress);
-    if (rc == 0 && s->live_count == 0)
-        rc = accel_fail(&err, ACCEL_ERR_RANGE, "scene %s has nothing to hit", spec);
+    char why[sizeof ((accel_error *)0)->msg];
+    int rc = exp_scene_try(x, spec, s, why, sizeof why);
     if (rc) {
-        fprintf(stderr, "%s: %s\n", x->name, err.msg);
-        exit(cli_exit_of(err.code));
+        fprintf(stderr, "%s: %s\n", x->name, why);
+        exit(cli_exit_of(rc));
     }
 }
 
@@ -455,6 +449,17 @@ int exp_scene_try(exp_ctx *x, const char *spec, accel_scene *s, char *why, size_
     }
     if (rc) snprintf(why, why_n, "%s", err.msg);
     return rc;
+}
+
+void exp_scene_section(exp_ctx *x, const char *spec, accel_scene *s, int mask, int rt,
+                       bench_sets *sets)
+{
+    exp_scene(x, spec, s);
+    if (rt)
+        exp_sets_wh(x, s, mask, x->rt_size[0], x->rt_size[1], 1, sets);
+    else
+        exp_sets(x, s, mask, sets);
+    exp_md(x, "\n### %s (%u primitives)\n", s->name, s->live_count);
 }
 
 void exp_sets(exp_ctx *x, const accel_scene *s, int mask, bench_sets *out)

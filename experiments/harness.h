@@ -15,7 +15,7 @@
  * section: claims.h) and what it left out to DIR/<name>.leftout.csv.
  * experiments/report.sh runs them; bin/mkreport assembles REPORT.md.
  *
- * Exit statuses are those of bench/cli.h: 2 for a bad option, 3 for a scene
+ * Exit statuses are those of cli/cli.h: 2 for a bad option, 3 for a scene
  * that cannot be made, 4 when a counted pass broke a traversal invariant or
  * a CSV record did not fit the header (the run goes on; exp_finish returns 4).
  */
@@ -24,9 +24,9 @@
 
 #include <stdio.h>
 
-#include "bench/bench.h"
-#include "bench/csv.h"
-#include "bench/image.h"
+#include "measure/bench.h"
+#include "measure/csv.h"
+#include "image/image.h"
 #include "scene/scene.h"
 #include "claims.h"
 #include "stats.h"
@@ -118,6 +118,11 @@ void exp_scene(exp_ctx *x, const char *spec, accel_scene *s);
 /* The same for a scene that may not exist in this build (a generator not
  * merged yet): 0, or nonzero with the reason in why. */
 int exp_scene_try(exp_ctx *x, const char *spec, accel_scene *s, char *why, size_t why_n);
+/* A scene's subsection: exp_scene, its ray sets of mask (exp_sets; with rt
+ * at x->rt_size with one AO sample per hit, as exp_sets_wh), and the
+ * heading "### name (N primitives)". */
+void exp_scene_section(exp_ctx *x, const char *spec, accel_scene *s, int mask, int rt,
+                       bench_sets *sets);
 /* Builds the standard ray sets (mask of bench_set_bit) for s at x->size. */
 void exp_sets(exp_ctx *x, const accel_scene *s, int mask, bench_sets *out);
 /* The same at w x h with ao_samples ambient occlusion rays per hit. */

@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bench/image.h"
+#include "image/image.h"
 #include "harness.h"
 
 /* The counted primary pass of exp_heatmap: steps ('s') or primitive tests

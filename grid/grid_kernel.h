@@ -1,11 +1,11 @@
 /*
  * grid_kernel.h - the one traversal kernel of the `grid` kind (closest hit
- * A kernel body (C only): included by the .c files of its folder, not part
- * of the interface a C++ program includes.
  * and any hit, every skipping mode), private to grid/. Described in
  * grid_trace.c. GRID_KERNELS(NAME, SKIP) compiles it into the variant
  * tables NAME_hit_table and NAME_occ_table (core/variant.h) for one
  * skipping mode.
+ * A kernel body (C only): included by the .c files of its folder, not part
+ * of the interface a C++ program includes.
  *
  * Each skipping mode's tables live in their own translation unit
  * (grid_trace.c, grid_trace_cloud.c, grid_trace_macro.c): GCC's inlining

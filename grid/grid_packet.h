@@ -1,10 +1,10 @@
 /*
  * grid_packet.h - the packet of the coherent grid traversal (grid_packet.c),
+ * its setup and its slice ranges (grid_packet_setup.c).
  * A kernel body (C only): included by the .c files of its folder, not part
  * of the interface a C++ program includes.
- * its setup and its slice ranges (grid_packet_setup.c). Private to grid/,
- * but for nested_grid/ngrid_packet.c, which walks its levels with it through
- * grid_packet_walk.h.
+ * Private to grid/, but for nested_grid/ngrid_packet.c, which walks its
+ * levels with it through grid_packet_walk.h.
  *
  * A packet holds up to GRID_PACKET_SIZE consecutive rays as arrays of
  * doubles (one per attribute, AVX2 loads 4 rays at once), relative to a

@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "check.h"
+#include "check_common.h"
 #include "instanced/instanced.h"
 #include "scene/scene.h"
 

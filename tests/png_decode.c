@@ -1,7 +1,7 @@
 /*
  * png_decode.c - see png_decode.h. Written from the specifications (RFC
  * 1950, RFC 1951, PNG ISO/IEC 15948) and sharing no code with the writer
- * (accel/bench/deflate.c, image.c): CRC and Adler-32 are recomputed here
+ * (accel/image/deflate.c, image.c): CRC and Adler-32 are recomputed here
  * bit by bit, Huffman codes are decoded canonically one bit at a time.
  */
 #include <stdarg.h>

@@ -20,7 +20,7 @@
 #include <stdint.h>
 
 #include "accel.h"
-#include "bench/stiff.h"
+#include "rays/stiff.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
 #include "test.h"
@@ -71,6 +71,15 @@ int test_backend_folders(char (*names)[256], int max);
 /* A whole file, NUL-terminated (its size in *size when size is not NULL);
  * NULL when it cannot be read. */
 char *test_read_file(const char *path, size_t *size);
+
+/* Writes text to path, replacing the file: 1, or 0 after a failed check. */
+int test_write_file(const char *path, const char *text);
+
+/* A new empty folder /tmp/gridbvh_<stem>_XXXXXX, its path in dir (size
+ * bytes): 1, or 0 after a failed check. test_remove_dir removes it and all
+ * it holds (a note when it cannot). */
+int test_temp_dir(const char *stem, char *dir, size_t size);
+void test_remove_dir(const char *dir);
 
 /* Runs a shell command with its stdout and stderr captured in files of
  * `dir` (made if absent); returns its exit status (-1 if it did not exit).
@@ -167,7 +176,7 @@ typedef enum {
     TEST_ORACLE_FLOAT_BRUTE /* the brute kind: the same float kernels without a structure */
 } test_oracle;
 
-/* Stiff case ci (bench/stiff.h) into *c: 1, or 0 after failing the test
+/* Stiff case ci (rays/stiff.h) into *c: 1, or 0 after failing the test
  * with the reason (a case that cannot be made). */
 int test_stiff_case(int ci, stiff_case *c);
 

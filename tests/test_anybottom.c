@@ -18,7 +18,7 @@
 #include "lab/check.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
-#include "test.h"
+#include "support.h"
 #include "test_instanced.h"
 
 /* A bvh whose walk forgets the pad: the mistake the pad=0 control makes
@@ -38,10 +38,10 @@ typedef struct {
 
 static int load(const case_scene *c, accel_scene *s)
 {
+    if (!c->text) return !test_make_scene(c->name, s);
     accel_error err = {0};
     scene_file_options o = {0, inst_stiff_mesh, NULL};
-    int rc = c->text ? scene_parse_scene(c->name, "", c->text, strlen(c->text), &o, s, &err)
-                     : scene_create(c->name, s, &err);
+    int rc = scene_parse_scene(c->name, "", c->text, strlen(c->text), &o, s, &err);
     if (rc) test_fail(__FILE__, __LINE__, "%s: %s", c->name, err.msg);
     return rc;
 }
@@ -119,7 +119,7 @@ TEST(anybottom_refuses_kind_without_walk)
 {
     accel_scene s;
     accel_error err = {0};
-    CHECK(scene_create("field:instances=3,detail=1", &s, &err) == 0);
+    if (!test_make_scene("field:instances=3,detail=1", &s)) return;
     const accel_kind *k;
     void *a = NULL;
     accel_build_stats st;
@@ -137,8 +137,11 @@ TEST(anybottom_update_frames)
     /* A walked bottom is rebuilt when its mesh moves: exact on every frame. */
     accel_scene f0, f1;
     accel_error err = {0};
-    CHECK(scene_create("animated:frame=0,instances=6,detail=2", &f0, &err) == 0);
-    CHECK(scene_create("animated:frame=9,instances=6,detail=2", &f1, &err) == 0);
+    if (!test_make_scene("animated:frame=0,instances=6,detail=2", &f0)) return;
+    if (!test_make_scene("animated:frame=9,instances=6,detail=2", &f1)) {
+        scene_free(&f0);
+        return;
+    }
     const accel_kind *k;
     void *a = NULL;
     accel_build_stats st;

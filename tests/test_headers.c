@@ -64,8 +64,8 @@ static int by_path(const void *a, const void *b)
 /* accel/, its layers and every backend folder (sources.mk). */
 static int collect_headers(header_list *h)
 {
-    static const char *const dirs[] = {"accel", "accel/core", "accel/scene", "accel/rays",
-                                       "accel/bench"};
+    static const char *const dirs[] = {"accel",         "accel/core",  "accel/scene", "accel/rays",
+                                       "accel/measure", "accel/image", "accel/cli"};
     h->count = 0;
     for (size_t i = 0; i < sizeof dirs / sizeof dirs[0]; i++) add_headers(h, dirs[i]);
     char backends[32][256];

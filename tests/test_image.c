@@ -11,18 +11,15 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bench/image.h"
+#include "image/image.h"
 #include "png_decode.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
-#include "test.h"
+#include "support.h"
 
-static uint64_t rng_state = 0x9e3779b97f4a7c15ull;
-static uint32_t rng(void) /* xorshift64* */
-{
-    rng_state ^= rng_state >> 12, rng_state ^= rng_state << 25, rng_state ^= rng_state >> 27;
-    return (uint32_t)((rng_state * 0x2545f4914f6cdd1dull) >> 32);
-}
+/* A random byte from the tests' generator (support.h: reseeded before
+ * every test, so a test's images do not depend on the tests before it). */
+static uint8_t rand_byte(void) { return (uint8_t)(test_rand_u64() >> 56); }
 
 /* Encodes img at `level`, decodes it, and checks every pixel. Returns the
  * PNG size (0 on failure) and the decoder's statistics. */
@@ -120,7 +117,7 @@ TEST(image_png_roundtrip_shapes)
         for (int kind = 0; kind < 3; kind++) { /* rendered-like, noise, constant */
             if (kind == 0) fill_rendered(&img);
             for (size_t i = 0; kind > 0 && i < (size_t)img.width * img.height * 3; i++)
-                img.rgb[i] = kind == 1 ? (uint8_t)rng() : 173;
+                img.rgb[i] = kind == 1 ? rand_byte() : 173;
             static const char *const names[] = {"rendered", "noise", "constant"};
             char name[64];
             snprintf(name, sizeof name, "%s %dx%d", names[kind], img.width, img.height);
@@ -151,7 +148,7 @@ TEST(image_png_noise_and_constant)
     accel_error err = {0};
     int w = 800, h = 500; /* 1.2 MB: more than one 1 MiB IDAT chunk when incompressible */
     CHECK(image_alloc(&img, w, h, &err) == 0);
-    for (size_t i = 0; i < (size_t)w * h * 3; i++) img.rgb[i] = (uint8_t)rng();
+    for (size_t i = 0; i < (size_t)w * h * 3; i++) img.rgb[i] = rand_byte();
     png_stats st;
     size_t n = roundtrip("noise 800x500", &img, IMAGE_PNG_LEVEL, &st);
     CHECKF(st.blocks[0] > 0, "incompressible data goes out as stored blocks (%zu stored)", st.blocks[0]);
@@ -174,7 +171,7 @@ TEST(image_png_beyond_window)
     accel_error err = {0};
     CHECK(image_alloc(&img, w, h, &err) == 0);
     for (int y = 0; y < period; y++)
-        for (int i = 0; i < w * 3; i++) img.rgb[(size_t)y * w * 3 + i] = (uint8_t)rng();
+        for (int i = 0; i < w * 3; i++) img.rgb[(size_t)y * w * 3 + i] = rand_byte();
     for (int y = period; y < h; y++)
         memcpy(img.rgb + (size_t)y * w * 3, img.rgb + (size_t)(y - period) * w * 3, (size_t)w * 3);
     png_stats st;
@@ -193,9 +190,9 @@ TEST(image_zlib_roundtrip_streams)
     for (int pattern = 0; pattern < 4; pattern++) {
         for (size_t i = 0; i < N; i++) {
             if (pattern == 0) in[i] = 0;                                   /* long runs */
-            if (pattern == 1) in[i] = (uint8_t)rng();                      /* incompressible */
+            if (pattern == 1) in[i] = rand_byte();                         /* incompressible */
             if (pattern == 2) in[i] = (uint8_t)("the quick brown fox "[i % 20] ^ (i % 997 == 0)); /* text */
-            if (pattern == 3) in[i] = i < 32767 ? (uint8_t)rng() : in[i - 32767]; /* far copy */
+            if (pattern == 3) in[i] = i < 32767 ? rand_byte() : in[i - 32767]; /* far copy */
         }
         for (size_t l = 0; l < sizeof len / sizeof len[0]; l++)
             for (int level = 0; level <= 9; level++) {
@@ -230,10 +227,7 @@ static int render(const char *spec, int w, int h, image_rgb *shaded, image_rgb *
 {
     accel_error err = {0};
     accel_scene s;
-    if (scene_create(spec, &s, &err)) {
-        test_fail(__FILE__, __LINE__, "%s: %s", spec, err.msg);
-        return 1;
-    }
+    if (!test_make_scene(spec, &s)) return 1;
     rays_set r;
     const accel_kind *kind;
     void *accel;
@@ -377,7 +371,7 @@ TEST(image_png_decoder_rejects_corruption)
     fill_rendered(&img);
     /* Low-bit noise: still Huffman-coded, but no two stretches alike, so a
      * flipped distance cannot copy identical bytes from elsewhere. */
-    for (size_t i = 0; i < (size_t)120 * 90 * 3; i++) img.rgb[i] ^= (uint8_t)(rng() & 3);
+    for (size_t i = 0; i < (size_t)120 * 90 * 3; i++) img.rgb[i] ^= (uint8_t)(rand_byte() & 3);
     uint8_t *png = NULL;
     size_t n = 0;
     CHECK(image_png_encode(&img, IMAGE_PNG_LEVEL, &png, &n, &err) == 0);

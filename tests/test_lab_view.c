@@ -11,7 +11,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "bench/image.h"
+#include "image/image.h"
 #include "lab/check.h"
 #include "png_decode.h"
 #include "rays/rays.h"

@@ -2,15 +2,19 @@
  * test_layout.c - the layering rule of the source tree, checked on the
  * files themselves (the tests run from the repository root):
  *
- *  - accel/ is layered core < scene < rays < bench: a file includes only
- *    accel.h, its own layer and the layers below it;
+ *  - accel/ is layered core < scene < rays < {measure, image} < cli: a file
+ *    includes only accel.h, its own layer and the layers below it (measure,
+ *    the timed traces, and image, the pictures, sit side by side: neither
+ *    includes the other; cli, the tools' option table, is on top of both);
  *  - a backend (every top-level folder the build treats as one, read from
  *    sources.mk) includes only accel.h, accel/core/ headers, its own
  *    folder's headers, and the two documented cross-backend APIs,
  *    grid/grid_core.h (the grid walk the nested grid reuses) and
  *    grid/grid_packet_walk.h (the coherent packet walk its levels reuse);
- *  - no library, backend, tool, experiment or test source file is over 650
- *    lines (split past about 600).
+ *  - sources.mk's ACCEL_LAYERS names these layers, and accel/ has no other
+ *    folder;
+ *  - no library, backend, tool, experiment, lab or test source file is over
+ *    650 lines (split past about 600).
  */
 #include <dirent.h>
 #include <stdlib.h>
@@ -19,8 +23,30 @@
 
 #include "support.h"
 
-static const char *const layers[] = {"core", "scene", "rays", "bench"};
-enum { LAYER_COUNT = 4, MAX_LINES = 650 };
+static const char *const layers[] = {"core", "scene", "rays", "measure", "image", "cli"};
+enum { LAYER_COUNT = 6, MAX_LINES = 650 };
+/* The layers each layer may include, comma-separated (itself last). */
+static const char *const allowed[LAYER_COUNT] = {
+    "core",
+    "core,scene",
+    "core,scene,rays",
+    "core,scene,rays,measure",
+    "core,scene,rays,image",
+    "core,scene,rays,measure,image,cli",
+};
+
+/* Is layer l in the list of layers `own` may include? */
+static int layer_allowed(int own, int l)
+{
+    const char *p = allowed[own];
+    size_t n = strlen(layers[l]);
+    while (*p) {
+        size_t len = strcspn(p, ",");
+        if (len == n && !strncmp(p, layers[l], n)) return 1;
+        p += len + (p[len] == ',');
+    }
+    return 0;
+}
 
 static int layer_of(const char *name)
 {
@@ -102,10 +128,9 @@ static void check_accel_include(const char *path, int line, const char *target, 
 {
     int own = *(const int *)ctx;
     int l = include_layer(target);
-    CHECKF(l == -1 || (l >= 0 && l <= own),
+    CHECKF(l == -1 || (l >= 0 && layer_allowed(own, l)),
            "%s:%d: includes \"%s\": accel/%s may include only accel.h and accel/{%s} headers",
-           path, line, target, layers[own],
-           own == 0 ? "core" : own == 1 ? "core,scene" : own == 2 ? "core,scene,rays" : "core,scene,rays,bench");
+           path, line, target, layers[own], allowed[own]);
 }
 
 static void check_accel_file(const char *path, const char *dir, void *ctx)
@@ -151,8 +176,35 @@ static void check_backend_file(const char *path, const char *dir, void *ctx)
     each_include(path, check_backend_include, &b);
 }
 
+/* sources.mk builds accel/'s layers from its ACCEL_LAYERS line: the same
+ * layers, in the same order, and no folder of accel/ outside them. */
+static void check_layer_list(void)
+{
+    char *mk = test_read_file("sources.mk", NULL);
+    const char *line = mk ? strstr(mk, "\nACCEL_LAYERS := ") : NULL;
+    char want[128] = "";
+    for (int l = 0; l < LAYER_COUNT; l++)
+        snprintf(want + strlen(want), sizeof want - strlen(want), "%s%s", l ? " " : "", layers[l]);
+    CHECKF(line && !strncmp(line + 17, want, strlen(want)) && line[17 + strlen(want)] == '\n',
+           "sources.mk: ACCEL_LAYERS is not \"%s\"", want);
+    free(mk);
+    DIR *d = opendir("accel");
+    CHECKF(d != NULL, "cannot read accel/");
+    struct dirent *e;
+    while (d && (e = readdir(d))) {
+        char path[512];
+        struct stat st;
+        if (e->d_name[0] == '.') continue;
+        snprintf(path, sizeof path, "accel/%s", e->d_name);
+        if (stat(path, &st) || !S_ISDIR(st.st_mode)) continue;
+        CHECKF(layer_of(e->d_name) >= 0, "%s: a folder of accel/ that is no layer", path);
+    }
+    if (d) closedir(d);
+}
+
 TEST(layout_layers_and_backends)
 {
+    check_layer_list();
     for (int l = 0; l < LAYER_COUNT; l++) {
         char dir[64];
         snprintf(dir, sizeof dir, "accel/%s", layers[l]);
@@ -178,9 +230,9 @@ static void check_length(const char *path, const char *dir, void *ctx)
 
 TEST(layout_file_length)
 {
-    static const char *const dirs[] = {"accel",       "accel/core", "accel/scene", "accel/rays",
-                                       "accel/bench", "tools",      "experiments", "tests",
-                                       "tests/fuzz"};
+    static const char *const dirs[] = {"accel",       "accel/core",  "accel/scene", "accel/rays",
+                                       "accel/measure", "accel/image", "accel/cli", "tools",
+                                       "experiments", "tests", "tests/fuzz", "lab"};
     int files = 0;
     for (size_t i = 0; i < sizeof dirs / sizeof dirs[0]; i++)
         files += each_source(dirs[i], check_length, NULL);

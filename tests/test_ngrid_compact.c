@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bench/stiff.h"
+#include "rays/stiff.h"
 #include "test_nested_grid.h"
 
 static const char *const compact_specs[][2] = {

@@ -12,11 +12,11 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bench/stiff.h"
 #include "core/oracle_bvh.h"
 #include "rays/rays.h"
+#include "rays/stiff.h"
 #include "scene/scene.h"
-#include "test.h"
+#include "support.h"
 
 /* ---- comparing against brute force ------------------------------------------ */
 
@@ -68,30 +68,14 @@ static void check_same(const accel_scene *s, const accel_ray *rays, size_t n, co
 
 /* ---- ray sets ------------------------------------------------------------------ */
 
-typedef struct {
-    accel_ray *r;
-    size_t n, cap;
-} ray_list;
-
-static void push(ray_list *l, vec3 o, vec3 d, float t_near, float t_far)
+static void push(test_rays *l, vec3 o, vec3 d, float t_near, float t_far)
 {
-    if (l->n == l->cap) {
-        size_t cap = l->cap ? 2 * l->cap : 256;
-        accel_ray *q = realloc(l->r, cap * sizeof *q);
-        if (!q) return;
-        l->r = q;
-        l->cap = cap;
-    }
-    accel_ray ray = {o.x, o.y, o.z, t_near, d.x, d.y, d.z, t_far};
-    l->r[l->n++] = ray;
+    test_rays_push(l, test_ray(o, d, t_near, t_far));
 }
 
-static void push_set(ray_list *l, const rays_set *set)
+static void push_set(test_rays *l, const rays_set *set)
 {
-    for (size_t i = 0; i < set->count; i++) {
-        const accel_ray *r = &set->rays[i];
-        push(l, v3(r->ox, r->oy, r->oz), v3(r->dx, r->dy, r->dz), r->t_near, r->t_far);
-    }
+    for (size_t i = 0; i < set->count; i++) test_rays_push(l, set->rays[i]);
 }
 
 static float rnd(uint64_t seed, uint64_t i, uint32_t dim) { return rays_rand(seed, i, dim); }
@@ -121,7 +105,7 @@ static box3 live_bounds(const accel_scene *s)
  * face diagonals, from 1e22 away, in a triangle's plane, and the invalid
  * ones (NaN, zero direction, t_near > t_far).
  */
-static void add_adversarial(const accel_scene *s, ray_list *l, size_t count, uint64_t seed)
+static void add_adversarial(const accel_scene *s, test_rays *l, size_t count, uint64_t seed)
 {
     box3 b = live_bounds(s);
     vec3 ext = box3_extent(b);
@@ -180,7 +164,7 @@ static void add_adversarial(const accel_scene *s, ray_list *l, size_t count, uin
 /* Primary (w x h), shadow and diffuse rays from the camera, vertex rays
  * from the eye and from the centre, and the adversarial set. */
 static void scene_rays(const accel_scene *s, int w, int h, size_t vertex, size_t adversarial,
-                       ray_list *l)
+                       test_rays *l)
 {
     accel_error err = {0};
     rays_set prim = {0}, sh = {0}, df = {0}, vx = {0};
@@ -212,11 +196,8 @@ TEST(oracle_stiff_cases_match_brute)
     for (int ci = 0; ci < stiff_case_count(); ci++) {
         stiff_case c;
         accel_error err = {0};
-        if (stiff_case_make(ci, &c, &err)) {
-            test_fail(__FILE__, __LINE__, "stiff case %d: %s", ci, err.msg);
-            continue;
-        }
-        ray_list l = {0};
+        if (!test_stiff_case(ci, &c)) continue;
+        test_rays l = {0};
         push_set(&l, &c.rays);
         /* Secondary rays from the hits of every other ray of the case (the
          * hits come from the oracle under test, checked just below). */
@@ -233,10 +214,10 @@ TEST(oracle_stiff_cases_match_brute)
             push_set(&l, &df);
         }
         add_adversarial(&c.scene, &l, 32, (uint64_t)ci);
-        check_same(&c.scene, l.r, l.n, c.name, NULL);
+        check_same(&c.scene, l.rays, l.count, c.name, NULL);
         free(hits);
         free(own.rays);
-        free(l.r);
+        test_rays_free(&l);
         rays_free(&sh);
         rays_free(&df);
         stiff_case_free(&c);
@@ -247,16 +228,12 @@ TEST(oracle_builtin_scenes_match_brute)
 {
     for (size_t i = 0; i < scene_generator_count; i++) {
         accel_scene s;
-        accel_error err = {0};
         const char *spec = scene_generators[i]->small_spec;
-        if (scene_create(spec, &s, &err)) {
-            test_fail(__FILE__, __LINE__, "%s: %s", spec, err.msg);
-            continue;
-        }
-        ray_list l = {0};
+        if (!test_make_scene(spec, &s)) continue;
+        test_rays l = {0};
         scene_rays(&s, 16, 16, 64, 48, &l);
-        check_same(&s, l.r, l.n, spec, NULL);
-        free(l.r);
+        check_same(&s, l.rays, l.count, spec, NULL);
+        test_rays_free(&l);
         scene_free(&s);
     }
 }
@@ -276,10 +253,10 @@ TEST(oracle_mesh_file_matches_brute)
         test_note("skipped: %s", err.msg);
         return;
     }
-    ray_list l = {0};
+    test_rays l = {0};
     scene_rays(&s, 8, 8, 24, 8, &l);
-    check_same(&s, l.r, l.n, "bunny.off", NULL);
-    free(l.r);
+    check_same(&s, l.rays, l.count, "bunny.off", NULL);
+    test_rays_free(&l);
     scene_free(&s);
 }
 
@@ -289,8 +266,7 @@ TEST(oracle_ties_follow_live_order)
 {
     for (int ci = 0; ci < stiff_case_count(); ci++) {
         stiff_case c;
-        accel_error err = {0};
-        if (stiff_case_make(ci, &c, &err)) continue;
+        if (!test_stiff_case(ci, &c)) continue;
         if (strcmp(c.name, "coincident") != 0) {
             stiff_case_free(&c);
             continue;
@@ -355,7 +331,7 @@ TEST(oracle_odd_scenes_match_brute)
     s.camera.eye = v3(0, 0, 30);
     s.camera.up = v3(0, 1, 0);
     s.camera.fov_deg = 40;
-    ray_list l = {0};
+    test_rays l = {0};
     scene_rays(&s, 16, 16, 64, 128, &l);
     /* From exact surface points of the spheres (centre + r on an axis),
      * tangent and one float step off tangent, with and without t_near. */
@@ -370,16 +346,16 @@ TEST(oracle_odd_scenes_match_brute)
             push(&l, p, v3_scale(d, -1.0f), 1e-3f, INFINITY);
         }
     }
-    check_same(&s, l.r, l.n, "odd scene", NULL);
+    check_same(&s, l.rays, l.count, "odd scene", NULL);
     /* The same rays on no primitives at all, and on only non-finite ones. */
     s.live_count = 0;
-    check_same(&s, l.r, l.n, "empty live list", NULL);
+    check_same(&s, l.rays, l.count, "empty live list", NULL);
     live[0] = 0;
     live[1] = 29;
     live[2] = TRIS + 7;
     s.live_count = 3;
-    check_same(&s, l.r, l.n, "only non-finite primitives", NULL);
-    free(l.r);
+    check_same(&s, l.rays, l.count, "only non-finite primitives", NULL);
+    test_rays_free(&l);
 }
 
 /* Centroids spaced by powers of 1.3 up to 1e37: binned SAH peels a few
@@ -404,7 +380,7 @@ TEST(oracle_exponential_spacing_matches_brute)
     CHECK(accel_oracle_build(&s, &o, &err) == 0);
     if (o) CHECKF(o->depth > 20, "tree depth %d", o->depth);
     accel_oracle_free(o);
-    ray_list l = {0};
+    test_rays l = {0};
     for (int i = 0; i < TRIS; i += 3) {
         const float *t = tris + 9 * i;
         push(&l, v3(-1, 0.25f, 0.25f), v3(1, 0, 0), 0.0f, INFINITY);
@@ -412,8 +388,8 @@ TEST(oracle_exponential_spacing_matches_brute)
         push(&l, v3(t[0], -1, 0.25f), v3(0, 1, 0), 0.0f, INFINITY);
         push(&l, v3(t[0] * 0.9f, 0.1f, 0.1f), v3(1, 0.001f * (float)i, 0), 0.0f, INFINITY);
     }
-    check_same(&s, l.r, l.n, "exponential spacing", NULL);
-    free(l.r);
+    check_same(&s, l.rays, l.count, "exponential spacing", NULL);
+    test_rays_free(&l);
 }
 
 /* The oracle must actually cull: on a 24k-triangle sphere, primary rays
@@ -422,10 +398,7 @@ TEST(oracle_culls)
 {
     accel_scene s;
     accel_error err = {0};
-    if (scene_create("sphere:segments=64", &s, &err)) {
-        test_fail(__FILE__, __LINE__, "%s", err.msg);
-        return;
-    }
+    if (!test_make_scene("sphere:segments=64", &s)) return;
     rays_set prim = {0};
     CHECK(rays_primary(&s.camera, 32, 32, &prim, &err) == 0);
     accel_oracle *o = NULL;
@@ -461,7 +434,7 @@ TEST(oracle_random_scales_match_brute)
     enum { SCENES = 24, TRIS = 200, SPHERES = 24, RAYS = 600 };
     static float tris[9 * TRIS], spheres[4 * SPHERES];
     static uint32_t live[TRIS + SPHERES];
-    ray_list l = {0};
+    test_rays l = {0};
     for (uint64_t sc = 0; sc < SCENES; sc++) {
         uint64_t k = 0;
 #define DRAW() draw(100 + sc, &k)
@@ -505,7 +478,7 @@ TEST(oracle_random_scales_match_brute)
         s.spheres = spheres;
         s.live = live;
         s.live_count = n;
-        l.n = 0;
+        l.count = 0;
         for (int i = 0; n && i < RAYS; i++) {
             uint32_t prim = live[(int)(DRAW() * n)];
             const float *p = prim < TRIS ? tris + 9 * prim : spheres + 4 * (prim - TRIS);
@@ -543,7 +516,7 @@ TEST(oracle_random_scales_match_brute)
 #undef DRAW
         char what[64];
         snprintf(what, sizeof what, "random scene %d (scale %g)", (int)sc, scale);
-        check_same(&s, l.r, l.n, what, NULL);
+        check_same(&s, l.rays, l.count, what, NULL);
     }
-    free(l.r);
+    test_rays_free(&l);
 }

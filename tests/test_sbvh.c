@@ -12,7 +12,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "bench/stiff.h"
+#include "rays/stiff.h"
 #include "bvh/build_common.h"
 #include "support.h"
 #include "test_bvh.h"

@@ -14,7 +14,7 @@
 
 #include "scene/compose.h"
 #include "scene/scene.h"
-#include "test.h"
+#include "support.h"
 
 /* ---- meshes served by name, so the tests know every vertex ---------------- */
 
@@ -156,34 +156,21 @@ TEST(scene_file_transforms)
 
 TEST(scene_file_from_disk)
 {
-    char dir[] = "/tmp/gridbvh_scene_XXXXXX";
-    if (!mkdtemp(dir)) {
-        test_fail(__FILE__, __LINE__, "mkdtemp failed");
-        return;
-    }
+    char dir[64];
+    if (!test_temp_dir("scene", dir, sizeof dir)) return;
     char sub[600], mesh[700], scene[700];
     snprintf(sub, sizeof sub, "%s/meshes", dir);
     mkdir(sub, 0700);
     snprintf(mesh, sizeof mesh, "%s/quad.off", sub);
     snprintf(scene, sizeof scene, "%s/two.scene", dir);
-    FILE *f = fopen(mesh, "w");
-    if (f) {
-        fputs("OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n", f);
-        fclose(f);
-    }
-    f = fopen(scene, "w");
-    if (f) {
-        fputs("mesh q meshes/quad.off   # relative to the scene's folder\r\n"
-              "mesh c cube:n=1\r\n"
-              "instance q translate 0 0 -1\r\ninstance c scale 0.5\r\ninstance q\r\n"
-              "camera eye 0 0 5 look 0 0 0 fov 30\r\nlight 1 2 3\r\n", f);
-        fclose(f);
-    }
+    test_write_file(mesh, "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n");
+    test_write_file(scene, "mesh q meshes/quad.off   # relative to the scene's folder\r\n"
+                           "mesh c cube:n=1\r\n"
+                           "instance q translate 0 0 -1\r\ninstance c scale 0.5\r\ninstance q\r\n"
+                           "camera eye 0 0 5 look 0 0 0 fov 30\r\nlight 1 2 3\r\n");
     accel_scene s;
     accel_error err = {0};
-    int rc = scene_create(scene, &s, &err);
-    CHECKF(rc == 0, "%s", err.msg);
-    if (rc == 0) {
+    if (test_make_scene(scene, &s)) {
         CHECK(s.prim_count == 2 + 12 + 2 && s.instances && s.instances->instance_count == 3);
         CHECK(same_vec(s.tris + 6, 1, 1, -1));          /* quad: (0,1,2), z moved */
         CHECK(same_vec(s.tris + 9 * 14 + 6, 1, 1, 0));   /* third instance, first triangle */
@@ -192,17 +179,12 @@ TEST(scene_file_from_disk)
         scene_free(&s);
     }
     /* A missing mesh file: the scene's line, then the loader's message. */
-    f = fopen(scene, "w");
-    if (f) {
-        fputs("\nmesh gone meshes/missing.ply\n", f);
-        fclose(f);
-    }
-    rc = scene_create(scene, &s, &err);
-    char want[800];
+    test_write_file(scene, "\nmesh gone meshes/missing.ply\n");
+    int rc = scene_create(scene, &s, &err);
+    char want[900];
     snprintf(want, sizeof want, "%s:2: mesh gone: %s/meshes/missing.ply: cannot open", scene, dir);
     CHECKF(rc == ACCEL_ERR_IO && !strncmp(err.msg, want, strlen(want)), "got '%s'", err.msg);
-    snprintf(want, sizeof want, "rm -rf '%s'", dir);
-    if (system(want) != 0) test_note("could not remove %s", dir);
+    test_remove_dir(dir);
 }
 
 /* ---- bad input --------------------------------------------------------------- */
@@ -386,11 +368,7 @@ static void check_description(const accel_scene *s)
 TEST(scene_builtin_multi_meshes)
 {
     accel_scene a, b, c;
-    accel_error err = {0};
-    if (scene_create("field:instances=40,detail=2", &a, &err)) {
-        test_fail(__FILE__, __LINE__, "%s", err.msg);
-        return;
-    }
+    if (!test_make_scene("field:instances=40,detail=2", &a)) return;
     check_description(&a);
     CHECK(a.instances->mesh_count == 5 && a.instances->instance_count == 41);
     /* Some instances are mirrored (negative determinant). */
@@ -401,10 +379,7 @@ TEST(scene_builtin_multi_meshes)
     scene_free(&a);
     /* animated: a function of the frame; the blob (mesh 3) deforms. */
     const char *s0 = "animated:frame=0,instances=8,detail=3", *s1 = "animated:frame=30,instances=8,detail=3";
-    if (scene_create(s0, &a, &err) || scene_create(s1, &b, &err) || scene_create(s1, &c, &err)) {
-        test_fail(__FILE__, __LINE__, "%s", err.msg);
-        return;
-    }
+    if (!test_make_scene(s0, &a) || !test_make_scene(s1, &b) || !test_make_scene(s1, &c)) return;
     check_description(&b);
     CHECK(a.prim_count == b.prim_count && b.prim_count == c.prim_count);
     CHECK(!memcmp(b.tris, c.tris, 9 * sizeof(float) * b.tri_count));

@@ -14,9 +14,9 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "scene/builtin.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
+#include "scene/teapot.h"
 #include "support.h"
 
 /* ---- builds, counts, determinism ----------------------------------------- */

@@ -1,6 +1,6 @@
 /*
  * test_stability.c - every registered kind and variant on the stiff and
- * extreme cases of accel/stiff.c.
+ * extreme cases of accel/rays/stiff.c.
  *
  * Held for the robust (watertight) kernels: zero holes, zero false hits,
  * zero disagreements against the double-precision reference, zero leaks
@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bench/stiff.h"
+#include "rays/stiff.h"
 #include "support.h"
 
 typedef struct {

@@ -1,7 +1,7 @@
 /*
  * test_tools.c - tools that never surprise: bin/trace and the experiments
- * run as subprocesses (small sizes), their pieces (bench/cli.h, csv.h,
- * progress.h) called directly; CSV is read back by an RFC 4180 reader here.
+ * run as subprocesses (small sizes), their pieces (cli/cli.h, measure/csv.h,
+ * measure/progress.h) called directly; CSV is read back by an RFC 4180 reader here.
  */
 #include <math.h>
 #include <stdio.h>
@@ -11,10 +11,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "bench/bench.h"
-#include "bench/cli.h"
-#include "bench/csv.h"
-#include "bench/progress.h"
+#include "measure/bench.h"
+#include "cli/cli.h"
+#include "measure/csv.h"
+#include "measure/progress.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
 #include "support.h"

@@ -8,7 +8,7 @@
 #include <string.h>
 #include <sys/stat.h>
 
-#include "bench/image.h"
+#include "image/image.h"
 #include "png_decode.h"
 #include "support.h"
 #include "test.h"

@@ -11,7 +11,7 @@
 #include "bvh/bvh.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
-#include "test.h"
+#include "support.h"
 
 /* A bvh whose interior node points back at the root loops for ever in a
  * traversal without a bound: the counted run must stop every ray at the
@@ -20,7 +20,7 @@ TEST(variant_broken_tree_reported_not_aborted)
 {
     accel_scene s;
     accel_error err = {0};
-    CHECK(scene_create("soup:tris=24,seed=3", &s, &err) == 0);
+    if (!test_make_scene("soup:tris=24,seed=3", &s)) return;
     const accel_kind *k;
     void *a;
     accel_build_stats st;
@@ -72,7 +72,7 @@ TEST(variant_structure_outlives_scene)
         if (!strcmp(kind->name, "instanced")) continue; /* follows a caller-owned scene (accel.h) */
         accel_scene s;
         accel_error err = {0};
-        CHECK(scene_create("sphereflake:level=1", &s, &err) == 0);
+        if (!test_make_scene("sphereflake:level=1", &s)) continue;
         rays_set r;
         CHECK(rays_primary(&s.camera, 24, 24, &r, &err) == 0);
         accel_hit *ref = malloc(r.count * sizeof *ref), *hits = malloc(r.count * sizeof *hits);

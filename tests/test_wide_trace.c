@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bench/stiff.h"
+#include "rays/stiff.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
 #include "support.h"

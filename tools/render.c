@@ -23,7 +23,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bench/image.h"
+#include "image/image.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
 

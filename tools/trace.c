@@ -18,10 +18,10 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "bench/bench.h"
-#include "bench/cli.h"
-#include "bench/csv.h"
-#include "bench/shade.h"
+#include "measure/bench.h"
+#include "cli/cli.h"
+#include "measure/csv.h"
+#include "image/shade.h"
 #include "scene/scene.h"
 
 #define MAX_ACCELS 32
@@ -462,7 +462,7 @@ static void write_outputs(const options *o, run *r, const set_run *t, const acce
     if (o->image && r->bits[t->set] == BENCH_PRIMARY) {
         image_rgb img;
         if (image_alloc(&img, t->rays->width, t->rays->height, &err) == 0) {
-            bench_shade(&r->scene, t->rays, t->hits, &img);
+            image_shade(&r->scene, t->rays, t->hits, &img);
             if (image_write(o->image, &img, &err)) report_err(r, &err);
             image_free(&img);
         } else {

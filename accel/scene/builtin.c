@@ -12,6 +12,8 @@
 #include <stdlib.h>
 
 #include "scene/builtin.h"
+#include "scene/mesh.h"
+#include "scene/teapot.h"
 
 #define BUILTIN_PI 3.14159265358979323846
 

@@ -105,15 +105,6 @@ int scene_xform_invert(const double m[12], double inv[12])
 
 /* ---- composing ------------------------------------------------------------- */
 
-void scene_instances_free(accel_instances *set)
-{
-    if (!set) return;
-    for (uint32_t i = 0; i < set->mesh_count; i++) scene_free(&set->meshes[i]);
-    free(set->meshes);
-    free(set->instances);
-    memset(set, 0, sizeof *set);
-}
-
 void scene_compose_free(scene_compose *c)
 {
     scene_instances_free(&c->set);

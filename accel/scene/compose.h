@@ -46,8 +46,6 @@ int scene_compose_add_instance(scene_compose *c, uint32_t mesh, const double m[1
  * and moves the description into out->instances; *c is left empty. */
 int scene_compose_finish(scene_compose *c, const char *name, accel_scene *out, accel_error *err);
 void scene_compose_free(scene_compose *c);
-/* Releases a description (scene_free calls it). */
-void scene_instances_free(accel_instances *set);
 
 /* ---- transforms ---------------------------------------------------------- */
 

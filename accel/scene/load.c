@@ -1,15 +1,18 @@
 /*
  * load.c - a scene from a spec: a built-in generator ("sphereflake:level=3")
  * or a file, dispatched to its loader by extension (.obj, .ply, .off, and
- * .scene for scenes of many meshes, load_scene.c).
+ * .scene for scenes of many meshes, load_scene.c). The .scene reader is
+ * handed its mesh loader: the default one here makes a built-in scene or
+ * loads a mesh file, so the reader itself never calls back into this file.
  */
 #include <errno.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 
-#include "scene/builtin.h"
 #include "scene/compose.h"
+#include "scene/load_common.h"
 #include "scene/scene.h"
 
 static const char *extension(const char *path)
@@ -130,4 +133,57 @@ int scene_create(const char *spec, accel_scene *s, accel_error *err)
     }
     if (strchr(spec, '.')) return scene_load_file(spec, s, err);
     return unknown_scene(spec, err);
+}
+
+/* ---- .scene files --------------------------------------------------------- */
+
+/* A mesh of a .scene file without its own loader (scene_file_options): a
+ * built-in scene by its name before ':', else a mesh file relative to the
+ * scene file's folder (never another .scene: scene files do not nest). */
+static int default_load_mesh(void *ctx, const char *source, const char *dir, accel_scene *mesh,
+                             accel_error *err)
+{
+    (void)ctx;
+    const char *args;
+    if (find_generator(source, &args)) return scene_create(source, mesh, err);
+    const char *dot = strrchr(source, '.'), *slash = strrchr(source, '/');
+    if (dot && (!slash || dot > slash) && !strcasecmp(dot, ".scene"))
+        return accel_fail(err, ACCEL_ERR_SPEC,
+                          "%s: a mesh cannot be a .scene file (scene files do not nest)", source);
+    char path[4096];
+    int n = (source[0] == '/' || !dir[0]) ? snprintf(path, sizeof path, "%s", source)
+                                          : snprintf(path, sizeof path, "%s/%s", dir, source);
+    if (n < 0 || (size_t)n >= sizeof path)
+        return accel_fail(err, ACCEL_ERR_RANGE, "%s: path too long", source);
+    return scene_load_file(path, mesh, err);
+}
+
+int scene_parse_scene(const char *name, const char *dir, const char *data, size_t size,
+                      const scene_file_options *opt, accel_scene *s, accel_error *err)
+{
+    scene_file_options o = {opt ? opt->max_prims : 0, default_load_mesh, NULL};
+    if (opt && opt->load_mesh) o = *opt;
+    return load_scene_parse(name, dir, data, size, &o, s, err);
+}
+
+int scene_load_scene(const char *path, accel_scene *s, accel_error *err)
+{
+    memset(s, 0, sizeof *s);
+    char *data;
+    size_t size;
+    int rc = load_read_file(path, &data, &size, err);
+    if (rc) return rc;
+    char dir[4096];
+    const char *slash = strrchr(path, '/');
+    size_t n = slash ? (size_t)(slash - path) : 0;
+    if (n >= sizeof dir) {
+        free(data);
+        return accel_fail(err, ACCEL_ERR_RANGE, "%s: path too long", path);
+    }
+    memcpy(dir, path, n);
+    dir[n] = 0;
+    if (slash && n == 0) strcpy(dir, "/");
+    rc = scene_parse_scene(path, dir, data, size, NULL, s, err);
+    free(data);
+    return rc;
 }

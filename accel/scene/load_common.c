@@ -72,6 +72,17 @@ int load_read_file(const char *path, char **data, size_t *size, accel_error *err
     return 0;
 }
 
+int load_parse_file(const char *path, load_parse_fn parse, scene_builder *b, accel_error *err)
+{
+    char *data;
+    size_t size;
+    int rc = load_read_file(path, &data, &size, err);
+    if (rc) return rc;
+    rc = parse(path, data, size, b, err);
+    free(data);
+    return rc;
+}
+
 /* Line number (1-based) of position pos, counting "\n", "\r\n" and "\r". */
 static size_t line_of(const char *data, size_t pos)
 {
@@ -110,6 +121,16 @@ int load_check_text(const char *name, const char *data, size_t size, size_t text
                           "%s:%zu: NUL byte in a text file (UTF-16 without byte order mark, or "
                           "not a text file?)",
                           name, line_of(data, (size_t)(nul - data)));
+    return 0;
+}
+
+int load_text_begin(load_text *t, const char *name, const char *data, size_t size,
+                    size_t text_size, char comment, accel_error *err)
+{
+    size_t skip;
+    int rc = load_check_text(name, data, size, text_size, &skip, err);
+    if (rc) return rc;
+    *t = (load_text){name, data, data + skip, data + size, 1, comment, err};
     return 0;
 }
 

@@ -1,7 +1,8 @@
 /*
- * load_common.h - lexing shared by the mesh loaders (load_obj.c, load_ply.c,
- * load_off.c): whole-file reading, line tracking, exact number parsing and
- * error messages that name the file and the line or byte offset.
+ * load_common.h - lexing shared by the file readers (load_obj.c, load_ply.c,
+ * load_off.c, load_scene.c): whole-file reading, line tracking, exact number
+ * parsing and error messages that name the file and the line or byte
+ * offset; and the .scene reader's entry, which load.c calls.
  *
  * Every parser works on a buffer that is NOT NUL-terminated (fuzz inputs,
  * memory-mapped data): every read is bounded by `end`, never by a NUL.
@@ -47,12 +48,23 @@ typedef struct {
  * An empty file gives a valid 1-byte allocation and *size == 0. */
 int load_read_file(const char *path, char **data, size_t *size, accel_error *err);
 
+/* A mesh parser on a buffer: scene_parse_obj, _ply or _off (scene.h). */
+typedef int (*load_parse_fn)(const char *name, const char *data, size_t size, scene_builder *b,
+                             accel_error *err);
+/* Reads the file at path and parses it with parse (messages name path):
+ * scene_load_obj, _ply and _off. */
+int load_parse_file(const char *path, load_parse_fn parse, scene_builder *b, accel_error *err);
+
 /* Rejects UTF-16/UTF-32 (byte order mark or NUL bytes) with a clear message
  * and returns in *skip the length of a UTF-8 byte order mark (0 or 3) to be
  * skipped. Only the first `text_size` bytes are scanned for NULs (PLY: the
  * header). */
 int load_check_text(const char *name, const char *data, size_t size, size_t text_size,
                     size_t *skip, accel_error *err);
+/* load_check_text, then *t over the buffer past the byte order mark, at
+ * line 1, with the format's comment character (0: none). */
+int load_text_begin(load_text *t, const char *name, const char *data, size_t size,
+                    size_t text_size, char comment, accel_error *err);
 
 /* "name:line: message" (text) */
 int load_fail(const load_text *t, int code, const char *fmt, ...)
@@ -139,6 +151,12 @@ int load_float_token(load_text *t, const char *what, float *out);
 /* Parses an integer token ending at a delimiter (unlike load_float_token the
  * caller may allow other terminators: see load_parse_int). */
 int load_int_token(load_text *t, const char *what, int64_t *out);
+
+/* The .scene reader (load_scene.c) on a buffer: scene_parse_scene with
+ * opt and opt->load_mesh given (load.c supplies the default mesh loader,
+ * which may load built-in scenes and mesh files through scene_create). */
+int load_scene_parse(const char *name, const char *dir, const char *data, size_t size,
+                     const scene_file_options *opt, accel_scene *s, accel_error *err);
 
 /* Appends triangle (a, c, d) of the vertex array v (3 floats per vertex). */
 static inline int load_add_tri(scene_builder *b, const float *v, size_t a, size_t c, size_t d,

@@ -164,10 +164,9 @@ int scene_parse_off(const char *name, const char *data, size_t size, scene_build
                     accel_error *err)
 {
     if (!data) data = "", size = 0;
-    size_t skip;
-    int rc = load_check_text(name, data, size, size, &skip, err);
+    load_text t;
+    int rc = load_text_begin(&t, name, data, size, size, '#', err);
     if (rc) return rc;
-    load_text t = {name, data, data + skip, data + size, 1, '#', err};
     size_t tri_start = b->tri_count;
     float *verts = NULL;
     rc = parse_off(&t, b, &verts);
@@ -178,11 +177,5 @@ int scene_parse_off(const char *name, const char *data, size_t size, scene_build
 
 int scene_load_off(const char *path, scene_builder *b, accel_error *err)
 {
-    char *data;
-    size_t size;
-    int rc = load_read_file(path, &data, &size, err);
-    if (rc) return rc;
-    rc = scene_parse_off(path, data, size, b, err);
-    free(data);
-    return rc;
+    return load_parse_file(path, scene_parse_off, b, err);
 }

@@ -582,12 +582,12 @@ int scene_parse_ply(const char *name, const char *data, size_t size, scene_build
                     accel_error *err)
 {
     if (!data) data = "", size = 0;
-    size_t skip;
-    int rc = load_check_text(name, data, size, 0, &skip, err);
+    load_text t;
+    int rc = load_text_begin(&t, name, data, size, 0, 0, err);
     if (rc) return rc;
     ply_file *f = calloc(1, sizeof *f);
     if (!f) return accel_fail(err, ACCEL_ERR_NOMEM, "%s: out of memory", name);
-    f->t = (load_text){name, data, data + skip, data + size, 1, 0, err};
+    f->t = t;
     f->format = -1;
     size_t tri_start = b->tri_count;
     rc = parse_ply(f, b);
@@ -599,11 +599,5 @@ int scene_parse_ply(const char *name, const char *data, size_t size, scene_build
 
 int scene_load_ply(const char *path, scene_builder *b, accel_error *err)
 {
-    char *data;
-    size_t size;
-    int rc = load_read_file(path, &data, &size, err);
-    if (rc) return rc;
-    rc = scene_parse_ply(path, data, size, b, err);
-    free(data);
-    return rc;
+    return load_parse_file(path, scene_parse_ply, b, err);
 }

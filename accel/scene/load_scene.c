@@ -27,7 +27,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 
 #include "scene/compose.h"
 #include "scene/load_common.h"
@@ -164,33 +163,6 @@ static int find_mesh(const parser *ps, const char *name)
     return -1;
 }
 
-static int is_builtin(const char *source)
-{
-    size_t n = strcspn(source, ":");
-    for (size_t i = 0; i < scene_generator_count; i++) {
-        const char *g = scene_generators[i]->name;
-        if (strlen(g) == n && !strncmp(g, source, n)) return 1;
-    }
-    return 0;
-}
-
-static int default_load_mesh(void *ctx, const char *source, const char *dir, accel_scene *mesh,
-                             accel_error *err)
-{
-    (void)ctx;
-    if (is_builtin(source)) return scene_create(source, mesh, err);
-    const char *dot = strrchr(source, '.'), *slash = strrchr(source, '/');
-    if (dot && (!slash || dot > slash) && !strcasecmp(dot, ".scene"))
-        return accel_fail(err, ACCEL_ERR_SPEC,
-                          "%s: a mesh cannot be a .scene file (scene files do not nest)", source);
-    char path[4096];
-    int n = (source[0] == '/' || !dir[0]) ? snprintf(path, sizeof path, "%s", source)
-                                          : snprintf(path, sizeof path, "%s/%s", dir, source);
-    if (n < 0 || (size_t)n >= sizeof path)
-        return accel_fail(err, ACCEL_ERR_RANGE, "%s: path too long", source);
-    return scene_load_file(path, mesh, err);
-}
-
 static int parse_mesh(parser *ps)
 {
     load_text *t = &ps->t;
@@ -217,9 +189,7 @@ static int parse_mesh(parser *ps)
     ps->meshes = m;
     accel_scene mesh;
     memset(&mesh, 0, sizeof mesh);
-    int (*load)(void *, const char *, const char *, accel_scene *, accel_error *) =
-        ps->opt && ps->opt->load_mesh ? ps->opt->load_mesh : default_load_mesh;
-    rc = load(ps->opt ? ps->opt->ctx : NULL, source, ps->dir, &mesh, t->err);
+    rc = ps->opt->load_mesh(ps->opt->ctx, source, ps->dir, &mesh, t->err);
     uint32_t index;
     if (rc == 0) {
         rc = scene_compose_add_mesh(&ps->c, &mesh, &index, t->err);
@@ -374,19 +344,17 @@ static int parse_lines(parser *ps)
     return 0;
 }
 
-int scene_parse_scene(const char *name, const char *dir, const char *data, size_t size,
-                      const scene_file_options *opt, accel_scene *s, accel_error *err)
+int load_scene_parse(const char *name, const char *dir, const char *data, size_t size,
+                     const scene_file_options *opt, accel_scene *s, accel_error *err)
 {
     memset(s, 0, sizeof *s);
-    size_t skip;
-    int rc = load_check_text(name, data, size, size, &skip, err);
-    if (rc) return rc;
     parser ps;
     memset(&ps, 0, sizeof ps);
-    ps.t = (load_text){name, data, data + skip, data + size, 1, '#', err};
+    int rc = load_text_begin(&ps.t, name, data, size, size, '#', err);
+    if (rc) return rc;
     ps.dir = dir ? dir : "";
     ps.opt = opt;
-    ps.c.max_prims = opt ? opt->max_prims : 0;
+    ps.c.max_prims = opt->max_prims;
     rc = parse_lines(&ps);
     const char *base = strrchr(name, '/');
     if (rc == 0) rc = scene_compose_finish(&ps.c, base ? base + 1 : name, s, err);
@@ -396,27 +364,5 @@ int scene_parse_scene(const char *name, const char *dir, const char *data, size_
     }
     scene_compose_free(&ps.c);
     free(ps.meshes);
-    return rc;
-}
-
-int scene_load_scene(const char *path, accel_scene *s, accel_error *err)
-{
-    memset(s, 0, sizeof *s);
-    char *data;
-    size_t size;
-    int rc = load_read_file(path, &data, &size, err);
-    if (rc) return rc;
-    char dir[4096];
-    const char *slash = strrchr(path, '/');
-    size_t n = slash ? (size_t)(slash - path) : 0;
-    if (n >= sizeof dir) {
-        free(data);
-        return accel_fail(err, ACCEL_ERR_RANGE, "%s: path too long", path);
-    }
-    memcpy(dir, path, n);
-    dir[n] = 0;
-    if (slash && n == 0) strcpy(dir, "/");
-    rc = scene_parse_scene(path, dir, data, size, NULL, s, err);
-    free(data);
     return rc;
 }

@@ -11,7 +11,7 @@
 #include <math.h>
 #include <stdlib.h>
 
-#include "scene/builtin.h"
+#include "scene/mesh.h"
 
 #define BUILTIN_PI 3.14159265358979323846
 

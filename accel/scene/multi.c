@@ -20,6 +20,8 @@
 
 #include "scene/builtin.h"
 #include "scene/compose.h"
+#include "scene/mesh.h"
+#include "scene/teapot.h"
 
 #define MULTI_PI 3.14159265358979323846
 

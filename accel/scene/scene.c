@@ -14,7 +14,6 @@
 #include <strings.h>
 
 #include "core/prim.h"
-#include "scene/compose.h"
 #include "scene/scene.h"
 
 #define SCENE_MAX_PRIMS 0xFFFFFFFEu /* ids are uint32 and 0xFFFFFFFF means miss */
@@ -189,6 +188,15 @@ static accel_camera camera_fit_prims(const accel_scene *s, vec3 from, float fov_
         }
     }
     return c;
+}
+
+void scene_instances_free(accel_instances *set)
+{
+    if (!set) return;
+    for (uint32_t i = 0; i < set->mesh_count; i++) scene_free(&set->meshes[i]);
+    free(set->meshes);
+    free(set->instances);
+    memset(set, 0, sizeof *set);
 }
 
 void scene_free(accel_scene *s)

@@ -40,6 +40,9 @@ void scene_builder_free(scene_builder *b);
 int scene_finish(scene_builder *b, const char *name, accel_scene *s, accel_error *err);
 
 void scene_free(accel_scene *s);
+/* Releases a description of many meshes (accel_scene.instances): every
+ * mesh, the meshes and instances arrays; scene_free calls it. */
+void scene_instances_free(accel_instances *set);
 
 /* A camera looking at the bounds from direction `from` (not normalized),
  * far enough that the whole box fits the field of view. */

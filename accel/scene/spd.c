@@ -31,6 +31,7 @@
 #include <math.h>
 
 #include "scene/builtin.h"
+#include "scene/mesh.h"
 
 #define SPD_PI 3.14159265358979323846
 

@@ -24,7 +24,8 @@
  */
 #include <stdlib.h>
 
-#include "scene/builtin.h"
+#include "scene/mesh.h"
+#include "scene/teapot.h"
 
 #define TEAPOT_PATCHES 32
 #define TEAPOT_POINTS 290

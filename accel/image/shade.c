@@ -5,9 +5,9 @@
  */
 #include <math.h>
 
-#include "bench/shade.h"
+#include "image/shade.h"
 
-void bench_shade(const accel_scene *s, const rays_set *r, const accel_hit *hits, image_rgb *img)
+void image_shade(const accel_scene *s, const rays_set *r, const accel_hit *hits, image_rgb *img)
 {
     for (size_t i = 0; i < r->count; i++) {
         uint32_t px = r->pixel ? r->pixel[i] : (uint32_t)i;

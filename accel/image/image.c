@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bench/image.h"
+#include "image/image.h"
 
 #define IDAT_MAX ((size_t)1 << 20) /* bytes of compressed data per IDAT chunk */
 

@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bench/image.h"
+#include "image/image.h"
 
 void image_heat_color(float x, uint8_t rgb[3])
 {

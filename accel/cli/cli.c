@@ -9,8 +9,8 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "bench/cli.h"
-#include "bench/image.h"
+#include "cli/cli.h"
+#include "image/image.h"
 
 int cli_exit_of(int accel_status)
 {

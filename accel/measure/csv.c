@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bench/csv.h"
+#include "measure/csv.h"
 
 typedef struct {
     char *buf;

@@ -17,7 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bench/image.h"
+#include "image/image.h"
 
 #define WSIZE 32768u      /* LZ77 window, bytes (the deflate maximum) */
 #define WMASK (WSIZE - 1u)

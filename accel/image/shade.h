@@ -4,7 +4,7 @@
 #ifndef ACCEL_SHADE_H
 #define ACCEL_SHADE_H
 
-#include "bench/image.h"
+#include "image/image.h"
 #include "rays/rays.h"
 
 #ifdef __cplusplus
@@ -13,7 +13,7 @@ extern "C" {
 
 /* Colours the pixel of every ray of r (r->pixel, or ray i = pixel i) in img
  * from its hit; pixels without a ray keep their colour. */
-void bench_shade(const accel_scene *s, const rays_set *r, const accel_hit *hits, image_rgb *img);
+void image_shade(const accel_scene *s, const rays_set *r, const accel_hit *hits, image_rgb *img);
 
 #ifdef __cplusplus
 }

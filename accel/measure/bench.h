@@ -8,7 +8,7 @@
 #ifndef ACCEL_BENCH_H
 #define ACCEL_BENCH_H
 
-#include "bench/progress.h"
+#include "measure/progress.h"
 #include "rays/rays.h"
 
 #ifdef __cplusplus

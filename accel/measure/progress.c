@@ -10,7 +10,7 @@
 #include <unistd.h>
 
 #include "accel.h"
-#include "bench/progress.h"
+#include "measure/progress.h"
 
 #define TICK_MS 250
 #define LINE_EVERY_MS 10000.0 /* when out is not a terminal */

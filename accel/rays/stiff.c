@@ -14,7 +14,7 @@
 #include <string.h>
 
 #include "scene/scene.h"
-#include "bench/stiff.h"
+#include "rays/stiff.h"
 
 static int reserve(rays_set *r, size_t more, size_t *cap, accel_error *err)
 {

@@ -1,0 +1,76 @@
+/*
+ * check_common.c - what the step checks share (check.c and check_step3.c):
+ * the report a check writes, and rays aimed at the cases a careless
+ * traversal gets wrong.
+ */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check_common.h"
+
+void lab_say(lab_result *r, const char *fmt, ...)
+{
+    size_t len = strlen(r->report);
+    if (len + 1 >= sizeof r->report) return;
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(r->report + len, sizeof r->report - len, fmt, ap);
+    va_end(ap);
+}
+
+void lab_fail(lab_result *r, const char *fmt, ...)
+{
+    size_t len = strlen(r->report);
+    if (len + 8 < sizeof r->report) {
+        memcpy(r->report + len, "  FAIL ", 8);
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(r->report + len + 7, sizeof r->report - len - 7, fmt, ap);
+        va_end(ap);
+        lab_say(r, "\n");
+    }
+    r->passed = 0;
+}
+
+/* Rays from the eye through triangle vertices (the cases that leak through
+ * a careless edge test), and axis-parallel rays with +-0 components from
+ * the faces of the scene box (the cases that break a careless slab test). */
+int lab_make_stiff_rays(const accel_scene *sc, rays_set *out, accel_error *err)
+{
+    size_t verts = sc->tri_count < 150 ? sc->tri_count : 150;
+    size_t n = verts * 3 + 6 * 64;
+    memset(out, 0, sizeof *out);
+    out->rays = malloc(n * sizeof *out->rays);
+    if (!out->rays) return accel_fail(err, ACCEL_ERR_NOMEM, "lab: out of memory");
+    size_t k = 0;
+    vec3 eye = sc->camera.eye;
+    for (size_t i = 0; i < verts; i++) {
+        size_t tri = i * (sc->tri_count / (verts ? verts : 1));
+        for (int v = 0; v < 3; v++) {
+            const float *p = sc->tris + 9 * tri + 3 * v;
+            accel_ray r = {eye.x, eye.y, eye.z, 0.0f, p[0] - eye.x, p[1] - eye.y, p[2] - eye.z,
+                           INFINITY};
+            out->rays[k++] = r;
+        }
+    }
+    box3 b = sc->bounds;
+    const float lo[3] = {b.min.x, b.min.y, b.min.z}, hi[3] = {b.max.x, b.max.y, b.max.z};
+    for (int axis = 0; axis < 3; axis++)
+        for (int sign = 0; sign < 2; sign++)
+            for (int j = 0; j < 64; j++) {
+                int u = (axis + 1) % 3, w = (axis + 2) % 3;
+                float o[3], d[3] = {-0.0f, -0.0f, -0.0f};
+                o[axis] = sign ? hi[axis] : lo[axis];
+                o[u] = lo[u] + (hi[u] - lo[u]) * (float)(j % 8) / 7.0f;
+                o[w] = lo[w] + (hi[w] - lo[w]) * (float)(j / 8) / 7.0f;
+                if (j & 1) d[u] = 0.0f; /* +0 and -0 both */
+                d[axis] = sign ? -1.0f : 1.0f;
+                accel_ray r = {o[0], o[1], o[2], 0.0f, d[0], d[1], d[2], INFINITY};
+                out->rays[k++] = r;
+            }
+    out->count = k;
+    return 0;
+}
