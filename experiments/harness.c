@@ -16,6 +16,7 @@
 #include "svg.h"
 #include "bench/cli.h"
 #include "bench/image.h"
+#include "tools/spec_check.h"
 
 static int opt_mesh(const cli_option *o, void *field, char **v, accel_error *err)
 {
@@ -26,6 +27,29 @@ static int opt_mesh(const cli_option *o, void *field, char **v, accel_error *err
     if (rc) return rc;
     x->meshes[x->mesh_count++] = v[0];
     return 0;
+}
+
+/* --kinds: every name a registered kind, none empty. */
+static int opt_kinds(const cli_option *o, void *field, char **v, accel_error *err)
+{
+    for (const char *p = v[0];; p++) {
+        size_t n = strcspn(p, ",");
+        char name[64];
+        snprintf(name, sizeof name, "%.*s", (int)n, p);
+        if (n == 0 || n >= sizeof name || !accel_find_kind(name)) {
+            char names[400] = "";
+            for (size_t i = 0; i < accel_kind_count; i++) {
+                size_t len = strlen(names);
+                snprintf(names + len, sizeof names - len, "%s%s", i ? ", " : "",
+                         accel_kinds[i]->name);
+            }
+            return accel_fail(err, ACCEL_ERR_SPEC, "%s %s: unknown kind '%s'; registered: %s",
+                              o->name, v[0], name, names);
+        }
+        p += n;
+        if (!*p) break;
+    }
+    return cli_string(o, field, v, err);
 }
 
 static int opt_threads(const cli_option *o, void *field, char **v, accel_error *err)
@@ -40,8 +64,10 @@ static int opt_accel(const cli_option *o, void *field, char **v, accel_error *er
     exp_ctx *x = (exp_ctx *)((char *)field - offsetof(exp_ctx, accels));
     if (x->accel_count == EXP_MAX_ACCELS)
         return accel_fail(err, ACCEL_ERR_SPEC, "%s: at most %d specs", o->name, EXP_MAX_ACCELS);
-    /* Not parsed here: a spec of a kind this build lacks is left out with
-     * its reason by the experiment, not refused. */
+    /* Checked in full (kind, keys, values): a typo is an error before any
+     * work, not a green report without the configuration. */
+    int rc = spec_check_accel(o->name, v[0], err);
+    if (rc) return rc;
     x->accels[x->accel_count++] = v[0];
     return 0;
 }
@@ -59,12 +85,12 @@ static const cli_option exp_options[] = {
     {"--rt-size", "WxH", "image of the lecture's real-time claims (default 800x600, quick 160x120)",
      cli_size, OPT(rt_size), 8, 8192},
     {"--accel", "SPEC", "add SPEC to the experiment's configurations (repeatable; specs of kinds\n"
-     "the experiment does not compare are ignored, specs this build lacks are left out)",
+     "the experiment does not compare are ignored; an unknown kind, key or value is an error)",
      opt_accel, OPT(accels), 0, 0},
     {"--only-accels", NULL, "the --accel specs replace the experiment's own list", cli_flag,
      OPT(only_accels), 0, 0},
-    {"--kinds", "LIST", "only these kinds, e.g. grid,bvh (make report KINDS=...)", cli_string,
-     OPT(kinds), 0, 0},
+    {"--kinds", "LIST", "only these kinds, e.g. grid,bvh (make report KINDS=...); unknown: an error",
+     opt_kinds, OPT(kinds), 0, 0},
     {"--mesh", "FILE", "add a mesh (repeatable; default ../shared/scenes/*.off if present)",
      opt_mesh, OPT(meshes), 0, 0},
     {"--no-meshes", NULL, "built-in scenes only", cli_flag, OPT(no_meshes), 0, 0},

@@ -127,7 +127,8 @@ void exp_sets_wh(exp_ctx *x, const accel_scene *s, int mask, int w, int h, int a
 /* A list of specs for one question: the experiment's defaults (or only the
  * --accel specs with --only-accels) plus the --accel specs whose kind is in
  * `accept` (a comma list of kind names; NULL: every kind), without the
- * kinds --kinds leaves out. Specs this build cannot parse stay in the list:
+ * kinds --kinds leaves out (--kinds and --accel are checked in full by
+ * exp_init: a typo is exit 2). Default specs this build cannot parse stay in the list:
  * exp_group_add leaves them out with the reason, so the report works before
  * and after the kinds and parameters it names have landed. */
 typedef struct {

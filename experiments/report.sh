@@ -31,12 +31,23 @@ else
   out=report; report=REPORT.md; flag=""; budget="full"; links="report/"
 fi
 if [ -n "$dir" ]; then out="$dir"; report="$dir/REPORT.md"; links=""; fi
-mkdir -p "$out"
-# A whole run starts clean (no section of an earlier run survives); --only keeps the others.
-[ -n "$only" ] || rm -f "$out"/*.md "$out"/*.csv "$out"/*.svg "$out"/*.gp
 extra=()
 [ -n "${KINDS:-}" ] && extra+=(--kinds "$KINDS")
 for spec in ${ACCEL:-}; do extra+=(--accel "$spec"); done
+# The choices are checked before anything is removed or run: an unknown kind
+# in KINDS or a bad ACCEL spec is a usage error (exit 2), never a green
+# report without them. An experiment checks every option before --help.
+for e in exp_step_cost exp_sah; do
+  if [ -x "$bin/$e" ]; then
+    st=0
+    "$bin/$e" $flag "${extra[@]}" --help > /dev/null || st=$?
+    [ "$st" = 0 ] || exit "$st"
+    break
+  fi
+done
+mkdir -p "$out"
+# A whole run starts clean (no section of an earlier run survives); --only keeps the others.
+[ -n "$only" ] || rm -f "$out"/*.md "$out"/*.csv "$out"/*.svg "$out"/*.gp
 read -r load_start _ < /proc/loadavg || load_start="?"
 # Experiments in the order the report reads them.
 order="exp_step_cost exp_grid_resolution exp_grids exp_nested_grid exp_sah exp_binning exp_packets exp_wide exp_threads exp_twolevel exp_scaling exp_error_time exp_time_to_image exp_stability"

@@ -23,6 +23,7 @@
 #include "bench/csv.h"
 #include "bench/shade.h"
 #include "scene/scene.h"
+#include "tools/spec_check.h"
 
 #define MAX_ACCELS 32
 #define MAX_SETS 4
@@ -204,10 +205,9 @@ static int parse_options(int argc, char **argv, options *o, run *r, accel_error 
     int rc = cli_parse(trace_options, OPTION_COUNT, argc, argv, 1, o, err);
     if (rc || o->help) return rc;
     if (o->accel_count == 0) o->accels[o->accel_count++] = accel_find_kind("bvh") ? "bvh" : "brute";
-    accel_params p;
     for (int a = 0; a < o->accel_count; a++)
-        if ((rc = accel_params_parse(o->accels[a], &p, err))) return rc;
-    if (o->gen_accel && (rc = accel_params_parse(o->gen_accel, &p, err))) return rc;
+        if ((rc = spec_check_accel("--accel", o->accels[a], err))) return rc;
+    if (o->gen_accel && (rc = spec_check_accel("--gen-accel", o->gen_accel, err))) return rc;
     if ((rc = scene_spec_check(o->scene, err))) return rc;
     if ((rc = parse_ray_sets(o->rays, r, err))) return rc;
     if (o->image && (r->from_file || !has_primary(r)))
