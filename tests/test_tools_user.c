@@ -4,6 +4,8 @@
  * asked for and say so, and every tool keeps one exit-code convention.
  * The tools run as subprocesses on tiny sizes.
  */
+#include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -11,6 +13,7 @@
 #include <unistd.h>
 
 #include "bench/cli.h"
+#include "rays/rays.h"
 #include "support.h"
 
 #define DIR "build/test_tools_user"
@@ -81,4 +84,69 @@ TEST(tools_trace_checks_every_spec_before_the_scene)
                  NULL, &err);
     CHECKF(rc == 0, "good bottom= specs: exit %d, '%s'", rc, err ? err : "");
     free(err);
+}
+
+/* Defect 5: shadow and ao answers can leave the project and come back: a
+ * hit file per set, any-hit answers by FORMATS.md's rule, --occluded for
+ * rays from a file, and `trace compare --occluded`. */
+TEST(tools_trace_dumps_and_compares_any_hit_answers)
+{
+    char *out = NULL, *err = NULL;
+    int rc = run("bin/trace --size 24x24 --repeat 1 --quiet --scene sphereflake --accel bvh "
+                 "--rays primary,shadow,ao --dump-rays " DIR "/s --dump-hits " DIR "/h",
+                 &out, &err);
+    CHECKF(rc == 0, "exit %d: %s", rc, err ? err : "");
+    static const char *const sets[] = {"primary", "shadow", "ao"};
+    for (int i = 0; i < 3; i++) {
+        char path[256], said[300];
+        snprintf(path, sizeof path, DIR "/h.%s.hits", sets[i]);
+        snprintf(said, sizeof said, "wrote %s: ", path);
+        CHECKF(access(path, R_OK) == 0, "%s not written", path);
+        CHECKF(out && strstr(out, said), "'%s' not said: %s", said, out ? out : "");
+        snprintf(path, sizeof path, DIR "/s.%s.rays", sets[i]);
+        snprintf(said, sizeof said, "wrote %s: ", path);
+        CHECKF(out && strstr(out, said), "'%s' not said: %s", said, out ? out : "");
+    }
+    CHECK(out && strstr(out, "any-hit answers of shadow rays"));
+    free(out), free(err);
+    /* The shadow rays again from their file, as any-hit queries of another kind. */
+    rc = run("bin/trace --repeat 1 --quiet --scene sphereflake --accel grid --occluded --rays "
+             DIR "/s.shadow.rays --dump-hits " DIR "/g.hits", &out, &err);
+    CHECKF(rc == 0 && out && strstr(out, "occluded"), "--occluded: exit %d: %s %s", rc,
+           out ? out : "", err ? err : "");
+    free(out), free(err);
+    rc = run("bin/trace compare --occluded " DIR "/h.shadow.hits " DIR "/g.hits", &out, NULL);
+    CHECKF(rc == 0 && out && strstr(out, "leaks 0"), "compare: exit %d: %s", rc, out ? out : "");
+    free(out);
+    /* The rule: another triangle of an occluded ray agrees, a ray let through leaks. */
+    accel_hit *h = NULL;
+    size_t n = 0, occluded = SIZE_MAX, clear = SIZE_MAX;
+    accel_error e = {0};
+    CHECKF(hits_read(DIR "/h.shadow.hits", &h, &n, &e) == 0, "%s", e.msg);
+    for (size_t i = 0; i < n; i++) {
+        if (h[i].prim != ACCEL_MISS && occluded == SIZE_MAX) occluded = i;
+        if (h[i].prim == ACCEL_MISS && clear == SIZE_MAX) clear = i;
+    }
+    CHECKF(occluded != SIZE_MAX && clear != SIZE_MAX, "no occluded or no clear shadow ray");
+    if (occluded == SIZE_MAX || clear == SIZE_MAX) {
+        free(h);
+        return;
+    }
+    h[occluded].prim ^= 1, h[occluded].t *= 0.5f;
+    hits_write(DIR "/other.hits", h, n, &e);
+    rc = run("bin/trace compare --occluded " DIR "/h.shadow.hits " DIR "/other.hits", &out, NULL);
+    CHECKF(rc == 0, "another triangle of an occluded ray: exit %d: %s", rc, out ? out : "");
+    free(out);
+    rc = run("bin/trace compare " DIR "/h.shadow.hits " DIR "/other.hits", NULL, NULL);
+    CHECKF(rc == CLI_EXIT_DIFFER, "closest-hit rule on another triangle: exit %d", rc);
+    h[occluded].prim = ACCEL_MISS, h[occluded].t = INFINITY;
+    hits_write(DIR "/other.hits", h, n, &e);
+    rc = run("bin/trace compare --occluded " DIR "/h.shadow.hits " DIR "/other.hits", &out, NULL);
+    CHECKF(rc == CLI_EXIT_DIFFER && out && strstr(out, "leaks 1"), "a leak: exit %d: %s", rc,
+           out ? out : "");
+    free(out), free(h);
+    expect_early_error("bin/trace --occluded", CLI_EXIT_USAGE, "--occluded needs a .rays file",
+                       3000);
+    rc = run("bin/trace compare --help", NULL, NULL);
+    CHECKF(rc == 0, "trace compare --help: exit %d", rc);
 }

@@ -24,6 +24,7 @@
 #include "bench/shade.h"
 #include "scene/scene.h"
 #include "tools/spec_check.h"
+#include "tools/trace/hitfiles.h"
 
 #define MAX_ACCELS 32
 #define MAX_SETS 4
@@ -37,7 +38,7 @@ typedef struct {
     cli_vec3 eye, look, up;
     double fov; /* 0: the scene's */
     int threads, repeat, warmup, build_repeat;
-    int counters, check, csv, quiet, help;
+    int counters, check, csv, quiet, help, occluded;
     double progress_after; /* seconds */
     const char *image, *heatmap[2], *dump_rays, *dump_hits, *export_obj;
     const char *gen_accel;
@@ -73,6 +74,8 @@ static const cli_option trace_options[] = {
      "(default bvh when registered, else brute)", opt_accel, OPT(accels), 0, 0},
     {"--rays", "LIST", "comma list of primary,shadow,diffuse,ao, or a .rays file (default primary)",
      cli_string, OPT(rays), 0, 0},
+    {"--occluded", NULL, "trace the rays of a .rays file as any-hit (occlusion) queries, as shadow\n"
+     "and ao rays are (default: closest hit)", cli_flag, OPT(occluded), 0, 0},
     {"--size", "WxH", "image / primary ray grid (default 512x512)", cli_size, OPT(size), 1, 16384},
     {"--eye", "X,Y,Z", "camera position (default: the scene's camera)", cli_vec, OPT(eye), 0, 0},
     {"--look", "X,Y,Z", "point the camera looks at", cli_vec, OPT(look), 0, 0},
@@ -94,7 +97,8 @@ static const cli_option trace_options[] = {
      opt_heatmap, OPT(heatmap), 0, 0},
     {"--dump-rays", "F", "write the ray set(s) as FORMATS.md .rays (F.<set>.rays if several)",
      cli_string, OPT(dump_rays), 0, 0},
-    {"--dump-hits", "F", "write the hits of the last accelerator (F.<set>.hits if several)",
+    {"--dump-hits", "F", "write the hits of the last accelerator, a file per set (F.<set>.hits\n"
+     "if several); shadow, ao and --occluded rays as FORMATS.md any-hit answers",
      cli_string, OPT(dump_hits), 0, 0},
     {"--export-obj", "F", "write the scene as OBJ (spheres tessellated) and continue", cli_string,
      OPT(export_obj), 0, 0},
@@ -216,11 +220,9 @@ static int parse_options(int argc, char **argv, options *o, run *r, accel_error 
     if (o->heatmap[0] && r->from_file)
         return accel_fail(err, ACCEL_ERR_SPEC, "--heatmap needs rays made from the camera, not a "
                           ".rays file (it has no pixels)");
-    int closest = r->from_file;
-    for (int s = 0; s < r->set_count; s++) closest |= !bench_set_is_occlusion(r->bits[s]);
-    if (o->dump_hits && !closest)
-        return accel_fail(err, ACCEL_ERR_SPEC, "--dump-hits: shadow and ao rays are any-hit "
-                          "queries without hits; add primary or diffuse to --rays");
+    if (o->occluded && !r->from_file)
+        return accel_fail(err, ACCEL_ERR_SPEC, "--occluded needs a .rays file in --rays (shadow "
+                          "and ao sets are any-hit queries already)");
     if (o->eye.given && o->look.given && v3_len(v3_sub(o->eye.v, o->look.v)) == 0)
         return accel_fail(err, ACCEL_ERR_SPEC, "--eye and --look are the same point");
     if (o->up.given && v3_len(o->up.v) == 0)
@@ -329,6 +331,10 @@ static int make_rays(const options *o, run *r, accel_error *err)
         snprintf(path, sizeof path, r->set_count > 1 ? "%s.%s.rays" : "%s", o->dump_rays,
                  r->set_names[s]);
         rc = rays_write(path, rs->rays, rs->count, err);
+        FILE *info = o->csv ? (o->quiet ? NULL : stderr) : stdout;
+        if (!rc && info)
+            fprintf(info, "wrote %s: %zu %s rays (FORMATS.md .rays)\n", path, rs->count,
+                    r->set_names[s]);
     }
     return rc;
 }
@@ -448,17 +454,40 @@ static int write_heatmap(const options *o, run *r, const set_run *t, const accel
     return rc;
 }
 
-/* The outputs of the last accelerator: --dump-hits, --image, --heatmap. */
-static void write_outputs(const options *o, run *r, const set_run *t, const accel_kind *kind,
-                          const char *spec)
+/* --dump-hits of one set: closest hits, or the any-hit answers of an
+ * occlusion set (FORMATS.md), named on the way. */
+static void dump_hits(const options *o, run *r, const set_run *t, const accel_kind *kind,
+                      const void *accel)
 {
     accel_error err = {0};
     const char *name = r->set_names[t->set];
-    if (o->dump_hits && !t->occl) {
-        char path[1024];
-        snprintf(path, sizeof path, r->set_count > 1 ? "%s.%s.hits" : "%s", o->dump_hits, name);
-        if (hits_write(path, t->hits, t->rays->count, &err)) report_err(r, &err);
+    char path[1024];
+    snprintf(path, sizeof path, r->set_count > 1 ? "%s.%s.hits" : "%s", o->dump_hits, name);
+    size_t n = t->rays->count, lost = 0;
+    if (t->occl) {
+        lost = trace_anyhit_answers(kind, accel, &r->scene, t->rays->rays, t->occ, n, o->threads,
+                                    t->hits);
+        if (lost)
+            report(r, CLI_EXIT_INTERNAL, "--dump-hits: some occluded rays hit no triangle in a "
+                   "closest-hit query or the reference: written as misses");
     }
+    if (hits_write(path, t->hits, n, &err)) {
+        report_err(r, &err);
+        return;
+    }
+    FILE *info = o->csv ? (o->quiet ? NULL : stderr) : stdout;
+    if (info)
+        fprintf(info, "wrote %s: %zu %s of %s rays%s\n", path, n,
+                t->occl ? "any-hit answers" : "closest hits", name,
+                t->occl ? " (trace compare --occluded compares them)" : "");
+}
+
+/* The outputs of the last accelerator: --dump-hits, --image, --heatmap. */
+static void write_outputs(const options *o, run *r, const set_run *t, const accel_kind *kind,
+                          const void *accel, const char *spec)
+{
+    accel_error err = {0};
+    if (o->dump_hits) dump_hits(o, r, t, kind, accel);
     if (o->image && r->bits[t->set] == BENCH_PRIMARY) {
         image_rgb img;
         if (image_alloc(&img, t->rays->width, t->rays->height, &err) == 0) {
@@ -481,7 +510,7 @@ static void trace_set(const options *o, run *r, int s, int last, const accel_kin
     set_run t = {0};
     t.rays = r->from_file ? &r->file_rays : bench_sets_get(&r->sets, r->bits[s]);
     t.set = s;
-    t.occl = !r->from_file && bench_set_is_occlusion(r->bits[s]);
+    t.occl = r->from_file ? o->occluded : bench_set_is_occlusion(r->bits[s]);
     size_t n = t.rays->count, m = n ? n : 1;
     int heat = o->heatmap[0] && last && t.rays->pixel;
     t.hits = malloc(m * sizeof *t.hits);
@@ -508,7 +537,7 @@ static void trace_set(const options *o, run *r, int s, int last, const accel_kin
     if (o->check && check_set(o, r, &t, &cerr)) report_err(r, &cerr);
     print_row(o, r, kind, canon, st, bt, &t);
     if (rc) report_err(r, &err);
-    if (last) write_outputs(o, r, &t, kind, canon->spec);
+    if (last) write_outputs(o, r, &t, kind, accel, canon->spec);
 done:
     free(t.hits);
     free(t.occ);
@@ -547,42 +576,11 @@ static void run_accel(const options *o, run *r, int a)
     kind->destroy(accel);
 }
 
-static int cmd_compare(int argc, char **argv)
-{
-    if (argc != 4) {
-        fprintf(stderr, "usage: trace compare REFERENCE.hits OTHER.hits\n");
-        return CLI_EXIT_USAGE;
-    }
-    accel_error err = {0};
-    accel_hit *a = NULL, *b = NULL;
-    size_t na = 0, nb = 0;
-    if (hits_read(argv[2], &a, &na, &err) || hits_read(argv[3], &b, &nb, &err)) {
-        fprintf(stderr, "trace: %s\n", err.msg);
-        free(a);
-        return cli_exit_of(err.code);
-    }
-    if (na != nb) {
-        fprintf(stderr, "trace: %s has %zu hits, %s has %zu\n", argv[2], na, argv[3], nb);
-        free(a), free(b);
-        return CLI_EXIT_INPUT;
-    }
-    hits_diff d = hits_compare(a, b, na);
-    printf("rays %zu  agree %zu  holes %zu  false_hits %zu  disagreements %zu\n", d.rays, d.agree,
-           d.holes, d.false_hits, d.disagreements);
-    if (d.first_bad != SIZE_MAX) {
-        size_t i = d.first_bad;
-        printf("first difference: ray %zu: %s prim %u t %.9g, %s prim %u t %.9g\n", i, argv[2],
-               a[i].prim, a[i].t, argv[3], b[i].prim, b[i].t);
-    }
-    free(a), free(b);
-    return d.agree == d.rays ? CLI_EXIT_OK : CLI_EXIT_DIFFER;
-}
-
 int main(int argc, char **argv)
 {
     /* Lines reach a pipe or file as they are printed, in order with stderr. */
     setvbuf(stdout, NULL, _IOLBF, 0);
-    if (argc > 1 && !strcmp(argv[1], "compare")) return cmd_compare(argc, argv);
+    if (argc > 1 && !strcmp(argv[1], "compare")) return trace_compare(argc, argv);
     options o;
     run r = {0};
     accel_error err = {0};
