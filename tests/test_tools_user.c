@@ -150,3 +150,25 @@ TEST(tools_trace_dumps_and_compares_any_hit_answers)
     rc = run("bin/trace compare --help", NULL, NULL);
     CHECKF(rc == 0, "trace compare --help: exit %d", rc);
 }
+
+/* Defect 1: trace passes have the builds' time budget, and a structure that
+ * collapses (the regular grid around teapot_stadium's teapot: thousands of
+ * primitive tests per ray) is named in one line. */
+TEST(tools_trace_passes_stop_at_the_budget_and_collapse_warns)
+{
+    char *out = NULL, *err = NULL;
+    int rc = run("bin/trace --quiet --scene teapot_stadium --size 32x24 --accel grid "
+                 "--repeat 5 --budget 0.05", &out, &err);
+    CHECKF(rc == 0, "exit %d: %s", rc, err ? err : "");
+    CHECKF(out && strstr(out, " of 5 timed passes: a pass takes ") && strstr(out, "0.05 s budget"),
+           "the row does not say the budget cut the passes: %s", out ? out : "");
+    CHECKF(err && strstr(err, "warning: grid collapses on teapot_stadium: "),
+           "no collapse warning: %s", err ? err : "");
+    free(out), free(err);
+    /* A structure that adapts: every pass, no warning. */
+    rc = run("bin/trace --quiet --scene teapot_stadium --size 32x24 --accel bvh --repeat 3",
+             &out, &err);
+    CHECKF(rc == 0 && out && !strstr(out, "timed passes:") && err && !strstr(err, "collapses"),
+           "bvh: exit %d, '%s', '%s'", rc, out ? out : "", err ? err : "");
+    free(out), free(err);
+}

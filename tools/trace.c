@@ -64,8 +64,11 @@ static const cli_option trace_options[] = {
      cli_int, OPT(threads), 1, 256},
     {"--repeat", "N", "timed passes per ray set (default 5)", cli_int, OPT(repeat), 1, 100},
     {"--warmup", "N", "untimed passes first (default 1)", cli_int, OPT(warmup), 0, 100},
-    {"--build-repeat", "N", "builds timed per accelerator (default 3, up to 10 s)", cli_int,
+    {"--build-repeat", "N", "builds timed per accelerator (default 3, within --budget)", cli_int,
      OPT(build_repeat), 1, 64},
+    {"--budget", "S", "seconds of timed passes per ray set and of builds per accelerator\n"
+     "(default 10): slower ones stop repeating, and the row says so", cli_double, OPT(budget),
+     0.001, 1e6},
     {"--no-counters", NULL, "skip the counted pass (steps, box and primitive tests)", cli_unflag,
      OPT(counters), 0, 0},
     {"--check", NULL, "compare every result against the double-precision reference", cli_flag,
@@ -167,6 +170,7 @@ static int parse_options(int argc, char **argv, options *o, run *r, accel_error 
     o->repeat = 5;
     o->warmup = 1;
     o->build_repeat = 3;
+    o->budget = 10;
     o->counters = 1;
     o->seed = 1;
     o->ao_samples = 4;
@@ -335,6 +339,19 @@ static int check_set(const options *o, run *r, set_run *t, accel_error *err)
     return 0;
 }
 
+/* A structure that degenerates on this scene (thousands of primitive tests
+ * per ray: the regular grid around teapot_stadium's teapot) in one line. */
+static void warn_collapse(const run *r, const accel_kind *kind, const accel_params *canon,
+                          const set_run *t)
+{
+    double n = t->rays->count ? (double)t->rays->count : 1.0;
+    double prims = t->br.counted ? (double)t->br.counters.prim_tests / n : 0;
+    if (prims >= 1000 && strcmp(kind->name, "brute"))
+        fprintf(stderr, "trace: warning: %s collapses on %s: %.0f primitive tests per %s ray (of "
+                "%u primitives); try another kind or parameter\n", canon->spec, r->scene.name,
+                prims, r->set_names[t->set], r->scene.live_count);
+}
+
 /* Step 6: one ray set on one built accelerator. */
 static void trace_set(const options *o, run *r, int s, int last, const accel_kind *kind,
                       const void *accel, const accel_params *canon, const accel_build_stats *st,
@@ -357,6 +374,7 @@ static void trace_set(const options *o, run *r, int s, int last, const accel_kin
     char phase[320];
     snprintf(phase, sizeof phase, "trace %s with %s", r->set_names[s], canon->spec);
     bench_trace_opts to = {.threads = o->threads, .warmup = o->warmup, .repeats = o->repeat,
+                           .max_ms = o->budget * 1e3,
                            .count_pass = o->counters || heat, .hits = t.hits, .occluded = t.occ,
                            .ray_steps = t.steps, .ray_prims = t.prims,
                            .progress = r->progress, .progress_name = phase};
@@ -370,6 +388,7 @@ static void trace_set(const options *o, run *r, int s, int last, const accel_kin
     accel_error cerr = {0};
     if (o->check && check_set(o, r, &t, &cerr)) report_err(r, &cerr);
     print_row(o, r, kind, canon, st, bt, &t);
+    warn_collapse(r, kind, canon, &t);
     if (rc) report_err(r, &err);
     if (last) write_outputs(o, r, &t, kind, accel, canon->spec);
 done:
@@ -387,8 +406,8 @@ static void run_accel(const options *o, run *r, int a)
     void *accel;
     accel_build_stats st;
     accel_timing bt;
-    if (bench_build(o->accels[a], &r->scene, o->threads, o->build_repeat, 10000.0, &kind, &accel,
-                    &st, &bt, r->progress, &err)) {
+    if (bench_build(o->accels[a], &r->scene, o->threads, o->build_repeat, o->budget * 1e3, &kind,
+                    &accel, &st, &bt, r->progress, &err)) {
         report_err(r, &err);
         return;
     }

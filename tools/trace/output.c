@@ -49,6 +49,9 @@ void print_row(const options *o, run *r, const accel_kind *kind, const accel_par
     printf("  %-8s %9zu rays %9zu %s  %8.3f Mrays/s (min %.3f, max %.3f; %.2f ms)", name,
            t->rays->count, br->hits, t->occl ? "occluded" : "hit", br->mrays.median,
            br->mrays.min, br->mrays.max, br->ms.median);
+    if (br->ms.n < o->repeat)
+        printf(" [%d of %d timed passes: a pass takes %.1f s, over the %g s budget]", br->ms.n,
+               o->repeat, br->ms.median / 1e3, o->budget);
     if (br->counted)
         printf("  per ray: %.2f %s, %.2f empty, %.2f box, %.2f prim, %.2f mailbox skips",
                c->steps / nr, kind->step_name, c->empty_steps / nr, c->box_tests / nr,

@@ -27,6 +27,7 @@ typedef struct {
     double fov; /* 0: the scene's */
     int threads, repeat, warmup, build_repeat;
     int counters, check, csv, quiet, help, occluded;
+    double budget; /* seconds of timed passes per ray set, and of builds per accelerator */
     double progress_after; /* seconds */
     const char *image, *heatmap[2], *dump_rays, *dump_hits, *export_obj;
     const char *gen_accel;
