@@ -46,8 +46,16 @@ for e in exp_step_cost exp_sah; do
   fi
 done
 mkdir -p "$out"
-# A whole run starts clean (no section of an earlier run survives); --only keeps the others.
-[ -n "$only" ] || rm -f "$out"/*.md "$out"/*.csv "$out"/*.svg "$out"/*.gp
+# A whole run owns $out: it starts clean (no section of an earlier run
+# survives), and what the run did not write is removed at its end (an old
+# plot no section names); --only keeps the others. Never a source folder.
+owned=1
+[ -e "$out/Makefile" ] || [ -e "$out/.git" ] || [ -e "$out/sources.mk" ] && owned=0
+stamp="$out/.report-start"
+if [ -z "$only" ] && [ "$owned" = 1 ]; then
+  rm -f "$out"/*.md "$out"/*.csv "$out"/*.svg "$out"/*.gp
+  touch "$stamp"
+fi
 read -r load_start _ < /proc/loadavg || load_start="?"
 # Experiments in the order the report reads them.
 order="exp_step_cost exp_grid_resolution exp_grids exp_nested_grid exp_sah exp_binning exp_packets exp_wide exp_threads exp_twolevel exp_scaling exp_error_time exp_time_to_image exp_stability"
@@ -89,4 +97,10 @@ cc_version=$(${CC:-cc} --version 2>/dev/null | head -1)
   --run "$((end - start)) s; per experiment: $times (sum $sum s)$note${KINDS:+; KINDS=$KINDS}${ACCEL:+; ACCEL=$ACCEL}" \
   --load "$load_start (1 minute) before the first experiment, $load_end after the last" \
   "${ran[@]}"
+if [ -f "$stamp" ]; then
+  # Files older than the run's start were not written by it.
+  find "$out" -maxdepth 1 -type f ! -newer "$stamp" ! -name .report-start -print |
+    while read -r f; do echo "report.sh: removed $f (not written by this run)" >&2; rm -f "$f"; done
+  rm -f "$stamp"
+fi
 echo "report.sh: wrote $report in $((end - start)) s" >&2
