@@ -100,7 +100,7 @@ test: all
 
 report: all
 	GRIDBVH_CFLAGS="$(ALL_CFLAGS)" CC="$(CC)" KINDS="$(KINDS)" ACCEL="$(ACCEL)" \
-	  ./experiments/report.sh $(if $(QUICK),--quick,)
+	  SCENES="$(SCENES)" ./experiments/report.sh $(if $(QUICK),--quick,)
 
 bench: all
 	./experiments/bench.sh

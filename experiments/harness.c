@@ -52,6 +52,17 @@ static int opt_kinds(const cli_option *o, void *field, char **v, accel_error *er
     return cli_string(o, field, v, err);
 }
 
+static int opt_scene(const cli_option *o, void *field, char **v, accel_error *err)
+{
+    exp_ctx *x = (exp_ctx *)((char *)field - offsetof(exp_ctx, scenes));
+    if (x->scene_count == EXP_MAX_MESHES)
+        return accel_fail(err, ACCEL_ERR_SPEC, "%s: at most %d scenes", o->name, EXP_MAX_MESHES);
+    int rc = scene_spec_check(v[0], err);
+    if (rc) return rc;
+    x->scenes[x->scene_count++] = v[0];
+    return 0;
+}
+
 static int opt_threads(const cli_option *o, void *field, char **v, accel_error *err)
 {
     exp_ctx *x = (exp_ctx *)((char *)field - offsetof(exp_ctx, threads));
@@ -91,9 +102,13 @@ static const cli_option exp_options[] = {
      OPT(only_accels), 0, 0},
     {"--kinds", "LIST", "only these kinds, e.g. grid,bvh (make report KINDS=...); unknown: an error",
      opt_kinds, OPT(kinds), 0, 0},
+    {"--scene", "SPEC|FILE", "measure exactly this scene (repeatable): a built-in spec, a mesh or\n"
+     "a .scene file, in place of the experiment's own scenes (make report SCENES=...)",
+     opt_scene, OPT(scenes), 0, 0},
     {"--mesh", "FILE", "add a mesh (repeatable; default ../shared/scenes/*.off if present)",
      opt_mesh, OPT(meshes), 0, 0},
-    {"--no-meshes", NULL, "built-in scenes only", cli_flag, OPT(no_meshes), 0, 0},
+    {"--no-meshes", NULL, "no default meshes (the --mesh ones stay)", cli_flag, OPT(no_meshes),
+     0, 0},
     CLI_COMMON_ROWS(exp_ctx),
 };
 #define OPTION_COUNT (sizeof exp_options / sizeof exp_options[0])
@@ -159,10 +174,13 @@ void exp_init(exp_ctx *x, int argc, char **argv, const char *name, const char *q
     x->sample_ms = x->quick ? 2.0 : 20.0;
     x->set_budget_ms = x->quick ? 100.0 : 1500.0;
     x->build_budget_ms = x->quick ? 100.0 : 2000.0;
-    if (x->no_meshes)
-        x->mesh_count = 0;
-    else if (!x->mesh_count && !x->quick)
-        find_default_meshes(x);
+    x->meshes_given = x->mesh_count > 0;
+    if (x->quick && x->meshes_given) {
+        fprintf(stderr, "%s: --mesh %s: the quick budget measures its own tiny scenes, not the "
+                "meshes; --scene %s measures exactly it\n", name, x->meshes[0], x->meshes[0]);
+        exit(CLI_EXIT_USAGE);
+    }
+    if (!x->no_meshes && !x->mesh_count && !x->quick) find_default_meshes(x);
     mkdir(x->out_dir, 0777);
     char path[1024];
     snprintf(path, sizeof path, "%s/%s.csv", x->out_dir, name);
@@ -449,6 +467,34 @@ void exp_md_table(exp_ctx *x, const char *cols)
     exp_md(x, "\n| %s |\n|", cols);
     for (int i = 0; i < n; i++) exp_md(x, "---|");
     exp_md(x, "\n");
+}
+
+int exp_scene_list(exp_ctx *x, const char **list, int n, int max)
+{
+    if (!x->scene_count) return n;
+    if (x->scene_count > max) {
+        fprintf(stderr, "%s: %d --scene given, this experiment measures at most %d: none is "
+                "dropped silently; give fewer\n", x->name, x->scene_count, max);
+        exit(CLI_EXIT_USAGE);
+    }
+    for (int i = 0; i < x->scene_count; i++) list[i] = x->scenes[i];
+    return x->scene_count;
+}
+
+void exp_mesh_room(exp_ctx *x, int max)
+{
+    if (!x->meshes_given || x->mesh_count <= max || x->scene_count) return;
+    fprintf(stderr, "%s: %d --mesh given, this experiment measures the first %d: none is dropped "
+            "silently; give fewer, or --scene for each scene to measure\n", x->name,
+            x->mesh_count, max);
+    exit(CLI_EXIT_USAGE);
+}
+
+void exp_scenes_unused(exp_ctx *x, const char *why)
+{
+    if (!x->scene_count) return;
+    fprintf(stderr, "%s: note: --scene not measured here: %s\n", x->name, why);
+    exp_md(x, "\n_The --scene scenes are not measured in this section: %s._\n", why);
 }
 
 void exp_scene(exp_ctx *x, const char *spec, accel_scene *s)

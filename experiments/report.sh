@@ -10,6 +10,7 @@
 #   BIN=bin-lab             the binaries of another build (default bin)
 #   KINDS=grid,bvh          only these kinds (--kinds)
 #   ACCEL="spec spec ..."   more configurations (--accel SPEC, each)
+#   SCENES="spec file ..."  exactly these scenes (--scene, each; .scene files too)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 quick=0
@@ -34,6 +35,7 @@ if [ -n "$dir" ]; then out="$dir"; report="$dir/REPORT.md"; links=""; fi
 extra=()
 [ -n "${KINDS:-}" ] && extra+=(--kinds "$KINDS")
 for spec in ${ACCEL:-}; do extra+=(--accel "$spec"); done
+for scene in ${SCENES:-}; do extra+=(--scene "$scene"); done
 # The choices are checked before anything is removed or run: an unknown kind
 # in KINDS or a bad ACCEL spec is a usage error (exit 2), never a green
 # report without them. An experiment checks every option before --help.
@@ -94,7 +96,7 @@ commit="$commit, $(git log -1 --format='%cd' --date=format:'%Y-%m-%d %H:%M' 2>/d
 cc_version=$(${CC:-cc} --version 2>/dev/null | head -1)
 "$bin/mkreport" --out "$out" --report "$report" --links "$links" --budget "$budget" \
   --commit "$commit" --flags "${GRIDBVH_CFLAGS:-see Makefile} (driver: $cc_version)" \
-  --run "$((end - start)) s; per experiment: $times (sum $sum s)$note${KINDS:+; KINDS=$KINDS}${ACCEL:+; ACCEL=$ACCEL}" \
+  --run "$((end - start)) s; per experiment: $times (sum $sum s)$note${KINDS:+; KINDS=$KINDS}${ACCEL:+; ACCEL=$ACCEL}${SCENES:+; SCENES=$SCENES}" \
   --load "$load_start (1 minute) before the first experiment, $load_end after the last" \
   "${ran[@]}"
 if [ -f "$stamp" ]; then

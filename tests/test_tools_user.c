@@ -172,3 +172,37 @@ TEST(tools_trace_passes_stop_at_the_budget_and_collapse_warns)
            "bvh: exit %d, '%s', '%s'", rc, out ? out : "", err ? err : "");
     free(out), free(err);
 }
+
+/* Defect 6: a user's own scene in the experiments: --scene measures exactly
+ * the scenes given (.scene files too), and a scene given is never dropped
+ * without an error that says so. */
+TEST(tools_experiments_measure_the_scenes_given)
+{
+    mkdir("build", 0777), mkdir(DIR, 0777);
+    FILE *f = fopen(DIR "/my.scene", "w");
+    if (f) fputs("mesh a soup:tris=300\ninstance a\ninstance a translate 2 0 0\n", f), fclose(f);
+    char *out = NULL, *err = NULL;
+    int rc = run("bin/exp_sah --quick --quiet --out " DIR "/sah --scene " DIR "/my.scene", &out,
+                 &err);
+    CHECKF(rc == 0, "exp_sah --scene: exit %d: %s", rc, err ? err : "");
+    free(out), free(err);
+    char *csv = test_read_file(DIR "/sah/exp_sah.csv", NULL);
+    CHECKF(csv && strstr(csv, "\nmy.scene,"), "my.scene not measured: %.300s", csv ? csv : "");
+    CHECKF(csv && !strstr(csv, "\nsoup"), "the experiment's own scenes measured too");
+    free(csv);
+    rc = run("bin/exp_grids --quick --quiet --out " DIR "/grids --only-accels --accel grid "
+             "--accel bvh --scene soup:tris=400", NULL, &err);
+    CHECKF(rc == 0, "exp_grids --scene: exit %d: %s", rc, err ? err : "");
+    free(err);
+    csv = test_read_file(DIR "/grids/exp_grids.csv", NULL);
+    CHECKF(csv && strstr(csv, "\nsoup:tris=400,") && !strstr(csv, "sphereflake"),
+           "exp_grids did not measure exactly soup:tris=400: %.300s", csv ? csv : "");
+    free(csv);
+    expect_early_error("bin/exp_sah --quick --out " DIR "/sah --mesh " DIR "/my.scene",
+                       CLI_EXIT_USAGE, "--scene", 5000);
+    expect_early_error("bin/exp_sah --out " DIR "/sah --mesh " DIR "/my.scene --mesh " DIR
+                       "/my.scene --mesh " DIR "/my.scene", CLI_EXIT_USAGE,
+                       "measures the first 2", 5000);
+    expect_early_error("bin/exp_binning --quick --out " DIR "/bin --scene sphere --scene tetra",
+                       CLI_EXIT_USAGE, "measures at most 1", 5000);
+}
