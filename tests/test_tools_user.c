@@ -206,3 +206,41 @@ TEST(tools_experiments_measure_the_scenes_given)
     expect_early_error("bin/exp_binning --quick --out " DIR "/bin --scene sphere --scene tetra",
                        CLI_EXIT_USAGE, "measures at most 1", 5000);
 }
+
+/* Defect 8: the smaller ones. A closing summary table, the light printed,
+ * --help naming .scene files and the light, CSV columns for the primitive
+ * count, image size and grid resolution with empty fields (never nan)
+ * where a value does not apply, and --help of every tool exits 0. */
+TEST(tools_trace_summary_light_and_csv_columns)
+{
+    char *out = NULL, *err = NULL;
+    int rc = run("bin/trace --quiet --size 24x16 --repeat 1 --scene soup:tris=300 --accel bvh "
+                 "--accel grid --rays primary,shadow", &out, &err);
+    CHECKF(rc == 0, "exit %d: %s", rc, err ? err : "");
+    const char *sum = out ? strstr(out, "\nsummary: Mrays/s") : NULL;
+    CHECKF(sum != NULL, "no summary table: %s", out ? out : "");
+    if (sum) {
+        CHECK(strstr(sum, "primary") && strstr(sum, "shadow") && strstr(sum, "build ms") &&
+              strstr(sum, "MiB"));
+        CHECK(strstr(sum, "\n  bvh ") && strstr(sum, "\n  grid "));
+    }
+    CHECKF(out && strstr(out, "  light ("), "the light is not printed");
+    free(out), free(err);
+    rc = run("bin/trace --help", &out, NULL);
+    CHECKF(rc == 0 && out && strstr(out, ".scene") && strstr(out, "light"),
+           "trace --help names neither .scene files nor the light");
+    free(out);
+    rc = run("bin/trace --quiet --csv --size 24x16 --repeat 1 --scene soup:tris=300 --accel bvh "
+             "--accel grid:res=4", &out, NULL);
+    CHECKF(rc == 0 && out, "--csv: exit %d", rc);
+    CHECKF(out && strstr(out, "csv,kind,spec,scene,prims,rayset,width,height,") &&
+           strstr(out, ",grid_res,"), "CSV header without prims, width, height, grid_res: %s",
+           out ? out : "");
+    CHECKF(out && strstr(out, ",soup:tris=300,300,primary,24,16,") && strstr(out, ",4x4x4,"),
+           "CSV values: %s", out ? out : "");
+    CHECKF(out && !strstr(out, "nan"), "a nan in the CSV: %s", out ? out : "");
+    free(out);
+    rc = run("bin/mkreport --help", &out, NULL);
+    CHECKF(rc == 0 && out && strstr(out, "usage: mkreport"), "mkreport --help: exit %d", rc);
+    free(out);
+}

@@ -47,8 +47,9 @@ static int opt_heatmap(const cli_option *o, void *field, char **v, accel_error *
 
 #define OPT(f) offsetof(options, f)
 static const cli_option trace_options[] = {
-    {"--scene", "SPEC", "built-in scene (name:key=value,...) or mesh file (.obj .ply .off)\n"
-     "(default sphereflake)", cli_string, OPT(scene), 0, 0},
+    {"--scene", "SPEC", "built-in scene (name:key=value,...), mesh file (.obj .ply .off) or .scene\n"
+     "file (meshes placed as instances, camera and light: FORMATS.md); default sphereflake;\n"
+     "its point light (printed) shades --image and starts the shadow rays", cli_string, OPT(scene), 0, 0},
     {"--accel", "SPEC", "accelerator kind:key=value,...; repeat to compare several\n"
      "(default bvh when registered, else brute)", opt_accel, OPT(accels), 0, 0},
     {"--rays", "LIST", "comma list of primary,shadow,diffuse,ao, or a .rays file (default primary)",
@@ -229,6 +230,9 @@ static int load_scene(const options *o, run *r, accel_error *err)
                 s->name, s->prim_count, s->tri_count, s->sphere_count, s->degenerate_count,
                 accel_now_ms() - t0, s->bounds.min.x, s->bounds.min.y, s->bounds.min.z,
                 s->bounds.max.x, s->bounds.max.y, s->bounds.max.z);
+    if (info)
+        fprintf(info, "  light (%.6g, %.6g, %.6g): shading and shadow rays\n", s->light.x,
+                s->light.y, s->light.z);
     if (o->export_obj) {
         if ((rc = scene_export_obj(s, o->export_obj, 24, err))) return rc;
         if (info) fprintf(info, "exported %s\n", o->export_obj);
@@ -454,6 +458,7 @@ int main(int argc, char **argv)
     } else {
         if (o.csv) print_csv_header(&r);
         for (int a = 0; a < o.accel_count; a++) run_accel(&o, &r, a);
+        print_summary(&o, &r);
     }
     bench_progress_stop(r.progress);
     bench_sets_free(&r.sets);

@@ -13,8 +13,9 @@
 
 void print_csv_header(run *r)
 {
-    csv_row(&r->csv, "csv,kind,spec,scene,rayset,rays,hits,threads,build_ms,build_ms_min,"
-            "build_ms_max,bytes,nodes,refs,sah_cost,depth,trace_ms,mrays_median,mrays_min,"
+    csv_row(&r->csv, "csv,kind,spec,scene,prims,rayset,width,height,rays,hits,threads,build_ms,"
+            "build_ms_min,build_ms_max,bytes,nodes,refs,sah_cost,depth,grid_res,trace_ms,"
+            "timed_passes,mrays_median,mrays_min,"
             "mrays_max,steps_per_ray,empty_per_ray,box_per_ray,prims_per_ray,"
             "mailbox_skips_per_ray,holes,false_hits,disagreements\n");
 }
@@ -35,16 +36,28 @@ void print_row(const options *o, run *r, const accel_kind *kind, const accel_par
         if (t->checked)
             snprintf(chk, sizeof chk, "%zu,%zu,%zu", t->diff.holes, t->diff.false_hits,
                      t->diff.disagreements);
+        /* Fields that do not apply are empty, never nan: the image size of
+         * rays from a file, the SAH cost of a grid, the resolution of a tree. */
+        char wh[32] = ",", sah[32] = "", res[48] = "";
+        if (!r->from_file) snprintf(wh, sizeof wh, "%d,%d", o->size[0], o->size[1]);
+        if (isfinite(st->sah_cost) && st->sah_cost != 0) snprintf(sah, sizeof sah, "%.6g", st->sah_cost);
+        if (st->res[0]) snprintf(res, sizeof res, "%dx%dx%d", st->res[0], st->res[1], st->res[2]);
         /* cnt and chk are whole runs of numeric fields: spliced into the format. */
         char fmt[512];
-        snprintf(fmt, sizeof fmt, "csv,%%s,%%s,%%s,%%s,%%zu,%%zu,%%d,%%.4f,%%.4f,%%.4f,%%zu,%%llu,"
-                 "%%llu,%%.6g,%%d,%%.4f,%%.4f,%%.4f,%%.4f,%s,%s\n", cnt, chk);
-        if (csv_row(&r->csv, fmt, kind->name, canon->spec, r->scene.name, name, t->rays->count,
-                    br->hits, o->threads, bt->median, bt->min, bt->max, st->bytes,
-                    (unsigned long long)st->nodes, (unsigned long long)st->refs, st->sah_cost,
-                    st->depth, br->ms.median, br->mrays.median, br->mrays.min, br->mrays.max))
+        snprintf(fmt, sizeof fmt, "csv,%%s,%%s,%%s,%%u,%%s,%s,%%zu,%%zu,%%d,%%.4f,%%.4f,%%.4f,%%zu,"
+                 "%%llu,%%llu,%s,%%d,%s,%%.4f,%%d,%%.4f,%%.4f,%%.4f,%s,%s\n", wh, sah, res, cnt, chk);
+        if (csv_row(&r->csv, fmt, kind->name, canon->spec, r->scene.name, r->scene.live_count, name,
+                    t->rays->count, br->hits, o->threads, bt->median, bt->min, bt->max, st->bytes,
+                    (unsigned long long)st->nodes, (unsigned long long)st->refs, st->depth,
+                    br->ms.median, br->ms.n, br->mrays.median, br->mrays.min, br->mrays.max))
             report(r, CLI_EXIT_INTERNAL, r->csv.first_bad);
         return;
+    }
+    if (r->summary_count < MAX_ACCELS * MAX_SETS) {
+        summary_cell *cell = &r->summary[r->summary_count++];
+        snprintf(cell->spec, sizeof cell->spec, "%s", canon->spec);
+        cell->set = t->set, cell->mrays = br->mrays.median, cell->build_ms = bt->median;
+        cell->bytes = st->bytes;
     }
     printf("  %-8s %9zu rays %9zu %s  %8.3f Mrays/s (min %.3f, max %.3f; %.2f ms)", name,
            t->rays->count, br->hits, t->occl ? "occluded" : "hit", br->mrays.median,
@@ -60,6 +73,34 @@ void print_row(const options *o, run *r, const accel_kind *kind, const accel_par
     if (t->checked)
         printf("    check vs reference: %zu holes, %zu false hits, %zu disagreements\n",
                t->diff.holes, t->diff.false_hits, t->diff.disagreements);
+}
+
+void print_summary(const options *o, const run *r)
+{
+    if (o->csv || r->summary_count == 0) return;
+    int w = 11;
+    for (int i = 0; i < r->summary_count; i++) {
+        int len = (int)strlen(r->summary[i].spec);
+        if (len > w) w = len;
+    }
+    printf("\nsummary: Mrays/s (median of the timed passes) per ray set; build ms (median); MiB\n");
+    printf("  %-*s", w, "accelerator");
+    for (int s = 0; s < r->set_count; s++) printf(" %10s", r->set_names[s]);
+    printf(" %10s %9s\n", "build ms", "MiB");
+    for (int i = 0; i < r->summary_count;) {
+        const summary_cell *first = &r->summary[i];
+        printf("  %-*s", w, first->spec);
+        int j = i;
+        for (int s = 0; s < r->set_count; s++) {
+            if (j < r->summary_count && !strcmp(r->summary[j].spec, first->spec) &&
+                r->summary[j].set == s)
+                printf(" %10.3f", r->summary[j++].mrays);
+            else
+                printf(" %10s", "-");
+        }
+        printf(" %10.2f %9.2f\n", first->build_ms, (double)first->bytes / (1024.0 * 1024.0));
+        i = j > i ? j : i + 1;
+    }
 }
 
 static int write_heatmap(const options *o, run *r, const set_run *t, const accel_kind *kind,

@@ -37,6 +37,14 @@ typedef struct {
     image_heat_scale heat_scale;
 } options;
 
+/* One cell of the closing summary: an accelerator on a ray set. */
+typedef struct {
+    char spec[256];
+    int set;
+    double mrays, build_ms;
+    size_t bytes;
+} summary_cell;
+
 /* Everything one run holds between its steps. */
 typedef struct {
     accel_scene scene;
@@ -48,6 +56,8 @@ typedef struct {
     bench_progress *progress;
     csv_file csv;
     int status; /* the worst exit status so far */
+    summary_cell summary[MAX_ACCELS * MAX_SETS];
+    int summary_count;
 } run;
 
 /* One ray set traced by one accelerator: its results and measurements. */
@@ -74,6 +84,9 @@ FILE *trace_info(const options *o);
 void print_csv_header(run *r);
 void print_row(const options *o, run *r, const accel_kind *kind, const accel_params *canon,
                const accel_build_stats *st, const accel_timing *bt, const set_run *t);
+/* The closing table (text output): accelerators by ray sets, Mrays/s, then
+ * build ms and MiB, as tinybvh's speedtest and Embree's tools end. */
+void print_summary(const options *o, const run *r);
 void write_outputs(const options *o, run *r, const set_run *t, const accel_kind *kind,
                    const void *accel, const char *spec);
 
