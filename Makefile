@@ -63,9 +63,12 @@ $(LIB): $(LIB_OBJ)
 EXP_OBJ  := $(EXP_LIB:%.c=$(BUILD)/%.o)
 TEST_OBJ := $(TEST_SRC:%.c=$(BUILD)/%.o)
 
+# A tool's own pieces, if any: tools/<tool>/*.c.
+TOOL_PARTS := $(patsubst %.c,$(BUILD)/%.o,$(wildcard tools/*/*.c))
+$(TOOLS): $(TOOL_PARTS)
 $(BIN)/%: $(BUILD)/tools/%.o $(LIB)
 	@mkdir -p $(BIN)
-	$(CC) $(ALL_CFLAGS) $< $(LIB) -o $@ $(LDLIBS)
+	$(CC) $(ALL_CFLAGS) $< $(patsubst %.c,$(BUILD)/%.o,$(wildcard tools/$*/*.c)) $(LIB) -o $@ $(LDLIBS)
 
 $(BIN)/exp_%: $(BUILD)/experiments/exp_%.o $(EXP_OBJ) $(LIB)
 	@mkdir -p $(BIN)
@@ -97,7 +100,7 @@ test: all
 
 report: all
 	GRIDBVH_CFLAGS="$(ALL_CFLAGS)" CC="$(CC)" KINDS="$(KINDS)" ACCEL="$(ACCEL)" \
-	  ./experiments/report.sh $(if $(QUICK),--quick,)
+	  SCENES="$(SCENES)" ./experiments/report.sh $(if $(QUICK),--quick,)
 
 bench: all
 	./experiments/bench.sh

@@ -34,7 +34,8 @@ static const char *const contenders[] = {
 /* Part 1: bins and axes against the full sweep on one scene. */
 static void bins_against_quality(exp_ctx *x, exp_text *findings)
 {
-    const char *scene_spec = x->quick ? "soup:tris=5000" : x->mesh_count ? x->meshes[0] : "teapot_stadium";
+    const char *scene_spec = x->scene_count ? x->scenes[0] : x->quick ? "soup:tris=5000"
+                             : x->mesh_count ? x->meshes[0] : "teapot_stadium";
     accel_scene s;
     exp_scene(x, scene_spec, &s);
     bench_sets sets;
@@ -288,6 +289,9 @@ int main(int argc, char **argv)
     exp_init(&x, argc, argv, "exp_binning",
              "How many bins does binned SAH need, and how many triangles does it build at 30 Hz?",
              NULL);
+    exp_mesh_room(&x, 1);
+    const char *given[1];
+    exp_scene_list(&x, given, 0, 1); /* the bins study measures one scene: the --scene one */
     exp_header(&x, "Binned SAH construction", "binned SAH builds \"a high quality BVH in little "
                "time, up to 100k triangles @ 30 Hz\"",
                "how do build time, SAH cost and trace time of binned SAH depend on the number of "

@@ -397,6 +397,7 @@ int main(int argc, char **argv)
     } else {
         scenes[scene_count++] = "teapot_stadium:n=4,stadium=32,tiers=4";
     }
+    scene_count = exp_scene_list(&x, scenes, scene_count, MAX_SCENES);
     exp_csv(&x, "scene,spec,lambda,nx,ny,nz,ns_per_ray,ns_lo,ns_hi,steps_per_ray,prims_per_ray,"
                 "model_ns,build_ms,mb\n");
     exp_list extra;

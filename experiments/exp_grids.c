@@ -241,21 +241,11 @@ int main(int argc, char **argv)
 {
     const char *scenes[EXP_MAX_MESHES + 8];
     int n = 0;
-    char *rest[64];
-    int rest_count = 0;
-    for (int i = 0; i < argc && rest_count < 63; i++) {
-        if (i + 1 < argc && !strcmp(argv[i], "--scene") && n < EXP_MAX_MESHES)
-            scenes[n++] = argv[++i];
-        else
-            rest[rest_count++] = argv[i];
-    }
-    rest[rest_count] = NULL;
     exp_ctx x;
-    exp_init(&x, rest_count, rest, "exp_grids",
+    exp_init(&x, argc, argv, "exp_grids",
              "How close do the best grids (coherent traversal, skipping, nested, irregular) come "
              "to the BVH?",
-             "  --scene SPEC     a scene (repeatable; default: the meshes, sphereflake,\n"
-             "                   teapot_stadium:n=8, tetra)\n");
+             "Scenes (without --scene): the meshes, sphereflake, teapot_stadium:n=8, tetra.\n");
     exp_header(&x, "Grids at their best", "(not a lecture claim: issue 13's targets) coherent "
                "grid traversal >= 5x the single-ray grid on primary rays; the best grid within "
                "1.3x of `bvh` on the scanned meshes (primary, diffuse), within 2x on "
@@ -270,7 +260,8 @@ int main(int argc, char **argv)
                x.rt_size[0], x.rt_size[1]);
     exp_csv(&x, "scene,spec,set,rays,build_ms,mb,mrays,mrays_lo,mrays_hi,time_vs_bvh,"
                 "time_vs_bvh_lo,time_vs_bvh_hi,steps_per_ray,prims_per_ray\n");
-    if (n) {
+    if (x.scene_count) {
+        n = exp_scene_list(&x, scenes, n, EXP_MAX_MESHES);
     } else if (x.quick) {
         scenes[n++] = "sphereflake:level=1";
         scenes[n++] = "teapot_stadium:n=2,stadium=16,tiers=4";

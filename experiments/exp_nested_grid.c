@@ -172,6 +172,7 @@ int main(int argc, char **argv)
              "Does a nested grid beat the best regular grid on non-uniform scenes, and does it "
              "still need hand-set parameters?",
              NULL);
+    exp_mesh_room(&x, 2);
     exp_header(&x, "Nested grids",
                "a nested grid \"adapts to local scene complexity, but resolutions still require "
                "manual tweaking\"",
@@ -196,6 +197,7 @@ int main(int argc, char **argv)
         scenes[scene_count++] = "sphereflake";
         for (int i = 0; i < x.mesh_count && scene_count < 5; i++) scenes[scene_count++] = x.meshes[i];
     }
+    scene_count = exp_scene_list(&x, scenes, scene_count, 8);
     exp_csv(&x, "scene,spec,ns_per_ray,ns_lo,ns_hi,steps_per_ray,prims_per_ray,build_ms,mb\n");
     exp_list ctx;
     exp_list_make(&x, others, (int)(sizeof others / sizeof others[0]), NULL, &ctx);

@@ -112,6 +112,7 @@ int main(int argc, char **argv)
     exp_ctx x;
     exp_init(&x, argc, argv, "exp_packets",
              "Do 64-ray packets beat single rays, on coherent and on incoherent rays?", NULL);
+    exp_mesh_room(&x, 1);
     exp_header(&x, "Ray packets", "\"Traverse a node if any ray of the packet hits its box\" "
                "(first active ray, early in, scan; optionally a frustum test); \"BVH + ray "
                "packets = real-time performance\"",
@@ -131,6 +132,7 @@ int main(int argc, char **argv)
         scenes[scene_count++] = "sphereflake";
         scenes[scene_count++] = "teapot_stadium";
     }
+    scene_count = exp_scene_list(&x, scenes, scene_count, 8);
     if (!x.quick) x.set_budget_ms = 800; /* 800x600 passes: fewer, longer rounds */
     exp_csv(&x, "scene,spec,rayset,rays,mrays,mrays_lo,mrays_hi,speedup,speedup_lo,speedup_hi,"
                 "steps_per_ray,box_per_ray,prims_per_ray\n");

@@ -326,6 +326,7 @@ int main(int argc, char **argv)
              "How much faster do SAH trees trace than median-split trees, and what does their "
              "build cost?",
              NULL);
+    exp_mesh_room(&x, 2);
     exp_header(&x, "The Surface Area Heuristic", "\"SAH will double performance, but "
                "construction becomes much slower\"",
                "how much faster do SAH-built BVHs trace than the lecture's pure median split "
@@ -359,6 +360,8 @@ int main(int argc, char **argv)
         scenes[scene_count++] = "sphereflake";
         scenes[scene_count++] = "tetra";
     }
+    if (x.scene_count) mesh_scenes = 0; /* the --scene ones are not claimed as scanned meshes */
+    scene_count = exp_scene_list(&x, scenes, scene_count, 12);
     exp_csv(&x, "scene,spec,build_ms,build_ms_lo,build_ms_hi,mtris_per_s,sah_cost,nodes,"
                 "primary_mrays,primary_lo,primary_hi,shadow_mrays,shadow_lo,shadow_hi,"
                 "diffuse_mrays,diffuse_lo,diffuse_hi,primary_nodes,primary_prims,diffuse_nodes,"

@@ -168,6 +168,7 @@ int main(int argc, char **argv)
              "How do build time, memory and trace time grow with the triangle count, per "
              "accelerator?",
              NULL);
+    exp_scenes_unused(&x, "its question needs scenes of growing size (soup, teapot_stadium)");
     /* Builds of the 256k and 1M sizes take 0.1-1 s: 1 s of interleaved
      * builds per configuration gives them 2-5 samples (the growth fit
      * rests on seven sizes, not on one size's interval). */

@@ -288,6 +288,16 @@ static void stiff_cases(exp_ctx *x, study *st, const exp_list *list)
         measure_case(x, st, &c, list);
         stiff_case_free(&c);
     }
+    for (int m = 0; m < x->scene_count; m++) { /* a scene given explicitly: measured, or an error */
+        stiff_case c;
+        accel_error err = {0};
+        if (stiff_case_from_scene(x->scenes[m], 0, &c, &err)) {
+            fprintf(stderr, "%s: --scene %s: %s\n", x->name, x->scenes[m], err.msg);
+            exit(CLI_EXIT_INPUT);
+        }
+        measure_case(x, st, &c, list);
+        stiff_case_free(&c);
+    }
 }
 
 int main(int argc, char **argv)

@@ -187,6 +187,7 @@ int main(int argc, char **argv)
              "What do a traversal step and a primitive test cost here, and does "
              "C_step*N_steps + C_intersect*N_intersect predict trace time?",
              NULL);
+    exp_mesh_room(&x, 1);
     const char *scenes[8];
     int scene_count = 0;
     if (x.quick) {
@@ -196,6 +197,7 @@ int main(int argc, char **argv)
         scenes[scene_count++] = "teapot_stadium:n=8"; /* 4k teapot triangles: the grid's passes stay short */
         if (x.mesh_count) scenes[scene_count++] = x.meshes[0];
     }
+    scene_count = exp_scene_list(&x, scenes, scene_count, 8);
     exp_header(&x, "Cost of a step and of an intersection",
                "C_step \xc2\xb7 N_steps + C_intersect \xc2\xb7 N_intersect; \"stepping is not free\"",
                "what do one traversal step (grid cell / BVH node) and one primitive test cost on "

@@ -50,7 +50,8 @@ typedef struct {
 
 static void scaling(exp_ctx *x, study *st, int max_t, const exp_machine *mach)
 {
-    const char *spec = x->quick ? "soup:tris=20000" : x->mesh_count ? x->meshes[0] : "soup:tris=200000";
+    const char *spec = x->scene_count ? x->scenes[0] : x->quick ? "soup:tris=20000"
+                       : x->mesh_count ? x->meshes[0] : "soup:tris=200000";
     accel_scene s;
     exp_scene(x, spec, &s);
     bench_sets sets;
@@ -256,6 +257,7 @@ int main(int argc, char **argv)
     exp_init(&x, argc, argv, "exp_threads",
              "How do build and trace times scale with threads, and is it real-time at 800x600?",
              NULL);
+    exp_mesh_room(&x, 2);
     exp_machine mach;
     exp_machine_read(&mach);
     int max_t = x.threads_given ? x.threads : mach.logical;
@@ -279,7 +281,11 @@ int main(int argc, char **argv)
     exp_md(&x, "\n### Real time: frames per second at %dx%d, primary plus shadow rays, %d "
                "thread%s\n", x.rt_size[0], x.rt_size[1], max_t, max_t > 1 ? "s" : "");
     exp_md_table(&x, "scene|configuration|frame ms [95% CI]|fps [95% CI]|Mrays/s [95% CI]|note");
-    if (x.quick) {
+    if (x.scene_count) {
+        const char *given[EXP_MAX_MESHES];
+        int n = exp_scene_list(&x, given, 0, EXP_MAX_MESHES);
+        for (int i = 0; i < n; i++) frame_scene(&x, &st, given[i], max_t, 0);
+    } else if (x.quick) {
         frame_scene(&x, &st, "sphereflake:level=2", max_t, 0);
     } else {
         for (int i = 0; i < x.mesh_count && i < 2; i++) frame_scene(&x, &st, x.meshes[i], max_t, 0);

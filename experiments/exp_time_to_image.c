@@ -169,6 +169,7 @@ int main(int argc, char **argv)
              "At how many rays does a slower-to-build, faster-to-trace structure overtake a "
              "faster-to-build one?",
              NULL);
+    exp_mesh_room(&x, 4);
     exp_header(&x, "Time to image", "\"SAH will double performance, but construction becomes "
                "much slower\": when does a slower build pay?",
                "counting build time, how many rays must be traced before a structure that is "
@@ -187,6 +188,7 @@ int main(int argc, char **argv)
         for (int i = 0; i < x.mesh_count && scene_count < 7; i++) scenes[scene_count++] = x.meshes[i];
         scenes[scene_count++] = "field"; /* many meshes at many scales, when this build has it */
     }
+    scene_count = exp_scene_list(&x, scenes, scene_count, 8);
     exp_csv(&x, "scene,spec,build_ms,build_lo,build_hi,mrays,mrays_lo,mrays_hi,ms_one_image,"
                 "ms_100_images,ms_1080p_frame\n");
     exp_list list;

@@ -327,6 +327,8 @@ int main(int argc, char **argv)
              "                   scene at frame 0; a .scene file works too)\n"
              "  --anim SPEC      the animated scene of parts 2 and 3, without frame=\n"
              "                   (default animated:instances=48: 100,288 triangles)\n");
+    exp_scenes_unused(&x, "its questions need scenes of many meshes and an animated one "
+                      "(field, animated)");
     if (!anim) anim = x.quick ? "animated:instances=8,detail=3" : "animated:instances=48";
     char anim0[600];
     exp_anim_frame_spec(anim0, sizeof anim0, anim, 0);

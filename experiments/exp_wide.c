@@ -366,23 +366,16 @@ int main(int argc, char **argv)
 {
     scene_def scenes[MAX_SCENES];
     int scene_count = 0;
-    char *rest[64];
-    int rest_count = 0;
-    for (int i = 0; i < argc && rest_count < 63; i++) {
-        if (i + 1 < argc && !strcmp(argv[i], "--scene") && scene_count < MAX_SCENES) {
-            scenes[scene_count] = (scene_def){argv[++i], 1, scene_count == 0}; /* heatmaps of the first */
-            scene_count++;
-        } else {
-            rest[rest_count++] = argv[i];
-        }
-    }
-    rest[rest_count] = NULL;
     exp_ctx x;
-    exp_init(&x, rest_count, rest, "exp_wide",
+    exp_init(&x, argc, argv, "exp_wide",
              "How much faster than the binary BVH are 4- and 8-wide BVHs, single and coherent?",
-             "  --scene SPEC     a scene (repeatable; default: the meshes, soup:tris=1000000,\n"
-             "                   teapot_stadium, sphereflake:spheres=0, slivers)\n");
-    if (scene_count == 0) {
+             "Scenes (without --scene): the meshes, soup:tris=1000000, teapot_stadium,\n"
+             "sphereflake:spheres=0, slivers; heatmaps of the first --scene.\n");
+    if (x.scene_count) {
+        const char *given[MAX_SCENES];
+        scene_count = exp_scene_list(&x, given, 0, MAX_SCENES);
+        for (int i = 0; i < scene_count; i++) scenes[i] = (scene_def){given[i], 1, i == 0};
+    } else {
         if (x.quick) {
             scenes[scene_count++] = (scene_def){"sphereflake:level=1,spheres=0", 1, 1};
             scenes[scene_count++] = (scene_def){"slivers:tris=3000,slivers=100", 1, 0};

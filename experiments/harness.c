@@ -16,6 +16,7 @@
 #include "svg.h"
 #include "cli/cli.h"
 #include "image/image.h"
+#include "cli/spec_check.h"
 
 static int opt_mesh(const cli_option *o, void *field, char **v, accel_error *err)
 {
@@ -25,6 +26,40 @@ static int opt_mesh(const cli_option *o, void *field, char **v, accel_error *err
     int rc = scene_spec_check(v[0], err);
     if (rc) return rc;
     x->meshes[x->mesh_count++] = v[0];
+    return 0;
+}
+
+/* --kinds: every name a registered kind, none empty. */
+static int opt_kinds(const cli_option *o, void *field, char **v, accel_error *err)
+{
+    for (const char *p = v[0];; p++) {
+        size_t n = strcspn(p, ",");
+        char name[64];
+        snprintf(name, sizeof name, "%.*s", (int)n, p);
+        if (n == 0 || n >= sizeof name || !accel_find_kind(name)) {
+            char names[400] = "";
+            for (size_t i = 0; i < accel_kind_count; i++) {
+                size_t len = strlen(names);
+                snprintf(names + len, sizeof names - len, "%s%s", i ? ", " : "",
+                         accel_kinds[i]->name);
+            }
+            return accel_fail(err, ACCEL_ERR_SPEC, "%s %s: unknown kind '%s'; registered: %s",
+                              o->name, v[0], name, names);
+        }
+        p += n;
+        if (!*p) break;
+    }
+    return cli_string(o, field, v, err);
+}
+
+static int opt_scene(const cli_option *o, void *field, char **v, accel_error *err)
+{
+    exp_ctx *x = (exp_ctx *)((char *)field - offsetof(exp_ctx, scenes));
+    if (x->scene_count == EXP_MAX_MESHES)
+        return accel_fail(err, ACCEL_ERR_SPEC, "%s: at most %d scenes", o->name, EXP_MAX_MESHES);
+    int rc = scene_spec_check(v[0], err);
+    if (rc) return rc;
+    x->scenes[x->scene_count++] = v[0];
     return 0;
 }
 
@@ -40,8 +75,10 @@ static int opt_accel(const cli_option *o, void *field, char **v, accel_error *er
     exp_ctx *x = (exp_ctx *)((char *)field - offsetof(exp_ctx, accels));
     if (x->accel_count == EXP_MAX_ACCELS)
         return accel_fail(err, ACCEL_ERR_SPEC, "%s: at most %d specs", o->name, EXP_MAX_ACCELS);
-    /* Not parsed here: a spec of a kind this build lacks is left out with
-     * its reason by the experiment, not refused. */
+    /* Checked in full (kind, keys, values): a typo is an error before any
+     * work, not a green report without the configuration. */
+    int rc = spec_check_accel(o->name, v[0], err);
+    if (rc) return rc;
     x->accels[x->accel_count++] = v[0];
     return 0;
 }
@@ -59,15 +96,19 @@ static const cli_option exp_options[] = {
     {"--rt-size", "WxH", "image of the lecture's real-time claims (default 800x600, quick 160x120)",
      cli_size, OPT(rt_size), 8, 8192},
     {"--accel", "SPEC", "add SPEC to the experiment's configurations (repeatable; specs of kinds\n"
-     "the experiment does not compare are ignored, specs this build lacks are left out)",
+     "the experiment does not compare are ignored; an unknown kind, key or value is an error)",
      opt_accel, OPT(accels), 0, 0},
     {"--only-accels", NULL, "the --accel specs replace the experiment's own list", cli_flag,
      OPT(only_accels), 0, 0},
-    {"--kinds", "LIST", "only these kinds, e.g. grid,bvh (make report KINDS=...)", cli_string,
-     OPT(kinds), 0, 0},
+    {"--kinds", "LIST", "only these kinds, e.g. grid,bvh (make report KINDS=...); unknown: an error",
+     opt_kinds, OPT(kinds), 0, 0},
+    {"--scene", "SPEC|FILE", "measure exactly this scene (repeatable): a built-in spec, a mesh or\n"
+     "a .scene file, in place of the experiment's own scenes (make report SCENES=...)",
+     opt_scene, OPT(scenes), 0, 0},
     {"--mesh", "FILE", "add a mesh (repeatable; default ../shared/scenes/*.off if present)",
      opt_mesh, OPT(meshes), 0, 0},
-    {"--no-meshes", NULL, "built-in scenes only", cli_flag, OPT(no_meshes), 0, 0},
+    {"--no-meshes", NULL, "no default meshes (the --mesh ones stay)", cli_flag, OPT(no_meshes),
+     0, 0},
     CLI_COMMON_ROWS(exp_ctx),
 };
 #define OPTION_COUNT (sizeof exp_options / sizeof exp_options[0])
@@ -133,10 +174,13 @@ void exp_init(exp_ctx *x, int argc, char **argv, const char *name, const char *q
     x->sample_ms = x->quick ? 2.0 : 20.0;
     x->set_budget_ms = x->quick ? 100.0 : 1500.0;
     x->build_budget_ms = x->quick ? 100.0 : 2000.0;
-    if (x->no_meshes)
-        x->mesh_count = 0;
-    else if (!x->mesh_count && !x->quick)
-        find_default_meshes(x);
+    x->meshes_given = x->mesh_count > 0;
+    if (x->quick && x->meshes_given) {
+        fprintf(stderr, "%s: --mesh %s: the quick budget measures its own tiny scenes, not the "
+                "meshes; --scene %s measures exactly it\n", name, x->meshes[0], x->meshes[0]);
+        exit(CLI_EXIT_USAGE);
+    }
+    if (!x->no_meshes && !x->mesh_count && !x->quick) find_default_meshes(x);
     mkdir(x->out_dir, 0777);
     char path[1024];
     snprintf(path, sizeof path, "%s/%s.csv", x->out_dir, name);
@@ -423,6 +467,34 @@ void exp_md_table(exp_ctx *x, const char *cols)
     exp_md(x, "\n| %s |\n|", cols);
     for (int i = 0; i < n; i++) exp_md(x, "---|");
     exp_md(x, "\n");
+}
+
+int exp_scene_list(exp_ctx *x, const char **list, int n, int max)
+{
+    if (!x->scene_count) return n;
+    if (x->scene_count > max) {
+        fprintf(stderr, "%s: %d --scene given, this experiment measures at most %d: none is "
+                "dropped silently; give fewer\n", x->name, x->scene_count, max);
+        exit(CLI_EXIT_USAGE);
+    }
+    for (int i = 0; i < x->scene_count; i++) list[i] = x->scenes[i];
+    return x->scene_count;
+}
+
+void exp_mesh_room(exp_ctx *x, int max)
+{
+    if (!x->meshes_given || x->mesh_count <= max || x->scene_count) return;
+    fprintf(stderr, "%s: %d --mesh given, this experiment measures the first %d: none is dropped "
+            "silently; give fewer, or --scene for each scene to measure\n", x->name,
+            x->mesh_count, max);
+    exit(CLI_EXIT_USAGE);
+}
+
+void exp_scenes_unused(exp_ctx *x, const char *why)
+{
+    if (!x->scene_count) return;
+    fprintf(stderr, "%s: note: --scene not measured here: %s\n", x->name, why);
+    exp_md(x, "\n_The --scene scenes are not measured in this section: %s._\n", why);
 }
 
 void exp_scene(exp_ctx *x, const char *spec, accel_scene *s)

@@ -3,7 +3,7 @@
  *
  * An experiment answers one question. It parses the common options (one
  * table in harness.c drives parsing and --help: --quick, --out DIR,
- * --threads N, --repeat N, --size N, --rt-size WxH, --mesh FILE...,
+ * --threads N, --repeat N, --size N, --rt-size WxH, --scene SPEC..., --mesh FILE...,
  * --accel SPEC..., --only-accels, --kinds LIST, --heat-scale SPEC, --quiet,
  * --help), measures configurations in interleaved rounds (group.h), writes
  * its raw numbers to DIR/<name>.csv (RFC 4180, one schema: the first
@@ -71,8 +71,11 @@ typedef struct {
     double sample_ms;     /* one timed sample lasts at least this (passes are batched) */
     double set_budget_ms; /* timed work per configuration and ray set */
     double build_budget_ms; /* interleaved builds per configuration */
+    const char *scenes[EXP_MAX_MESHES]; /* --scene: exactly these scenes (specs, meshes, .scene files) */
+    int scene_count;
     const char *meshes[EXP_MAX_MESHES]; /* extra mesh files (default: the meshes in ../shared/scenes) */
     int mesh_count;
+    int meshes_given;     /* the meshes came from --mesh (not the default folder) */
     int no_meshes, quiet, help;
     double progress_after; /* seconds */
     image_heat_scale heat_scale; /* --heat-scale: colours of exp_heatmap images */
@@ -112,6 +115,17 @@ void exp_header(exp_ctx *x, const char *title, const char *words, const char *qu
     __attribute__((format(printf, 4, 5)));
 /* A Markdown table header: cols separated by '|'. */
 void exp_md_table(exp_ctx *x, const char *cols);
+/* The scenes of an experiment's scene loop: exactly the --scene ones when
+ * given (into list, replacing the experiment's own *n), else list as it is.
+ * `max` is the loop's room: more --scene than that is an error (exit 2)
+ * naming the limit, never a silent drop. Returns the new count. */
+int exp_scene_list(exp_ctx *x, const char **list, int n, int max);
+/* For an experiment whose question fixes its own scenes: with --scene, a
+ * line on stderr and in the section says that they are not measured here. */
+void exp_scenes_unused(exp_ctx *x, const char *why);
+/* An experiment that measures the first `max` meshes: more --mesh than that
+ * is an error (exit 2) that says so, never a silent drop. */
+void exp_mesh_room(exp_ctx *x, int max);
 /* Loads a scene spec or dies with its error (experiments stop on bad
  * input): exit 3, also for a scene with nothing to hit. */
 void exp_scene(exp_ctx *x, const char *spec, accel_scene *s);
@@ -132,7 +146,8 @@ void exp_sets_wh(exp_ctx *x, const accel_scene *s, int mask, int w, int h, int a
 /* A list of specs for one question: the experiment's defaults (or only the
  * --accel specs with --only-accels) plus the --accel specs whose kind is in
  * `accept` (a comma list of kind names; NULL: every kind), without the
- * kinds --kinds leaves out. Specs this build cannot parse stay in the list:
+ * kinds --kinds leaves out (--kinds and --accel are checked in full by
+ * exp_init: a typo is exit 2). Default specs this build cannot parse stay in the list:
  * exp_group_add leaves them out with the reason, so the report works before
  * and after the kinds and parameters it names have landed. */
 typedef struct {

@@ -211,6 +211,15 @@ int main(int argc, char **argv)
     char *names[64];
     int count = 0;
     for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
+            printf("usage: mkreport --out DIR --report FILE [--links P] [--budget T] [--commit T]\n"
+                   "                [--flags T] [--run T] [--load T] exp_a exp_b ...\n"
+                   "Assembles REPORT.md from the experiments' sections in DIR (experiments/report.sh\n"
+                   "runs it): the claims' summary, contents, the machine, then each section.\n\n"
+                   "Exit status:\n  0  success\n  2  usage error\n  3  a file cannot be read "
+                   "or written\n");
+            return 0;
+        }
         const char **opt = !strcmp(argv[i], "--out") ? &dir : !strcmp(argv[i], "--report") ? &out
                          : !strcmp(argv[i], "--links") ? &links : !strcmp(argv[i], "--budget") ? &budget
                          : !strcmp(argv[i], "--commit") ? &commit : !strcmp(argv[i], "--flags") ? &flags

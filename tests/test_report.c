@@ -38,5 +38,9 @@ TEST(report_quick_smoke)
     }
     if (d) closedir(d);
     CHECKF(sections >= 11, "only %d experiment sections", sections);
+    /* make report owns its folder: what the run did not write is gone. */
+    FILE *stale = fopen("build/quick-report/stale_plot.png", "r");
+    CHECKF(stale == NULL, "build/quick-report/stale_plot.png, not written by the run, survived it");
+    if (stale) fclose(stale);
     free(report);
 }

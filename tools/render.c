@@ -23,15 +23,20 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <sys/stat.h>
+
+#include "cli/cli.h"
 #include "image/image.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
+#include "cli/spec_check.h"
 
 typedef struct {
     const char *scene, *accel, *out;
     int frames, first, step, width, height, threads, verify, counters;
     int mode; /* 0 refit, 1 rebuild (bottom levels), 2 full build */
     int last; /* first + (frames - 1) * step, checked by parse */
+    int still; /* the scene has no frame parameter (a mesh, a .scene file): every frame the same */
 } options;
 
 static void usage(FILE *f)
@@ -39,8 +44,9 @@ static void usage(FILE *f)
     fprintf(f,
             "usage: render [options]\n"
             "Renders the frames of an animated scene; reports per-frame times and frames/s.\n\n"
-            "  --scene SPEC      built-in scene with a frame parameter (default animated);\n"
-            "                    frame=N is appended per frame\n"
+            "  --scene SPEC      built-in scene (default animated), mesh or .scene file;\n"
+            "                    a scene with a frame parameter is animated (frame=N is\n"
+            "                    appended per frame), any other renders as a still\n"
             "  --accel SPEC      accelerator (default instanced)\n"
             "  --update MODE     refit | rebuild | full (default refit): refit or rebuild the\n"
             "                    changed meshes and the top level through the kind's update, or\n"
@@ -49,10 +55,11 @@ static void usage(FILE *f)
             "  --first F         first frame number (default 0); --step S between frames (1)\n"
             "  --size WxH        image size (default 800x600)\n"
             "  --threads T       tracing threads (default: every core)\n"
-            "  --out PREFIX      write PREFIX_NNNN.png per frame\n"
+            "  --out PREFIX      write PREFIX_NNNN.png per frame (PREFIX's folder is made)\n"
             "  --verify          compare each frame with a fresh build (holes, disagreements)\n"
             "  --counters        a counted primary pass per frame (after the timed one): nodes,\n"
-            "                    boxes and primitives per ray, the time-free cost of a refit tree\n");
+            "                    boxes and primitives per ray, the time-free cost of a refit tree\n\n");
+    cli_help_exit_codes(f);
 }
 
 
@@ -68,9 +75,45 @@ static int whole(const char *v, long lo, long hi, int *out)
     return 1;
 }
 
+/* A built-in scene with a frame parameter is animated; any other scene (a
+ * mesh, a .scene file, a generator without frame) is a still. */
+static int animated(const char *scene)
+{
+    size_t n = strcspn(scene, ":");
+    for (size_t i = 0; i < scene_generator_count; i++) {
+        const scene_generator *g = scene_generators[i];
+        if (strlen(g->name) != n || strncmp(g->name, scene, n)) continue;
+        for (size_t k = 0; k < g->param_count; k++)
+            if (!strcmp(g->params[k].key, "frame")) return 1;
+    }
+    return 0;
+}
+
+/* --out PREFIX: its folder is made (with its parents) and must take files. */
+static int make_out_dir(const char *prefix, accel_error *err)
+{
+    char dir[1024];
+    snprintf(dir, sizeof dir, "%s", prefix);
+    char *slash = strrchr(dir, '/');
+    if (slash && slash != dir) {
+        *slash = 0;
+        for (char *p = dir + 1; *p; p++)
+            if (*p == '/') *p = 0, mkdir(dir, 0777), *p = '/';
+        mkdir(dir, 0777);
+        struct stat st;
+        if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode))
+            return accel_fail(err, ACCEL_ERR_IO, "--out %s: %s is not a folder and cannot be made",
+                              prefix, dir);
+    }
+    char probe[1100];
+    snprintf(probe, sizeof probe, "%s_0000.png", prefix);
+    return cli_check_output("--out", probe, "png", err);
+}
+
+/* 0, or the exit status of a bad command line (bench/cli.h: 2 usage, 3 input). */
 static int parse(int argc, char **argv, options *o)
 {
-    *o = (options){"animated", "instanced", NULL, 10, 0, 1, 800, 600, accel_cpu_count(), 0, 0, 0, 0};
+    *o = (options){"animated", "instanced", NULL, 10, 0, 1, 800, 600, accel_cpu_count(), 0, 0, 0, 0, 0};
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i], *v = i + 1 < argc ? argv[i + 1] : NULL;
         if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
@@ -81,9 +124,17 @@ static int parse(int argc, char **argv, options *o)
             *(a[2] == 'v' ? &o->verify : &o->counters) = 1;
             continue;
         }
+        static const char *const valued[] = {"--scene", "--accel", "--out", "--frames", "--first",
+                                             "--step", "--threads", "--size", "--update"};
+        int known = 0;
+        for (size_t k = 0; k < sizeof valued / sizeof valued[0]; k++) known |= !strcmp(a, valued[k]);
+        if (!known) {
+            fprintf(stderr, "render: unknown option %s (see --help)\n", a);
+            return CLI_EXIT_USAGE;
+        }
         if (!v) {
             fprintf(stderr, "render: %s needs a value (see --help)\n", a);
-            return 1;
+            return CLI_EXIT_USAGE;
         }
         i++;
         int bad = 0;
@@ -108,23 +159,30 @@ static int parse(int argc, char **argv, options *o)
             bad = o->mode < 0;
         } else {
             fprintf(stderr, "render: unknown option %s (see --help)\n", a);
-            return 1;
+            return CLI_EXIT_USAGE;
         }
         if (bad) {
             fprintf(stderr, "render: bad value for %s: %s\n", a, v);
-            return 1;
+            return CLI_EXIT_USAGE;
         }
     }
     long long last = o->first + (long long)(o->frames - 1) * o->step;
     if (last > 100000000) {
         fprintf(stderr, "render: the last frame, --first %d + (--frames %d - 1) x --step %d = %lld, "
                 "is past 100000000\n", o->first, o->frames, o->step, last);
-        return 1;
+        return CLI_EXIT_USAGE;
     }
     o->last = (int)last;
-    if (strstr(o->scene, "frame=")) {
+    o->still = !animated(o->scene);
+    if (!o->still && strstr(o->scene, "frame=")) {
         fprintf(stderr, "render: --scene %s: leave frame= out, the tool sets it\n", o->scene);
-        return 1;
+        return CLI_EXIT_USAGE;
+    }
+    accel_error err = {0};
+    if (scene_spec_check(o->scene, &err) || spec_check_accel("--accel", o->accel, &err) ||
+        (o->out && make_out_dir(o->out, &err))) {
+        fprintf(stderr, "render: %s\n", err.msg);
+        return cli_exit_of(err.code);
     }
     return 0;
 }
@@ -132,7 +190,11 @@ static int parse(int argc, char **argv, options *o)
 static int make_frame(const options *o, int frame, accel_scene *s, accel_error *err)
 {
     char spec[600];
-    snprintf(spec, sizeof spec, "%s%sframe=%d", o->scene, strchr(o->scene, ':') ? "," : ":", frame);
+    if (o->still)
+        snprintf(spec, sizeof spec, "%s", o->scene);
+    else
+        snprintf(spec, sizeof spec, "%s%sframe=%d", o->scene, strchr(o->scene, ':') ? "," : ":",
+                 frame);
     return scene_create(spec, s, err);
 }
 
@@ -163,14 +225,15 @@ static int cmp_double(const void *a, const void *b)
 int main(int argc, char **argv)
 {
     options o;
-    if (parse(argc, argv, &o)) return 2;
+    int prc = parse(argc, argv, &o);
+    if (prc) return prc;
     accel_error err = {0};
     accel_scene slot[2];
     int cur = 0;
     double t = accel_now_ms();
     if (make_frame(&o, o.first, &slot[0], &err)) {
         fprintf(stderr, "render: %s\n", err.msg);
-        return 1;
+        return cli_exit_of(err.code);
     }
     double scene_ms = accel_now_ms() - t;
     /* The last frame is made once here, so that a range the scene refuses
@@ -178,7 +241,8 @@ int main(int argc, char **argv)
     if (o.frames > 1) {
         if (make_frame(&o, o.last, &slot[1], &err)) {
             fprintf(stderr, "render: frame %d, the last one: %s\n", o.last, err.msg);
-            return 1;
+            scene_free(&slot[0]);
+            return cli_exit_of(err.code);
         }
         scene_free(&slot[1]);
     }
@@ -187,18 +251,20 @@ int main(int argc, char **argv)
     accel_build_stats st;
     if (accel_build_spec(o.accel, &slot[0], o.threads, &kind, &accel, &st, &err)) {
         fprintf(stderr, "render: %s\n", err.msg);
-        return 1;
+        return cli_exit_of(err.code);
     }
     int mode = kind->update ? o.mode : 2;
     static const char *const mode_name[] = {"refit", "rebuild", "full build"};
     printf("render %s, %s, %dx%d, %d threads, %s per frame; %u triangles, %u instances\n", o.scene,
            o.accel, o.width, o.height, o.threads, mode_name[mode], slot[0].tri_count,
            slot[0].instances ? slot[0].instances->instance_count : 0);
+    if (o.still)
+        printf("%s has no frame parameter: a still, every frame the same scene\n", o.scene);
     printf("frame 0 build %.2f ms, %zu bytes\n", st.ms, st.bytes);
     rays_set prim = {0};
     if (rays_primary(&slot[0].camera, o.width, o.height, &prim, &err)) {
         fprintf(stderr, "render: %s\n", err.msg);
-        return 1;
+        return cli_exit_of(err.code);
     }
     size_t npx = (size_t)o.width * o.height;
     accel_hit *hits = malloc(prim.count * sizeof *hits), *ref = malloc(prim.count * sizeof *ref);
@@ -206,13 +272,13 @@ int main(int argc, char **argv)
     image_rgb img = {0};
     if (!hits || !ref || !lit || !occ || image_alloc(&img, o.width, o.height, &err)) {
         fprintf(stderr, "render: out of memory\n");
-        return 1;
+        return CLI_EXIT_INTERNAL;
     }
     double *fps = malloc(o.frames * sizeof *fps), *fps_all = malloc(o.frames * sizeof *fps_all);
     printf("%6s %9s %9s %9s %9s %9s %9s %7s %7s\n", "frame", "scene_ms", "bottom_ms", "top_ms",
            "prim_ms", "shadow_ms", "total_ms", "fps", "fps+sc");
-    int rc = 0;
-    for (int f = 0; f < o.frames && rc == 0; f++) {
+    int rc = 0, differ = 0; /* rc: an ACCEL_ERR_* that stops the loop */
+    for (int f = 0; f < o.frames && rc == 0 && !differ; f++) {
         int frame = o.first + f * o.step;
         double bottom_ms = 0, top_ms = 0;
         if (f > 0) {
@@ -270,21 +336,18 @@ int main(int argc, char **argv)
             printf("  verify: %zu holes, %zu false hits, %zu disagreements", d.holes, d.false_hits,
                    d.disagreements);
             k2->destroy(fresh);
-            if (d.holes + d.false_hits + d.disagreements) rc = 3;
+            if (d.holes + d.false_hits + d.disagreements) differ = 1;
         }
         printf("\n");
         if (o.out) {
             char path[1024];
             snprintf(path, sizeof path, "%s_%04d.png", o.out, frame);
             shade(s, &prim, hits, lit, &img);
-            if (image_write(path, &img, &err)) {
-                rc = 1;
-                break;
-            }
+            if ((rc = image_write(path, &img, &err))) break;
         }
     }
-    if (rc && rc != 3) fprintf(stderr, "render: %s\n", err.msg);
-    if (rc == 0 && o.frames > 1) {
+    if (rc) fprintf(stderr, "render: %s\n", err.msg);
+    if (rc == 0 && !differ && o.frames > 1) {
         /* Frame 0 carries the first build, not an update: left out. */
         int n = o.frames - 1, mid = 1 + (n - 1) / 2;
         qsort(fps + 1, n, sizeof *fps, cmp_double);
@@ -297,5 +360,5 @@ int main(int argc, char **argv)
     rays_free(&prim);
     image_free(&img);
     free(hits), free(ref), free(lit), free(occ), free(fps), free(fps_all);
-    return rc;
+    return rc ? cli_exit_of(rc) : differ ? CLI_EXIT_DIFFER : CLI_EXIT_OK;
 }

@@ -23,28 +23,9 @@
 #include "measure/csv.h"
 #include "image/shade.h"
 #include "scene/scene.h"
-
-#define MAX_ACCELS 32
-#define MAX_SETS 4
-
-typedef struct {
-    const char *scene;
-    const char *accels[MAX_ACCELS];
-    int accel_count;
-    const char *rays;
-    int size[2]; /* width, height */
-    cli_vec3 eye, look, up;
-    double fov; /* 0: the scene's */
-    int threads, repeat, warmup, build_repeat;
-    int counters, check, csv, quiet, help;
-    double progress_after; /* seconds */
-    const char *image, *heatmap[2], *dump_rays, *dump_hits, *export_obj;
-    const char *gen_accel;
-    uint64_t seed;
-    int ao_samples;
-    float ao_radius;
-    image_heat_scale heat_scale;
-} options;
+#include "cli/spec_check.h"
+#include "tools/trace/hitfiles.h"
+#include "tools/trace/trace.h"
 
 static int opt_accel(const cli_option *o, void *field, char **v, accel_error *err)
 {
@@ -66,12 +47,15 @@ static int opt_heatmap(const cli_option *o, void *field, char **v, accel_error *
 
 #define OPT(f) offsetof(options, f)
 static const cli_option trace_options[] = {
-    {"--scene", "SPEC", "built-in scene (name:key=value,...) or mesh file (.obj .ply .off)\n"
-     "(default sphereflake)", cli_string, OPT(scene), 0, 0},
+    {"--scene", "SPEC", "built-in scene (name:key=value,...), mesh file (.obj .ply .off) or .scene\n"
+     "file (meshes placed as instances, camera and light: FORMATS.md); default sphereflake;\n"
+     "its point light (printed) shades --image and starts the shadow rays", cli_string, OPT(scene), 0, 0},
     {"--accel", "SPEC", "accelerator kind:key=value,...; repeat to compare several\n"
      "(default bvh when registered, else brute)", opt_accel, OPT(accels), 0, 0},
     {"--rays", "LIST", "comma list of primary,shadow,diffuse,ao, or a .rays file (default primary)",
      cli_string, OPT(rays), 0, 0},
+    {"--occluded", NULL, "trace the rays of a .rays file as any-hit (occlusion) queries, as shadow\n"
+     "and ao rays are (default: closest hit)", cli_flag, OPT(occluded), 0, 0},
     {"--size", "WxH", "image / primary ray grid (default 512x512)", cli_size, OPT(size), 1, 16384},
     {"--eye", "X,Y,Z", "camera position (default: the scene's camera)", cli_vec, OPT(eye), 0, 0},
     {"--look", "X,Y,Z", "point the camera looks at", cli_vec, OPT(look), 0, 0},
@@ -81,8 +65,11 @@ static const cli_option trace_options[] = {
      cli_int, OPT(threads), 1, 256},
     {"--repeat", "N", "timed passes per ray set (default 5)", cli_int, OPT(repeat), 1, 100},
     {"--warmup", "N", "untimed passes first (default 1)", cli_int, OPT(warmup), 0, 100},
-    {"--build-repeat", "N", "builds timed per accelerator (default 3, up to 10 s)", cli_int,
+    {"--build-repeat", "N", "builds timed per accelerator (default 3, within --budget)", cli_int,
      OPT(build_repeat), 1, 64},
+    {"--budget", "S", "seconds of timed passes per ray set and of builds per accelerator\n"
+     "(default 10): slower ones stop repeating, and the row says so", cli_double, OPT(budget),
+     0.001, 1e6},
     {"--no-counters", NULL, "skip the counted pass (steps, box and primitive tests)", cli_unflag,
      OPT(counters), 0, 0},
     {"--check", NULL, "compare every result against the double-precision reference", cli_flag,
@@ -93,7 +80,8 @@ static const cli_option trace_options[] = {
      opt_heatmap, OPT(heatmap), 0, 0},
     {"--dump-rays", "F", "write the ray set(s) as FORMATS.md .rays (F.<set>.rays if several)",
      cli_string, OPT(dump_rays), 0, 0},
-    {"--dump-hits", "F", "write the hits of the last accelerator (F.<set>.hits if several)",
+    {"--dump-hits", "F", "write the hits of the last accelerator, a file per set (F.<set>.hits\n"
+     "if several); shadow, ao and --occluded rays as FORMATS.md any-hit answers",
      cli_string, OPT(dump_hits), 0, 0},
     {"--export-obj", "F", "write the scene as OBJ (spheres tessellated) and continue", cli_string,
      OPT(export_obj), 0, 0},
@@ -136,30 +124,16 @@ static void usage(FILE *f)
     cli_help_exit_codes(f);
 }
 
-/* Everything one run holds between its steps. */
-typedef struct {
-    accel_scene scene;
-    accel_camera cam;
-    bench_sets sets;
-    rays_set file_rays;
-    int from_file, set_count, bits[MAX_SETS];
-    const char *set_names[MAX_SETS];
-    bench_progress *progress;
-    csv_file csv;
-    int status; /* the worst exit status so far */
-} run;
-
-static int report(run *r, int code, const char *msg)
+int report(run *r, int code, const char *msg)
 {
     fprintf(stderr, "trace: %s\n", msg);
     if (code > r->status) r->status = code;
     return code;
 }
 
-static int report_err(run *r, const accel_error *err)
-{
-    return report(r, cli_exit_of(err->code), err->msg);
-}
+int report_err(run *r, const accel_error *err) { return report(r, cli_exit_of(err->code), err->msg); }
+
+FILE *trace_info(const options *o) { return o->csv ? (o->quiet ? NULL : stderr) : stdout; }
 
 /* The ray sets of --rays: names, or one .rays file that must open. */
 static int parse_ray_sets(const char *list, run *r, accel_error *err)
@@ -197,6 +171,7 @@ static int parse_options(int argc, char **argv, options *o, run *r, accel_error 
     o->repeat = 5;
     o->warmup = 1;
     o->build_repeat = 3;
+    o->budget = 10;
     o->counters = 1;
     o->seed = 1;
     o->ao_samples = 4;
@@ -204,10 +179,9 @@ static int parse_options(int argc, char **argv, options *o, run *r, accel_error 
     int rc = cli_parse(trace_options, OPTION_COUNT, argc, argv, 1, o, err);
     if (rc || o->help) return rc;
     if (o->accel_count == 0) o->accels[o->accel_count++] = accel_find_kind("bvh") ? "bvh" : "brute";
-    accel_params p;
     for (int a = 0; a < o->accel_count; a++)
-        if ((rc = accel_params_parse(o->accels[a], &p, err))) return rc;
-    if (o->gen_accel && (rc = accel_params_parse(o->gen_accel, &p, err))) return rc;
+        if ((rc = spec_check_accel("--accel", o->accels[a], err))) return rc;
+    if (o->gen_accel && (rc = spec_check_accel("--gen-accel", o->gen_accel, err))) return rc;
     if ((rc = scene_spec_check(o->scene, err))) return rc;
     if ((rc = parse_ray_sets(o->rays, r, err))) return rc;
     if (o->image && (r->from_file || !has_primary(r)))
@@ -216,11 +190,9 @@ static int parse_options(int argc, char **argv, options *o, run *r, accel_error 
     if (o->heatmap[0] && r->from_file)
         return accel_fail(err, ACCEL_ERR_SPEC, "--heatmap needs rays made from the camera, not a "
                           ".rays file (it has no pixels)");
-    int closest = r->from_file;
-    for (int s = 0; s < r->set_count; s++) closest |= !bench_set_is_occlusion(r->bits[s]);
-    if (o->dump_hits && !closest)
-        return accel_fail(err, ACCEL_ERR_SPEC, "--dump-hits: shadow and ao rays are any-hit "
-                          "queries without hits; add primary or diffuse to --rays");
+    if (o->occluded && !r->from_file)
+        return accel_fail(err, ACCEL_ERR_SPEC, "--occluded needs a .rays file in --rays (shadow "
+                          "and ao sets are any-hit queries already)");
     if (o->eye.given && o->look.given && v3_len(v3_sub(o->eye.v, o->look.v)) == 0)
         return accel_fail(err, ACCEL_ERR_SPEC, "--eye and --look are the same point");
     if (o->up.given && v3_len(o->up.v) == 0)
@@ -251,13 +223,16 @@ static int load_scene(const options *o, run *r, accel_error *err)
     if (s->live_count == 0)
         return accel_fail(err, ACCEL_ERR_RANGE, "scene %s has nothing to hit: %u primitives, %u "
                           "of them degenerate", s->name, s->prim_count, s->degenerate_count);
-    FILE *info = o->csv ? (o->quiet ? NULL : stderr) : stdout;
+    FILE *info = trace_info(o);
     if (info)
         fprintf(info, "scene %s: %u primitives (%u triangles, %u spheres), %u degenerate, made in "
                 "%.1f ms\n  bounds (%.6g, %.6g, %.6g) to (%.6g, %.6g, %.6g)\n",
                 s->name, s->prim_count, s->tri_count, s->sphere_count, s->degenerate_count,
                 accel_now_ms() - t0, s->bounds.min.x, s->bounds.min.y, s->bounds.min.z,
                 s->bounds.max.x, s->bounds.max.y, s->bounds.max.z);
+    if (info)
+        fprintf(info, "  light (%.6g, %.6g, %.6g): shading and shadow rays\n", s->light.x,
+                s->light.y, s->light.z);
     if (o->export_obj) {
         if ((rc = scene_export_obj(s, o->export_obj, 24, err))) return rc;
         if (info) fprintf(info, "exported %s\n", o->export_obj);
@@ -289,7 +264,7 @@ static int set_camera(const options *o, run *r, accel_error *err)
                           "frames its bounds) is not usable: %s; give --eye, --look and --up",
                           o->scene, msg);
     }
-    FILE *info = o->csv ? (o->quiet ? NULL : stderr) : stdout;
+    FILE *info = trace_info(o);
     if (info)
         fprintf(info, "  camera eye (%.6g, %.6g, %.6g) look (%.6g, %.6g, %.6g) up (%.6g, %.6g, "
                 "%.6g) fov %.6g deg, %dx%d\n", c->eye.x, c->eye.y, c->eye.z, c->look_at.x,
@@ -329,21 +304,14 @@ static int make_rays(const options *o, run *r, accel_error *err)
         snprintf(path, sizeof path, r->set_count > 1 ? "%s.%s.rays" : "%s", o->dump_rays,
                  r->set_names[s]);
         rc = rays_write(path, rs->rays, rs->count, err);
+        FILE *info = trace_info(o);
+        if (!rc && info)
+            fprintf(info, "wrote %s: %zu %s rays (FORMATS.md .rays)\n", path, rs->count,
+                    r->set_names[s]);
     }
     return rc;
 }
 
-/* One ray set traced by one accelerator: its results and measurements. */
-typedef struct {
-    const rays_set *rays;
-    int set, occl;
-    accel_hit *hits;
-    uint8_t *occ;
-    uint32_t *steps, *prims; /* per-ray costs for --heatmap */
-    bench_result br;
-    hits_diff diff;
-    int checked;
-} set_run;
 
 /* The double-precision reference with --threads, compared as hits or as
  * hit / miss for occlusion queries. */
@@ -375,101 +343,17 @@ static int check_set(const options *o, run *r, set_run *t, accel_error *err)
     return 0;
 }
 
-static void print_csv_header(run *r)
+/* A structure that degenerates on this scene (thousands of primitive tests
+ * per ray: the regular grid around teapot_stadium's teapot) in one line. */
+static void warn_collapse(const run *r, const accel_kind *kind, const accel_params *canon,
+                          const set_run *t)
 {
-    csv_row(&r->csv, "csv,kind,spec,scene,rayset,rays,hits,threads,build_ms,build_ms_min,"
-            "build_ms_max,bytes,nodes,refs,sah_cost,depth,trace_ms,mrays_median,mrays_min,"
-            "mrays_max,steps_per_ray,empty_per_ray,box_per_ray,prims_per_ray,"
-            "mailbox_skips_per_ray,holes,false_hits,disagreements\n");
-}
-
-static void print_row(const options *o, run *r, const accel_kind *kind, const accel_params *canon,
-                      const accel_build_stats *st, const accel_timing *bt, const set_run *t)
-{
-    const bench_result *br = &t->br;
-    const accel_counters *c = &br->counters;
-    double nr = t->rays->count ? (double)t->rays->count : 1.0;
-    const char *name = r->set_names[t->set];
-    if (o->csv) {
-        char cnt[256] = ",,,,", chk[96] = ",,";
-        if (br->counted)
-            snprintf(cnt, sizeof cnt, "%.4f,%.4f,%.4f,%.4f,%.4f", c->steps / nr,
-                     c->empty_steps / nr, c->box_tests / nr, c->prim_tests / nr,
-                     c->mailbox_skips / nr);
-        if (t->checked)
-            snprintf(chk, sizeof chk, "%zu,%zu,%zu", t->diff.holes, t->diff.false_hits,
-                     t->diff.disagreements);
-        /* cnt and chk are whole runs of numeric fields: spliced into the format. */
-        char fmt[512];
-        snprintf(fmt, sizeof fmt, "csv,%%s,%%s,%%s,%%s,%%zu,%%zu,%%d,%%.4f,%%.4f,%%.4f,%%zu,%%llu,"
-                 "%%llu,%%.6g,%%d,%%.4f,%%.4f,%%.4f,%%.4f,%s,%s\n", cnt, chk);
-        if (csv_row(&r->csv, fmt, kind->name, canon->spec, r->scene.name, name, t->rays->count,
-                    br->hits, o->threads, bt->median, bt->min, bt->max, st->bytes,
-                    (unsigned long long)st->nodes, (unsigned long long)st->refs, st->sah_cost,
-                    st->depth, br->ms.median, br->mrays.median, br->mrays.min, br->mrays.max))
-            report(r, CLI_EXIT_INTERNAL, r->csv.first_bad);
-        return;
-    }
-    printf("  %-8s %9zu rays %9zu %s  %8.3f Mrays/s (min %.3f, max %.3f; %.2f ms)", name,
-           t->rays->count, br->hits, t->occl ? "occluded" : "hit", br->mrays.median,
-           br->mrays.min, br->mrays.max, br->ms.median);
-    if (br->counted)
-        printf("  per ray: %.2f %s, %.2f empty, %.2f box, %.2f prim, %.2f mailbox skips",
-               c->steps / nr, kind->step_name, c->empty_steps / nr, c->box_tests / nr,
-               c->prim_tests / nr, c->mailbox_skips / nr);
-    printf("\n");
-    if (t->checked)
-        printf("    check vs reference: %zu holes, %zu false hits, %zu disagreements\n",
-               t->diff.holes, t->diff.false_hits, t->diff.disagreements);
-}
-
-static int write_heatmap(const options *o, run *r, const set_run *t, const accel_kind *kind,
-                         const char *spec, accel_error *err)
-{
-    const rays_set *rs = t->rays;
-    size_t n = rs->count;
-    float *v = calloc((size_t)rs->width * rs->height, sizeof *v);
-    if (!v) return accel_fail(err, ACCEL_ERR_NOMEM, "out of memory for a heatmap");
-    const uint32_t *src = !strcmp(o->heatmap[0], "steps") ? t->steps : t->prims;
-    for (size_t i = 0; i < n; i++)
-        if (rs->pixel[i] < (uint32_t)(rs->width * rs->height)) v[rs->pixel[i]] += src[i];
-    char path[1024];
-    snprintf(path, sizeof path, r->set_count > 1 ? "%s.%s.png" : "%s", o->heatmap[1],
-             r->set_names[t->set]);
-    image_rgb img;
-    char title[256];
-    image_heat_title(title, sizeof title, spec, kind, src == t->prims);
-    int rc = image_heatmap(v, rs->width, rs->height, &o->heat_scale, title, &img, err);
-    if (rc == 0) {
-        rc = image_write(path, &img, err);
-        image_free(&img);
-    }
-    free(v);
-    return rc;
-}
-
-/* The outputs of the last accelerator: --dump-hits, --image, --heatmap. */
-static void write_outputs(const options *o, run *r, const set_run *t, const accel_kind *kind,
-                          const char *spec)
-{
-    accel_error err = {0};
-    const char *name = r->set_names[t->set];
-    if (o->dump_hits && !t->occl) {
-        char path[1024];
-        snprintf(path, sizeof path, r->set_count > 1 ? "%s.%s.hits" : "%s", o->dump_hits, name);
-        if (hits_write(path, t->hits, t->rays->count, &err)) report_err(r, &err);
-    }
-    if (o->image && r->bits[t->set] == BENCH_PRIMARY) {
-        image_rgb img;
-        if (image_alloc(&img, t->rays->width, t->rays->height, &err) == 0) {
-            image_shade(&r->scene, t->rays, t->hits, &img);
-            if (image_write(o->image, &img, &err)) report_err(r, &err);
-            image_free(&img);
-        } else {
-            report_err(r, &err);
-        }
-    }
-    if (t->steps && write_heatmap(o, r, t, kind, spec, &err)) report_err(r, &err);
+    double n = t->rays->count ? (double)t->rays->count : 1.0;
+    double prims = t->br.counted ? (double)t->br.counters.prim_tests / n : 0;
+    if (prims >= 1000 && strcmp(kind->name, "brute"))
+        fprintf(stderr, "trace: warning: %s collapses on %s: %.0f primitive tests per %s ray (of "
+                "%u primitives); try another kind or parameter\n", canon->spec, r->scene.name,
+                prims, r->set_names[t->set], r->scene.live_count);
 }
 
 /* Step 6: one ray set on one built accelerator. */
@@ -481,7 +365,7 @@ static void trace_set(const options *o, run *r, int s, int last, const accel_kin
     set_run t = {0};
     t.rays = r->from_file ? &r->file_rays : bench_sets_get(&r->sets, r->bits[s]);
     t.set = s;
-    t.occl = !r->from_file && bench_set_is_occlusion(r->bits[s]);
+    t.occl = r->from_file ? o->occluded : bench_set_is_occlusion(r->bits[s]);
     size_t n = t.rays->count, m = n ? n : 1;
     int heat = o->heatmap[0] && last && t.rays->pixel;
     t.hits = malloc(m * sizeof *t.hits);
@@ -494,6 +378,7 @@ static void trace_set(const options *o, run *r, int s, int last, const accel_kin
     char phase[320];
     snprintf(phase, sizeof phase, "trace %s with %s", r->set_names[s], canon->spec);
     bench_trace_opts to = {.threads = o->threads, .warmup = o->warmup, .repeats = o->repeat,
+                           .max_ms = o->budget * 1e3,
                            .count_pass = o->counters || heat, .hits = t.hits, .occluded = t.occ,
                            .ray_steps = t.steps, .ray_prims = t.prims,
                            .progress = r->progress, .progress_name = phase};
@@ -507,8 +392,9 @@ static void trace_set(const options *o, run *r, int s, int last, const accel_kin
     accel_error cerr = {0};
     if (o->check && check_set(o, r, &t, &cerr)) report_err(r, &cerr);
     print_row(o, r, kind, canon, st, bt, &t);
+    warn_collapse(r, kind, canon, &t);
     if (rc) report_err(r, &err);
-    if (last) write_outputs(o, r, &t, kind, canon->spec);
+    if (last) write_outputs(o, r, &t, kind, accel, canon->spec);
 done:
     free(t.hits);
     free(t.occ);
@@ -524,8 +410,8 @@ static void run_accel(const options *o, run *r, int a)
     void *accel;
     accel_build_stats st;
     accel_timing bt;
-    if (bench_build(o->accels[a], &r->scene, o->threads, o->build_repeat, 10000.0, &kind, &accel,
-                    &st, &bt, r->progress, &err)) {
+    if (bench_build(o->accels[a], &r->scene, o->threads, o->build_repeat, o->budget * 1e3, &kind,
+                    &accel, &st, &bt, r->progress, &err)) {
         report_err(r, &err);
         return;
     }
@@ -547,42 +433,11 @@ static void run_accel(const options *o, run *r, int a)
     kind->destroy(accel);
 }
 
-static int cmd_compare(int argc, char **argv)
-{
-    if (argc != 4) {
-        fprintf(stderr, "usage: trace compare REFERENCE.hits OTHER.hits\n");
-        return CLI_EXIT_USAGE;
-    }
-    accel_error err = {0};
-    accel_hit *a = NULL, *b = NULL;
-    size_t na = 0, nb = 0;
-    if (hits_read(argv[2], &a, &na, &err) || hits_read(argv[3], &b, &nb, &err)) {
-        fprintf(stderr, "trace: %s\n", err.msg);
-        free(a);
-        return cli_exit_of(err.code);
-    }
-    if (na != nb) {
-        fprintf(stderr, "trace: %s has %zu hits, %s has %zu\n", argv[2], na, argv[3], nb);
-        free(a), free(b);
-        return CLI_EXIT_INPUT;
-    }
-    hits_diff d = hits_compare(a, b, na);
-    printf("rays %zu  agree %zu  holes %zu  false_hits %zu  disagreements %zu\n", d.rays, d.agree,
-           d.holes, d.false_hits, d.disagreements);
-    if (d.first_bad != SIZE_MAX) {
-        size_t i = d.first_bad;
-        printf("first difference: ray %zu: %s prim %u t %.9g, %s prim %u t %.9g\n", i, argv[2],
-               a[i].prim, a[i].t, argv[3], b[i].prim, b[i].t);
-    }
-    free(a), free(b);
-    return d.agree == d.rays ? CLI_EXIT_OK : CLI_EXIT_DIFFER;
-}
-
 int main(int argc, char **argv)
 {
     /* Lines reach a pipe or file as they are printed, in order with stderr. */
     setvbuf(stdout, NULL, _IOLBF, 0);
-    if (argc > 1 && !strcmp(argv[1], "compare")) return cmd_compare(argc, argv);
+    if (argc > 1 && !strcmp(argv[1], "compare")) return trace_compare(argc, argv);
     options o;
     run r = {0};
     accel_error err = {0};
@@ -603,6 +458,7 @@ int main(int argc, char **argv)
     } else {
         if (o.csv) print_csv_header(&r);
         for (int a = 0; a < o.accel_count; a++) run_accel(&o, &r, a);
+        print_summary(&o, &r);
     }
     bench_progress_stop(r.progress);
     bench_sets_free(&r.sets);
