@@ -310,6 +310,91 @@ static inline __attribute__((always_inline)) int grid_dda_step(grid_dda *d)
     return grid_dda_advance(d, 2);
 }
 
+/* ---- the cell visit: one cell's references, through the per-ray mailbox ------
+ * Every single-ray walk of the grid family (grid, nested_grid in both
+ * layouts, irregular_grid, instanced's grid levels, the conservative walks
+ * of grid_walk.c and ngrid_trace.c) visits a cell the same way: its
+ * references in order, each skipped when the per-ray mailbox already holds
+ * it, else entered and tested. The mailbox is a direct-mapped cache of
+ * GRID_MAILBOX primitive ids (the slot of id q is q mod GRID_MAILBOX): a
+ * miss only repeats a test, never drops one, so it changes counters, never
+ * answers. It is valid for one ray: a primitive tested for the ray keeps
+ * its nearest hit for the ray, even beyond the cell (contract point 4). */
+
+/* Entries of the per-ray mailbox (a power of two). */
+#define GRID_MAILBOX 16
+
+/* Empties a mailbox: ACCEL_MISS (all bits set) is no primitive's id. */
+static inline void grid_mailbox_clear(uint32_t mail[GRID_MAILBOX])
+{
+    for (int i = 0; i < GRID_MAILBOX; i++) mail[i] = ACCEL_MISS;
+}
+
+/* The slot rule: 1 when the mailbox holds prim (skip it), else enters it
+ * and returns 0. */
+static inline __attribute__((always_inline)) int grid_mailbox_seen(uint32_t *mail, uint32_t prim)
+{
+    uint32_t *slot = &mail[prim & (GRID_MAILBOX - 1)];
+    if (*slot == prim) return 1;
+    *slot = prim;
+    return 0;
+}
+
+/*
+ * The cell visit of the closest-hit and any-hit kernels: tests ids[0..n)
+ * (local ids of store scene s) against the prepared ray p with the shared
+ * kernels (accel_prim_hit), each at most once per ray when `mailbox` is
+ * set. *t, *u, *v are the running nearest hit (t starts at t_far); a hit
+ * records t, u, v and the id in *h. Counted runs (c not NULL) add to
+ * *tests and *skips. Returns 1 when `any` (an any-hit query) found a hit
+ * and the ray is done. Callers pass any, naive, spheres and mailbox as
+ * compile-time constants: inlined, each copy keeps only its own branches.
+ */
+static inline __attribute__((always_inline)) int
+grid_cell_hit(const accel_scene *s, const uint32_t *ids, uint32_t n, const accel_ray_prep *p,
+              accel_hit *h, float *t, float *u, float *v, uint32_t *mail, uint32_t *tests,
+              uint32_t *skips, const accel_counters *c, int any, int naive, int spheres,
+              int mailbox)
+{
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t prim = ids[k];
+        if (mailbox && grid_mailbox_seen(mail, prim)) {
+            if (c) (*skips)++;
+            continue;
+        }
+        if (c) (*tests)++;
+        if (accel_prim_hit(s, prim, p, t, u, v, naive, spheres)) {
+            h->t = *t, h->u = *u, h->v = *v, h->prim = prim;
+            if (any) return 1;
+        }
+    }
+    return 0;
+}
+
+/*
+ * The cell visit of walks whose test is not accel_prim_hit (instanced's
+ * world-space decision, accel.h's walk visitors): visit(ctx, prim) for
+ * every id of ids[0..n) the mailbox does not hold (always on: these walks
+ * allow repeats, so the mailbox only saves work), *skips counting the
+ * others. The visitor returns 0 to end the walk; the visit then returns 0,
+ * else 1. Inlined with a constant visitor, the call is direct (and inlined
+ * when the visitor is).
+ */
+typedef int (*grid_prim_visit_fn)(void *ctx, uint32_t prim);
+static inline __attribute__((always_inline)) int
+grid_cell_visit(const uint32_t *ids, uint32_t n, uint32_t *mail, uint32_t *skips,
+                grid_prim_visit_fn visit, void *ctx)
+{
+    for (uint32_t k = 0; k < n; k++) {
+        if (grid_mailbox_seen(mail, ids[k])) {
+            (*skips)++;
+            continue;
+        }
+        if (!visit(ctx, ids[k])) return 0;
+    }
+    return 1;
+}
+
 /* ---- the fat walk (grid_fat.c) ------------------------------------------------
  * accel.h's conservative walk over one grid: calls fn(ctx, cell, ta, tb)
  * for every cell (linear index) whose box, grown by pad and the membership

@@ -9,6 +9,7 @@
 
 #include <assert.h>
 #include "accel.h"
+#include "grid/grid_core.h"
 
 #ifdef __cplusplus
 extern "C" {

@@ -28,7 +28,6 @@
 #include "inst_impl.h"
 
 #define INST_STACK 128 /* > the deepest tree inst_struct.c builds (48 + 32) */
-#define INST_MAILBOX 8
 
 typedef struct {
     accel_ray_prep p;   /* world ray for the float kernels */
@@ -212,13 +211,21 @@ INLINE size_t dda_cell(const inst_grid *g, const dda *w)
     return ((size_t)w->cell[2] * g->res[1] + w->cell[1]) * g->res[0] + w->cell[0];
 }
 
-/* Seen recently: a direct-mapped cache of item ids (a miss only repeats work). */
-INLINE int mailbox_seen(uint32_t *mb, uint32_t id)
+/* A bottom grid cell's triangle, decided in world space (grid_cell_visit's
+ * visitor): 0 once the ray is done. */
+typedef struct {
+    const inst_accel *a;
+    const inst_item *it;
+    const inst_bottom *b;
+    ray_state *r;
+    int naive, spheres;
+} bottom_cell;
+
+INLINE int bottom_prim(void *ctx, uint32_t q)
 {
-    uint32_t *slot = &mb[id & (INST_MAILBOX - 1)];
-    if (*slot == id) return 1;
-    *slot = id;
-    return 0;
+    const bottom_cell *v = ctx;
+    test_prim(v->a, v->it, v->b->mesh, q, v->r, v->naive, v->spheres);
+    return !v->r->done;
 }
 
 INLINE void walk_grid(const inst_accel *a, const inst_item *it, const inst_bottom *b, ray_state *r,
@@ -227,21 +234,16 @@ INLINE void walk_grid(const inst_accel *a, const inst_item *it, const inst_botto
     const inst_grid *g = &b->grid;
     dda w;
     if (!dda_start(g, o, d, t0, r->t, &w)) return;
-    uint32_t mb[INST_MAILBOX];
-    memset(mb, 0xFF, sizeof mb);
+    bottom_cell v = {a, it, b, r, naive, spheres};
+    uint32_t mb[GRID_MAILBOX];
+    grid_mailbox_clear(mb);
     do {
         size_t cell = dda_cell(g, &w);
         uint32_t begin = g->start[cell], end = g->start[cell + 1];
         r->bottom_steps++;
         r->empties += begin == end;
-        for (uint32_t i = begin; i < end; i++) {
-            if (mailbox_seen(mb, g->items[i])) {
-                r->skips++;
-                continue;
-            }
-            test_prim(a, it, b->mesh, g->items[i], r, naive, spheres);
-            if (r->done) return;
-        }
+        if (!grid_cell_visit(g->items + begin, end - begin, mb, &r->skips, bottom_prim, &v))
+            return;
         if (r->t <= dda_exit(&w)) return;
     } while (dda_step(g, &w));
 }
@@ -450,33 +452,42 @@ INLINE void top_bvh(const inst_accel *a, ray_state *r, int naive, int spheres)
     }
 }
 
+/* A top grid cell's instance (grid_cell_visit's visitor): walked when the
+ * ray reaches its world bounds; 0 once the ray is done. */
+typedef struct {
+    const inst_accel *a;
+    ray_state *r;
+    int naive, spheres;
+} top_cell;
+
+INLINE int top_item(void *ctx, uint32_t k)
+{
+    const top_cell *v = ctx;
+    ray_state *r = v->r;
+    float e;
+    r->boxes++;
+    const box3 *bb = &v->a->item_boxes[k];
+    if (!box3_slab(&bb->min.x, &bb->max.x, r->p.org, r->p.inv_dir, r->p.neg, r->p.t_near, r->t,
+                   &e))
+        return 1;
+    visit(v->a, k, r, v->naive, v->spheres);
+    return !r->done;
+}
+
 INLINE void top_grid(const inst_accel *a, ray_state *r, int naive, int spheres)
 {
     const inst_grid *g = &a->top_grid;
     dda w;
     if (!dda_start(g, r->o, r->d, r->p.t_near, r->t, &w)) return;
-    uint32_t mb[INST_MAILBOX];
-    memset(mb, 0xFF, sizeof mb);
+    top_cell v = {a, r, naive, spheres};
+    uint32_t mb[GRID_MAILBOX];
+    grid_mailbox_clear(mb);
     do {
         size_t cell = dda_cell(g, &w);
         uint32_t begin = g->start[cell], end = g->start[cell + 1];
         r->top_steps++;
         r->empties += begin == end;
-        for (uint32_t i = begin; i < end; i++) {
-            uint32_t k = g->items[i];
-            if (mailbox_seen(mb, k)) {
-                r->skips++;
-                continue;
-            }
-            float e;
-            r->boxes++;
-            const box3 *bb = &a->item_boxes[k];
-            if (!box3_slab(&bb->min.x, &bb->max.x, r->p.org, r->p.inv_dir, r->p.neg, r->p.t_near,
-                           r->t, &e))
-                continue;
-            visit(a, k, r, naive, spheres);
-            if (r->done) return;
-        }
+        if (!grid_cell_visit(g->items + begin, end - begin, mb, &r->skips, top_item, &v)) return;
         if (r->t <= dda_exit(&w)) return;
     } while (dda_step(g, &w));
 }

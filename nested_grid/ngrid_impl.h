@@ -169,9 +169,6 @@ int ngrid_wrap_error(accel_error *err, int rc, const char *context);
 int ngrid_build_level(ngrid_builder *b, uint32_t begin, uint32_t end, int threads,
                       accel_error *err);
 
-/* Entries of the per-ray mailbox of both layouts' walks (power of two). */
-#define NGRID_MAILBOX 16
-
 /* Turns a flattened two-level g into the compact layout (g->compact) and
  * frees the word layout's arrays (ngrid_compact.c). */
 int ngrid_compact_build(ngrid_accel *g, double max_bytes, accel_error *err);
