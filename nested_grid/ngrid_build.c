@@ -353,6 +353,28 @@ void ngrid_get_view(const void *accel, ngrid_view *v)
     v->levels = g->levels;
 }
 
+/* The batch entries: the packet walk (ngrid_packet.c) or the single-ray
+ * walk of the layout (ngrid_trace.c, ngrid_compact.c). */
+static void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
+                            size_t count, accel_counters *counters)
+{
+    const ngrid_accel *g = accel;
+    if (g->traverse == NGRID_TRAVERSE_PACKET)
+        ngrid_packet_intersect(g, rays, hits, count, counters);
+    else
+        ngrid_single_intersect(g, rays, hits, count, counters);
+}
+
+static void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded,
+                           size_t count, accel_counters *counters)
+{
+    const ngrid_accel *g = accel;
+    if (g->traverse == NGRID_TRAVERSE_PACKET)
+        ngrid_packet_occluded(g, rays, occluded, count, counters);
+    else
+        ngrid_single_occluded(g, rays, occluded, count, counters);
+}
+
 /* The conformance suite runs each: defaults, the cost model, a single
  * level (the regular grid), subdividing almost every cell (with a small
  * depth), never subdividing, bounding-box membership, no mailbox; the

@@ -142,26 +142,6 @@ void ngrid_single_occluded(const void *accel, const accel_ray *rays, uint8_t *oc
     accel_run_kernel(&ngrid_occ_table, accel, rays, occluded, count, counters, ngrid_flags(accel));
 }
 
-void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
-                     accel_counters *counters)
-{
-    const ngrid_accel *g = accel;
-    if (g->traverse == NGRID_TRAVERSE_PACKET)
-        ngrid_packet_intersect(g, rays, hits, count, counters);
-    else
-        ngrid_single_intersect(g, rays, hits, count, counters);
-}
-
-void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
-                    accel_counters *counters)
-{
-    const ngrid_accel *g = accel;
-    if (g->traverse == NGRID_TRAVERSE_PACKET)
-        ngrid_packet_occluded(g, rays, occluded, count, counters);
-    else
-        ngrid_single_occluded(g, rays, occluded, count, counters);
-}
-
 /* ---- accel.h's conservative walk --------------------------------------------
  * grid_core.h's fat walk at every level: the top grid's cells whose boxes
  * grown by the pad the ray reaches, and in a cell holding a sub-grid the
