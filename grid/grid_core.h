@@ -176,6 +176,12 @@ int grid_cells_build(const grid_frame *f, const accel_scene *s, const uint32_t *
                      grid_cells *out, accel_error *err);
 void grid_cells_free(grid_cells *c);
 
+/* The same storage over boxes (grid_boxes.c): cell c lists, in increasing
+ * index, every non-empty box of boxes[0..n) that grid_cell_range puts in
+ * it (the box against the cells grown by frame.pad). Single-threaded. */
+int grid_cells_build_boxes(const grid_frame *f, const box3 *boxes, uint32_t n, grid_cells *out,
+                           accel_error *err);
+
 /* ---- 3D-DDA (Amanatides & Woo 1987) ---------------------------------------- */
 
 /*
@@ -218,21 +224,23 @@ static inline double grid_plane_t(const grid_dda *d, int a, float plane)
  * the ray crosses all "at once") the walk starts in the first cell of that
  * run, not the last: the steps then visit every cell of it at t_entry
  * (their primitives, resolved by the exact membership, are not covered by
- * any padding). An axis with a
- * zero direction component (+0 or -0) does not move: its cell is the one
- * whose planes bracket the origin. Returns the entry distance.
+ * any padding). An axis with a zero direction component (+0 or -0) does
+ * not move: its cell is the one whose planes bracket the origin. Returns
+ * the entry distance. grid_dda_init_d takes the ray in double (instanced's
+ * object-space rays): then plane - org rounds once more, about 1e-16 of
+ * the distance, still far inside the padding; grid_dda_init gives it a
+ * float ray's exact values.
  */
 static inline __attribute__((always_inline)) double
-grid_dda_init(grid_dda *d, const grid_frame *f, const accel_ray_prep *p, double t_start)
+grid_dda_init_d(grid_dda *d, const grid_frame *f, const double o[3], const double dir[3],
+                double t_start)
 {
-    const float o[3] = {p->org.x, p->org.y, p->org.z};
-    const float dir[3] = {p->dir.x, p->dir.y, p->dir.z};
     double t_entry = t_start;
     for (int a = 0; a < 3; a++) {
         d->org[a] = o[a];
-        d->inv_dir[a] = dir[a] != 0.0f ? 1.0 / (double)dir[a] : 0.0;
-        if (dir[a] != 0.0f) {
-            double t = grid_plane_t(d, a, dir[a] > 0.0f ? f->lo[a] : f->hi[a]);
+        d->inv_dir[a] = dir[a] != 0.0 ? 1.0 / dir[a] : 0.0;
+        if (dir[a] != 0.0) {
+            double t = grid_plane_t(d, a, dir[a] > 0.0 ? f->lo[a] : f->hi[a]);
             t_entry = t > t_entry ? t : t_entry;
         }
     }
@@ -240,10 +248,10 @@ grid_dda_init(grid_dda *d, const grid_frame *f, const accel_ray_prep *p, double 
     for (int a = 0; a < 3; a++) {
         const int n = f->res[a];
         const float *pl = f->planes[a];
-        double pos = dir[a] != 0.0f ? o[a] + t_entry * dir[a] : o[a];
+        double pos = dir[a] != 0.0 ? o[a] + t_entry * dir[a] : o[a];
         double g = (pos - f->lo[a]) * f->inv_cell[a];
         int i = g >= n ? n - 1 : (g > 0.0 ? (int)g : 0);
-        if (dir[a] == 0.0f) {
+        if (dir[a] == 0.0) {
             /* The ray stays in the slab of its origin: pick the cell whose
              * planes bracket it (either one when it lies on a plane). */
             while (i > 0 && o[a] < pl[i]) i--;
@@ -253,7 +261,7 @@ grid_dda_init(grid_dda *d, const grid_frame *f, const accel_ray_prep *p, double 
             d->cell_step[a] = 0;
             d->t_next[a] = INFINITY;
             d->next_plane[a] = pl;
-        } else if (dir[a] > 0.0f) {
+        } else if (dir[a] > 0.0) {
             /* Entry plane pl[i] crossed at or before t_entry, exit plane after. */
             while (i > 0 && grid_plane_t(d, a, pl[i]) > t_entry) i--;
             while (i < n - 1 && grid_plane_t(d, a, pl[i + 1]) <= t_entry) i++;
@@ -278,6 +286,15 @@ grid_dda_init(grid_dda *d, const grid_frame *f, const accel_ray_prep *p, double 
         d->cell += (uint32_t)i * f->stride[a];
     }
     return t_entry;
+}
+
+/* The setup for a prepared float ray (the grid family's kernels). */
+static inline __attribute__((always_inline)) double
+grid_dda_init(grid_dda *d, const grid_frame *f, const accel_ray_prep *p, double t_start)
+{
+    const double o[3] = {p->org.x, p->org.y, p->org.z};
+    const double dir[3] = {p->dir.x, p->dir.y, p->dir.z};
+    return grid_dda_init_d(d, f, o, dir, t_start);
 }
 
 /* Distance at which the ray leaves the current cell. */
