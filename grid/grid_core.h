@@ -176,6 +176,12 @@ int grid_cells_build(const grid_frame *f, const accel_scene *s, const uint32_t *
                      grid_cells *out, accel_error *err);
 void grid_cells_free(grid_cells *c);
 
+/* The same storage over boxes (grid_boxes.c): cell c lists, in increasing
+ * index, every non-empty box of boxes[0..n) that grid_cell_range puts in
+ * it (the box against the cells grown by frame.pad). Single-threaded. */
+int grid_cells_build_boxes(const grid_frame *f, const box3 *boxes, uint32_t n, grid_cells *out,
+                           accel_error *err);
+
 /* ---- 3D-DDA (Amanatides & Woo 1987) ---------------------------------------- */
 
 /*
@@ -218,21 +224,23 @@ static inline double grid_plane_t(const grid_dda *d, int a, float plane)
  * the ray crosses all "at once") the walk starts in the first cell of that
  * run, not the last: the steps then visit every cell of it at t_entry
  * (their primitives, resolved by the exact membership, are not covered by
- * any padding). An axis with a
- * zero direction component (+0 or -0) does not move: its cell is the one
- * whose planes bracket the origin. Returns the entry distance.
+ * any padding). An axis with a zero direction component (+0 or -0) does
+ * not move: its cell is the one whose planes bracket the origin. Returns
+ * the entry distance. grid_dda_init_d takes the ray in double (instanced's
+ * object-space rays): then plane - org rounds once more, about 1e-16 of
+ * the distance, still far inside the padding; grid_dda_init gives it a
+ * float ray's exact values.
  */
 static inline __attribute__((always_inline)) double
-grid_dda_init(grid_dda *d, const grid_frame *f, const accel_ray_prep *p, double t_start)
+grid_dda_init_d(grid_dda *d, const grid_frame *f, const double o[3], const double dir[3],
+                double t_start)
 {
-    const float o[3] = {p->org.x, p->org.y, p->org.z};
-    const float dir[3] = {p->dir.x, p->dir.y, p->dir.z};
     double t_entry = t_start;
     for (int a = 0; a < 3; a++) {
         d->org[a] = o[a];
-        d->inv_dir[a] = dir[a] != 0.0f ? 1.0 / (double)dir[a] : 0.0;
-        if (dir[a] != 0.0f) {
-            double t = grid_plane_t(d, a, dir[a] > 0.0f ? f->lo[a] : f->hi[a]);
+        d->inv_dir[a] = dir[a] != 0.0 ? 1.0 / dir[a] : 0.0;
+        if (dir[a] != 0.0) {
+            double t = grid_plane_t(d, a, dir[a] > 0.0 ? f->lo[a] : f->hi[a]);
             t_entry = t > t_entry ? t : t_entry;
         }
     }
@@ -240,10 +248,10 @@ grid_dda_init(grid_dda *d, const grid_frame *f, const accel_ray_prep *p, double 
     for (int a = 0; a < 3; a++) {
         const int n = f->res[a];
         const float *pl = f->planes[a];
-        double pos = dir[a] != 0.0f ? o[a] + t_entry * dir[a] : o[a];
+        double pos = dir[a] != 0.0 ? o[a] + t_entry * dir[a] : o[a];
         double g = (pos - f->lo[a]) * f->inv_cell[a];
         int i = g >= n ? n - 1 : (g > 0.0 ? (int)g : 0);
-        if (dir[a] == 0.0f) {
+        if (dir[a] == 0.0) {
             /* The ray stays in the slab of its origin: pick the cell whose
              * planes bracket it (either one when it lies on a plane). */
             while (i > 0 && o[a] < pl[i]) i--;
@@ -253,7 +261,7 @@ grid_dda_init(grid_dda *d, const grid_frame *f, const accel_ray_prep *p, double 
             d->cell_step[a] = 0;
             d->t_next[a] = INFINITY;
             d->next_plane[a] = pl;
-        } else if (dir[a] > 0.0f) {
+        } else if (dir[a] > 0.0) {
             /* Entry plane pl[i] crossed at or before t_entry, exit plane after. */
             while (i > 0 && grid_plane_t(d, a, pl[i]) > t_entry) i--;
             while (i < n - 1 && grid_plane_t(d, a, pl[i + 1]) <= t_entry) i++;
@@ -278,6 +286,15 @@ grid_dda_init(grid_dda *d, const grid_frame *f, const accel_ray_prep *p, double 
         d->cell += (uint32_t)i * f->stride[a];
     }
     return t_entry;
+}
+
+/* The setup for a prepared float ray (the grid family's kernels). */
+static inline __attribute__((always_inline)) double
+grid_dda_init(grid_dda *d, const grid_frame *f, const accel_ray_prep *p, double t_start)
+{
+    const double o[3] = {p->org.x, p->org.y, p->org.z};
+    const double dir[3] = {p->dir.x, p->dir.y, p->dir.z};
+    return grid_dda_init_d(d, f, o, dir, t_start);
 }
 
 /* Distance at which the ray leaves the current cell. */
@@ -308,6 +325,91 @@ static inline __attribute__((always_inline)) int grid_dda_step(grid_dda *d)
     if (d->t_next[0] < d->t_next[1] && d->t_next[0] < d->t_next[2]) return grid_dda_advance(d, 0);
     if (d->t_next[1] < d->t_next[2]) return grid_dda_advance(d, 1);
     return grid_dda_advance(d, 2);
+}
+
+/* ---- the cell visit: one cell's references, through the per-ray mailbox ------
+ * Every single-ray walk of the grid family (grid, nested_grid in both
+ * layouts, irregular_grid, instanced's grid levels, the conservative walks
+ * of grid_walk.c and ngrid_trace.c) visits a cell the same way: its
+ * references in order, each skipped when the per-ray mailbox already holds
+ * it, else entered and tested. The mailbox is a direct-mapped cache of
+ * GRID_MAILBOX primitive ids (the slot of id q is q mod GRID_MAILBOX): a
+ * miss only repeats a test, never drops one, so it changes counters, never
+ * answers. It is valid for one ray: a primitive tested for the ray keeps
+ * its nearest hit for the ray, even beyond the cell (contract point 4). */
+
+/* Entries of the per-ray mailbox (a power of two). */
+#define GRID_MAILBOX 16
+
+/* Empties a mailbox: ACCEL_MISS (all bits set) is no primitive's id. */
+static inline void grid_mailbox_clear(uint32_t mail[GRID_MAILBOX])
+{
+    for (int i = 0; i < GRID_MAILBOX; i++) mail[i] = ACCEL_MISS;
+}
+
+/* The slot rule: 1 when the mailbox holds prim (skip it), else enters it
+ * and returns 0. */
+static inline __attribute__((always_inline)) int grid_mailbox_seen(uint32_t *mail, uint32_t prim)
+{
+    uint32_t *slot = &mail[prim & (GRID_MAILBOX - 1)];
+    if (*slot == prim) return 1;
+    *slot = prim;
+    return 0;
+}
+
+/*
+ * The cell visit of the closest-hit and any-hit kernels: tests ids[0..n)
+ * (local ids of store scene s) against the prepared ray p with the shared
+ * kernels (accel_prim_hit), each at most once per ray when `mailbox` is
+ * set. *t, *u, *v are the running nearest hit (t starts at t_far); a hit
+ * records t, u, v and the id in *h. Counted runs (c not NULL) add to
+ * *tests and *skips. Returns 1 when `any` (an any-hit query) found a hit
+ * and the ray is done. Callers pass any, naive, spheres and mailbox as
+ * compile-time constants: inlined, each copy keeps only its own branches.
+ */
+static inline __attribute__((always_inline)) int
+grid_cell_hit(const accel_scene *s, const uint32_t *ids, uint32_t n, const accel_ray_prep *p,
+              accel_hit *h, float *t, float *u, float *v, uint32_t *mail, uint32_t *tests,
+              uint32_t *skips, const accel_counters *c, int any, int naive, int spheres,
+              int mailbox)
+{
+    for (uint32_t k = 0; k < n; k++) {
+        uint32_t prim = ids[k];
+        if (mailbox && grid_mailbox_seen(mail, prim)) {
+            if (c) (*skips)++;
+            continue;
+        }
+        if (c) (*tests)++;
+        if (accel_prim_hit(s, prim, p, t, u, v, naive, spheres)) {
+            h->t = *t, h->u = *u, h->v = *v, h->prim = prim;
+            if (any) return 1;
+        }
+    }
+    return 0;
+}
+
+/*
+ * The cell visit of walks whose test is not accel_prim_hit (instanced's
+ * world-space decision, accel.h's walk visitors): visit(ctx, prim) for
+ * every id of ids[0..n) the mailbox does not hold (always on: these walks
+ * allow repeats, so the mailbox only saves work), *skips counting the
+ * others. The visitor returns 0 to end the walk; the visit then returns 0,
+ * else 1. Inlined with a constant visitor, the call is direct (and inlined
+ * when the visitor is).
+ */
+typedef int (*grid_prim_visit_fn)(void *ctx, uint32_t prim);
+static inline __attribute__((always_inline)) int
+grid_cell_visit(const uint32_t *ids, uint32_t n, uint32_t *mail, uint32_t *skips,
+                grid_prim_visit_fn visit, void *ctx)
+{
+    for (uint32_t k = 0; k < n; k++) {
+        if (grid_mailbox_seen(mail, ids[k])) {
+            (*skips)++;
+            continue;
+        }
+        if (!visit(ctx, ids[k])) return 0;
+    }
+    return 1;
 }
 
 /* ---- the fat walk (grid_fat.c) ------------------------------------------------

@@ -1,6 +1,7 @@
 /*
- * grid_impl.h - the built grid, shared by the builder (grid_build.c) and
- * the traversals (grid_trace.c, grid_packet.c). Private to grid/.
+ * grid_impl.h - the built grid, shared by the builder (grid_build.c), the
+ * empty-space tables (grid_skip.c) and the traversals (grid_trace.c,
+ * grid_packet.c). Private to grid/.
  */
 #ifndef GRID_GRID_IMPL_H
 #define GRID_GRID_IMPL_H
@@ -44,6 +45,14 @@ typedef struct {
 
 /* Traversal modes (parameter traverse=). */
 enum { GRID_TRAVERSE_SINGLE = 0, GRID_TRAVERSE_PACKET = 1 };
+
+/* Macro cells: GRID_MACRO^3 cells each, 1 when any of them holds a
+ * primitive (grid_accel.macro, built for traverse=packet; grid_skip.c). */
+int grid_macro_build(grid_accel *g, accel_error *err);
+/* 1 when a macro cell of layer `layer` (on K) covering cells [lo, hi] on
+ * a1, a2 holds a primitive. */
+int grid_macro_any(const grid_accel *g, int K, int a1, int a2, int layer, const int lo[2],
+                   const int hi[2]);
 
 /* The kernel-variant flags of a built grid (core/variant.h). */
 static inline unsigned grid_variant_flags(const grid_accel *g)

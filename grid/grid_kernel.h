@@ -16,17 +16,12 @@
 #ifndef GRID_GRID_KERNEL_H
 #define GRID_GRID_KERNEL_H
 
-#include <string.h>
-
 #include "core/variant.h"
 #include "grid_impl.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-/* Entries of the per-ray mailbox (power of two). */
-#define GRID_MAILBOX 16
 
 /* In an empty cell: the box of empty cells around it that skipping knows
  * (grid_skip.h), as inclusive cell ranges; 0 when it is not worth a jump. */
@@ -100,7 +95,7 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
             grid_dda d;
             grid_dda_init(&d, f, &p, p.t_near);
             uint32_t mail[GRID_MAILBOX];
-            if (mailbox) memset(mail, 0xFF, sizeof mail); /* ACCEL_MISS: no primitive */
+            if (mailbox) grid_mailbox_clear(mail);
             float t = p.t_far, u = 0.0f, v = 0.0f;
             /* Walk the ray through the cells. */
             for (;;) {
@@ -116,22 +111,10 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
                         break;
                     if (moved) continue;
                 }
-                for (; k < end; k++) {
-                    uint32_t prim = refs[k];
-                    if (mailbox) {
-                        uint32_t *slot = &mail[prim & (GRID_MAILBOX - 1)];
-                        if (*slot == prim) {
-                            if (c) skips++;
-                            continue;
-                        }
-                        *slot = prim;
-                    }
-                    if (c) tests++;
-                    if (accel_prim_hit(s, prim, &p, &t, &u, &v, naive, spheres)) {
-                        h.t = t, h.u = u, h.v = v, h.prim = prim; /* local id until done */
-                        if (occ) goto done;
-                    }
-                }
+                /* The cell's primitives, nearest hit kept (grid_core.h). */
+                if (grid_cell_hit(s, refs + k, end - k, &p, &h, &t, &u, &v, mail, &tests, &skips,
+                                  c, occ != NULL, naive, spheres, mailbox))
+                    goto done;
                 /* A hit (or the ray's end) before this cell's exit: nothing
                  * in a later cell can be nearer. */
                 if (grid_dda_exit(&d) >= t) break;

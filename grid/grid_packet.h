@@ -132,14 +132,6 @@ void grid_packet_bound(grid_packet *pk);
 int grid_packet_span(const grid_frame *f, const grid_packet *pk, int k, int k_end, int lo[2],
                      int hi[2], double hull[2][2]);
 
-/* Macro cells: GRID_MACRO^3 cells each, 1 when any of them holds a
- * primitive (grid_accel.macro, built for traverse=packet). */
-int grid_macro_build(grid_accel *g, accel_error *err);
-/* 1 when a macro cell of layer `layer` (on K) covering cells [lo, hi] on
- * a1, a2 holds a primitive. */
-int grid_macro_any(const grid_accel *g, int K, int a1, int a2, int layer, const int lo[2],
-                   const int hi[2]);
-
 #ifdef __cplusplus
 }
 #endif

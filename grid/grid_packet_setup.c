@@ -464,36 +464,3 @@ int grid_packet_span(const grid_frame *f, const grid_packet *pk, int k, int k_en
     }
     return 1;
 }
-
-int grid_macro_build(grid_accel *g, accel_error *err)
-{
-    const grid_frame *f = &g->frame;
-    const int M = GRID_MACRO;
-    uint64_t n = 1;
-    for (int a = 0; a < 3; a++) {
-        g->macro_res[a] = (f->res[a] + M - 1) / M;
-        n *= (uint64_t)g->macro_res[a];
-    }
-    g->macro = calloc(n, 1);
-    if (!g->macro) return accel_fail(err, ACCEL_ERR_NOMEM, "grid: out of memory for macro cells");
-    for (int z = 0; z < f->res[2]; z++)
-        for (int y = 0; y < f->res[1]; y++)
-            for (int x = 0; x < f->res[0]; x++) {
-                const uint64_t c = (uint64_t)x + (uint64_t)f->stride[1] * y + (uint64_t)f->stride[2] * z;
-                if (g->cells.offsets[c] != g->cells.offsets[c + 1])
-                    g->macro[x / M + (size_t)g->macro_res[0] * (y / M + (size_t)g->macro_res[1] * (z / M))] = 1;
-            }
-    return ACCEL_OK;
-}
-
-int grid_macro_any(const grid_accel *g, int K, int a1, int a2, int layer, const int lo[2],
-                   const int hi[2])
-{
-    const int M = GRID_MACRO;
-    size_t st[3];
-    st[0] = 1, st[1] = (size_t)g->macro_res[0], st[2] = st[1] * (size_t)g->macro_res[1];
-    for (int j = lo[1] / M; j <= hi[1] / M; j++)
-        for (int i = lo[0] / M; i <= hi[0] / M; i++)
-            if (g->macro[(size_t)layer * st[K] + (size_t)j * st[a2] + (size_t)i * st[a1]]) return 1;
-    return 0;
-}

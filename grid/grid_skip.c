@@ -1,7 +1,9 @@
 /*
  * grid_skip.c - the tables behind empty-space skipping (grid_skip.h): the
  * proximity cloud (per-cell Chebyshev distance to the nearest non-empty
- * cell, Cohen & Sheffer 1994) and the macro-cell empty flags.
+ * cell, Cohen & Sheffer 1994) and the macro-cell empty flags; and the
+ * occupancy of GRID_MACRO^3 blocks that the packet walk (grid_packet.c)
+ * skips empty layers with.
  *
  * The distance transform is separable (Meijster, Roerdink & Hesselink,
  * ISMM 2000): pass 1 gives, per row along x, the distance to the nearest
@@ -16,7 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "grid_skip.h"
+#include "grid_impl.h"
 
 typedef struct {
     const grid_frame *f;
@@ -140,4 +142,39 @@ void grid_skip_macro(const grid_frame *f, const uint32_t *offsets, int shift, ui
             for (int x = 0; x < f->res[0]; x++, c++)
                 if (offsets[c] != offsets[c + 1]) empty[row + (x >> shift)] = 0;
         }
+}
+
+/* ---- traverse=packet: occupied blocks of GRID_MACRO^3 cells ---------------- */
+
+int grid_macro_build(grid_accel *g, accel_error *err)
+{
+    const grid_frame *f = &g->frame;
+    const int M = GRID_MACRO;
+    uint64_t n = 1;
+    for (int a = 0; a < 3; a++) {
+        g->macro_res[a] = (f->res[a] + M - 1) / M;
+        n *= (uint64_t)g->macro_res[a];
+    }
+    g->macro = calloc(n, 1);
+    if (!g->macro) return accel_fail(err, ACCEL_ERR_NOMEM, "grid: out of memory for macro cells");
+    for (int z = 0; z < f->res[2]; z++)
+        for (int y = 0; y < f->res[1]; y++)
+            for (int x = 0; x < f->res[0]; x++) {
+                const uint64_t c = (uint64_t)x + (uint64_t)f->stride[1] * y + (uint64_t)f->stride[2] * z;
+                if (g->cells.offsets[c] != g->cells.offsets[c + 1])
+                    g->macro[x / M + (size_t)g->macro_res[0] * (y / M + (size_t)g->macro_res[1] * (z / M))] = 1;
+            }
+    return ACCEL_OK;
+}
+
+int grid_macro_any(const grid_accel *g, int K, int a1, int a2, int layer, const int lo[2],
+                   const int hi[2])
+{
+    const int M = GRID_MACRO;
+    size_t st[3];
+    st[0] = 1, st[1] = (size_t)g->macro_res[0], st[2] = st[1] * (size_t)g->macro_res[1];
+    for (int j = lo[1] / M; j <= hi[1] / M; j++)
+        for (int i = lo[0] / M; i <= hi[0] / M; i++)
+            if (g->macro[(size_t)layer * st[K] + (size_t)j * st[a2] + (size_t)i * st[a1]]) return 1;
+    return 0;
 }

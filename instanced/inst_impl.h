@@ -9,6 +9,7 @@
 
 #include <assert.h>
 #include "accel.h"
+#include "grid/grid_core.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -34,21 +35,21 @@ typedef struct {
     int depth;
 } inst_bvh;
 
-/* A uniform grid in double precision (its DDA runs in double). */
+/* A uniform grid over boxes: grid_core.h's frame (boundary planes as
+ * floats) and compact cells (cells.refs: item ids, per cell in increasing
+ * order), walked with grid_core.h's DDA (distances in double). */
 typedef struct {
-    double lo[3], cell[3], inv_cell[3];
-    int res[3];
-    uint32_t *start; /* res[0]*res[1]*res[2] + 1 offsets into items */
-    uint32_t *items;
-    uint64_t ref_count;
-    uint64_t cell_count;
+    grid_frame frame;
+    float *planes; /* storage behind frame.planes */
+    grid_cells cells;
 } inst_grid;
 
 /* Binned SAH (16 bins, Wald 2007) over n boxes; leaves of at most max_leaf. */
 int inst_bvh_build(const box3 *boxes, uint32_t n, int max_leaf, inst_bvh *out, accel_error *err);
 void inst_bvh_free(inst_bvh *b);
-/* A grid of about lambda * n cells over the boxes, each box grown by pad
- * on every side before the cells it overlaps are listed. */
+/* A grid of about lambda * n cells (grid_resolution) over the boxes, each
+ * box grown by pad on every side (rounded outwards to float) before the
+ * cells it reaches are listed (grid_cells_build_boxes). */
 int inst_grid_build(const box3 *boxes, uint32_t n, double lambda, double pad, inst_grid *out,
                     accel_error *err);
 void inst_grid_free(inst_grid *g);

@@ -87,7 +87,10 @@ static size_t bvh_bytes(const inst_bvh *b)
 
 static size_t grid_bytes(const inst_grid *g)
 {
-    return g->start ? ((size_t)g->cell_count + 1 + (size_t)g->ref_count) * sizeof(uint32_t) : 0;
+    return g->cells.offsets ? ((size_t)g->cells.cell_count + 1 + (size_t)g->cells.ref_count) *
+                                      sizeof(uint32_t) +
+                                  grid_plane_count(g->frame.res) * sizeof(float)
+                            : 0;
 }
 
 size_t inst_memory(const void *p)
@@ -183,8 +186,8 @@ int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *e
     free(boxes);
     if (rc || !ids) return rc;
     /* Items were box indices: make them primitive ids. */
-    uint32_t *items = a->bottom_kind == INST_BVH ? b->bvh.items : b->grid.items;
-    uint64_t count = a->bottom_kind == INST_BVH ? b->bvh.item_count : b->grid.ref_count;
+    uint32_t *items = a->bottom_kind == INST_BVH ? b->bvh.items : b->grid.cells.refs;
+    uint64_t count = a->bottom_kind == INST_BVH ? b->bvh.item_count : b->grid.cells.ref_count;
     for (uint64_t k = 0; k < count; k++) items[k] = ids[items[k]];
     return 0;
 }
@@ -278,14 +281,14 @@ void inst_fill_stats(const inst_accel *a, accel_build_stats *stats)
             if (b->walk_stats.depth > bottom_depth) bottom_depth = b->walk_stats.depth;
             continue;
         }
-        stats->nodes += a->bottom_kind == INST_BVH ? b->bvh.node_count : b->grid.cell_count;
-        stats->refs += a->bottom_kind == INST_BVH ? b->bvh.item_count : b->grid.ref_count;
+        stats->nodes += a->bottom_kind == INST_BVH ? b->bvh.node_count : b->grid.cells.cell_count;
+        stats->refs += a->bottom_kind == INST_BVH ? b->bvh.item_count : b->grid.cells.ref_count;
         if (b->bvh.depth > bottom_depth) bottom_depth = b->bvh.depth;
     }
-    stats->nodes += a->top == INST_BVH ? a->top_bvh.node_count : a->top_grid.cell_count;
+    stats->nodes += a->top == INST_BVH ? a->top_bvh.node_count : a->top_grid.cells.cell_count;
     stats->leaves = a->item_count;
     stats->depth = (a->top == INST_BVH ? a->top_bvh.depth : 1) + bottom_depth;
-    for (int k = 0; k < 3; k++) stats->res[k] = a->top_grid.res[k];
+    for (int k = 0; k < 3; k++) stats->res[k] = a->top_grid.frame.res[k];
     stats->bytes = inst_memory(a);
 }
 

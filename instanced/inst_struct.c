@@ -5,8 +5,9 @@
  * on each axis, an object median when binning cannot separate the
  * centroids), flattened into 32-byte nodes as in pbrt-v3; and a uniform
  * grid of about lambda * n cells (Cleary and Wyvill 1988's rule) whose
- * cells list every box, grown by a pad, that overlaps them. Both are
- * deterministic: the same boxes give the same bytes.
+ * cells list every box, grown by a pad, that reaches them: grid_core.h's
+ * frame and cell storage over boxes. Both are deterministic: the same
+ * boxes give the same bytes.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -177,112 +178,71 @@ void inst_bvh_free(inst_bvh *b)
     memset(b, 0, sizeof *b);
 }
 
-/* ---- grid -------------------------------------------------------------------------- */
+/* ---- grid ---------------------------------------------------------------------------
+ * grid_core.h's grid over boxes: the resolution rule, the frame and the
+ * cell lists are the regular grid's, capped for a structure rebuilt every
+ * frame. */
 
 #define INST_GRID_MAX_RES 512
 #define INST_GRID_MAX_CELLS (1u << 24)
 
-/* The range of cells [c0, c1] a padded box overlaps on one axis. */
-static void cell_range(const inst_grid *g, int axis, double lo, double hi, int *c0, int *c1)
+/* b grown by pad on every side, rounded outwards to float. */
+static box3 grow_box(box3 b, double pad)
 {
-    double a = floor((lo - g->lo[axis]) * g->inv_cell[axis]);
-    double b = floor((hi - g->lo[axis]) * g->inv_cell[axis]);
-    int r = g->res[axis] - 1;
-    *c0 = a < 0 ? 0 : a > r ? r : (int)a;
-    *c1 = b < 0 ? 0 : b > r ? r : (int)b;
+    float *lo = &b.min.x, *hi = &b.max.x;
+    for (int a = 0; a < 3; a++) {
+        double l = lo[a] - pad, h = hi[a] + pad;
+        lo[a] = (float)l;
+        hi[a] = (float)h;
+        if (lo[a] > l) lo[a] = nextafterf(lo[a], -INFINITY);
+        if (hi[a] < h) hi[a] = nextafterf(hi[a], INFINITY);
+    }
+    return b;
 }
 
 int inst_grid_build(const box3 *boxes, uint32_t n, double lambda, double pad, inst_grid *g,
                     accel_error *err)
 {
     memset(g, 0, sizeof *g);
-    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    box3 *grown = malloc((n ? n : 1) * sizeof *grown);
+    if (!grown) return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory for a grid");
+    box3 bounds = box3_empty();
     for (uint32_t i = 0; i < n; i++) {
-        if (box3_is_empty(boxes[i])) continue;
-        const float *bl = &boxes[i].min.x, *bh = &boxes[i].max.x;
-        for (int a = 0; a < 3; a++) lo[a] = fmin(lo[a], bl[a]), hi[a] = fmax(hi[a], bh[a]);
+        grown[i] = box3_is_empty(boxes[i]) ? boxes[i] : grow_box(boxes[i], pad);
+        if (!box3_is_empty(grown[i])) bounds = box3_union(bounds, grown[i]);
     }
-    if (!(lo[0] <= hi[0])) lo[0] = lo[1] = lo[2] = -1, hi[0] = hi[1] = hi[2] = 1;
-    double ext[3], big = 0.0;
-    for (int a = 0; a < 3; a++) {
-        lo[a] -= 2 * pad, hi[a] += 2 * pad;
-        big = fmax(big, hi[a] - lo[a]);
-    }
-    if (!(big > 0.0)) big = 1.0;
-    /* A flat axis gets a thin but nonzero extent, so cells have a size. */
-    for (int a = 0; a < 3; a++) {
-        double e = hi[a] - lo[a], want = 1e-6 * big + 1e-30;
-        if (e < want) lo[a] -= 0.5 * (want - e), hi[a] += 0.5 * (want - e);
-        ext[a] = hi[a] - lo[a];
-    }
-    /* Cubic cells: res_a = ext_a * cbrt(lambda n / volume), axes at least
-     * 1/1000 of the largest counted in the volume. */
-    double vol = 1.0;
-    for (int a = 0; a < 3; a++) vol *= fmax(ext[a], 1e-3 * big);
-    double k = cbrt(lambda * (n ? n : 1) / vol);
+    /* The grid box: the grown boxes with one more pad of margin. */
+    bounds = box3_is_empty(bounds) ? (box3){{-1.0f, -1.0f, -1.0f}, {1.0f, 1.0f, 1.0f}}
+                                   : grow_box(bounds, pad);
+    int res[3];
+    grid_resolution(bounds, n ? n : 1, lambda, res);
     uint64_t cells = 1;
     for (int a = 0; a < 3; a++) {
-        double r = ceil(ext[a] * k);
-        g->res[a] = r < 1 ? 1 : r > INST_GRID_MAX_RES ? INST_GRID_MAX_RES : (int)r;
-        cells *= (uint64_t)g->res[a];
+        res[a] = res[a] > INST_GRID_MAX_RES ? INST_GRID_MAX_RES : res[a];
+        cells *= (uint64_t)res[a];
     }
     while (cells > INST_GRID_MAX_CELLS) {
         cells = 1;
         for (int a = 0; a < 3; a++) {
-            g->res[a] = g->res[a] > 1 ? (g->res[a] + 1) / 2 : 1;
-            cells *= (uint64_t)g->res[a];
+            res[a] = res[a] > 1 ? (res[a] + 1) / 2 : 1;
+            cells *= (uint64_t)res[a];
         }
     }
-    for (int a = 0; a < 3; a++) {
-        g->lo[a] = lo[a];
-        g->cell[a] = ext[a] / g->res[a];
-        g->inv_cell[a] = g->res[a] / ext[a];
+    g->planes = malloc(grid_plane_count(res) * sizeof *g->planes);
+    if (!g->planes) {
+        free(grown);
+        return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory for a grid");
     }
-    g->cell_count = cells;
-    g->start = calloc((size_t)cells + 1, sizeof *g->start);
-    if (!g->start) return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory for a grid");
-    /* Two passes: count per cell, then fill. */
-    uint64_t refs = 0;
-    for (int pass = 0; pass < 2; pass++) {
-        for (uint32_t i = 0; i < n; i++) {
-            if (box3_is_empty(boxes[i])) continue;
-            const float *bl = &boxes[i].min.x, *bh = &boxes[i].max.x;
-            int c0[3], c1[3];
-            for (int a = 0; a < 3; a++) cell_range(g, a, bl[a] - pad, bh[a] + pad, &c0[a], &c1[a]);
-            for (int z = c0[2]; z <= c1[2]; z++)
-                for (int y = c0[1]; y <= c1[1]; y++)
-                    for (int x = c0[0]; x <= c1[0]; x++) {
-                        size_t cell = ((size_t)z * g->res[1] + y) * g->res[0] + x;
-                        if (pass == 0)
-                            g->start[cell + 1]++, refs++;
-                        else
-                            g->items[g->start[cell]++] = i;
-                    }
-            if (pass == 0 && refs > UINT32_MAX - 1) {
-                inst_grid_free(g);
-                return accel_fail(err, ACCEL_ERR_RANGE,
-                                  "instanced: a grid of more than 2^32 references");
-            }
-        }
-        if (pass == 0) {
-            for (uint64_t c = 0; c < cells; c++) g->start[c + 1] += g->start[c];
-            g->items = malloc((refs ? refs : 1) * sizeof *g->items);
-            if (!g->items) {
-                inst_grid_free(g);
-                return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory for a grid");
-            }
-        }
-    }
-    /* The fill moved every start to its cell's end: shift back. */
-    for (uint64_t c = cells; c > 0; c--) g->start[c] = g->start[c - 1];
-    g->start[0] = 0;
-    g->ref_count = refs;
-    return 0;
+    grid_frame_init(&g->frame, grid_frame_box(bounds), res, g->planes);
+    int rc = grid_cells_build_boxes(&g->frame, grown, n, &g->cells, err);
+    free(grown);
+    if (rc) inst_grid_free(g);
+    return rc;
 }
 
 void inst_grid_free(inst_grid *g)
 {
-    free(g->start);
-    free(g->items);
+    free(g->planes);
+    grid_cells_free(&g->cells);
     memset(g, 0, sizeof *g);
 }

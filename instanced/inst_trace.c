@@ -28,7 +28,6 @@
 #include "inst_impl.h"
 
 #define INST_STACK 128 /* > the deepest tree inst_struct.c builds (48 + 32) */
-#define INST_MAILBOX 8
 
 typedef struct {
     accel_ray_prep p;   /* world ray for the float kernels */
@@ -147,20 +146,16 @@ INLINE void walk_bvh(const inst_accel *a, const inst_item *it, const inst_bottom
     }
 }
 
-/* ---- grids: a DDA in double ---------------------------------------------------- */
+/* ---- grids: grid_core.h's DDA, the ray in double ----------------------------------- */
 
-typedef struct {
-    int cell[3], step[3];
-    double next[3], delta[3];
-    double t_end;
-} dda;
-
-/* Clips [t0, t1] to the grid's box and finds the first cell; 0 if missed. */
-INLINE int dda_start(const inst_grid *g, const double *o, const double *d, double t0, double t1,
-                     dda *w)
+/* Clips [t0, t1] of the ray (o, d), in double, to the grid's box and sets
+ * up the walk from there; 0 if the ray misses the box. */
+INLINE int grid_start(const inst_grid *g, const double *o, const double *d, double t0, double t1,
+                      grid_dda *w)
 {
+    const grid_frame *f = &g->frame;
     for (int k = 0; k < 3; k++) {
-        double lo = g->lo[k], hi = g->lo[k] + g->res[k] * g->cell[k];
+        double lo = f->lo[k], hi = f->hi[k];
         if (d[k] == 0.0) {
             if (o[k] < lo || o[k] > hi) return 0;
             continue;
@@ -171,79 +166,44 @@ INLINE int dda_start(const inst_grid *g, const double *o, const double *d, doubl
         t1 = b < t1 ? b : t1;
     }
     if (!(t0 <= t1)) return 0;
-    w->t_end = t1;
-    for (int k = 0; k < 3; k++) {
-        double p = o[k] + t0 * d[k];
-        double c = floor((p - g->lo[k]) * g->inv_cell[k]);
-        int r = g->res[k] - 1;
-        w->cell[k] = c < 0 ? 0 : c > r ? r : (int)c;
-        if (d[k] == 0.0) {
-            w->step[k] = 0, w->next[k] = INFINITY, w->delta[k] = INFINITY;
-        } else {
-            w->step[k] = d[k] > 0 ? 1 : -1;
-            double plane = g->lo[k] + (w->cell[k] + (d[k] > 0)) * g->cell[k];
-            w->next[k] = (plane - o[k]) / d[k];
-            w->delta[k] = g->cell[k] / fabs(d[k]);
-        }
-    }
+    grid_dda_init_d(w, f, o, d, t0);
     return 1;
 }
 
-INLINE double dda_exit(const dda *w)
-{
-    double t = w->next[0] < w->next[1] ? w->next[0] : w->next[1];
-    return t < w->next[2] ? t : w->next[2];
-}
+/* A bottom grid cell's triangle, decided in world space (grid_cell_visit's
+ * visitor): 0 once the ray is done. */
+typedef struct {
+    const inst_accel *a;
+    const inst_item *it;
+    const inst_bottom *b;
+    ray_state *r;
+    int naive, spheres;
+} bottom_cell;
 
-/* To the next cell; 0 when the ray leaves the grid or its range. */
-INLINE int dda_step(const inst_grid *g, dda *w)
+INLINE int bottom_prim(void *ctx, uint32_t q)
 {
-    int k = w->next[0] < w->next[1] ? (w->next[0] < w->next[2] ? 0 : 2)
-                                    : (w->next[1] < w->next[2] ? 1 : 2);
-    if (w->next[k] > w->t_end) return 0;
-    w->cell[k] += w->step[k];
-    if (w->cell[k] < 0 || w->cell[k] >= g->res[k]) return 0;
-    w->next[k] += w->delta[k];
-    return 1;
-}
-
-INLINE size_t dda_cell(const inst_grid *g, const dda *w)
-{
-    return ((size_t)w->cell[2] * g->res[1] + w->cell[1]) * g->res[0] + w->cell[0];
-}
-
-/* Seen recently: a direct-mapped cache of item ids (a miss only repeats work). */
-INLINE int mailbox_seen(uint32_t *mb, uint32_t id)
-{
-    uint32_t *slot = &mb[id & (INST_MAILBOX - 1)];
-    if (*slot == id) return 1;
-    *slot = id;
-    return 0;
+    const bottom_cell *v = ctx;
+    test_prim(v->a, v->it, v->b->mesh, q, v->r, v->naive, v->spheres);
+    return !v->r->done;
 }
 
 INLINE void walk_grid(const inst_accel *a, const inst_item *it, const inst_bottom *b, ray_state *r,
                       const double *o, const double *d, double t0, int naive, int spheres)
 {
     const inst_grid *g = &b->grid;
-    dda w;
-    if (!dda_start(g, o, d, t0, r->t, &w)) return;
-    uint32_t mb[INST_MAILBOX];
-    memset(mb, 0xFF, sizeof mb);
+    grid_dda w;
+    if (!grid_start(g, o, d, t0, r->t, &w)) return;
+    bottom_cell v = {a, it, b, r, naive, spheres};
+    uint32_t mb[GRID_MAILBOX];
+    grid_mailbox_clear(mb);
     do {
-        size_t cell = dda_cell(g, &w);
-        uint32_t begin = g->start[cell], end = g->start[cell + 1];
+        uint32_t begin = g->cells.offsets[w.cell], end = g->cells.offsets[w.cell + 1];
         r->bottom_steps++;
         r->empties += begin == end;
-        for (uint32_t i = begin; i < end; i++) {
-            if (mailbox_seen(mb, g->items[i])) {
-                r->skips++;
-                continue;
-            }
-            test_prim(a, it, b->mesh, g->items[i], r, naive, spheres);
-            if (r->done) return;
-        }
-        if (r->t <= dda_exit(&w)) return;
-    } while (dda_step(g, &w));
+        if (!grid_cell_visit(g->cells.refs + begin, end - begin, mb, &r->skips, bottom_prim, &v))
+            return;
+        if (r->t <= grid_dda_exit(&w)) return;
+    } while (grid_dda_step(&w));
 }
 
 /* The walks as real functions, flattened: everything they call (the
@@ -450,35 +410,44 @@ INLINE void top_bvh(const inst_accel *a, ray_state *r, int naive, int spheres)
     }
 }
 
+/* A top grid cell's instance (grid_cell_visit's visitor): walked when the
+ * ray reaches its world bounds; 0 once the ray is done. */
+typedef struct {
+    const inst_accel *a;
+    ray_state *r;
+    int naive, spheres;
+} top_cell;
+
+INLINE int top_item(void *ctx, uint32_t k)
+{
+    const top_cell *v = ctx;
+    ray_state *r = v->r;
+    float e;
+    r->boxes++;
+    const box3 *bb = &v->a->item_boxes[k];
+    if (!box3_slab(&bb->min.x, &bb->max.x, r->p.org, r->p.inv_dir, r->p.neg, r->p.t_near, r->t,
+                   &e))
+        return 1;
+    visit(v->a, k, r, v->naive, v->spheres);
+    return !r->done;
+}
+
 INLINE void top_grid(const inst_accel *a, ray_state *r, int naive, int spheres)
 {
     const inst_grid *g = &a->top_grid;
-    dda w;
-    if (!dda_start(g, r->o, r->d, r->p.t_near, r->t, &w)) return;
-    uint32_t mb[INST_MAILBOX];
-    memset(mb, 0xFF, sizeof mb);
+    grid_dda w;
+    if (!grid_start(g, r->o, r->d, r->p.t_near, r->t, &w)) return;
+    top_cell v = {a, r, naive, spheres};
+    uint32_t mb[GRID_MAILBOX];
+    grid_mailbox_clear(mb);
     do {
-        size_t cell = dda_cell(g, &w);
-        uint32_t begin = g->start[cell], end = g->start[cell + 1];
+        uint32_t begin = g->cells.offsets[w.cell], end = g->cells.offsets[w.cell + 1];
         r->top_steps++;
         r->empties += begin == end;
-        for (uint32_t i = begin; i < end; i++) {
-            uint32_t k = g->items[i];
-            if (mailbox_seen(mb, k)) {
-                r->skips++;
-                continue;
-            }
-            float e;
-            r->boxes++;
-            const box3 *bb = &a->item_boxes[k];
-            if (!box3_slab(&bb->min.x, &bb->max.x, r->p.org, r->p.inv_dir, r->p.neg, r->p.t_near,
-                           r->t, &e))
-                continue;
-            visit(a, k, r, naive, spheres);
-            if (r->done) return;
-        }
-        if (r->t <= dda_exit(&w)) return;
-    } while (dda_step(g, &w));
+        if (!grid_cell_visit(g->cells.refs + begin, end - begin, mb, &r->skips, top_item, &v))
+            return;
+        if (r->t <= grid_dda_exit(&w)) return;
+    } while (grid_dda_step(&w));
 }
 
 /* ---- batch kernels ------------------------------------------------------------- */

@@ -31,15 +31,11 @@
  * Every iteration moves at least one voxel forward along one axis, so a ray
  * visits at most nx+ny+nz+3 cells of the lattice (the counted runs' bound).
  *
- * Mailboxing as in the regular grid: 16 entries per ray, on the stack.
+ * Step 2 is grid_core.h's cell visit, the regular grid's: the same per-ray
+ * mailbox, on the stack.
  */
-#include <string.h>
-
 #include "core/variant.h"
 #include "igrid_impl.h"
-
-/* Entries of the per-ray mailbox (power of two). */
-#define IGRID_MAILBOX 16
 
 /* Distance at which the ray leaves box [lo, hi) on axis a (+inf on an axis
  * it does not move along). */
@@ -105,8 +101,8 @@ igrid_kernel(const igrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
         if (live) {
             grid_dda d;
             grid_dda_init(&d, f, &p, p.t_near);
-            uint32_t mail[IGRID_MAILBOX];
-            if (mailbox) memset(mail, 0xFF, sizeof mail);
+            uint32_t mail[GRID_MAILBOX];
+            if (mailbox) grid_mailbox_clear(mail);
             float t = p.t_far, u = 0.0f, v = 0.0f;
             for (;;) {
                 if (c) steps++;
@@ -117,22 +113,9 @@ igrid_kernel(const igrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
                 /* 2. Its primitives. */
                 uint32_t k = cell->begin, end = cell->end;
                 if (c && k == end) empty++;
-                for (; k < end; k++) {
-                    uint32_t prim = refs[k];
-                    if (mailbox) {
-                        uint32_t *slot = &mail[prim & (IGRID_MAILBOX - 1)];
-                        if (*slot == prim) {
-                            if (c) skips++;
-                            continue;
-                        }
-                        *slot = prim;
-                    }
-                    if (c) tests++;
-                    if (accel_prim_hit(s, prim, &p, &t, &u, &v, naive, spheres)) {
-                        h.t = t, h.u = u, h.v = v, h.prim = prim;
-                        if (occ) goto done;
-                    }
-                }
+                if (grid_cell_hit(s, refs + k, end - k, &p, &h, &t, &u, &v, mail, &tests, &skips,
+                                  c, occ != NULL, naive, spheres, mailbox))
+                    goto done;
                 /* 3. Where the ray leaves the exit box. */
                 double t0 = exit_t(&d, f, 0, cell), t1 = exit_t(&d, f, 1, cell);
                 double t2 = exit_t(&d, f, 2, cell);

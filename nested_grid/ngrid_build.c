@@ -106,6 +106,26 @@ static int is_child_cell(const ngrid_builder *b, const ngrid_bgrid *g, uint32_t 
     return *next < g->first_child + g->child_count && b->grids[*next]->parent_cell == c;
 }
 
+/* The most cells (all levels) one ray can visit: every cell of a grid
+ * crossed, each one possibly holding the most expensive child. Children
+ * come after their parents. */
+static int step_bound(const ngrid_builder *b, uint64_t *out, accel_error *err)
+{
+    uint64_t *bound = calloc(b->grid_count, sizeof *bound);
+    if (!bound) return accel_fail(err, ACCEL_ERR_NOMEM, "nested_grid: out of memory");
+    for (uint32_t i = b->grid_count; i-- > 0;) {
+        const ngrid_bgrid *q = b->grids[i];
+        uint64_t worst = 0;
+        for (uint32_t k = 0; k < q->child_count; k++)
+            if (bound[q->first_child + k] > worst) worst = bound[q->first_child + k];
+        uint64_t walk = (uint64_t)q->frame.res[0] + q->frame.res[1] + q->frame.res[2] + 3;
+        bound[i] = worst >= UINT64_MAX / 2 / walk ? UINT64_MAX / 2 : walk * (1 + worst);
+    }
+    *out = bound[0];
+    free(bound);
+    return ACCEL_OK;
+}
+
 static int flatten(const ngrid_builder *b, ngrid_accel *g, accel_error *err)
 {
     uint64_t cells = 0, list_len = 1, refs = 0, leaves = 0;
@@ -190,21 +210,7 @@ static int flatten(const ngrid_builder *b, ngrid_accel *g, accel_error *err)
         cell_at += q->cells.cell_count;
         if (q->level + 1 > g->levels) g->levels = q->level + 1;
     }
-    /* Step bound: every cell of a grid crossed, each one possibly holding
-     * the most expensive child. Children come after their parents. */
-    uint64_t *bound = calloc(b->grid_count, sizeof *bound);
-    if (!bound) return accel_fail(err, ACCEL_ERR_NOMEM, "nested_grid: out of memory");
-    for (uint32_t i = b->grid_count; i-- > 0;) {
-        const ngrid_bgrid *q = b->grids[i];
-        uint64_t worst = 0;
-        for (uint32_t k = 0; k < q->child_count; k++)
-            if (bound[q->first_child + k] > worst) worst = bound[q->first_child + k];
-        uint64_t walk = (uint64_t)q->frame.res[0] + q->frame.res[1] + q->frame.res[2] + 3;
-        bound[i] = worst >= UINT64_MAX / 2 / walk ? UINT64_MAX / 2 : walk * (1 + worst);
-    }
-    g->step_bound = bound[0];
-    free(bound);
-    return ACCEL_OK;
+    return step_bound(b, &g->step_bound, err);
 }
 
 static void builder_free(ngrid_builder *b)
@@ -214,6 +220,36 @@ static void builder_free(ngrid_builder *b)
 }
 
 /* ---- the kind -------------------------------------------------------------------- */
+
+/* The top grid over box at resolution res, then level by level the
+ * sub-grids the builder's rules give (every grid pushed onto b). */
+static int build_grids(ngrid_builder *b, box3 box, const int res[3], int threads,
+                       accel_error *err)
+{
+    const accel_scene *scene = b->scene;
+    ngrid_bgrid *top;
+    int rc = ngrid_bgrid_new(box, res, 0, &top, err);
+    if (rc) return rc;
+    rc = grid_cells_build(&top->frame, scene, scene->live, scene->live_count, b->mode, threads,
+                          b->max_bytes, &top->cells, err);
+    if (rc) {
+        ngrid_bgrid_free(top);
+        return ngrid_wrap_error(err, rc, "top level");
+    }
+    rc = ngrid_push_grid(b, top, err);
+    if (rc) {
+        ngrid_bgrid_free(top);
+        return rc;
+    }
+    /* Level by level: the grids of level L are grids[begin, end). */
+    uint32_t begin = 0, end = 1;
+    for (int level = 0; !rc && level + 1 < b->depth && begin < end; level++) {
+        rc = ngrid_build_level(b, begin, end, threads, err);
+        begin = end;
+        end = b->grid_count;
+    }
+    return rc;
+}
 
 /* Builds over the primitive store's scene (every primitive live, local ids). */
 static int build_over(const accel_scene *scene, const accel_params *params, int threads,
@@ -265,27 +301,7 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
     rc = grid_cell_count("nested_grid", res, b.max_bytes, &cells, err);
     if (rc) return rc;
 
-    ngrid_bgrid *top;
-    rc = ngrid_bgrid_new(box, res, 0, &top, err);
-    if (rc) return rc;
-    rc = grid_cells_build(&top->frame, scene, scene->live, scene->live_count, b.mode, threads,
-                          b.max_bytes, &top->cells, err);
-    if (rc) {
-        ngrid_bgrid_free(top);
-        return ngrid_wrap_error(err, rc, "top level");
-    }
-    rc = ngrid_push_grid(&b, top, err);
-    if (rc) {
-        ngrid_bgrid_free(top);
-        return rc;
-    }
-    /* Level by level: the grids of level L are grids[begin, end). */
-    uint32_t begin = 0, end = 1;
-    for (int level = 0; !rc && level + 1 < b.depth && begin < end; level++) {
-        rc = ngrid_build_level(&b, begin, end, threads, err);
-        begin = end;
-        end = b.grid_count;
-    }
+    rc = build_grids(&b, box, res, threads, err);
 
     ngrid_accel *g = NULL;
     if (!rc) {
@@ -351,6 +367,28 @@ void ngrid_get_view(const void *accel, ngrid_view *v)
     v->list_len = g->list_len;
     v->ref_count = g->ref_count;
     v->levels = g->levels;
+}
+
+/* The batch entries: the packet walk (ngrid_packet.c) or the single-ray
+ * walk of the layout (ngrid_trace.c, ngrid_compact.c). */
+static void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
+                            size_t count, accel_counters *counters)
+{
+    const ngrid_accel *g = accel;
+    if (g->traverse == NGRID_TRAVERSE_PACKET)
+        ngrid_packet_intersect(g, rays, hits, count, counters);
+    else
+        ngrid_single_intersect(g, rays, hits, count, counters);
+}
+
+static void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded,
+                           size_t count, accel_counters *counters)
+{
+    const ngrid_accel *g = accel;
+    if (g->traverse == NGRID_TRAVERSE_PACKET)
+        ngrid_packet_occluded(g, rays, occluded, count, counters);
+    else
+        ngrid_single_occluded(g, rays, occluded, count, counters);
 }
 
 /* The conformance suite runs each: defaults, the cost model, a single

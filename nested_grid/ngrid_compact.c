@@ -159,38 +159,6 @@ int ngrid_compact_build(ngrid_accel *g, double max_bytes, accel_error *err)
 /* ---- the walk ---------------------------------------------------------------------- */
 
 /*
- * One leaf cell's primitives: ids[0..n), each at most once per ray with
- * the mailbox, the nearest hit kept in *h (t, u, v: the running values).
- * Returns 1 when an any-hit query (occ) can stop. The word layout's walk
- * (ngrid_trace.c) keeps the same loop inline: through this helper it ran
- * 1% more instructions on bunny.off (callgrind), so it was left as it was.
- */
-static inline __attribute__((always_inline)) int
-ngrid_test_leaf(const accel_scene *s, const uint32_t *ids, uint32_t n, const accel_ray_prep *p,
-                accel_hit *h, float *t, float *u, float *v, uint32_t *box, uint32_t mask,
-                uint32_t *tests, uint32_t *skips, const accel_counters *c, int occ, int naive,
-                int spheres, int mailbox)
-{
-    for (uint32_t k = 0; k < n; k++) {
-        uint32_t prim = ids[k];
-        if (mailbox) {
-            uint32_t *slot = &box[prim & mask];
-            if (*slot == prim) {
-                if (c) (*skips)++;
-                continue;
-            }
-            *slot = prim;
-        }
-        if (c) (*tests)++;
-        if (accel_prim_hit(s, prim, p, t, u, v, naive, spheres)) {
-            h->t = *t, h->u = *u, h->v = *v, h->prim = prim;
-            if (occ) return 1;
-        }
-    }
-    return 0;
-}
-
-/*
  * Sub-grid frames of the batch's recent descents: consecutive rays of a
  * batch (8x8 tiles of primary rays) cross the same top cells, and remaking
  * a frame (grid_frame_init fills its planes, one division each) was 40% of
@@ -229,8 +197,8 @@ ncompact_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, ui
         if (live) {
             grid_dda d;
             double t_cell = grid_dda_init(&d, top, &p, p.t_near);
-            uint32_t box[NGRID_MAILBOX];
-            if (mailbox) memset(box, 0xFF, sizeof box); /* ACCEL_MISS: no primitive */
+            uint32_t box[GRID_MAILBOX];
+            if (mailbox) grid_mailbox_clear(box);
             float t = p.t_far, u = 0.0f, v = 0.0f;
             for (;;) {
                 if (c) steps++;
@@ -240,9 +208,8 @@ ncompact_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, ui
                 if (tc.res == 0) {
                     uint32_t b = k->leaf[tc.first], n = k->leaf[tc.first + 1] - b;
                     if (c && n == 0) empty++;
-                    if (ngrid_test_leaf(s, k->refs + b, n, &p, &h, &t, &u, &v, box,
-                                        NGRID_MAILBOX - 1, &tests, &skips, c, occ != NULL, naive,
-                                        spheres, mailbox))
+                    if (grid_cell_hit(s, k->refs + b, n, &p, &h, &t, &u, &v, box, &tests, &skips,
+                                      c, occ != NULL, naive, spheres, mailbox))
                         goto done;
                     t_exit = grid_dda_exit(&d);
                     if (t_exit >= t) break;
@@ -278,9 +245,8 @@ ncompact_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, ui
                         if (ACCEL_STEP_BOUND_BROKEN(c, steps, g->step_bound)) goto done;
                         uint32_t b = leaf[sd.cell], n = leaf[sd.cell + 1] - b;
                         if (c && n == 0) empty++;
-                        if (ngrid_test_leaf(s, k->refs + b, n, &p, &h, &t, &u, &v, box,
-                                            NGRID_MAILBOX - 1, &tests, &skips, c, occ != NULL,
-                                            naive, spheres, mailbox))
+                        if (grid_cell_hit(s, k->refs + b, n, &p, &h, &t, &u, &v, box, &tests,
+                                          &skips, c, occ != NULL, naive, spheres, mailbox))
                             goto done;
                         t_exit = grid_dda_exit(&sd);
                         if (t_exit >= t) goto done;

@@ -169,9 +169,6 @@ int ngrid_wrap_error(accel_error *err, int rc, const char *context);
 int ngrid_build_level(ngrid_builder *b, uint32_t begin, uint32_t end, int threads,
                       accel_error *err);
 
-/* Entries of the per-ray mailbox of both layouts' walks (power of two). */
-#define NGRID_MAILBOX 16
-
 /* Turns a flattened two-level g into the compact layout (g->compact) and
  * frees the word layout's arrays (ngrid_compact.c). */
 int ngrid_compact_build(ngrid_accel *g, double max_bytes, accel_error *err);
@@ -181,14 +178,9 @@ size_t ngrid_compact_bytes(const ngrid_compact *k);
 /* Traversal modes (parameter traverse=). */
 enum { NGRID_TRAVERSE_SINGLE = 0, NGRID_TRAVERSE_PACKET = 1 };
 
-/* Traversal entry points (ngrid_trace.c): the kind's, which pick the
- * packet walk (traverse=packet) or the single-ray walk of the layout. */
-void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
-                     accel_counters *counters);
-void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
-                    accel_counters *counters);
 /* The single-ray walks of either layout (ngrid_trace.c; the compact
- * layout's in ngrid_compact.c). */
+ * layout's in ngrid_compact.c). The kind's entries (ngrid_build.c) pick
+ * these or the packet walk (traverse=packet). */
 void ngrid_single_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
                             size_t count, accel_counters *counters);
 void ngrid_single_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded,

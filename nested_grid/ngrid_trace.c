@@ -18,8 +18,8 @@
  * beyond the current cell, and the walk stops once the current cell's exit
  * distance reaches that hit. Every later cell, at any level, starts at or
  * beyond that exit, so the hit kept is the nearest one, and a primitive
- * tested in one cell never needs testing again: the per-ray mailbox (a
- * 16-entry direct-mapped cache of ids, on the stack) is shared by all levels.
+ * tested in one cell never needs testing again: the per-ray mailbox
+ * (grid_core.h's cell visit, on the stack) is shared by all levels.
  *
  * Kernels are written once (ngrid_kernel) and compiled into one variant
  * table per query (core/variant.h): spheres, naive triangles and mailbox
@@ -27,8 +27,6 @@
  * no step-bound check; counted runs check the build's bound on the cells one
  * ray can visit over all levels.
  */
-#include <string.h>
-
 #include "core/variant.h"
 #include "ngrid_impl.h"
 
@@ -64,8 +62,8 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
             int level = 0;
             double t_cell = grid_dda_init(&d, top, &p, p.t_near);
             const uint32_t *words = g->cells + nodes[0].cell_base;
-            uint32_t box[NGRID_MAILBOX];
-            if (mailbox) memset(box, 0xFF, sizeof box); /* ACCEL_MISS: no primitive */
+            uint32_t box[GRID_MAILBOX];
+            if (mailbox) grid_mailbox_clear(box);
             float t = p.t_far, u = 0.0f, v = 0.0f;
             /* Walk the ray through the cells, descending into sub-grids. */
             for (;;) {
@@ -88,22 +86,9 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
                 const uint32_t *list = lists + w;
                 uint32_t n = list[0];
                 if (c && n == 0) empty++;
-                for (uint32_t k = 1; k <= n; k++) {
-                    uint32_t prim = list[k];
-                    if (mailbox) {
-                        uint32_t *slot = &box[prim & (NGRID_MAILBOX - 1)];
-                        if (*slot == prim) {
-                            if (c) skips++;
-                            continue;
-                        }
-                        *slot = prim;
-                    }
-                    if (c) tests++;
-                    if (accel_prim_hit(s, prim, &p, &t, &u, &v, naive, spheres)) {
-                        h.t = t, h.u = u, h.v = v, h.prim = prim;
-                        if (occ) goto done;
-                    }
-                }
+                if (grid_cell_hit(s, list + 1, n, &p, &h, &t, &u, &v, box, &tests, &skips, c,
+                                  occ != NULL, naive, spheres, mailbox))
+                    goto done;
                 /* A hit (or the ray's end) before this cell's exit: nothing
                  * in a later cell, at any level, can be nearer. */
                 double t_exit = grid_dda_exit(&d);
@@ -157,33 +142,13 @@ void ngrid_single_occluded(const void *accel, const accel_ray *rays, uint8_t *oc
     accel_run_kernel(&ngrid_occ_table, accel, rays, occluded, count, counters, ngrid_flags(accel));
 }
 
-void ngrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
-                     accel_counters *counters)
-{
-    const ngrid_accel *g = accel;
-    if (g->traverse == NGRID_TRAVERSE_PACKET)
-        ngrid_packet_intersect(g, rays, hits, count, counters);
-    else
-        ngrid_single_intersect(g, rays, hits, count, counters);
-}
-
-void ngrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
-                    accel_counters *counters)
-{
-    const ngrid_accel *g = accel;
-    if (g->traverse == NGRID_TRAVERSE_PACKET)
-        ngrid_packet_occluded(g, rays, occluded, count, counters);
-    else
-        ngrid_single_occluded(g, rays, occluded, count, counters);
-}
-
 /* ---- accel.h's conservative walk --------------------------------------------
  * grid_core.h's fat walk at every level: the top grid's cells whose boxes
  * grown by the pad the ray reaches, and in a cell holding a sub-grid the
  * same walk of the sub-grid over the piece of the ray that reached the
  * cell (a sub-grid's box is its parent cell's, so a primitive within the
  * pad of the ray lies in a reached cell at every level). The primitives of
- * every reached list go to the visitor, through the kernel's mailbox. */
+ * every reached list go to the visitor, through the cell visit's mailbox. */
 typedef struct {
     const ngrid_accel *g;
     const accel_ray_prep *p;
@@ -192,8 +157,16 @@ typedef struct {
     accel_walk_visit visit;
     void *ctx;
     uint32_t *steps;
-    uint32_t mailbox[NGRID_MAILBOX];
+    uint32_t mailbox[GRID_MAILBOX];
 } ngrid_walker;
+
+/* One primitive (a local id) to the visitor; 0 once the walk is over. */
+static inline __attribute__((always_inline)) int walk_prim(void *ctx, uint32_t prim)
+{
+    ngrid_walker *w = ctx;
+    w->t_max = w->visit(w->ctx, w->g->store.scene_id[prim], w->t_max);
+    return !(w->t_max < w->p->t_near);
+}
 
 static int walk_cell(void *ctx, uint32_t cell, double ta, double tb)
 {
@@ -208,14 +181,8 @@ static int walk_cell(void *ctx, uint32_t cell, double ta, double tb)
         return go;
     }
     const uint32_t *list = w->g->lists + word;
-    for (uint32_t k = 1; k <= list[0]; k++) {
-        uint32_t prim = list[k], *slot = &w->mailbox[prim & (NGRID_MAILBOX - 1)];
-        if (*slot == prim) continue;
-        *slot = prim;
-        w->t_max = w->visit(w->ctx, w->g->store.scene_id[prim], w->t_max);
-        if (w->t_max < w->p->t_near) return 0;
-    }
-    return 1;
+    uint32_t skips = 0; /* not reported: the walk counts cells only */
+    return grid_cell_visit(list + 1, list[0], w->mailbox, &skips, walk_prim, w);
 }
 
 int ngrid_walk(const void *accel, const accel_ray *ray, float pad, accel_walk_visit visit,
@@ -228,7 +195,7 @@ int ngrid_walk(const void *accel, const accel_ray *ray, float pad, accel_walk_vi
     accel_ray_prep p;
     if (!visit || g->ref_count == 0 || !accel_prep_ray(ray, &p)) return 0;
     ngrid_walker w = {g, &p, &g->nodes[0], pad, p.t_far, visit, ctx, steps, {0}};
-    memset(w.mailbox, 0xFF, sizeof w.mailbox);
+    grid_mailbox_clear(w.mailbox);
     grid_fat_walk(&g->nodes[0].frame, &p, p.t_near, p.t_far, pad, &w.t_max, walk_cell, &w);
     return 0;
 }

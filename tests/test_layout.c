@@ -9,7 +9,8 @@
  *  - a backend (every top-level folder the build treats as one, read from
  *    sources.mk) includes only accel.h, accel/core/ headers, its own
  *    folder's headers, and the two documented cross-backend APIs,
- *    grid/grid_core.h (the grid walk the nested grid reuses) and
+ *    grid/grid_core.h (the grid walk and cell visit of the grid family:
+ *    nested, irregular and instanced grids reuse it) and
  *    grid/grid_packet_walk.h (the coherent packet walk its levels reuse);
  *  - sources.mk's ACCEL_LAYERS names these layers, and accel/ has no other
  *    folder;
