@@ -267,8 +267,10 @@ static inline uint32_t group_range(const packet *pk, uint32_t g, uint32_t first)
     return (uint32_t)((from & to & pk->alive) >> (GROUP * g)) & 0xFFu;
 }
 
+#if !BVH_SSE /* the scalar cull below; the SSE one takes four lanes at once */
 static inline float min4(float a, float b, float c, float d) { return minf(minf(a, b), minf(c, d)); }
 static inline float max4(float a, float b, float c, float d) { return maxf(maxf(a, b), maxf(c, d)); }
+#endif
 
 /* 1 when no live ray of the packet can hit the node's box. Corner products
  * bound fl((plane - o) * r) over the box of (o, r): the product is monotone

@@ -1,29 +1,29 @@
 /*
- * wide_tables.h - one width's kernels and kernel tables (core/variant.h).
+ * tables.h - one width's kernels and kernel tables (core/variant.h).
  * A kernel body (C only), included once per translation unit with WIDE_NW
- * defined: by wide_trace.c (4) and wide_trace8.c (8), two files so that a
+ * defined: by trace4.c (4) and trace8.c (8), two files so that a
  * 2-core build compiles the two widths in parallel.
  *
- * It instantiates the templates wide_leaf.h (blocks of 4 and 8),
- * wide_kernel.h and wide_packet.h (width WIDE_NW, blocks of 4 and 8) and
+ * It instantiates the templates leaf.h (blocks of 4 and 8),
+ * kernel.h and packet.h (width WIDE_NW, blocks of 4 and 8) and
  * defines wide_tables[row][any hit][block 8], the rows being single rays,
  * packets, order=branchy and quant=1 (width 8 only: width 4 repeats the
  * branchy row there, never selected).
  */
 #define WIDE_LB 4
-#include "wide_leaf.h"
+#include "leaf.h"
 #undef WIDE_LB
 #define WIDE_LB 8
-#include "wide_leaf.h"
+#include "leaf.h"
 #undef WIDE_LB
 
 #define WIDE_LB 4
-#include "wide_kernel.h"
-#include "wide_packet.h"
+#include "kernel.h"
+#include "packet.h"
 #undef WIDE_LB
 #define WIDE_LB 8
-#include "wide_kernel.h"
-#include "wide_packet.h"
+#include "kernel.h"
+#include "packet.h"
 #undef WIDE_LB
 
 #define WT_CAT_(a, n, b) a##_##n##_##b
