@@ -3,7 +3,7 @@
  * points and memory accounting.
  *
  * The kind's table is the only thing the rest of the project sees
- * (registry.c); the build driver is bvh_build.c, builders live in
+ * (registry.c); the build driver is build_driver.c, builders live in
  * build_*.c, traversal in bvh_single.c and bvh_packet.c, saving and
  * loading in bvh_io.c.
  */
@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "build_common.h"
+#include "split_common.h"
 #include "bvh.h"
 #include "wide/wide.h"
 

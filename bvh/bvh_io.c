@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "build_common.h"
+#include "split_common.h"
 #include "bvh.h"
 
 /* ---- saving and loading -------------------------------------------------- */

@@ -13,13 +13,13 @@
  *     the SoA leaf blocks, each lane from the scene id the lane holds
  *     (wide/refit.c).
  * The boxes are then what the build computes: a leaf's box is the union of
- * bvh_prim_box of its primitives (the references' boxes of bvh_build.c's
- * make_refs, grown as build_common.h explains), an interior box the union of its
+ * bvh_prim_box of its primitives (the references' boxes of build_driver.c's
+ * make_refs, grown as split_common.h explains), an interior box the union of its
  * children's. A spatial-split tree (build=sbvh) clipped its references to
  * split planes; refit boxes hold whole primitives, so they are larger
  * (still conservative, the tree only gets slower).
  *
- * Nodes come before their children (bvh_build.c's compact_nodes; the wide
+ * Nodes come before their children (build_driver.c's compact_nodes; the wide
  * tree likewise), so one backward pass over the node pool sees every child
  * before its parent. The kind's path (bvh_node.h) picks the binary refit
  * here or the wide one.
@@ -33,7 +33,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "build_common.h"
+#include "split_common.h"
 #include "bvh.h"
 
 /* Marks the scene ids a tree holds (mark[id] = 1); 0 when one is not an id

@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bvh/build_common.h"
+#include "bvh/split_common.h"
 #include "bvh/bvh.h"
 #include "bvh/wide/node.h"
 #include "bvh/wide/simd.h"

@@ -134,7 +134,7 @@ typedef struct {
  * documents needing (wide/node.h: the binary node and the kernels' shared
  * pieces; collapse.c and refit.c: the builders' primitive boxes and
  * allocation helpers). */
-static const char *const sub_parent_headers[] = {"bvh/bvh_node.h", "bvh/build_common.h", NULL};
+static const char *const sub_parent_headers[] = {"bvh/bvh_node.h", "bvh/split_common.h", NULL};
 
 /* Is target "sub/sub.h" or "<folder>/sub/sub.h" for a subfolder sub of
  * folder: the one header a parent's file may include from a subfolder? */

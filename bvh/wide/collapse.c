@@ -35,7 +35,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bvh/build_common.h"
+#include "bvh/split_common.h"
 #include "node.h"
 
 #if defined(__AVX__) && !defined(BVH_NO_SIMD)

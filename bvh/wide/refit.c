@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bvh/build_common.h"
+#include "bvh/split_common.h"
 #include "node.h"
 
 int bvh_wide_mark_ids(const bvh_wide *w, uint8_t *mark, size_t total)

@@ -63,7 +63,7 @@ typedef struct {
  * stats->sah_cost with the wide tree's SAH cost under node cost ct and
  * primitive cost ci (the binary tree's formula over the wide nodes and
  * leaves). The binary tree is best built with leaf_below = block
- * (build_common.h): a subtree that fits one block becomes one leaf. */
+ * (split_common.h): a subtree that fits one block becomes one leaf. */
 int bvh_wide_build(struct bvh *b, bvh_wide **out, int width, int block, int order, int quant,
                    const bvh_wide_collapse *cc, int threads, double ct, double ci, accel_build_stats *stats, accel_error *err);
 /* Bytes held by the wide tree (nodes, blocks, the struct itself). */

@@ -1,5 +1,5 @@
 /*
- * bvh_build.c - the build driver of the `bvh` kind: one reference per live
+ * build_driver.c - the build driver of the `bvh` kind: one reference per live
  * primitive, the chosen builder (build_binned.c, build_sah.c, build_mid.c,
  * build_sbvh.c, which may duplicate references),
  * then the final pass that lays the nodes out depth-first, copies the
@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "build_common.h"
+#include "split_common.h"
 
 /* ---- references, final layout, statistics --------------------------------- */
 
@@ -149,7 +149,7 @@ static int build_over(const accel_scene *scene, const uint32_t *scene_id, const 
                           "max_mb = %.1f MiB (raise max_mb%s)",
                           peak / 1048576.0, live, slots, opts->max_mb,
                           opts->builder == BVH_BUILD_SBVH ? " or lower split_budget" : "");
-    bvh_build ctx;
+    bvh_build_ctx ctx;
     memset(&ctx, 0, sizeof ctx);
     ctx.scene = scene;
     ctx.opts = *opts;
