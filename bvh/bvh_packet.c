@@ -316,6 +316,11 @@ static inline int packet_misses(const packet *pk, const bvh_node *node)
     return lo > hi + fabsf(hi) * ACCEL_SLAB_PAD;
 }
 
+/* trace_packet stays one function of about 140 lines on purpose: it is the
+ * forced-inline body of every packet kernel copy, and its node loop keeps
+ * the packet's live mask, stack and first-active index in registers across
+ * the box test, the leaf loop and the frustum cull; split into calls, a
+ * copy's code (and speed) would depend on what the compiler inlines. */
 static inline __attribute__((always_inline)) void
 trace_packet(const bvh *b, packet *pk, accel_counters *c, uint32_t *ray_steps,
              uint32_t *ray_prims, int naive, int has_spheres, int any_hit, int frustum)

@@ -433,6 +433,27 @@ static int collapse_within(const bvh *b, const bvh_wide *w, double max_mb, doubl
                       more / 1048576.0, max_mb);
 }
 
+/* Every binary node's run of primitive slots (sub_first, sub_count) and
+ * half area; counts the interior nodes and leaves. Children come after
+ * their parent, so one backward pass sees them first. Node 1 is padding. */
+static void subtree_table(const bvh_node *bin, uint32_t nc, uint32_t *sub_first, uint32_t *sub_count,
+                          float *area, uint32_t *interior, uint32_t *leaves)
+{
+    for (uint32_t i = nc; i-- > 0;) {
+        area[i] = (float)bvh_half_area(bvh_node_box(&bin[i]));
+        if (i == 1 && nc > 1) {
+            sub_first[i] = sub_count[i] = 0;
+        } else if (bin[i].count) {
+            sub_first[i] = bin[i].left_first, sub_count[i] = bin[i].count;
+            (*leaves)++;
+        } else {
+            uint32_t l = bin[i].left_first;
+            sub_first[i] = sub_first[l], sub_count[i] = sub_count[l] + sub_count[l + 1];
+            (*interior)++;
+        }
+    }
+}
+
 /* Collapses b's binary tree; fills w (nodes, blocks, counts, root). */
 static int collapse_tree(const bvh *b, bvh_wide *w, const bvh_wide_collapse *cc, int threads, double ct,
                          double ci, double *sah, accel_error *err)
@@ -443,22 +464,8 @@ static int collapse_tree(const bvh *b, bvh_wide *w, const bvh_wide_collapse *cc,
     if (!sub) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for the collapse");
     uint32_t *sub_first = sub, *sub_count = sub + nc;
     float *area = (float *)(sub + 2 * (size_t)nc);
-    /* Children come after their parent, so one backward pass gives every
-     * subtree's run of slots. Node 1 is padding. */
     uint32_t interior = 0, leaves = 0;
-    for (uint32_t i = nc; i-- > 0;) {
-        area[i] = (float)bvh_half_area(bvh_node_box(&bin[i]));
-        if (i == 1 && nc > 1) {
-            sub_first[i] = sub_count[i] = 0;
-        } else if (bin[i].count) {
-            sub_first[i] = bin[i].left_first, sub_count[i] = bin[i].count;
-            leaves++;
-        } else {
-            uint32_t l = bin[i].left_first;
-            sub_first[i] = sub_first[l], sub_count[i] = sub_count[l] + sub_count[l + 1];
-            interior++;
-        }
-    }
+    subtree_table(bin, nc, sub_first, sub_count, area, &interior, &leaves);
     /* The scratch, known before it is taken: the subtree table, the DP's
      * table, the wide nodes' upper bound and the leaf list. */
     const double scratch = (double)nc * 3 * sizeof(uint32_t) +

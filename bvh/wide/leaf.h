@@ -224,6 +224,13 @@ WIDE_INLINE int WL(aff_cull_rect)(const WL(wide_leaf_aff) *f, float cx, float cy
  * *t]) updates *t, *u, *v, *id and returns 1; with any_hit it returns 1 at
  * the first hit found. The watertight test (leaf_block takes tri=naive
  * apart); has_spheres is a constant in every copy.
+ *
+ * About 130 lines on purpose: the steps of the watertight test (shear,
+ * edge functions and their error bounds, det and T with theirs, the
+ * nearest sure hit, the uncertain lanes in double, the spheres) share
+ * their vector masks, and this one forced-inline body is what every
+ * kernel copy's leaf loop runs; split, a copy's code would depend on
+ * what the compiler chooses to inline.
  */
 static inline __attribute__((always_inline)) int
 WL(leaf_block_rel)(const LBLOCK *blk, const WL(wide_leaf_rel) *q, const WL(wide_leaf_ray) *r,
