@@ -88,6 +88,27 @@ static_assert(offsetof(bvh_node, count) == 28, "count closes the node");
 const bvh_node *bvh_nodes(const void *accel, uint32_t *node_count);
 const uint32_t *bvh_prim_ids(const void *accel, uint32_t *prim_count);
 
+/* A binary SAH tree over n boxes, for a kind that builds its own two-level
+ * structure (the top level over instance boxes). boxes holds 6 floats per
+ * box: lo x, y, z, then hi x, y, z, finite with lo <= hi (else
+ * ACCEL_ERR_SPEC). The tree is the default builder's (binned SAH, 16 bins,
+ * 3 axes, ct = ci = 1) with leaves of at most max_leaf boxes (1..256); the
+ * boxes are used as given (no pad). nodes is the lecture's pool of 32-byte
+ * nodes as above (node 0 the root, node 1 padding; BVH_NODE_ALIGN-aligned;
+ * node_count used), and a leaf's count boxes are order[left_first ..
+ * left_first + count - 1], indices into boxes, each index in exactly one
+ * leaf. The same tree for any thread count. An empty set gives no nodes. */
+typedef struct {
+    bvh_node *nodes;     /* node_count used, 0 for n = 0 */
+    uint32_t node_count;
+    uint32_t *order;     /* count box indices in leaf order */
+    uint32_t count;      /* n */
+    int depth;           /* levels (a lone leaf is 1) */
+} bvh_box_tree;
+int bvh_build_boxes(const float *boxes, uint32_t n, int max_leaf, int threads, bvh_box_tree *out,
+                    accel_error *err);
+void bvh_box_tree_free(bvh_box_tree *t);
+
 /* SAH cost of a node pool, normalized by the root's area (half areas):
  *   sum over interior nodes of ct * A(n) / A(root)
  * + sum over leaves of ci * count(n) * A(n) / A(root).
