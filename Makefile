@@ -108,7 +108,7 @@ bench: all
 # Tests under ASan + UBSan in a separate build tree, with the same
 # instruction set as the product (ARCH), so that the SIMD kernels it runs
 # are the ones checked; the wide kernels' helpers not forced inline
-# (bvh/wide_simd.h: minutes of compile time otherwise).
+# (bvh/wide/simd.h: minutes of compile time otherwise).
 sanitize:
 	$(MAKE) BUILD=build-san BIN=bin-san OPT=-O1 \
 	  CFLAGS="-O1 -g $(ARCH) -DWIDE_NO_FORCE_INLINE -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined" \

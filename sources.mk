@@ -9,6 +9,8 @@ NOT_BACKENDS := accel experiments tests tools lab build build-san bin bin-san bu
 BACKENDS     := $(filter-out $(NOT_BACKENDS),$(patsubst $(ROOT)%/,%,$(sort $(dir $(wildcard $(ROOT)*/*.c)))))
 ACCEL_LAYERS := core scene rays measure image cli
 CORE_SRC     := $(foreach l,$(ACCEL_LAYERS),$(wildcard $(ROOT)accel/$(l)/*.c))
-BACKEND_SRC  := $(foreach d,$(BACKENDS),$(wildcard $(ROOT)$(d)/*.c))
+# A backend's sources are its folder's .c files and those of its subfolders
+# (bvh/wide/), one level down.
+BACKEND_SRC  := $(foreach d,$(BACKENDS),$(wildcard $(ROOT)$(d)/*.c $(ROOT)$(d)/*/*.c))
 LIB_SRC      := $(CORE_SRC) $(BACKEND_SRC)
 LOADER_SRC   := $(wildcard $(ROOT)accel/scene/load_*.c)

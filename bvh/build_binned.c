@@ -21,7 +21,7 @@
 #include <string.h>
 
 #include "build_binned_view.h"
-#include "build_common.h"
+#include "split_common.h"
 
 #define BINS_MAX 256
 /* Tasks of at least 2 * BIN_CHUNK references are binned by all threads. */
@@ -163,7 +163,7 @@ static void bin_chunk(void *p, size_t begin, size_t end, int thread)
 
 /* Sets up the axes worth binning: those with a positive, finite centroid
  * extent and a finite bin scale. */
-static void plan_bins(const bvh_build *ctx, const bvh_task *t, bin_plan *p)
+static void plan_bins(const bvh_build_ctx *ctx, const bvh_task *t, bin_plan *p)
 {
     vec3 ext = box3_extent(t->cbounds);
     int order[3] = {0, 1, 2}, n = 3;
@@ -187,7 +187,7 @@ static void plan_bins(const bvh_build *ctx, const bvh_task *t, bin_plan *p)
 
 /* Large tasks: bin every reference (with all threads near the root), then
  * keep the non-empty bins. */
-static void groups_from_bins(bvh_build *ctx, const bvh_task *t, int threads, const bin_plan *plan,
+static void groups_from_bins(bvh_build_ctx *ctx, const bvh_task *t, int threads, const bin_plan *plan,
                              bin_group (*g)[BINS_MAX], int *ng)
 {
     /* Subtree tasks run concurrently and bin into their own stack copy; only
@@ -225,7 +225,7 @@ static void groups_from_bins(bvh_build *ctx, const bvh_task *t, int threads, con
  * clearing and sweeping all K bins. A bitmask records which bins are
  * occupied; a bin is initialized when first touched, and the groups are
  * read off the set bits in order. Bit-identical to groups_from_bins. */
-static void groups_sparse(const bvh_build *ctx, const bvh_task *t, const bin_plan *plan,
+static void groups_sparse(const bvh_build_ctx *ctx, const bvh_task *t, const bin_plan *plan,
                           bin_group (*g)[BINS_MAX], int *ng)
 {
     const bvh_ref *refs = ctx->refs + t->first;
@@ -434,7 +434,7 @@ static uint32_t partition(bvh_ref *r, uint32_t n, const bin_plan *plan, int axis
 /* If axis k's fullest group holds more than a quarter of t's references
  * and four times a bin's share, the groups of that axis with its bin
  * replaced by its non-empty sub-bins, in order. */
-static void refine_cluster(const bvh_build *ctx, const bvh_task *t, const bin_plan *plan, int k,
+static void refine_cluster(const bvh_build_ctx *ctx, const bvh_task *t, const bin_plan *plan, int k,
                           bin_group *g, int *ng)
 {
     if (t->count < REFINE_MIN || *ng < 1 || *ng - 1 + plan->bins > BINS_MAX) return;
@@ -478,7 +478,7 @@ static void refine_cluster(const bvh_build *ctx, const bvh_task *t, const bin_pl
     *ng += subs - 1;
 }
 
-static void binned_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_split *out)
+static void binned_split(bvh_build_ctx *ctx, const bvh_task *t, int threads, bvh_split *out)
 {
     out->left_count = 0;
     if (bvh_task_forced(t)) {
@@ -559,7 +559,7 @@ static void binned_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_spl
     out->right_c = rc;
 }
 
-int bvh_build_binned(bvh_build *ctx, accel_error *err)
+int bvh_build_binned(bvh_build_ctx *ctx, accel_error *err)
 {
     int sets = ctx->threads > 1 ? ctx->threads * BIN_SPLITS : 1;
     /* Aligned for the bins' vectors (bin_box: 32 bytes with AVX). */

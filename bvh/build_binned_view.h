@@ -11,7 +11,7 @@
 #ifndef BVH_BUILD_BINNED_VIEW_H
 #define BVH_BUILD_BINNED_VIEW_H
 
-#include "build_common.h"
+#include "split_common.h"
 
 #if BVH_SSE
 #include <immintrin.h>

@@ -11,16 +11,16 @@
  * SAH cost is no better, up to the leaf size bound), so that ct, ci and leaf
  * mean the same for every builder.
  */
-#include "build_common.h"
+#include "split_common.h"
 
-static void median_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_split *out)
+static void median_split(bvh_build_ctx *ctx, const bvh_task *t, int threads, bvh_split *out)
 {
     (void)threads;
     bvh_split_median(ctx, t, out);
     if (!bvh_split_pays(ctx, t, bvh_split_sum(out, t->count))) out->left_count = 0;
 }
 
-static void mid_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_split *out)
+static void mid_split(bvh_build_ctx *ctx, const bvh_task *t, int threads, bvh_split *out)
 {
     (void)threads;
     out->left_count = 0;
@@ -58,7 +58,7 @@ static void mid_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_split 
     if (!bvh_split_pays(ctx, t, bvh_split_sum(out, t->count))) out->left_count = 0;
 }
 
-int bvh_build_mid(bvh_build *ctx, accel_error *err)
+int bvh_build_mid(bvh_build_ctx *ctx, accel_error *err)
 {
     (void)err;
     ctx->split = mid_split;
@@ -66,7 +66,7 @@ int bvh_build_mid(bvh_build *ctx, accel_error *err)
     return 0;
 }
 
-int bvh_build_median(bvh_build *ctx, accel_error *err)
+int bvh_build_median(bvh_build_ctx *ctx, accel_error *err)
 {
     (void)err;
     ctx->split = median_split;

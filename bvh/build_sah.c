@@ -24,7 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "build_common.h"
+#include "split_common.h"
 
 typedef struct {
     uint32_t *order[3]; /* reference indices, sorted by centroid per axis within each task */
@@ -87,7 +87,7 @@ static void sort_chunk(void *p, size_t begin, size_t end, int thread)
 /* ---- the split ---------------------------------------------------------------- */
 
 typedef struct {
-    bvh_build *ctx;
+    bvh_build_ctx *ctx;
     const bvh_task *t;
     double cost[3];
     uint32_t at[3];   /* best split position (left count) per axis */
@@ -154,7 +154,7 @@ static void partition_chunk(void *p, size_t begin, size_t end, int thread)
         if ((int)b != j->skip) partition_axis(j, (int)b);
 }
 
-static void list_bounds(const bvh_build *ctx, const uint32_t *o, uint32_t n, box3 *b, box3 *c)
+static void list_bounds(const bvh_build_ctx *ctx, const uint32_t *o, uint32_t n, box3 *b, box3 *c)
 {
     *b = box3_empty();
     *c = box3_empty();
@@ -165,7 +165,7 @@ static void list_bounds(const bvh_build *ctx, const uint32_t *o, uint32_t n, box
     }
 }
 
-static void sweep_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_split *out)
+static void sweep_split(bvh_build_ctx *ctx, const bvh_task *t, int threads, bvh_split *out)
 {
     sweep_data *d = ctx->data;
     uint32_t n = t->count, f = t->first;
@@ -212,7 +212,7 @@ static void sweep_split(bvh_build *ctx, const bvh_task *t, int threads, bvh_spli
     if (forced && !bvh_split_pays(ctx, t, bvh_split_sum(out, n))) out->left_count = 0;
 }
 
-int bvh_build_sah(bvh_build *ctx, accel_error *err)
+int bvh_build_sah(bvh_build_ctx *ctx, accel_error *err)
 {
     uint32_t n = ctx->ref_count;
     sweep_data d;

@@ -20,7 +20,7 @@
  *  3. reference unsplitting (section 4.4): a straddling reference goes to
  *     one side whole when that costs less than putting it in both;
  *  4. the cheaper split is made, or a leaf by the SAH termination rule that
- *     every builder shares (build_common.c).
+ *     every builder shares (split_common.c).
  *
  * Exactness. Triangles are still tested whole, with the shared exact test,
  * so a triangle in several leaves answers the same everywhere; the one
@@ -52,7 +52,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "build_common.h"
+#include "split_common.h"
 
 #define SBVH_BINS_MAX 256
 
@@ -63,7 +63,7 @@ typedef struct {
 } sbvh_bin;
 
 typedef struct {
-    bvh_build *ctx;
+    bvh_build_ctx *ctx;
     uint32_t cap;        /* slots of ctx->refs */
     bvh_ref *tmp;        /* scratch: the right part of a task while it is placed */
     uint8_t *side;       /* scratch: where each reference of a spatial split goes */
@@ -115,7 +115,7 @@ static void chop_ref(const sbvh_ctx *x, const bvh_ref *ref, int axis, double pla
     box3 box = bvh_ref_box(ref);
     if (ref->prim < s->tri_count) {
         bvh_sbvh_chop(s->tris + 9 * (size_t)ref->prim, box, axis, plane, 1, left, right);
-        /* A part's box is grown like every stored box (build_common.h),
+        /* A part's box is grown like every stored box (split_common.h),
          * inside the reference's own (grown) box. */
         if (box_valid(*left)) *left = box_intersect(box3_hit_pad(*left, x->delta), box);
         if (box_valid(*right)) *right = box_intersect(box3_hit_pad(*right, x->delta), box);
@@ -450,7 +450,7 @@ static void make_leaf(bvh_node *n, const bvh_task *t)
 /* Splits one task or makes it a leaf; returns 1 with the children filled. */
 static int split_task(sbvh_ctx *x, const sbvh_task *st, sbvh_task *l, sbvh_task *r)
 {
-    bvh_build *ctx = x->ctx;
+    bvh_build_ctx *ctx = x->ctx;
     const bvh_task *t = &st->t;
     bvh_node *node = &ctx->nodes[t->node];
     if (t->count <= 1 || (!bvh_task_forced(t) && bvh_leaf_certain(ctx, t))) {
@@ -506,7 +506,7 @@ static int split_task(sbvh_ctx *x, const sbvh_task *st, sbvh_task *l, sbvh_task 
 /* Moves every leaf's references down to the next free slot, in depth-first
  * order (the order of the runs in the array, so nothing is overwritten
  * before it moves). Returns the references kept. */
-static uint32_t compact_refs(bvh_build *ctx)
+static uint32_t compact_refs(bvh_build_ctx *ctx)
 {
     uint32_t stack[BVH_MAX_DEPTH + 1];
     int sp = 0;
@@ -528,7 +528,7 @@ static uint32_t compact_refs(bvh_build *ctx)
     return next;
 }
 
-int bvh_build_sbvh(bvh_build *ctx, accel_error *err)
+int bvh_build_sbvh(bvh_build_ctx *ctx, accel_error *err)
 {
     const uint32_t n = ctx->ref_count;
     double extra = floor(ctx->opts.split_budget * n);

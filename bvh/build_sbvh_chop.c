@@ -17,7 +17,7 @@
 #include <float.h>
 #include <math.h>
 
-#include "build_common.h"
+#include "split_common.h"
 
 static inline box3 box_clip(box3 a, box3 b)
 {

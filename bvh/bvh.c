@@ -3,7 +3,7 @@
  * points and memory accounting.
  *
  * The kind's table is the only thing the rest of the project sees
- * (registry.c); the build driver is bvh_build.c, builders live in
+ * (registry.c); the build driver is build_driver.c, builders live in
  * build_*.c, traversal in bvh_single.c and bvh_packet.c, saving and
  * loading in bvh_io.c.
  */
@@ -11,9 +11,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "build_common.h"
+#include "split_common.h"
 #include "bvh.h"
-#include "wide_node.h"
+#include "wide/wide.h"
 
 static const accel_param_def bvh_params[] = {
     {"build", ACCEL_PARAM_ENUM, "binned", 0, 0, "binned|sah|mid|median|sbvh",
@@ -45,7 +45,7 @@ static const accel_param_def bvh_params[] = {
     {"frustum", ACCEL_PARAM_BOOL, "0", 0, 1, NULL,
      "traverse=packet: interval-arithmetic early-out per node (0/1)"},
     {"width", ACCEL_PARAM_ENUM, "2", 0, 0, "2|4|8",
-     "children per node: 2 = the lecture's binary tree; 4, 8 = collapsed SIMD nodes (wide_build.c)"},
+     "children per node: 2 = the lecture's binary tree; 4, 8 = collapsed SIMD nodes (wide/collapse.c)"},
     {"block", ACCEL_PARAM_ENUM, "auto", 0, 0, "auto|4|8",
      "width=4|8: primitives per SIMD leaf block (auto: 8, or 4 when the scene has spheres)"},
     {"order", ACCEL_PARAM_ENUM, "octant", 0, 0, "dist|octant|branchy",
@@ -83,7 +83,7 @@ typedef struct {
     int width, block, order; /* width 2: the binary tree */
     int first_left, split_pairs; /* width 2: first=left, pairs=split */
     int quant;                   /* width 8: quantized nodes */
-    int hybrid;                  /* wide packets: hand-over span (wide_packet.h) */
+    int hybrid;                  /* wide packets: hand-over span (wide/packet.h) */
     bvh_wide_collapse collapse;  /* wide: greedy or dp */
     int leaf_below;              /* wide: the binary build's leaf_below (0: block) */
 } wide_opts;
@@ -160,21 +160,88 @@ struct bvh_rebuild {
     wide_opts wo;
 };
 
+/* ---- the two trees' code paths (bvh_node.h's bvh_path) ------------------- */
+
+static size_t binary_memory(const bvh *b)
+{
+    return (size_t)b->node_count * sizeof(bvh_node) +
+           (size_t)b->prim_count * (BVH_SLOT_FLOATS * sizeof(float) + sizeof(uint32_t));
+}
+
+const bvh_path bvh_path_single = {bvh_trace_intersect, bvh_trace_occluded, bvh_walk_binary,
+                                  bvh_mark_ids_binary, bvh_refit_binary,   binary_memory,
+                                  bvh_release,         1,                  1};
+const bvh_path bvh_path_packet = {bvh_packet_intersect, bvh_packet_occluded, bvh_walk_binary,
+                                  bvh_mark_ids_binary,  bvh_refit_binary,    binary_memory,
+                                  bvh_release,          1,                   1};
+
+const bvh_path *bvh_binary_path(int traverse)
+{
+    return traverse == BVH_TRAVERSE_PACKET ? &bvh_path_packet : &bvh_path_single;
+}
+
+/* The wide path: the tree in b->wide; the binary pools were freed by the
+ * collapse. The kernels take the scene flags the kind keeps. */
+static void wide_intersect(const bvh *b, const accel_ray *rays, accel_hit *hits, size_t count,
+                           accel_counters *c)
+{
+    bvh_wide_intersect(b->wide, rays, hits, count, c, b->naive, b->has_spheres);
+}
+
+static void wide_occluded(const bvh *b, const accel_ray *rays, uint8_t *occ, size_t count,
+                          accel_counters *c)
+{
+    bvh_wide_occluded(b->wide, rays, occ, count, c, b->naive, b->has_spheres);
+}
+
+static void wide_walk(const bvh *b, const accel_ray_prep *p, float pad, accel_walk_visit visit,
+                      void *ctx, uint32_t *steps)
+{
+    bvh_wide_walk(b->wide, p, pad, visit, ctx, steps);
+}
+
+static int wide_mark_ids(const bvh *b, uint8_t *mark, size_t total)
+{
+    return bvh_wide_mark_ids(b->wide, mark, total);
+}
+
+static int wide_refit(bvh *b, const accel_scene *s, int threads, int boxes, accel_error *err)
+{
+    return bvh_wide_refit(b->wide, s, threads, boxes, err);
+}
+
+static size_t wide_memory(const bvh *b) { return bvh_wide_memory(b->wide); }
+
+static void wide_release(bvh *b)
+{
+    bvh_wide_free(b->wide);
+    b->wide = NULL;
+    bvh_release(b); /* the binary pools, freed by the collapse already */
+}
+
+const bvh_path bvh_path_wide = {wide_intersect, wide_occluded, wide_walk,    wide_mark_ids,
+                                wide_refit,     wide_memory,   wide_release, 1,
+                                0};
+/* quantized nodes keep no float boxes to refit: their path rebuilds */
+static const bvh_path bvh_path_wide_quant = {wide_intersect, wide_occluded, wide_walk,    wide_mark_ids,
+                                             wide_refit,     wide_memory,   wide_release, 0,
+                                             0};
+
+/* ---- the kind ------------------------------------------------------------- */
+
 static size_t bvh_memory(const void *a)
 {
     const bvh *b = a;
-    if (b->wide) return sizeof *b + bvh_wide_memory(b->wide);
-    return sizeof *b + (size_t)b->node_count * sizeof(bvh_node) +
-           (size_t)b->prim_count * (BVH_SLOT_FLOATS * sizeof(float) + sizeof(uint32_t));
+    return sizeof *b + b->path->memory(b);
 }
 
 static void bvh_destroy(void *a)
 {
     if (!a) return;
-    bvh_wide_free(((bvh *)a)->wide);
-    free(((bvh *)a)->rebuild);
-    bvh_release(a);
-    free(a);
+    bvh *b = a;
+    free(b->rebuild);
+    b->path->release(b);
+    free(b);
 }
 
 /* The tree over `scene` with the given options: the binary build, then
@@ -194,11 +261,13 @@ static int build_tree(const accel_scene *scene, const bvh_build_opts *opts, cons
     bvh_wide_collapse cc = wo->collapse;
     cc.max_mb = o.max_mb;
     int rc = bvh_build_run(scene, &o, threads, out, stats, err);
+    out->path = bvh_binary_path(traverse);
     if (rc == 0 && wo->width == 2 && wo->split_pairs) rc = bvh_split_pairs(out, err);
     if (rc == 0 && wo->width > 2) {
-        rc = bvh_wide_build(out, wo->width, block, wo->order, wo->quant, &cc, threads < 1 ? 1 : threads, o.ct,
-                            o.ci, stats, err);
+        rc = bvh_wide_build(out, &out->wide, wo->width, block, wo->order, wo->quant, &cc,
+                            threads < 1 ? 1 : threads, o.ct, o.ci, stats, err);
         if (rc == 0) out->wide->packets = traverse == BVH_TRAVERSE_PACKET, out->wide->hybrid = wo->hybrid;
+        if (rc == 0) out->path = out->wide->quant ? &bvh_path_wide_quant : &bvh_path_wide;
         if (rc) bvh_release(out);
     }
     return rc;
@@ -254,8 +323,7 @@ static int bvh_rebuild_on(bvh *b, const accel_scene *scene, accel_error *err)
     nb.naive = b->naive, nb.traverse = b->traverse, nb.frustum = b->frustum;
     nb.first_left = b->first_left;
     nb.rebuild = b->rebuild;
-    bvh_wide_free(b->wide);
-    bvh_release(b);
+    b->path->release(b);
     *b = nb;
     return 0;
 }
@@ -275,7 +343,7 @@ static int bvh_update(void *a, const accel_scene *scene, int refit, accel_update
     int rc = bvh_refit_compatible(b, scene, err);
     if (rc > 0) return rc;
     /* quantized nodes keep no float boxes to refit: rebuilt (the stats say so) */
-    if (refit && rc == 0 && !(b->wide && b->wide->quant)) {
+    if (refit && rc == 0 && b->path->refit_boxes) {
         rc = bvh_refit_run(b, scene, b->rebuild ? b->rebuild->threads : 1, 1, err);
         if (rc) return rc;
         st->meshes_refit = 1;
@@ -297,26 +365,27 @@ static void bvh_intersect(const void *a, const accel_ray *rays, accel_hit *hits,
                           accel_counters *c)
 {
     const bvh *b = a;
-    c = ACCEL_COUNTERS_ON(c);
-    if (b->wide)
-        bvh_wide_intersect(b->wide, rays, hits, count, c, b->naive, b->has_spheres);
-    else if (b->traverse == BVH_TRAVERSE_PACKET)
-        bvh_packet_intersect(b, rays, hits, count, c);
-    else
-        bvh_trace_intersect(b, rays, hits, count, c);
+    b->path->intersect(b, rays, hits, count, ACCEL_COUNTERS_ON(c));
 }
 
 static void bvh_occluded(const void *a, const accel_ray *rays, uint8_t *occ, size_t count,
                          accel_counters *c)
 {
     const bvh *b = a;
-    c = ACCEL_COUNTERS_ON(c);
-    if (b->wide)
-        bvh_wide_occluded(b->wide, rays, occ, count, c, b->naive, b->has_spheres);
-    else if (b->traverse == BVH_TRAVERSE_PACKET)
-        bvh_packet_occluded(b, rays, occ, count, c);
-    else
-        bvh_trace_occluded(b, rays, occ, count, c);
+    b->path->occluded(b, rays, occ, count, ACCEL_COUNTERS_ON(c));
+}
+
+/* accel.h's conservative walk, which lets a bvh serve as instanced's bottom
+ * level (bvh_walk.c, wide/walk.c). */
+static int bvh_kind_walk(const void *accel, const accel_ray *ray, float pad, accel_walk_visit visit,
+                         void *ctx, uint32_t *steps)
+{
+    const bvh *b = accel;
+    if (!visit) return 0;
+    accel_ray_prep p;
+    if (!accel_prep_ray(ray, &p)) return 0;
+    b->path->walk(b, &p, pad, visit, ctx, steps);
+    return 0;
 }
 
 static const char *const bvh_variants[] = {
@@ -381,7 +450,7 @@ const accel_kind accel_kind_bvh = {
     .memory = bvh_memory,
     .destroy = bvh_destroy,
     .update = bvh_update,
-    .walk = bvh_walk,
+    .walk = bvh_kind_walk,
 };
 
 /* ---- inspection ---------------------------------------------------------- */

@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "build_common.h"
+#include "split_common.h"
 #include "bvh.h"
 
 /* ---- saving and loading -------------------------------------------------- */
@@ -38,7 +38,7 @@ static int host_little_endian(void)
 int bvh_save(const void *accel, const char *path, accel_error *err)
 {
     const bvh *b = accel;
-    if (b->wide)
+    if (!b->path->saveable)
         return accel_fail(err, ACCEL_ERR_SPEC, "%s: only binary trees (width=2) can be saved", path);
     if (!host_little_endian())
         return accel_fail(err, ACCEL_ERR_IO, "%s: bvh files are little-endian; this host is not", path);
@@ -133,6 +133,7 @@ int bvh_load(const char *path, void **accel_out, accel_error *err)
         b->has_spheres = (h.flags & 1) != 0;
         b->naive = (h.flags & 2) != 0;
         b->traverse = (h.flags & 4) ? BVH_TRAVERSE_PACKET : BVH_TRAVERSE_SINGLE;
+        b->path = bvh_binary_path(b->traverse);
         b->frustum = (h.flags & 8) != 0;
         b->depth = h.depth;
         b->nodes = bvh_alloc_nodes(h.node_count);

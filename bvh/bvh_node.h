@@ -1,29 +1,8 @@
 /*
- * bvh_node.h - the BVH's memory layout, shared by the builders and the
- * traversal kernels (internal to bvh/; the public header is bvh.h).
- *
- * The node is the lecture's 32-byte node (see ../shared/LECTURE.md, 2):
- *
- *   offset  0  float bmin[3]     12 bytes
- *   offset 12  uint32 left_first  4 bytes: leaf: first primitive slot;
- *                                          interior: left child (right = left + 1)
- *   offset 16  float bmax[3]     12 bytes
- *   offset 28  uint32 count       4 bytes: > 0 for a leaf, 0 for an interior node
- *
- * All nodes live in one 64-byte aligned pool. The root is node 0, node 1 is
- * padding, and every child pair starts at an even index, so the two children
- * an interior node tests together always share one 64-byte cache line. A
- * tree over N primitives has at most N leaves, hence at most N-1 interior
- * nodes and 2 + 2(N-1) = 2N nodes with the padding: the lecture's "2N".
- *
- * Nothing in the structure is a pointer: nodes name their children and
- * primitives by index, so the pools can be written to a file and read back
- * anywhere (bvh_save / bvh_load in bvh.c).
- *
- * Primitives are stored in leaf order: slot i holds the 9 floats of a
- * triangle (v0, v1, v2) or the 4 floats of a sphere (centre, radius) in the
- * first 4 of its 9, and prim_ids[i] the scene id reported in hits. A leaf's
- * primitives are then one contiguous run of memory.
+ * bvh_node.h - the binary BVH's internals, shared by the builders and the
+ * traversal kernels (internal to bvh/; the public header bvh.h holds the
+ * node type and its layout): the built structure, the kind's code paths,
+ * the slab test and the primitive test the kernels share.
  */
 #ifndef BVH_BVH_NODE_H
 #define BVH_BVH_NODE_H
@@ -32,6 +11,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "bvh.h"
 #include "core/prim.h"
 #include "core/variant.h"
 
@@ -39,32 +19,9 @@
 extern "C" {
 #endif
 
-typedef struct {
-    float bmin[3];
-    uint32_t left_first;
-    float bmax[3];
-    uint32_t count;
-} bvh_node;
-
-static_assert(sizeof(bvh_node) == 32, "bvh_node must be the lecture's 32-byte node");
-static_assert(offsetof(bvh_node, left_first) == 12, "left_first follows bmin");
-static_assert(offsetof(bvh_node, bmax) == 16, "bmax starts the second 16 bytes");
-static_assert(offsetof(bvh_node, count) == 28, "count closes the node");
-
 /* Index of bmax[0] in the node seen as 8 floats: the slab test picks a
  * plane as ((const float *)node)[axis + (near or far offset)]. */
 #define BVH_BMAX_OFS 4
-
-/* Alignment of the node pool: one cache line holds a sibling pair. */
-#define BVH_NODE_ALIGN 64
-
-/* Floats per primitive slot (a triangle's three vertices). */
-#define BVH_SLOT_FLOATS 9
-
-/* The builders never make a tree deeper than this (the root is level 1),
- * so a traversal stack of BVH_MAX_DEPTH entries cannot overflow: each entry
- * is a far child of one node on the current root-to-node path. */
-#define BVH_MAX_DEPTH 64
 
 /* Traversal modes (parameter traverse=). */
 enum { BVH_TRAVERSE_SINGLE = 0, BVH_TRAVERSE_PACKET = 1 };
@@ -99,12 +56,36 @@ typedef struct bvh {
     int traverse;         /* BVH_TRAVERSE_* */
     int frustum;          /* packets: interval-arithmetic early-out */
     int depth;            /* levels of the tree (a lone leaf is 1) */
-    struct bvh_wide *wide; /* width=4|8: the collapsed tree (wide_node.h), else NULL */
+    const struct bvh_path *path; /* the kind's code path, chosen at build or load (below) */
+    struct bvh_wide *wide; /* bvh_path_wide's tree (wide/wide.h), else NULL: only that path reads it */
     uint32_t scene_prims; /* the scene's triangles + spheres at build (0: loaded from a file) */
     struct bvh_rebuild *rebuild; /* the build's options, for update's rebuild (bvh.c); NULL if loaded */
     int first_left;       /* first=left: single rays always visit the left hit child first */
     void *nodes_block;    /* pairs=split: the allocation nodes points 32 bytes into, else NULL */
 } bvh;
+
+/* The kind's code paths (bvh.c): the binary tree traced one ray at a time
+ * or in 64-ray packets, or the wide tree (bvh/wide/). One is chosen once,
+ * at build (or load), so that no entry point asks which tree it holds. */
+typedef struct bvh_path {
+    void (*intersect)(const bvh *b, const accel_ray *rays, accel_hit *hits, size_t count,
+                      accel_counters *c);
+    void (*occluded)(const bvh *b, const accel_ray *rays, uint8_t *occ, size_t count,
+                     accel_counters *c);
+    void (*walk)(const bvh *b, const accel_ray_prep *p, float pad, accel_walk_visit visit, void *ctx,
+                 uint32_t *steps);
+    int (*mark_ids)(const bvh *b, uint8_t *mark, size_t total); /* bvh_refit.c's contract */
+    int (*refit)(bvh *b, const accel_scene *s, int threads, int boxes, accel_error *err);
+    size_t (*memory)(const bvh *b); /* bytes of the tree's pools (not the struct) */
+    void (*release)(bvh *b);        /* frees the tree's pools */
+    int refit_boxes;                /* 0: update rebuilds (quantized nodes keep no float boxes) */
+    int saveable;                   /* bvh_save writes it (binary trees only) */
+} bvh_path;
+
+/* bvh.c: binary single rays, binary packets, the wide tree; and the path
+ * of a binary tree traced with traverse (BVH_TRAVERSE_*). */
+extern const bvh_path bvh_path_single, bvh_path_packet, bvh_path_wide;
+const bvh_path *bvh_binary_path(int traverse);
 
 /* ---- pieces of the traversal kernels -------------------------------------- */
 
@@ -202,9 +183,28 @@ void bvh_packet_intersect(const bvh *b, const accel_ray *rays, accel_hit *hits, 
 void bvh_packet_occluded(const bvh *b, const accel_ray *rays, uint8_t *occ, size_t count,
                          accel_counters *c);
 
-/* accel.h's conservative walk (bvh_walk.c): binary and wide trees. */
-int bvh_walk(const void *accel, const accel_ray *ray, float pad, accel_walk_visit visit, void *ctx,
-             uint32_t *steps);
+/* The conservative walks (bvh_walk.c, wide/walk.c): a box given as lo/hi
+ * triples, grown by pad, and a stack entry. */
+static inline __attribute__((always_inline)) int bvh_padded_slab(const float *lo, const float *hi,
+                                                             float pad, const accel_ray_prep *p,
+                                                             float t_max, float *entry)
+{
+    float l[3] = {lo[0] - pad, lo[1] - pad, lo[2] - pad};
+    float h[3] = {hi[0] + pad, hi[1] + pad, hi[2] + pad};
+    return box3_slab(l, h, p->org, p->inv_dir, p->neg, p->t_near, t_max, entry);
+}
+
+typedef struct {
+    uint32_t node;
+    float entry;
+} bvh_walk_entry;
+
+/* The binary tree's conservative walk (bvh_walk.c; accel.h's contract, for
+ * a prepared ray), id marks and refit (bvh_refit.c; its contracts). */
+void bvh_walk_binary(const bvh *b, const accel_ray_prep *p, float pad, accel_walk_visit visit,
+                     void *ctx, uint32_t *steps);
+int bvh_mark_ids_binary(const bvh *b, uint8_t *mark, size_t total);
+int bvh_refit_binary(bvh *b, const accel_scene *s, int threads, int boxes, accel_error *err);
 
 #ifdef __cplusplus
 }

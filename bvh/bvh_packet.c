@@ -267,8 +267,10 @@ static inline uint32_t group_range(const packet *pk, uint32_t g, uint32_t first)
     return (uint32_t)((from & to & pk->alive) >> (GROUP * g)) & 0xFFu;
 }
 
+#if !BVH_SSE /* the scalar cull below; the SSE one takes four lanes at once */
 static inline float min4(float a, float b, float c, float d) { return minf(minf(a, b), minf(c, d)); }
 static inline float max4(float a, float b, float c, float d) { return maxf(maxf(a, b), maxf(c, d)); }
+#endif
 
 /* 1 when no live ray of the packet can hit the node's box. Corner products
  * bound fl((plane - o) * r) over the box of (o, r): the product is monotone
@@ -314,6 +316,11 @@ static inline int packet_misses(const packet *pk, const bvh_node *node)
     return lo > hi + fabsf(hi) * ACCEL_SLAB_PAD;
 }
 
+/* trace_packet stays one function of about 140 lines on purpose: it is the
+ * forced-inline body of every packet kernel copy, and its node loop keeps
+ * the packet's live mask, stack and first-active index in registers across
+ * the box test, the leaf loop and the frustum cull; split into calls, a
+ * copy's code (and speed) would depend on what the compiler inlines. */
 static inline __attribute__((always_inline)) void
 trace_packet(const bvh *b, packet *pk, accel_counters *c, uint32_t *ray_steps,
              uint32_t *ray_prims, int naive, int has_spheres, int any_hit, int frustum)

@@ -67,6 +67,9 @@ int test_shared_files(const char *exts, char (*paths)[512], int max);
  * Returns the count, or -1 (a failed check) when sources.mk has no
  * NOT_BACKENDS line (the tests run from the repository root). */
 int test_backend_folders(char (*names)[256], int max);
+/* The subfolders of a backend folder ("bvh/wide"), whose .c files sources.mk
+ * builds into the library too; sorted, at most max. */
+int test_backend_subfolders(const char *backend, char (*names)[256], int max);
 
 /* A whole file, NUL-terminated (its size in *size when size is not NULL);
  * NULL when it cannot be read. */

@@ -11,7 +11,7 @@
 #include <string.h>
 
 #include "bvh/bvh.h"
-#include "bvh/wide_node.h"
+#include "bvh/wide/node.h"
 #include "rays/rays.h"
 #include "support.h"
 #include "test.h"
@@ -229,7 +229,7 @@ TEST(bvh_refit_back_to_frame0_is_the_build)
     scene_free(&s20);
 }
 
-/* Wide nodes whose octant orders (wide_node.h) do not rank the used
+/* Wide nodes whose octant orders (bvh/wide/node.h) do not rank the used
  * children by their box centres along each octant's diagonal. */
 static uint32_t misordered_nodes(const void *a)
 {

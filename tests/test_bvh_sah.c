@@ -23,7 +23,7 @@ static int two_far_tris(accel_scene *s)
 }
 
 /* The stored boxes are the primitives' bounds grown by 2^-22 of each
- * coordinate plus 2^-40 of the scene's size (build_common.h: so that the
+ * coordinate plus 2^-40 of the scene's size (split_common.h: so that the
  * box test never rejects a hit the exact triangle test claims): costs match
  * the hand computation to about 1e-6. */
 #define SAH_TOL 1e-5

@@ -61,7 +61,7 @@ static int by_path(const void *a, const void *b)
     return strcmp((const char *)a, (const char *)b);
 }
 
-/* accel/, its layers and every backend folder (sources.mk). */
+/* accel/, its layers and every backend folder and subfolder (sources.mk). */
 static int collect_headers(header_list *h)
 {
     static const char *const dirs[] = {"accel",         "accel/core",  "accel/scene", "accel/rays",
@@ -70,7 +70,12 @@ static int collect_headers(header_list *h)
     for (size_t i = 0; i < sizeof dirs / sizeof dirs[0]; i++) add_headers(h, dirs[i]);
     char backends[32][256];
     int count = test_backend_folders(backends, 32);
-    for (int i = 0; i < count; i++) add_headers(h, backends[i]);
+    for (int i = 0; i < count; i++) {
+        add_headers(h, backends[i]);
+        char subs[8][256];
+        int n = test_backend_subfolders(backends[i], subs, 8);
+        for (int k = 0; k < n; k++) add_headers(h, subs[k]);
+    }
     qsort(h->path, (size_t)h->count, sizeof h->path[0], by_path);
     return count >= 3;
 }

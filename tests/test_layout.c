@@ -14,6 +14,11 @@
  *    grid/grid_packet_walk.h (the coherent packet walk its levels reuse);
  *  - sources.mk's ACCEL_LAYERS names these layers, and accel/ has no other
  *    folder;
+ *  - a backend's subfolder (bvh/wide/, built by sources.mk too) is a room
+ *    of its own: its files include only accel.h, accel/core/ headers, their
+ *    own subfolder and the parent's headers listed in sub_parent_headers
+ *    below; the parent's files include of the subfolder only its entry
+ *    header, named after it (bvh/wide/wide.h), never its internals;
  *  - no library, backend, tool, experiment, lab or test source file is over
  *    650 lines (split past about 600).
  */
@@ -140,14 +145,36 @@ static void check_accel_file(const char *path, const char *dir, void *ctx)
     each_include(path, check_accel_include, ctx);
 }
 
-typedef struct {
-    const char *folder;
-} backend_ctx;
-
 static int file_exists(const char *path)
 {
     struct stat st;
     return stat(path, &st) == 0;
+}
+
+typedef struct {
+    const char *folder; /* "bvh" or "bvh/wide" */
+    const char *parent; /* "bvh" for a subfolder, else NULL */
+} backend_ctx;
+
+/* The parent headers a subfolder's files may include: what the wide tree
+ * documents needing (wide/node.h: the binary node and the kernels' shared
+ * pieces; collapse.c and refit.c: the builders' primitive boxes and
+ * allocation helpers). */
+static const char *const sub_parent_headers[] = {"bvh/bvh_node.h", "bvh/split_common.h", NULL};
+
+/* Is target "sub/sub.h" or "<folder>/sub/sub.h" for a subfolder sub of
+ * folder: the one header a parent's file may include from a subfolder? */
+static int subfolder_entry(const char *folder, const char *target)
+{
+    size_t fl = strlen(folder);
+    if (!strncmp(target, folder, fl) && target[fl] == '/') target += fl + 1;
+    const char *slash = strchr(target, '/');
+    if (!slash || strchr(slash + 1, '/')) return 0;
+    size_t sl = (size_t)(slash - target);
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", folder, target);
+    return strlen(slash + 1) == sl + 2 && !strncmp(slash + 1, target, sl) &&
+           !strcmp(slash + 1 + sl, ".h") && file_exists(path);
 }
 
 static void check_backend_include(const char *path, int line, const char *target, void *ctx)
@@ -160,20 +187,26 @@ static void check_backend_include(const char *path, int line, const char *target
     if (!strchr(target, '/')) {
         snprintf(own, sizeof own, "%s/%s", b->folder, target);
         if (file_exists(own)) return;
-    } else if (!strncmp(target, b->folder, fl) && target[fl] == '/') {
+    } else if (!strncmp(target, b->folder, fl) && target[fl] == '/' && !strchr(target + fl + 1, '/')) {
         return;
+    } else if (!b->parent && subfolder_entry(b->folder, target)) {
+        return;
+    } else if (b->parent) {
+        for (int i = 0; sub_parent_headers[i]; i++)
+            if (!strcmp(target, sub_parent_headers[i])) return;
     }
     if (!strcmp(target, "grid/grid_core.h") || !strcmp(target, "grid/grid_packet_walk.h")) return;
     test_fail(__FILE__, __LINE__,
               "%s:%d: includes \"%s\": a backend may include only accel.h, core/ headers, its "
-              "own folder, grid/grid_core.h and grid/grid_packet_walk.h",
+              "own folder, a subfolder's entry header (sub/sub.h), grid/grid_core.h and "
+              "grid/grid_packet_walk.h; a subfolder only its own files and the parent headers "
+              "of sub_parent_headers",
               path, line, target);
 }
 
 static void check_backend_file(const char *path, const char *dir, void *ctx)
 {
-    backend_ctx b = {dir};
-    (void)ctx;
+    backend_ctx b = {dir, ctx};
     each_include(path, check_backend_include, &b);
 }
 
@@ -213,7 +246,14 @@ TEST(layout_layers_and_backends)
     }
     char backends[32][256];
     int count = test_backend_folders(backends, 32);
-    for (int i = 0; i < count; i++) each_source(backends[i], check_backend_file, NULL);
+    int subs_seen = 0;
+    for (int i = 0; i < count; i++) {
+        each_source(backends[i], check_backend_file, NULL);
+        char subs[8][256];
+        int n = test_backend_subfolders(backends[i], subs, 8);
+        for (int k = 0; k < n; k++) subs_seen += each_source(subs[k], check_backend_file, backends[i]) > 0;
+    }
+    CHECKF(subs_seen >= 1, "no backend subfolder with sources (bvh/wide expected)");
     CHECKF(count >= 3, "only %d backends found (grid, nested_grid, bvh expected)", count);
 }
 
@@ -239,6 +279,11 @@ TEST(layout_file_length)
         files += each_source(dirs[i], check_length, NULL);
     char backends[32][256];
     int count = test_backend_folders(backends, 32);
-    for (int i = 0; i < count; i++) files += each_source(backends[i], check_length, NULL);
+    for (int i = 0; i < count; i++) {
+        files += each_source(backends[i], check_length, NULL);
+        char subs[8][256];
+        int n = test_backend_subfolders(backends[i], subs, 8);
+        for (int k = 0; k < n; k++) files += each_source(subs[k], check_length, NULL);
+    }
     CHECKF(files > 50 && count >= 3, "only %d source files in %d backends measured", files, count);
 }

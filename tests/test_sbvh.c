@@ -13,7 +13,7 @@
 #include <unistd.h>
 
 #include "rays/stiff.h"
-#include "bvh/build_common.h"
+#include "bvh/split_common.h"
 #include "support.h"
 #include "test_bvh.h"
 

@@ -1,19 +1,19 @@
 /*
- * wide_leaf.h - one ray against a leaf block of WIDE_LB (4 or 8) primitives:
+ * leaf.h - one ray against a leaf block of WIDE_LB (4 or 8) primitives:
  * the watertight test of Woop, Benthin and Wald ("Watertight Ray/Triangle
  * Intersection", JCGT 2(1), 2013) on all lanes at once, with this project's
  * exact fallback.
  * A kernel body (C only): included by the .c files of its folder, not part
  * of the interface a C++ program includes.
  *
- * A template: wide_tables.h includes it once per block width, with WIDE_LB
+ * A template: tables.h includes it once per block width, with WIDE_LB
  * defined (4 when included alone). It defines wide_leaf_ray_<LB>,
  * leaf_setup_<LB>() and leaf_block_<LB>().
  *
  * Every lane computes what accel_tri_watertight (core/prim.h) computes,
  * in the same order: the shear, the edge functions U, V, W, their error
  * bounds, the scaled distance T and its bound. Where the target has FMA,
- * each "a - b c" or "a b + c" of those is one fused operation (wide_simd.h)
+ * each "a - b c" or "a b + c" of those is one fused operation (simd.h)
  * where the scalar test rounds twice: 21 vector operations fewer per
  * block. The bounds of ACCEL_EDGE_FILTER count a rounding for the product
  * and one for the sum; a fused step has only the second, so every bound
@@ -34,8 +34,8 @@
  * rule accepts).
  * Spheres (lanes with id >= tri_count) go through the scalar sphere test.
  */
-#include "wide_node.h"
-#include "wide_simd.h"
+#include "node.h"
+#include "simd.h"
 
 #ifndef WIDE_LB
 #define WIDE_LB 4
@@ -198,7 +198,7 @@ WIDE_INLINE void WL(leaf_aff)(const WL(wide_leaf_rel) *q, WL(wide_leaf_aff) *f)
  * centred at (cx, cy) with half sizes (hx, hy), and |sx| <= xa, |sy| <= ya
  * in it (a bit per lane). Over the rectangle an edge function lies within
  * e0 + cx e1 + cy e2 +- (hx |e1| + hy |e2|); the caller rounds the half
- * sizes up (wide_packet.h), and the margin takes the few roundings of
+ * sizes up (packet.h), and the margin takes the few roundings of
  * these sums with room to spare.
  */
 WIDE_INLINE int WL(aff_cull_rect)(const WL(wide_leaf_aff) *f, float cx, float cy, float hx, float hy, float xa,
@@ -224,6 +224,13 @@ WIDE_INLINE int WL(aff_cull_rect)(const WL(wide_leaf_aff) *f, float cx, float cy
  * *t]) updates *t, *u, *v, *id and returns 1; with any_hit it returns 1 at
  * the first hit found. The watertight test (leaf_block takes tri=naive
  * apart); has_spheres is a constant in every copy.
+ *
+ * About 130 lines on purpose: the steps of the watertight test (shear,
+ * edge functions and their error bounds, det and T with theirs, the
+ * nearest sure hit, the uncertain lanes in double, the spheres) share
+ * their vector masks, and this one forced-inline body is what every
+ * kernel copy's leaf loop runs; split, a copy's code would depend on
+ * what the compiler chooses to inline.
  */
 static inline __attribute__((always_inline)) int
 WL(leaf_block_rel)(const LBLOCK *blk, const WL(wide_leaf_rel) *q, const WL(wide_leaf_ray) *r,

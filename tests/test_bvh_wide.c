@@ -1,29 +1,29 @@
 /*
- * test_wide.c - the wide BVHs (bvh:width=4|8): the SSE ray preparation
+ * test_bvh_wide.c - the wide BVHs (bvh:width=4|8): the SSE ray preparation
  * against accel_prep_ray, the SIMD leaf test lane by lane against the
  * scalar watertight test (bit-identical t, same decisions on rays aimed at
  * edges and vertices, where the exact fallback decides), the collapsed
  * tree's invariants, memory accounting and spec errors. Traces against the
- * reference are in test_wide_trace.c.
+ * reference are in test_bvh_wide_trace.c.
  */
 #include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "bvh/build_common.h"
+#include "bvh/split_common.h"
 #include "bvh/bvh.h"
-#include "bvh/wide_node.h"
-#include "bvh/wide_simd.h"
+#include "bvh/wide/node.h"
+#include "bvh/wide/simd.h"
 #include "scene/scene.h"
 #include "support.h"
 #include "test.h"
 
 #define WIDE_LB 4
-#include "bvh/wide_leaf.h"
+#include "bvh/wide/leaf.h"
 #undef WIDE_LB
 #define WIDE_LB 8
-#include "bvh/wide_leaf.h"
+#include "bvh/wide/leaf.h"
 #undef WIDE_LB
 
 static uint64_t rng = 0x9E3779B97F4A7C15ull;
@@ -48,7 +48,7 @@ static int prep_equal(const accel_ray_prep *a, const accel_ray_prep *b)
            !memcmp(&a->t_far, &b->t_far, 4);
 }
 
-TEST(wide_prep_matches_scalar)
+TEST(bvh_wide_prep_matches_scalar)
 {
     const float special[] = {0.0f, -0.0f, 1.0f, -1.0f, 1e-38f, -3e38f, INFINITY, -INFINITY, NAN, 0.5f};
     size_t bad = 0, valid = 0, n = 0;
@@ -108,7 +108,7 @@ static int leaf_hit(int block, const void *blk, const accel_ray_prep *p, float *
  * then err by about (e_num + |value| e_det) / |det|, e_det = eu + ev + ew.
  * Computed in double from the exact coordinates, doubled for the
  * bounds' own looseness. Both float tests stay within it; a fused
- * multiply-add (wide_leaf.h) lands elsewhere in it than the scalar test.
+ * multiply-add (bvh/wide/leaf.h) lands elsewhere in it than the scalar test.
  */
 typedef struct { double t, u, v; } value_bounds;
 
@@ -143,7 +143,7 @@ static int close_to(float w, double r, double bound)
 /* Rays aimed exactly at vertices and at (rounded) points of edges: most
  * of these are decided by the double-precision fallback, so a SIMD lane
  * test without it (or with other arithmetic) disagrees somewhere. */
-TEST(wide_leaf_lanes_match_scalar)
+TEST(bvh_wide_leaf_lanes_match_scalar)
 {
     wide_block8 b8 __attribute__((aligned(64)));
     wide_block4 b4 __attribute__((aligned(64)));
@@ -189,7 +189,7 @@ TEST(wide_leaf_lanes_match_scalar)
             trials++;
             /* The same decision always; t, u, v the scalar test's, or as
              * close to the double-precision answer (a fused multiply-add
-             * rounds differently: wide_leaf.h). */
+             * rounds differently: bvh/wide/leaf.h). */
             int same = hw == hs;
             if (same && hs && !any) {
                 same = id == 7u && close_to(tw, tr, vb.t) && close_to(uw, ur, vb.u) && close_to(vw, vr, vb.v);
@@ -377,7 +377,7 @@ static void check_wide(const accel_scene *s, const char *spec)
 
 /* quant=1: the same collapse as the float tree (same node numbering), and
  * every decoded child box holds the float one, at most about two steps
- * looser per axis; memory of 128-byte nodes (its refusals: wide_spec_errors). */
+ * looser per axis; memory of 128-byte nodes (its refusals: bvh_wide_spec_errors). */
 static void check_quant(const accel_scene *s)
 {
     accel_error err = {0};
@@ -424,7 +424,7 @@ static void check_quant(const accel_scene *s)
     k->destroy(qa);
 }
 
-TEST(wide_tree_invariants)
+TEST(bvh_wide_tree_invariants)
 {
     static const char *const scenes[] = {"soup:tris=4000", "sphereflake:level=2", "slivers:tris=2000,slivers=100",
                                          "cube:n=4", "teapot_stadium:n=2"};
@@ -450,7 +450,7 @@ TEST(wide_tree_invariants)
 
 /* Fewer levels than the binary tree, and node counts near N / (W - 1) /
  * leaf size: the collapse really merges levels. */
-TEST(wide_collapse_merges_levels)
+TEST(bvh_wide_collapse_merges_levels)
 {
     accel_scene s;
     accel_error err = {0};
@@ -478,7 +478,7 @@ TEST(wide_collapse_merges_levels)
     scene_free(&s);
 }
 
-TEST(wide_spec_errors)
+TEST(bvh_wide_spec_errors)
 {
     static const char *const bad[] = {"bvh:block=8", "bvh:width=4,traverse=packet,frustum=1", "bvh:width=3",
                                       "bvh:width=8,block=2", "bvh:width=4,quant=1",

@@ -1,16 +1,18 @@
 /*
- * bvh_build.c - the build driver of the `bvh` kind: one reference per live
+ * build_driver.c - the build driver of the `bvh` kind: one reference per live
  * primitive, the chosen builder (build_binned.c, build_sah.c, build_mid.c,
  * build_sbvh.c, which may duplicate references),
  * then the final pass that lays the nodes out depth-first, copies the
- * primitives in leaf order and computes the statistics.
+ * primitives in leaf order and computes the statistics. Also the public
+ * builder over boxes (bvh.h's bvh_build_boxes), the same binned build and
+ * layout over caller-given boxes.
  */
 #include <assert.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "build_common.h"
+#include "split_common.h"
 
 /* ---- references, final layout, statistics --------------------------------- */
 
@@ -149,7 +151,7 @@ static int build_over(const accel_scene *scene, const uint32_t *scene_id, const 
                           "max_mb = %.1f MiB (raise max_mb%s)",
                           peak / 1048576.0, live, slots, opts->max_mb,
                           opts->builder == BVH_BUILD_SBVH ? " or lower split_budget" : "");
-    bvh_build ctx;
+    bvh_build_ctx ctx;
     memset(&ctx, 0, sizeof ctx);
     ctx.scene = scene;
     ctx.opts = *opts;
@@ -261,4 +263,73 @@ int bvh_split_pairs(bvh *b, accel_error *err)
     b->nodes = block + 1;
     b->nodes_block = block;
     return 0;
+}
+
+/* ---- the public builder over boxes (bvh.h) -------------------------------------- */
+
+int bvh_build_boxes(const float *boxes, uint32_t n, int max_leaf, int threads, bvh_box_tree *out,
+                    accel_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (max_leaf < 1 || max_leaf > 256)
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh_build_boxes: max_leaf %d outside 1..256", max_leaf);
+    if (n > 0x7FFFFFFFu)
+        return accel_fail(err, ACCEL_ERR_RANGE, "bvh_build_boxes: %u boxes exceed 2^31-1", n);
+    for (uint32_t i = 0; i < n; i++) {
+        const float *b = boxes + 6 * (size_t)i;
+        for (int a = 0; a < 3; a++)
+            if (!(isfinite(b[a]) && isfinite(b[3 + a]) && b[a] <= b[3 + a]))
+                return accel_fail(err, ACCEL_ERR_SPEC, "bvh_build_boxes: box %u is not finite or inverted", i);
+    }
+    out->count = n;
+    if (n == 0) return 0;
+    /* The default builder's options (binned SAH, 16 bins, 3 axes, ct = ci = 1). */
+    bvh_build_ctx ctx;
+    memset(&ctx, 0, sizeof ctx);
+    ctx.opts.builder = BVH_BUILD_BINNED;
+    ctx.opts.bins = 16, ctx.opts.axes = 3, ctx.opts.max_leaf = max_leaf;
+    ctx.opts.ct = 1.0f, ctx.opts.ci = 1.0f;
+    ctx.threads = threads < 1 ? 1 : threads;
+    ctx.refs = bvh_alloc_array(n, sizeof(bvh_ref));
+    ctx.nodes = bvh_alloc_nodes(2 * (size_t)n);
+    out->order = bvh_alloc_array(n, sizeof(uint32_t));
+    int rc = 0;
+    if (!ctx.refs || !ctx.nodes || !out->order) {
+        rc = accel_fail(err, ACCEL_ERR_NOMEM, "bvh_build_boxes: out of memory for %u boxes", n);
+    } else {
+        for (uint32_t i = 0; i < n; i++) {
+            const float *b = boxes + 6 * (size_t)i;
+            bvh_ref *r = &ctx.refs[i];
+            memcpy(r->lo, b, 3 * sizeof(float));
+            memcpy(r->hi, b + 3, 3 * sizeof(float));
+            r->prim = i, r->pad = 0;
+        }
+        ctx.ref_count = n;
+        rc = bvh_build_binned(&ctx, err);
+    }
+    if (rc == 0) {
+        uint64_t leaves;
+        out->node_count = compact_nodes(ctx.nodes, &out->depth, &leaves);
+        if (out->node_count > 1) { /* padding node: an empty box, never referenced */
+            memset(&ctx.nodes[1], 0, sizeof(bvh_node));
+            bvh_node_set_box(&ctx.nodes[1], box3_empty());
+        }
+        for (uint32_t i = 0; i < n; i++) out->order[i] = ctx.refs[i].prim;
+        out->nodes = ctx.nodes; /* the 2n pool, of which node_count are used */
+        ctx.nodes = NULL;
+    } else {
+        free(out->order);
+        out->order = NULL;
+        out->count = 0;
+    }
+    free(ctx.nodes);
+    free(ctx.refs);
+    return rc;
+}
+
+void bvh_box_tree_free(bvh_box_tree *t)
+{
+    free(t->nodes);
+    free(t->order);
+    memset(t, 0, sizeof *t);
 }

@@ -1,7 +1,7 @@
 /*
- * wide_build.c - the wide BVH (`bvh:width=4|8`): the binary SAH tree
+ * collapse.c - the wide BVH (`bvh:width=4|8`): the binary SAH tree
  * collapsed into 4- or 8-wide nodes, and the leaves packed into SoA blocks
- * of 4 or 8 primitives (layout in wide_node.h). Both passes run inside
+ * of 4 or 8 primitives (layout in node.h). Both passes run inside
  * the kind's build, so they are part of the build time it reports.
  *
  * Two collapses. The greedy one (collapse=greedy; Wald et al., "Embree",
@@ -22,7 +22,7 @@
  * (plan_dp below): it may open a small child before a large one, or keep
  * a subtree of two blocks as one leaf where that costs less (its
  * recurrence allows nodes of fewer than W children too). The greedy tree is one of the forests it compares, so its SAH
- * cost under the DP's own measure is never higher (tests/test_wide_collapse.c
+ * cost under the DP's own measure is never higher (tests/test_bvh_wide_collapse.c
  * checks that).
  *
  * Nodes are numbered in depth-first order (a node before its children, a
@@ -35,8 +35,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "build_common.h"
-#include "wide_node.h"
+#include "bvh/split_common.h"
+#include "node.h"
 
 #if defined(__AVX__) && !defined(BVH_NO_SIMD)
 #include <immintrin.h>
@@ -78,7 +78,7 @@ static uint32_t *node_children(collapse_ctx *x, uint32_t idx)
     return (uint32_t *)(node_rows(x, idx) + 6 * x->width);
 }
 
-/* The octant orders of a node's k used children (see wide_node.h), the
+/* The octant orders of a node's k used children (see node.h), the
  * node's rows at `rows` (its child and perm arrays follow them):
  * children sorted by the projection of their box centre on each octant's
  * diagonal, nearest first (ties by slot); unused slots rank last. The
@@ -433,6 +433,27 @@ static int collapse_within(const bvh *b, const bvh_wide *w, double max_mb, doubl
                       more / 1048576.0, max_mb);
 }
 
+/* Every binary node's run of primitive slots (sub_first, sub_count) and
+ * half area; counts the interior nodes and leaves. Children come after
+ * their parent, so one backward pass sees them first. Node 1 is padding. */
+static void subtree_table(const bvh_node *bin, uint32_t nc, uint32_t *sub_first, uint32_t *sub_count,
+                          float *area, uint32_t *interior, uint32_t *leaves)
+{
+    for (uint32_t i = nc; i-- > 0;) {
+        area[i] = (float)bvh_half_area(bvh_node_box(&bin[i]));
+        if (i == 1 && nc > 1) {
+            sub_first[i] = sub_count[i] = 0;
+        } else if (bin[i].count) {
+            sub_first[i] = bin[i].left_first, sub_count[i] = bin[i].count;
+            (*leaves)++;
+        } else {
+            uint32_t l = bin[i].left_first;
+            sub_first[i] = sub_first[l], sub_count[i] = sub_count[l] + sub_count[l + 1];
+            (*interior)++;
+        }
+    }
+}
+
 /* Collapses b's binary tree; fills w (nodes, blocks, counts, root). */
 static int collapse_tree(const bvh *b, bvh_wide *w, const bvh_wide_collapse *cc, int threads, double ct,
                          double ci, double *sah, accel_error *err)
@@ -443,22 +464,8 @@ static int collapse_tree(const bvh *b, bvh_wide *w, const bvh_wide_collapse *cc,
     if (!sub) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for the collapse");
     uint32_t *sub_first = sub, *sub_count = sub + nc;
     float *area = (float *)(sub + 2 * (size_t)nc);
-    /* Children come after their parent, so one backward pass gives every
-     * subtree's run of slots. Node 1 is padding. */
     uint32_t interior = 0, leaves = 0;
-    for (uint32_t i = nc; i-- > 0;) {
-        area[i] = (float)bvh_half_area(bvh_node_box(&bin[i]));
-        if (i == 1 && nc > 1) {
-            sub_first[i] = sub_count[i] = 0;
-        } else if (bin[i].count) {
-            sub_first[i] = bin[i].left_first, sub_count[i] = bin[i].count;
-            leaves++;
-        } else {
-            uint32_t l = bin[i].left_first;
-            sub_first[i] = sub_first[l], sub_count[i] = sub_count[l] + sub_count[l + 1];
-            interior++;
-        }
-    }
+    subtree_table(bin, nc, sub_first, sub_count, area, &interior, &leaves);
     /* The scratch, known before it is taken: the subtree table, the DP's
      * table, the wide nodes' upper bound and the leaf list. */
     const double scratch = (double)nc * 3 * sizeof(uint32_t) +
@@ -547,8 +554,8 @@ static int collapse_tree(const bvh *b, bvh_wide *w, const bvh_wide_collapse *cc,
     return rc;
 }
 
-int bvh_wide_build(bvh *b, int width, int block, int order, int quant, const bvh_wide_collapse *cc,
-                   int threads, double ct, double ci, accel_build_stats *stats, accel_error *err)
+int bvh_wide_build(bvh *b, bvh_wide **out, int width, int block, int order, int quant,
+                   const bvh_wide_collapse *cc, int threads, double ct, double ci, accel_build_stats *stats, accel_error *err)
 {
     bvh_wide *w = calloc(1, sizeof *w);
     if (!w) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory");
@@ -571,7 +578,7 @@ int bvh_wide_build(bvh *b, int width, int block, int order, int quant, const bvh
     bvh_release(b);
     b->node_count = 0;
     b->depth = w->depth;
-    b->wide = w;
+    *out = w;
     stats->nodes = w->node_count;
     stats->leaves = w->leaf_count;
     stats->depth = w->depth;

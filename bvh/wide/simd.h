@@ -1,5 +1,5 @@
 /*
- * wide_simd.h - the few float-vector operations the wide BVH kernels use,
+ * simd.h - the few float-vector operations the wide BVH kernels use,
  * for 4 lanes (f4: SSE) and 8 lanes (f8: AVX2), each with a plain-C twin
  * (a struct of floats and a loop per operation) used when the compiler
  * does not target the instruction set, or with -DBVH_NO_SIMD. AVX-512 is
@@ -20,7 +20,7 @@
  * targets FMA, and a rounded product then a rounded sum elsewhere. Only
  * the leaf test uses them, where the error bounds of core/prim.h assume
  * the two roundings: the fused form errs less, so every bound still
- * holds (wide_leaf.h). The slab test and everything else round every
+ * holds (leaf.h). The slab test and everything else round every
  * product before the sum, as the scalar tests do.
  */
 #ifndef BVH_WIDE_SIMD_H
@@ -35,10 +35,6 @@
 #if defined(__SSE2__) && !defined(BVH_NO_SIMD)
 #define WIDE_SSE 1
 #include <immintrin.h>
-
-#ifdef __cplusplus
-extern "C" {
-#endif
 #else
 #define WIDE_SSE 0
 #endif
@@ -48,10 +44,14 @@ extern "C" {
 #define WIDE_AVX 0
 #endif
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* The kernels' helpers are forced inline, so that every copy of a kernel
  * (core/variant.h) folds its constant flags. `make sanitize` defines
  * WIDE_NO_FORCE_INLINE: instrumented, the forced copies took 6 minutes
- * (AVX2) to over 19 (plain C lanes) to compile bvh/wide_trace.c, plain
+ * (AVX2) to over 19 (plain C lanes) to compile bvh/wide/trace4.c, plain
  * `static inline` 11 seconds; the same code, copies the compiler may
  * leave uninlined. */
 #ifdef WIDE_NO_FORCE_INLINE
@@ -199,7 +199,7 @@ WIDE_INLINE float f8_hmin(f8 a)
     return _mm_cvtss_f32(m);
 }
 /* Lane i (< 8) of a by one variable permute (the two-hit path of
- * wide_kernel.h, AVX2 only). */
+ * kernel.h, AVX2 only). */
 WIDE_INLINE float f8_lane(f8 a, unsigned i)
 {
     return _mm256_cvtss_f32(_mm256_permutevar8x32_ps(a, _mm256_castsi128_si256(_mm_cvtsi32_si128((int)i))));
@@ -235,7 +235,7 @@ WIDE_INLINE f8 f8_signs(f8 a) { return f8_and(f8_set1(-0.0f), a); }
  * by lane), and the same rays refused. The finiteness test is one compare
  * of |x| < inf (false for inf and NaN) over the six components, and the
  * six divisions are two 4-lane divisions. Tested against accel_prep_ray in
- * tests/test_wide.c.
+ * tests/test_bvh_wide.c.
  */
 static inline int wide_prep_ray(const accel_ray *r, accel_ray_prep *p)
 {

@@ -1,11 +1,11 @@
 /*
- * wide_packet.h - 64-ray packets over a wide BVH (traverse=packet with
+ * packet.h - 64-ray packets over a wide BVH (traverse=packet with
  * width=4|8): the coherent mode for primary and shadow rays.
  * A kernel body (C only): included by the .c files of its folder, not part
  * of the interface a C++ program includes.
  *
- * A template: wide_tables.h includes it once per (WIDE_NW, WIDE_LB) pair
- * after wide_kernel.h for the same pair, whose single-ray kernel it falls
+ * A template: tables.h includes it once per (WIDE_NW, WIDE_LB) pair
+ * after kernel.h for the same pair, whose single-ray kernel it falls
  * back to. It defines wide_pclosest_<NW>_<LB> and wide_pany_<NW>_<LB>.
  *
  * A packet is 64 consecutive rays (8x8 screen tiles in the primary sets),
@@ -30,12 +30,12 @@
  * Each entry also carries `last`, the last ray that hit its box (found by
  * scanning the groups from the back), and every scan stops there. At a
  * leaf, the rays `first` to `last` that hit the leaf's box (groups of 8
- * again) run the single-ray leaf test (wide_leaf.h) on its blocks, block
+ * again) run the single-ray leaf test (leaf.h) on its blocks, block
  * by block (leaf_by_block: rays sharing their origin and axes share the
  * block's relative vertices). An
  * interior entry whose span last - first is below w->hybrid (spec key
  * hybrid=, 0: never) is not walked as a packet: each ray of the span that
- * hits its box walks the subtree alone (walk_oct of wide_kernel.h, the
+ * hits its box walks the subtree alone (walk_oct of kernel.h, the
  * single-ray loop), the hybrid of Benthin et al. (HPG 2012) with the span
  * as a bound on the active rays instead of an exact count. With
  * any hit, an occluded ray leaves the packet. A packet whose valid rays do
@@ -49,10 +49,10 @@
 #define WIDE_NW 4
 #endif
 #ifndef WIDE_LB /* alone: the pieces for width 4 (or WIDE_NW), blocks of 4 */
-#include "wide_kernel.h"
+#include "kernel.h"
 #endif
-#include "wide_node.h"
-#include "wide_simd.h"
+#include "node.h"
+#include "simd.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -243,7 +243,7 @@ WIDE_INLINE int PK(packet_load)(wide_packet *pk, const bvh_wide *w, const accel_
 
 /* With shared: each group's rectangle of shear constants as centre and
  * half sizes, rounded up so that it holds every valid ray's (sx, sy)
- * (aff_cull_rect, wide_leaf.h). Made at the first leaf that culls. */
+ * (aff_cull_rect, leaf.h). Made at the first leaf that culls. */
 WIDE_INLINE void PK(packet_rects)(wide_packet *pk)
 {
     for (unsigned g = 0; g < WP_RAYS / 8; g++) {
@@ -307,7 +307,7 @@ WIDE_INLINE void PK(ray_block)(wide_packet *pk, unsigned r, const PBLOCK *blk, c
 /*
  * The leaf cull of a packet whose rays share their origin and axes: the
  * rays of `rays` whose group's rectangle of shears surely misses every lane
- * of the block (aff_cull_rect, wide_leaf.h: lanes the exact test misses for
+ * of the block (aff_cull_rect, leaf.h: lanes the exact test misses for
  * each of them) skip it; returns the others. A separate function, so that
  * the leaf loop around it compiles as it did without it. Measured on its
  * own in bvh/README.md: it pays where a packet's rays miss whole blocks
@@ -369,7 +369,7 @@ WIDE_INLINE void PK(leaf_by_block)(wide_packet *pk, const wide_packet_entry *e, 
             PKL(leaf_rel)(&blk[k], &lr0, &q);
             PKL(leaf_rel_mags)(&q);
             uint64_t todo = rays;
-            if (!has_spheres && WP_CULL && __builtin_popcountll(rays) >= WP_CULL &&
+            if (!has_spheres && WP_CULL != 0 && __builtin_popcountll(rays) >= WP_CULL &&
                 (pk->cull_tries < 64 || 4 * pk->cull_wins >= pk->cull_tries ||
                  (++pk->cull_skips & 15) == 0))
                 todo = PK(leaf_cull)(pk, &q, &blk[k], todo, c);

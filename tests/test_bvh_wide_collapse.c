@@ -1,19 +1,19 @@
 /*
- * test_wide_collapse.c - the collapse of the binary tree into wide nodes
- * (bvh/wide_build.c): the binary build stopped at one block gives the
+ * test_bvh_wide_collapse.c - the collapse of the binary tree into wide nodes
+ * (bvh/wide/collapse.c): the binary build stopped at one block gives the
  * same greedy wide tree as the fully split one, and collapse=dp finds
  * trees no greedy collapse beats under its own cost (and cheaper ones on
  * most scenes), within its leaf_blocks bound. The trees' structural
- * invariants are in test_wide.c, traces against the reference in
- * test_wide_trace.c.
+ * invariants are in test_bvh_wide.c, traces against the reference in
+ * test_bvh_wide_trace.c.
  */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "bvh/build_common.h"
+#include "bvh/split_common.h"
 #include "bvh/bvh.h"
-#include "bvh/wide_node.h"
+#include "bvh/wide/node.h"
 #include "scene/scene.h"
 #include "support.h"
 #include "test.h"
@@ -41,7 +41,7 @@ static void wide_counts(const accel_scene *s, int width, int leaf_below, int thr
     memset(st, 0, sizeof *st);
     *blocks = 0;
     if (bvh_build_run(s, &o, threads, &b, st, &err) ||
-        bvh_wide_build(&b, width, 8, WIDE_ORDER_OCTANT, 0, &greedy, threads, 1.0, 1.0, st, &err)) {
+        bvh_wide_build(&b, &b.wide, width, 8, WIDE_ORDER_OCTANT, 0, &greedy, threads, 1.0, 1.0, st, &err)) {
         test_fail(__FILE__, __LINE__, "%s: %s", s->name, err.msg);
         return;
     }
@@ -49,7 +49,7 @@ static void wide_counts(const accel_scene *s, int width, int leaf_below, int thr
     bvh_wide_free(b.wide);
 }
 
-TEST(wide_binary_stops_at_one_block)
+TEST(bvh_wide_binary_stops_at_one_block)
 {
     for (size_t i = 0; i < COLLAPSE_SCENES; i++) {
         accel_scene s;
@@ -72,7 +72,7 @@ TEST(wide_binary_stops_at_one_block)
     }
 }
 
-/* The collapse=dp objective of a built wide tree (wide_build.c's plan_dp):
+/* The collapse=dp objective of a built wide tree (bvh/wide/collapse.c's plan_dp):
  * every wide node below the root costs its half area, every leaf its half
  * area x leaf_cost x its blocks; the areas are the child boxes of the
  * parents' rows, which are the binary nodes' boxes. */
@@ -114,7 +114,7 @@ static int dp_objective_of(const accel_scene *s, const char *spec, double leaf_c
  * leaf_below), no greedy collapse costs less by plan_dp's measure, and on
  * most scenes the DP finds strictly cheaper trees (it is not the greedy
  * one under another name). Its leaf_blocks bound holds. */
-TEST(wide_dp_collapse_costs_least)
+TEST(bvh_wide_dp_collapse_costs_least)
 {
     static const double costs[] = {0.5, 1.5, 4.0};
     int cheaper = 0, compared = 0;
@@ -166,7 +166,7 @@ TEST(wide_dp_collapse_costs_least)
  * the binary build's peak, so a limit the binary build fits is refused by
  * the collapse with a message that names the limit and the account, never
  * built past it; a limit that fits builds the same tree as no limit. */
-TEST(wide_collapse_within_max_mb)
+TEST(bvh_wide_collapse_within_max_mb)
 {
     accel_scene s;
     accel_error err = {0};

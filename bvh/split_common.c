@@ -1,8 +1,8 @@
 /*
- * build_common.c - what every BVH builder shares: aligned allocation, the
+ * split_common.c - what every BVH builder shares: aligned allocation, the
  * SAH termination rule, the object-median split and the (parallel,
  * deterministic) top-down recursion that calls a builder's split function.
- * The driver that runs a builder and lays out its result is bvh_build.c.
+ * The driver that runs a builder and lays out its result is build_driver.c.
  *
  * The recursion follows the usual top-down recursion (pbrt-v3 section 4.3;
  * Wald, "On fast Construction of SAH-based Bounding Volume Hierarchies",
@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "build_common.h"
+#include "split_common.h"
 
 /* Tasks with fewer references than this are built by a single thread: a
  * subtree of a few thousand primitives takes about a millisecond. */
@@ -32,7 +32,7 @@ void *bvh_alloc_array(size_t n, size_t size)
     return accel_alloc_large(n, size, sizeof(void *));
 }
 
-int bvh_split_pays(const bvh_build *ctx, const bvh_task *t, double split_sum)
+int bvh_split_pays(const bvh_build_ctx *ctx, const bvh_task *t, double split_sum)
 {
     if (t->count > (uint32_t)ctx->opts.max_leaf) return 1;
     if (ctx->opts.term_none) return 0;
@@ -49,7 +49,7 @@ double bvh_split_sum(const bvh_split *s, uint32_t count)
            bvh_half_area(s->right) * (count - s->left_count);
 }
 
-int bvh_leaf_certain(const bvh_build *ctx, const bvh_task *t)
+int bvh_leaf_certain(const bvh_build_ctx *ctx, const bvh_task *t)
 {
     if (t->count > (uint32_t)ctx->opts.max_leaf) return 0;
     double area = bvh_half_area(t->bounds);
@@ -126,7 +126,7 @@ static void select_kth(bvh_ref *r, uint32_t n, uint32_t k, int axis)
     }
 }
 
-void bvh_split_median(bvh_build *ctx, const bvh_task *t, bvh_split *out)
+void bvh_split_median(bvh_build_ctx *ctx, const bvh_task *t, bvh_split *out)
 {
     assert(t->count >= 2);
     int axis = v3_max_axis(box3_extent(t->cbounds));
@@ -146,7 +146,7 @@ void bvh_split_median(bvh_build *ctx, const bvh_task *t, bvh_split *out)
  * thread), to the next free pair of the subtree's region: its nodes then
  * lie together at the region's start, in depth-first order, and the pages
  * of the region's unused tail are never touched. */
-static int split_task(bvh_build *ctx, const bvh_task *t, int threads, bvh_task *l, bvh_task *r,
+static int split_task(bvh_build_ctx *ctx, const bvh_task *t, int threads, bvh_task *l, bvh_task *r,
                       uint32_t *bump)
 {
     bvh_node *node = &ctx->nodes[t->node];
@@ -181,7 +181,7 @@ static int split_task(bvh_build *ctx, const bvh_task *t, int threads, bvh_task *
 /* Depth-first, one thread. Pending right siblings: at most one per level.
  * The subtree's pairs are handed out in the order of its splits (left
  * first, depth-first): at most 2(count - 1) nodes, inside its region. */
-static void build_subtree(bvh_build *ctx, const bvh_task *root)
+static void build_subtree(bvh_build_ctx *ctx, const bvh_task *root)
 {
     bvh_task stack[BVH_MAX_DEPTH + 1];
     int sp = 0;
@@ -197,7 +197,7 @@ static void build_subtree(bvh_build *ctx, const bvh_task *root)
 }
 
 typedef struct {
-    bvh_build *ctx;
+    bvh_build_ctx *ctx;
     bvh_task *tasks;
 } subtree_job;
 
@@ -214,7 +214,7 @@ static int by_count_desc(const void *a, const void *b)
     return x < y ? 1 : x > y ? -1 : 0;
 }
 
-void bvh_build_tree(bvh_build *ctx)
+void bvh_build_tree(bvh_build_ctx *ctx)
 {
     bvh_task root;
     root.node = 0;

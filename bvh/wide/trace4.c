@@ -1,14 +1,14 @@
 /*
- * wide_trace.c - the wide BVH's batch entries: one kernel table
+ * trace4.c - the wide BVH's batch entries: one kernel table
  * (core/variant.h) per width, block size and query, each compiled from the
- * templates wide_leaf.h (the SIMD watertight leaf test) and wide_kernel.h
- * (the traversal), instantiated by wide_tables.h: the 4-wide tables are
- * here, the 8-wide ones in wide_trace8.c (bvh_wide_kernels8).
+ * templates leaf.h (the SIMD watertight leaf test) and kernel.h
+ * (the traversal), instantiated by tables.h: the 4-wide tables are
+ * here, the 8-wide ones in trace8.c (bvh_wide_kernels8).
  */
-#include "wide_node.h"
+#include "node.h"
 
 #define WIDE_NW 4
-#include "wide_tables.h"
+#include "tables.h"
 
 static const accel_kernel_table *table_of(const bvh_wide *w, int row, int any_hit)
 {

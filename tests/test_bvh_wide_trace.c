@@ -1,5 +1,5 @@
 /*
- * test_wide_trace.c - the wide BVHs traced against the double-precision
+ * test_bvh_wide_trace.c - the wide BVHs traced against the double-precision
  * reference where the shared suites do not reach: the scanned meshes
  * (test_conformance.c runs only each kind's default there) with primary,
  * shadow, diffuse and vertex-aimed rays, for every width and block size;
@@ -110,7 +110,7 @@ static void check_specs_on(const accel_scene *s, const char *const *specs, size_
     }
 }
 
-TEST(wide_shared_meshes_against_reference)
+TEST(bvh_wide_shared_meshes_against_reference)
 {
     const char *dir = test_shared_scenes();
     if (!dir) {
@@ -137,7 +137,7 @@ TEST(wide_shared_meshes_against_reference)
 /* Built-in scenes with the wide specs' counted traces: same hits as the
  * timed copies, the same with 2 threads and a 2-thread build, no broken
  * step bound, per-ray costs filled in. */
-TEST(wide_invariants)
+TEST(bvh_wide_invariants)
 {
     static const char *const scenes[] = {"teapot_stadium:n=4,stadium=16,tiers=3", "sphereflake:level=2",
                                          "slivers:tris=3000,slivers=100"};
@@ -199,7 +199,7 @@ TEST(wide_invariants)
 
 /* The naive test per lane: the wide trees find the same closest hits as
  * the binary tree with the same (non-robust) triangle test. */
-TEST(wide_naive_matches_binary_naive)
+TEST(bvh_wide_naive_matches_binary_naive)
 {
     accel_scene s;
     accel_error err = {0};
@@ -237,7 +237,7 @@ TEST(wide_naive_matches_binary_naive)
 }
 
 /* Empty scenes and scenes of one primitive (the root is then a leaf). */
-TEST(wide_tiny_scenes)
+TEST(bvh_wide_tiny_scenes)
 {
     scene_builder b = {0};
     accel_error err = {0};
@@ -286,7 +286,7 @@ TEST(wide_tiny_scenes)
  * core/geom.h: the folded padding is proven for t_near >= 0 only); every
  * width, order and layout against the reference, which the conformance
  * suite runs only for the kinds' listed variants. */
-TEST(wide_negative_t_near)
+TEST(bvh_wide_negative_t_near)
 {
     static const char *const specs[] = {"bvh:width=8", "bvh:width=8,order=branchy", "bvh:width=8,quant=1",
                                         "bvh:width=4,block=4,order=branchy", "bvh:width=8,order=dist",
@@ -348,7 +348,7 @@ static int by_class(const void *a, const void *b)
  * over its dominant one (the watertight test's shear, up to order and
  * sign): neighbours in this order are neighbours on the screen, so the
  * groups of 8 of a packet have small rectangles of shears, as a tile of
- * primary rays has, and the leaf cull (wide_leaf.h, aff_cull_rect; the
+ * primary rays has, and the leaf cull (bvh/wide/leaf.h, aff_cull_rect; the
  * binary packets' aff_misses) is tried with its margins on rays through
  * vertices and edges. */
 static uint64_t shear_key(const accel_ray *r)
@@ -374,12 +374,12 @@ static int by_class_shear(const void *a, const void *b)
 
 /* Packets whose rays share their origin and permuted axes test a leaf's
  * blocks with the block's vertices relative to that origin computed once
- * (wide_packet.h, leaf_by_block; the binary packets likewise per
+ * (bvh/wide/packet.h, leaf_by_block; the binary packets likewise per
  * triangle, bvh_packet.c). Rays from one eye aimed exactly at
  * vertices and edge midpoints, grouped by class so that most packets of
  * 64 are such packets, put every lane's error bounds and the double
  * fallback to work there; hybrid=0 keeps every leaf in the packet. */
-TEST(wide_packets_shared_origin_at_vertices)
+TEST(bvh_wide_packets_shared_origin_at_vertices)
 {
     static const char *const specs[] = {"bvh:width=8,traverse=packet,hybrid=0",
                                         "bvh:width=4,block=4,traverse=packet,hybrid=0",

@@ -1,7 +1,8 @@
 /*
- * wide_node.h - the memory layout of the wide BVHs (`bvh:width=4|8`),
- * shared by the collapse (wide_build.c) and the kernels (wide_trace.c,
- * wide_trace8.c, wide_tables.h, wide_kernel.h, wide_leaf.h). Internal to bvh/.
+ * node.h - the memory layout of the wide BVHs (`bvh:width=4|8`),
+ * shared by the collapse (collapse.c) and the kernels (trace4.c,
+ * trace8.c, tables.h, kernel.h, leaf.h), the walk and the refit. Internal
+ * to bvh/wide/ (the kind sees wide.h).
  *
  * A wide node holds the boxes of its up to W children in SoA form, one row
  * of W floats per box plane, so that one ray meets all W boxes in one
@@ -56,8 +57,9 @@
 #include <stdint.h>
 #include <string.h>
 
-#include "bvh_node.h"
+#include "bvh/bvh_node.h"
 #include "core/variant.h"
+#include "wide.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -162,54 +164,8 @@ typedef struct {
     float t_entry;
 } wide_stack_entry;
 
-/* Ordering of the hit children (parameter order=): per-ray entry
- * distances with branches on the hit count, the node's precomputed octant
- * order with a compress-store onto the stack, or the octant order pushed
- * with one branch per child (branchy; single rays only). */
-enum { WIDE_ORDER_DIST = 0, WIDE_ORDER_OCTANT = 1, WIDE_ORDER_BRANCHY = 2 };
-
-/* The wide form of a built bvh (bvh.wide). Immutable after the build. */
-typedef struct bvh_wide {
-    int width;            /* children per node: 4 or 8 */
-    int block;            /* primitives per leaf block: 4 or 8 */
-    int order;            /* WIDE_ORDER_*: how hit children are ordered */
-    int packets;          /* traverse=packet: 64-ray packets (wide_packet.h) */
-    int hybrid;           /* packets: entries spanning at most this many rays go ray by ray */
-    int quant;            /* quant=1: nodes are wide_qnode8 (width 8 only) */
-    uint32_t root;        /* reference of the root, WIDE_EMPTY for an empty scene */
-    uint32_t node_count;  /* wide nodes */
-    uint32_t leaf_count;  /* leaves */
-    uint32_t block_count; /* leaf blocks */
-    uint32_t prim_count;  /* primitives stored (not counting padding lanes) */
-    uint32_t tri_count;   /* scene ids >= tri_count are spheres */
-    uint32_t step_bound;  /* nodes + leaves: a ray visits each at most once */
-    int depth;            /* levels of wide nodes and leaves (a lone leaf is 1) */
-    void *nodes;          /* wide_node4 or wide_node8, 64-byte aligned */
-    void *blocks;         /* wide_block4 or wide_block8, 64-byte aligned */
-} bvh_wide;
-
-struct bvh;
-/* How the binary tree is collapsed: greedy (dp = 0: open the largest
- * child, every subtree of one block a leaf) or the optimal collapse under
- * the SAH (dp = 1, wide_build.c's plan_dp), with a leaf block costing
- * leaf_cost wide node visits and leaves of at most leaf_blocks blocks. */
-typedef struct {
-    int dp;
-    double leaf_cost;
-    int leaf_blocks;
-    double max_mb; /* the build's memory limit (bvh's max_mb), MiB; 0: none */
-} bvh_wide_collapse;
-/* Collapses the built binary tree of b into b->wide (width 4 or 8, leaf
- * blocks of `block` primitives) and frees the binary pools, which the wide
- * kernels do not use. Fills stats->nodes, leaves and depth, and
- * stats->sah_cost with the wide tree's SAH cost under node cost ct and
- * primitive cost ci (the binary tree's formula over the wide nodes and
- * leaves). The binary tree is best built with leaf_below = block
- * (build_common.h): a subtree that fits one block becomes one leaf. */
-int bvh_wide_build(struct bvh *b, int width, int block, int order, int quant, const bvh_wide_collapse *cc,
-                   int threads, double ct, double ci, accel_build_stats *stats, accel_error *err);
 /* Recomputes a node's octant orders (perm) from its box rows; its first k
- * child slots are used (wide_build.c; bvh_refit.c calls it after a refit). */
+ * child slots are used (collapse.c; bvh_refit.c calls it after a refit). */
 void bvh_wide_set_perm(float *rows, int width, int k);
 /* The decoded box of child c of a quantized node (lo[3], hi[3]). */
 void bvh_wide_qbox(const wide_qnode8 *n, int c, float *lo, float *hi);
@@ -234,17 +190,8 @@ static inline void wide_put_lane(float *v, int block, int lane, const float *slo
             v[(3 * vtx + axis) * block + lane] = slot[3 * vtx + axis];
 }
 
-/* Bytes held by the wide tree (nodes, blocks, the struct itself). */
-size_t bvh_wide_memory(const bvh_wide *w);
-void bvh_wide_free(bvh_wide *w);
-
-/* Kernels (wide_trace.c; the 8-wide tables in wide_trace8.c). */
-void bvh_wide_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hits, size_t count,
-                        accel_counters *c, int naive, int has_spheres);
-void bvh_wide_occluded(const bvh_wide *w, const accel_ray *rays, uint8_t *occ, size_t count,
-                       accel_counters *c, int naive, int has_spheres);
 /* The 8-wide kernel table of a row (0 single, 1 packets, 2 order=branchy,
- * 3 quant=1), query and block size (wide_trace8.c). */
+ * 3 quant=1), query and block size (trace8.c). */
 const accel_kernel_table *bvh_wide_kernels8(int row, int any_hit, int block8);
 
 #ifdef __cplusplus

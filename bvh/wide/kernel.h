@@ -1,12 +1,12 @@
 /*
- * wide_kernel.h - single-ray traversal of a wide BVH with WIDE_NW (4 or 8)
+ * kernel.h - single-ray traversal of a wide BVH with WIDE_NW (4 or 8)
  * children per node and leaf blocks of WIDE_LB (4 or 8) primitives:
  * closest hit and any hit.
  * A kernel body (C only): included by the .c files of its folder, not part
  * of the interface a C++ program includes.
  *
- * A template: wide_tables.h (for wide_trace.c and wide_trace8.c) includes
- * it once per (WIDE_NW, WIDE_LB) pair after wide_leaf.h for WIDE_LB (4 and 4 when included alone). It defines
+ * A template: tables.h (for trace4.c and trace8.c) includes
+ * it once per (WIDE_NW, WIDE_LB) pair after leaf.h for WIDE_LB (4 and 4 when included alone). It defines
  * the always-inline kernels wide_closest_<NW>_<LB> and wide_any_<NW>_<LB>
  * in the form core/variant.h's ACCEL_KERNEL_TABLE expects.
  *
@@ -37,11 +37,11 @@
 #endif
 #ifndef WIDE_LB
 #define WIDE_LB 4
-#include "wide_leaf.h"
+#include "leaf.h"
 #endif
 #include "core/variant.h"
-#include "wide_node.h"
-#include "wide_simd.h"
+#include "node.h"
+#include "simd.h"
 
 #define WK_CAT_(a, b, c) a##_##b##_##c
 #define WK_CAT(a, b, c) WK_CAT_(a, b, c)
@@ -371,7 +371,7 @@ WIDE_INLINE int WK(visit_node_q)(const wide_qnode8 *n, const WK(node_ray) *r, fl
  * The walk of one prepared ray with order=octant (and branchy, quant) from
  * `ref` down, on the ray's running answer (*t, *u, *v, *hit_id): the
  * whole trace from the root, or a subtree the packet kernel hands to single
- * rays (wide_packet.h). Returns 1 when any_hit found a hit or the step
+ * rays (packet.h). Returns 1 when any_hit found a hit or the step
  * bound broke (the caller stops).
  */
 WIDE_INLINE int WK(walk_oct)(const bvh_wide *w, const accel_ray_prep *p, uint32_t ref, float *t_io, float *u,

@@ -1,12 +1,18 @@
 /*
- * build_common.h - what every BVH builder shares (internal to bvh/).
+ * split_common.h - what every BVH builder shares (internal to bvh/).
+ *
+ * Names: a builder is a split algorithm (bvh_builder, BVH_BUILD_*, the
+ * build= parameter; one file build_<name>.c each); its working state is
+ * the build context (bvh_build_ctx); the split code they share is
+ * split_common.c; the driver that runs one and lays out the finished tree
+ * is build_driver.c (bvh_build_run).
  *
  * A build works on an array of primitive references (one 32-byte record per
  * primitive: its box and its scene id) and a temporary node pool of 2N
  * nodes. A builder is one split function: given a task (a node and its run
  * of references) it either declares a leaf or partitions the run in place,
  * quicksort-like, into a left and a right part. The common driver
- * (build_common.c) does everything else: the SAH termination rule, the depth
+ * (split_common.c) does everything else: the SAH termination rule, the depth
  * bound, node allocation, the parallel schedule, and the final pass that
  * writes the compact node pool and the primitives in leaf order.
  *
@@ -19,8 +25,8 @@
  * per-chunk bins with min, max and integer sums, which are exact in any
  * order. So the tree is byte-identical for any thread count.
  */
-#ifndef BVH_BUILD_COMMON_H
-#define BVH_BUILD_COMMON_H
+#ifndef BVH_SPLIT_COMMON_H
+#define BVH_SPLIT_COMMON_H
 
 #include <assert.h>
 #include <float.h>
@@ -95,6 +101,7 @@ static inline void bvh_prim_slot(const accel_scene *s, uint32_t prim, float *dst
     }
 }
 
+/* The builder (split algorithm) of the build= parameter, in its order. */
 typedef enum {
     BVH_BUILD_BINNED = 0,
     BVH_BUILD_SAH,
@@ -112,7 +119,7 @@ typedef struct {
     int term_none; /* term=none: split every node over max_leaf, never stop by the SAH rule */
     int reorder;       /* common parameter: Morton-ordered primitive store */
     double split_budget; /* sbvh: most duplicated references, as a fraction of the primitives */
-    double max_mb;       /* memory limit of the build, MiB (bvh_build.c checks it up front) */
+    double max_mb;       /* memory limit of the build, MiB (build_driver.c checks it up front) */
     double alpha;        /* sbvh: spatial splits only where the object split's children overlap
                           * by more than alpha times the root's (half) area */
     int leaf_below;      /* a task of at most this many references is a leaf, unsplit (0: none;
@@ -138,14 +145,14 @@ typedef struct {
     box3 left_c, right_c; /* children's centroid bounds */
 } bvh_split;
 
-struct bvh_build;
+struct bvh_build_ctx;
 /* Decides the task's split and partitions its references in place so that
  * the left part comes first. `threads` > 1 only near the root, for the
  * builder's own data-parallel loops; the answer must not depend on it. A
  * split function cannot fail: scratch memory is allocated up front. */
-typedef void (*bvh_split_fn)(struct bvh_build *ctx, const bvh_task *t, int threads, bvh_split *out);
+typedef void (*bvh_split_fn)(struct bvh_build_ctx *ctx, const bvh_task *t, int threads, bvh_split *out);
 
-typedef struct bvh_build {
+typedef struct bvh_build_ctx {
     const accel_scene *scene;
     bvh_build_opts opts;
     bvh_ref *refs;        /* ref_count references */
@@ -154,7 +161,7 @@ typedef struct bvh_build {
     bvh_split_fn split;
     void *data;           /* the builder's scratch */
     int threads;
-} bvh_build;
+} bvh_build_ctx;
 
 /* Centroid of a reference on one axis: halves first, so that it never
  * overflows for any finite box; separate statements, so that no compiler
@@ -211,7 +218,7 @@ static inline int bvh_task_forced(const bvh_task *t)
  *   ct + ci * split_sum / A_node  <  ci * N.
  * A task larger than max_leaf is always split; with term=none (the
  * lecture's lab: split until a leaf is small enough) nothing else is. */
-int bvh_split_pays(const bvh_build *ctx, const bvh_task *t, double split_sum);
+int bvh_split_pays(const bvh_build_ctx *ctx, const bvh_task *t, double split_sum);
 
 /* A_L*N_L + A_R*N_R of a split (half areas), for bvh_split_pays. */
 double bvh_split_sum(const bvh_split *s, uint32_t count);
@@ -222,14 +229,14 @@ double bvh_split_sum(const bvh_split *s, uint32_t count);
  * split cost more than the leaf (by a margin that covers rounding in the
  * builders' own cost sums), any split function would answer "leaf" too.
  * Only for tasks whose references lie at refs[first, first+count). */
-int bvh_leaf_certain(const bvh_build *ctx, const bvh_task *t);
+int bvh_leaf_certain(const bvh_build_ctx *ctx, const bvh_task *t);
 
 /* Object median on the axis of largest centroid extent (quickselect on the
  * centroid, ties broken by primitive id so the result is unique): the
  * `median` builder, and every builder's fallback when forced by the depth
  * bound or when no other split separates the references. Always splits
  * (count >= 2); fills both children's bounds. */
-void bvh_split_median(bvh_build *ctx, const bvh_task *t, bvh_split *out);
+void bvh_split_median(bvh_build_ctx *ctx, const bvh_task *t, bvh_split *out);
 
 /* Bounds and centroid bounds of refs[first, first+count). */
 void bvh_refs_bounds(const bvh_ref *refs, uint32_t first, uint32_t count, box3 *bounds,
@@ -237,18 +244,18 @@ void bvh_refs_bounds(const bvh_ref *refs, uint32_t first, uint32_t count, box3 *
 
 /* The common driver: builds the whole tree in ctx->nodes with ctx->split,
  * using ctx->threads threads (binning near the root, subtrees as tasks). */
-void bvh_build_tree(bvh_build *ctx);
+void bvh_build_tree(bvh_build_ctx *ctx);
 
 /* The builders (one file each). Each sets ctx->split, allocates its scratch,
  * runs bvh_build_tree and leaves ctx->refs in leaf order. */
-int bvh_build_binned(bvh_build *ctx, accel_error *err);
-int bvh_build_sah(bvh_build *ctx, accel_error *err);
-int bvh_build_mid(bvh_build *ctx, accel_error *err);
-int bvh_build_median(bvh_build *ctx, accel_error *err);
+int bvh_build_binned(bvh_build_ctx *ctx, accel_error *err);
+int bvh_build_sah(bvh_build_ctx *ctx, accel_error *err);
+int bvh_build_mid(bvh_build_ctx *ctx, accel_error *err);
+int bvh_build_median(bvh_build_ctx *ctx, accel_error *err);
 /* The split BVH (build_sbvh.c): it replaces ctx->refs and ctx->nodes by
  * larger arrays (N(1 + split_budget) references, twice that many nodes) and
  * sets ctx->ref_count to the references of the finished tree (>= N). */
-int bvh_build_sbvh(bvh_build *ctx, accel_error *err);
+int bvh_build_sbvh(bvh_build_ctx *ctx, accel_error *err);
 
 /* The boxes of the parts of triangle `tri` (9 floats) on either side of the
  * plane x[axis] = plane, each intersected with `box`: computed in double and,
@@ -269,7 +276,7 @@ int bvh_build_run(const accel_scene *scene, const bvh_build_opts *opts, int thre
 
 /* Frees what bvh_build_run allocated in b. */
 void bvh_release(bvh *b);
-/* pairs=split (bvh_build.c): moves the node pool 32 bytes off the cache line
+/* pairs=split (build_driver.c): moves the node pool 32 bytes off the cache line
  * grid; frees the old pool. */
 int bvh_split_pairs(bvh *b, accel_error *err);
 

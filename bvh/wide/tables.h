@@ -1,0 +1,91 @@
+/*
+ * tables.h - one width's kernels and kernel tables (core/variant.h).
+ * A kernel body (C only), included once per translation unit with WIDE_NW
+ * defined: by trace4.c (4) and trace8.c (8), two files so that a
+ * 2-core build compiles the two widths in parallel.
+ *
+ * It instantiates the templates leaf.h (blocks of 4 and 8),
+ * kernel.h and packet.h (width WIDE_NW, blocks of 4 and 8) and
+ * defines wide_tables[row][any hit][block 8], the rows being single rays,
+ * packets, order=branchy and quant=1 (width 8 only: width 4 repeats the
+ * branchy row there, never selected). The single-ray row compiles all
+ * eight flag copies (ACCEL_V_OPT: order=octant or dist); the three octant
+ * rows only the four with ACCEL_V_OPT set (WT_TABLE_OCT): 144 copies for
+ * both widths instead of 224.
+ */
+#define WIDE_LB 4
+#include "leaf.h"
+#undef WIDE_LB
+#define WIDE_LB 8
+#include "leaf.h"
+#undef WIDE_LB
+
+#define WIDE_LB 4
+#include "kernel.h"
+#include "packet.h"
+#undef WIDE_LB
+#define WIDE_LB 8
+#include "kernel.h"
+#include "packet.h"
+#undef WIDE_LB
+
+#define WT_CAT_(a, n, b) a##_##n##_##b
+#define WT_CAT(a, n, b) WT_CAT_(a, n, b)
+/* A layer of its own, so that the pasted names are expanded before
+ * ACCEL_KERNEL_TABLE pastes again. */
+#define WT_TABLE(name, kernel) ACCEL_KERNEL_TABLE(name, kernel)
+/* The rows other than single rays (packets, order=branchy, quant=1) always
+ * trace in the octant order: their kernels never read ACCEL_V_OPT, so the
+ * copies with it clear would be the copies with it set, compiled again.
+ * Only the four with OPT set are compiled; the OPT-clear entries name the
+ * same functions (a packet tree built with order=dist selects them). */
+#define WT_TABLE_OCT(name, kernel) WT_TABLE_OCT_(name, kernel) /* expands the names first */
+#define WT_TABLE_OCT_(NAME, KERNEL)                                                                 \
+    ACCEL_KERNEL_COUNTED_(NAME, KERNEL)                                                             \
+    ACCEL_KERNEL_COPY_(NAME, KERNEL, 4)                                                             \
+    ACCEL_KERNEL_COPY_(NAME, KERNEL, 5)                                                             \
+    ACCEL_KERNEL_COPY_(NAME, KERNEL, 6)                                                             \
+    ACCEL_KERNEL_COPY_(NAME, KERNEL, 7)                                                             \
+    static const accel_kernel_table NAME = {                                                        \
+        NAME##_counted,                                                                             \
+        {NAME##_v4, NAME##_v5, NAME##_v6, NAME##_v7, NAME##_v4, NAME##_v5, NAME##_v6, NAME##_v7}};
+#define WT_BOTH_(table, name, kernel)                                                               \
+    table(WT_CAT(name, WIDE_NW, 4), WT_CAT(kernel, WIDE_NW, 4))                                    \
+    table(WT_CAT(name, WIDE_NW, 8), WT_CAT(kernel, WIDE_NW, 8))
+#define WT_BOTH(name, kernel) WT_BOTH_(WT_TABLE, name, kernel)
+#define WT_BOTH_OCT(name, kernel) WT_BOTH_(WT_TABLE_OCT, name, kernel)
+#define WT_ROW(closest, any)                                                                        \
+    {{&WT_CAT(closest, WIDE_NW, 4), &WT_CAT(closest, WIDE_NW, 8)},                                 \
+     {&WT_CAT(any, WIDE_NW, 4), &WT_CAT(any, WIDE_NW, 8)}}
+
+WT_BOTH(closest, wide_closest)
+WT_BOTH(any, wide_any)
+WT_BOTH_OCT(bclosest, wide_closest_br)
+WT_BOTH_OCT(bany, wide_any_br)
+#if WIDE_NW == 8
+WT_BOTH_OCT(qclosest, wide_closest_q)
+WT_BOTH_OCT(qany, wide_any_q)
+#endif
+WT_BOTH_OCT(pclosest, wide_pclosest)
+WT_BOTH_OCT(pany, wide_pany)
+
+static const accel_kernel_table *const wide_tables[4][2][2] = {
+    WT_ROW(closest, any),
+    WT_ROW(pclosest, pany),
+    WT_ROW(bclosest, bany),
+#if WIDE_NW == 8
+    WT_ROW(qclosest, qany),
+#else
+    WT_ROW(bclosest, bany),
+#endif
+};
+
+#undef WT_ROW
+#undef WT_BOTH_OCT
+#undef WT_BOTH
+#undef WT_BOTH_
+#undef WT_TABLE_OCT
+#undef WT_TABLE_OCT_
+#undef WT_TABLE
+#undef WT_CAT
+#undef WT_CAT_
