@@ -5,7 +5,7 @@
  * A kernel body (C only): included by the .c files of its folder, not part
  * of the interface a C++ program includes.
  *
- * A template: tables.h (for trace4.c and trace8.c) includes
+ * A template: tables.h (for the k<width>_<row>.c units) includes
  * it once per (WIDE_NW, WIDE_LB) pair after leaf.h for WIDE_LB (4 and 4 when included alone). It defines
  * the always-inline kernels wide_closest_<NW>_<LB> and wide_any_<NW>_<LB>
  * in the form core/variant.h's ACCEL_KERNEL_TABLE expects.

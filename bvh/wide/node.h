@@ -1,7 +1,7 @@
 /*
  * node.h - the memory layout of the wide BVHs (`bvh:width=4|8`),
- * shared by the collapse (collapse.c) and the kernels (trace4.c,
- * trace8.c, tables.h, kernel.h, leaf.h), the walk and the refit. Internal
+ * shared by the collapse (collapse.c) and the kernels (trace.c,
+ * k*_*.c, tables.h, kernel.h, leaf.h), the walk and the refit. Internal
  * to bvh/wide/ (the kind sees wide.h).
  *
  * A wide node holds the boxes of its up to W children in SoA form, one row
@@ -190,9 +190,26 @@ static inline void wide_put_lane(float *v, int block, int lane, const float *slo
             v[(3 * vtx + axis) * block + lane] = slot[3 * vtx + axis];
 }
 
-/* The 8-wide kernel table of a row (0 single, 1 packets, 2 order=branchy,
- * 3 quant=1), query and block size (trace8.c). */
-const accel_kernel_table *bvh_wide_kernels8(int row, int any_hit, int block8);
+/* The kernel tables' rows: single rays (order=octant or dist), packets,
+ * order=branchy, quant=1 (width 8 only). */
+#define WIDE_ROW_SINGLE 0
+#define WIDE_ROW_PACKET 1
+#define WIDE_ROW_BRANCHY 2
+#define WIDE_ROW_QUANT 3
+
+/* One row's kernel table of one width, for a query and a block size: each
+ * defined by its own unit, k<width>_<row>.c (tables.h; the packet row one
+ * unit per query, k<width>_packet_<query>.c), and dispatched by trace.c. */
+typedef const accel_kernel_table *(*wide_row_fn)(int any_hit, int block8);
+const accel_kernel_table *bvh_wide_k4_single(int any_hit, int block8);
+const accel_kernel_table *bvh_wide_k4_packet_hit(int block8);
+const accel_kernel_table *bvh_wide_k4_packet_any(int block8);
+const accel_kernel_table *bvh_wide_k4_branchy(int any_hit, int block8);
+const accel_kernel_table *bvh_wide_k8_single(int any_hit, int block8);
+const accel_kernel_table *bvh_wide_k8_packet_hit(int block8);
+const accel_kernel_table *bvh_wide_k8_packet_any(int block8);
+const accel_kernel_table *bvh_wide_k8_branchy(int any_hit, int block8);
+const accel_kernel_table *bvh_wide_k8_quant(int any_hit, int block8);
 
 #ifdef __cplusplus
 }

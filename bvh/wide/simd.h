@@ -51,7 +51,7 @@ extern "C" {
 /* The kernels' helpers are forced inline, so that every copy of a kernel
  * (core/variant.h) folds its constant flags. `make sanitize` defines
  * WIDE_NO_FORCE_INLINE: instrumented, the forced copies took 6 minutes
- * (AVX2) to over 19 (plain C lanes) to compile bvh/wide/trace4.c, plain
+ * (AVX2) to over 19 (plain C lanes) to compile the 4-wide kernels (then one unit), plain
  * `static inline` 11 seconds; the same code, copies the compiler may
  * leave uninlined. */
 #ifdef WIDE_NO_FORCE_INLINE

@@ -1,18 +1,21 @@
 /*
- * tables.h - one width's kernels and kernel tables (core/variant.h).
+ * tables.h - one row of one width's kernel tables (core/variant.h).
  * A kernel body (C only), included once per translation unit with WIDE_NW
- * defined: by trace4.c (4) and trace8.c (8), two files so that a
- * 2-core build compiles the two widths in parallel.
+ * (4 or 8) and WIDE_ROW (the row: WIDE_ROW_SINGLE, _PACKET, _BRANCHY,
+ * _QUANT) defined: by the k<width>_<row>.c files, one unit per row so
+ * that a 2-core build spreads the forced inlining over seven units of
+ * similar size instead of two large ones (trace.c dispatches).
  *
- * It instantiates the templates leaf.h (blocks of 4 and 8),
- * kernel.h and packet.h (width WIDE_NW, blocks of 4 and 8) and
- * defines wide_tables[row][any hit][block 8], the rows being single rays,
- * packets, order=branchy and quant=1 (width 8 only: width 4 repeats the
- * branchy row there, never selected). The single-ray row compiles all
- * eight flag copies (ACCEL_V_OPT: order=octant or dist); the three octant
- * rows only the four with ACCEL_V_OPT set (WT_TABLE_OCT): 144 copies for
- * both widths instead of 224.
+ * It instantiates the templates leaf.h (blocks of 4 and 8), kernel.h and,
+ * for the packet row, packet.h (width WIDE_NW, blocks of 4 and 8) and
+ * defines wide_row[any hit][block 8] for its row; the packet row, the
+ * largest, is split once more by query (WIDE_ANY 0 or 1: one unit each)
+ * and defines wide_query[block 8]. The single-ray row
+ * compiles all eight flag copies (ACCEL_V_OPT: order=octant or dist); the
+ * three octant rows only the four with ACCEL_V_OPT set (WT_TABLE_OCT).
  */
+#include "node.h"
+
 #define WIDE_LB 4
 #include "leaf.h"
 #undef WIDE_LB
@@ -22,11 +25,15 @@
 
 #define WIDE_LB 4
 #include "kernel.h"
+#if WIDE_ROW == WIDE_ROW_PACKET
 #include "packet.h"
+#endif
 #undef WIDE_LB
 #define WIDE_LB 8
 #include "kernel.h"
+#if WIDE_ROW == WIDE_ROW_PACKET
 #include "packet.h"
+#endif
 #undef WIDE_LB
 
 #define WT_CAT_(a, n, b) a##_##n##_##b
@@ -58,27 +65,29 @@
     {{&WT_CAT(closest, WIDE_NW, 4), &WT_CAT(closest, WIDE_NW, 8)},                                 \
      {&WT_CAT(any, WIDE_NW, 4), &WT_CAT(any, WIDE_NW, 8)}}
 
+#if WIDE_ROW == WIDE_ROW_SINGLE
 WT_BOTH(closest, wide_closest)
 WT_BOTH(any, wide_any)
+static const accel_kernel_table *const wide_row[2][2] = WT_ROW(closest, any);
+#elif WIDE_ROW == WIDE_ROW_PACKET && !WIDE_ANY
+WT_BOTH_OCT(pclosest, wide_pclosest)
+static const accel_kernel_table *const wide_query[2] = {&WT_CAT(pclosest, WIDE_NW, 4),
+                                                        &WT_CAT(pclosest, WIDE_NW, 8)};
+#elif WIDE_ROW == WIDE_ROW_PACKET
+WT_BOTH_OCT(pany, wide_pany)
+static const accel_kernel_table *const wide_query[2] = {&WT_CAT(pany, WIDE_NW, 4),
+                                                        &WT_CAT(pany, WIDE_NW, 8)};
+#elif WIDE_ROW == WIDE_ROW_BRANCHY
 WT_BOTH_OCT(bclosest, wide_closest_br)
 WT_BOTH_OCT(bany, wide_any_br)
-#if WIDE_NW == 8
+static const accel_kernel_table *const wide_row[2][2] = WT_ROW(bclosest, bany);
+#elif WIDE_ROW == WIDE_ROW_QUANT && WIDE_NW == 8
 WT_BOTH_OCT(qclosest, wide_closest_q)
 WT_BOTH_OCT(qany, wide_any_q)
-#endif
-WT_BOTH_OCT(pclosest, wide_pclosest)
-WT_BOTH_OCT(pany, wide_pany)
-
-static const accel_kernel_table *const wide_tables[4][2][2] = {
-    WT_ROW(closest, any),
-    WT_ROW(pclosest, pany),
-    WT_ROW(bclosest, bany),
-#if WIDE_NW == 8
-    WT_ROW(qclosest, qany),
+static const accel_kernel_table *const wide_row[2][2] = WT_ROW(qclosest, qany);
 #else
-    WT_ROW(bclosest, bany),
+#error "tables.h: WIDE_ROW names no row of this width"
 #endif
-};
 
 #undef WT_ROW
 #undef WT_BOTH_OCT

@@ -70,7 +70,7 @@ int bvh_wide_build(struct bvh *b, bvh_wide **out, int width, int block, int orde
 size_t bvh_wide_memory(const bvh_wide *w);
 void bvh_wide_free(bvh_wide *w);
 
-/* Kernels (trace4.c; the 8-wide tables in trace8.c). */
+/* Kernels (trace.c, which picks the table a unit k<width>_<row>.c compiled). */
 void bvh_wide_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hits, size_t count,
                         accel_counters *c, int naive, int has_spheres);
 void bvh_wide_occluded(const bvh_wide *w, const accel_ray *rays, uint8_t *occ, size_t count,

@@ -1,0 +1,12 @@
+/*
+ * k4_single.c - the 4-wide kernels of single rays (order=octant and order=dist): tables.h for one
+ * width and row, a unit of its own (tables.h says why).
+ */
+#define WIDE_NW 4
+#define WIDE_ROW WIDE_ROW_SINGLE
+#include "tables.h"
+
+const accel_kernel_table *bvh_wide_k4_single(int any_hit, int block8)
+{
+    return wide_row[any_hit][block8];
+}

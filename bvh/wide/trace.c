@@ -1,0 +1,59 @@
+/*
+ * trace.c - the wide BVH's batch entries: the kernel table (core/variant.h)
+ * of the tree's width, row (single rays, packets, order=branchy, quant=1),
+ * block size and query, each compiled from the templates leaf.h (the SIMD
+ * watertight leaf test), kernel.h and packet.h (the traversals) by its own
+ * unit k<width>_<row>.c (tables.h).
+ */
+#include "node.h"
+
+static const accel_kernel_table *bvh_wide_k4_packet(int any_hit, int block8)
+{
+    return any_hit ? bvh_wide_k4_packet_any(block8) : bvh_wide_k4_packet_hit(block8);
+}
+
+static const accel_kernel_table *bvh_wide_k8_packet(int any_hit, int block8)
+{
+    return any_hit ? bvh_wide_k8_packet_any(block8) : bvh_wide_k8_packet_hit(block8);
+}
+
+/* [width 8][row]: width 4 has no quantized row (quant=1 is width 8 only;
+ * the build refuses it), so its slot repeats the branchy one. */
+static const wide_row_fn wide_rows[2][4] = {
+    {bvh_wide_k4_single, bvh_wide_k4_packet, bvh_wide_k4_branchy, bvh_wide_k4_branchy},
+    {bvh_wide_k8_single, bvh_wide_k8_packet, bvh_wide_k8_branchy, bvh_wide_k8_quant},
+};
+
+static const accel_kernel_table *table_of(const bvh_wide *w, int row, int any_hit)
+{
+    return wide_rows[w->width == 8][row](any_hit, w->block == 8);
+}
+
+/* Packets keep their own order (octant); order=branchy selects the third
+ * single-ray table, quant=1 the fourth (quantized nodes, branchy push). */
+static int table_row(const bvh_wide *w)
+{
+    return w->packets ? WIDE_ROW_PACKET
+           : w->quant ? WIDE_ROW_QUANT
+           : w->order == WIDE_ORDER_BRANCHY ? WIDE_ROW_BRANCHY
+                                            : WIDE_ROW_SINGLE;
+}
+
+static unsigned kernel_flags(const bvh_wide *w, int naive, int has_spheres)
+{
+    return accel_variant_flags(naive, has_spheres, w->order != WIDE_ORDER_DIST);
+}
+
+void bvh_wide_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hits, size_t count,
+                        accel_counters *c, int naive, int has_spheres)
+{
+    accel_run_kernel(table_of(w, table_row(w), 0), w, rays, hits, count, c,
+                     kernel_flags(w, naive, has_spheres));
+}
+
+void bvh_wide_occluded(const bvh_wide *w, const accel_ray *rays, uint8_t *occ, size_t count,
+                       accel_counters *c, int naive, int has_spheres)
+{
+    accel_run_kernel(table_of(w, table_row(w), 1), w, rays, occ, count, c,
+                     kernel_flags(w, naive, has_spheres));
+}
