@@ -16,66 +16,73 @@
 #include "wide_node.h"
 
 static const accel_param_def bvh_params[] = {
-    {"build", ACCEL_PARAM_ENUM, "binned", 0, 0, "binned|sah|mid|median|sbvh",
-     "builder: binned SAH (Wald 2007), exact SAH by full sweep, spatial middle, object median, "
-     "binned SAH with spatial splits (Stich et al. 2009)"},
-    {"bins", ACCEL_PARAM_INT, "16", 2, 256, NULL,
-     "build=binned|sbvh: bins per axis (count; sbvh: for object and spatial splits)"},
-    {"axes", ACCEL_PARAM_ENUM, "3", 0, 0, "1|3",
-     "build=binned: axes binned per node, 1 = largest centroid extent only, 3 = all"},
-    {"split_budget", ACCEL_PARAM_FLOAT, "0.3", 0, 4, NULL,
-     "build=sbvh: most duplicated references, as a fraction of the primitives (0.3 = +30%)"},
-    {"alpha", ACCEL_PARAM_FLOAT, "1e-5", 0, 1, NULL,
-     "build=sbvh: try spatial splits where the object split's children overlap by more than "
-     "alpha times the root's area (0: everywhere)"},
-    {"max_mb", ACCEL_PARAM_FLOAT, "4096", 1.0, 1048576.0, NULL,
-     "memory limit of the build (references, node pool, scratch, final pools), MiB; "
-     "a larger tree is refused"},
-    {"leaf", ACCEL_PARAM_INT, "8", 1, 256, NULL,
-     "largest leaf (primitives); smaller leaves when the SAH rule says so"},
-    {"ct", ACCEL_PARAM_FLOAT, "1", 0, 1e6, NULL,
-     "SAH cost of a node visit (same time unit as ci)"},
-    {"ci", ACCEL_PARAM_FLOAT, "1", 1e-6, 1e6, NULL,
-     "SAH cost of a primitive test (same time unit as ct)"},
-    {"term", ACCEL_PARAM_ENUM, "sah", 0, 0, "sah|none",
-     "leaf rule: sah (a leaf once splitting does not pay, at most `leaf` primitives) or none "
-     "(split every node over `leaf`, as the lecture's lab does)"},
-    {"traverse", ACCEL_PARAM_ENUM, "single", 0, 0, "single|packet",
-     "single rays, or packets of 64 consecutive rays (8x8 tiles)"},
-    {"frustum", ACCEL_PARAM_BOOL, "0", 0, 1, NULL,
-     "traverse=packet: interval-arithmetic early-out per node (0/1)"},
-    {"width", ACCEL_PARAM_ENUM, "2", 0, 0, "2|4|8",
-     "children per node: 2 = the lecture's binary tree; 4, 8 = collapsed SIMD nodes (wide_build.c)"},
-    {"block", ACCEL_PARAM_ENUM, "auto", 0, 0, "auto|4|8",
-     "width=4|8: primitives per SIMD leaf block (auto: 8, or 4 when the scene has spheres)"},
-    {"order", ACCEL_PARAM_ENUM, "octant", 0, 0, "dist|octant|branchy",
-     "width=4|8: hit children sorted by entry distance per ray, or in the node's octant order "
-     "pushed by a compress-store (octant) or by one branch per child (branchy: single rays)"},
-    {"collapse", ACCEL_PARAM_ENUM, "dp", 0, 0, "greedy|dp",
-     "width=4|8: binary tree to wide nodes by opening the largest child first, every subtree of "
-     "one block a leaf (greedy), or the forests of least SAH cost by dynamic programming (dp; "
-     "Ylitie et al. 2017)"},
-    {"leaf_cost", ACCEL_PARAM_FLOAT, "1.5", 0.01, 100, NULL,
-     "collapse=dp: cost of one leaf block test, in wide node visits"},
-    {"leaf_blocks", ACCEL_PARAM_INT, "2", 1, 64, NULL,
-     "collapse=dp: most blocks in a leaf the collapse makes (larger binary leaves stay whole)"},
-    {"leaf_below", ACCEL_PARAM_INT, "0", 0, 256, NULL,
-     "width=4|8: the binary build makes every subtree of at most this many primitives a leaf, "
-     "unsplit (0: the block size; smaller lets collapse=dp choose smaller leaves, for more build "
-     "time)"},
-    {"hybrid", ACCEL_PARAM_INT, "16", 0, 64, NULL,
-     "width=4|8, traverse=packet: a subtree whose hitting rays span at most this many of the "
-     "packet's 64 (first to last) is traced ray by ray from there (0: never)"},
-    {"quant", ACCEL_PARAM_BOOL, "0", 0, 1, NULL,
-     "width=8, single rays: child boxes as 8-bit steps from the node's corner, rounded outward "
-     "(128-byte nodes instead of 256; the octant order pushed by branches, as order=branchy; "
-     "update rebuilds) (0/1)"},
-    {"first", ACCEL_PARAM_ENUM, "near", 0, 0, "near|left",
-     "width=2, single rays: of two hit children visit the nearer first (the lecture's \"better\"), "
-     "or always the left one (a control for that claim)"},
-    {"pairs", ACCEL_PARAM_ENUM, "line", 0, 0, "line|split",
-     "width=2: sibling pairs in one 64-byte cache line (the lecture's layout), or the node pool "
-     "shifted by 32 bytes so that every pair straddles two lines (a control for that claim)"},
+    {.key = "build", .type = ACCEL_PARAM_ENUM, .def = "binned",
+     .choices = "binned|sah|mid|median|sbvh",
+     .help = "builder: binned SAH (Wald 2007), exact SAH by full sweep, spatial middle, object "
+             "median, binned SAH with spatial splits (Stich et al. 2009)"},
+    {.key = "bins", .type = ACCEL_PARAM_INT, .def = "16", .min = 2, .max = 256,
+     .help = "build=binned|sbvh: bins per axis (count; sbvh: for object and spatial splits)"},
+    {.key = "axes", .type = ACCEL_PARAM_ENUM, .def = "3", .choices = "1|3",
+     .help = "build=binned: axes binned per node, 1 = largest centroid extent only, 3 = all"},
+    {.key = "split_budget", .type = ACCEL_PARAM_FLOAT, .def = "0.3", .min = 0, .max = 4,
+     .help = "build=sbvh: most duplicated references, as a fraction of the primitives (0.3 = "
+             "+30%)"},
+    {.key = "alpha", .type = ACCEL_PARAM_FLOAT, .def = "1e-5", .min = 0, .max = 1,
+     .help = "build=sbvh: try spatial splits where the object split's children overlap by more "
+             "than alpha times the root's area (0: everywhere)"},
+    {.key = "max_mb", .type = ACCEL_PARAM_FLOAT, .def = "4096", .min = 1.0, .max = 1048576.0,
+     .help = "memory limit of the build (references, node pool, scratch, final pools), MiB; a "
+             "larger tree is refused"},
+    {.key = "leaf", .type = ACCEL_PARAM_INT, .def = "8", .min = 1, .max = 256,
+     .help = "largest leaf (primitives); smaller leaves when the SAH rule says so"},
+    {.key = "ct", .type = ACCEL_PARAM_FLOAT, .def = "1", .min = 0, .max = 1e6,
+     .help = "SAH cost of a node visit (same time unit as ci)"},
+    {.key = "ci", .type = ACCEL_PARAM_FLOAT, .def = "1", .min = 1e-6, .max = 1e6,
+     .help = "SAH cost of a primitive test (same time unit as ct)"},
+    {.key = "term", .type = ACCEL_PARAM_ENUM, .def = "sah", .choices = "sah|none",
+     .help = "leaf rule: sah (a leaf once splitting does not pay, at most `leaf` primitives) or "
+             "none (split every node over `leaf`, as the lecture's lab does)"},
+    {.key = "traverse", .type = ACCEL_PARAM_ENUM, .def = "single", .choices = "single|packet",
+     .help = "single rays, or packets of 64 consecutive rays (8x8 tiles)"},
+    {.key = "frustum", .type = ACCEL_PARAM_BOOL, .def = "0", .min = 0, .max = 1,
+     .help = "traverse=packet: interval-arithmetic early-out per node (0/1)"},
+    {.key = "width", .type = ACCEL_PARAM_ENUM, .def = "2", .choices = "2|4|8",
+     .help = "children per node: 2 = the lecture's binary tree; 4, 8 = collapsed SIMD nodes "
+             "(wide_build.c)"},
+    {.key = "block", .type = ACCEL_PARAM_ENUM, .def = "auto", .choices = "auto|4|8",
+     .help = "width=4|8: primitives per SIMD leaf block (auto: 8, or 4 when the scene has "
+             "spheres)"},
+    {.key = "order", .type = ACCEL_PARAM_ENUM, .def = "octant", .choices = "dist|octant|branchy",
+     .help = "width=4|8: hit children sorted by entry distance per ray, or in the node's octant "
+             "order pushed by a compress-store (octant) or by one branch per child (branchy: "
+             "single rays)"},
+    {.key = "collapse", .type = ACCEL_PARAM_ENUM, .def = "dp", .choices = "greedy|dp",
+     .help = "width=4|8: binary tree to wide nodes by opening the largest child first, every "
+             "subtree of one block a leaf (greedy), or the forests of least SAH cost by dynamic "
+             "programming (dp; Ylitie et al. 2017)"},
+    {.key = "leaf_cost", .type = ACCEL_PARAM_FLOAT, .def = "1.5", .min = 0.01, .max = 100,
+     .help = "collapse=dp: cost of one leaf block test, in wide node visits"},
+    {.key = "leaf_blocks", .type = ACCEL_PARAM_INT, .def = "2", .min = 1, .max = 64,
+     .help = "collapse=dp: most blocks in a leaf the collapse makes (larger binary leaves stay "
+             "whole)"},
+    {.key = "leaf_below", .type = ACCEL_PARAM_INT, .def = "0", .min = 0, .max = 256,
+     .help = "width=4|8: the binary build makes every subtree of at most this many primitives a "
+             "leaf, unsplit (0: the block size; smaller lets collapse=dp choose smaller leaves, "
+             "for more build time)"},
+    {.key = "hybrid", .type = ACCEL_PARAM_INT, .def = "16", .min = 0, .max = 64,
+     .help = "width=4|8, traverse=packet: a subtree whose hitting rays span at most this many of "
+             "the packet's 64 (first to last) is traced ray by ray from there (0: never)"},
+    {.key = "quant", .type = ACCEL_PARAM_BOOL, .def = "0", .min = 0, .max = 1,
+     .help = "width=8, single rays: child boxes as 8-bit steps from the node's corner, rounded "
+             "outward (128-byte nodes instead of 256; the octant order pushed by branches, as "
+             "order=branchy; update rebuilds) (0/1)"},
+    {.key = "first", .type = ACCEL_PARAM_ENUM, .def = "near", .choices = "near|left",
+     .help = "width=2, single rays: of two hit children visit the nearer first (the lecture's "
+             "\"better\"), or always the left one (a control for that claim)"},
+    {.key = "pairs", .type = ACCEL_PARAM_ENUM, .def = "line", .choices = "line|split",
+     .help = "width=2: sibling pairs in one 64-byte cache line (the lecture's layout), or the "
+             "node pool shifted by 32 bytes so that every pair straddles two lines (a control "
+             "for that claim)"},
 };
 #define BVH_PARAM_COUNT (sizeof bvh_params / sizeof bvh_params[0])
 

@@ -16,25 +16,26 @@
 #define STR(x) STR_(x)
 
 static const accel_param_def grid_params[] = {
-    {"lambda", ACCEL_PARAM_FLOAT, STR(GRID_DEFAULT_LAMBDA), 0.001, 1000.0, NULL,
-     "cells per primitive: n_i = d_i*cbrt(lambda*N/V) (ignored when res is given)"},
-    {"res", ACCEL_PARAM_STR, "auto", 0, 0, NULL,
-     "cells per axis: auto (from lambda), N, or NxNyNz (each 1..65536)"},
-    {"overlap", ACCEL_PARAM_ENUM, "exact", 0, 0, "exact|bbox",
-     "cell membership: exact primitive/box overlap, or bounding box only"},
-    {"mailbox", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
-     "test a primitive spanning several cells once per ray (16-entry per-ray cache)"},
-    {"max_mb", ACCEL_PARAM_FLOAT, "4096", 1.0, 1048576.0, NULL,
-     "memory limit for cell offsets + references, MiB: larger grids are refused"},
-    {"traverse", ACCEL_PARAM_ENUM, "single", 0, 0, "single|packet",
-     "single rays (3D-DDA), or coherent grid traversal of 64 consecutive rays (8x8 tiles) "
-     "slice by slice"},
-    {"skip", ACCEL_PARAM_ENUM, "none", 0, 0, "none|cloud|macro",
-     "empty-space skipping: none, proximity clouds (1 byte/cell), macro cells (see macro)"},
-    {"skip_min", ACCEL_PARAM_INT, "1", 1, 254, NULL,
-     "skip=cloud: smallest radius worth a jump (cells; a jump costs about two steps)"},
-    {"macro", ACCEL_PARAM_INT, "4", 2, 64, NULL,
-     "skip=macro: cells per macro cell along each axis, a power of two"},
+    {.key = "lambda", .type = ACCEL_PARAM_FLOAT, .def = STR(GRID_DEFAULT_LAMBDA),
+     .min = 0.001, .max = 1000.0,
+     .help = "cells per primitive: n_i = d_i*cbrt(lambda*N/V) (ignored when res is given)"},
+    {.key = "res", .type = ACCEL_PARAM_STR, .def = "auto",
+     .help = "cells per axis: auto (from lambda), N, or NxNyNz (each 1..65536)"},
+    {.key = "overlap", .type = ACCEL_PARAM_ENUM, .def = "exact", .choices = "exact|bbox",
+     .help = "cell membership: exact primitive/box overlap, or bounding box only"},
+    {.key = "mailbox", .type = ACCEL_PARAM_BOOL, .def = "1",
+     .help = "test a primitive spanning several cells once per ray (16-entry per-ray cache)"},
+    {.key = "max_mb", .type = ACCEL_PARAM_FLOAT, .def = "4096", .min = 1.0, .max = 1048576.0,
+     .help = "memory limit for cell offsets + references, MiB: larger grids are refused"},
+    {.key = "traverse", .type = ACCEL_PARAM_ENUM, .def = "single", .choices = "single|packet",
+     .help = "single rays (3D-DDA), or coherent grid traversal of 64 consecutive rays (8x8 "
+             "tiles) slice by slice"},
+    {.key = "skip", .type = ACCEL_PARAM_ENUM, .def = "none", .choices = "none|cloud|macro",
+     .help = "empty-space skipping: none, proximity clouds (1 byte/cell), macro cells (see macro)"},
+    {.key = "skip_min", .type = ACCEL_PARAM_INT, .def = "1", .min = 1, .max = 254,
+     .help = "skip=cloud: smallest radius worth a jump (cells; a jump costs about two steps)"},
+    {.key = "macro", .type = ACCEL_PARAM_INT, .def = "4", .min = 2, .max = 64,
+     .help = "skip=macro: cells per macro cell along each axis, a power of two"},
 };
 
 static void grid_destroy(void *a)

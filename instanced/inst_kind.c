@@ -18,21 +18,25 @@
 #include "instanced.h"
 
 static const accel_param_def inst_params[] = {
-    {"top", ACCEL_PARAM_ENUM, "bvh", 0, 0, "bvh|grid",
-     "top level over the instances' world bounds: binned-SAH BVH or uniform grid"},
-    {"bottom", ACCEL_PARAM_STR, "bvh", 0, 0, NULL,
-     "bottom level per mesh, object space, shared by its instances: bvh or grid (the kind's "
-     "own), or any kind with a walk: <kind> or <kind>:key=value;key=value (';' for ','), e.g. "
-     "nested_grid, bvh:width=4"},
-    {"leaf", ACCEL_PARAM_INT, "4", 1, 64, NULL, "bottom=bvh: largest leaf (primitives)"},
-    {"lambda", ACCEL_PARAM_FLOAT, "2", 0.01, 64, NULL, "bottom=grid: cells per primitive"},
-    {"top_lambda", ACCEL_PARAM_FLOAT, "2", 0.01, 64, NULL, "top=grid: cells per instance"},
-    {"world", ACCEL_PARAM_ENUM, "compute", 0, 0, "compute|flat",
-     "world triangles: computed from the mesh by the flattener's expression (a true two-level "
-     "structure), or read from the flattened scene (the same bits; for comparison)"},
-    {"pad", ACCEL_PARAM_BOOL, "1", 0, 1, NULL,
-     "grow bottom-level boxes by the flattening's rounding (0: exact object-space boxes, "
-     "which miss world hits near edges: kept to show why the pad is needed)"},
+    {.key = "top", .type = ACCEL_PARAM_ENUM, .def = "bvh", .choices = "bvh|grid",
+     .help = "top level over the instances' world bounds: binned-SAH BVH or uniform grid"},
+    {.key = "bottom", .type = ACCEL_PARAM_STR, .def = "bvh",
+     .help = "bottom level per mesh, object space, shared by its instances: bvh or grid (the "
+             "kind's own), or any kind with a walk: <kind> or <kind>:key=value;key=value (';' "
+             "for ','), e.g. nested_grid, bvh:width=4"},
+    {.key = "leaf", .type = ACCEL_PARAM_INT, .def = "4", .min = 1, .max = 64,
+     .help = "bottom=bvh: largest leaf (primitives)"},
+    {.key = "lambda", .type = ACCEL_PARAM_FLOAT, .def = "2", .min = 0.01, .max = 64,
+     .help = "bottom=grid: cells per primitive"},
+    {.key = "top_lambda", .type = ACCEL_PARAM_FLOAT, .def = "2", .min = 0.01, .max = 64,
+     .help = "top=grid: cells per instance"},
+    {.key = "world", .type = ACCEL_PARAM_ENUM, .def = "compute", .choices = "compute|flat",
+     .help = "world triangles: computed from the mesh by the flattener's expression (a true "
+             "two-level structure), or read from the flattened scene (the same bits; for "
+             "comparison)"},
+    {.key = "pad", .type = ACCEL_PARAM_BOOL, .def = "1", .min = 0, .max = 1,
+     .help = "grow bottom-level boxes by the flattening's rounding (0: exact object-space boxes, "
+             "which miss world hits near edges: kept to show why the pad is needed)"},
 };
 #define INST_PARAM_COUNT (sizeof inst_params / sizeof inst_params[0])
 

@@ -59,36 +59,45 @@
 #define IGRID_CHUNK 64
 
 static const accel_param_def igrid_params[] = {
-    {"top_lambda", ACCEL_PARAM_FLOAT, STR(IGRID_DEFAULT_TOP_LAMBDA), 0.0001, 100.0, NULL,
-     "top grid: cells per primitive, n_i = d_i*cbrt(lambda*N/V)"},
-    {"sub_lambda", ACCEL_PARAM_FLOAT, STR(IGRID_DEFAULT_SUB_LAMBDA), 0.001, 1000.0, NULL,
-     "octree density: cells per primitive the resolution rule aims at (see split)"},
-    {"max_depth", ACCEL_PARAM_INT, STR(IGRID_DEFAULT_MAX_DEPTH), 0, IGRID_MAX_DEPTH, NULL,
-     "deepest octree level (levels; the lattice is the top grid times 2^depth per axis, at "
-     "most 65536)"},
-    {"split", ACCEL_PARAM_ENUM, "adaptive", 0, 0, "adaptive|cell",
-     "octree: every non-empty node down to its top cell's depth (cell, the paper), and below it "
-     "nodes holding at least split_min primitives while a split separates them (adaptive)"},
-    {"subdivide", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
-     "step 1: octree subdivision of the top cells (0: top cells only)"},
-    {"split_min", ACCEL_PARAM_INT, STR(IGRID_DEFAULT_SPLIT_MIN), 1, 1000000, NULL,
-     "split=adaptive: below the paper's depth, only nodes holding at least this many primitives "
-     "are split"},
-    {"split_ratio", ACCEL_PARAM_FLOAT, STR(IGRID_SPLIT_GUARD), 1.0, 8.0, NULL,
-     "split=adaptive: a split is undone when its octants hold more than this many references per "
-     "primitive of the node (below the paper's depth; above it too for nodes of 64 or more)"},
-    {"merge", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
-     "step 2: merge neighbouring cells while the surface-area cost does not grow"},
-    {"alpha", ACCEL_PARAM_FLOAT, STR(IGRID_DEFAULT_ALPHA), 0.0, 1.0, NULL,
-     "merge: another round of passes while a round removes at least 1-alpha of the cells"},
-    {"ct", ACCEL_PARAM_FLOAT, "1", 0.0, 1000.0, NULL,
-     "merge cost: one cell step, in primitive tests"},
-    {"expand", ACCEL_PARAM_INT, STR(IGRID_DEFAULT_EXPAND), 0, 16, NULL,
-     "step 3: expansion rounds over the six faces of every cell (0: off)"},
-    {"mailbox", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
-     "test a primitive spanning several cells once per ray (16-entry per-ray cache)"},
-    {"max_mb", ACCEL_PARAM_FLOAT, "4096", 1.0, 1048576.0, NULL,
-     "memory limit for cells, references and voxel map, MiB: larger builds are refused"},
+    {.key = "top_lambda", .type = ACCEL_PARAM_FLOAT, .def = STR(IGRID_DEFAULT_TOP_LAMBDA),
+     .min = 0.0001, .max = 100.0,
+     .help = "top grid: cells per primitive, n_i = d_i*cbrt(lambda*N/V)"},
+    {.key = "sub_lambda", .type = ACCEL_PARAM_FLOAT, .def = STR(IGRID_DEFAULT_SUB_LAMBDA),
+     .min = 0.001, .max = 1000.0,
+     .help = "octree density: cells per primitive the resolution rule aims at (see split)"},
+    {.key = "max_depth", .type = ACCEL_PARAM_INT, .def = STR(IGRID_DEFAULT_MAX_DEPTH),
+     .min = 0, .max = IGRID_MAX_DEPTH,
+     .help = "deepest octree level (levels; the lattice is the top grid times 2^depth per axis, "
+             "at most 65536)"},
+    {.key = "split", .type = ACCEL_PARAM_ENUM, .def = "adaptive", .choices = "adaptive|cell",
+     .help = "octree: every non-empty node down to its top cell's depth (cell, the paper), and "
+             "below it nodes holding at least split_min primitives while a split separates them "
+             "(adaptive)"},
+    {.key = "subdivide", .type = ACCEL_PARAM_BOOL, .def = "1",
+     .help = "step 1: octree subdivision of the top cells (0: top cells only)"},
+    {.key = "split_min", .type = ACCEL_PARAM_INT, .def = STR(IGRID_DEFAULT_SPLIT_MIN),
+     .min = 1, .max = 1000000,
+     .help = "split=adaptive: below the paper's depth, only nodes holding at least this many "
+             "primitives are split"},
+    {.key = "split_ratio", .type = ACCEL_PARAM_FLOAT, .def = STR(IGRID_SPLIT_GUARD),
+     .min = 1.0, .max = 8.0,
+     .help = "split=adaptive: a split is undone when its octants hold more than this many "
+             "references per primitive of the node (below the paper's depth; above it too for "
+             "nodes of 64 or more)"},
+    {.key = "merge", .type = ACCEL_PARAM_BOOL, .def = "1",
+     .help = "step 2: merge neighbouring cells while the surface-area cost does not grow"},
+    {.key = "alpha", .type = ACCEL_PARAM_FLOAT, .def = STR(IGRID_DEFAULT_ALPHA),
+     .min = 0.0, .max = 1.0,
+     .help = "merge: another round of passes while a round removes at least 1-alpha of the cells"},
+    {.key = "ct", .type = ACCEL_PARAM_FLOAT, .def = "1", .min = 0.0, .max = 1000.0,
+     .help = "merge cost: one cell step, in primitive tests"},
+    {.key = "expand", .type = ACCEL_PARAM_INT, .def = STR(IGRID_DEFAULT_EXPAND),
+     .min = 0, .max = 16,
+     .help = "step 3: expansion rounds over the six faces of every cell (0: off)"},
+    {.key = "mailbox", .type = ACCEL_PARAM_BOOL, .def = "1",
+     .help = "test a primitive spanning several cells once per ray (16-entry per-ray cache)"},
+    {.key = "max_mb", .type = ACCEL_PARAM_FLOAT, .def = "4096", .min = 1.0, .max = 1048576.0,
+     .help = "memory limit for cells, references and voxel map, MiB: larger builds are refused"},
 };
 
 /* ---- frames on the virtual lattice ------------------------------------------------ */

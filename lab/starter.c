@@ -62,9 +62,10 @@ typedef struct {
 } lab_bvh;
 
 static const accel_param_def lab_params[] = {
-    {"leaf", ACCEL_PARAM_INT, "4", 1, 64, NULL, "largest leaf (primitives)"},
-    {"traverse", ACCEL_PARAM_ENUM, "single", 0, 0, "single|packet",
-     "single rays, or packets of 64 consecutive rays (8x8 tiles) (step 4)"},
+    {.key = "leaf", .type = ACCEL_PARAM_INT, .def = "4", .min = 1, .max = 64,
+     .help = "largest leaf (primitives)"},
+    {.key = "traverse", .type = ACCEL_PARAM_ENUM, .def = "single", .choices = "single|packet",
+     .help = "single rays, or packets of 64 consecutive rays (8x8 tiles) (step 4)"},
 };
 
 /* ---- step 1: build -------------------------------------------------------- */

@@ -38,41 +38,49 @@
 
 
 static const accel_param_def ngrid_params[] = {
-    {"lambda", ACCEL_PARAM_FLOAT, STR(NGRID_DEFAULT_LAMBDA), 0.001, 1000.0, NULL,
-     "top level: cells per primitive, n_i = d_i*cbrt(lambda*N/V)"},
-    {"res", ACCEL_PARAM_STR, "auto", 0, 0, NULL,
-     "top level: cells per axis, auto (from lambda or the cost model), N or NxNyNz"},
-    {"sub_lambda", ACCEL_PARAM_FLOAT, STR(NGRID_DEFAULT_SUB_LAMBDA), 0.001, 1000.0, NULL,
-     "sub-grids: cells per primitive, on the cell's own primitive count and box"},
-    {"sub_res", ACCEL_PARAM_INT, "0", 0, 256, NULL,
-     "sub-grids: cells per axis of every sub-grid (0: from sub_lambda)"},
-    {"threshold", ACCEL_PARAM_INT, STR(NGRID_DEFAULT_THRESHOLD), 0, 1e9, NULL,
-     "a cell holding more than this many primitives gets a sub-grid (primitives)"},
-    {"depth", ACCEL_PARAM_INT, STR(NGRID_DEFAULT_DEPTH), 1, NGRID_MAX_LEVELS, NULL,
-     "most levels, the top included (1: a regular grid)"},
-    {"auto", ACCEL_PARAM_BOOL, "0", 0, 0, NULL,
-     "cost model picks the top resolution and every sub-grid (ignores lambda, sub_lambda, "
-     "sub_res, threshold)"},
-    {"lookahead", ACCEL_PARAM_BOOL, "0", 0, 0, NULL,
-     "auto: price a cell that may still get a sub-grid by its best sub-grid's estimate "
-     "(0: as a leaf)"},
-    {"c_step", ACCEL_PARAM_FLOAT, STR(NGRID_DEFAULT_C_STEP), 1e-3, 1e6, NULL,
-     "auto: cost of one cell step, ns"},
-    {"c_isect", ACCEL_PARAM_FLOAT, STR(NGRID_DEFAULT_C_ISECT), 1e-3, 1e6, NULL,
-     "auto: cost of one primitive test, ns"},
-    {"overlap", ACCEL_PARAM_ENUM, "exact", 0, 0, "exact|bbox",
-     "cell membership: exact primitive/box overlap, or bounding box only"},
-    {"mailbox", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
-     "test a primitive spanning several cells once per ray, across levels (16-entry cache)"},
-    {"max_mb", ACCEL_PARAM_FLOAT, "4096", 1.0, 1048576.0, NULL,
-     "memory limit for all levels (cells, references, planes), MiB"},
-    {"layout", ACCEL_PARAM_ENUM, "words", 0, 0, "words|compact",
-     "words: cell words and count-prefixed lists, any depth; compact: two levels, 8-byte top "
-     "cells with their own sub-grid resolution (at most 256 per axis), 4-byte leaf cells, one "
-     "reference array (Kalojanov et al. 2011; depth defaults to 2, others refused)"},
-    {"traverse", ACCEL_PARAM_ENUM, "single", 0, 0, "single|packet",
-     "single rays (hierarchical 3D-DDA), or coherent grid traversal of 64 consecutive rays "
-     "(8x8 tiles) slice by slice through every level, as grid:traverse=packet"},
+    {.key = "lambda", .type = ACCEL_PARAM_FLOAT, .def = STR(NGRID_DEFAULT_LAMBDA),
+     .min = 0.001, .max = 1000.0,
+     .help = "top level: cells per primitive, n_i = d_i*cbrt(lambda*N/V)"},
+    {.key = "res", .type = ACCEL_PARAM_STR, .def = "auto",
+     .help = "top level: cells per axis, auto (from lambda or the cost model), N or NxNyNz"},
+    {.key = "sub_lambda", .type = ACCEL_PARAM_FLOAT, .def = STR(NGRID_DEFAULT_SUB_LAMBDA),
+     .min = 0.001, .max = 1000.0,
+     .help = "sub-grids: cells per primitive, on the cell's own primitive count and box"},
+    {.key = "sub_res", .type = ACCEL_PARAM_INT, .def = "0", .min = 0, .max = 256,
+     .help = "sub-grids: cells per axis of every sub-grid (0: from sub_lambda)"},
+    {.key = "threshold", .type = ACCEL_PARAM_INT, .def = STR(NGRID_DEFAULT_THRESHOLD),
+     .min = 0, .max = 1e9,
+     .help = "a cell holding more than this many primitives gets a sub-grid (primitives)"},
+    {.key = "depth", .type = ACCEL_PARAM_INT, .def = STR(NGRID_DEFAULT_DEPTH),
+     .min = 1, .max = NGRID_MAX_LEVELS,
+     .help = "most levels, the top included (1: a regular grid)"},
+    {.key = "auto", .type = ACCEL_PARAM_BOOL, .def = "0",
+     .help = "cost model picks the top resolution and every sub-grid (ignores lambda, "
+             "sub_lambda, sub_res, threshold)"},
+    {.key = "lookahead", .type = ACCEL_PARAM_BOOL, .def = "0",
+     .help = "auto: price a cell that may still get a sub-grid by its best sub-grid's estimate "
+             "(0: as a leaf)"},
+    {.key = "c_step", .type = ACCEL_PARAM_FLOAT, .def = STR(NGRID_DEFAULT_C_STEP),
+     .min = 1e-3, .max = 1e6,
+     .help = "auto: cost of one cell step, ns"},
+    {.key = "c_isect", .type = ACCEL_PARAM_FLOAT, .def = STR(NGRID_DEFAULT_C_ISECT),
+     .min = 1e-3, .max = 1e6,
+     .help = "auto: cost of one primitive test, ns"},
+    {.key = "overlap", .type = ACCEL_PARAM_ENUM, .def = "exact", .choices = "exact|bbox",
+     .help = "cell membership: exact primitive/box overlap, or bounding box only"},
+    {.key = "mailbox", .type = ACCEL_PARAM_BOOL, .def = "1",
+     .help = "test a primitive spanning several cells once per ray, across levels (16-entry "
+             "cache)"},
+    {.key = "max_mb", .type = ACCEL_PARAM_FLOAT, .def = "4096", .min = 1.0, .max = 1048576.0,
+     .help = "memory limit for all levels (cells, references, planes), MiB"},
+    {.key = "layout", .type = ACCEL_PARAM_ENUM, .def = "words", .choices = "words|compact",
+     .help = "words: cell words and count-prefixed lists, any depth; compact: two levels, 8-byte "
+             "top cells with their own sub-grid resolution (at most 256 per axis), 4-byte leaf "
+             "cells, one reference array (Kalojanov et al. 2011; depth defaults to 2, others "
+             "refused)"},
+    {.key = "traverse", .type = ACCEL_PARAM_ENUM, .def = "single", .choices = "single|packet",
+     .help = "single rays (hierarchical 3D-DDA), or coherent grid traversal of 64 consecutive "
+             "rays (8x8 tiles) slice by slice through every level, as grid:traverse=packet"},
 };
 
 /* ---- the flat structure ------------------------------------------------------------ */
