@@ -329,6 +329,9 @@ extern const size_t accel_common_param_count;
  * by accelerator and scene specs. */
 int accel_parse_kv(const char *what, const char *text, const accel_param_def *defs, size_t n,
                    double *num, char (*str)[64], unsigned char *given, accel_error *err);
+/* The choice of `choices` ("a|b|c") that an ENUM stores as `value`, copied
+ * into buf ("" when none does); returns buf. For messages that name it. */
+const char *accel_param_choice(const char *choices, int value, char *buf, size_t size);
 /* Appends "  key  (type, default D, range) help" lines for a table to buf. */
 void accel_params_help(const accel_param_def *defs, size_t n, char *buf, size_t size);
 

@@ -64,6 +64,26 @@ static int choice_number(const char *value, int idx)
     return idx;
 }
 
+const char *accel_param_choice(const char *choices, int value, char *buf, size_t size)
+{
+    int idx = 0;
+    const char *p = choices;
+    if (size) buf[0] = 0;
+    while (p && *p) {
+        const char *bar = strchr(p, '|');
+        size_t len = bar ? (size_t)(bar - p) : strlen(p);
+        char text[ACCEL_PARAM_TEXT];
+        snprintf(text, sizeof text, "%.*s", (int)len, p);
+        if (choice_number(text, idx) == value) {
+            snprintf(buf, size, "%s", text);
+            break;
+        }
+        idx++;
+        p = bar ? bar + 1 : NULL;
+    }
+    return buf;
+}
+
 /* Parses one value into num/str; returns 0 or an error. */
 static int parse_value(const char *what, const accel_param_def *d, const char *value, double *num,
                        char *str, accel_error *err)
