@@ -246,11 +246,14 @@ static int check_table(const accel_kind *k, accel_error *err)
     if (k->param_count + accel_common_param_count > ACCEL_MAX_PARAMS ||
         k->spec_size > ACCEL_SPEC_BYTES)
         return accel_fail(err, ACCEL_ERR_INTERNAL,
-                          "%s: %zu parameters in a %zu-byte spec struct (at most %d and %d)",
-                          k->name, k->param_count, k->spec_size, ACCEL_MAX_PARAMS - 2,
-                          ACCEL_SPEC_BYTES);
+                          "%s: %zu parameters in a %zu-byte spec struct (at most %zu and %d)",
+                          k->name, k->param_count, k->spec_size,
+                          ACCEL_MAX_PARAMS - accel_common_param_count, ACCEL_SPEC_BYTES);
     for (size_t i = 0; k->spec_size && i < k->param_count; i++) { /* TRANSITION */
         const accel_param_def *d = &k->params[i];
+        if (!d->key || !d->help)
+            return accel_fail(err, ACCEL_ERR_INTERNAL, "%s: parameter %zu has no key or help",
+                              k->name, i);
         if (d->offset + field_size(d->type) > k->spec_size ||
             (d->type == ACCEL_PARAM_INT && (d->min < INT_MIN || d->max > INT_MAX)))
             return accel_fail(err, ACCEL_ERR_INTERNAL,
