@@ -307,10 +307,6 @@ typedef struct {
         unsigned char bytes[ACCEL_SPEC_BYTES];
     } values;                           /* the kind's spec struct (kind->spec_size bytes) */
     unsigned char given[ACCEL_SPEC_BYTES]; /* given[offset]: the key of that field was written */
-    /* By table position, for accel_param_num/str/given (kinds not yet converted). */
-    double num[ACCEL_MAX_PARAMS];
-    char str[ACCEL_MAX_PARAMS][64];
-    unsigned char key_given[ACCEL_MAX_PARAMS];
 } accel_params;
 
 /* The kind's spec struct of a parsed spec: ACCEL_SPEC(p, bvh_spec)->bins. */
@@ -344,11 +340,6 @@ int accel_params_parse(const char *spec, accel_params *out, accel_error *err);
  * fit its spec struct is ACCEL_ERR_INTERNAL. */
 int accel_params_parse_kind(const struct accel_kind *kind, const char *kv, accel_params *out,
                             accel_error *err);
-/* Lookups by key, for kinds not yet on their spec struct: 0 / "" for an
- * undeclared key. */
-double accel_param_num(const accel_params *p, const char *key);
-const char *accel_param_str(const accel_params *p, const char *key);
-int accel_param_given(const accel_params *p, const char *key);
 
 /* ---- the accelerator kind table ----------------------------------------- */
 

@@ -69,7 +69,7 @@ static void check_kind_table(const accel_kind *k)
     CHECKF(k->spec_size <= ACCEL_SPEC_BYTES, "%s: spec struct of %zu bytes", k->name, k->spec_size);
     CHECKF(k->param_count + accel_common_param_count <= ACCEL_MAX_PARAMS, "%s: %zu parameters",
            k->name, k->param_count);
-    for (size_t i = 0; k->spec_size && i < k->param_count; i++) { /* TRANSITION */
+    for (size_t i = 0; i < k->param_count; i++) {
         const accel_param_def *d = &k->params[i];
         size_t end = d->offset + field_bytes(d->type);
         CHECKF(end <= k->spec_size, "%s: '%s' at %zu..%zu outside its %zu-byte struct", k->name,

@@ -2,9 +2,11 @@
  * params.c - spec strings: "kind:key=value,key=value,flag".
  *
  * Every parameter is declared once in its kind's table (key, type, default,
- * range, help); the same table drives parsing, range checks and --help. An
- * unknown key is an error that lists the accepted ones: never a warning with
- * a silent fallback.
+ * range, help, and where its value goes in the kind's spec struct); the same
+ * table drives parsing, range checks and --help. A spec is parsed once into
+ * that struct, typed, so kinds read fields, not keys. An unknown key is an
+ * error that lists the accepted ones: never a warning with a silent
+ * fallback; a table mistake is ACCEL_ERR_INTERNAL, never an assert.
  */
 #include <errno.h>
 #include <limits.h>
@@ -249,7 +251,7 @@ static int check_table(const accel_kind *k, accel_error *err)
                           "%s: %zu parameters in a %zu-byte spec struct (at most %zu and %d)",
                           k->name, k->param_count, k->spec_size,
                           ACCEL_MAX_PARAMS - accel_common_param_count, ACCEL_SPEC_BYTES);
-    for (size_t i = 0; k->spec_size && i < k->param_count; i++) { /* TRANSITION */
+    for (size_t i = 0; i < k->param_count; i++) {
         const accel_param_def *d = &k->params[i];
         if (!d->key || !d->help)
             return accel_fail(err, ACCEL_ERR_INTERNAL, "%s: parameter %zu has no key or help",
@@ -275,52 +277,29 @@ int accel_params_parse_kind(const accel_kind *k, const char *kv, accel_params *o
     if (k->param_count) memcpy(defs, k->params, k->param_count * sizeof *defs);
     memcpy(defs + k->param_count, accel_common_params, accel_common_param_count * sizeof *defs);
     out->kind = k;
-    rc = accel_parse_kv(k->name, kv, defs, n, out->num, out->str, out->key_given, err);
+    double num[ACCEL_MAX_PARAMS];
+    char str[ACCEL_MAX_PARAMS][64];
+    unsigned char given[ACCEL_MAX_PARAMS];
+    rc = accel_parse_kv(k->name, kv, defs, n, num, str, given, err);
     if (rc) return rc;
     /* Typed values: the kind's into its spec struct, the common ones into
      * out's own fields. */
     for (size_t i = 0; i < n; i++) {
         int common = i >= k->param_count;
-        if (!common && !k->spec_size) continue; /* TRANSITION */
-        store_value(common ? (unsigned char *)out : out->values.bytes, &defs[i], out->num[i],
-                    out->str[i]);
-        if (!common) out->given[defs[i].offset] |= out->key_given[i];
+        store_value(common ? (unsigned char *)out : out->values.bytes, &defs[i], num[i], str[i]);
+        if (!common)
+            out->given[defs[i].offset] |= given[i];
+        else if (defs[i].offset == offsetof(accel_params, reorder))
+            out->reorder_given = given[i];
     }
-    out->reorder_given = out->key_given[k->param_count + 1];
     /* Canonical spec: the name and the parameters given, in table order. */
     size_t len = (size_t)snprintf(out->spec, sizeof out->spec, "%s", k->name);
     int first = 1;
     for (size_t i = 0; i < n && len < sizeof out->spec; i++) {
-        if (!out->key_given[i]) continue;
+        if (!given[i]) continue;
         len += (size_t)snprintf(out->spec + len, sizeof out->spec - len, "%s%s=%s",
-                                first ? ":" : ",", defs[i].key, out->str[i]);
+                                first ? ":" : ",", defs[i].key, str[i]);
         first = 0;
     }
     return 0;
-}
-
-static int key_index(const accel_params *p, const char *key)
-{
-    const accel_kind *k = p->kind;
-    for (size_t i = 0; i < k->param_count; i++)
-        if (!strcmp(k->params[i].key, key)) return (int)i;
-    for (size_t i = 0; i < accel_common_param_count; i++)
-        if (!strcmp(accel_common_params[i].key, key)) return (int)(k->param_count + i);
-    return -1;
-}
-
-double accel_param_num(const accel_params *p, const char *key)
-{
-    int i = key_index(p, key);
-    return i < 0 ? 0.0 : p->num[i];
-}
-const char *accel_param_str(const accel_params *p, const char *key)
-{
-    int i = key_index(p, key);
-    return i < 0 ? "" : p->str[i];
-}
-int accel_param_given(const accel_params *p, const char *key)
-{
-    int i = key_index(p, key);
-    return i < 0 ? 0 : p->key_given[i];
 }
