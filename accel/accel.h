@@ -277,32 +277,57 @@ typedef struct {
     double min, max;     /* accepted range for INT and FLOAT */
     const char *choices; /* ENUM: "a|b|c" */
     const char *help;    /* meaning, with its unit */
+    /* Where the parser stores the value in the kind's spec struct
+     * (offsetof): an int for INT, BOOL (0/1) and ENUM, a double for FLOAT,
+     * char[ACCEL_PARAM_TEXT] for STR. An ENUM stores the chosen choice's
+     * integer when it is written as one ("2|4|8" stores 2, 4 or 8), else its
+     * position ("binned|sah" stores 0 or 1; "auto|4|8": 0, 4 or 8). */
+    size_t offset;
 } accel_param_def;
 
 #define ACCEL_MAX_PARAMS 32
+#define ACCEL_PARAM_TEXT 64   /* a STR field: char key[ACCEL_PARAM_TEXT] */
+#define ACCEL_SPEC_BYTES 512  /* largest spec struct a kind may declare */
 
 struct accel_kind;
 
-/* A parsed spec: values for every parameter of the kind (defaults filled in). */
+/* A parsed spec. The kind's own parameters are in its spec struct (every
+ * one filled, defaults included), read with ACCEL_SPEC; whether the user
+ * wrote a key, with ACCEL_GIVEN. */
 typedef struct {
     const struct accel_kind *kind;
-    double num[ACCEL_MAX_PARAMS];       /* INT, FLOAT, BOOL, ENUM (choice index) */
-    char str[ACCEL_MAX_PARAMS][64];     /* textual value of every parameter */
-    unsigned char given[ACCEL_MAX_PARAMS];
     char spec[256];                     /* canonical "kind:key=value,..." of the given keys */
     int naive;                          /* common parameter tri=naive (Moller-Trumbore) */
     int reorder;                        /* common parameter reorder: Morton-ordered store */
+    int reorder_given;                  /* reorder was written (bvh's default differs) */
+    union {
+        double d;
+        int64_t i;
+        void *p;
+        unsigned char bytes[ACCEL_SPEC_BYTES];
+    } values;                           /* the kind's spec struct (kind->spec_size bytes) */
+    unsigned char given[ACCEL_SPEC_BYTES]; /* given[offset]: the key of that field was written */
 } accel_params;
+
+/* The kind's spec struct of a parsed spec: ACCEL_SPEC(p, bvh_spec)->bins. */
+#define ACCEL_SPEC(p, type) ((const type *)(const void *)(p)->values.bytes)
+/* 1 if the user wrote the parameter stored in `field`: ACCEL_GIVEN(p, bvh_spec, bins). */
+#define ACCEL_GIVEN(p, type, field) ((p)->given[offsetof(type, field)] != 0)
 
 /* Parameters every kind accepts, handled by the parser itself. */
 extern const accel_param_def accel_common_params[];
 extern const size_t accel_common_param_count;
 
-/* Parses "key=value,key=value,flag" against a parameter table: fills num[],
- * str[] and given[] (defaults first). `what` names the thing in messages
- * ("bvh", "scene sphereflake"). Shared by accelerator and scene specs. */
+/* Parses "key=value,key=value,flag" against a parameter table: fills num[]
+ * (ENUM: as stored in a spec struct), str[] (the text) and given[]
+ * (defaults first; a default that does not parse is ACCEL_ERR_INTERNAL).
+ * `what` names the thing in messages ("bvh", "scene sphereflake"). Shared
+ * by accelerator and scene specs. */
 int accel_parse_kv(const char *what, const char *text, const accel_param_def *defs, size_t n,
                    double *num, char (*str)[64], unsigned char *given, accel_error *err);
+/* The choice of `choices` ("a|b|c") that an ENUM stores as `value`, copied
+ * into buf ("" when none does); returns buf. For messages that name it. */
+const char *accel_param_choice(const char *choices, int value, char *buf, size_t size);
 /* Appends "  key  (type, default D, range) help" lines for a table to buf. */
 void accel_params_help(const accel_param_def *defs, size_t n, char *buf, size_t size);
 
@@ -311,13 +336,10 @@ void accel_params_help(const accel_param_def *defs, size_t n, char *buf, size_t 
  * is accepted. */
 int accel_params_parse(const char *spec, accel_params *out, accel_error *err);
 /* The same for a kind given directly (registered or not, e.g. the lab's
- * starter kind): kv is the part after "name:". */
+ * starter kind): kv is the part after "name:". A kind whose table does not
+ * fit its spec struct is ACCEL_ERR_INTERNAL. */
 int accel_params_parse_kind(const struct accel_kind *kind, const char *kv, accel_params *out,
                             accel_error *err);
-/* Lookups by key; the key must be one of the kind's parameters (asserted). */
-double accel_param_num(const accel_params *p, const char *key);
-const char *accel_param_str(const accel_params *p, const char *key);
-int accel_param_given(const accel_params *p, const char *key);
 
 /* ---- the accelerator kind table ----------------------------------------- */
 
@@ -391,6 +413,7 @@ typedef struct accel_kind {
     const char *step_name;     /* "cells" or "nodes": what counters.steps counts */
     const accel_param_def *params;
     size_t param_count;
+    size_t spec_size;          /* sizeof the struct params' offsets point into */
     /* Parameter strings (after "name:") the conformance and stability suites
      * run, NULL-terminated; the first should be "" (defaults). */
     const char *const *variants;

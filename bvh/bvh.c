@@ -15,67 +15,100 @@
 #include "bvh.h"
 #include "wide/wide.h"
 
+/* Named once: the table's choices and a message that names the one chosen. */
+#define BVH_BUILD_CHOICES "binned|sah|mid|median|sbvh"
+
 static const accel_param_def bvh_params[] = {
-    {"build", ACCEL_PARAM_ENUM, "binned", 0, 0, "binned|sah|mid|median|sbvh",
-     "builder: binned SAH (Wald 2007), exact SAH by full sweep, spatial middle, object median, "
-     "binned SAH with spatial splits (Stich et al. 2009)"},
-    {"bins", ACCEL_PARAM_INT, "16", 2, 256, NULL,
-     "build=binned|sbvh: bins per axis (count; sbvh: for object and spatial splits)"},
-    {"axes", ACCEL_PARAM_ENUM, "3", 0, 0, "1|3",
-     "build=binned: axes binned per node, 1 = largest centroid extent only, 3 = all"},
-    {"split_budget", ACCEL_PARAM_FLOAT, "0.3", 0, 4, NULL,
-     "build=sbvh: most duplicated references, as a fraction of the primitives (0.3 = +30%)"},
-    {"alpha", ACCEL_PARAM_FLOAT, "1e-5", 0, 1, NULL,
-     "build=sbvh: try spatial splits where the object split's children overlap by more than "
-     "alpha times the root's area (0: everywhere)"},
-    {"max_mb", ACCEL_PARAM_FLOAT, "4096", 1.0, 1048576.0, NULL,
-     "memory limit of the build (references, node pool, scratch, final pools), MiB; "
-     "a larger tree is refused"},
-    {"leaf", ACCEL_PARAM_INT, "8", 1, 256, NULL,
-     "largest leaf (primitives); smaller leaves when the SAH rule says so"},
-    {"ct", ACCEL_PARAM_FLOAT, "1", 0, 1e6, NULL,
-     "SAH cost of a node visit (same time unit as ci)"},
-    {"ci", ACCEL_PARAM_FLOAT, "1", 1e-6, 1e6, NULL,
-     "SAH cost of a primitive test (same time unit as ct)"},
-    {"term", ACCEL_PARAM_ENUM, "sah", 0, 0, "sah|none",
-     "leaf rule: sah (a leaf once splitting does not pay, at most `leaf` primitives) or none "
-     "(split every node over `leaf`, as the lecture's lab does)"},
-    {"traverse", ACCEL_PARAM_ENUM, "single", 0, 0, "single|packet",
-     "single rays, or packets of 64 consecutive rays (8x8 tiles)"},
-    {"frustum", ACCEL_PARAM_BOOL, "0", 0, 1, NULL,
-     "traverse=packet: interval-arithmetic early-out per node (0/1)"},
-    {"width", ACCEL_PARAM_ENUM, "2", 0, 0, "2|4|8",
-     "children per node: 2 = the lecture's binary tree; 4, 8 = collapsed SIMD nodes (wide/collapse.c)"},
-    {"block", ACCEL_PARAM_ENUM, "auto", 0, 0, "auto|4|8",
-     "width=4|8: primitives per SIMD leaf block (auto: 8, or 4 when the scene has spheres)"},
-    {"order", ACCEL_PARAM_ENUM, "octant", 0, 0, "dist|octant|branchy",
-     "width=4|8: hit children sorted by entry distance per ray, or in the node's octant order "
-     "pushed by a compress-store (octant) or by one branch per child (branchy: single rays)"},
-    {"collapse", ACCEL_PARAM_ENUM, "dp", 0, 0, "greedy|dp",
-     "width=4|8: binary tree to wide nodes by opening the largest child first, every subtree of "
-     "one block a leaf (greedy), or the forests of least SAH cost by dynamic programming (dp; "
-     "Ylitie et al. 2017)"},
-    {"leaf_cost", ACCEL_PARAM_FLOAT, "1.5", 0.01, 100, NULL,
-     "collapse=dp: cost of one leaf block test, in wide node visits"},
-    {"leaf_blocks", ACCEL_PARAM_INT, "2", 1, 64, NULL,
-     "collapse=dp: most blocks in a leaf the collapse makes (larger binary leaves stay whole)"},
-    {"leaf_below", ACCEL_PARAM_INT, "0", 0, 256, NULL,
-     "width=4|8: the binary build makes every subtree of at most this many primitives a leaf, "
-     "unsplit (0: the block size; smaller lets collapse=dp choose smaller leaves, for more build "
-     "time)"},
-    {"hybrid", ACCEL_PARAM_INT, "16", 0, 64, NULL,
-     "width=4|8, traverse=packet: a subtree whose hitting rays span at most this many of the "
-     "packet's 64 (first to last) is traced ray by ray from there (0: never)"},
-    {"quant", ACCEL_PARAM_BOOL, "0", 0, 1, NULL,
-     "width=8, single rays: child boxes as 8-bit steps from the node's corner, rounded outward "
-     "(128-byte nodes instead of 256; the octant order pushed by branches, as order=branchy; "
-     "update rebuilds) (0/1)"},
-    {"first", ACCEL_PARAM_ENUM, "near", 0, 0, "near|left",
-     "width=2, single rays: of two hit children visit the nearer first (the lecture's \"better\"), "
-     "or always the left one (a control for that claim)"},
-    {"pairs", ACCEL_PARAM_ENUM, "line", 0, 0, "line|split",
-     "width=2: sibling pairs in one 64-byte cache line (the lecture's layout), or the node pool "
-     "shifted by 32 bytes so that every pair straddles two lines (a control for that claim)"},
+    {.key = "build", .type = ACCEL_PARAM_ENUM, .def = "binned",
+     .choices = BVH_BUILD_CHOICES,
+     .help = "builder: binned SAH (Wald 2007), exact SAH by full sweep, spatial middle, object "
+             "median, binned SAH with spatial splits (Stich et al. 2009)",
+     .offset = offsetof(bvh_spec, build)},
+    {.key = "bins", .type = ACCEL_PARAM_INT, .def = "16", .min = 2, .max = 256,
+     .help = "build=binned|sbvh: bins per axis (count; sbvh: for object and spatial splits)",
+     .offset = offsetof(bvh_spec, bins)},
+    {.key = "axes", .type = ACCEL_PARAM_ENUM, .def = "3", .choices = "1|3",
+     .help = "build=binned: axes binned per node, 1 = largest centroid extent only, 3 = all",
+     .offset = offsetof(bvh_spec, axes)},
+    {.key = "split_budget", .type = ACCEL_PARAM_FLOAT, .def = "0.3", .min = 0, .max = 4,
+     .help = "build=sbvh: most duplicated references, as a fraction of the primitives (0.3 = "
+             "+30%)",
+     .offset = offsetof(bvh_spec, split_budget)},
+    {.key = "alpha", .type = ACCEL_PARAM_FLOAT, .def = "1e-5", .min = 0, .max = 1,
+     .help = "build=sbvh: try spatial splits where the object split's children overlap by more "
+             "than alpha times the root's area (0: everywhere)",
+     .offset = offsetof(bvh_spec, alpha)},
+    {.key = "max_mb", .type = ACCEL_PARAM_FLOAT, .def = "4096", .min = 1.0, .max = 1048576.0,
+     .help = "memory limit of the build (references, node pool, scratch, final pools), MiB; a "
+             "larger tree is refused",
+     .offset = offsetof(bvh_spec, max_mb)},
+    {.key = "leaf", .type = ACCEL_PARAM_INT, .def = "8", .min = 1, .max = 256,
+     .help = "largest leaf (primitives); smaller leaves when the SAH rule says so",
+     .offset = offsetof(bvh_spec, leaf)},
+    {.key = "ct", .type = ACCEL_PARAM_FLOAT, .def = "1", .min = 0, .max = 1e6,
+     .help = "SAH cost of a node visit (same time unit as ci)",
+     .offset = offsetof(bvh_spec, ct)},
+    {.key = "ci", .type = ACCEL_PARAM_FLOAT, .def = "1", .min = 1e-6, .max = 1e6,
+     .help = "SAH cost of a primitive test (same time unit as ct)",
+     .offset = offsetof(bvh_spec, ci)},
+    {.key = "term", .type = ACCEL_PARAM_ENUM, .def = "sah", .choices = "sah|none",
+     .help = "leaf rule: sah (a leaf once splitting does not pay, at most `leaf` primitives) or "
+             "none (split every node over `leaf`, as the lecture's lab does)",
+     .offset = offsetof(bvh_spec, term)},
+    {.key = "traverse", .type = ACCEL_PARAM_ENUM, .def = "single", .choices = "single|packet",
+     .help = "single rays, or packets of 64 consecutive rays (8x8 tiles)",
+     .offset = offsetof(bvh_spec, traverse)},
+    {.key = "frustum", .type = ACCEL_PARAM_BOOL, .def = "0", .min = 0, .max = 1,
+     .help = "traverse=packet: interval-arithmetic early-out per node (0/1)",
+     .offset = offsetof(bvh_spec, frustum)},
+    {.key = "width", .type = ACCEL_PARAM_ENUM, .def = "2", .choices = "2|4|8",
+     .help = "children per node: 2 = the lecture's binary tree; 4, 8 = collapsed SIMD nodes "
+             "(wide/collapse.c)",
+     .offset = offsetof(bvh_spec, width)},
+    {.key = "block", .type = ACCEL_PARAM_ENUM, .def = "auto", .choices = "auto|4|8",
+     .help = "width=4|8: primitives per SIMD leaf block (auto: 8, or 4 when the scene has "
+             "spheres)",
+     .offset = offsetof(bvh_spec, block)},
+    {.key = "order", .type = ACCEL_PARAM_ENUM, .def = "octant", .choices = "dist|octant|branchy",
+     .help = "width=4|8: hit children sorted by entry distance per ray, or in the node's octant "
+             "order pushed by a compress-store (octant) or by one branch per child (branchy: "
+             "single rays)",
+     .offset = offsetof(bvh_spec, order)},
+    {.key = "collapse", .type = ACCEL_PARAM_ENUM, .def = "dp", .choices = "greedy|dp",
+     .help = "width=4|8: binary tree to wide nodes by opening the largest child first, every "
+             "subtree of one block a leaf (greedy), or the forests of least SAH cost by dynamic "
+             "programming (dp; Ylitie et al. 2017)",
+     .offset = offsetof(bvh_spec, collapse)},
+    {.key = "leaf_cost", .type = ACCEL_PARAM_FLOAT, .def = "1.5", .min = 0.01, .max = 100,
+     .help = "collapse=dp: cost of one leaf block test, in wide node visits",
+     .offset = offsetof(bvh_spec, leaf_cost)},
+    {.key = "leaf_blocks", .type = ACCEL_PARAM_INT, .def = "2", .min = 1, .max = 64,
+     .help = "collapse=dp: most blocks in a leaf the collapse makes (larger binary leaves stay "
+             "whole)",
+     .offset = offsetof(bvh_spec, leaf_blocks)},
+    {.key = "leaf_below", .type = ACCEL_PARAM_INT, .def = "0", .min = 0, .max = 256,
+     .help = "width=4|8: the binary build makes every subtree of at most this many primitives a "
+             "leaf, unsplit (0: the block size; smaller lets collapse=dp choose smaller leaves, "
+             "for more build time)",
+     .offset = offsetof(bvh_spec, leaf_below)},
+    {.key = "hybrid", .type = ACCEL_PARAM_INT, .def = "16", .min = 0, .max = 64,
+     .help = "width=4|8, traverse=packet: a subtree whose hitting rays span at most this many of "
+             "the packet's 64 (first to last) is traced ray by ray from there (0: never)",
+     .offset = offsetof(bvh_spec, hybrid)},
+    {.key = "quant", .type = ACCEL_PARAM_BOOL, .def = "0", .min = 0, .max = 1,
+     .help = "width=8, single rays: child boxes as 8-bit steps from the node's corner, rounded "
+             "outward (128-byte nodes instead of 256; the octant order pushed by branches, as "
+             "order=branchy; update rebuilds) (0/1)",
+     .offset = offsetof(bvh_spec, quant)},
+    {.key = "first", .type = ACCEL_PARAM_ENUM, .def = "near", .choices = "near|left",
+     .help = "width=2, single rays: of two hit children visit the nearer first (the lecture's "
+             "\"better\"), or always the left one (a control for that claim)",
+     .offset = offsetof(bvh_spec, first)},
+    {.key = "pairs", .type = ACCEL_PARAM_ENUM, .def = "line", .choices = "line|split",
+     .help = "width=2: sibling pairs in one 64-byte cache line (the lecture's layout), or the "
+             "node pool shifted by 32 bytes so that every pair straddles two lines (a control "
+             "for that claim)",
+     .offset = offsetof(bvh_spec, pairs)},
 };
 #define BVH_PARAM_COUNT (sizeof bvh_params / sizeof bvh_params[0])
 
@@ -91,65 +124,69 @@ typedef struct {
 static int options_from_params(const accel_params *p, bvh_build_opts *o, int *traverse,
                                int *frustum, wide_opts *wo, accel_error *err)
 {
+#define GIVEN(field) ACCEL_GIVEN(p, bvh_spec, field)
+    const bvh_spec *s = ACCEL_SPEC(p, bvh_spec);
     memset(o, 0, sizeof *o);
-    o->builder = (bvh_builder)(int)accel_param_num(p, "build");
-    o->bins = (int)accel_param_num(p, "bins");
-    o->axes = atoi(accel_param_str(p, "axes"));
-    o->max_leaf = (int)accel_param_num(p, "leaf");
-    o->ct = (float)accel_param_num(p, "ct");
-    o->ci = (float)accel_param_num(p, "ci");
-    o->term_none = (int)accel_param_num(p, "term") == 1;
+    o->builder = (bvh_builder)s->build;
+    o->bins = s->bins;
+    o->axes = s->axes;
+    o->max_leaf = s->leaf;
+    o->ct = (float)s->ct;
+    o->ci = (float)s->ci;
+    o->term_none = s->term == 1;
     /* The common reorder defaults to 1 (a Morton-ordered store) for every
      * kind but this one: the tree copies the primitives in leaf order, a
      * spatial order of its own, so a Morton copy would only cost build time
      * (bvh_build_run). reorder=1 given explicitly still builds over it. */
-    o->reorder = accel_param_given(p, "reorder") ? p->reorder : 0;
-    o->split_budget = accel_param_num(p, "split_budget");
-    o->alpha = accel_param_num(p, "alpha");
-    o->max_mb = accel_param_num(p, "max_mb");
-    *traverse = (int)accel_param_num(p, "traverse");
-    *frustum = (int)accel_param_num(p, "frustum");
+    o->reorder = p->reorder_given ? p->reorder : 0;
+    o->split_budget = s->split_budget;
+    o->alpha = s->alpha;
+    o->max_mb = s->max_mb;
+    *traverse = s->traverse;
+    *frustum = s->frustum;
     /* Options that would be silently ignored are errors. */
     int binned = o->builder == BVH_BUILD_BINNED, sbvh = o->builder == BVH_BUILD_SBVH;
-    if ((!binned && accel_param_given(p, "axes")) || (!binned && !sbvh && accel_param_given(p, "bins")))
+    char build[ACCEL_PARAM_TEXT];
+    if ((!binned && GIVEN(axes)) || (!binned && !sbvh && GIVEN(bins)))
         return accel_fail(err, ACCEL_ERR_SPEC,
                           "bvh: bins applies to build=binned|sbvh, axes to build=binned (got build=%s)",
-                          accel_param_str(p, "build"));
-    if (!sbvh && (accel_param_given(p, "split_budget") || accel_param_given(p, "alpha")))
+                          accel_param_choice(BVH_BUILD_CHOICES, s->build, build, sizeof build));
+    if (!sbvh && (GIVEN(split_budget) || GIVEN(alpha)))
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: split_budget and alpha apply to build=sbvh only");
     if (*frustum && *traverse != BVH_TRAVERSE_PACKET)
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: frustum=1 needs traverse=packet");
-    wo->width = atoi(accel_param_str(p, "width"));
-    wo->block = atoi(accel_param_str(p, "block")); /* 0 for auto, set by the build */
-    wo->order = (int)accel_param_num(p, "order");
-    if (wo->width == 2 && (accel_param_given(p, "block") || accel_param_given(p, "order")))
+    wo->width = s->width;
+    wo->block = s->block; /* 0 for auto, set by the build */
+    wo->order = s->order;
+    if (wo->width == 2 && (GIVEN(block) || GIVEN(order)))
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: block and order apply to width=4|8 only");
-    wo->first_left = (int)accel_param_num(p, "first") == 1;
-    wo->split_pairs = (int)accel_param_num(p, "pairs") == 1;
-    if (wo->width > 2 && (accel_param_given(p, "first") || accel_param_given(p, "pairs")))
+    wo->first_left = s->first == 1;
+    wo->split_pairs = s->pairs == 1;
+    if (wo->width > 2 && (GIVEN(first) || GIVEN(pairs)))
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: first and pairs apply to width=2 only");
-    if (accel_param_given(p, "first") && *traverse != BVH_TRAVERSE_SINGLE)
+    if (GIVEN(first) && *traverse != BVH_TRAVERSE_SINGLE)
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: first applies to traverse=single only");
-    wo->quant = (int)accel_param_num(p, "quant");
-    if (wo->quant && (wo->width != 8 || *traverse != BVH_TRAVERSE_SINGLE || accel_param_given(p, "order")))
+    wo->quant = s->quant;
+    if (wo->quant && (wo->width != 8 || *traverse != BVH_TRAVERSE_SINGLE || GIVEN(order)))
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: quant=1 applies to width=8 with single rays and "
                                                "its own order (no order=, no traverse=packet)");
-    wo->collapse.dp = (int)accel_param_num(p, "collapse") == 1;
-    wo->collapse.leaf_cost = accel_param_num(p, "leaf_cost");
-    wo->collapse.leaf_blocks = (int)accel_param_num(p, "leaf_blocks");
-    wo->leaf_below = (int)accel_param_num(p, "leaf_below");
-    if ((wo->width == 2 && (accel_param_given(p, "collapse") || accel_param_given(p, "leaf_below"))) ||
-        (!wo->collapse.dp && (accel_param_given(p, "leaf_cost") || accel_param_given(p, "leaf_blocks"))))
+    wo->collapse.dp = s->collapse == 1;
+    wo->collapse.leaf_cost = s->leaf_cost;
+    wo->collapse.leaf_blocks = s->leaf_blocks;
+    wo->leaf_below = s->leaf_below;
+    if ((wo->width == 2 && (GIVEN(collapse) || GIVEN(leaf_below))) ||
+        (!wo->collapse.dp && (GIVEN(leaf_cost) || GIVEN(leaf_blocks))))
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: collapse and leaf_below apply to width=4|8, "
                                                "leaf_cost and leaf_blocks to collapse=dp");
-    wo->hybrid = (int)accel_param_num(p, "hybrid");
-    if (accel_param_given(p, "hybrid") && (wo->width == 2 || *traverse != BVH_TRAVERSE_PACKET))
+    wo->hybrid = s->hybrid;
+    if (GIVEN(hybrid) && (wo->width == 2 || *traverse != BVH_TRAVERSE_PACKET))
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: hybrid applies to width=4|8 with traverse=packet");
     if (wo->order == WIDE_ORDER_BRANCHY && *traverse != BVH_TRAVERSE_SINGLE)
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: order=branchy applies to traverse=single only");
     if (wo->width > 2 && *frustum)
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: frustum applies to width=2 (wide packets always use it)");
     return 0;
+#undef GIVEN
 }
 
 /* What update needs to build the tree again (refit=0, or a scene whose set
@@ -443,6 +480,7 @@ const accel_kind accel_kind_bvh = {
     .step_name = "nodes",
     .params = bvh_params,
     .param_count = BVH_PARAM_COUNT,
+    .spec_size = sizeof(bvh_spec),
     .variants = bvh_variants,
     .build = bvh_kind_build,
     .intersect = bvh_intersect,

@@ -83,6 +83,19 @@ static_assert(offsetof(bvh_node, count) == 28, "count closes the node");
  * is a far child of one node on the current root-to-node path. */
 #define BVH_MAX_DEPTH 64
 
+/* The kind's parameters as parsed, one field per key (bvh.c's table:
+ * ACCEL_SPEC(params, bvh_spec)). Choices hold their position in the
+ * table's list (build: binned 0, sah, mid, median, sbvh 4; traverse:
+ * single 0, packet 1; ...), those written as numbers their number (width
+ * 2, 4 or 8; axes 1 or 3; block 4 or 8, 0 for auto). */
+typedef struct {
+    int build, bins, axes, leaf;
+    double split_budget, alpha, max_mb, ct, ci;
+    int term, traverse, frustum, width, block, order, collapse;
+    double leaf_cost;
+    int leaf_blocks, leaf_below, hybrid, quant, first, pairs;
+} bvh_spec;
+
 /* The node pool of a built bvh (node 0 is the root; node 1 is padding) and
  * the scene id of every primitive slot, in leaf order. */
 const bvh_node *bvh_nodes(const void *accel, uint32_t *node_count);

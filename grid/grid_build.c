@@ -16,25 +16,35 @@
 #define STR(x) STR_(x)
 
 static const accel_param_def grid_params[] = {
-    {"lambda", ACCEL_PARAM_FLOAT, STR(GRID_DEFAULT_LAMBDA), 0.001, 1000.0, NULL,
-     "cells per primitive: n_i = d_i*cbrt(lambda*N/V) (ignored when res is given)"},
-    {"res", ACCEL_PARAM_STR, "auto", 0, 0, NULL,
-     "cells per axis: auto (from lambda), N, or NxNyNz (each 1..65536)"},
-    {"overlap", ACCEL_PARAM_ENUM, "exact", 0, 0, "exact|bbox",
-     "cell membership: exact primitive/box overlap, or bounding box only"},
-    {"mailbox", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
-     "test a primitive spanning several cells once per ray (16-entry per-ray cache)"},
-    {"max_mb", ACCEL_PARAM_FLOAT, "4096", 1.0, 1048576.0, NULL,
-     "memory limit for cell offsets + references, MiB: larger grids are refused"},
-    {"traverse", ACCEL_PARAM_ENUM, "single", 0, 0, "single|packet",
-     "single rays (3D-DDA), or coherent grid traversal of 64 consecutive rays (8x8 tiles) "
-     "slice by slice"},
-    {"skip", ACCEL_PARAM_ENUM, "none", 0, 0, "none|cloud|macro",
-     "empty-space skipping: none, proximity clouds (1 byte/cell), macro cells (see macro)"},
-    {"skip_min", ACCEL_PARAM_INT, "1", 1, 254, NULL,
-     "skip=cloud: smallest radius worth a jump (cells; a jump costs about two steps)"},
-    {"macro", ACCEL_PARAM_INT, "4", 2, 64, NULL,
-     "skip=macro: cells per macro cell along each axis, a power of two"},
+    {.key = "lambda", .type = ACCEL_PARAM_FLOAT, .def = STR(GRID_DEFAULT_LAMBDA),
+     .min = 0.001, .max = 1000.0,
+     .help = "cells per primitive: n_i = d_i*cbrt(lambda*N/V) (ignored when res is given)",
+     .offset = offsetof(grid_spec, lambda)},
+    {.key = "res", .type = ACCEL_PARAM_STR, .def = "auto",
+     .help = "cells per axis: auto (from lambda), N, or NxNyNz (each 1..65536)",
+     .offset = offsetof(grid_spec, res)},
+    {.key = "overlap", .type = ACCEL_PARAM_ENUM, .def = "exact", .choices = "exact|bbox",
+     .help = "cell membership: exact primitive/box overlap, or bounding box only",
+     .offset = offsetof(grid_spec, overlap)},
+    {.key = "mailbox", .type = ACCEL_PARAM_BOOL, .def = "1",
+     .help = "test a primitive spanning several cells once per ray (16-entry per-ray cache)",
+     .offset = offsetof(grid_spec, mailbox)},
+    {.key = "max_mb", .type = ACCEL_PARAM_FLOAT, .def = "4096", .min = 1.0, .max = 1048576.0,
+     .help = "memory limit for cell offsets + references, MiB: larger grids are refused",
+     .offset = offsetof(grid_spec, max_mb)},
+    {.key = "traverse", .type = ACCEL_PARAM_ENUM, .def = "single", .choices = "single|packet",
+     .help = "single rays (3D-DDA), or coherent grid traversal of 64 consecutive rays (8x8 "
+             "tiles) slice by slice",
+     .offset = offsetof(grid_spec, traverse)},
+    {.key = "skip", .type = ACCEL_PARAM_ENUM, .def = "none", .choices = "none|cloud|macro",
+     .help = "empty-space skipping: none, proximity clouds (1 byte/cell), macro cells (see macro)",
+     .offset = offsetof(grid_spec, skip)},
+    {.key = "skip_min", .type = ACCEL_PARAM_INT, .def = "1", .min = 1, .max = 254,
+     .help = "skip=cloud: smallest radius worth a jump (cells; a jump costs about two steps)",
+     .offset = offsetof(grid_spec, skip_min)},
+    {.key = "macro", .type = ACCEL_PARAM_INT, .def = "4", .min = 2, .max = 64,
+     .help = "skip=macro: cells per macro cell along each axis, a power of two",
+     .offset = offsetof(grid_spec, macro)},
 };
 
 static void grid_destroy(void *a)
@@ -99,10 +109,11 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
                       void **out, accel_build_stats *stats, accel_error *err)
 {
     *out = NULL;
-    double lambda = accel_param_num(params, "lambda");
-    double max_bytes = accel_param_num(params, "max_mb") * 1048576.0;
+    const grid_spec *spec = ACCEL_SPEC(params, grid_spec);
+    double lambda = spec->lambda;
+    double max_bytes = spec->max_mb * 1048576.0;
     int res[3];
-    int rc = grid_parse_res(accel_param_str(params, "res"), res, err);
+    int rc = grid_parse_res(spec->res, res, err);
     if (rc) return rc;
     box3 box = grid_frame_box(scene->bounds);
     if (res[0] == 0) grid_resolution(scene->bounds, (double)scene->live_count, lambda, res);
@@ -113,13 +124,12 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
     grid_accel *g = calloc(1, sizeof *g);
     if (!g) return accel_fail(err, ACCEL_ERR_NOMEM, "grid: out of memory");
     g->naive = params->naive;
-    g->mailbox = accel_param_num(params, "mailbox") != 0.0;
-    g->traverse = (int)accel_param_num(params, "traverse") == 1 ? GRID_TRAVERSE_PACKET
-                                                                 : GRID_TRAVERSE_SINGLE;
+    g->mailbox = spec->mailbox != 0;
+    g->traverse = spec->traverse == 1 ? GRID_TRAVERSE_PACKET : GRID_TRAVERSE_SINGLE;
     g->has_spheres = scene->sphere_count > 0;
-    g->skip = (grid_skip_mode)(int)accel_param_num(params, "skip");
-    g->skip_min = (int)accel_param_num(params, "skip_min");
-    int macro = (int)accel_param_num(params, "macro");
+    g->skip = (grid_skip_mode)spec->skip;
+    g->skip_min = spec->skip_min;
+    int macro = spec->macro;
     while ((1 << g->macro_shift) < macro) g->macro_shift++;
     if ((1 << g->macro_shift) != macro) {
         grid_destroy(g);
@@ -138,8 +148,7 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
         grid_destroy(g);
         return rc;
     }
-    grid_overlap mode = (int)accel_param_num(params, "overlap") == 1 ? GRID_OVERLAP_BBOX
-                                                                      : GRID_OVERLAP_EXACT;
+    grid_overlap mode = spec->overlap == 1 ? GRID_OVERLAP_BBOX : GRID_OVERLAP_EXACT;
     rc = grid_cells_build(&g->frame, &g->store.prims, NULL, g->store.prims.prim_count, mode, threads,
                           max_bytes, &g->cells, err);
     if (!rc) rc = build_skip(g, threads, max_bytes, err);
@@ -218,6 +227,7 @@ const accel_kind accel_kind_grid = {
     .step_name = "cells",
     .params = grid_params,
     .param_count = sizeof grid_params / sizeof grid_params[0],
+    .spec_size = sizeof(grid_spec),
     .variants = grid_variants,
     .build = grid_build,
     .intersect = grid_trace_intersect,

@@ -17,22 +17,41 @@
 #include "inst_impl.h"
 #include "instanced.h"
 
+/* The kind's parameters as parsed, one field per key; choices hold their
+ * position in the table's list (top: bvh 0, grid 1; world: compute 0, flat 1). */
+typedef struct {
+    int top, leaf, world, pad;
+    double lambda, top_lambda;
+    char bottom[ACCEL_PARAM_TEXT];
+} inst_spec;
+
 static const accel_param_def inst_params[] = {
-    {"top", ACCEL_PARAM_ENUM, "bvh", 0, 0, "bvh|grid",
-     "top level over the instances' world bounds: binned-SAH BVH or uniform grid"},
-    {"bottom", ACCEL_PARAM_STR, "bvh", 0, 0, NULL,
-     "bottom level per mesh, object space, shared by its instances: bvh or grid (the kind's "
-     "own), or any kind with a walk: <kind> or <kind>:key=value;key=value (';' for ','), e.g. "
-     "nested_grid, bvh:width=4"},
-    {"leaf", ACCEL_PARAM_INT, "4", 1, 64, NULL, "bottom=bvh: largest leaf (primitives)"},
-    {"lambda", ACCEL_PARAM_FLOAT, "2", 0.01, 64, NULL, "bottom=grid: cells per primitive"},
-    {"top_lambda", ACCEL_PARAM_FLOAT, "2", 0.01, 64, NULL, "top=grid: cells per instance"},
-    {"world", ACCEL_PARAM_ENUM, "compute", 0, 0, "compute|flat",
-     "world triangles: computed from the mesh by the flattener's expression (a true two-level "
-     "structure), or read from the flattened scene (the same bits; for comparison)"},
-    {"pad", ACCEL_PARAM_BOOL, "1", 0, 1, NULL,
-     "grow bottom-level boxes by the flattening's rounding (0: exact object-space boxes, "
-     "which miss world hits near edges: kept to show why the pad is needed)"},
+    {.key = "top", .type = ACCEL_PARAM_ENUM, .def = "bvh", .choices = "bvh|grid",
+     .help = "top level over the instances' world bounds: binned-SAH BVH or uniform grid",
+     .offset = offsetof(inst_spec, top)},
+    {.key = "bottom", .type = ACCEL_PARAM_STR, .def = "bvh",
+     .help = "bottom level per mesh, object space, shared by its instances: bvh or grid (the "
+             "kind's own), or any kind with a walk: <kind> or <kind>:key=value;key=value (';' "
+             "for ','), e.g. nested_grid, bvh:width=4",
+     .offset = offsetof(inst_spec, bottom)},
+    {.key = "leaf", .type = ACCEL_PARAM_INT, .def = "4", .min = 1, .max = 64,
+     .help = "bottom=bvh: largest leaf (primitives)",
+     .offset = offsetof(inst_spec, leaf)},
+    {.key = "lambda", .type = ACCEL_PARAM_FLOAT, .def = "2", .min = 0.01, .max = 64,
+     .help = "bottom=grid: cells per primitive",
+     .offset = offsetof(inst_spec, lambda)},
+    {.key = "top_lambda", .type = ACCEL_PARAM_FLOAT, .def = "2", .min = 0.01, .max = 64,
+     .help = "top=grid: cells per instance",
+     .offset = offsetof(inst_spec, top_lambda)},
+    {.key = "world", .type = ACCEL_PARAM_ENUM, .def = "compute", .choices = "compute|flat",
+     .help = "world triangles: computed from the mesh by the flattener's expression (a true "
+             "two-level structure), or read from the flattened scene (the same bits; for "
+             "comparison)",
+     .offset = offsetof(inst_spec, world)},
+    {.key = "pad", .type = ACCEL_PARAM_BOOL, .def = "1", .min = 0, .max = 1,
+     .help = "grow bottom-level boxes by the flattening's rounding (0: exact object-space boxes, "
+             "which miss world hits near edges: kept to show why the pad is needed)",
+     .offset = offsetof(inst_spec, pad)},
 };
 #define INST_PARAM_COUNT (sizeof inst_params / sizeof inst_params[0])
 
@@ -343,25 +362,26 @@ int inst_build_with(const accel_scene *scene, const accel_params *params, int th
 {
     inst_accel *a = calloc(1, sizeof *a);
     if (!a) return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
+    const inst_spec *spec = ACCEL_SPEC(params, inst_spec);
     a->threads = threads;
-    a->top = (int)accel_param_num(params, "top");
+    a->top = spec->top;
     int brc = 0;
     if (bottom) {
         snprintf(a->walk_kv, sizeof a->walk_kv, "%s", bottom_kv ? bottom_kv : "");
         brc = inst_use_bottom_kind(a, bottom, err);
     } else {
-        brc = parse_bottom(a, accel_param_str(params, "bottom"), err);
+        brc = parse_bottom(a, spec->bottom, err);
     }
     if (brc) {
         free(a);
         return brc;
     }
     a->naive = params->naive;
-    a->world_flat = (int)accel_param_num(params, "world") == 1;
-    a->no_pad = accel_param_num(params, "pad") == 0.0;
-    a->leaf = (int)accel_param_num(params, "leaf");
-    a->lambda = accel_param_num(params, "lambda");
-    a->top_lambda = accel_param_num(params, "top_lambda");
+    a->world_flat = spec->world == 1;
+    a->no_pad = spec->pad == 0;
+    a->leaf = spec->leaf;
+    a->lambda = spec->lambda;
+    a->top_lambda = spec->top_lambda;
     const accel_instances *set = scene->instances;
     a->bottom_count = set ? set->mesh_count : 1;
     a->item_count = set ? set->instance_count : 1;
@@ -417,6 +437,7 @@ const accel_kind accel_kind_instanced = {
     .step_name = "nodes",
     .params = inst_params,
     .param_count = INST_PARAM_COUNT,
+    .spec_size = sizeof(inst_spec),
     .variants = inst_variants,
     .build = inst_build,
     .intersect = inst_intersect,

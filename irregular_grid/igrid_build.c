@@ -1,6 +1,7 @@
 /*
- * igrid_build.c - parameters, build and bookkeeping of the `irregular_grid`
- * kind (Perard-Gayot, Kalojanov & Slusallek, EG 2017; igrid.h).
+ * igrid_build.c - build and bookkeeping of the `irregular_grid` kind
+ * (Perard-Gayot, Kalojanov & Slusallek, EG 2017; igrid.h; its parameters:
+ * igrid_params.c).
  *
  * Build, step by step:
  *   0. coincident copies of a primitive are grouped; steps 1-3 run on one
@@ -34,19 +35,6 @@
 
 #include "igrid_impl.h"
 
-#define STR_(x) #x
-#define STR(x) STR_(x)
-
-/* split=adaptive, below the paper's depth: a split whose octants hold more
- * than this many references per primitive of the node duplicates more
- * than it separates: primitives
- * as large as the node (a mesh's triangles around a shared vertex, where
- * the count never drops), crossing or coincident ones. One that leaves
- * every primitive in one octant is kept: it carves empty space around a
- * cluster (the teapot in the stadium). */
-#ifndef IGRID_SPLIT_GUARD
-#define IGRID_SPLIT_GUARD 3.0
-#endif
 /* split=adaptive, above the paper's depth too, for nodes of at least this
  * many primitives: its depth assumes primitives small against the cell, and
  * 1,000 near-coincident triangles (vertices moved by up to 1e-6) counted
@@ -57,39 +45,6 @@
 #endif
 /* Top cells per work item of the subdivision. */
 #define IGRID_CHUNK 64
-
-static const accel_param_def igrid_params[] = {
-    {"top_lambda", ACCEL_PARAM_FLOAT, STR(IGRID_DEFAULT_TOP_LAMBDA), 0.0001, 100.0, NULL,
-     "top grid: cells per primitive, n_i = d_i*cbrt(lambda*N/V)"},
-    {"sub_lambda", ACCEL_PARAM_FLOAT, STR(IGRID_DEFAULT_SUB_LAMBDA), 0.001, 1000.0, NULL,
-     "octree density: cells per primitive the resolution rule aims at (see split)"},
-    {"max_depth", ACCEL_PARAM_INT, STR(IGRID_DEFAULT_MAX_DEPTH), 0, IGRID_MAX_DEPTH, NULL,
-     "deepest octree level (levels; the lattice is the top grid times 2^depth per axis, at "
-     "most 65536)"},
-    {"split", ACCEL_PARAM_ENUM, "adaptive", 0, 0, "adaptive|cell",
-     "octree: every non-empty node down to its top cell's depth (cell, the paper), and below it "
-     "nodes holding at least split_min primitives while a split separates them (adaptive)"},
-    {"subdivide", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
-     "step 1: octree subdivision of the top cells (0: top cells only)"},
-    {"split_min", ACCEL_PARAM_INT, STR(IGRID_DEFAULT_SPLIT_MIN), 1, 1000000, NULL,
-     "split=adaptive: below the paper's depth, only nodes holding at least this many primitives "
-     "are split"},
-    {"split_ratio", ACCEL_PARAM_FLOAT, STR(IGRID_SPLIT_GUARD), 1.0, 8.0, NULL,
-     "split=adaptive: a split is undone when its octants hold more than this many references per "
-     "primitive of the node (below the paper's depth; above it too for nodes of 64 or more)"},
-    {"merge", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
-     "step 2: merge neighbouring cells while the surface-area cost does not grow"},
-    {"alpha", ACCEL_PARAM_FLOAT, STR(IGRID_DEFAULT_ALPHA), 0.0, 1.0, NULL,
-     "merge: another round of passes while a round removes at least 1-alpha of the cells"},
-    {"ct", ACCEL_PARAM_FLOAT, "1", 0.0, 1000.0, NULL,
-     "merge cost: one cell step, in primitive tests"},
-    {"expand", ACCEL_PARAM_INT, STR(IGRID_DEFAULT_EXPAND), 0, 16, NULL,
-     "step 3: expansion rounds over the six faces of every cell (0: off)"},
-    {"mailbox", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
-     "test a primitive spanning several cells once per ray (16-entry per-ray cache)"},
-    {"max_mb", ACCEL_PARAM_FLOAT, "4096", 1.0, 1048576.0, NULL,
-     "memory limit for cells, references and voxel map, MiB: larger builds are refused"},
-};
 
 /* ---- frames on the virtual lattice ------------------------------------------------ */
 
@@ -393,21 +348,21 @@ static void shrink_lattice(igrid_accel *g, igrid_bcells *b, int shift)
 static int subdivide(igrid_accel *g, const accel_params *params, int threads, double max_bytes,
                      igrid_bcells *b, accel_error *err)
 {
+    const igrid_spec *spec = ACCEL_SPEC(params, igrid_spec);
     const accel_scene *s = &g->store.prims;
     box3 box = grid_frame_box(s->bounds);
     uint32_t *reps, rep_count, *copy_off, *copies;
     if (igrid_group_copies(s, &reps, &rep_count, &copy_off, &copies))
         return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory for the copies");
     int t[3];
-    igrid_top_resolution(s->bounds, box, rep_count, accel_param_num(params, "top_lambda"), t);
+    igrid_top_resolution(s->bounds, box, rep_count, spec->top_lambda, t);
     uint64_t top_cells;
     int rc = grid_cell_count("irregular_grid: top grid", t, max_bytes, &top_cells, err);
     if (rc) {
         free(reps), free(copy_off), free(copies);
         return rc;
     }
-    int max_depth = accel_param_num(params, "subdivide") != 0.0
-                        ? (int)accel_param_num(params, "max_depth") : 0;
+    int max_depth = spec->subdivide != 0 ? spec->max_depth : 0;
     for (int a = 0; a < 3; a++)
         while (max_depth > 0 && ((int64_t)t[a] << max_depth) > GRID_MAX_AXIS_RES) max_depth--;
     uint8_t *depth = calloc(top_cells, 1);
@@ -432,8 +387,8 @@ static int subdivide(igrid_accel *g, const accel_params *params, int threads, do
     /* The paper's depth of every top cell; the lattice is as deep as the
      * deepest (split=cell) or as max_depth allows (split=adaptive). */
     int shift = 0, any = 0;
-    const int adaptive = (int)accel_param_num(params, "split") == 0;
-    const double sub_lambda = accel_param_num(params, "sub_lambda");
+    const int adaptive = spec->split == 0;
+    const double sub_lambda = spec->sub_lambda;
     for (uint64_t c = 0; c < top_cells && max_depth > 0; c++) {
         uint32_t n = top.offsets[c + 1] - top.offsets[c];
         int d = cell_depth(&f, n, c, sub_lambda);
@@ -455,8 +410,8 @@ static int subdivide(igrid_accel *g, const accel_params *params, int threads, do
         grid_cells_free(&top), free(depth), free(top_planes), free(copy_off), free(copies);
         return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory");
     }
-    split_job j = {&g->frame, s, &top, t, depth, shift, adaptive, accel_param_num(params, "split_min"),
-                   accel_param_num(params, "split_ratio"), copy_off, copies, out, max_bytes,
+    split_job j = {&g->frame, s, &top, t, depth, shift, adaptive, spec->split_min, spec->split_ratio,
+                   copy_off, copies, out, max_bytes,
                    (uint64_t)(top.cell_count + 1) * 4};
     accel_parallel_for(top_cells, IGRID_CHUNK, threads, split_chunk, &j);
     int failed = 0;
@@ -555,21 +510,21 @@ static int igrid_build(const accel_scene *scene, const accel_params *params, int
                        void **out, accel_build_stats *stats, accel_error *err)
 {
     *out = NULL;
-    double max_bytes = accel_param_num(params, "max_mb") * 1048576.0;
+    const igrid_spec *spec = ACCEL_SPEC(params, igrid_spec);
+    double max_bytes = spec->max_mb * 1048576.0;
     igrid_accel *g = calloc(1, sizeof *g);
     if (!g) return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory");
     g->naive = params->naive;
-    g->mailbox = accel_param_num(params, "mailbox") != 0.0;
+    g->mailbox = spec->mailbox != 0;
     g->has_spheres = scene->sphere_count > 0;
     igrid_bcells b;
     memset(&b, 0, sizeof b);
     int rc = accel_prim_store_build(scene, params->reorder, &g->store, err);
     if (!rc) rc = subdivide(g, params, threads, max_bytes, &b, err);
-    if (!rc && accel_param_num(params, "merge") != 0.0)
-        rc = igrid_merge(&b, accel_param_num(params, "alpha"), accel_param_num(params, "ct"), err);
+    if (!rc && spec->merge != 0) rc = igrid_merge(&b, spec->alpha, spec->ct, err);
     if (!rc) {
         memcpy(b.exit, b.box, (size_t)b.count * sizeof *b.box);
-        rc = igrid_expand(&b, (int)accel_param_num(params, "expand"), err);
+        rc = igrid_expand(&b, spec->expand, err);
         if (!rc) rc = flatten(g, &b, err);
     }
     igrid_bcells_free(&b);
@@ -635,7 +590,8 @@ const accel_kind accel_kind_irregular_grid = {
                "expanded exits",
     .step_name = "cells",
     .params = igrid_params,
-    .param_count = sizeof igrid_params / sizeof igrid_params[0],
+    .param_count = IGRID_PARAM_COUNT,
+    .spec_size = sizeof(igrid_spec),
     .variants = igrid_variants,
     .build = igrid_build,
     .intersect = igrid_intersect,

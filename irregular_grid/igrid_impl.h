@@ -12,6 +12,17 @@
 extern "C" {
 #endif
 
+/* The kind's parameters as parsed, one field per key (igrid_params.c's
+ * table: ACCEL_SPEC(params, igrid_spec)); choices hold their position in
+ * the table's list (split: adaptive 0, cell 1). */
+typedef struct {
+    double top_lambda, sub_lambda, split_ratio, alpha, ct, max_mb;
+    int max_depth, split, subdivide, split_min, merge, expand, mailbox;
+} igrid_spec;
+
+#define IGRID_PARAM_COUNT 13
+extern const accel_param_def igrid_params[IGRID_PARAM_COUNT];
+
 typedef struct {
     /* The primitive store (accel.h): cells hold its local ids. */
     accel_prim_store store;

@@ -61,10 +61,20 @@ typedef struct {
     uint32_t leaf_count;
 } lab_bvh;
 
+/* The parameters as parsed: one field per key of lab_params, where
+ * .offset tells the parser where each value goes (a parameter of your own
+ * is a field here and a line there). */
+typedef struct {
+    int leaf;     /* leaf=N: largest leaf */
+    int traverse; /* traverse=single (0) or packet (1): the choice's position */
+} lab_spec;
+
 static const accel_param_def lab_params[] = {
-    {"leaf", ACCEL_PARAM_INT, "4", 1, 64, NULL, "largest leaf (primitives)"},
-    {"traverse", ACCEL_PARAM_ENUM, "single", 0, 0, "single|packet",
-     "single rays, or packets of 64 consecutive rays (8x8 tiles) (step 4)"},
+    {.key = "leaf", .type = ACCEL_PARAM_INT, .def = "4", .min = 1, .max = 64,
+     .help = "largest leaf (primitives)", .offset = offsetof(lab_spec, leaf)},
+    {.key = "traverse", .type = ACCEL_PARAM_ENUM, .def = "single", .choices = "single|packet",
+     .help = "single rays, or packets of 64 consecutive rays (8x8 tiles) (step 4)",
+     .offset = offsetof(lab_spec, traverse)},
 };
 
 /* ---- step 1: build -------------------------------------------------------- */
@@ -125,8 +135,9 @@ static int lab_build(const accel_scene *scene, const accel_params *params, int t
         free(b);
         return rc;
     }
-    b->max_leaf = (int)accel_param_num(params, "leaf");
-    b->packet = (int)accel_param_num(params, "traverse") == 1;
+    const lab_spec *spec = ACCEL_SPEC(params, lab_spec);
+    b->max_leaf = spec->leaf;
+    b->packet = spec->traverse == 1;
     b->naive = params->naive;
     uint32_t n = b->store.prims.prim_count;
     b->nodes = malloc(((size_t)2 * n + 1) * sizeof *b->nodes);
@@ -332,6 +343,7 @@ const accel_kind accel_kind_starter = {
     .step_name = "nodes",
     .params = lab_params,
     .param_count = sizeof lab_params / sizeof lab_params[0],
+    .spec_size = sizeof(lab_spec),
     .variants = lab_variants,
     .build = lab_build,
     .intersect = lab_intersect,

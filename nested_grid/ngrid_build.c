@@ -37,42 +37,73 @@
 #define STR(x) STR_(x)
 
 
+/* The kind's parameters as parsed, one field per key (auto: is_auto);
+ * choices hold their position in the table's list. */
+typedef struct {
+    double lambda, sub_lambda, c_step, c_isect, max_mb;
+    char res[ACCEL_PARAM_TEXT];
+    int sub_res, threshold, depth, is_auto, lookahead, overlap, mailbox, layout, traverse;
+} ngrid_spec;
+
 static const accel_param_def ngrid_params[] = {
-    {"lambda", ACCEL_PARAM_FLOAT, STR(NGRID_DEFAULT_LAMBDA), 0.001, 1000.0, NULL,
-     "top level: cells per primitive, n_i = d_i*cbrt(lambda*N/V)"},
-    {"res", ACCEL_PARAM_STR, "auto", 0, 0, NULL,
-     "top level: cells per axis, auto (from lambda or the cost model), N or NxNyNz"},
-    {"sub_lambda", ACCEL_PARAM_FLOAT, STR(NGRID_DEFAULT_SUB_LAMBDA), 0.001, 1000.0, NULL,
-     "sub-grids: cells per primitive, on the cell's own primitive count and box"},
-    {"sub_res", ACCEL_PARAM_INT, "0", 0, 256, NULL,
-     "sub-grids: cells per axis of every sub-grid (0: from sub_lambda)"},
-    {"threshold", ACCEL_PARAM_INT, STR(NGRID_DEFAULT_THRESHOLD), 0, 1e9, NULL,
-     "a cell holding more than this many primitives gets a sub-grid (primitives)"},
-    {"depth", ACCEL_PARAM_INT, STR(NGRID_DEFAULT_DEPTH), 1, NGRID_MAX_LEVELS, NULL,
-     "most levels, the top included (1: a regular grid)"},
-    {"auto", ACCEL_PARAM_BOOL, "0", 0, 0, NULL,
-     "cost model picks the top resolution and every sub-grid (ignores lambda, sub_lambda, "
-     "sub_res, threshold)"},
-    {"lookahead", ACCEL_PARAM_BOOL, "0", 0, 0, NULL,
-     "auto: price a cell that may still get a sub-grid by its best sub-grid's estimate "
-     "(0: as a leaf)"},
-    {"c_step", ACCEL_PARAM_FLOAT, STR(NGRID_DEFAULT_C_STEP), 1e-3, 1e6, NULL,
-     "auto: cost of one cell step, ns"},
-    {"c_isect", ACCEL_PARAM_FLOAT, STR(NGRID_DEFAULT_C_ISECT), 1e-3, 1e6, NULL,
-     "auto: cost of one primitive test, ns"},
-    {"overlap", ACCEL_PARAM_ENUM, "exact", 0, 0, "exact|bbox",
-     "cell membership: exact primitive/box overlap, or bounding box only"},
-    {"mailbox", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
-     "test a primitive spanning several cells once per ray, across levels (16-entry cache)"},
-    {"max_mb", ACCEL_PARAM_FLOAT, "4096", 1.0, 1048576.0, NULL,
-     "memory limit for all levels (cells, references, planes), MiB"},
-    {"layout", ACCEL_PARAM_ENUM, "words", 0, 0, "words|compact",
-     "words: cell words and count-prefixed lists, any depth; compact: two levels, 8-byte top "
-     "cells with their own sub-grid resolution (at most 256 per axis), 4-byte leaf cells, one "
-     "reference array (Kalojanov et al. 2011; depth defaults to 2, others refused)"},
-    {"traverse", ACCEL_PARAM_ENUM, "single", 0, 0, "single|packet",
-     "single rays (hierarchical 3D-DDA), or coherent grid traversal of 64 consecutive rays "
-     "(8x8 tiles) slice by slice through every level, as grid:traverse=packet"},
+    {.key = "lambda", .type = ACCEL_PARAM_FLOAT, .def = STR(NGRID_DEFAULT_LAMBDA),
+     .min = 0.001, .max = 1000.0,
+     .help = "top level: cells per primitive, n_i = d_i*cbrt(lambda*N/V)",
+     .offset = offsetof(ngrid_spec, lambda)},
+    {.key = "res", .type = ACCEL_PARAM_STR, .def = "auto",
+     .help = "top level: cells per axis, auto (from lambda or the cost model), N or NxNyNz",
+     .offset = offsetof(ngrid_spec, res)},
+    {.key = "sub_lambda", .type = ACCEL_PARAM_FLOAT, .def = STR(NGRID_DEFAULT_SUB_LAMBDA),
+     .min = 0.001, .max = 1000.0,
+     .help = "sub-grids: cells per primitive, on the cell's own primitive count and box",
+     .offset = offsetof(ngrid_spec, sub_lambda)},
+    {.key = "sub_res", .type = ACCEL_PARAM_INT, .def = "0", .min = 0, .max = 256,
+     .help = "sub-grids: cells per axis of every sub-grid (0: from sub_lambda)",
+     .offset = offsetof(ngrid_spec, sub_res)},
+    {.key = "threshold", .type = ACCEL_PARAM_INT, .def = STR(NGRID_DEFAULT_THRESHOLD),
+     .min = 0, .max = 1e9,
+     .help = "a cell holding more than this many primitives gets a sub-grid (primitives)",
+     .offset = offsetof(ngrid_spec, threshold)},
+    {.key = "depth", .type = ACCEL_PARAM_INT, .def = STR(NGRID_DEFAULT_DEPTH),
+     .min = 1, .max = NGRID_MAX_LEVELS,
+     .help = "most levels, the top included (1: a regular grid)",
+     .offset = offsetof(ngrid_spec, depth)},
+    {.key = "auto", .type = ACCEL_PARAM_BOOL, .def = "0",
+     .help = "cost model picks the top resolution and every sub-grid (ignores lambda, "
+             "sub_lambda, sub_res, threshold)",
+     .offset = offsetof(ngrid_spec, is_auto)},
+    {.key = "lookahead", .type = ACCEL_PARAM_BOOL, .def = "0",
+     .help = "auto: price a cell that may still get a sub-grid by its best sub-grid's estimate "
+             "(0: as a leaf)",
+     .offset = offsetof(ngrid_spec, lookahead)},
+    {.key = "c_step", .type = ACCEL_PARAM_FLOAT, .def = STR(NGRID_DEFAULT_C_STEP),
+     .min = 1e-3, .max = 1e6,
+     .help = "auto: cost of one cell step, ns",
+     .offset = offsetof(ngrid_spec, c_step)},
+    {.key = "c_isect", .type = ACCEL_PARAM_FLOAT, .def = STR(NGRID_DEFAULT_C_ISECT),
+     .min = 1e-3, .max = 1e6,
+     .help = "auto: cost of one primitive test, ns",
+     .offset = offsetof(ngrid_spec, c_isect)},
+    {.key = "overlap", .type = ACCEL_PARAM_ENUM, .def = "exact", .choices = "exact|bbox",
+     .help = "cell membership: exact primitive/box overlap, or bounding box only",
+     .offset = offsetof(ngrid_spec, overlap)},
+    {.key = "mailbox", .type = ACCEL_PARAM_BOOL, .def = "1",
+     .help = "test a primitive spanning several cells once per ray, across levels (16-entry "
+             "cache)",
+     .offset = offsetof(ngrid_spec, mailbox)},
+    {.key = "max_mb", .type = ACCEL_PARAM_FLOAT, .def = "4096", .min = 1.0, .max = 1048576.0,
+     .help = "memory limit for all levels (cells, references, planes), MiB",
+     .offset = offsetof(ngrid_spec, max_mb)},
+    {.key = "layout", .type = ACCEL_PARAM_ENUM, .def = "words", .choices = "words|compact",
+     .help = "words: cell words and count-prefixed lists, any depth; compact: two levels, 8-byte "
+             "top cells with their own sub-grid resolution (at most 256 per axis), 4-byte leaf "
+             "cells, one reference array (Kalojanov et al. 2011; depth defaults to 2, others "
+             "refused)",
+     .offset = offsetof(ngrid_spec, layout)},
+    {.key = "traverse", .type = ACCEL_PARAM_ENUM, .def = "single", .choices = "single|packet",
+     .help = "single rays (hierarchical 3D-DDA), or coherent grid traversal of 64 consecutive "
+             "rays (8x8 tiles) slice by slice through every level, as grid:traverse=packet",
+     .offset = offsetof(ngrid_spec, traverse)},
 };
 
 /* ---- the flat structure ------------------------------------------------------------ */
@@ -259,19 +290,20 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
     ngrid_builder b;
     memset(&b, 0, sizeof b);
     b.scene = scene;
-    b.mode = (int)accel_param_num(params, "overlap") == 1 ? GRID_OVERLAP_BBOX : GRID_OVERLAP_EXACT;
-    b.is_auto = accel_param_num(params, "auto") != 0.0;
-    b.lookahead = accel_param_num(params, "lookahead") != 0.0;
-    b.depth = (int)accel_param_num(params, "depth");
-    b.sub_res = (int)accel_param_num(params, "sub_res");
-    b.sub_lambda = accel_param_num(params, "sub_lambda");
-    b.threshold = (uint32_t)accel_param_num(params, "threshold");
-    b.costs.c_step = accel_param_num(params, "c_step");
-    b.costs.c_isect = accel_param_num(params, "c_isect");
-    b.max_bytes = accel_param_num(params, "max_mb") * 1048576.0;
-    const int compact = (int)accel_param_num(params, "layout") == 1;
+    const ngrid_spec *spec = ACCEL_SPEC(params, ngrid_spec);
+    b.mode = spec->overlap == 1 ? GRID_OVERLAP_BBOX : GRID_OVERLAP_EXACT;
+    b.is_auto = spec->is_auto != 0;
+    b.lookahead = spec->lookahead != 0;
+    b.depth = spec->depth;
+    b.sub_res = spec->sub_res;
+    b.sub_lambda = spec->sub_lambda;
+    b.threshold = (uint32_t)spec->threshold;
+    b.costs.c_step = spec->c_step;
+    b.costs.c_isect = spec->c_isect;
+    b.max_bytes = spec->max_mb * 1048576.0;
+    const int compact = spec->layout == 1;
     if (compact) {
-        if (accel_param_given(params, "depth") && b.depth != 2)
+        if (ACCEL_GIVEN(params, ngrid_spec, depth) && b.depth != 2)
             return accel_fail(err, ACCEL_ERR_RANGE,
                               "nested_grid: layout=compact has exactly two levels (depth=2), "
                               "not depth=%d (use layout=words for other depths)",
@@ -284,7 +316,7 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
                           "nested_grid: sub_res=1 makes sub-grids of one cell (use 0 or 2..256)");
 
     int res[3];
-    int rc = grid_parse_res(accel_param_str(params, "res"), res, err);
+    int rc = grid_parse_res(spec->res, res, err);
     if (rc) return ngrid_wrap_error(err, rc, "top level");
     box3 box = grid_frame_box(scene->bounds);
     if (res[0] == 0) {
@@ -293,8 +325,7 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
                                     b.max_bytes, res, err);
             if (rc) return rc;
         } else {
-            grid_resolution(scene->bounds, (double)scene->live_count,
-                            accel_param_num(params, "lambda"), res);
+            grid_resolution(scene->bounds, (double)scene->live_count, spec->lambda, res);
         }
     }
     uint64_t cells;
@@ -310,9 +341,8 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
     }
     if (!rc) {
         g->naive = params->naive;
-        g->mailbox = accel_param_num(params, "mailbox") != 0.0;
-        g->traverse = (int)accel_param_num(params, "traverse") == 1 ? NGRID_TRAVERSE_PACKET
-                                                                     : NGRID_TRAVERSE_SINGLE;
+        g->mailbox = spec->mailbox != 0;
+        g->traverse = spec->traverse == 1 ? NGRID_TRAVERSE_PACKET : NGRID_TRAVERSE_SINGLE;
         g->has_spheres = scene->sphere_count > 0;
         rc = flatten(&b, g, err);
     }
@@ -411,6 +441,7 @@ const accel_kind accel_kind_nested_grid = {
     .step_name = "cells",
     .params = ngrid_params,
     .param_count = sizeof ngrid_params / sizeof ngrid_params[0],
+    .spec_size = sizeof(ngrid_spec),
     .variants = ngrid_variants,
     .build = ngrid_build,
     .intersect = ngrid_intersect,

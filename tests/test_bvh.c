@@ -124,7 +124,7 @@ TEST(bvh_layout_every_builder)
         accel_build_stats st;
         void *a = test_build(spec, &s, 1, &st);
         if (!a) continue;
-        test_bvh_check_pool(&s, a, (int)accel_param_num(&p, "leaf"), spec);
+        test_bvh_check_pool(&s, a, ACCEL_SPEC(&p, bvh_spec)->leaf, spec);
         uint32_t nc;
         bvh_nodes(a, &nc);
         CHECK(st.nodes == nc);

@@ -39,7 +39,7 @@ TEST(bvh_coincident_primitives)
         accel_params p;
         accel_error err;
         accel_params_parse(spec, &p, &err);
-        test_bvh_check_pool(&s, a, (int)accel_param_num(&p, "leaf"), spec);
+        test_bvh_check_pool(&s, a, ACCEL_SPEC(&p, bvh_spec)->leaf, spec);
         CHECK(isfinite(st.sah_cost) && st.depth <= BVH_MAX_DEPTH);
         test_rays r = {0};
         test_rays_random(&r, s.bounds, 500);

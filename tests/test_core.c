@@ -34,9 +34,10 @@ TEST(core_spec_parsing)
     CHECK(accel_params_parse("brute:tri=naive,tri=naive", &p, &err) == ACCEL_ERR_SPEC);
 
     static const accel_param_def defs[] = {
-        {"n", ACCEL_PARAM_INT, "4", 1, 10, NULL, "count"},
-        {"x", ACCEL_PARAM_FLOAT, "0.5", 0, 1, NULL, "fraction"},
-        {"on", ACCEL_PARAM_BOOL, "0", 0, 1, NULL, "flag"},
+        {.key = "n", .type = ACCEL_PARAM_INT, .def = "4", .min = 1, .max = 10, .help = "count"},
+        {.key = "x", .type = ACCEL_PARAM_FLOAT, .def = "0.5", .min = 0, .max = 1,
+         .help = "fraction"},
+        {.key = "on", .type = ACCEL_PARAM_BOOL, .def = "0", .min = 0, .max = 1, .help = "flag"},
     };
     double num[3];
     char str[3][64];

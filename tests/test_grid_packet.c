@@ -16,6 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "grid/grid.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
 #include "test.h"
@@ -280,9 +281,9 @@ TEST(grid_packet_spec)
     accel_params p;
     accel_error err = {0};
     CHECK(accel_params_parse("grid:traverse=packet", &p, &err) == 0);
-    CHECK(accel_param_num(&p, "traverse") == 1.0);
+    CHECK(ACCEL_SPEC(&p, grid_spec)->traverse == 1);
     CHECK(accel_params_parse("grid", &p, &err) == 0);
-    CHECK(accel_param_num(&p, "traverse") == 0.0);
+    CHECK(ACCEL_SPEC(&p, grid_spec)->traverse == 0);
     CHECK(accel_params_parse("grid:traverse=frustum", &p, &err) == ACCEL_ERR_SPEC);
     CHECKF(strstr(err.msg, "single") && strstr(err.msg, "packet"), "message: %s", err.msg);
 }

@@ -2,12 +2,14 @@
  * params.c - spec strings: "kind:key=value,key=value,flag".
  *
  * Every parameter is declared once in its kind's table (key, type, default,
- * range, help); the same table drives parsing, range checks and --help. An
- * unknown key is an error that lists the accepted ones: never a warning with
- * a silent fallback.
+ * range, help, and where its value goes in the kind's spec struct); the same
+ * table drives parsing, range checks and --help. A spec is parsed once into
+ * that struct, typed, so kinds read fields, not keys. An unknown key is an
+ * error that lists the accepted ones: never a warning with a silent
+ * fallback; a table mistake is ACCEL_ERR_INTERNAL, never an assert.
  */
-#include <assert.h>
 #include <errno.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -16,12 +18,15 @@
 
 #include "accel.h"
 
+/* Their offsets are into accel_params itself (the parser's own fields). */
 const accel_param_def accel_common_params[] = {
-    {"tri", ACCEL_PARAM_ENUM, "watertight", 0, 0, "watertight|naive",
-     "triangle test: watertight (Woop et al. 2013) or naive (Moller-Trumbore)"},
-    {"reorder", ACCEL_PARAM_BOOL, "1", 0, 0, NULL,
-     "primitive store: copy the primitives in Morton order of their centroids (0: scene order; "
-     "bvh alone defaults to 0: its tree copies them in leaf order itself)"},
+    {.key = "tri", .type = ACCEL_PARAM_ENUM, .def = "watertight", .choices = "watertight|naive",
+     .help = "triangle test: watertight (Woop et al. 2013) or naive (Moller-Trumbore)",
+     .offset = offsetof(accel_params, naive)},
+    {.key = "reorder", .type = ACCEL_PARAM_BOOL, .def = "1", .min = 0, .max = 1,
+     .help = "primitive store: copy the primitives in Morton order of their centroids (0: scene "
+             "order; bvh alone defaults to 0: its tree copies them in leaf order itself)",
+     .offset = offsetof(accel_params, reorder)},
 };
 const size_t accel_common_param_count = sizeof accel_common_params / sizeof accel_common_params[0];
 
@@ -48,6 +53,37 @@ static int choice_index(const char *choices, const char *value)
         p = bar + 1;
     }
     return -1;
+}
+
+/* What an ENUM stores for the choice `value` at position idx: the choice
+ * itself when it is written as an integer ("2|4|8"), else idx. */
+static int choice_number(const char *value, int idx)
+{
+    char *end = NULL;
+    errno = 0;
+    long x = strtol(value, &end, 10);
+    if (*value && !*end && errno == 0 && x >= INT_MIN && x <= INT_MAX) return (int)x;
+    return idx;
+}
+
+const char *accel_param_choice(const char *choices, int value, char *buf, size_t size)
+{
+    int idx = 0;
+    const char *p = choices;
+    if (size) buf[0] = 0;
+    while (p && *p) {
+        const char *bar = strchr(p, '|');
+        size_t len = bar ? (size_t)(bar - p) : strlen(p);
+        char text[ACCEL_PARAM_TEXT];
+        snprintf(text, sizeof text, "%.*s", (int)len, p);
+        if (choice_number(text, idx) == value) {
+            snprintf(buf, size, "%s", text);
+            break;
+        }
+        idx++;
+        p = bar ? bar + 1 : NULL;
+    }
+    return buf;
 }
 
 /* Parses one value into num/str; returns 0 or an error. */
@@ -91,7 +127,7 @@ static int parse_value(const char *what, const accel_param_def *d, const char *v
         if (idx < 0)
             return accel_fail(err, ACCEL_ERR_SPEC, "%s: '%s=%s': accepted values are %s", what,
                               d->key, value, d->choices);
-        *num = idx;
+        *num = choice_number(value, idx);
         return 0;
     }
     case ACCEL_PARAM_STR:
@@ -106,9 +142,9 @@ int accel_parse_kv(const char *what, const char *text, const accel_param_def *de
 {
     for (size_t i = 0; i < n; i++) {
         given[i] = 0;
-        int rc = parse_value(what, &defs[i], defs[i].def, &num[i], str[i], err);
-        assert(rc == 0 && "a parameter default must parse");
-        (void)rc;
+        if (!defs[i].def || parse_value(what, &defs[i], defs[i].def, &num[i], str[i], err))
+            return accel_fail(err, ACCEL_ERR_INTERNAL, "%s: the default of parameter '%s' does "
+                              "not parse", what, defs[i].key);
     }
     if (!text || !*text) return 0;
     char buf[512];
@@ -182,48 +218,88 @@ int accel_params_parse(const char *spec, accel_params *out, accel_error *err)
     return accel_params_parse_kind(k, colon ? colon + 1 : "", out, err);
 }
 
-int accel_params_parse_kind(const accel_kind *k, const char *kv, accel_params *out,
-                            accel_error *err)
+/* Bytes a parameter of this type takes in a spec struct. */
+static size_t field_size(accel_param_type type)
 {
-    memset(out, 0, sizeof *out);
-    /* The kind's own parameters and the common ones share one table. */
-    accel_param_def defs[ACCEL_MAX_PARAMS];
-    size_t n = k->param_count + accel_common_param_count;
-    assert(n <= ACCEL_MAX_PARAMS);
-    if (k->param_count) memcpy(defs, k->params, k->param_count * sizeof *defs);
-    memcpy(defs + k->param_count, accel_common_params, accel_common_param_count * sizeof *defs);
-    out->kind = k;
-    int rc = accel_parse_kv(k->name, kv, defs, n, out->num, out->str, out->given, err);
-    if (rc) return rc;
-    out->naive = out->num[k->param_count] == 1; /* tri: 0 watertight, 1 naive */
-    out->reorder = out->num[k->param_count + 1] != 0.0;
-    /* Canonical spec: the name and the parameters given, in table order. */
-    size_t len = (size_t)snprintf(out->spec, sizeof out->spec, "%s", k->name);
-    int first = 1;
-    for (size_t i = 0; i < n && len < sizeof out->spec; i++) {
-        if (!out->given[i]) continue;
-        len += (size_t)snprintf(out->spec + len, sizeof out->spec - len, "%s%s=%s",
-                                first ? ":" : ",", defs[i].key, out->str[i]);
-        first = 0;
+    return type == ACCEL_PARAM_FLOAT ? sizeof(double)
+           : type == ACCEL_PARAM_STR ? ACCEL_PARAM_TEXT
+                                     : sizeof(int);
+}
+
+/* Stores a parsed value at base + d->offset, typed. */
+static void store_value(unsigned char *base, const accel_param_def *d, double num,
+                        const char *text)
+{
+    unsigned char *at = base + d->offset;
+    if (d->type == ACCEL_PARAM_FLOAT) {
+        memcpy(at, &num, sizeof num);
+    } else if (d->type == ACCEL_PARAM_STR) {
+        snprintf((char *)at, ACCEL_PARAM_TEXT, "%s", text);
+    } else {
+        int v = (int)num;
+        memcpy(at, &v, sizeof v);
+    }
+}
+
+/* A kind's table must fit its spec struct (a table mistake, never the
+ * user's: ACCEL_ERR_INTERNAL). */
+static int check_table(const accel_kind *k, accel_error *err)
+{
+    if (k->param_count + accel_common_param_count > ACCEL_MAX_PARAMS ||
+        k->spec_size > ACCEL_SPEC_BYTES)
+        return accel_fail(err, ACCEL_ERR_INTERNAL,
+                          "%s: %zu parameters in a %zu-byte spec struct (at most %zu and %d)",
+                          k->name, k->param_count, k->spec_size,
+                          ACCEL_MAX_PARAMS - accel_common_param_count, ACCEL_SPEC_BYTES);
+    for (size_t i = 0; i < k->param_count; i++) {
+        const accel_param_def *d = &k->params[i];
+        if (!d->key || !d->help)
+            return accel_fail(err, ACCEL_ERR_INTERNAL, "%s: parameter %zu has no key or help",
+                              k->name, i);
+        if (d->offset + field_size(d->type) > k->spec_size ||
+            (d->type == ACCEL_PARAM_INT && (d->min < INT_MIN || d->max > INT_MAX)))
+            return accel_fail(err, ACCEL_ERR_INTERNAL,
+                              "%s: parameter '%s' does not fit its field of the spec struct",
+                              k->name, d->key);
     }
     return 0;
 }
 
-static size_t key_index(const accel_params *p, const char *key)
+int accel_params_parse_kind(const accel_kind *k, const char *kv, accel_params *out,
+                            accel_error *err)
 {
-    const accel_kind *k = p->kind;
-    for (size_t i = 0; i < k->param_count; i++)
-        if (!strcmp(k->params[i].key, key)) return i;
-    for (size_t i = 0; i < accel_common_param_count; i++)
-        if (!strcmp(accel_common_params[i].key, key)) return k->param_count + i;
-    fprintf(stderr, "accel: kind %s has no parameter '%s'\n", k->name, key);
-    assert(0 && "parameter lookup with an undeclared key");
+    memset(out, 0, sizeof *out);
+    int rc = check_table(k, err);
+    if (rc) return rc;
+    /* The kind's own parameters and the common ones share one table. */
+    accel_param_def defs[ACCEL_MAX_PARAMS];
+    size_t n = k->param_count + accel_common_param_count;
+    if (k->param_count) memcpy(defs, k->params, k->param_count * sizeof *defs);
+    memcpy(defs + k->param_count, accel_common_params, accel_common_param_count * sizeof *defs);
+    out->kind = k;
+    double num[ACCEL_MAX_PARAMS];
+    char str[ACCEL_MAX_PARAMS][64];
+    unsigned char given[ACCEL_MAX_PARAMS];
+    rc = accel_parse_kv(k->name, kv, defs, n, num, str, given, err);
+    if (rc) return rc;
+    /* Typed values: the kind's into its spec struct, the common ones into
+     * out's own fields. */
+    for (size_t i = 0; i < n; i++) {
+        int common = i >= k->param_count;
+        store_value(common ? (unsigned char *)out : out->values.bytes, &defs[i], num[i], str[i]);
+        if (!common)
+            out->given[defs[i].offset] |= given[i];
+        else if (defs[i].offset == offsetof(accel_params, reorder))
+            out->reorder_given = given[i];
+    }
+    /* Canonical spec: the name and the parameters given, in table order. */
+    size_t len = (size_t)snprintf(out->spec, sizeof out->spec, "%s", k->name);
+    int first = 1;
+    for (size_t i = 0; i < n && len < sizeof out->spec; i++) {
+        if (!given[i]) continue;
+        len += (size_t)snprintf(out->spec + len, sizeof out->spec - len, "%s%s=%s",
+                                first ? ":" : ",", defs[i].key, str[i]);
+        first = 0;
+    }
     return 0;
 }
-
-double accel_param_num(const accel_params *p, const char *key) { return p->num[key_index(p, key)]; }
-const char *accel_param_str(const accel_params *p, const char *key)
-{
-    return p->str[key_index(p, key)];
-}
-int accel_param_given(const accel_params *p, const char *key) { return p->given[key_index(p, key)]; }

@@ -27,8 +27,8 @@ static accel_camera camera(vec3 eye, vec3 look_at, vec3 up, float fov_deg)
 
 enum { CUBE_N };
 static const accel_param_def cube_params[] = {
-    {"n", ACCEL_PARAM_INT, "32", 1, 4096, NULL,
-     "squares per face edge: 12*n^2 triangles on the cube [-1,1]^3"},
+    {.key = "n", .type = ACCEL_PARAM_INT, .def = "32", .min = 1, .max = 4096,
+     .help = "squares per face edge: 12*n^2 triangles on the cube [-1,1]^3"},
 };
 
 static int gen_cube(const double *values, scene_builder *b, accel_camera *cam, vec3 *light,
@@ -54,10 +54,10 @@ static const scene_generator gen_cube_def = {
 
 enum { SPHERE_SEGMENTS, SPHERE_TESS };
 static const accel_param_def sphere_params[] = {
-    {"segments", ACCEL_PARAM_INT, "32", 1, 4096, NULL,
-     "cube: squares per cube-face edge (12*s^2 triangles); uv: meridians (2*s*(s/2-1))"},
-    {"tess", ACCEL_PARAM_ENUM, "cube", 0, 0, "cube|uv",
-     "cube: projected cube, no poles; uv: latitude/longitude with pole fans"},
+    {.key = "segments", .type = ACCEL_PARAM_INT, .def = "32", .min = 1, .max = 4096,
+     .help = "cube: squares per cube-face edge (12*s^2 triangles); uv: meridians (2*s*(s/2-1))"},
+    {.key = "tess", .type = ACCEL_PARAM_ENUM, .def = "cube", .choices = "cube|uv",
+     .help = "cube: projected cube, no poles; uv: latitude/longitude with pole fans"},
 };
 
 static int gen_sphere(const double *values, scene_builder *b, accel_camera *cam, vec3 *light,
@@ -120,10 +120,12 @@ static void cube_view(accel_camera *cam, vec3 *light)
 
 enum { SOUP_TRIS, SOUP_SIZE, SOUP_SEED };
 static const accel_param_def soup_params[] = {
-    {"tris", ACCEL_PARAM_INT, "100000", 1, 4e9, NULL, "number of triangles"},
-    {"size", ACCEL_PARAM_FLOAT, "1", 1e-3, 1e3, NULL,
-     "triangle extent per axis, in mean spacings (1/cbrt(tris))"},
-    {"seed", ACCEL_PARAM_INT, "1", 0, 4e9, NULL, "random seed"},
+    {.key = "tris", .type = ACCEL_PARAM_INT, .def = "100000", .min = 1, .max = 4e9,
+     .help = "number of triangles"},
+    {.key = "size", .type = ACCEL_PARAM_FLOAT, .def = "1", .min = 1e-3, .max = 1e3,
+     .help = "triangle extent per axis, in mean spacings (1/cbrt(tris))"},
+    {.key = "seed", .type = ACCEL_PARAM_INT, .def = "1", .min = 0, .max = 4e9,
+     .help = "random seed"},
 };
 
 static int gen_soup(const double *values, scene_builder *b, accel_camera *cam, vec3 *light,
@@ -155,12 +157,16 @@ static const scene_generator gen_soup_def = {
  */
 enum { SLIV_TRIS, SLIV_SLIVERS, SLIV_SIZE, SLIV_WIDTH, SLIV_SEED };
 static const accel_param_def sliver_params[] = {
-    {"tris", ACCEL_PARAM_INT, "50000", 0, 4e9, NULL, "number of small triangles"},
-    {"slivers", ACCEL_PARAM_INT, "1000", 0, 4e9, NULL, "number of long thin triangles"},
-    {"size", ACCEL_PARAM_FLOAT, "1", 1e-3, 1e3, NULL,
-     "small triangle extent per axis, in mean spacings (1/cbrt(tris))"},
-    {"width", ACCEL_PARAM_FLOAT, "0.5", 1e-6, 1e3, NULL, "sliver width, in mean spacings"},
-    {"seed", ACCEL_PARAM_INT, "1", 0, 4e9, NULL, "random seed"},
+    {.key = "tris", .type = ACCEL_PARAM_INT, .def = "50000", .min = 0, .max = 4e9,
+     .help = "number of small triangles"},
+    {.key = "slivers", .type = ACCEL_PARAM_INT, .def = "1000", .min = 0, .max = 4e9,
+     .help = "number of long thin triangles"},
+    {.key = "size", .type = ACCEL_PARAM_FLOAT, .def = "1", .min = 1e-3, .max = 1e3,
+     .help = "small triangle extent per axis, in mean spacings (1/cbrt(tris))"},
+    {.key = "width", .type = ACCEL_PARAM_FLOAT, .def = "0.5", .min = 1e-6, .max = 1e3,
+     .help = "sliver width, in mean spacings"},
+    {.key = "seed", .type = ACCEL_PARAM_INT, .def = "1", .min = 0, .max = 4e9,
+     .help = "random seed"},
 };
 
 static int gen_slivers(const double *values, scene_builder *b, accel_camera *cam, vec3 *light,
@@ -226,11 +232,12 @@ static const scene_generator gen_slivers_def = {
 
 enum { TS_N, TS_STADIUM, TS_TIERS };
 static const accel_param_def stadium_params[] = {
-    {"n", ACCEL_PARAM_INT, "32", 1, 8192, NULL,
-     "teapot quads per patch side: 64*n^2-8*n triangles"},
-    {"stadium", ACCEL_PARAM_INT, "128", 3, 1 << 20, NULL,
-     "stadium slices around: stadium*(1+4*tiers) triangles"},
-    {"tiers", ACCEL_PARAM_INT, "24", 0, 1000, NULL, "steps of the stadium bowl"},
+    {.key = "n", .type = ACCEL_PARAM_INT, .def = "32", .min = 1, .max = 8192,
+     .help = "teapot quads per patch side: 64*n^2-8*n triangles"},
+    {.key = "stadium", .type = ACCEL_PARAM_INT, .def = "128", .min = 3, .max = 1 << 20,
+     .help = "stadium slices around: stadium*(1+4*tiers) triangles"},
+    {.key = "tiers", .type = ACCEL_PARAM_INT, .def = "24", .min = 0, .max = 1000,
+     .help = "steps of the stadium bowl"},
 };
 
 static vec3 ring_point(double radius, double c, double s, double z)

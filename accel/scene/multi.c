@@ -156,12 +156,13 @@ static accel_camera view(vec3 eye, vec3 look, float fov)
 
 enum { FIELD_INSTANCES, FIELD_DETAIL, FIELD_SEED };
 static const accel_param_def field_params[] = {
-    {"instances", ACCEL_PARAM_INT, "200", 1, 1e7, NULL,
-     "meshes placed (besides the ground); a quarter in a dense cluster of tiny ones"},
-    {"detail", ACCEL_PARAM_INT, "4", 1, 64, NULL,
-     "tessellation: teapot n=detail (64 d^2 triangles), sphere 12 (d+2)^2, dense sphere "
-     "12 (4d)^2, tetra level 2+d/4, ground 12 (2d)^2"},
-    {"seed", ACCEL_PARAM_INT, "1", 0, 4e9, NULL, "random seed"},
+    {.key = "instances", .type = ACCEL_PARAM_INT, .def = "200", .min = 1, .max = 1e7,
+     .help = "meshes placed (besides the ground); a quarter in a dense cluster of tiny ones"},
+    {.key = "detail", .type = ACCEL_PARAM_INT, .def = "4", .min = 1, .max = 64,
+     .help = "tessellation: teapot n=detail (64 d^2 triangles), sphere 12 (d+2)^2, dense sphere "
+             "12 (4d)^2, tetra level 2+d/4, ground 12 (2d)^2"},
+    {.key = "seed", .type = ACCEL_PARAM_INT, .def = "1", .min = 0, .max = 4e9,
+     .help = "random seed"},
 };
 
 static int gen_field(const double *values, scene_compose *c, accel_camera *cam, vec3 *light,
@@ -220,11 +221,13 @@ const scene_generator scene_gen_field = {
 
 enum { ANIM_FRAME, ANIM_INSTANCES, ANIM_DETAIL };
 static const accel_param_def anim_params[] = {
-    {"frame", ACCEL_PARAM_INT, "0", 0, 1e7, NULL, "frame number (60 frames per second of motion)"},
-    {"instances", ACCEL_PARAM_INT, "24", 1, 1e6, NULL, "meshes on the two orbiting rings"},
-    {"detail", ACCEL_PARAM_INT, "8", 1, 64, NULL,
-     "tessellation: teapot n=detail (64 d^2 triangles), sphere 12 (d+2)^2, tetra level "
-     "2+d/4, blob 12 (4d)^2"},
+    {.key = "frame", .type = ACCEL_PARAM_INT, .def = "0", .min = 0, .max = 1e7,
+     .help = "frame number (60 frames per second of motion)"},
+    {.key = "instances", .type = ACCEL_PARAM_INT, .def = "24", .min = 1, .max = 1e6,
+     .help = "meshes on the two orbiting rings"},
+    {.key = "detail", .type = ACCEL_PARAM_INT, .def = "8", .min = 1, .max = 64,
+     .help = "tessellation: teapot n=detail (64 d^2 triangles), sphere 12 (d+2)^2, tetra level "
+             "2+d/4, blob 12 (4d)^2"},
 };
 
 static int gen_animated(const double *values, scene_compose *c, accel_camera *cam, vec3 *light,

@@ -102,12 +102,12 @@ static accel_camera spd_view(vec3 from, vec3 at, vec3 up)
 enum { FLAKE_LEVEL, FLAKE_SPHERES, FLAKE_SEGMENTS };
 
 static const accel_param_def flake_params[] = {
-    {"level", ACCEL_PARAM_INT, "4", 0, 8, NULL,
-     "SPD size factor: (9^(level+1)-1)/8 spheres (SPD default 4: 7381)"},
-    {"spheres", ACCEL_PARAM_BOOL, "1", 0, 1, NULL,
-     "1: true spheres; 0: each sphere a closed mesh of 12*segments^2 triangles"},
-    {"segments", ACCEL_PARAM_INT, "4", 1, 256, NULL,
-     "tessellated spheres: squares per cube-face edge (SPD default 4: 192 triangles)"},
+    {.key = "level", .type = ACCEL_PARAM_INT, .def = "4", .min = 0, .max = 8,
+     .help = "SPD size factor: (9^(level+1)-1)/8 spheres (SPD default 4: 7381)"},
+    {.key = "spheres", .type = ACCEL_PARAM_BOOL, .def = "1", .min = 0, .max = 1,
+     .help = "1: true spheres; 0: each sphere a closed mesh of 12*segments^2 triangles"},
+    {.key = "segments", .type = ACCEL_PARAM_INT, .def = "4", .min = 1, .max = 256,
+     .help = "tessellated spheres: squares per cube-face edge (SPD default 4: 192 triangles)"},
 };
 
 typedef struct {
@@ -215,8 +215,8 @@ const scene_generator scene_gen_sphereflake = {
 enum { TETRA_LEVEL };
 
 static const accel_param_def tetra_params[] = {
-    {"level", ACCEL_PARAM_INT, "7", 1, 13, NULL,
-     "SPD size factor: 4^level triangles (SPD default 6: 4096)"},
+    {.key = "level", .type = ACCEL_PARAM_INT, .def = "7", .min = 1, .max = 13,
+     .help = "SPD size factor: 4^level triangles (SPD default 6: 4096)"},
 };
 
 static int tetra_object(scene_builder *b, int depth, double cx, double cy, double cz, double w,
@@ -290,12 +290,12 @@ const scene_generator scene_gen_tetra = {
 enum { MOUNT_LEVEL, MOUNT_SPHERES, MOUNT_SEGMENTS };
 
 static const accel_param_def mount_params[] = {
-    {"level", ACCEL_PARAM_INT, "7", 1, 12, NULL,
-     "SPD size factor: 2*4^level terrain triangles (SPD default 6: 8192)"},
-    {"spheres", ACCEL_PARAM_BOOL, "1", 0, 1, NULL,
-     "1: the 4 spheres as true spheres; 0: as closed meshes of 12*segments^2 triangles"},
-    {"segments", ACCEL_PARAM_INT, "4", 1, 256, NULL,
-     "tessellated spheres: squares per cube-face edge (SPD default 4)"},
+    {.key = "level", .type = ACCEL_PARAM_INT, .def = "7", .min = 1, .max = 12,
+     .help = "SPD size factor: 2*4^level terrain triangles (SPD default 6: 8192)"},
+    {.key = "spheres", .type = ACCEL_PARAM_BOOL, .def = "1", .min = 0, .max = 1,
+     .help = "1: the 4 spheres as true spheres; 0: as closed meshes of 12*segments^2 triangles"},
+    {.key = "segments", .type = ACCEL_PARAM_INT, .def = "4", .min = 1, .max = 256,
+     .help = "tessellated spheres: squares per cube-face edge (SPD default 4)"},
 };
 
 #define MOUNT_FRACTAL_DIMENSION 2.2
