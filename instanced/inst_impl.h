@@ -1,14 +1,15 @@
 /*
  * inst_impl.h - internals of the `instanced` kind (see instanced.h and
- * README.md): the structures over boxes both levels use (a BVH of 32-byte
- * nodes and a uniform grid), the per-mesh bottom levels, the per-instance
- * data the traversal reads.
+ * README.md): the structures over boxes both levels use (the bvh
+ * backend's tree over boxes and a uniform grid), the per-mesh bottom
+ * levels, the per-instance data the traversal reads.
  */
 #ifndef INSTANCED_INST_IMPL_H
 #define INSTANCED_INST_IMPL_H
 
 #include <assert.h>
 #include "accel.h"
+#include "bvh/bvh.h"
 #include "grid/grid_core.h"
 
 #ifdef __cplusplus
@@ -17,23 +18,11 @@ extern "C" {
 
 /* ---- structures over boxes ----------------------------------------------- */
 
-/* 32 bytes: the box, then either the first child (the second follows it)
- * or the first item of a leaf. */
-typedef struct {
-    float lo[3];
-    uint32_t index; /* inner: first child; leaf: first item */
-    float hi[3];
-    uint32_t count; /* 0: inner node; else items in the leaf */
-} inst_node;
-static_assert(sizeof(inst_node) == 32, "inst_node is 32 bytes");
-
-typedef struct {
-    inst_node *nodes;
-    uint32_t node_count;
-    uint32_t *items; /* item ids, leaf by leaf */
-    uint32_t item_count;
-    int depth;
-} inst_bvh;
+/* A BVH over boxes is bvh/bvh.h's bvh_box_tree: the lecture's 32-byte
+ * bvh_node pool (node 0 the root, node 1 padding; an interior node's
+ * children are left_first and left_first + 1, a leaf's count items are
+ * order[left_first ..]; children come after their parent), order holding
+ * the leaves' item ids. */
 
 /* A uniform grid over boxes: grid_core.h's frame (boundary planes as
  * floats) and compact cells (cells.refs: item ids, per cell in increasing
@@ -44,9 +33,12 @@ typedef struct {
     grid_cells cells;
 } inst_grid;
 
-/* Binned SAH (16 bins, Wald 2007) over n boxes; leaves of at most max_leaf. */
-int inst_bvh_build(const box3 *boxes, uint32_t n, int max_leaf, inst_bvh *out, accel_error *err);
-void inst_bvh_free(inst_bvh *b);
+/* bvh_build_boxes (binned SAH, 16 bins) over the n boxes, leaves of at
+ * most max_leaf (1..256); boxes that are not finite or are inverted (empty)
+ * are left out. out->order holds ids[box index], or the box index itself
+ * when ids is NULL. Freed with bvh_box_tree_free. */
+int inst_bvh_build(const box3 *boxes, uint32_t n, int max_leaf, int threads, const uint32_t *ids,
+                   bvh_box_tree *out, accel_error *err);
 /* A grid of about lambda * n cells (grid_resolution) over the boxes, each
  * box grown by pad on every side (rounded outwards to float) before the
  * cells it reaches are listed (grid_cells_build_boxes). */
@@ -66,7 +58,7 @@ typedef struct {
     double abs_max;          /* largest |coordinate| of box */
     double vert_abs_max;     /* largest |coordinate| of any vertex (dead triangles too) */
     double grid_pad;         /* bottom=grid: how far its boxes were grown */
-    inst_bvh bvh;
+    bvh_box_tree bvh;
     inst_grid grid;
     /* bottom=<kind spec>: the kind's structure over the mesh, walked
      * (accel.h's walk); and the mesh's triangles with no area in object
@@ -102,7 +94,7 @@ typedef struct {
     inst_bottom *bottoms;
     inst_item *items;
     box3 *item_boxes;         /* world bounds per instance (top level) */
-    inst_bvh top_bvh;
+    bvh_box_tree top_bvh;
     inst_grid top_grid;
 } inst_accel;
 

@@ -86,12 +86,12 @@ void inst_destroy(void *p)
     inst_accel *a = p;
     if (!a) return;
     for (uint32_t i = 0; i < a->bottom_count; i++) {
-        inst_bvh_free(&a->bottoms[i].bvh);
+        bvh_box_tree_free(&a->bottoms[i].bvh);
         inst_grid_free(&a->bottoms[i].grid);
         if (a->bottoms[i].walk) a->walk_kind->destroy(a->bottoms[i].walk);
         free(a->bottoms[i].dead);
     }
-    inst_bvh_free(&a->top_bvh);
+    bvh_box_tree_free(&a->top_bvh);
     inst_grid_free(&a->top_grid);
     free(a->bottoms);
     free(a->items);
@@ -99,9 +99,9 @@ void inst_destroy(void *p)
     free(a);
 }
 
-static size_t bvh_bytes(const inst_bvh *b)
+static size_t bvh_bytes(const bvh_box_tree *b)
 {
-    return (size_t)b->node_count * sizeof(inst_node) + (size_t)b->item_count * sizeof(uint32_t);
+    return (size_t)b->node_count * sizeof(bvh_node) + (size_t)b->count * sizeof(uint32_t);
 }
 
 static size_t grid_bytes(const inst_grid *g)
@@ -161,7 +161,7 @@ static int build_walk_bottom(inst_accel *a, inst_bottom *b, accel_error *err)
 int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *err)
 {
     inst_bottom *b = &a->bottoms[i];
-    inst_bvh_free(&b->bvh);
+    bvh_box_tree_free(&b->bvh);
     inst_grid_free(&b->grid);
     if (b->walk) a->walk_kind->destroy(b->walk);
     b->walk = NULL;
@@ -199,15 +199,14 @@ int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *e
         float delta = box3_hit_delta((float)b->abs_max);
         for (uint32_t k = 0; k < n; k++) boxes[k] = box3_hit_pad(boxes[k], delta);
     }
+    /* Items are box indices: ids makes them primitive ids. */
     int rc = a->bottom_kind == INST_BVH
-                 ? inst_bvh_build(boxes, n, a->leaf, &b->bvh, err)
+                 ? inst_bvh_build(boxes, n, a->leaf, a->threads, ids, &b->bvh, err)
                  : inst_grid_build(boxes, n, a->lambda, b->grid_pad, &b->grid, err);
     free(boxes);
-    if (rc || !ids) return rc;
-    /* Items were box indices: make them primitive ids. */
-    uint32_t *items = a->bottom_kind == INST_BVH ? b->bvh.items : b->grid.cells.refs;
-    uint64_t count = a->bottom_kind == INST_BVH ? b->bvh.item_count : b->grid.cells.ref_count;
-    for (uint64_t k = 0; k < count; k++) items[k] = ids[items[k]];
+    if (rc || !ids || a->bottom_kind == INST_BVH) return rc;
+    for (uint64_t k = 0; k < b->grid.cells.ref_count; k++)
+        b->grid.cells.refs[k] = ids[b->grid.cells.refs[k]];
     return 0;
 }
 
@@ -266,7 +265,7 @@ int inst_set_items(inst_accel *a, const accel_scene *scene, double *grid_pad, ac
 
 int inst_build_top(inst_accel *a, accel_error *err)
 {
-    inst_bvh_free(&a->top_bvh);
+    bvh_box_tree_free(&a->top_bvh);
     inst_grid_free(&a->top_grid);
     if (a->top == INST_BVH) {
         /* Instance boxes grown as every BVH box is (core/geom.h). */
@@ -276,7 +275,7 @@ int inst_build_top(inst_accel *a, accel_error *err)
         box3 *grown = malloc((a->item_count ? a->item_count : 1) * sizeof *grown);
         if (!grown) return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
         for (uint32_t k = 0; k < a->item_count; k++) grown[k] = box3_hit_pad(a->item_boxes[k], delta);
-        int rc = inst_bvh_build(grown, a->item_count, 1, &a->top_bvh, err);
+        int rc = inst_bvh_build(grown, a->item_count, 1, a->threads, NULL, &a->top_bvh, err);
         free(grown);
         return rc;
     }
@@ -301,7 +300,7 @@ void inst_fill_stats(const inst_accel *a, accel_build_stats *stats)
             continue;
         }
         stats->nodes += a->bottom_kind == INST_BVH ? b->bvh.node_count : b->grid.cells.cell_count;
-        stats->refs += a->bottom_kind == INST_BVH ? b->bvh.item_count : b->grid.cells.ref_count;
+        stats->refs += a->bottom_kind == INST_BVH ? b->bvh.count : b->grid.cells.ref_count;
         if (b->bvh.depth > bottom_depth) bottom_depth = b->bvh.depth;
     }
     stats->nodes += a->top == INST_BVH ? a->top_bvh.node_count : a->top_grid.cells.cell_count;

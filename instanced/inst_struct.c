@@ -1,9 +1,7 @@
 /*
  * inst_struct.c - the two structures over boxes that both levels of the
- * `instanced` kind use: a BVH built by binned SAH (Wald, "On fast
- * Construction of SAH-based Bounding Volume Hierarchies", IRT 2007; 16 bins
- * on each axis, an object median when binning cannot separate the
- * centroids), flattened into 32-byte nodes as in pbrt-v3; and a uniform
+ * `instanced` kind use: a BVH, the bvh backend's binned SAH tree over boxes
+ * (bvh/bvh.h's bvh_build_boxes: the lecture's 32-byte nodes); and a uniform
  * grid of about lambda * n cells (Cleary and Wyvill 1988's rule) whose
  * cells list every box, grown by a pad, that reaches them: grid_core.h's
  * frame and cell storage over boxes. Both are deterministic: the same
@@ -15,167 +13,51 @@
 
 #include "inst_impl.h"
 
-#define INST_BINS 16
-#define INST_MAX_DEPTH 48 /* then object medians only: at most 32 more levels */
-
 /* ---- BVH ------------------------------------------------------------------------- */
 
-typedef struct {
-    const box3 *boxes;
-    float *cent;      /* 3 per item */
-    uint32_t *items;
-    inst_node *nodes;
-    uint32_t node_count;
-    int max_leaf;
-    int depth;
-    int sort_axis;    /* for the median fallback's comparator */
-} bvh_builder;
+static_assert(sizeof(box3) == 6 * sizeof(float), "box3 is bvh_build_boxes' 6 floats");
 
-static _Thread_local const bvh_builder *sort_ctx; /* qsort has no context argument */
-
-static int by_centroid(const void *pa, const void *pb)
+/* A box bvh_build_boxes takes: finite, lo <= hi on every axis. The only
+ * others here are empty boxes (an instance of a mesh without triangles, a
+ * scene without primitives; NaN once grown by box3_hit_pad), which hold
+ * nothing a ray can hit: the tree leaves them out. */
+static int box_usable(const box3 *b)
 {
-    uint32_t a = *(const uint32_t *)pa, b = *(const uint32_t *)pb;
-    float ca = sort_ctx->cent[3 * a + sort_ctx->sort_axis];
-    float cb = sort_ctx->cent[3 * b + sort_ctx->sort_axis];
-    if (ca != cb) return ca < cb ? -1 : 1;
-    return a < b ? -1 : a > b;
+    const float *lo = &b->min.x, *hi = &b->max.x;
+    for (int a = 0; a < 3; a++)
+        if (!(isfinite(lo[a]) && isfinite(hi[a]) && lo[a] <= hi[a])) return 0;
+    return 1;
 }
 
-static void set_box(inst_node *n, box3 b)
+int inst_bvh_build(const box3 *boxes, uint32_t n, int max_leaf, int threads, const uint32_t *ids,
+                   bvh_box_tree *out, accel_error *err)
 {
-    n->lo[0] = b.min.x, n->lo[1] = b.min.y, n->lo[2] = b.min.z;
-    n->hi[0] = b.max.x, n->hi[1] = b.max.y, n->hi[2] = b.max.z;
-}
-
-/* Where to split items[begin, end): returns the first item of the right
- * half, or `begin` for no split (all centroids alike). */
-static uint32_t split_binned(bvh_builder *b, uint32_t begin, uint32_t end, box3 cb)
-{
-    float lo[3] = {cb.min.x, cb.min.y, cb.min.z}, ext[3] = {cb.max.x - cb.min.x,
-                                                             cb.max.y - cb.min.y,
-                                                             cb.max.z - cb.min.z};
-    float best = INFINITY;
-    int best_axis = -1, best_bin = 0;
-    for (int axis = 0; axis < 3; axis++) {
-        if (!(ext[axis] > 0.0f)) continue;
-        box3 bin_box[INST_BINS];
-        uint32_t bin_n[INST_BINS] = {0};
-        for (int i = 0; i < INST_BINS; i++) bin_box[i] = box3_empty();
-        float k = INST_BINS / ext[axis];
-        for (uint32_t i = begin; i < end; i++) {
-            uint32_t it = b->items[i];
-            int bin = (int)((b->cent[3 * it + axis] - lo[axis]) * k);
-            bin = bin < 0 ? 0 : bin >= INST_BINS ? INST_BINS - 1 : bin;
-            bin_n[bin]++;
-            bin_box[bin] = box3_union(bin_box[bin], b->boxes[it]);
+    uint32_t used = 0;
+    for (uint32_t i = 0; i < n; i++) used += (uint32_t)box_usable(&boxes[i]);
+    const box3 *given = boxes;
+    box3 *kept_box = NULL;
+    uint32_t *kept = NULL; /* box index of each kept box */
+    if (used < n) {
+        kept_box = malloc((used ? used : 1) * sizeof *kept_box);
+        kept = malloc((used ? used : 1) * sizeof *kept);
+        if (!kept_box || !kept) {
+            free(kept_box), free(kept);
+            memset(out, 0, sizeof *out);
+            return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory for a BVH of %u boxes", n);
         }
-        /* SAH: area(left) * n(left) + area(right) * n(right), by sweeps. */
-        float right_cost[INST_BINS];
-        box3 acc = box3_empty();
-        uint32_t n = 0;
-        for (int i = INST_BINS - 1; i > 0; i--) {
-            acc = box3_union(acc, bin_box[i]);
-            n += bin_n[i];
-            right_cost[i] = box3_half_area(acc) * (float)n;
-        }
-        acc = box3_empty();
-        n = 0;
-        for (int i = 0; i < INST_BINS - 1; i++) {
-            acc = box3_union(acc, bin_box[i]);
-            n += bin_n[i];
-            if (n == 0 || n == end - begin) continue;
-            float cost = box3_half_area(acc) * (float)n + right_cost[i + 1];
-            if (cost < best) best = cost, best_axis = axis, best_bin = i + 1;
-        }
+        for (uint32_t i = 0, k = 0; i < n; i++)
+            if (box_usable(&boxes[i])) kept_box[k] = boxes[i], kept[k++] = i;
+        given = kept_box;
     }
-    if (best_axis < 0) return begin;
-    float k = INST_BINS / ext[best_axis];
-    uint32_t i = begin, j = end;
-    while (i < j) {
-        uint32_t it = b->items[i];
-        int bin = (int)((b->cent[3 * it + best_axis] - lo[best_axis]) * k);
-        bin = bin < 0 ? 0 : bin >= INST_BINS ? INST_BINS - 1 : bin;
-        if (bin < best_bin) {
-            i++;
-        } else {
-            b->items[i] = b->items[--j];
-            b->items[j] = it;
-        }
+    int rc = bvh_build_boxes(&given->min.x, used, max_leaf, threads, out, err);
+    free(kept_box);
+    /* The leaf order names kept boxes: make it box indices, then ids. */
+    for (uint32_t i = 0; rc == 0 && i < out->count; i++) {
+        uint32_t box = kept ? kept[out->order[i]] : out->order[i];
+        out->order[i] = ids ? ids[box] : box;
     }
-    return (i == begin || i == end) ? begin : i;
-}
-
-static void build_node(bvh_builder *b, uint32_t node, uint32_t begin, uint32_t end, int depth)
-{
-    box3 bb = box3_empty(), cb = box3_empty();
-    for (uint32_t i = begin; i < end; i++) {
-        uint32_t it = b->items[i];
-        bb = box3_union(bb, b->boxes[it]);
-        cb = box3_grow(cb, v3_load(b->cent + 3 * it));
-    }
-    inst_node *n = &b->nodes[node];
-    set_box(n, bb);
-    if (depth > b->depth) b->depth = depth;
-    if (end - begin <= (uint32_t)b->max_leaf) {
-        n->index = begin;
-        n->count = end - begin;
-        return;
-    }
-    uint32_t mid = depth < INST_MAX_DEPTH ? split_binned(b, begin, end, cb) : begin;
-    if (mid == begin) {
-        /* Object median on the widest centroid axis (items in id order on ties). */
-        vec3 e = box3_extent(cb);
-        b->sort_axis = box3_is_empty(cb) ? 0 : v3_max_axis(e);
-        sort_ctx = b;
-        qsort(b->items + begin, end - begin, sizeof *b->items, by_centroid);
-        mid = begin + (end - begin) / 2;
-    }
-    uint32_t left = b->node_count;
-    b->node_count += 2;
-    n->index = left;
-    n->count = 0;
-    build_node(b, left, begin, mid, depth + 1);
-    build_node(b, left + 1, mid, end, depth + 1);
-}
-
-int inst_bvh_build(const box3 *boxes, uint32_t n, int max_leaf, inst_bvh *out, accel_error *err)
-{
-    memset(out, 0, sizeof *out);
-    bvh_builder b;
-    memset(&b, 0, sizeof b);
-    b.boxes = boxes;
-    b.max_leaf = max_leaf < 1 ? 1 : max_leaf;
-    size_t nodes = 2 * (size_t)(n ? n : 1);
-    b.cent = malloc(3 * sizeof(float) * (n ? n : 1));
-    b.items = malloc(sizeof(uint32_t) * (n ? n : 1));
-    b.nodes = malloc(nodes * sizeof *b.nodes);
-    if (!b.cent || !b.items || !b.nodes) {
-        free(b.cent), free(b.items), free(b.nodes);
-        return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory for a BVH of %u boxes", n);
-    }
-    for (uint32_t i = 0; i < n; i++) {
-        vec3 c = box3_center(boxes[i]);
-        b.cent[3 * i] = c.x, b.cent[3 * i + 1] = c.y, b.cent[3 * i + 2] = c.z;
-        b.items[i] = i;
-    }
-    b.node_count = n ? 1 : 0; /* no boxes: no root (a leaf of 0 would read as inner) */
-    if (n) build_node(&b, 0, 0, n, 1);
-    free(b.cent);
-    inst_node *shrunk = realloc(b.nodes, (b.node_count ? b.node_count : 1) * sizeof *b.nodes);
-    out->nodes = shrunk ? shrunk : b.nodes;
-    out->node_count = b.node_count;
-    out->items = b.items;
-    out->item_count = n;
-    out->depth = b.depth;
-    return 0;
-}
-
-void inst_bvh_free(inst_bvh *b)
-{
-    free(b->nodes);
-    free(b->items);
-    memset(b, 0, sizeof *b);
+    free(kept);
+    return rc;
 }
 
 /* ---- grid ---------------------------------------------------------------------------

@@ -27,7 +27,7 @@
 #include "core/variant.h"
 #include "inst_impl.h"
 
-#define INST_STACK 128 /* > the deepest tree inst_struct.c builds (48 + 32) */
+#define INST_STACK BVH_MAX_DEPTH /* bvh_build_boxes builds no deeper tree (bvh.h) */
 
 typedef struct {
     accel_ray_prep p;   /* world ray for the float kernels */
@@ -80,12 +80,12 @@ INLINE void test_prim(const inst_accel *a, const inst_item *it, const accel_scen
 /* ---- bottom level: BVH ------------------------------------------------------ */
 
 /* Slab test of a node's box grown by pad (Ize 2013's robust float test). */
-INLINE int node_slab(const inst_node *n, float pad, vec3 org, vec3 inv, const int *neg, float lo_t,
+INLINE int node_slab(const bvh_node *n, float pad, vec3 org, vec3 inv, const int *neg, float lo_t,
                      float hi_t, float *entry)
 {
-    if (pad == 0.0f) return box3_slab(n->lo, n->hi, org, inv, neg, lo_t, hi_t, entry);
-    float lo[3] = {n->lo[0] - pad, n->lo[1] - pad, n->lo[2] - pad};
-    float hi[3] = {n->hi[0] + pad, n->hi[1] + pad, n->hi[2] + pad};
+    if (pad == 0.0f) return box3_slab(n->bmin, n->bmax, org, inv, neg, lo_t, hi_t, entry);
+    float lo[3] = {n->bmin[0] - pad, n->bmin[1] - pad, n->bmin[2] - pad};
+    float hi[3] = {n->bmax[0] + pad, n->bmax[1] + pad, n->bmax[2] + pad};
     return box3_slab(lo, hi, org, inv, neg, lo_t, hi_t, entry);
 }
 
@@ -96,7 +96,7 @@ INLINE void walk_bvh(const inst_accel *a, const inst_item *it, const inst_bottom
                      ray_state *r, vec3 org, vec3 dir, float pad, double shift, int naive,
                      int spheres)
 {
-    const inst_bvh *h = &b->bvh;
+    const bvh_box_tree *h = &b->bvh;
     if (!h->node_count) return;
     vec3 inv = v3(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
     int neg[3] = {signbit(dir.x) != 0, signbit(dir.y) != 0, signbit(dir.z) != 0};
@@ -107,17 +107,17 @@ INLINE void walk_bvh(const inst_accel *a, const inst_item *it, const inst_bottom
     int sp = 0;
     uint32_t node = 0;
     for (;;) {
-        const inst_node *n = &h->nodes[node];
+        const bvh_node *n = &h->nodes[node];
         r->bottom_steps++;
         if (n->count) {
             for (uint32_t i = 0; i < n->count; i++) {
-                test_prim(a, it, b->mesh, h->items[n->index + i], r, naive, spheres);
+                test_prim(a, it, b->mesh, h->order[n->left_first + i], r, naive, spheres);
                 if (r->done) return;
             }
         } else {
             float hi_t = (float)((double)r->t - shift);
             if (slack != 0.0f) hi_t += fabsf(hi_t) * slack;
-            uint32_t c0 = n->index, c1 = c0 + 1;
+            uint32_t c0 = n->left_first, c1 = c0 + 1;
             float e0, e1;
             int h0 = node_slab(&h->nodes[c0], pad, org, inv, neg, lo_t, hi_t, &e0);
             int h1 = node_slab(&h->nodes[c1], pad, org, inv, neg, lo_t, hi_t, &e1);
@@ -364,30 +364,30 @@ INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int 
 
 INLINE void top_bvh(const inst_accel *a, ray_state *r, int naive, int spheres)
 {
-    const inst_bvh *h = &a->top_bvh;
+    const bvh_box_tree *h = &a->top_bvh;
     if (!h->node_count) return;
     struct { uint32_t node; float entry; } stack[INST_STACK];
     int sp = 0;
     uint32_t node = 0;
     float e;
     r->boxes++;
-    if (!box3_slab(h->nodes[0].lo, h->nodes[0].hi, r->p.org, r->p.inv_dir, r->p.neg, r->p.t_near,
+    if (!box3_slab(h->nodes[0].bmin, h->nodes[0].bmax, r->p.org, r->p.inv_dir, r->p.neg, r->p.t_near,
                    r->t, &e))
         return;
     for (;;) {
-        const inst_node *n = &h->nodes[node];
+        const bvh_node *n = &h->nodes[node];
         r->top_steps++;
         if (n->count) {
             for (uint32_t i = 0; i < n->count; i++) {
-                visit(a, h->items[n->index + i], r, naive, spheres);
+                visit(a, h->order[n->left_first + i], r, naive, spheres);
                 if (r->done) return;
             }
         } else {
-            uint32_t c0 = n->index, c1 = c0 + 1;
+            uint32_t c0 = n->left_first, c1 = c0 + 1;
             float e0, e1;
-            int h0 = box3_slab(h->nodes[c0].lo, h->nodes[c0].hi, r->p.org, r->p.inv_dir, r->p.neg,
+            int h0 = box3_slab(h->nodes[c0].bmin, h->nodes[c0].bmax, r->p.org, r->p.inv_dir, r->p.neg,
                                r->p.t_near, r->t, &e0);
-            int h1 = box3_slab(h->nodes[c1].lo, h->nodes[c1].hi, r->p.org, r->p.inv_dir, r->p.neg,
+            int h1 = box3_slab(h->nodes[c1].bmin, h->nodes[c1].bmax, r->p.org, r->p.inv_dir, r->p.neg,
                                r->p.t_near, r->t, &e1);
             r->boxes += 2;
             if (h0 && h1) {

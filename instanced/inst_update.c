@@ -18,35 +18,37 @@
 
 #include "inst_impl.h"
 
-/* Children come after their parent in the node array (inst_struct.c
- * appends them), so one backward pass sees every child before its parent. */
+/* Children come after their parent in the node pool (bvh_build_boxes
+ * numbers them depth first), so one backward pass sees every child before
+ * its parent. Node 1 is padding, referenced by nothing: it stays empty. */
 static void refit_bvh(inst_bottom *b)
 {
-    inst_bvh *h = &b->bvh;
+    bvh_box_tree *h = &b->bvh;
     const accel_scene *m = b->mesh;
     for (uint32_t i = h->node_count; i-- > 0;) {
-        inst_node *n = &h->nodes[i];
+        if (i == 1) continue;
+        bvh_node *n = &h->nodes[i];
         box3 bb = box3_empty();
         if (n->count) {
             for (uint32_t k = 0; k < n->count; k++) {
-                const float *t = m->tris + 9 * (size_t)h->items[n->index + k];
+                const float *t = m->tris + 9 * (size_t)h->order[n->left_first + k];
                 for (int c = 0; c < 3; c++) bb = box3_grow(bb, v3_load(t + 3 * c));
             }
         } else {
             for (int c = 0; c < 2; c++) {
-                const inst_node *ch = &h->nodes[n->index + c];
-                bb = box3_grow(bb, v3(ch->lo[0], ch->lo[1], ch->lo[2]));
-                bb = box3_grow(bb, v3(ch->hi[0], ch->hi[1], ch->hi[2]));
+                const bvh_node *ch = &h->nodes[n->left_first + c];
+                bb = box3_grow(bb, v3(ch->bmin[0], ch->bmin[1], ch->bmin[2]));
+                bb = box3_grow(bb, v3(ch->bmax[0], ch->bmax[1], ch->bmax[2]));
             }
         }
-        n->lo[0] = bb.min.x, n->lo[1] = bb.min.y, n->lo[2] = bb.min.z;
-        n->hi[0] = bb.max.x, n->hi[1] = bb.max.y, n->hi[2] = bb.max.z;
+        n->bmin[0] = bb.min.x, n->bmin[1] = bb.min.y, n->bmin[2] = bb.min.z;
+        n->bmax[0] = bb.max.x, n->bmax[1] = bb.max.y, n->bmax[2] = bb.max.z;
     }
     /* The tree holds every triangle of the mesh: its root box is the mesh's. */
     b->box = box3_empty();
     if (h->node_count) {
-        b->box.min = v3(h->nodes[0].lo[0], h->nodes[0].lo[1], h->nodes[0].lo[2]);
-        b->box.max = v3(h->nodes[0].hi[0], h->nodes[0].hi[1], h->nodes[0].hi[2]);
+        b->box.min = v3(h->nodes[0].bmin[0], h->nodes[0].bmin[1], h->nodes[0].bmin[2]);
+        b->box.max = v3(h->nodes[0].bmax[0], h->nodes[0].bmax[1], h->nodes[0].bmax[2]);
     }
     const float *lo = &b->box.min.x, *hi = &b->box.max.x;
     b->abs_max = 0.0;
@@ -58,10 +60,12 @@ static void refit_bvh(inst_bottom *b)
      * is monotone, so growing each union is growing the leaves. */
     float delta = box3_hit_delta((float)b->abs_max);
     for (uint32_t i = 0; i < h->node_count; i++) {
-        inst_node *n = &h->nodes[i];
-        box3 g = box3_hit_pad((box3){{n->lo[0], n->lo[1], n->lo[2]}, {n->hi[0], n->hi[1], n->hi[2]}}, delta);
-        n->lo[0] = g.min.x, n->lo[1] = g.min.y, n->lo[2] = g.min.z;
-        n->hi[0] = g.max.x, n->hi[1] = g.max.y, n->hi[2] = g.max.z;
+        if (i == 1) continue;
+        bvh_node *n = &h->nodes[i];
+        box3 g = box3_hit_pad((box3){{n->bmin[0], n->bmin[1], n->bmin[2]}, {n->bmax[0], n->bmax[1], n->bmax[2]}},
+                              delta);
+        n->bmin[0] = g.min.x, n->bmin[1] = g.min.y, n->bmin[2] = g.min.z;
+        n->bmax[0] = g.max.x, n->bmax[1] = g.max.y, n->bmax[2] = g.max.z;
     }
 }
 

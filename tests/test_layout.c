@@ -8,10 +8,12 @@
  *    includes the other; cli, the tools' option table, is on top of both);
  *  - a backend (every top-level folder the build treats as one, read from
  *    sources.mk) includes only accel.h, accel/core/ headers, its own
- *    folder's headers, and the two documented cross-backend APIs,
+ *    folder's headers, and the documented cross-backend APIs,
  *    grid/grid_core.h (the grid walk and cell visit of the grid family:
- *    nested, irregular and instanced grids reuse it) and
- *    grid/grid_packet_walk.h (the coherent packet walk its levels reuse);
+ *    nested, irregular and instanced grids reuse it),
+ *    grid/grid_packet_walk.h (the coherent packet walk its levels reuse)
+ *    and, for instanced/ only, bvh/bvh.h (bvh_build_boxes builds its BVH
+ *    levels over boxes);
  *  - sources.mk's ACCEL_LAYERS names these layers, and accel/ has no other
  *    folder;
  *  - a backend's subfolder (bvh/wide/, built by sources.mk too) is a room
@@ -196,10 +198,11 @@ static void check_backend_include(const char *path, int line, const char *target
             if (!strcmp(target, sub_parent_headers[i])) return;
     }
     if (!strcmp(target, "grid/grid_core.h") || !strcmp(target, "grid/grid_packet_walk.h")) return;
+    if (!strcmp(b->folder, "instanced") && !strcmp(target, "bvh/bvh.h")) return;
     test_fail(__FILE__, __LINE__,
               "%s:%d: includes \"%s\": a backend may include only accel.h, core/ headers, its "
-              "own folder, a subfolder's entry header (sub/sub.h), grid/grid_core.h and "
-              "grid/grid_packet_walk.h; a subfolder only its own files and the parent headers "
+              "own folder, a subfolder's entry header (sub/sub.h), grid/grid_core.h, "
+              "grid/grid_packet_walk.h (instanced/ also bvh/bvh.h); a subfolder only its own files and the parent headers "
               "of sub_parent_headers",
               path, line, target);
 }
