@@ -20,7 +20,7 @@
  *   skip_min cloud: smallest box radius worth a jump, cells
  *   macro    macro: cells per macro cell along each axis (power of two)
  *   traverse single | packet: the 3D-DDA per ray, or coherent grid traversal
- *            of 64-ray packets slice by slice (grid_packet.c; the mailbox
+ *            of 64-ray packets slice by slice (grid_packet_trace.c; the mailbox
  *            is then per packet)
  *   tri      watertight | naive (common to all kinds)
  */

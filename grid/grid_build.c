@@ -187,7 +187,7 @@ void grid_get_view(const void *accel, grid_view *v)
     v->ref_count = g->cells.ref_count;
 }
 
-/* The batch entries: single rays or packets (grid_packet.c). */
+/* The batch entries: single rays or packets (grid_packet_trace.c). */
 static void grid_trace_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
                                  size_t count, accel_counters *counters)
 {

@@ -1,7 +1,7 @@
 /*
  * grid_impl.h - the built grid, shared by the builder (grid_build.c), the
  * empty-space tables (grid_skip.c) and the traversals (grid_trace.c,
- * grid_packet.c). Private to grid/.
+ * grid_packet_trace.c). Private to grid/.
  */
 #ifndef GRID_GRID_IMPL_H
 #define GRID_GRID_IMPL_H
@@ -66,7 +66,7 @@ void grid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, s
 void grid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
                    accel_counters *counters);
 
-/* Coherent grid traversal, 64-ray packets (grid_packet.c); packets that
+/* Coherent grid traversal, 64-ray packets (grid_packet_trace.c); packets that
  * do not qualify go to the single-ray kernels above. */
 void grid_packet_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
                            size_t count, accel_counters *counters);

@@ -1,5 +1,5 @@
 /*
- * grid_packet.h - the packet of the coherent grid traversal (grid_packet.c),
+ * grid_packet.h - the packet of the coherent grid traversal (grid_packet_trace.c),
  * its setup and its slice ranges (grid_packet_setup.c).
  * A kernel body (C only): included by the .c files of its folder, not part
  * of the interface a C++ program includes.

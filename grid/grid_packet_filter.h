@@ -1,12 +1,12 @@
 /*
  * grid_packet_filter.h - the conservative filters of the coherent grid
- * traversal (grid_packet.c): which active rays of a packet may hit a
+ * traversal (grid_packet_trace.c): which active rays of a packet may hit a
  * primitive.
  * A kernel body (C only): included by the .c files of its folder, not part
  * of the interface a C++ program includes.
  * A filter only drops a (ray, primitive) pair that the exact test
  * accel_prim_hit (core/prim.h) would reject; the argument for each bound is
- * in grid_packet.c's header. Private to grid/, but for nested_grid/ through
+ * in grid_packet_trace.c's header. Private to grid/, but for nested_grid/ through
  * grid_packet_walk.h.
  */
 #ifndef GRID_GRID_PACKET_FILTER_H

@@ -1,6 +1,6 @@
 /*
  * grid_packet_setup.c - the packet of the coherent grid traversal
- * (grid_packet.c): which rays are live, the axis of the walk, the arrays
+ * (grid_packet_trace.c): which rays are live, the axis of the walk, the arrays
  * the filters read, and the range of cells each slice can touch.
  *
  * Liveness is decided exactly as by the single-ray kernel (grid_trace.c):

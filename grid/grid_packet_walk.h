@@ -1,6 +1,6 @@
 /*
  * grid_packet_walk.h - the pieces of the coherent grid traversal that every
- * slice walk shares: the regular grid's (grid_packet.c) and the nested
+ * slice walk shares: the regular grid's (grid_packet_trace.c) and the nested
  * grid's, whose levels are walked with the same packet (nested_grid/
  * ngrid_packet.c). A kernel body (C only): included by .c files, not part
  * of the interface a C++ program includes.
@@ -9,7 +9,7 @@
  * the exact test of each remaining ray), retiring the rays that need
  * nothing past a slice, the per-ray counter shares, tracing a packet that
  * does not qualify with a single-ray kernel, and writing the answers. The
- * correctness argument of the walk is in grid_packet.c's header.
+ * correctness argument of the walk is in grid_packet_trace.c's header.
  */
 #ifndef GRID_GRID_PACKET_WALK_H
 #define GRID_GRID_PACKET_WALK_H

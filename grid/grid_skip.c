@@ -2,7 +2,7 @@
  * grid_skip.c - the tables behind empty-space skipping (grid_skip.h): the
  * proximity cloud (per-cell Chebyshev distance to the nearest non-empty
  * cell, Cohen & Sheffer 1994) and the macro-cell empty flags; and the
- * occupancy of GRID_MACRO^3 blocks that the packet walk (grid_packet.c)
+ * occupancy of GRID_MACRO^3 blocks that the packet walk (grid_packet_trace.c)
  * skips empty layers with.
  *
  * The distance transform is separable (Meijster, Roerdink & Hesselink,

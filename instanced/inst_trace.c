@@ -41,8 +41,8 @@ typedef struct {
 #define INLINE static inline __attribute__((always_inline))
 
 /* Compare-and-select (libm's fmax is a call: it must order NaNs). */
-INLINE double dmax(double a, double b) { return a > b ? a : b; }
-INLINE double dmin(double a, double b) { return a < b ? a : b; }
+INLINE double inst_dmax(double a, double b) { return a > b ? a : b; }
+INLINE double inst_dmin(double a, double b) { return a < b ? a : b; }
 
 /* ---- the world-space decision ------------------------------------------------ */
 
@@ -286,7 +286,7 @@ static __attribute__((noinline)) void walk_kind(const inst_accel *a, const inst_
 
 /* ---- one instance ------------------------------------------------------------- */
 
-INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int spheres)
+INLINE void visit_instance(const inst_accel *a, uint32_t k, ray_state *r, int naive, int spheres)
 {
     const inst_item *it = &a->items[k];
     const inst_bottom *b = &a->bottoms[it->bottom];
@@ -309,11 +309,11 @@ INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int 
         const double *row = m + 4 * i;
         o[i] = row[0] * r->o[0] + row[1] * r->o[1] + row[2] * r->o[2] + row[3];
         d[i] = row[0] * r->d[0] + row[1] * r->d[1] + row[2] * r->d[2];
-        eo = dmax(eo, fabs(row[0] * r->o[0]) + fabs(row[1] * r->o[1]) + fabs(row[2] * r->o[2]) +
+        eo = inst_dmax(eo, fabs(row[0] * r->o[0]) + fabs(row[1] * r->o[1]) + fabs(row[2] * r->o[2]) +
                           fabs(row[3]));
-        ed = dmax(ed, fabs(row[0] * r->d[0]) + fabs(row[1] * r->d[1]) + fabs(row[2] * r->d[2]));
-        oa = dmax(oa, fabs(o[i]));
-        da = dmax(da, fabs(d[i]));
+        ed = inst_dmax(ed, fabs(row[0] * r->d[0]) + fabs(row[1] * r->d[1]) + fabs(row[2] * r->d[2]));
+        oa = inst_dmax(oa, fabs(o[i]));
+        da = inst_dmax(da, fabs(d[i]));
     }
     if (!(da > 0.0) || !isfinite(oa) || !isfinite(da)) return;
     /* Points that matter lie in the padded box: |t d| <= |o| + B + pad. */
@@ -331,8 +331,8 @@ INLINE void visit(const inst_accel *a, uint32_t k, ray_state *r, int naive, int 
         double t0 = (lo - o[i]) / d[i], t1 = (hi - o[i]) / d[i];
         if (t0 > t1) { double x = t0; t0 = t1; t1 = x; }
         double slack = 0x1p-40 * (fabs(t0) + fabs(t1));
-        s0 = dmax(s0, t0 - slack);
-        s1 = dmin(s1, t1 + slack);
+        s0 = inst_dmax(s0, t0 - slack);
+        s1 = inst_dmin(s1, t1 + slack);
     }
     r->boxes++;
     if (!(s0 <= s1)) return;
@@ -379,7 +379,7 @@ INLINE void top_bvh(const inst_accel *a, ray_state *r, int naive, int spheres)
         r->top_steps++;
         if (n->count) {
             for (uint32_t i = 0; i < n->count; i++) {
-                visit(a, h->order[n->left_first + i], r, naive, spheres);
+                visit_instance(a, h->order[n->left_first + i], r, naive, spheres);
                 if (r->done) return;
             }
         } else {
@@ -428,7 +428,7 @@ INLINE int top_item(void *ctx, uint32_t k)
     if (!box3_slab(&bb->min.x, &bb->max.x, r->p.org, r->p.inv_dir, r->p.neg, r->p.t_near, r->t,
                    &e))
         return 1;
-    visit(v->a, k, r, v->naive, v->spheres);
+    visit_instance(v->a, k, r, v->naive, v->spheres);
     return !r->done;
 }
 

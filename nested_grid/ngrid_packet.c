@@ -1,7 +1,7 @@
 /*
  * ngrid_packet.c - coherent grid traversal of the nested grid
  * (`nested_grid:traverse=packet`, both layouts), the packet walk of
- * grid/grid_packet.c (Wald, Ize, Kensler, Knoll and Parker, SIGGRAPH 2006)
+ * grid/grid_packet_trace.c (Wald, Ize, Kensler, Knoll and Parker, SIGGRAPH 2006)
  * carried into the levels.
  *
  * The packet (grid_packet_setup over the top grid) walks the top grid slice
@@ -21,7 +21,7 @@
  * theirs; retired rays keep theirs, which are final.
  *
  * Why the answer is the single-ray walk's and the reference's: the argument
- * of grid_packet.c, level by level. Let the ray's nearest accepted hit p
+ * of grid_packet_trace.c, level by level. Let the ray's nearest accepted hit p
  * (on primitive q) lie in top slice k, top cell c and, if c holds a
  * sub-grid, in its sub-slice k' and sub-cell c' (and so on down). The ray is
  * active in top slice k (it is retired only after a top slice, by a hit no
@@ -41,7 +41,7 @@
  * Counters (counted runs): steps = cells visited at any level (a top cell
  * holding a sub-grid included, as in the single-ray walk), per ray active at
  * the visit; prim_tests, mailbox_skips and packet_box_tests as in
- * grid_packet.c; level_steps are not split by level in packet mode. The
+ * grid_packet_trace.c; level_steps are not split by level in packet mode. The
  * step bound is the top grid's slice count per packet.
  */
 #include "grid/grid_packet_walk.h"

@@ -1,6 +1,6 @@
 /*
  * test_grid_packet.c - the coherent grid traversal (grid:traverse=packet,
- * grid/grid_packet.c) against the double-precision reference, on packets
+ * grid/grid_packet_trace.c) against the double-precision reference, on packets
  * built to walk: a common origin (camera), rays converging on a point
  * (shadow rays to a light), scattered origins with finite and offset t
  * ranges, axis rays with +0/-0 components starting on the box faces, rays

@@ -25,7 +25,7 @@
 #include "scene/scene.h"
 #include "cli/spec_check.h"
 #include "tools/trace/hitfiles.h"
-#include "tools/trace/trace.h"
+#include "tools/trace/run.h"
 
 static int opt_accel(const cli_option *o, void *field, char **v, accel_error *err)
 {
@@ -124,16 +124,6 @@ static void usage(FILE *f)
     cli_help_exit_codes(f);
 }
 
-int report(run *r, int code, const char *msg)
-{
-    fprintf(stderr, "trace: %s\n", msg);
-    if (code > r->status) r->status = code;
-    return code;
-}
-
-int report_err(run *r, const accel_error *err) { return report(r, cli_exit_of(err->code), err->msg); }
-
-FILE *trace_info(const options *o) { return o->csv ? (o->quiet ? NULL : stderr) : stdout; }
 
 /* The ray sets of --rays: names, or one .rays file that must open. */
 static int parse_ray_sets(const char *list, run *r, accel_error *err)

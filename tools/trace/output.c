@@ -1,7 +1,8 @@
 /*
- * output.c - what bin/trace prints and writes for one ray set traced by one
- * accelerator: the CSV record or the text row, and the outputs of the last
- * accelerator (--dump-hits, one file per set; --image; --heatmap).
+ * output.c - what bin/trace prints and writes: its error reports and exit
+ * status, and for one ray set traced by one accelerator the CSV record or
+ * the text row, and the outputs of the last accelerator (--dump-hits, one
+ * file per set; --image; --heatmap).
  */
 #include <math.h>
 #include <stdlib.h>
@@ -9,7 +10,18 @@
 
 #include "image/shade.h"
 #include "tools/trace/hitfiles.h"
-#include "tools/trace/trace.h"
+#include "tools/trace/run.h"
+
+int report(run *r, int code, const char *msg)
+{
+    fprintf(stderr, "trace: %s\n", msg);
+    if (code > r->status) r->status = code;
+    return code;
+}
+
+int report_err(run *r, const accel_error *err) { return report(r, cli_exit_of(err->code), err->msg); }
+
+FILE *trace_info(const options *o) { return o->csv ? (o->quiet ? NULL : stderr) : stdout; }
 
 void print_csv_header(run *r)
 {

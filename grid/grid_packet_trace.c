@@ -1,5 +1,5 @@
 /*
- * grid_packet.c - coherent grid traversal of the `grid` kind
+ * grid_packet_trace.c - coherent grid traversal of the `grid` kind
  * (traverse=packet), after Wald, Ize, Kensler, Knoll and Parker, "Ray
  * Tracing Animated Scenes using Coherent Grid Traversal", SIGGRAPH 2006.
  *

@@ -1,9 +1,9 @@
 /*
- * trace.h - what bin/trace's steps share (tools/trace.c runs them; the
+ * run.h - what bin/trace's steps share (tools/trace.c runs them; the
  * pieces in tools/trace/ print and write what they measured).
  */
-#ifndef TOOLS_TRACE_TRACE_H
-#define TOOLS_TRACE_TRACE_H
+#ifndef TOOLS_TRACE_RUN_H
+#define TOOLS_TRACE_RUN_H
 
 #include <stdint.h>
 #include <stdio.h>
