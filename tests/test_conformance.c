@@ -1,8 +1,9 @@
 /*
  * test_conformance.c - every registered kind, every listed variant (plus the
- * naive triangle test when the list lacks it), on every built-in scene at small size and on the
- * shared scanned meshes, against the double-precision reference. One test
- * per kind (conformance_grid, conformance_bvh, ...: TEST_PER_KIND), so that
+ * naive triangle test when the list lacks it), on every built-in scene at
+ * small size and on the shared scanned meshes, against the double-precision
+ * reference. One test per kind (conformance_grid, conformance_bvh, ...:
+ * TEST_PER_KIND), so that
  * `make test T=conformance_grid` runs one kind's and a new kind gets its own.
  *
  * Ray sets per scene: primary (the scene's camera), shadow and diffuse from
