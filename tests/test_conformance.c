@@ -1,8 +1,9 @@
 /*
  * test_conformance.c - every registered kind, every listed variant (plus the
- * naive triangle test), on every built-in scene at small size and on the
- * shared scanned meshes, against the double-precision reference. One test
- * per kind (conformance_grid, conformance_bvh, ...: TEST_PER_KIND), so that
+ * naive triangle test when the list lacks it), on every built-in scene at
+ * small size and on the shared scanned meshes, against the double-precision
+ * reference. One test per kind (conformance_grid, conformance_bvh, ...:
+ * TEST_PER_KIND), so that
  * `make test T=conformance_grid` runs one kind's and a new kind gets its own.
  *
  * Ray sets per scene: primary (the scene's camera), shadow and diffuse from
@@ -211,6 +212,47 @@ static size_t check_variant(test_scene *ts, const char *spec, int naive, int inv
     return bad_total;
 }
 
+enum { MAX_SPECS = 64 };
+
+/* The specs the suite runs for a kind, in order: each listed variant and,
+ * right after the default, its naive twin ("kind:tri=naive") unless the
+ * default is naive already or the list holds the twin (grid lists
+ * "tri=naive" itself, which used to run twice). Returns the count. */
+static int conformance_specs(const accel_kind *kind, char specs[][256], int max)
+{
+    const char *const *vars = kind->variants;
+    static const char *const none[] = {"", NULL};
+    if (!vars) vars = none;
+    int listed = 0, count = 0;
+    while (vars[listed]) listed++;
+    for (int v = 0; v < listed && count < max; v++) {
+        snprintf(specs[count++], 256, "%s%s%s", kind->name, vars[v][0] ? ":" : "", vars[v]);
+        if (v != 0 || strstr(specs[0], "tri=naive") || count == max) continue;
+        int twin_listed = 0;
+        for (int w = 1; w < listed; w++) twin_listed |= !strcmp(vars[w], "tri=naive");
+        if (!twin_listed) snprintf(specs[count++], 256, "%s:tri=naive", kind->name);
+    }
+    return count;
+}
+
+/* Every spec the conformance suite runs for a kind is run once. */
+TEST(naive_twin_and_variants_run_once)
+{
+    for (size_t k = 0; k < accel_kind_count; k++) {
+        static char specs[MAX_SPECS][256];
+        int n = conformance_specs(accel_kinds[k], specs, MAX_SPECS);
+        CHECKF(n > 0 && n < MAX_SPECS, "%s: %d conformance specs", accel_kinds[k]->name, n);
+        int naive = 0;
+        for (int i = 0; i < n; i++) {
+            naive |= strstr(specs[i], "tri=naive") != NULL;
+            for (int j = 0; j < i; j++)
+                CHECKF(strcmp(specs[i], specs[j]), "%s: %s is run twice", accel_kinds[k]->name,
+                       specs[i]);
+        }
+        CHECKF(naive, "%s: no naive triangle spec is run", accel_kinds[k]->name);
+    }
+}
+
 /* all_variants = 0: only the kind's default, answers against the oracle,
  * for the large scanned meshes where every variant would cost minutes. The
  * invariants (counted and uncounted, 1 and 2 threads, build statistics) and
@@ -218,24 +260,10 @@ static size_t check_variant(test_scene *ts, const char *spec, int naive, int inv
  * they would triple the passes (brute force: 42 of its 63 s went there). */
 static void run_kind(test_scene *ts, const accel_kind *kind, int all_variants)
 {
-    const char *const *vars = kind->variants;
-    static const char *const none[] = {"", NULL};
-    if (!vars) vars = none;
-    if (!all_variants) {
-        char spec[256];
-        snprintf(spec, sizeof spec, "%s%s%s", kind->name, vars[0][0] ? ":" : "", vars[0]);
-        check_variant(ts, spec, strstr(spec, "tri=naive") != NULL, 0);
-        return;
-    }
-    for (int v = 0; vars[v]; v++) {
-        char spec[256];
-        snprintf(spec, sizeof spec, "%s%s%s", kind->name, vars[v][0] ? ":" : "", vars[v]);
-        check_variant(ts, spec, strstr(spec, "tri=naive") != NULL, v == 0);
-        if (v == 0 && !strstr(spec, "tri=naive")) {
-            snprintf(spec, sizeof spec, "%s:tri=naive", kind->name);
-            check_variant(ts, spec, 1, 0);
-        }
-    }
+    static char specs[MAX_SPECS][256];
+    int n = conformance_specs(kind, specs, MAX_SPECS);
+    for (int i = 0; i < (all_variants ? n : 1); i++)
+        check_variant(ts, specs[i], strstr(specs[i], "tri=naive") != NULL, all_variants && i == 0);
 }
 
 /*

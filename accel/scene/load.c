@@ -41,6 +41,7 @@ int scene_load_file(const char *path, accel_scene *s, accel_error *err)
     if (rc == 0) {
         const char *slash = strrchr(path, '/');
         rc = scene_finish(&b, slash ? slash + 1 : path, s, err);
+        if (rc == 0) scene_camera_front(s);
     }
     scene_builder_free(&b);
     return rc;

@@ -44,6 +44,11 @@ void scene_free(accel_scene *s);
  * mesh, the meshes and instances arrays; scene_free calls it. */
 void scene_instances_free(accel_instances *set);
 
+/* The default view of a mesh file: framing its primitives like
+ * scene_finish's, from the side the mesh faces (scanned figures, +y up,
+ * lean toward their front: scene.c mesh_front). */
+void scene_camera_front(accel_scene *s);
+
 /* A camera looking at the bounds from direction `from` (not normalized),
  * far enough that the whole box fits the field of view. */
 accel_camera scene_camera_framing(box3 bounds, vec3 from, float fov_deg);
