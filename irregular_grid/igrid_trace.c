@@ -142,17 +142,8 @@ static unsigned igrid_flags(const igrid_accel *g)
     return accel_variant_flags(g->naive, g->has_spheres, g->mailbox);
 }
 
-void igrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
-                     accel_counters *counters)
-{
-    accel_run_kernel(&igrid_hit_table, accel, rays, hits, count, counters, igrid_flags(accel));
-}
-
-void igrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
-                    accel_counters *counters)
-{
-    accel_run_kernel(&igrid_occ_table, accel, rays, occluded, count, counters, igrid_flags(accel));
-}
+ACCEL_KERNEL_ENTRIES(igrid_intersect, igrid_occluded, const void, igrid_hit_table,
+                     igrid_occ_table, igrid_flags)
 
 /* accel.h's conservative walk: the simplest correct one, every primitive
  * whose bounding box grown by the pad the ray reaches (the primitive
