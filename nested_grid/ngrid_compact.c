@@ -264,16 +264,5 @@ ncompact_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, ui
 
 ACCEL_KERNEL_PAIR(ncompact, ncompact_kernel)
 
-void ngrid_compact_intersect(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits,
-                             size_t count, accel_counters *counters)
-{
-    accel_run_kernel(&ncompact_hit_table, g, rays, hits, count, counters,
-                     accel_variant_flags(g->naive, g->has_spheres, g->mailbox));
-}
-
-void ngrid_compact_occluded(const ngrid_accel *g, const accel_ray *rays, uint8_t *occluded,
-                            size_t count, accel_counters *counters)
-{
-    accel_run_kernel(&ncompact_occ_table, g, rays, occluded, count, counters,
-                     accel_variant_flags(g->naive, g->has_spheres, g->mailbox));
-}
+ACCEL_KERNEL_ENTRIES(ngrid_compact_intersect, ngrid_compact_occluded, const ngrid_accel,
+                     ncompact_hit_table, ncompact_occ_table, ngrid_flags)

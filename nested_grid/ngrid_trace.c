@@ -108,11 +108,6 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
 
 ACCEL_KERNEL_PAIR(ngrid, ngrid_kernel)
 
-static unsigned ngrid_flags(const ngrid_accel *g)
-{
-    return accel_variant_flags(g->naive, g->has_spheres, g->mailbox);
-}
-
 void ngrid_single_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
                             size_t count, accel_counters *counters)
 {
