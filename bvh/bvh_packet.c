@@ -496,14 +496,5 @@ packet_batch(const bvh *b, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
 
 ACCEL_KERNEL_PAIR(packet, packet_batch)
 
-void bvh_packet_intersect(const bvh *b, const accel_ray *rays, accel_hit *hits, size_t count,
-                          accel_counters *c)
-{
-    accel_run_kernel(&packet_hit_table, b, rays, hits, count, c, bvh_variant_flags(b));
-}
-
-void bvh_packet_occluded(const bvh *b, const accel_ray *rays, uint8_t *occ, size_t count,
-                         accel_counters *c)
-{
-    accel_run_kernel(&packet_occ_table, b, rays, occ, count, c, bvh_variant_flags(b));
-}
+ACCEL_KERNEL_ENTRIES(bvh_packet_intersect, bvh_packet_occluded, const bvh, packet_hit_table,
+                     packet_occ_table, bvh_variant_flags)

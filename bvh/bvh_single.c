@@ -119,14 +119,5 @@ trace_batch(const bvh *b, const accel_ray *rays, accel_hit *hits, uint8_t *occ, 
 ACCEL_KERNEL_TABLE(single_hit_table, SINGLE_HIT)
 ACCEL_KERNEL_TABLE(single_occ_table, SINGLE_OCC)
 
-void bvh_trace_intersect(const bvh *b, const accel_ray *rays, accel_hit *hits, size_t count,
-                         accel_counters *c)
-{
-    accel_run_kernel(&single_hit_table, b, rays, hits, count, c, bvh_variant_flags(b));
-}
-
-void bvh_trace_occluded(const bvh *b, const accel_ray *rays, uint8_t *occ, size_t count,
-                        accel_counters *c)
-{
-    accel_run_kernel(&single_occ_table, b, rays, occ, count, c, bvh_variant_flags(b));
-}
+ACCEL_KERNEL_ENTRIES(bvh_trace_intersect, bvh_trace_occluded, const bvh, single_hit_table,
+                     single_occ_table, bvh_variant_flags)

@@ -297,6 +297,23 @@ grid_dda_init(grid_dda *d, const grid_frame *f, const accel_ray_prep *p, double 
     return grid_dda_init_d(d, f, o, dir, t_start);
 }
 
+/* A ray's entry into a grid-family kernel: prepares it in *p and clips it
+ * to the frame box (one box test, counted in *boxes). 0 when the ray is
+ * invalid, the grid holds no reference (nonempty == 0) or the box is
+ * missed; then the kernel records a miss. */
+static inline __attribute__((always_inline)) int
+grid_ray_enter(const grid_frame *f, const accel_ray *r, int nonempty, accel_ray_prep *p,
+               uint32_t *boxes)
+{
+    float t_entry; /* unused: grid_dda_init recomputes it in double */
+    int live = accel_prep_ray(r, p) && nonempty;
+    if (live) {
+        *boxes = 1;
+        live = box3_slab(f->lo, f->hi, p->org, p->inv_dir, p->neg, p->t_near, p->t_far, &t_entry);
+    }
+    return live;
+}
+
 /* Distance at which the ray leaves the current cell. */
 static inline double grid_dda_exit(const grid_dda *d)
 {

@@ -84,13 +84,7 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
         accel_ray_prep p;
         accel_hit h = accel_hit_miss();
         uint32_t steps = 0, empty = 0, tests = 0, skips = 0, boxes = 0;
-        float t_entry; /* unused: grid_dda_init recomputes it in double */
-        int live = accel_prep_ray(&rays[i], &p) && g->cells.ref_count > 0;
-        if (live) {
-            boxes = 1;
-            live = box3_slab(f->lo, f->hi, p.org, p.inv_dir, p.neg, p.t_near, p.t_far, &t_entry);
-        }
-        if (live) {
+        if (grid_ray_enter(f, &rays[i], g->cells.ref_count > 0, &p, &boxes)) {
             /* Set up 3D DDA for the ray. */
             grid_dda d;
             grid_dda_init(&d, f, &p, p.t_near);

@@ -176,16 +176,5 @@ packet_batch(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_
 
 ACCEL_KERNEL_PAIR(grid_packet, packet_batch)
 
-void grid_packet_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
-                           size_t count, accel_counters *counters)
-{
-    accel_run_kernel(&grid_packet_hit_table, accel, rays, hits, count, counters,
-                     grid_variant_flags(accel));
-}
-
-void grid_packet_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded,
-                          size_t count, accel_counters *counters)
-{
-    accel_run_kernel(&grid_packet_occ_table, accel, rays, occluded, count, counters,
-                     grid_variant_flags(accel));
-}
+ACCEL_KERNEL_ENTRIES(grid_packet_intersect, grid_packet_occluded, const void, grid_packet_hit_table,
+                     grid_packet_occ_table, grid_variant_flags)

@@ -498,14 +498,5 @@ static unsigned flags_of(const inst_accel *a)
     return accel_variant_flags(a->naive, a->spheres, 0);
 }
 
-void inst_intersect(const void *acc, const accel_ray *rays, accel_hit *hits, size_t n,
-                    accel_counters *c)
-{
-    accel_run_kernel(&inst_closest_table, acc, rays, hits, n, c, flags_of(acc));
-}
-
-void inst_occluded(const void *acc, const accel_ray *rays, uint8_t *occ, size_t n,
-                   accel_counters *c)
-{
-    accel_run_kernel(&inst_any_table, acc, rays, occ, n, c, flags_of(acc));
-}
+ACCEL_KERNEL_ENTRIES(inst_intersect, inst_occluded, const void, inst_closest_table, inst_any_table,
+                     flags_of)

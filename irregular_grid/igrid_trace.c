@@ -92,13 +92,7 @@ igrid_kernel(const igrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
         accel_ray_prep p;
         accel_hit h = accel_hit_miss();
         uint32_t steps = 0, empty = 0, tests = 0, skips = 0, boxes = 0;
-        float t_entry; /* unused: grid_dda_init recomputes it in double */
-        int live = accel_prep_ray(&rays[i], &p) && g->ref_count > 0;
-        if (live) {
-            boxes = 1;
-            live = box3_slab(f->lo, f->hi, p.org, p.inv_dir, p.neg, p.t_near, p.t_far, &t_entry);
-        }
-        if (live) {
+        if (grid_ray_enter(f, &rays[i], g->ref_count > 0, &p, &boxes)) {
             grid_dda d;
             grid_dda_init(&d, f, &p, p.t_near);
             uint32_t mail[GRID_MAILBOX];
@@ -142,17 +136,8 @@ static unsigned igrid_flags(const igrid_accel *g)
     return accel_variant_flags(g->naive, g->has_spheres, g->mailbox);
 }
 
-void igrid_intersect(const void *accel, const accel_ray *rays, accel_hit *hits, size_t count,
-                     accel_counters *counters)
-{
-    accel_run_kernel(&igrid_hit_table, accel, rays, hits, count, counters, igrid_flags(accel));
-}
-
-void igrid_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded, size_t count,
-                    accel_counters *counters)
-{
-    accel_run_kernel(&igrid_occ_table, accel, rays, occluded, count, counters, igrid_flags(accel));
-}
+ACCEL_KERNEL_ENTRIES(igrid_intersect, igrid_occluded, const void, igrid_hit_table,
+                     igrid_occ_table, igrid_flags)
 
 /* accel.h's conservative walk: the simplest correct one, every primitive
  * whose bounding box grown by the pad the ray reaches (the primitive

@@ -187,14 +187,7 @@ ncompact_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, ui
         accel_ray_prep p;
         accel_hit h = accel_hit_miss();
         uint32_t steps = 0, empty = 0, tests = 0, skips = 0, boxes = 0, sub_steps = 0;
-        float t_entry;
-        int live = accel_prep_ray(&rays[i], &p) && k->ref_count > 0;
-        if (live) {
-            boxes = 1;
-            live = box3_slab(top->lo, top->hi, p.org, p.inv_dir, p.neg, p.t_near, p.t_far,
-                             &t_entry);
-        }
-        if (live) {
+        if (grid_ray_enter(top, &rays[i], k->ref_count > 0, &p, &boxes)) {
             grid_dda d;
             double t_cell = grid_dda_init(&d, top, &p, p.t_near);
             uint32_t box[GRID_MAILBOX];
@@ -271,16 +264,5 @@ ncompact_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, ui
 
 ACCEL_KERNEL_PAIR(ncompact, ncompact_kernel)
 
-void ngrid_compact_intersect(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits,
-                             size_t count, accel_counters *counters)
-{
-    accel_run_kernel(&ncompact_hit_table, g, rays, hits, count, counters,
-                     accel_variant_flags(g->naive, g->has_spheres, g->mailbox));
-}
-
-void ngrid_compact_occluded(const ngrid_accel *g, const accel_ray *rays, uint8_t *occluded,
-                            size_t count, accel_counters *counters)
-{
-    accel_run_kernel(&ncompact_occ_table, g, rays, occluded, count, counters,
-                     accel_variant_flags(g->naive, g->has_spheres, g->mailbox));
-}
+ACCEL_KERNEL_ENTRIES(ngrid_compact_intersect, ngrid_compact_occluded, const ngrid_accel,
+                     ncompact_hit_table, ncompact_occ_table, ngrid_flags)

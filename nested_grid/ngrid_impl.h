@@ -6,6 +6,7 @@
 #ifndef NESTED_GRID_NGRID_IMPL_H
 #define NESTED_GRID_NGRID_IMPL_H
 
+#include "core/variant.h"
 #include "ngrid.h"
 
 #ifdef __cplusplus
@@ -177,6 +178,12 @@ size_t ngrid_compact_bytes(const ngrid_compact *k);
 
 /* Traversal modes (parameter traverse=). */
 enum { NGRID_TRAVERSE_SINGLE = 0, NGRID_TRAVERSE_PACKET = 1 };
+
+/* The kernel-variant flags of a built nested grid (core/variant.h). */
+static inline unsigned ngrid_flags(const ngrid_accel *g)
+{
+    return accel_variant_flags(g->naive, g->has_spheres, g->mailbox);
+}
 
 /* The single-ray walks of either layout (ngrid_trace.c; the compact
  * layout's in ngrid_compact.c). The kind's entries (ngrid_build.c) pick

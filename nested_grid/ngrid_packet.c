@@ -340,16 +340,5 @@ npacket_batch(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint
 
 ACCEL_KERNEL_PAIR(npacket, npacket_batch)
 
-void ngrid_packet_intersect(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits,
-                            size_t count, accel_counters *counters)
-{
-    accel_run_kernel(&npacket_hit_table, g, rays, hits, count, counters,
-                     accel_variant_flags(g->naive, g->has_spheres, g->mailbox));
-}
-
-void ngrid_packet_occluded(const ngrid_accel *g, const accel_ray *rays, uint8_t *occluded,
-                           size_t count, accel_counters *counters)
-{
-    accel_run_kernel(&npacket_occ_table, g, rays, occluded, count, counters,
-                     accel_variant_flags(g->naive, g->has_spheres, g->mailbox));
-}
+ACCEL_KERNEL_ENTRIES(ngrid_packet_intersect, ngrid_packet_occluded, const ngrid_accel,
+                     npacket_hit_table, npacket_occ_table, ngrid_flags)

@@ -44,14 +44,7 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
         accel_hit h = accel_hit_miss();
         uint32_t steps = 0, empty = 0, tests = 0, skips = 0, boxes = 0;
         uint32_t level_steps[NGRID_MAX_LEVELS] = {0};
-        float t_entry;
-        int live = accel_prep_ray(&rays[i], &p) && g->ref_count > 0;
-        if (live) {
-            boxes = 1;
-            live = box3_slab(top->lo, top->hi, p.org, p.inv_dir, p.neg, p.t_near, p.t_far,
-                             &t_entry);
-        }
-        if (live) {
+        if (grid_ray_enter(top, &rays[i], g->ref_count > 0, &p, &boxes)) {
             /* Set up the top-level 3D DDA for the ray. The current level's
              * walk lives in `d` (registers); the parents' walks wait on a
              * small stack while a sub-grid is walked. Distances are doubles
@@ -114,11 +107,6 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
 }
 
 ACCEL_KERNEL_PAIR(ngrid, ngrid_kernel)
-
-static unsigned ngrid_flags(const ngrid_accel *g)
-{
-    return accel_variant_flags(g->naive, g->has_spheres, g->mailbox);
-}
 
 void ngrid_single_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
                             size_t count, accel_counters *counters)

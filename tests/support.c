@@ -19,15 +19,19 @@ static uint64_t rng_state = TEST_SEED;
 
 void test_seed(uint64_t seed) { rng_state = seed; }
 
-uint64_t test_rand_u64(void)
+uint64_t test_xorshift(uint64_t *state)
 {
-    rng_state ^= rng_state << 13;
-    rng_state ^= rng_state >> 7;
-    rng_state ^= rng_state << 17;
-    return rng_state;
+    *state ^= *state << 13;
+    *state ^= *state >> 7;
+    *state ^= *state << 17;
+    return *state;
 }
 
-float test_rand(void) { return (float)(test_rand_u64() >> 40) / 16777216.0f; }
+float test_rand_of(uint64_t *state) { return (float)(test_xorshift(state) >> 40) / 16777216.0f; }
+
+uint64_t test_rand_u64(void) { return test_xorshift(&rng_state); }
+
+float test_rand(void) { return test_rand_of(&rng_state); }
 
 float test_rand_in(float lo, float hi) { return lo + (hi - lo) * test_rand(); }
 
@@ -404,15 +408,21 @@ void test_fail_diff(const char *file, int line, const char *label, const test_di
               hits[i].prim, hits[i].t, occ[i]);
 }
 
-void *test_build(const char *spec, const accel_scene *s, int threads, accel_build_stats *st)
+void *test_build_kind(const char *spec, const accel_scene *s, int threads,
+                      const accel_kind **kind, accel_build_stats *st)
 {
     accel_error err = {0};
-    const accel_kind *kind;
     void *accel = NULL;
     accel_build_stats local;
-    int rc = accel_build_spec(spec, s, threads, &kind, &accel, st ? st : &local, &err);
+    int rc = accel_build_spec(spec, s, threads, kind, &accel, st ? st : &local, &err);
     CHECKF(rc == 0, "%s on %s: %s", spec, s->name, err.msg);
     return rc ? NULL : accel;
+}
+
+void *test_build(const char *spec, const accel_scene *s, int threads, accel_build_stats *st)
+{
+    const accel_kind *kind;
+    return test_build_kind(spec, s, threads, &kind, st);
 }
 
 size_t test_check_accel(const accel_scene *s, const accel_kind *kind, const void *accel,

@@ -36,6 +36,10 @@ void test_seed(uint64_t seed);
 uint64_t test_rand_u64(void);
 /* Uniform in [0, 1), from the state's top 24 bits. */
 float test_rand(void);
+/* The same generator and mapping on a caller's own state (a test file
+ * that keeps its own sequence across its tests). */
+uint64_t test_xorshift(uint64_t *state);
+float test_rand_of(uint64_t *state);
 float test_rand_in(float lo, float hi);
 /* A uniform point of box b. */
 vec3 test_rand_point(box3 b);
@@ -219,6 +223,9 @@ void test_fail_diff(const char *file, int line, const char *label, const test_di
 /* Builds spec on s with `threads` threads (st may be NULL); NULL after a
  * failed check naming the spec, the scene and the error. */
 void *test_build(const char *spec, const accel_scene *s, int threads, accel_build_stats *st);
+/* The same, its kind in *kind too (for the caller's kind->destroy). */
+void *test_build_kind(const char *spec, const accel_scene *s, int threads,
+                      const accel_kind **kind, accel_build_stats *st);
 
 /*
  * The check of one built accelerator (built from spec on s) against the

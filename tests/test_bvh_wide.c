@@ -27,13 +27,7 @@
 #undef WIDE_LB
 
 static uint64_t rng = 0x9E3779B97F4A7C15ull;
-static float frand(void)
-{
-    rng ^= rng << 13;
-    rng ^= rng >> 7;
-    rng ^= rng << 17;
-    return (float)(rng >> 40) / 16777216.0f;
-}
+static float frand(void) { return test_rand_of(&rng); }
 static float frange(float lo, float hi) { return lo + (hi - lo) * frand(); }
 
 /* ---- ray preparation ------------------------------------------------------------ */
@@ -336,14 +330,10 @@ static void walk(walk_ctx *x, uint32_t ref, int level, const float *parent_rows,
 
 static void check_wide(const accel_scene *s, const char *spec)
 {
-    accel_error err = {0};
     const accel_kind *k;
-    void *a;
     accel_build_stats st;
-    if (accel_build_spec(spec, s, 1, &k, &a, &st, &err)) {
-        test_fail(__FILE__, __LINE__, "%s on %s: %s", spec, s->name, err.msg);
-        return;
-    }
+    void *a = test_build_kind(spec, s, 1, &k, &st);
+    if (!a) return;
     const bvh *b = a;
     const bvh_wide *w = b->wide;
     CHECKF(w != NULL, "%s: no wide tree", spec);

@@ -97,14 +97,9 @@ static double dp_objective(const bvh_wide *w, double leaf_cost)
 
 static int dp_objective_of(const accel_scene *s, const char *spec, double leaf_cost, double *objective)
 {
-    accel_error err = {0};
     const accel_kind *k;
-    void *a;
-    accel_build_stats st;
-    if (accel_build_spec(spec, s, 1, &k, &a, &st, &err)) {
-        test_fail(__FILE__, __LINE__, "%s on %s: %s", spec, s->name, err.msg);
-        return -1;
-    }
+    void *a = test_build_kind(spec, s, 1, &k, NULL);
+    if (!a) return -1;
     *objective = dp_objective(((const bvh *)a)->wide, leaf_cost);
     k->destroy(a);
     return 0;

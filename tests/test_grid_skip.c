@@ -18,13 +18,7 @@
 #include "test.h"
 
 static uint64_t rng = 0x2545F4914F6CDD1Dull;
-static float frand01(void)
-{
-    rng ^= rng << 13;
-    rng ^= rng >> 7;
-    rng ^= rng << 17;
-    return (float)(rng >> 40) / 16777216.0f;
-}
+static float frand01(void) { return test_rand_of(&rng); }
 
 /* Offsets of a grid whose cell c is non-empty when occ[c]. */
 static uint32_t *offsets_of(const uint8_t *occ, size_t cells)

@@ -21,13 +21,7 @@
 #include "test.h"
 
 static uint64_t rng = 0x853C49E6748FEA9Bull;
-static float frand(void)
-{
-    rng ^= rng << 13;
-    rng ^= rng >> 7;
-    rng ^= rng << 17;
-    return (float)(rng >> 40) / 16777216.0f;
-}
+static float frand(void) { return test_rand_of(&rng); }
 static float frange(float lo, float hi) { return lo + (hi - lo) * frand(); }
 
 static accel_ray mk_ray(vec3 o, vec3 d, float t_near, float t_far)

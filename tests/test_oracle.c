@@ -295,6 +295,22 @@ TEST(oracle_ties_follow_live_order)
 /* A hand-made scene: non-finite vertices (live, as scene_finish leaves
  * them), coordinates near FLT_MAX, spheres with a negative radius, tangent
  * rays from sphere surfaces, a shuffled live list with duplicates. */
+/* A scene over caller-owned arrays: tri_count triangles, then
+ * sphere_count spheres, live[0..live_count-1] live. */
+static accel_scene raw_scene(float *tris, uint32_t tri_count, float *spheres,
+                             uint32_t sphere_count, uint32_t *live, uint32_t live_count)
+{
+    accel_scene s = {0};
+    s.tri_count = tri_count;
+    s.sphere_count = sphere_count;
+    s.prim_count = tri_count + sphere_count;
+    s.tris = tris;
+    s.spheres = spheres;
+    s.live = live;
+    s.live_count = live_count;
+    return s;
+}
+
 TEST(oracle_odd_scenes_match_brute)
 {
     enum { TRIS = 300, SPHERES = 40 };
@@ -319,15 +335,8 @@ TEST(oracle_odd_scenes_match_brute)
     uint32_t n = 0;
     for (uint32_t i = 0; i < TRIS + SPHERES; i++) live[n++] = (i * 7919u) % (TRIS + SPHERES);
     for (uint32_t i = 0; i < 20; i++) live[n++] = live[i * 3];
-    accel_scene s = {0};
+    accel_scene s = raw_scene(tris, TRIS, spheres, SPHERES, live, n);
     snprintf(s.name, sizeof s.name, "odd");
-    s.tri_count = TRIS;
-    s.sphere_count = SPHERES;
-    s.prim_count = TRIS + SPHERES;
-    s.tris = tris;
-    s.spheres = spheres;
-    s.live = live;
-    s.live_count = n;
     s.camera.eye = v3(0, 0, 30);
     s.camera.up = v3(0, 1, 0);
     s.camera.fov_deg = 40;
@@ -470,14 +479,7 @@ TEST(oracle_random_scales_match_brute)
         uint32_t n = 0;
         for (uint32_t i = 0; i < TRIS + (sc % 2 ? SPHERES : 0); i++)
             if (DRAW() < 0.9f) live[n++] = i;
-        accel_scene s = {0};
-        s.tri_count = TRIS;
-        s.sphere_count = SPHERES;
-        s.prim_count = TRIS + SPHERES;
-        s.tris = tris;
-        s.spheres = spheres;
-        s.live = live;
-        s.live_count = n;
+        accel_scene s = raw_scene(tris, TRIS, spheres, SPHERES, live, n);
         l.count = 0;
         for (int i = 0; n && i < RAYS; i++) {
             uint32_t prim = live[(int)(DRAW() * n)];

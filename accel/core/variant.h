@@ -143,6 +143,25 @@ static inline void accel_run_kernel(const accel_kernel_table *t, const void *acc
     ((c) != NULL && (uint64_t)(steps) > (uint64_t)(bound) &&                                \
      accel_counters_note_broken((c), __FILE__, __LINE__, (uint64_t)(bound)))
 
+/* A kind's two batch entry points, closest hit and any hit, each running
+ * its table with the flags FLAGS(accel) of the built structure:
+ *
+ *     ACCEL_KERNEL_ENTRIES(kind_intersect, kind_occluded, const kind_accel,
+ *                          kind_hit_table, kind_occ_table, kind_flags)
+ *
+ * (ACCEL_T is the accel parameter's pointee type, as the header declares it). */
+#define ACCEL_KERNEL_ENTRIES(HIT_FN, OCC_FN, ACCEL_T, HIT_TABLE, OCC_TABLE, FLAGS)          \
+    void HIT_FN(ACCEL_T *accel, const accel_ray *rays, accel_hit *hits, size_t count,       \
+                accel_counters *c)                                                          \
+    {                                                                                       \
+        accel_run_kernel(&HIT_TABLE, accel, rays, hits, count, c, FLAGS(accel));           \
+    }                                                                                       \
+    void OCC_FN(ACCEL_T *accel, const accel_ray *rays, uint8_t *occ, size_t count,          \
+                accel_counters *c)                                                          \
+    {                                                                                       \
+        accel_run_kernel(&OCC_TABLE, accel, rays, occ, count, c, FLAGS(accel));            \
+    }
+
 #ifdef __cplusplus
 }
 #endif
