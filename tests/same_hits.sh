@@ -37,11 +37,18 @@ same=0
 differ=0
 for scene in $scenes; do
     case $scene in *.off) size=160x120 ;; *) size=96x72 ;; esac
+    # Both builds trace the old build's default view of the scene, given
+    # explicitly, so that a change of default camera is not a change of hits.
+    cam=$("$old/trace" --scene "$scene" --accel brute --size 8x6 --repeat 1 --warmup 0 \
+          --build-repeat 1 --no-counters --quiet 2>/dev/null |
+          sed -n 's/^ *camera eye (\([^)]*\)) look (\([^)]*\)) up (\([^)]*\)) fov \([^ ]*\) deg.*/--eye \1 --look \2 --up \3 --fov \4/p' |
+          tr -d ' ' | sed 's/--/ --/g; s/\(--[a-z]*\)/\1 /g')
     for spec in $specs; do
         tag=$(printf '%s__%s' "$(basename "$scene")" "$spec" | tr ':,=/' '____')
         for side in old new; do
             eval bin=\$$side
-            "$bin/trace" --scene "$scene" --accel "$spec" --rays primary,diffuse --size $size \
+            # shellcheck disable=SC2086
+            "$bin/trace" --scene "$scene" --accel "$spec" --rays primary,diffuse --size $size $cam \
                 --repeat 1 --warmup 0 --build-repeat 1 --no-counters --quiet \
                 --dump-hits "$dir/$tag.$side" > "$dir/$tag.$side.log" 2>&1 ||
                 echo "FAILED ($side): $scene $spec (see $dir/$tag.$side.log)"
