@@ -12,7 +12,7 @@ CORE_SRC     := $(foreach l,$(ACCEL_LAYERS),$(wildcard $(ROOT)accel/$(l)/*.c))
 # A backend's sources are its folder's .c files and those of its subfolders
 # (bvh/wide/), one level down.
 BACKEND_SRC  := $(foreach d,$(BACKENDS),$(wildcard $(ROOT)$(d)/*.c $(ROOT)$(d)/*/*.c))
-# The slowest units to compile (bvh/wide/'s kernel tables, 5-18 s each) come
+# The slowest units to compile (bvh/wide/'s kernel tables, 4-15 s of CPU each) come
 # first, so that a parallel build overlaps them with the many small ones
 # instead of finishing on them.
 SLOW_SRC     := $(foreach d,$(BACKENDS),$(wildcard $(ROOT)$(d)/*/k[0-9]_*.c))
