@@ -1,6 +1,7 @@
 /*
  * claims.c - the claims of the study, in the order the summary lists them.
  */
+#include <math.h>
 #include <string.h>
 
 #include "claims.h"
@@ -105,5 +106,23 @@ const exp_claim *exp_claim_find(const char *id)
 int exp_verdict_valid(const char *v)
 {
     return !strcmp(v, EXP_CONFIRMED) || !strcmp(v, EXP_PARTLY) || !strcmp(v, EXP_REFUTED) ||
-           !strcmp(v, EXP_UNTESTABLE);
+           !strcmp(v, EXP_UNTESTABLE) || !strcmp(v, EXP_ON_LINE) || !strcmp(v, EXP_ANSWERED);
+}
+
+const char *exp_judge(const exp_decider *d)
+{
+    double lo = d->lo * d->sense, hi = d->hi * d->sense, th = d->threshold * d->sense;
+    if (d->sense == 0 || lo != lo || hi != hi || th != th) return EXP_ON_LINE;
+    if (lo > hi) { double t = lo; lo = hi; hi = t; }
+    if (lo >= th) return EXP_CONFIRMED;
+    if (hi < th) return EXP_REFUTED;
+    return EXP_ON_LINE;
+}
+
+double exp_margin(const exp_decider *d)
+{
+    double half = fabs(d->hi - d->lo) / 2;
+    if (half < 1e-12) half = 1e-12;
+    double m = (d->value - d->threshold) * d->sense / half;
+    return d->sense ? m : NAN;
 }

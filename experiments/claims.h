@@ -26,7 +26,33 @@ const exp_claim *exp_claim_find(const char *id);
 #define EXP_PARTLY "partly"
 #define EXP_REFUTED "refuted"
 #define EXP_UNTESTABLE "not testable here"
-/* 1 when v is one of the four labels. */
+/* The deciding interval straddles the claim's threshold: neither confirmed
+ * nor refuted at this n (issue 38's rules). */
+#define EXP_ON_LINE "on the line"
+/* A request (claims of source "request") is answered with its numbers,
+ * never confirmed. */
+#define EXP_ANSWERED "answered"
+/* 1 when v is one of the six labels. */
 int exp_verdict_valid(const char *v);
+
+/* The number that decides a verdict: its value and interval [lo, hi] from
+ * n rounds (or samples), against the claim's threshold. sense is +1 when
+ * the claim says value >= threshold ("at least 2x"), -1 when it says
+ * value <= threshold ("within 1.3x"). what names it ("SAH / median
+ * traversal speed-up, bunny 69k tris, primary 800x600"). */
+typedef struct {
+    const char *what;
+    double value, lo, hi, threshold;
+    int sense, n;
+} exp_decider;
+/* Issue 38's rule: EXP_CONFIRMED when the whole interval lies on the
+ * claim's side of the threshold, EXP_REFUTED when the whole interval
+ * misses it, EXP_ON_LINE when it straddles (or any number is NaN). */
+const char *exp_judge(const exp_decider *d);
+/* The distance from value to threshold in units of the interval's
+ * half-width, positive on the claim's side (|margin| > 1: the interval
+ * does not reach the threshold). A zero-width interval counts as 1e-12
+ * wide. NaN when a number is missing. */
+double exp_margin(const exp_decider *d);
 
 #endif

@@ -195,7 +195,8 @@ void exp_init(exp_ctx *x, int argc, char **argv, const char *name, const char *q
     }
     csv_open(&x->csv, csv);
     csv_open(&x->verdicts, vf);
-    csv_row(&x->verdicts, "claim,verdict,evidence,scenes,section\n");
+    csv_row(&x->verdicts, "claim,verdict,evidence,scenes,section,deciding,value,lo,hi,threshold,sense,"
+                          "margin,n\n");
     exp_loadavg(x->load_start);
     x->others_start = exp_others_running();
     x->progress = bench_progress_start(x->quiet ? NULL : stderr, name, x->progress_after * 1e3);
@@ -361,8 +362,9 @@ void exp_list_free(exp_list *l)
     memset(l, 0, sizeof *l);
 }
 
-void exp_verdict(exp_ctx *x, const char *claim, const char *verdict, const char *scenes,
-                 const char *evidence_fmt, ...)
+/* Writes one verdicts row; d may be NULL (no deciding number). */
+static void verdict_row(exp_ctx *x, const char *claim, const char *verdict, const exp_decider *d,
+                        const char *scenes, const char *evidence_fmt, va_list ap0)
 {
     if (!exp_claim_find(claim) || !exp_verdict_valid(verdict)) {
         fprintf(stderr, "%s: internal: bad verdict '%s' on claim '%s'\n", x->name, verdict, claim);
@@ -370,19 +372,42 @@ void exp_verdict(exp_ctx *x, const char *claim, const char *verdict, const char 
         return;
     }
     va_list ap;
-    va_start(ap, evidence_fmt);
+    va_copy(ap, ap0);
     int need = vsnprintf(NULL, 0, evidence_fmt, ap);
     va_end(ap);
     char *ev = malloc(need > 0 ? (size_t)need + 1 : 1);
     if (!ev) exit(CLI_EXIT_INTERNAL);
-    va_start(ap, evidence_fmt);
+    va_copy(ap, ap0);
     vsnprintf(ev, (size_t)need + 1, evidence_fmt, ap);
     va_end(ap);
     /* A record too long for the CSV writer is refused and fails the run
      * (exit 4): evidence is never cut short silently. */
-    csv_row(&x->verdicts, "%s,%s,%s,%s,%s\n", claim, verdict, ev, scenes, x->name);
+    if (d)
+        csv_row(&x->verdicts, "%s,%s,%s,%s,%s,%s,%.6g,%.6g,%.6g,%.6g,%d,%.3g,%d\n", claim,
+                verdict, ev, scenes, x->name, d->what ? d->what : "", d->value, d->lo, d->hi,
+                d->threshold, d->sense, exp_margin(d), d->n);
+    else
+        csv_row(&x->verdicts, "%s,%s,%s,%s,%s,,,,,,,,\n", claim, verdict, ev, scenes, x->name);
     free(ev);
     x->verdict_count++;
+}
+
+void exp_verdict(exp_ctx *x, const char *claim, const char *verdict, const char *scenes,
+                 const char *evidence_fmt, ...)
+{
+    va_list ap;
+    va_start(ap, evidence_fmt);
+    verdict_row(x, claim, verdict, NULL, scenes, evidence_fmt, ap);
+    va_end(ap);
+}
+
+void exp_verdict_num(exp_ctx *x, const char *claim, const char *verdict, const exp_decider *d,
+                     const char *scenes, const char *evidence_fmt, ...)
+{
+    va_list ap;
+    va_start(ap, evidence_fmt);
+    verdict_row(x, claim, verdict, d, scenes, evidence_fmt, ap);
+    va_end(ap);
 }
 
 const char *exp_no_difference(double floor)

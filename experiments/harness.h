@@ -160,12 +160,19 @@ void exp_list_free(exp_list *l);
 /* Whether --kinds lets kind `name` run (always 1 without --kinds). */
 int exp_kind_wanted(const exp_ctx *x, const char *name);
 
-/* One verdict on a claim of claims.h: verdict is EXP_CONFIRMED, EXP_PARTLY,
- * EXP_REFUTED or EXP_UNTESTABLE; evidence gives the deciding numbers with
+/* One verdict on a claim of claims.h: verdict is one of claims.h's labels; evidence gives the deciding numbers with
  * their intervals; scenes names where they were measured. A bad claim id or
  * label is an internal error (exit 4). */
 void exp_verdict(exp_ctx *x, const char *claim, const char *verdict, const char *scenes,
                  const char *evidence_fmt, ...) __attribute__((format(printf, 5, 6)));
+/* exp_verdict with its deciding number: the verdicts CSV gets the columns
+ * deciding,value,lo,hi,threshold,sense,margin,n (exp_verdict leaves them
+ * empty), which mkreport shows in the summary. verdict is usually
+ * exp_judge(d); a compound claim passes EXP_PARTLY and says which part
+ * holds in the evidence. */
+void exp_verdict_num(exp_ctx *x, const char *claim, const char *verdict, const exp_decider *d,
+                     const char *scenes, const char *evidence_fmt, ...)
+    __attribute__((format(printf, 6, 7)));
 /* The verdict for a claim that comes out as "no difference": refuted when
  * the noise floor could have shown the effect (floor <= EXP_NOISY),
  * otherwise not testable (the run was too noisy to tell). */

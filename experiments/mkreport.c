@@ -22,7 +22,7 @@
 #include "claims.h"
 
 #define MAX_ROWS 256
-#define MAX_FIELDS 8
+#define MAX_FIELDS 16
 
 typedef struct {
     char *f[MAX_FIELDS];
@@ -105,7 +105,7 @@ static void load_outputs(const char *dir, char **names, int count)
         int n = text ? parse_csv(text, rows, MAX_ROWS) : 0;
         if (n < 0) fprintf(stderr, "mkreport: %s: not RFC 4180 CSV\n", path);
         for (int i = 1; i < n && verdict_count < MAX_ROWS; i++)
-            if (rows[i].n == 5)
+            if (rows[i].n == 5 || rows[i].n == 13)
                 verdicts[verdict_count++] = (verdict){rows[i].f[0], rows[i].f[1], rows[i].f[2],
                                                       rows[i].f[3], rows[i].f[4]};
         snprintf(path, sizeof path, "%s/%s.leftout.csv", dir, names[e]);
