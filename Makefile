@@ -49,7 +49,7 @@ EXP_BINS := $(patsubst experiments/%.c,$(BIN)/%,$(wildcard experiments/exp_*.c))
 # The lab's checks and its untouched starter kind are part of the tests
 # (tests/test_lab.c: every check passes on the project and fails on the starter).
 TEST_SRC := $(wildcard tests/*.c) lab/check.c lab/check_common.c lab/check_step3.c lab/starter.c \
-            experiments/claims.c experiments/stats.c experiments/svg.c
+            experiments/claims.c experiments/stats.c experiments/svg.c experiments/mdcut.c
 
 .PHONY: all test report sanitize fuzz clean bench lab lab-report FORCE
 all: $(TOOLS) $(EXP_BINS) $(BIN)/mkreport $(BIN)/run_tests
@@ -80,7 +80,7 @@ $(BIN)/exp_%: $(BUILD)/experiments/exp_%.o $(EXP_OBJ) $(LIB)
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $< $(EXP_OBJ) $(LIB) -o $@ $(LDLIBS)
 
-$(BIN)/mkreport: $(BUILD)/experiments/mkreport.o $(BUILD)/experiments/claims.o
+$(BIN)/mkreport: $(BUILD)/experiments/mkreport.o $(BUILD)/experiments/mdcut.o $(BUILD)/experiments/claims.o
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $^ -o $@ $(LDLIBS)
 

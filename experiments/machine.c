@@ -183,8 +183,37 @@ const char *exp_compiler(void)
 #endif
 }
 
+/* The ISA the kernels were compiled for: the widest of the intrinsics
+ * paths (bvh/wide/simd.h uses AVX2 at most) that this build's flags
+ * enable, and what the CPU has beyond it (its "flags", as m->vector).
+ * TODO(merge): the kernels issue's runtime dispatch brings
+ * accel_isa_name(); print that instead. */
+static void kernel_isa(const exp_machine *m, char *buf, size_t n)
+{
+#if defined(__AVX2__)
+    const char *used = "AVX2";
+#elif defined(__SSE2__)
+    const char *used = "SSE2";
+#else
+    const char *used = "scalar C";
+#endif
+    char padded[128];
+    snprintf(padded, sizeof padded, " %s ", m->vector);
+    const char *extra = strstr(padded, " avx512f ") ? " (AVX-512 present, not used by the kernels)"
+                        : strstr(padded, " avx2 ") && strcmp(used, "AVX2") ? " (AVX2 present, not used)"
+                        : "";
+#if defined(__AVX512F__)
+    const char *cc = "; the compiler may emit AVX-512 elsewhere (-march)";
+#else
+    const char *cc = "";
+#endif
+    snprintf(buf, n, "%s%s%s", used, extra, cc);
+}
+
 void exp_machine_markdown(const exp_machine *m, char *buf, size_t n)
 {
+    char isa[192];
+    kernel_isa(m, isa, sizeof isa);
     char mhz[64];
     if (m->mhz_max > 0)
         snprintf(mhz, sizeof mhz, "%.0f MHz (maximum %.0f MHz)", m->mhz, m->mhz_max);
@@ -196,12 +225,13 @@ void exp_machine_markdown(const exp_machine *m, char *buf, size_t n)
              "| cores | %d logical CPUs: %d core%s on %d socket%s, %d thread%s per core%s |\n"
              "| caches (cpu0) | %s |\n"
              "| vector extensions | %s |\n"
+             "| kernel ISA | %s |\n"
              "| memory | %.1f GiB |\n"
              "| kernel | %s%s |\n",
              m->cpu, mhz, m->logical, m->cores, m->cores == 1 ? "" : "s", m->sockets,
              m->sockets == 1 ? "" : "s", m->threads_per_core, m->threads_per_core == 1 ? "" : "s",
              m->threads_per_core == 1 ? " (no SMT siblings visible)" : " (SMT)", m->caches,
-             m->vector, m->mem_gib, m->kernel,
+             m->vector, isa, m->mem_gib, m->kernel,
              m->virtual_machine ? ", a virtual machine (the hypervisor CPU flag is set): the "
                                   "topology is the one it presents"
                                 : "");

@@ -3,128 +3,189 @@
  *
  * Reads, from the output directory, every experiment's Markdown section
  * (<name>.md), its verdicts (<name>.verdicts.csv: claim, verdict,
- * evidence, scenes, section), what it left out (<name>.leftout.csv) and
- * the machine (machine.md), and writes one report: a summary table of
- * every claim of claims.c with its verdict, deciding numbers and a link to
- * its section (claims no experiment answered say so), a contents list, the
- * machine, compiler, flags, commit and run, the method, then the sections,
- * each led by its question, the lecture's words and its verdicts. Plots
- * (<name>.svg) and images (<name>.png) are linked where the sections
- * placed them. Usage (experiments/report.sh runs it):
+ * evidence, scenes, section and, for exp_verdict_num, deciding, value, lo,
+ * hi, threshold, sense, margin, n), what it left out (<name>.leftout.csv)
+ * and the machine (machine.md), and writes two files (issue 39):
+ * - REPORT.md: the first screen is the whole summary (one line per claim:
+ *   verdict, ONE deciding number with its interval, n and margin, the scene
+ *   with its triangle count, a link), the machine in one line, the three
+ *   answers, then every section cut to its share of REPORT_MAX_LINES:
+ *   its head, verdicts, first table, plots, findings and footer stay;
+ *   blocks inside <!-- appendix --> ... <!-- /appendix --> and, from the
+ *   end backwards, the other blocks that do not fit go;
+ * - appendix.md (beside the sections): every section in full, the
+ *   machine record and the method. A line over MD_MAX_CHARS is cut in
+ *   REPORT.md with a link to its full text there: nothing is lost silently.
+ * Usage (experiments/report.sh runs it):
  *   mkreport --out DIR --report FILE [--links PREFIX] [--budget TEXT]
  *            [--commit TEXT] [--flags TEXT] [--run TEXT] [--load TEXT] exp_a exp_b ...
  */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
 
 #include "claims.h"
+#include "mdcut.h"
 
 #define MAX_ROWS 256
-#define MAX_FIELDS 16
+#define REPORT_MAX_LINES 800
+#define CELL_CHARS 190   /* a summary cell: evidence cut here */
+#define SCENE_CHARS 90
+/* The sections that answer the user's three questions get twice the share. */
+static const char *const answers[] = {"exp_step_cost", "exp_grid_resolution", "exp_sah",
+                                      "exp_binning"};
 
 typedef struct {
-    char *f[MAX_FIELDS];
-    int n;
-} row;
-
-static char *slurp(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    size_t cap = 4096, len = 0;
-    char *buf = malloc(cap);
-    size_t got;
-    while (buf && (got = fread(buf + len, 1, cap - len - 1, f)) > 0) {
-        len += got;
-        if (len + 1 == cap) {
-            char *b = realloc(buf, cap *= 2);
-            if (!b) free(buf);
-            buf = b;
-        }
-    }
-    fclose(f);
-    if (buf) buf[len] = 0;
-    return buf;
-}
-
-/* Parses RFC 4180 records (quoted fields, doubled quotes, LF or CRLF) into
- * rows; returns the count, -1 on a malformed record. */
-static int parse_csv(char *s, row *rows, int max)
-{
-    int n = 0;
-    while (*s && n < max) {
-        row *r = &rows[n];
-        r->n = 0;
-        for (;;) {
-            char *out = s, *start = s;
-            if (*s == '"') {
-                s++;
-                for (;;) {
-                    if (!*s) return -1;
-                    if (*s == '"' && s[1] == '"') *out++ = '"', s += 2;
-                    else if (*s == '"') { s++; break; }
-                    else *out++ = *s++;
-                }
-            } else {
-                while (*s && *s != ',' && *s != '\n' && *s != '\r') {
-                    if (*s == '"') return -1;
-                    *out++ = *s++;
-                }
-            }
-            char end = *s, next = end ? s[1] : 0;
-            *out = 0; /* may overwrite the separator: `end` and `next` keep it */
-            if (r->n < MAX_FIELDS) r->f[r->n++] = start;
-            if (end == ',') { s++; continue; }
-            if (end == '\r' && next == '\n') s += 2;
-            else if (end == '\n') s++;
-            else if (end) return -1;
-            break;
-        }
-        n++;
-    }
-    return n;
-}
-
-typedef struct {
-    const char *claim, *verdict, *evidence, *scenes, *section;
+    const char *claim, *verdict, *evidence, *scenes, *section, *what;
+    double value, lo, hi, threshold, margin;
+    int sense, n, num; /* num: the row has a deciding number (exp_verdict_num) */
 } verdict;
 
 static verdict verdicts[MAX_ROWS];
 static int verdict_count;
 static int left[5];
 
+static double field_num(const char *s)
+{
+    return s && *s ? strtod(s, NULL) : NAN;
+}
+
 static void load_outputs(const char *dir, char **names, int count)
 {
     for (int e = 0; e < count; e++) {
         char path[1024];
         snprintf(path, sizeof path, "%s/%s.verdicts.csv", dir, names[e]);
-        char *text = slurp(path); /* kept: the rows point into it */
-        static row rows[MAX_ROWS];
-        int n = text ? parse_csv(text, rows, MAX_ROWS) : 0;
+        char *text = md_slurp(path); /* kept: the rows point into it */
+        static md_row rows[MAX_ROWS];
+        int n = text ? md_parse_csv(text, rows, MAX_ROWS) : 0;
         if (n < 0) fprintf(stderr, "mkreport: %s: not RFC 4180 CSV\n", path);
-        for (int i = 1; i < n && verdict_count < MAX_ROWS; i++)
-            if (rows[i].n == 5 || rows[i].n == 13)
-                verdicts[verdict_count++] = (verdict){rows[i].f[0], rows[i].f[1], rows[i].f[2],
-                                                      rows[i].f[3], rows[i].f[4]};
+        for (int i = 1; i < n && verdict_count < MAX_ROWS; i++) {
+            char **f = rows[i].f;
+            if (rows[i].n != 5 && rows[i].n != 13) continue;
+            verdict v = {f[0], f[1], f[2], f[3], f[4], "", NAN, NAN, NAN, NAN, NAN, 0, 0, 0};
+            if (rows[i].n == 13 && f[6][0]) {
+                v.what = f[5], v.value = field_num(f[6]), v.lo = field_num(f[7]);
+                v.hi = field_num(f[8]), v.threshold = field_num(f[9]), v.sense = atoi(f[10]);
+                v.margin = field_num(f[11]), v.n = atoi(f[12]), v.num = 1;
+            }
+            verdicts[verdict_count++] = v;
+        }
         snprintf(path, sizeof path, "%s/%s.leftout.csv", dir, names[e]);
-        char *lo = slurp(path);
-        row lr[2];
-        if (lo && parse_csv(lo, lr, 2) == 2 && lr[1].n == 6)
+        char *lo = md_slurp(path);
+        md_row lr[2];
+        if (lo && md_parse_csv(lo, lr, 2) == 2 && lr[1].n == 6)
             for (int k = 0; k < 5; k++) left[k] += atoi(lr[1].f[k + 1]);
         free(lo);
     }
 }
 
-/* A claim's verdict over its lines: the same label everywhere, or partly. */
-static const char *combined(const char *claim, int *lines)
+/* Scene sizes from the sections' headings "### ... name (N primitives)". */
+typedef struct {
+    char name[128];
+    long tris;
+} scene_size;
+static scene_size sizes[96];
+static int size_count;
+
+static void note_sizes(const char *md)
+{
+    for (const char *p = md; (p = strstr(p, " primitives)")); p++) {
+        const char *d = p;
+        while (d > md && d[-1] >= '0' && d[-1] <= '9') d--;
+        if (d == p || d - md < 3 || d[-1] != '(' || d[-2] != ' ') continue;
+        const char *e = d - 2, *b = e;
+        while (b > md && b[-1] != ' ' && b[-1] != '\n' && b[-1] != '#') b--;
+        size_t len = (size_t)(e - b);
+        if (!len || len >= sizeof sizes[0].name || size_count >= 96) continue;
+        int seen = 0;
+        for (int i = 0; i < size_count; i++)
+            seen |= strlen(sizes[i].name) == len && !strncmp(sizes[i].name, b, len);
+        if (seen) continue;
+        memcpy(sizes[size_count].name, b, len);
+        sizes[size_count].name[len] = 0;
+        sizes[size_count++].tris = atol(d);
+    }
+}
+
+static const char *fmt_tris(char *b, size_t n, long t)
+{
+    if (t < 1000) snprintf(b, n, "%ld", t);
+    else if (t < 10000) snprintf(b, n, "%.1fk", t / 1e3);
+    else if (t < 1000000) snprintf(b, n, "%.0fk", t / 1e3);
+    else snprintf(b, n, "%.2fM", t / 1e6);
+    return b;
+}
+
+/* A scenes field with each known scene's triangle count, cut to max. */
+static void scene_cell(char *dst, size_t n, const char *scenes, size_t max)
+{
+    char buf[2048] = "", one[256], t[32];
+    size_t len = 0;
+    for (const char *p = scenes; *p && len < sizeof buf - 1;) {
+        while (*p == ' ') p++;
+        size_t k = strcspn(p, ",;");
+        snprintf(one, sizeof one, "%.*s", (int)k, p);
+        const char *tris = NULL;
+        for (int i = 0; i < size_count; i++)
+            if (!strcmp(sizes[i].name, one)) tris = fmt_tris(t, sizeof t, sizes[i].tris);
+        len += (size_t)snprintf(buf + len, sizeof buf - len, "%s%s%s%s%s", len ? ", " : "", one,
+                                tris ? " (" : "", tris ? tris : "", tris ? " tris)" : "");
+        if (len >= sizeof buf) len = sizeof buf - 1;
+        p += k;
+        if (*p) p++;
+    }
+    md_cell(dst, n, buf, max);
+}
+
+static const char *num(char *b, size_t n, double v)
+{
+    double a = fabs(v);
+    if (!isfinite(v)) snprintf(b, n, "n/a");
+    else if (a >= 100) snprintf(b, n, "%.0f", v);
+    else if (a >= 10) snprintf(b, n, "%.1f", v);
+    else snprintf(b, n, "%.3g", v);
+    return b;
+}
+
+/* A margin in half-widths; beyond 99 (a zero-width interval: one round
+ * or equal numbers) it says so instead of a huge number. */
+static const char *fmt_margin(char *b, size_t n, double m)
+{
+    if (!isfinite(m)) snprintf(b, n, "n/a");
+    else if (fabs(m) > 99) snprintf(b, n, "%s99 (no interval width)", m > 0 ? ">+" : "<-");
+    else snprintf(b, n, "%+.1f", m);
+    return b;
+}
+
+/* "what: value [lo, hi] (claim >= threshold)", the same in the summary and
+ * in the section (the test finds the one in the other). */
+static void deciding_cell(char *dst, size_t n, const verdict *v)
+{
+    char a[32], b[32], c[32], d[32], what[CELL_CHARS + 8];
+    md_cell(what, sizeof what, v->what, CELL_CHARS - 60);
+    snprintf(dst, n, "%s%s%s [%s, %s] (claim %s %s)", what, what[0] ? ": " : "",
+             num(a, sizeof a, v->value), num(b, sizeof b, v->lo), num(c, sizeof c, v->hi),
+             v->sense > 0 ? ">=" : v->sense < 0 ? "<=" : "vs", num(d, sizeof d, v->threshold));
+}
+
+/* A claim's verdict over its lines: the same label everywhere, or partly;
+ * *pick: the row that decides it (the deciding number nearest its
+ * threshold, else the first row). */
+static const char *combined(const char *claim, int *lines, int *pick)
 {
     const char *v = NULL;
-    *lines = 0;
+    double best = INFINITY;
+    *lines = 0, *pick = -1;
     for (int i = 0; i < verdict_count; i++) {
         if (strcmp(verdicts[i].claim, claim)) continue;
         (*lines)++;
+        if (*pick < 0) *pick = i;
+        if (verdicts[i].num) {
+            double m = isfinite(verdicts[i].margin) ? fabs(verdicts[i].margin) : 0;
+            if (m < best || !verdicts[*pick].num) best = m, *pick = i;
+        }
         if (!v) v = verdicts[i].verdict;
         else if (strcmp(v, verdicts[i].verdict)) v = EXP_PARTLY;
     }
@@ -133,160 +194,309 @@ static const char *combined(const char *claim, int *lines)
 
 static void summary(FILE *f)
 {
-    fprintf(f, "## Summary\n\nEvery claim of the lecture (../shared/LECTURE.md), every request "
-               "of the user and the study's own question, with the verdict the measurements "
-               "support and the numbers that decide it (medians with 95%% intervals; \"a tie\" "
-               "means inside the intervals or under the section's noise floor).\n\n"
-               "| # | claim | source | verdict | deciding numbers | scenes | section |\n"
+    fprintf(f, "## Summary\n\nOne line per claim of the lecture (../shared/LECTURE.md), request of "
+               "the user and question of the study: the verdict, the number that decides it with "
+               "its 95%% interval, the rounds (n) behind it and the margin (its distance to the "
+               "claim's threshold in half-widths of the interval; beyond 1 the interval does not "
+               "reach it), the scene. Rows without a deciding number quote their evidence.\n\n"
+               "| # | claim | verdict | deciding number [95%% interval] | n | margin | scene |\n"
                "|---|---|---|---|---|---|---|\n");
     for (int c = 0; c < exp_claim_count; c++) {
         const exp_claim *cl = &exp_claims[c];
-        int lines;
-        const char *v = combined(cl->id, &lines);
-        fprintf(f, "| %d | **%s** (`%s`): %s | %s | ", c + 1, cl->topic, cl->id, cl->words, cl->source);
+        int lines, pick;
+        const char *v = combined(cl->id, &lines, &pick);
+        if (!strncmp(cl->section, "exp_", 4))
+            fprintf(f, "| %d | [%s](#%s) `%s` | ", c + 1, cl->topic, cl->section, cl->id);
+        else
+            fprintf(f, "| %d | %s `%s` | ", c + 1, cl->topic, cl->id);
         if (!strcmp(cl->id, "leave-out")) {
             int total = left[0] + left[1] + left[2] + left[3] + left[4];
-            fprintf(f, "%s | %d configurations left out, each with its reason in its section: "
-                       "%d the same structure as another, %d collapsed (seconds per pass), %d "
-                       "not in this build, %d pointless (e.g. brute force at minutes per pass), "
-                       "%d failed builds | every scene | every section |\n",
-                    EXP_CONFIRMED, total, left[0], left[1], left[2], left[3], left[4]);
+            fprintf(f, "%s | %d configurations left out, each with its reason in its section "
+                       "(%d identical, %d collapsed, %d not in this build, %d pointless, %d "
+                       "failed) | | | every scene |\n", EXP_ANSWERED, total, left[0], left[1],
+                    left[2], left[3], left[4]);
             continue;
         }
         if (!v) {
-            fprintf(f, "not measured in this run | the section `%s` did not run | | |\n", cl->section);
+            fprintf(f, "not measured in this run | the section `%s` did not run | | | |\n",
+                    cl->section);
             continue;
         }
-        fprintf(f, "%s | ", v);
-        int k = 0;
-        for (int i = 0; i < verdict_count; i++)
-            if (!strcmp(verdicts[i].claim, cl->id))
-                fprintf(f, "%s%s%s", k++ ? "; " : "", lines > 1 ? verdicts[i].verdict : "",
-                        lines > 1 ? ": " : ""), fputs(verdicts[i].evidence, f);
-        fprintf(f, " | ");
-        k = 0;
-        for (int i = 0; i < verdict_count; i++)
-            if (!strcmp(verdicts[i].claim, cl->id)) fprintf(f, "%s%s", k++ ? "; " : "", verdicts[i].scenes);
-        fprintf(f, " | [%s](#%s) |\n", cl->section, cl->section);
+        const verdict *d = &verdicts[pick];
+        char cell[512], sc[SCENE_CHARS + 8], m[32] = "", nn[16] = "";
+        if (d->num) {
+            deciding_cell(cell, sizeof cell, d);
+            fmt_margin(m, sizeof m, d->margin);
+            snprintf(nn, sizeof nn, "%d", d->n);
+        } else {
+            md_cell(cell, sizeof cell, d->evidence, CELL_CHARS);
+        }
+        scene_cell(sc, sizeof sc, d->scenes, SCENE_CHARS);
+        char label[64];
+        if (lines > 1) snprintf(label, sizeof label, "%s (%d rows)", v, lines);
+        else snprintf(label, sizeof label, "%s", v);
+        fprintf(f, "%s | %s | %s | %s | %s |\n", label, cell, nn, m, sc);
+    }
+}
+/* The verdict md_lines of section `name`: the deciding number exactly as the
+ * summary shows it, then the evidence. */
+static void verdict_lines(md_lines *l, const char *name)
+{
+    for (int i = 0; i < verdict_count; i++) {
+        const verdict *v = &verdicts[i];
+        if (strcmp(v->section, name)) continue;
+        const exp_claim *cl = exp_claim_find(v->claim);
+        char cell[512] = "", head[700] = "";
+        if (v->num) {
+            deciding_cell(cell, sizeof cell, v);
+            char m[32];
+            snprintf(head, sizeof head, "Deciding: %s; n = %d, margin %s. ", cell, v->n,
+                     fmt_margin(m, sizeof m, v->margin));
+        }
+        size_t need = strlen(v->evidence) + strlen(v->scenes) + sizeof head + 256;
+        char *t = malloc(need);
+        if (!t) exit(3);
+        snprintf(t, need, "> **Verdict on %s: %s.** %s%s (%s).", cl ? cl->topic : v->claim,
+                 v->verdict, head, v->evidence, v->scenes);
+        md_lines_push(l, t);
+        md_lines_push(l, ">");
+        free(t);
     }
 }
 
-/* Copies a section, the verdicts in place of its marker, links for its
- * plots and images. */
-static void section(FILE *f, const char *dir, const char *name, const char *links)
+static int expand(const char *dir, const char *name, const char *links, md_lines *l)
 {
-    char path[1024];
+    char path[1024], buf[1024], tag[256];
     snprintf(path, sizeof path, "%s/%s.md", dir, name);
-    char *md = slurp(path);
-    if (!md) return;
-    fprintf(f, "\n<a id=\"%s\"></a>\n\n", name);
+    char *md = md_slurp(path);
+    if (!md) return -1;
+    note_sizes(md);
     for (char *line = md; line && *line;) {
         char *nl = strchr(line, '\n');
         if (nl) *nl = 0;
-        char tag[256];
         if (!strcmp(line, "<!-- verdicts -->")) {
-            for (int i = 0; i < verdict_count; i++) {
-                if (strcmp(verdicts[i].section, name)) continue;
-                const exp_claim *cl = exp_claim_find(verdicts[i].claim);
-                fprintf(f, "> **Verdict on %s: %s.** %s (%s).\n>\n", cl ? cl->topic : verdicts[i].claim,
-                        verdicts[i].verdict, verdicts[i].evidence, verdicts[i].scenes);
-            }
-            fprintf(f, "> _Evidence: the tables below._\n");
+            verdict_lines(l, name);
         } else if (sscanf(line, "<!-- image: %255[^ ] -->", tag) == 1) {
-            fprintf(f, "![%s](%s%s.png)\n", tag, links, tag);
+            snprintf(buf, sizeof buf, "![%s](%s%s.png)", tag, links, tag);
+            md_lines_push(l, buf);
         } else if (sscanf(line, "<!-- plot: %255[^ ] -->", tag) == 1) {
-            fprintf(f, "![%s](%s%s.svg)\n", tag, links, tag);
+            snprintf(buf, sizeof buf, "![%s](%s%s.svg)", tag, links, tag);
+            md_lines_push(l, buf);
         } else {
-            fprintf(f, "%s\n", line);
+            md_lines_push(l, line);
         }
         line = nl ? nl + 1 : NULL;
     }
     free(md);
+    return 0;
+}
+
+/* A section cut to `budget` md_lines into o; the full one into the appendix. */
+static void section(md_out *o, FILE *app, const char *dir, const char *name, int budget)
+{
+    md_lines full = {0}, l = {0};
+    if (expand(dir, name, "", &full) || expand(dir, name, o->links, &l)) {
+        md_lines_free(&full);
+        return;
+    }
+    fprintf(app, "\n<a id=\"%s\"></a>\n\n", name);
+    for (int i = 0; i < full.n; i++)
+        if (strcmp(full.s[i], "<!-- appendix -->") && strcmp(full.s[i], "<!-- /appendix -->"))
+            fprintf(app, "%s\n", full.s[i]);
+    int *kind = calloc((size_t)l.n + 1, sizeof *kind);
+    char *keep = calloc((size_t)l.n + 1, 1);
+    if (!kind || !keep) exit(3);
+    md_classify(&l, kind);
+    int moved = 0;
+    for (int i = 0; i < l.n; i++) keep[i] = kind[i] != K_APPENDIX, moved |= !keep[i];
+    char note[512];
+    snprintf(note, sizeof note, "_Cut to fit the report: the full section, with every table, is in "
+             "[the appendix](%sappendix.md#%s)._", o->links, name);
+    /* Order of sacrifice: other blocks, then findings beyond 6, then the first table beyond 12 rows. */
+    moved |= md_drop(&l, kind, keep, K_OTHER, 0, budget, note);
+    moved |= md_drop(&l, kind, keep, K_FIND, 8, budget, note);
+    moved |= md_drop(&l, kind, keep, K_TABLE1, 14, budget, note);
+    md_put(o, "", name);
+    char anchor[300];
+    snprintf(anchor, sizeof anchor, "<a id=\"%s\"></a>", name);
+    md_put(o, anchor, name);
+    md_put(o, "", name);
+    md_emit(o, &l, kind, keep, name, moved ? note : NULL);
+    free(kind);
+    free(keep);
+    md_lines_free(&full);
+    md_lines_free(&l);
+}
+
+/* The value of row `key` of machine.md ("| key | value |"), or "". */
+static void machine_value(const char *mach, const char *key, char *dst, size_t n)
+{
+    char tag[128];
+    snprintf(tag, sizeof tag, "| %s | ", key);
+    const char *p = mach ? strstr(mach, tag) : NULL;
+    dst[0] = 0;
+    if (!p) return;
+    p += strlen(tag);
+    size_t k = strcspn(p, "\n");
+    while (k >= 2 && !strncmp(p + k - 2, " |", 2)) k -= 2;
+    snprintf(dst, n, "%.*s", (int)k, p);
+}
+
+static int is_answer(const char *name)
+{
+    for (size_t i = 0; i < sizeof answers / sizeof answers[0]; i++)
+        if (!strcmp(answers[i], name)) return 1;
+    return 0;
+}
+
+/* "[title](#name)" of a section, from its first line. */
+static void section_link(const char *dir, const char *name, char *dst, size_t n)
+{
+    char path[1024], title[256] = "";
+    snprintf(path, sizeof path, "%s/%s.md", dir, name);
+    FILE *m = fopen(path, "r");
+    if (m && fgets(title, sizeof title, m)) title[strcspn(title, "\n")] = 0;
+    if (m) fclose(m);
+    char *paren = strstr(title, " (exp_");
+    if (paren) *paren = 0;
+    snprintf(dst, n, "[%s](#%s)", title[0] == '#' ? title + 3 : name, name);
+}
+
+/* One paragraph of section links (the answers, or the rest), its lines
+ * kept short (Markdown joins them). */
+static void contents(FILE *f, const char *dir, char **names, int count, int answers_)
+{
+    char link[512];
+    int col = fprintf(f, "%s", answers_ ? "**The three answers:**" : "**Then:**");
+    for (int e = 0, k = 0; e < count; e++) {
+        if (is_answer(names[e]) != answers_) continue;
+        section_link(dir, names[e], link, sizeof link);
+        if (col + (int)strlen(link) > 300) fprintf(f, "\n"), col = 0;
+        col += fprintf(f, "%s%s", k++ ? " \xc2\xb7 " : " ", link);
+    }
+    fprintf(f, ".\n\n");
+}
+
+typedef struct {
+    const char *dir, *out, *links, *budget, *commit, *flags, *run, *load;
+} opts;
+
+/* The head, the summary, the machine line, the contents and the short
+ * machine table: everything before the sections. */
+static void front(md_out *o, FILE *app, const opts *op, char **names, int count)
+{
+    FILE *f = o->f;
+    char path[1024], cpu[256], isa[256], cores[256];
+    snprintf(path, sizeof path, "%s/machine.md", op->dir);
+    char *mach = md_slurp(path);
+    machine_value(mach, "machine", cpu, sizeof cpu);
+    machine_value(mach, "kernel ISA", isa, sizeof isa);
+    machine_value(mach, "cores", cores, sizeof cores);
+    fprintf(f, "# gridbvh report\n\n_Generated by `make report` (%s budget); never edited by hand. "
+               "Per-scene tables, long lists and the full sections: [appendix](%sappendix.md)._\n\n",
+            op->budget, op->links);
+    summary(f);
+    cores[strcspn(cores, ":")] = 0;
+    fprintf(f, "\n**Machine:** %s, %s; kernels: %s. Commit %s.\n", cpu[0] ? cpu : "unknown",
+            cores[0] ? cores : "unknown CPUs", isa[0] ? isa : "not recorded", op->commit);
+    fprintf(f, "\n## Contents\n\n");
+    contents(f, op->dir, names, count, 1);
+    contents(f, op->dir, names, count, 0);
+    time_t now = time(NULL);
+    char date[64];
+    strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", gmtime(&now));
+    fprintf(f, "\n## Machine and method\n\n| | |\n|---|---|\n| machine | %s |\n| kernel ISA | %s |\n"
+               "| load average | %s |\n| flags | `%s` |\n| commit | %s |\n| date | %s |\n| run | %s |\n",
+            cpu, isa, op->load, op->flags, op->commit, date, op->run);
+    fprintf(f, "\nThe full machine record and how the numbers were taken (rounds, intervals, noise "
+               "floors, ties): [appendix](%sappendix.md#machine-and-method).\n", op->links);
+    fprintf(app, "# gridbvh report: appendix\n\nThe full sections of [the report](REPORT.md), with "
+                 "every table; the report keeps each section's head, verdicts, first table, plots "
+                 "and findings.\n\n<a id=\"machine-and-method\"></a>\n\n## Machine and method\n\n"
+                 "| | |\n|---|---|\n%s", mach ? mach : "| machine | unknown |\n");
+    fprintf(app, "\nHow the numbers were taken. Every configuration a section compares is built "
+               "and traced once counted (steps, box and primitive tests per ray: the "
+               "hardware-independent counts beside every time) and once as a warm-up; then the "
+               "builds and the timed traces run in interleaved rounds (A B C A B C ..., the order "
+               "rotated each round), so that the drift of a shared machine falls on every "
+               "configuration alike. A sample is the mean of enough back-to-back passes to last "
+               "the sample time. A time is the median of its rounds with its 95%% interval; a "
+               "comparison is the median of the paired per-round ratios with its interval. Each "
+               "group of configurations times its first one twice per round (an A/A control): how "
+               "far it strays from itself is the group's noise floor, and each section states the "
+               "largest. Two numbers whose intervals overlap, or that differ by less than the "
+               "floor, are a tie, never a win. Rates of rare events carry their 95%% "
+               "Clopper-Pearson bound.\n");
+    free(mach);
+}
+
+static int usage(void)
+{
+    fprintf(stderr, "usage: mkreport --out DIR --report FILE [--links P] [--budget T] "
+                    "[--commit T] [--flags T] [--run T] [--load T] exp_a exp_b ...\n");
+    return 2;
 }
 
 int main(int argc, char **argv)
 {
-    const char *dir = NULL, *out = NULL, *links = "", *budget = "full", *commit = "unknown",
-               *flags = "see Makefile", *run = "", *load = "";
+    opts op = {NULL, NULL, "", "full", "unknown", "see Makefile", "", ""};
     char *names[64];
     int count = 0;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
             printf("usage: mkreport --out DIR --report FILE [--links P] [--budget T] [--commit T]\n"
                    "                [--flags T] [--run T] [--load T] exp_a exp_b ...\n"
-                   "Assembles REPORT.md from the experiments' sections in DIR (experiments/report.sh\n"
-                   "runs it): the claims' summary, contents, the machine, then each section.\n\n"
+                   "Assembles REPORT.md (at most %d md_lines of at most %d characters: the summary,\n"
+                   "the machine, each section cut to its share) and DIR/appendix.md (every section\n"
+                   "in full) from the experiments' sections in DIR (experiments/report.sh runs it).\n\n"
                    "Exit status:\n  0  success\n  2  usage error\n  3  a file cannot be read "
-                   "or written\n");
+                   "or written\n", REPORT_MAX_LINES, MD_MAX_CHARS);
             return 0;
         }
-        const char **opt = !strcmp(argv[i], "--out") ? &dir : !strcmp(argv[i], "--report") ? &out
-                         : !strcmp(argv[i], "--links") ? &links : !strcmp(argv[i], "--budget") ? &budget
-                         : !strcmp(argv[i], "--commit") ? &commit : !strcmp(argv[i], "--flags") ? &flags
-                         : !strcmp(argv[i], "--run") ? &run : !strcmp(argv[i], "--load") ? &load : NULL;
+        const char **opt = !strcmp(argv[i], "--out") ? &op.dir : !strcmp(argv[i], "--report") ? &op.out
+                         : !strcmp(argv[i], "--links") ? &op.links : !strcmp(argv[i], "--budget") ? &op.budget
+                         : !strcmp(argv[i], "--commit") ? &op.commit : !strcmp(argv[i], "--flags") ? &op.flags
+                         : !strcmp(argv[i], "--run") ? &op.run : !strcmp(argv[i], "--load") ? &op.load : NULL;
         if (opt && i + 1 < argc) *opt = argv[++i];
         else if (argv[i][0] != '-' && count < 64) names[count++] = argv[i];
-        else {
-            fprintf(stderr, "usage: mkreport --out DIR --report FILE [--links P] [--budget T] "
-                            "[--commit T] [--flags T] [--run T] [--load T] exp_a exp_b ...\n");
-            return 2;
-        }
+        else return usage();
     }
-    if (!dir || !out) {
-        fprintf(stderr, "mkreport: --out and --report are required\n");
+    if (!op.dir || !op.out) {
+        fprintf(stderr, "mkreport: --md_out and --report are required\n");
         return 2;
     }
-    load_outputs(dir, names, count);
-    char tmp[1024];
-    snprintf(tmp, sizeof tmp, "%s.tmp", out);
-    FILE *f = fopen(tmp, "w");
-    if (!f) {
-        fprintf(stderr, "mkreport: cannot write %s\n", tmp);
+    load_outputs(op.dir, names, count);
+    for (int e = 0; e < count; e++) { /* the scene sizes the summary names */
+        md_lines l = {0};
+        expand(op.dir, names[e], "", &l);
+        md_lines_free(&l);
+    }
+    char tmp[1024], app_path[1024];
+    snprintf(tmp, sizeof tmp, "%s.tmp", op.out);
+    snprintf(app_path, sizeof app_path, "%s/appendix.md", op.dir);
+    FILE *f = fopen(tmp, "w"), *app = fopen(app_path, "w");
+    if (!f || !app) {
+        fprintf(stderr, "mkreport: cannot write %s or %s\n", tmp, app_path);
         return 3;
     }
-    fprintf(f, "# gridbvh report\n\n_Generated by `make report` (%s budget); never edited by hand. "
-               "Regenerate with `make report` (full) or `make report QUICK=1` (smoke test, "
-               "writes build/quick-report/)._\n\n", budget);
-    summary(f);
-    fprintf(f, "\n## Contents\n\n- [Summary](#summary)\n- [Machine and method](#machine-and-method)\n");
+    fflush(f);
+    front(&(md_out){f, 0, op.links}, app, &op, names, count);
+    fflush(f);
+    md_out o = {f, 0, op.links};
+    /* What the front used, then each section's share (answers count twice). */
+    FILE *r = fopen(tmp, "r");
+    for (int c; r && (c = fgetc(r)) != EOF;) o.lines += c == '\n';
+    if (r) fclose(r);
+    int weight = 0;
+    for (int e = 0; e < count; e++) weight += 1 + is_answer(names[e]);
+    int room = REPORT_MAX_LINES - 10 - o.lines - 4 * count;
     for (int e = 0; e < count; e++) {
-        char path[1024], title[256] = "";
-        snprintf(path, sizeof path, "%s/%s.md", dir, names[e]);
-        FILE *m = fopen(path, "r");
-        if (m && fgets(title, sizeof title, m)) title[strcspn(title, "\n")] = 0;
-        if (m) fclose(m);
-        fprintf(f, "- [%s](#%s)\n", title[0] == '#' ? title + 3 : names[e], names[e]);
+        int share = weight ? room * (1 + is_answer(names[e])) / weight : room;
+        section(&o, app, op.dir, names[e], share < 16 ? 16 : share);
     }
-    time_t now = time(NULL);
-    char date[64];
-    strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", gmtime(&now));
-    fprintf(f, "\n## Machine and method\n\n| | |\n|---|---|\n");
-    char path[1024];
-    snprintf(path, sizeof path, "%s/machine.md", dir);
-    char *mach = slurp(path);
-    fprintf(f, "%s", mach ? mach : "| machine | unknown |\n");
-    free(mach);
-    fprintf(f, "| load average | %s |\n| flags | `%s` |\n| commit | %s |\n| date | %s |\n"
-               "| run | %s |\n", load, flags, commit, date, run);
-    fprintf(f, "\nHow the numbers were taken. Every configuration a section compares is built "
-               "and traced once counted (steps, box and primitive tests per ray: the "
-               "hardware-independent counts beside every time) and once as a warm-up; then the "
-               "builds and the timed traces run in interleaved rounds (A B C A B C ..., the order "
-               "rotated each round), so that the drift of a shared machine falls on every "
-               "configuration alike. A sample is the mean of enough back-to-back passes to last "
-               "the sample time. A time is the median of its rounds with a 95%% bootstrap "
-               "interval (percentile method, 2000 resamples, fixed seed); a comparison is the "
-               "median of the paired per-round ratios with its interval. Each group of "
-               "configurations times its first one twice per round (an A/A control): how far it "
-               "strays from itself is the group's noise floor, and each section states the "
-               "largest. Two numbers whose intervals overlap, or that differ by less than the "
-               "floor, are a tie, never a win. Rates of rare events carry their 95%% "
-               "Clopper-Pearson bound. Verdicts that rest on \"no difference\" are \"not testable "
-               "here\" when the floor exceeds 25%%.\n");
-    for (int e = 0; e < count; e++) section(f, dir, names[e], links);
-    fclose(f);
-    if (rename(tmp, out)) {
-        fprintf(stderr, "mkreport: cannot rename %s\n", tmp);
+    fclose(app);
+    if (fclose(f) || rename(tmp, op.out)) {
+        fprintf(stderr, "mkreport: cannot write %s\n", op.out);
         return 3;
     }
     return 0;

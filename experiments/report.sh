@@ -60,7 +60,7 @@ if [ -z "$only" ] && [ "$owned" = 1 ]; then
 fi
 read -r load_start _ < /proc/loadavg || load_start="?"
 # Experiments in the order the report reads them.
-order="exp_step_cost exp_grid_resolution exp_grids exp_nested_grid exp_sah exp_binning exp_packets exp_wide exp_threads exp_twolevel exp_scaling exp_error_time exp_time_to_image exp_stability"
+order="exp_step_cost exp_grid_resolution exp_sah exp_binning exp_grids exp_nested_grid exp_packets exp_wide exp_threads exp_twolevel exp_scaling exp_error_time exp_time_to_image exp_stability"
 start=$(date +%s)
 ran=()
 times=""   # each experiment's own wall time, for the run record
