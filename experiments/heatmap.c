@@ -11,6 +11,8 @@
 #include "image/image.h"
 #include "harness.h"
 
+#define HEAT_MIN_WIDTH 320
+
 /* The counted primary pass of exp_heatmap: steps ('s') or primitive tests
  * ('p') per pixel into *values (malloc'ed, width*height of the set), their
  * mean per ray and the kind. Returns 0 or nonzero (reason in why). */
@@ -85,15 +87,28 @@ static int heat_write(exp_ctx *x, const char *spec, const accel_kind *kind, cons
     else
         snprintf(scale_text, sizeof scale_text, "%s colour scale from 0 to the image's maximum",
                  scale->log ? "logarithmic" : "linear");
-    int rc = image_heatmap(v, r->width, r->height, scale, title, &img, &err);
+    /* Issue 39: at least HEAT_MIN_WIDTH pixels wide. A smaller ray set is
+     * drawn with each ray a k x k block (nearest neighbour, k an integer),
+     * so that the image is readable and its colour scale keeps its text. */
+    int k = r->width > 0 && r->width < HEAT_MIN_WIDTH ? (HEAT_MIN_WIDTH + r->width - 1) / r->width : 1;
+    int w = r->width * k, h = r->height * k;
+    float *big = k > 1 ? malloc((size_t)w * (size_t)h * sizeof *big) : NULL;
+    if (big)
+        for (int y = 0; y < h; y++)
+            for (int q = 0; q < w; q++) big[(size_t)y * w + q] = v[(size_t)(y / k) * r->width + q / k];
+    else
+        w = r->width, h = r->height, k = 1;
+    int rc = image_heatmap(big ? big : v, w, h, scale, title, &img, &err);
+    free(big);
     if (rc == 0) {
         rc = image_write(path, &img, &err);
         image_free(&img);
     }
     if (rc == 0)
-        exp_md(x, "\n%s (mean %.1f %s per ray; %s, printed under the image):\n\n"
+        exp_md(x, "\n%s (mean %.1f %s per ray; %s, printed under the image%s):\n\n"
                   "<!-- image: %s -->\n",
-               caption, mean, unit, scale_text, image_name);
+               caption, mean, unit, scale_text, k > 1 ? "; each ray a block of pixels" : "",
+               image_name);
     else
         snprintf(why, why_n, "%s", err.msg);
     return rc;
