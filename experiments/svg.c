@@ -51,6 +51,19 @@ int svg_add(svg_plot *p, const char *name, const double *x, const double *y, con
     return 0;
 }
 
+static int add_mark(svg_plot *p, double x, double y, int vertical, const char *label)
+{
+    if (p->mark_count == SVG_MAX_MARKS) return -1;
+    svg_mark_t *m = &p->marks[p->mark_count++];
+    m->x = x, m->y = y, m->vertical = vertical;
+    snprintf(m->label, sizeof m->label, "%s", label ? label : "");
+    return 0;
+}
+
+int svg_vline(svg_plot *p, double x, const char *label) { return add_mark(p, x, NAN, 1, label); }
+
+int svg_mark(svg_plot *p, double x, double y, const char *label) { return add_mark(p, x, y, 0, label); }
+
 void svg_free(svg_plot *p)
 {
     for (int i = 0; i < p->count; i++)
@@ -113,6 +126,10 @@ static void range(const svg_plot *p, int y, axis *a)
             for (int j = 0; j < 3; j++)
                 if (shown(a, v[j])) a->lo = fmin(a->lo, v[j]), a->hi = fmax(a->hi, v[j]);
         }
+    for (int i = 0; i < p->mark_count; i++) {
+        double v = y ? p->marks[i].y : p->marks[i].x;
+        if (shown(a, v)) a->lo = fmin(a->lo, v), a->hi = fmax(a->hi, v);
+    }
     if (!(a->hi >= a->lo)) a->lo = a->log ? 1 : 0, a->hi = a->log ? 10 : 1;
     if (a->log) {
         if (a->hi <= a->lo * 1.0001) a->lo /= 2, a->hi *= 2;
@@ -134,12 +151,43 @@ static void text(FILE *f, const char *s)
     }
 }
 
-static void label(char *buf, size_t n, double v)
+/* Whether an axis's ticks need powers of ten (then all of them get it). */
+static int needs_exp(const double *t, int n)
 {
-    if (fabs(v) >= 1e5 || (fabs(v) < 1e-3 && v != 0))
-        snprintf(buf, n, "%.0e", v);
-    else
+    for (int i = 0; i < n; i++)
+        if (fabs(t[i]) >= 1e5 || (fabs(t[i]) < 1e-3 && t[i] != 0)) return 1;
+    return 0;
+}
+
+static void label(char *buf, size_t n, double v, int exp_form)
+{
+    if (exp_form && v != 0) {
+        int e = (int)floor(log10(fabs(v)) + 1e-9);
+        double m = v / pow(10, e);
+        if (fabs(m - 1) < 1e-9) snprintf(buf, n, "1e%d", e);
+        else snprintf(buf, n, "%.3ge%d", m, e);
+    } else {
         snprintf(buf, n, "%g", v);
+    }
+}
+
+/* The marks: dashed vertical lines and rings, labelled. */
+static void draw_marks(FILE *f, const svg_plot *p, const axis *ax, const axis *ay)
+{
+    for (int i = 0; i < p->mark_count; i++) {
+        const svg_mark_t *m = &p->marks[i];
+        if (!shown(ax, m->x) || (!m->vertical && !shown(ay, m->y))) continue;
+        double x = map(ax, m->x), y = m->vertical ? TOP + 12 + 14 * i : map(ay, m->y);
+        if (m->vertical)
+            fprintf(f, "<line x1=\"%.1f\" y1=\"%d\" x2=\"%.1f\" y2=\"%d\" stroke=\"#444\" "
+                       "stroke-width=\"1.4\" stroke-dasharray=\"3 3\"/>\n", x, TOP, x, H - BOTTOM);
+        else
+            fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"7\" fill=\"none\" stroke=\"#000\" "
+                       "stroke-width=\"1.6\"/>\n", x, y);
+        fprintf(f, "<text x=\"%.1f\" y=\"%.1f\" font-size=\"11\">", x + 5, m->vertical ? y : y - 9);
+        text(f, m->label);
+        fprintf(f, "</text>\n");
+    }
 }
 
 int svg_write(const svg_plot *p, const char *path)
@@ -157,18 +205,18 @@ int svg_write(const svg_plot *p, const char *path)
     fprintf(f, "</text>\n");
     double t[64];
     char buf[32];
-    int n = svg_ticks(ax.lo, ax.hi, ax.log, t, 64);
+    int n = svg_ticks(ax.lo, ax.hi, ax.log, t, 64), ex = needs_exp(t, n);
     for (int i = 0; i < n; i++) {
         double x = map(&ax, t[i]);
-        label(buf, sizeof buf, t[i]);
+        label(buf, sizeof buf, t[i], ex);
         fprintf(f, "<line x1=\"%.1f\" y1=\"%d\" x2=\"%.1f\" y2=\"%d\" stroke=\"#e4e4e4\"/>\n"
                    "<text x=\"%.1f\" y=\"%d\" text-anchor=\"middle\">%s</text>\n",
                 x, TOP, x, H - BOTTOM, x, H - BOTTOM + 16, buf);
     }
-    n = svg_ticks(ay.lo, ay.hi, ay.log, t, 64);
+    n = svg_ticks(ay.lo, ay.hi, ay.log, t, 64), ex = needs_exp(t, n);
     for (int i = 0; i < n; i++) {
         double y = map(&ay, t[i]);
-        label(buf, sizeof buf, t[i]);
+        label(buf, sizeof buf, t[i], ex);
         fprintf(f, "<line x1=\"%d\" y1=\"%.1f\" x2=\"%d\" y2=\"%.1f\" stroke=\"#e4e4e4\"/>\n"
                    "<text x=\"%d\" y=\"%.1f\" text-anchor=\"end\">%s</text>\n",
                 LEFT, y, W - RIGHT, y, LEFT - 6, y + 4, buf);
@@ -217,6 +265,7 @@ int svg_write(const svg_plot *p, const char *path)
         text(f, name);
         fprintf(f, "</text>\n");
     }
+    draw_marks(f, p, &ax, &ay);
     fprintf(f, "</svg>\n");
     return fclose(f) == 0 ? 0 : -1;
 }

@@ -21,11 +21,23 @@ typedef struct {
     int n, style;
 } svg_series;
 
+#define SVG_MAX_MARKS 8
+/* A mark that shows the answer on a plot (issue 39): a vertical line at x
+ * across the plot (a time budget, a crossing), or a ring at (x, y) (the
+ * measured best, a model's pick); each with its label. */
+typedef struct {
+    double x, y;
+    int vertical;
+    char label[64];
+} svg_mark_t;
+
 typedef struct {
     char title[256], xlabel[128], ylabel[128];
     int log_x, log_y;
     svg_series s[SVG_MAX_SERIES];
     int count;
+    svg_mark_t marks[SVG_MAX_MARKS];
+    int mark_count;
 } svg_plot;
 
 void svg_plot_init(svg_plot *p, const char *title, const char *xlabel, const char *ylabel);
@@ -34,7 +46,20 @@ void svg_plot_init(svg_plot *p, const char *title, const char *xlabel, const cha
  * are left out of the drawing. Returns 0, or -1 when out of memory. */
 int svg_add(svg_plot *p, const char *name, const double *x, const double *y, const double *lo,
             const double *hi, int n, int style);
-/* Writes the plot; 0, or -1 when the file cannot be written. */
+/* A labelled vertical line at x (svg_vline) or ring at (x, y) (svg_mark);
+ * marks widen the axes to show themselves. 0, or -1 when full. */
+int svg_vline(svg_plot *p, double x, const char *label);
+int svg_mark(svg_plot *p, double x, double y, const char *label);
+/* No fit is drawn through fewer points than this, nor through a collapsed
+ * structure (issue 39): svg_fit_drawable says whether a fit may be. */
+#define SVG_MIN_FIT_POINTS 4
+static inline int svg_fit_drawable(int points, int collapsed)
+{
+    return points >= SVG_MIN_FIT_POINTS && !collapsed;
+}
+/* Writes the plot; 0, or -1 when the file cannot be written. Every tick of
+ * an axis has one format: plain numbers, or powers of ten (1e5) when any
+ * tick needs them. */
 int svg_write(const svg_plot *p, const char *path);
 void svg_free(svg_plot *p);
 

@@ -432,4 +432,20 @@ TEST(report_svg_ticks)
     char *s = test_read_file("build/test_plot.svg", NULL);
     CHECK(s && strstr(s, "&lt;title&gt; &amp; more") && strstr(s, "<polyline") && strstr(s, "</svg>"));
     free(s);
+    /* Marks that show the answer (issue 39), and one tick format per axis:
+     * 1e3 .. 1e6 on a log axis are all powers of ten, never "1000" beside "1e+06". */
+    svg_plot_init(&pl, "marks", "x", "y");
+    double bx[2] = {1000, 1e6}, by[2] = {1, 2};
+    CHECK(svg_add(&pl, "s", bx, by, NULL, NULL, 2, SVG_LINE) == 0);
+    pl.log_x = 1;
+    CHECK(svg_vline(&pl, 5e4, "time budget") == 0 && svg_mark(&pl, 1e4, 1.5, "model's pick") == 0);
+    CHECK(svg_write(&pl, "build/test_plot.svg") == 0);
+    svg_free(&pl);
+    s = test_read_file("build/test_plot.svg", NULL);
+    CHECK(s && strstr(s, ">time budget</text>") && strstr(s, ">model&apos;s pick</text>") == NULL &&
+          strstr(s, ">model's pick</text>") && strstr(s, "stroke-dasharray=\"3 3\""));
+    CHECKF(s && strstr(s, ">1e3</text>") && strstr(s, ">1e6</text>") && !strstr(s, ">1000</text>"),
+           "mixed tick formats on one axis");
+    free(s);
+    CHECK(!svg_fit_drawable(3, 0) && !svg_fit_drawable(8, 1) && svg_fit_drawable(4, 0));
 }
