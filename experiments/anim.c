@@ -273,6 +273,7 @@ void exp_anim_fps(exp_ctx *x, exp_anim *a)
     exp_scene(x, spec, &slot[0]);
     rays_set prim = {0};
     accel_error err = {0};
+    exp_note_image(x, x->rt_size[0], x->rt_size[1]);
     if (rays_primary(&slot[0].camera, x->rt_size[0], x->rt_size[1], &prim, &err)) {
         fprintf(stderr, "%s: %s\n", x->name, err.msg);
         exit(cli_exit_of(err.code));

@@ -253,13 +253,17 @@ int exp_finish(exp_ctx *x)
     if (getrusage(RUSAGE_SELF, &ru) == 0)
         cpu = (double)ru.ru_utime.tv_sec + ru.ru_utime.tv_usec / 1e6 + (double)ru.ru_stime.tv_sec +
               ru.ru_stime.tv_usec / 1e6;
+    char images[96] = "no ray images";
+    for (int i = 0, len = 0; i < x->image_count && len < 80; i++)
+        len += snprintf(images + len, sizeof images - (size_t)len, "%s%dx%d", i ? (i + 1 == x->image_count ? " and " : ", ") : "images ",
+                        x->images[i][0], x->images[i][1]);
     exp_md(x, "\n_%s ran in %.1f s, %.1f s of CPU time (%s budget, %d thread%s unless a table says otherwise; "
               "%d to %d interleaved timed rounds per configuration (at most %d; fewer for slow "
-              "passes), samples of at least %.0f ms; images %dx%d and %dx%d; load average %.2f "
+              "passes), samples of at least %.0f ms; %s; load average %.2f "
               "at the start, %.2f at the end; %.1f other runnable threads at the start)._\n",
            x->name, s, cpu, x->quick ? "quick" : "full", x->threads, x->threads > 1 ? "s" : "",
-           x->rounds_lo, x->rounds_hi, x->repeats, x->sample_ms, x->size, x->size, x->rt_size[0],
-           x->rt_size[1], x->load_start[0], load_end[0], x->others_start);
+           x->rounds_lo, x->rounds_hi, x->repeats, x->sample_ms, images, x->load_start[0],
+           load_end[0], x->others_start);
     bench_progress_stop(x->progress);
     x->progress = NULL;
     if (x->csv.bad_rows || x->verdicts.bad_rows) {
@@ -564,10 +568,18 @@ void exp_sets(exp_ctx *x, const accel_scene *s, int mask, bench_sets *out)
     exp_sets_wh(x, s, mask, x->size, x->size, 4, out);
 }
 
+void exp_note_image(exp_ctx *x, int w, int h)
+{
+    for (int i = 0; i < x->image_count; i++)
+        if (x->images[i][0] == w && x->images[i][1] == h) return;
+    if (x->image_count < 4) x->images[x->image_count][0] = w, x->images[x->image_count++][1] = h;
+}
+
 void exp_sets_wh(exp_ctx *x, const accel_scene *s, int mask, int w, int h, int ao_samples,
                  bench_sets *out)
 {
     accel_error err = {0};
+    exp_note_image(x, w, h);
     bench_set_opts o = {NULL, w, h, ao_samples, 0, 1, x->threads, NULL};
     bench_progress_begin(x->progress, "make ray sets", 0, 0);
     int rc = bench_sets_make(s, &o, mask, out, &err);

@@ -93,6 +93,7 @@ typedef struct {
     int rounds_lo, rounds_hi; /* timed rounds per configuration over the section */
     double *floors;       /* noise floors of the section's groups */
     int floor_count, floors_measured;
+    int images[4][2], image_count; /* ray-set sizes exp_sets_wh made (the footer names them) */
 } exp_ctx;
 
 /* Parses the common options; `extra_help` is printed under --help. Exits on
@@ -137,6 +138,9 @@ int exp_scene_try(exp_ctx *x, const char *spec, accel_scene *s, char *why, size_
  * heading "### name (N primitives)". */
 void exp_scene_section(exp_ctx *x, const char *spec, accel_scene *s, int mask, int rt,
                        bench_sets *sets);
+/* Records a ray image size this section used (exp_sets_wh does it); the
+ * footer names exactly these (issue 39: footers that are true). */
+void exp_note_image(exp_ctx *x, int w, int h);
 /* Builds the standard ray sets (mask of bench_set_bit) for s at x->size. */
 void exp_sets(exp_ctx *x, const accel_scene *s, int mask, bench_sets *out);
 /* The same at w x h with ao_samples ambient occlusion rays per hit. */
