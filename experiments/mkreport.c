@@ -125,7 +125,8 @@ static void scene_cell(char *dst, size_t n, const char *scenes, size_t max)
     size_t len = 0;
     for (const char *p = scenes; *p && len < sizeof buf - 1;) {
         while (*p == ' ') p++;
-        size_t k = strcspn(p, ",;");
+        size_t k = 0; /* list items end at ", " or "; " (a scene spec holds bare commas) */
+        while (p[k] && !((p[k] == ',' || p[k] == ';') && p[k + 1] == ' ')) k++;
         snprintf(one, sizeof one, "%.*s", (int)k, p);
         const char *tris = NULL;
         for (int i = 0; i < size_count; i++)

@@ -78,16 +78,40 @@ int exp_region_time(exp_ctx *x, const exp_group *g, const int *cfgs, int n, int 
     int rc = -1;
     if (t && hits && split_tiles(pr, regions, tile, count) == 0) {
         bench_progress_begin(x->progress, "time per screen region", 0, 0);
-        for (int r = 0; r < rounds; r++)
-            for (int k = 0; k < n; k++) {
-                int c = (k + r) % n; /* rotated each round */
+        /* A warm-up pass sizes each sample: passes of one tile repeated to
+         * last about half a millisecond (a tile's single pass can be a few
+         * microseconds, under the timer's and the scheduler's noise). */
+        static int reps[MAX_CFG][MAX_TILES];
+        for (int c = 0; c < n; c++)
+            for (int q = 0; q < tiles; q++) {
                 const exp_cfg *cf = &g->cfg[cfgs[c]];
+                double t0 = accel_now_ms();
+                if (count[q]) accel_trace(cf->kind, cf->accel, tile[q], hits, count[q], x->threads, NULL);
+                double ms = accel_now_ms() - t0;
+                reps[c][q] = ms >= 0.5 ? 1 : ms <= 0.5 / 64 ? 64 : (int)ceil(0.5 / ms);
+            }
+        uint64_t seed = 0x9E3779B97F4A7C15ull;
+        for (int r = 0; r < rounds; r++) {
+            int order[MAX_CFG];
+            for (int k = 0; k < n; k++) order[k] = k;
+            for (int k = n - 1; k > 0; k--) { /* a fresh order each round (Fisher-Yates) */
+                seed = seed * 6364136223846793005ull + 1442695040888963407ull;
+                int j = (int)((seed >> 33) % (uint64_t)(k + 1)), tmp = order[k];
+                order[k] = order[j], order[j] = tmp;
+            }
+            for (int k = 0; k < n; k++) {
+                int c = order[k];
+                const exp_cfg *cf = &g->cfg[cfgs[c]];
+                for (int q = 0; q < tiles; q++) /* untimed: the structure back in the caches */
+                    if (count[q]) accel_trace(cf->kind, cf->accel, tile[q], hits, count[q], x->threads, NULL);
                 for (int q = 0; q < tiles; q++) {
                     double t0 = accel_now_ms();
-                    if (count[q]) accel_trace(cf->kind, cf->accel, tile[q], hits, count[q], x->threads, NULL);
-                    t[r][c][q] = accel_now_ms() - t0;
+                    for (int i = 0; i < reps[c][q] && count[q]; i++)
+                        accel_trace(cf->kind, cf->accel, tile[q], hits, count[q], x->threads, NULL);
+                    t[r][c][q] = (accel_now_ms() - t0) / reps[c][q];
                 }
             }
+        }
         bench_progress_end(x->progress);
         int per_tile[MAX_TILES], single = 0, used[MAX_CFG] = {0};
         choose(t, rounds, n, tiles, per_tile, &single);

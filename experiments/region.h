@@ -3,7 +3,8 @@
  * "region dependence timed per 4x4 region", not judged by a model whose
  * absolute error exceeds the effect). The primary rays of the group are
  * split by pixel into regions x regions screen tiles; every configuration
- * traces every tile in interleaved rounds (the order rotated per round).
+ * traces every tile in interleaved rounds (a fresh order each round, after
+ * an untimed pass over every tile).
  * The choice (a configuration per tile, and the best single one) is made
  * on the odd rounds and judged on the even ones, so that picking the
  * minimum of noisy medians does not flatter the per-tile choice.
