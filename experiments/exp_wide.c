@@ -319,7 +319,9 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, int 
         exp_group_add(&g, threaded[i], 2);
     }
     exp_group_run(&g);
+    exp_md(x, "\n<!-- appendix -->\n"); /* the build table: the report keeps the kernels' */
     build_table(x, &s, &g);
+    exp_md(x, "\n<!-- /appendix -->\n");
     int base = exp_group_find(&g, "bvh");
     if (base < 0 || !g.cfg[base].ok || g.cfg[base].threads != 1) {
         exp_md(x, "\n(no `bvh` single-ray base on this scene: ratios left out)\n");

@@ -170,7 +170,7 @@ void md_classify(const md_lines *l, int *kind)
     int t = 0;
     while (t < l->n && kind[t] != K_TABLE1) t++;
     for (int b = 0, i = t - 1; b < 2 && i >= 0; b++) {
-        while (i >= 0 && kind[i] == K_BLANK) i--;
+        while (i >= 0 && (kind[i] == K_BLANK || kind[i] == K_APPENDIX)) i--;
         int j = i;
         while (j >= 0 && kind[j] == K_OTHER) j--;
         if (j == i || i - j > 3) break;
@@ -219,6 +219,15 @@ int md_drop(const md_lines *l, const int *kind, char *keep, int k, int spare, in
             while (j > 0 && kind[j - 1] == k && keep[j - 1]) j--;
         for (int q = j; q <= i && have > spare; q++) keep[q] = 0, have--, dropped = 1;
         i = j;
+    }
+    /* A kept line that introduces what follows (it ends with ':') goes
+     * with it when what follows went: no caption over nothing. */
+    for (int i = 0; i < l->n; i++) {
+        size_t len = strlen(l->s[i]);
+        if (!keep[i] || kind[i] != K_OTHER || !len || l->s[i][len - 1] != ':') continue;
+        int j = i + 1;
+        while (j < l->n && kind[j] == K_BLANK) j++;
+        if (j < l->n && !keep[j]) keep[i] = 0, dropped = 1;
     }
     return dropped;
 }
