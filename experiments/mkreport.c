@@ -406,15 +406,26 @@ static void front(md_out *o, FILE *app, const opts *op, char **names, int count)
     time_t now = time(NULL);
     char date[64];
     strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", gmtime(&now));
-    fprintf(f, "\n## Machine and method\n\n| | |\n|---|---|\n| machine | %s |\n| kernel ISA | %s |\n"
-               "| load average | %s |\n| flags | `%s` |\n| commit | %s |\n| date | %s |\n| run | %s |\n",
-            cpu, isa, op->load, op->flags, op->commit, date, op->run);
-    fprintf(f, "\nThe full machine record and how the numbers were taken (rounds, intervals, noise "
-               "floors, ties): [appendix](%sappendix.md#machine-and-method).\n", op->links);
     fprintf(app, "# gridbvh report: appendix\n\nThe full sections of [the report](REPORT.md), with "
                  "every table; the report keeps each section's head, verdicts, first table, plots "
                  "and findings.\n\n<a id=\"machine-and-method\"></a>\n\n## Machine and method\n\n"
                  "| | |\n|---|---|\n%s", mach ? mach : "| machine | unknown |\n");
+    fprintf(f, "\n## Machine and method\n\n| | |\n|---|---|\n");
+    /* Rows of any length (flags, the run record with its options) go through
+     * md_put: over the limit, cut with their full text in the appendix. */
+    const char *key[7] = {"machine", "kernel ISA", "load average", "flags", "commit", "date", "run"};
+    const char *val[7] = {cpu, isa, op->load, op->flags, op->commit, date, op->run};
+    for (int i = 0; i < 7; i++) {
+        size_t need = strlen(val[i]) + 64;
+        char *row = malloc(need);
+        if (!row) exit(3);
+        snprintf(row, need, i == 3 ? "| %s | `%s` |" : "| %s | %s |", key[i], val[i]);
+        md_put(&(md_out){f, 0, op->links}, row, "machine-and-method");
+        if (i >= 2) fprintf(app, "%s\n", row); /* the run's own rows, in full */
+        free(row);
+    }
+    fprintf(f, "\nThe full machine record and how the numbers were taken (rounds, intervals, noise "
+               "floors, ties): [appendix](%sappendix.md#machine-and-method).\n", op->links);
     fprintf(app, "\nHow the numbers were taken. Every configuration a section compares is built "
                "and traced once counted (steps, box and primitive tests per ray: the "
                "hardware-independent counts beside every time) and once as a warm-up; then the "
