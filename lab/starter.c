@@ -32,6 +32,7 @@
 
 #include "core/prim.h"
 #include "core/variant.h"
+#include "validate.h" /* the tree check run after your build (nothing to do there) */
 
 /* The lecture's node: a leaf holds `count` primitives starting at
  * order[left_first]; an interior node (count == 0) has its children at
@@ -44,6 +45,9 @@ typedef struct {
 } lab_node;
 
 _Static_assert(sizeof(lab_node) == 32, "the lecture's 32-byte node");
+_Static_assert(sizeof(lab_node) == sizeof(lab_tree_node) &&
+                   offsetof(lab_node, count) == offsetof(lab_tree_node, count),
+               "validate.h reads the nodes");
 
 /* Deepest tree the traversal stack allows (a median split halves the
  * primitives at every level, so 64 levels hold 2^64 of them). */
@@ -140,7 +144,7 @@ static int lab_build(const accel_scene *scene, const accel_params *params, int t
     b->packet = spec->traverse == 1;
     b->naive = params->naive;
     uint32_t n = b->store.prims.prim_count;
-    b->nodes = malloc(((size_t)2 * n + 1) * sizeof *b->nodes);
+    b->nodes = calloc((size_t)2 * n + 1, sizeof *b->nodes);
     b->order = malloc(((size_t)n + 1) * sizeof *b->order);
     if (!b->nodes || !b->order) {
         lab_destroy(b);
@@ -150,6 +154,11 @@ static int lab_build(const accel_scene *scene, const accel_params *params, int t
     if (n > 0) {
         b->node_count = 1; /* the root; build_node takes its children from here on */
         rc = build_node(b, 0, 0, n, 1, err);
+        /* Your tree, checked (validate.h): a wrong box or a lost primitive
+         * fails here with "node 17: ...", not later as a hole or a crash. */
+        if (!rc)
+            rc = lab_validate_tree((const lab_tree_node *)b->nodes, b->node_count, b->order,
+                                   &b->store.prims, err);
         if (rc) {
             lab_destroy(b);
             return rc;
@@ -176,7 +185,11 @@ static int lab_build(const accel_scene *scene, const accel_params *params, int t
  * its primitives with accel_prim_hit(&b->store.prims, prim, p, &t, &u, &v,
  * naive, spheres), which keeps the nearest hit in t; at an interior node
  * visit the nearer child first and push the other on a stack of
- * LAB_MAX_DEPTH entries. Count every node visited in *steps, every box
+ * LAB_MAX_DEPTH entries, with its entry distance. Drop a popped node whose
+ * entry lies beyond the closest hit t with !box3_entry_before(entry, t)
+ * (geom.h): `entry < t` or `entry <= t` loses hits on rays that end exactly
+ * at the hit (t_far == the hit's t), where the entry's rounding can land
+ * just past t. Count every node visited in *steps, every box
  * test in *boxes, every primitive test in *prims (the depth view and the
  * checks read them). Return the local id hit (or ACCEL_MISS) and fill
  * *t_out, *u_out, *v_out.
@@ -257,7 +270,9 @@ static int lab_walk(const void *a, const accel_ray *ray, float pad, accel_walk_v
  * then each ray is traced alone, which is correct but not a packet.
  * Fill hit_local[i] (local id or ACCEL_MISS), t[i], u[i], v[i], and the
  * per-ray counters as in step 2; count each node the packet enters (once
- * for the whole packet) in *packet_steps: the check's sharing figure.
+ * for the whole packet) in *packet_steps: the check's sharing figure. The
+ * check holds it against the per-ray work (a packet fetches at least every
+ * node its busiest ray needs): a count that is not the walk's is caught.
  */
 static inline __attribute__((always_inline)) void
 trace_packet(const lab_bvh *b, const accel_ray_prep *p, const int *valid, uint32_t n,
