@@ -152,7 +152,8 @@ static int compare_work(const accel_scene *sc, const void *a, const rays_set *ra
         accel_trace(k, a, rays->rays, h, rays->count, 1, &mine);
         accel_trace(k, ref, rays->rays, h, rays->count, 1, &theirs);
         double n = rays->count ? (double)rays->count : 1.0;
-        double m_nodes = (double)mine.level_steps[1] / n, t_nodes = (double)theirs.level_steps[1] / n;
+        double m_nodes = (double)mine.level_steps[1] / n;
+        double t_nodes = (double)theirs.level_steps[1] / n;
         double m_tris = (double)mine.prim_tests / n, t_tris = (double)theirs.prim_tests / n;
         double m = m_nodes + m_tris, t = t_nodes + t_tris;
         if (t > 0.0 && m > LAB_WALK_RATIO * t) {
@@ -240,6 +241,7 @@ void lab_check_step3(const lab_subject *s, lab_result *r, accel_error *err)
         return;
     }
     lab_run_isolated(check_builtin, s, "field:instances=30,detail=2", r, err);
-    if (r->passed) lab_run_isolated(check_builtin, s, "animated:frame=77,instances=6,detail=2", r, err);
+    if (r->passed)
+        lab_run_isolated(check_builtin, s, "animated:frame=77,instances=6,detail=2", r, err);
     if (r->passed) lab_run_isolated(check_far, s, "far_instances", r, err);
 }
