@@ -27,7 +27,7 @@ endif
 ROOT :=
 include sources.mk
 ifdef LAB
-LIB_SRC     += lab/student.c
+LIB_SRC     += lab/student.c lab/student_grid.c
 BASE_CFLAGS += -DGRIDBVH_LAB
 endif
 LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/%.o)
@@ -49,6 +49,7 @@ EXP_BINS := $(patsubst experiments/%.c,$(BIN)/%,$(wildcard experiments/exp_*.c))
 # The lab's checks and its untouched starter kind are part of the tests
 # (tests/test_lab.c: every check passes on the project and fails on the starter).
 TEST_SRC := $(wildcard tests/*.c) lab/check.c lab/check_common.c lab/check_step3.c lab/starter.c \
+            lab/grid_starter.c \
             experiments/claims.c experiments/stats.c experiments/svg.c
 
 .PHONY: all test report sanitize fuzz clean bench lab lab-report FORCE
@@ -133,6 +134,10 @@ lab:
 	@test -f lab/student.c || { sed -e 's/accel_kind_starter/accel_kind_student/' \
 	  -e 's/"starter"/"student"/' -e 's@^ \* starter.c - @ * student.c - @' lab/starter.c > lab/student.c && \
 	  echo "lab: made lab/student.c from lab/starter.c: your kind is 'student'"; }
+	@test -f lab/student_grid.c || { sed -e 's/accel_kind_grid_starter/accel_kind_student_grid/' \
+	  -e 's/"grid_starter"/"student_grid"/' -e 's@^ \* grid_starter.c - @ * student_grid.c - @' \
+	  lab/grid_starter.c > lab/student_grid.c && \
+	  echo "lab: made lab/student_grid.c from lab/grid_starter.c (the optional grid step, STEP=6)"; }
 	@mkdir -p lab/out
 	@test -x bin-lab/lab || echo "lab: building bin-lab/ (the first time takes minutes: make -j2 lab uses 2 cores)"
 	@$(MAKE) -s --no-print-directory BUILD=build-lab BIN=bin-lab LAB=1 bin-lab/lab bin-lab/trace \
@@ -141,7 +146,7 @@ lab:
 	   { echo "step 5, last: your kind through the conformance suite (bin-lab/run_tests conformance_student)"; \
 	     ./bin-lab/run_tests conformance_student > lab/out/conformance.txt 2>&1 && tail -n 1 lab/out/conformance.txt || \
 	     { grep -v '^ *ok ' lab/out/conformance.txt | head -n 40; echo "step 5: not yet (lab/out/conformance.txt)"; exit 1; }; }); \
-	 else echo "lab: built bin-lab/ (trace, run_tests, experiments) with your kind 'student'; make lab STEP=1..5 checks a step"; fi
+	 else echo "lab: built bin-lab/ (trace, run_tests, experiments) with your kind 'student'; make lab STEP=1..5 checks a step (6: the optional grid)"; fi
 
 # The study's report with the student's kind beside the project's, into
 # lab/out/report/REPORT.md (QUICK=1: the smoke budget, a minute; KINDS=

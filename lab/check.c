@@ -28,6 +28,7 @@ const char *lab_step_title(int step)
         "many meshes: your kind as the bottom level, rays in object space",
         "packet traversal (traverse=packet)",
         "real time: frames per second at 800x600, primary and shadow rays",
+        "optional: a uniform grid (lab/grid_starter.c), single rays and the cells they step",
     };
     return step >= 1 && step <= LAB_STEPS ? titles[step] : "no such step";
 }
@@ -44,6 +45,24 @@ static int build(const lab_subject *s, const char *extra, const accel_scene *sce
 /* The project's median-split BVH, the yardstick of costs (NULL when bvh is
  * not registered, e.g. in a trimmed lab build). */
 static const accel_kind *reference_kind(void) { return accel_find_kind("bvh"); }
+
+/* The yardstick of step 2's cost rule (step 6: the project's grid in its
+ * plain form, with the subject's parameters, e.g. lambda). */
+typedef struct {
+    const char *kind, *kv, *what, *unit, *hint;
+} yardstick;
+
+static const yardstick bvh_yard = {
+    "bvh", "build=median", "a median-split BVH", "nodes",
+    "visit the nearer child first (the smaller entry distance), test boxes against the closest "
+    "hit so far (the t that accel_prim_hit shrinks), drop a popped node with "
+    "!box3_entry_before(entry, t), and split at the median of the sorted centroids"};
+static const yardstick grid_yard = {
+    "grid", "overlap=bbox,mailbox=0", "the project's grid at the same lambda", "cells",
+    "step only through the cells the ray crosses, in its order (3D DDA), start at the cell where "
+    "it enters the grid's box, and stop once the closest hit lies before the current cell's "
+    "exit"};
+static const yardstick *yard = &bvh_yard; /* set by lab_check before the children start */
 
 /* ---- step 1 -------------------------------------------------------------- */
 
@@ -214,7 +233,8 @@ static void write_depth_view(const lab_subject *s, const char *scene, const acce
     accel_error err = {0};
     float vmax = 1.0f;
     char path[512];
-    snprintf(path, sizeof path, "%s/step2_depth_%s.png", s->out_dir, scene);
+    snprintf(path, sizeof path, "%s/%s_depth_%s.png", s->out_dir,
+             yard == &grid_yard ? "grid" : "step2", scene);
     for (char *p = path + strlen(s->out_dir) + 1; *p; p++)
         if (*p == ':' || *p == '=' || *p == ',') *p = '_';
     if (!steps || !v || rays_primary(&sc->camera, w, h, &rays, &err)) goto out;
@@ -258,7 +278,7 @@ static void check_traversal(const lab_subject *s, const char *spec, lab_result *
     accel_hit *ph = NULL;
     void *a = NULL, *ref_a = NULL;
     accel_build_stats st;
-    const accel_kind *refk = reference_kind();
+    const accel_kind *refk = accel_find_kind(yard->kind);
     int ok = rays_primary(&sc.camera, size, size, &g[0].rays, err) == 0;
     if (ok) ph = malloc(g[0].rays.count * sizeof *ph);
     ok = ok && ph;
@@ -280,30 +300,31 @@ static void check_traversal(const lab_subject *s, const char *spec, lab_result *
         if (!compare_group(s->kind, a, &sc, &g[i], s->threads, r)) goto out;
     double mine = steps_per_ray(s->kind, a, &g[0].rays, NULL);
     if (!(mine > 0.0)) {
-        lab_fail(r, "%s: your traversal counts no node visits (*steps stays 0): the depth view "
-                "and the cost comparison need them",
-             spec);
+        lab_fail(r, "%s: your traversal counts no %s (*steps stays 0): the depth view and the "
+                "cost comparison need them",
+             spec, yard == &grid_yard ? "cells stepped" : "node visits");
         goto out;
     }
     write_depth_view(s, spec, &sc, a, r);
     double theirs = NAN;
-    if (refk && accel_build_kind(refk, "build=median", &sc, 1, &ref_a, &st, err) == 0)
+    char ykv[256];
+    snprintf(ykv, sizeof ykv, "%s%s%s", yard->kv, yard == &grid_yard && *s->kv ? "," : "",
+             yard == &grid_yard ? s->kv : "");
+    if (refk && accel_build_kind(refk, ykv, &sc, 1, &ref_a, &st, err) == 0)
         theirs = steps_per_ray(refk, ref_a, &g[0].rays, NULL);
     size_t rays = 0;
     for (int i = 0; i < GROUPS; i++) rays += g[i].rays.count;
     if (theirs > 0.0 && mine > LAB_SLOW_RATIO * theirs) {
         lab_slow(r, "%s: all %zu rays agree with the reference, but your traversal visits %.2fx "
-                "the nodes of a median-split BVH (%.1f against %.1f per primary ray; a good "
-                "solution: at most %.2fx). Hint: visit the nearer child first (the smaller entry "
-                "distance), test boxes against the closest hit so far (the t that "
-                "accel_prim_hit shrinks), drop a popped node with !box3_entry_before(entry, t), "
-                "and split at the median of the sorted centroids",
-             spec, rays, mine / theirs, mine, theirs, LAB_SLOW_RATIO);
+                "the %s of %s (%.1f against %.1f per primary ray; a good solution: at most "
+                "%.2fx). Hint: %s",
+             spec, rays, mine / theirs, yard->unit, yard->what, mine, theirs, LAB_SLOW_RATIO,
+             yard->hint);
         goto out;
     }
-    lab_say(r, "  ok   %s: %zu rays agree with the reference; %.1f nodes per primary ray (median-split "
-           "BVH: %.1f, %.2fx)\n",
-        spec, rays, mine, theirs, mine / theirs);
+    lab_say(r, "  ok   %s: %zu rays agree with the reference; %.1f %s per primary ray (%s: %.1f, "
+           "%.2fx)\n",
+        spec, rays, mine, yard->unit, yard->what, theirs, mine / theirs);
 out:
     if (a) s->kind->destroy(a);
     if (ref_a) refk->destroy(ref_a);
@@ -530,8 +551,11 @@ int lab_check(int step, const lab_subject *s, lab_result *out, accel_error *err)
             lab_run_isolated(check_build, s, step_scenes[i], out, err);
         break;
     case 2:
+    case 6:
+        yard = step == 6 ? &grid_yard : &bvh_yard;
         for (size_t i = 0; i < n && out->passed; i++)
             lab_run_isolated(check_traversal, s, step_scenes[i], out, err);
+        yard = &bvh_yard;
         break;
     case 3:
         lab_check_step3(s, out, err);

@@ -21,6 +21,7 @@
 #include "test.h"
 
 extern const accel_kind accel_kind_starter;
+extern const accel_kind accel_kind_grid_starter;
 
 static void run_step(int step)
 {
@@ -51,6 +52,24 @@ TEST(lab_step2_traversal) { run_step(2); }
 TEST(lab_step4_packets) { run_step(4); }
 TEST(lab_step5_real_time) { run_step(5); }
 TEST(lab_step3_many_meshes) { run_step(3); }
+
+/* The optional grid step: the project's grid in its plain form (bounding
+ * box overlap, no mailbox) passes, the untouched lab/grid_starter.c fails. */
+TEST(lab_step6_grid)
+{
+    const accel_kind *grid = accel_find_kind("grid");
+    CHECK(grid != NULL);
+    if (!grid) return;
+    accel_error err = {0};
+    lab_result r;
+    lab_subject own = {grid, "overlap=bbox,mailbox=0", 2, NULL, 1};
+    CHECK(lab_check(6, &own, &r, &err) == 0);
+    CHECKF(r.passed, "step 6 fails on the project's grid:\n%s", r.report);
+    lab_subject starter = {&accel_kind_grid_starter, "", 2, NULL, 1};
+    CHECK(lab_check(6, &starter, &r, &err) == 0);
+    CHECKF(!r.passed && r.outcome == LAB_WRONG && strstr(r.report, "FAIL"),
+           "step 6 passes on the untouched grid starter\n%s", r.report);
+}
 
 /* ---- mutant students ------------------------------------------------------ */
 
