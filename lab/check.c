@@ -221,8 +221,8 @@ static double steps_per_ray(const accel_kind *k, const void *a, const rays_set *
 /* The depth view: nodes visited per pixel, at 256x256 (the check's own
  * rays are too few pixels to see a tree in). */
 #define LAB_VIEW_SIZE 256
-static void write_depth_view(const lab_subject *s, const char *scene, const accel_scene *sc,
-                             const void *a, lab_result *r)
+static void write_depth_view(const lab_subject *s, const accel_kind *kind, const char *whose,
+                             const char *scene, const accel_scene *sc, const void *a, lab_result *r)
 {
     if (!s->out_dir) return;
     const int w = LAB_VIEW_SIZE, h = LAB_VIEW_SIZE;
@@ -233,21 +233,22 @@ static void write_depth_view(const lab_subject *s, const char *scene, const acce
     accel_error err = {0};
     float vmax = 1.0f;
     char path[512];
-    snprintf(path, sizeof path, "%s/%s_depth_%s.png", s->out_dir,
-             yard == &grid_yard ? "grid" : "step2", scene);
+    snprintf(path, sizeof path, "%s/%s_depth_%s%s.png", s->out_dir,
+             yard == &grid_yard ? "grid" : "step2", scene, whose);
     for (char *p = path + strlen(s->out_dir) + 1; *p; p++)
         if (*p == ':' || *p == '=' || *p == ',') *p = '_';
     if (!steps || !v || rays_primary(&sc->camera, w, h, &rays, &err)) goto out;
-    steps_per_ray(s->kind, a, &rays, steps);
+    steps_per_ray(kind, a, &rays, steps);
     for (size_t i = 0; i < rays.count; i++) { /* rays come in 8x8 tiles: pixel[] places them */
         float x = (float)steps[i];
         v[rays.pixel ? rays.pixel[i] : i] = x;
         if (x > vmax) vmax = x;
     }
     char title[128];
-    image_heat_title(title, sizeof title, s->kind->name, s->kind, 0);
+    image_heat_title(title, sizeof title, kind->name, kind, 0);
     if (image_heatmap(v, w, h, NULL, title, &img, &err) == 0 && image_write(path, &img, &err) == 0)
-        lab_say(r, "       depth view (nodes visited per pixel, white = %.0f): %s\n", vmax, path);
+        lab_say(r, "       depth view (%s per pixel, white = %.0f), %s: %s\n", kind->step_name,
+                vmax, *whose ? "the reference's" : "yours", path);
 out:
     if (err.code) lab_say(r, "       no depth view %s: %s\n", path, err.msg);
     image_free(&img);
@@ -305,13 +306,14 @@ static void check_traversal(const lab_subject *s, const char *spec, lab_result *
              spec, yard == &grid_yard ? "cells stepped" : "node visits");
         goto out;
     }
-    write_depth_view(s, spec, &sc, a, r);
+    write_depth_view(s, s->kind, "", spec, &sc, a, r);
     double theirs = NAN;
     char ykv[256];
     snprintf(ykv, sizeof ykv, "%s%s%s", yard->kv, yard == &grid_yard && *s->kv ? "," : "",
              yard == &grid_yard ? s->kv : "");
     if (refk && accel_build_kind(refk, ykv, &sc, 1, &ref_a, &st, err) == 0)
         theirs = steps_per_ray(refk, ref_a, &g[0].rays, NULL);
+    if (ref_a) write_depth_view(s, refk, "_reference", spec, &sc, ref_a, r);
     size_t rays = 0;
     for (int i = 0; i < GROUPS; i++) rays += g[i].rays.count;
     if (theirs > 0.0 && mine > LAB_SLOW_RATIO * theirs) {
