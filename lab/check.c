@@ -29,6 +29,7 @@ const char *lab_step_title(int step)
         "packet traversal (traverse=packet)",
         "real time: frames per second at 800x600, primary and shadow rays",
         "optional: a uniform grid (lab/grid_starter.c), single rays and the cells they step",
+        "optional: your own top level (lab_top_student): instances, inverse transforms",
     };
     return step >= 1 && step <= LAB_STEPS ? titles[step] : "no such step";
 }
@@ -568,6 +569,9 @@ int lab_check(int step, const lab_subject *s, lab_result *out, accel_error *err)
         break;
     case 5:
         lab_run_isolated(check_real_time, s, "teapot_stadium:n=16", out, err);
+        break;
+    case 7:
+        lab_check_top(s, out, err);
         break;
     }
     return 0;

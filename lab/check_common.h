@@ -8,13 +8,14 @@
 
 #include "accel.h"
 #include "rays/rays.h"
+#include "top.h"
 
 #ifdef __cplusplus
 extern "C" {
 #endif
 
-/* Steps 1-5 are the lecture's lab; step 6 is the optional grid step. */
-#define LAB_STEPS 6
+/* Steps 1-5 are the lecture's lab; 6 (a grid) and 7 (the top level) are optional. */
+#define LAB_STEPS 7
 
 typedef struct {
     const accel_kind *kind; /* the kind under test (registered or not) */
@@ -22,6 +23,7 @@ typedef struct {
     int threads;            /* step 5 */
     const char *out_dir;    /* NULL: no images; else an existing folder for step 2's depth views */
     int quick;              /* smaller sizes (the self-test in `make test`) */
+    lab_top_fn top;         /* step 7: the subject's top level (NULL: none) */
 } lab_subject;
 
 /* How a step ended: PASSED, or not yet in one of three ways. */
@@ -69,6 +71,10 @@ void lab_run_isolated(lab_scene_check fn, const lab_subject *s, const char *scen
 int lab_make_stiff_rays(const accel_scene *sc, rays_set *out, accel_error *err);
 /* Step 3 (check_step3.c), run by lab_check (check.h). */
 void lab_check_step3(const lab_subject *s, lab_result *r, accel_error *err);
+/* Step 7, the optional top level (check_top.c). */
+void lab_check_top(const lab_subject *s, lab_result *r, accel_error *err);
+/* Mirrored, scaled, rotated and far instances (a .scene text). */
+extern const char *const lab_far_scene;
 
 #ifdef __cplusplus
 }

@@ -19,7 +19,7 @@
 /* Mirrored, scaled, rotated and far instances (1e5: the flattened
  * triangles are quantized there to 2^-7, so a walk without the pad
  * misses triangles the reference hits). */
-static const char *const far_scene =
+const char *const lab_far_scene =
     "mesh s sphere:segments=6\n"
     "mesh t teapot_stadium:n=2,stadium=3,tiers=0\n"
     "instance s scale -1 1 1 translate 1e5 1e5 1e5\n"
@@ -230,7 +230,7 @@ static void check_builtin(const lab_subject *s, const char *scene, lab_result *r
 
 static void check_far(const lab_subject *s, const char *scene, lab_result *r, accel_error *err)
 {
-    check_scene(s, scene, far_scene, r, err);
+    check_scene(s, scene, lab_far_scene, r, err);
 }
 
 void lab_check_step3(const lab_subject *s, lab_result *r, accel_error *err)

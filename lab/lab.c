@@ -13,11 +13,15 @@
 
 #include "check.h"
 
+#ifdef GRIDBVH_LAB
+void lab_top_student(const lab_top *top, const accel_ray *ray, accel_hit *hit); /* student.c */
+#endif
+
 static int usage(const char *msg)
 {
     if (msg) fprintf(stderr, "lab: %s\n", msg);
     fprintf(stderr, "usage: lab --step N [--accel SPEC] [--threads N] [--out DIR] [--quick]\n"
-                    "  --step N      lab step 1..%d (LAB.md; 6: the optional grid step)\n"
+                    "  --step N      lab step 1..%d (LAB.md; optional: 6 a grid, 7 your top level)\n"
                     "  --accel SPEC  the kind to check (default: student; step 6: student_grid)\n"
                     "  --threads N   threads for step 5 (default: all cores)\n"
                     "  --out DIR     where the depth view and images go (default: none)\n"
@@ -44,7 +48,7 @@ int main(int argc, char **argv)
         i++;
         if (!strcmp(a, "--step")) {
             step = (int)strtol(v, &end, 10);
-            if (*end || step < 1 || step > LAB_STEPS) return usage("--step takes 1..6");
+            if (*end || step < 1 || step > LAB_STEPS) return usage("--step takes 1..7");
         } else if (!strcmp(a, "--accel")) {
             spec = v;
         } else if (!strcmp(a, "--threads")) {
@@ -65,7 +69,10 @@ int main(int argc, char **argv)
         return 2;
     }
     const char *colon = strchr(spec, ':');
-    lab_subject s = {p.kind, colon ? colon + 1 : "", threads, out_dir, quick};
+    lab_subject s = {p.kind, colon ? colon + 1 : "", threads, out_dir, quick, NULL};
+#ifdef GRIDBVH_LAB
+    if (!strcmp(p.kind->name, "student")) s.top = lab_top_student; /* step 7 */
+#endif
     lab_result r;
     if (lab_check(step, &s, &r, &err)) {
         fprintf(stderr, "lab: %s\n", err.msg);

@@ -19,6 +19,9 @@
  *           callback: your kind becomes the bottom level of the two-level
  *           kind `instanced`, which transforms rays to object space
  *   step 4  trace_packet(): 8x8 packets of rays (traverse=packet)
+ *   step 7  (optional) lab_top_starter(): the top level of a scene of
+ *           instances yourself: the loop, the inverse transforms, t in world
+ *           units (lab/top.h)
  *
  * Step 5 measures your frames per second.
  *
@@ -32,6 +35,7 @@
 
 #include "core/prim.h"
 #include "core/variant.h"
+#include "top.h"      /* step 7 (optional): the top level */
 #include "validate.h" /* the tree check run after your build (nothing to do there) */
 
 /* The lecture's node: a leaf holds `count` primitives starting at
@@ -248,6 +252,28 @@ static int walk_ray(const lab_bvh *b, const accel_ray_prep *p, float pad, accel_
     (void)ctx;
     (void)steps;
     return ACCEL_OK; /* TODO step 3: visits nothing yet */
+}
+
+/*
+ * Optional step 7 (LAB.md): the top level yourself, as the lecture's step 3
+ * means it. `top` holds your kind built once per mesh in the mesh's object
+ * space (top->mesh_accel[mesh]) and the instances (top->instances[k]: its
+ * mesh, the id `base` of its first primitive in the flattened scene, and
+ * `inverse`, the world -> object 3x4 matrix, rows: x' = m[0]x + m[1]y +
+ * m[2]z + m[3], ...). To do: for every instance, transform the ray's origin
+ * (a point: with the translation column) and direction (a vector: without
+ * it) by `inverse`, in double, and do NOT renormalize the direction: then
+ * t along the object ray is t along the world ray, so t_near, t_far and
+ * the hit's t stay in world units. Trace it with
+ * top->kind->intersect(top->mesh_accel[mesh], &object_ray, &h, 1, NULL),
+ * with t_far the nearest hit so far; keep the nearest hit over all
+ * instances, its id base + h.prim. *hit = accel_hit_miss() when none.
+ */
+void lab_top_starter(const lab_top *top, const accel_ray *ray, accel_hit *hit)
+{
+    (void)top;
+    (void)ray;
+    *hit = accel_hit_miss(); /* TODO step 7 (optional) */
 }
 
 static int lab_walk(const void *a, const accel_ray *ray, float pad, accel_walk_visit visit,

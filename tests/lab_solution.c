@@ -16,6 +16,7 @@
 #include "core/prim.h"
 #include "core/variant.h"
 #include "tests/lab_solution.h"
+#include "lab/top.h"
 #include "lab/validate.h" /* the tree check run after your build (nothing to do there) */
 
 /* The lecture's node: a leaf holds `count` primitives starting at
@@ -392,6 +393,39 @@ static int walk_ray(const lab_bvh *b, const accel_ray_prep *p, float pad, accel_
         while (sp > 0 && !box3_entry_before(entry[sp - 1], t_max)) sp--;
         if (sp == 0) return ACCEL_OK;
         node = stack[--sp];
+    }
+}
+
+/* Optional step 7: the top level (lab/top.h). Every instance's object ray
+ * from the world ray by the inverse transform, in double, not
+ * renormalized, so that t is the world ray's t. */
+void lab_top_lab_solution(const lab_top *top, const accel_ray *ray, accel_hit *hit)
+{
+    *hit = accel_hit_miss();
+    const double o[3] = {ray->ox, ray->oy, ray->oz}, d[3] = {ray->dx, ray->dy, ray->dz};
+    for (uint32_t k = 0; k < top->instance_count; k++) {
+        const accel_instance *in = &top->instances[k];
+        const double *m = MUTANT(LM_TOP_FORWARD) ? in->xform : in->inverse;
+        double oo[3], od[3];
+        for (int r = 0; r < 3; r++) {
+            oo[r] = m[4 * r] * o[0] + m[4 * r + 1] * o[1] + m[4 * r + 2] * o[2] + m[4 * r + 3];
+            od[r] = m[4 * r] * d[0] + m[4 * r + 1] * d[1] + m[4 * r + 2] * d[2];
+            if (MUTANT(LM_TOP_DIR_MOVED)) od[r] += m[4 * r + 3];
+        }
+        if (MUTANT(LM_TOP_NORMALIZE)) {
+            double len = sqrt(od[0] * od[0] + od[1] * od[1] + od[2] * od[2]);
+            for (int r = 0; r < 3; r++) od[r] /= len;
+        }
+        accel_ray obj = {(float)oo[0], (float)oo[1], (float)oo[2], ray->t_near,
+                         (float)od[0], (float)od[1], (float)od[2],
+                         hit->prim != ACCEL_MISS ? hit->t : ray->t_far};
+        accel_hit h;
+        top->kind->intersect(top->mesh_accel[in->mesh], &obj, &h, 1, NULL);
+        if (h.prim != ACCEL_MISS && (hit->prim == ACCEL_MISS || h.t < hit->t)) {
+            *hit = h;
+            hit->prim = in->base + h.prim;
+            if (MUTANT(LM_TOP_FIRST_INSTANCE)) return;
+        }
     }
 }
 

@@ -41,6 +41,11 @@ typedef enum {
     LM_PACKET_CULL_LT,    /* a lane enters a box when its entry < t */
     LM_PACKET_FIRST_ONLY, /* only the first active lane's box test decides */
     LM_PACKET_NO_COUNT,   /* packet_steps never counted */
+    /* step 7 (optional): the top level */
+    LM_TOP_FORWARD,        /* the object -> world matrix instead of its inverse */
+    LM_TOP_DIR_MOVED,      /* the direction moved by the translation too */
+    LM_TOP_NORMALIZE,      /* the object direction renormalized: t not in world units */
+    LM_TOP_FIRST_INSTANCE, /* stops at the first instance hit, not the nearest */
     LM_COUNT
 } lab_mutant_id;
 

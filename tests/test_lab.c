@@ -22,6 +22,8 @@
 
 extern const accel_kind accel_kind_starter;
 extern const accel_kind accel_kind_grid_starter;
+void lab_top_starter(const lab_top *top, const accel_ray *ray, accel_hit *hit);
+void lab_top_lab_solution(const lab_top *top, const accel_ray *ray, accel_hit *hit);
 
 static void run_step(int step)
 {
@@ -30,16 +32,18 @@ static void run_step(int step)
     if (!bvh) return;
     accel_error err = {0};
     lab_result r;
-    lab_subject own = {bvh, "build=median", 2, NULL, 1};
-    CHECK(lab_check(step, &own, &r, &err) == 0);
-    CHECKF(r.passed, "step %d fails on the project's own implementation:\n%s", step, r.report);
+    lab_subject own = {bvh, "build=median", 2, NULL, 1, NULL};
+    if (step != 7) { /* step 7 checks a function of the student's file, not a kind */
+        CHECK(lab_check(step, &own, &r, &err) == 0);
+        CHECKF(r.passed, "step %d fails on the project's own implementation:\n%s", step, r.report);
+    }
     lab_solution_mutant = LM_NONE;
-    lab_subject sol = {&accel_kind_lab_solution, "", 2, NULL, 1};
+    lab_subject sol = {&accel_kind_lab_solution, "", 2, NULL, 1, lab_top_lab_solution};
     CHECK(lab_check(step, &sol, &r, &err) == 0);
     CHECKF(r.passed && r.outcome == LAB_PASSED,
            "step %d fails on the reference solution (tests/lab_solution.c):\n%s", step, r.report);
     if (getenv("LAB_MUTANT_TABLE")) fputs(r.report, stdout);
-    lab_subject starter = {&accel_kind_starter, "", 2, NULL, 1};
+    lab_subject starter = {&accel_kind_starter, "", 2, NULL, 1, lab_top_starter};
     CHECK(lab_check(step, &starter, &r, &err) == 0);
     CHECKF(!r.passed, "step %d passes on the untouched starter: the check cannot fail\n%s", step,
            r.report);
@@ -52,6 +56,7 @@ TEST(lab_step2_traversal) { run_step(2); }
 TEST(lab_step4_packets) { run_step(4); }
 TEST(lab_step5_real_time) { run_step(5); }
 TEST(lab_step3_many_meshes) { run_step(3); }
+TEST(lab_step7_top_level) { run_step(7); }
 
 /* The optional grid step: the project's grid in its plain form (bounding
  * box overlap, no mailbox) passes, the untouched lab/grid_starter.c fails. */
@@ -62,10 +67,10 @@ TEST(lab_step6_grid)
     if (!grid) return;
     accel_error err = {0};
     lab_result r;
-    lab_subject own = {grid, "overlap=bbox,mailbox=0", 2, NULL, 1};
+    lab_subject own = {grid, "overlap=bbox,mailbox=0", 2, NULL, 1, NULL};
     CHECK(lab_check(6, &own, &r, &err) == 0);
     CHECKF(r.passed, "step 6 fails on the project's grid:\n%s", r.report);
-    lab_subject starter = {&accel_kind_grid_starter, "", 2, NULL, 1};
+    lab_subject starter = {&accel_kind_grid_starter, "", 2, NULL, 1, NULL};
     CHECK(lab_check(6, &starter, &r, &err) == 0);
     CHECKF(!r.passed && r.outcome == LAB_WRONG && strstr(r.report, "FAIL"),
            "step 6 passes on the untouched grid starter\n%s", r.report);
@@ -105,6 +110,10 @@ static const mutant_case mutants[] = {
     {LM_PACKET_CULL_LT, 4, LAB_WRONG, "step 4: a lane's cull entry < t"},
     {LM_PACKET_FIRST_ONLY, 4, LAB_WRONG, "step 4: only the first lane's box test"},
     {LM_PACKET_NO_COUNT, 4, LAB_WRONG, "step 4: packet_steps never counted"},
+    {LM_TOP_FORWARD, 7, LAB_WRONG, "step 7: object -> world matrix, not its inverse"},
+    {LM_TOP_DIR_MOVED, 7, LAB_WRONG, "step 7: the direction translated too"},
+    {LM_TOP_NORMALIZE, 7, LAB_WRONG, "step 7: object direction renormalized"},
+    {LM_TOP_FIRST_INSTANCE, 7, LAB_WRONG, "step 7: the first instance hit, not the nearest"},
 };
 
 static const char *outcome_name(lab_outcome o)
@@ -130,7 +139,7 @@ static void first_failure(const char *report, char *out, size_t size)
 static void run_mutants(int step)
 {
     int table = getenv("LAB_MUTANT_TABLE") != NULL;
-    lab_subject sol = {&accel_kind_lab_solution, "", 2, NULL, 1};
+    lab_subject sol = {&accel_kind_lab_solution, "", 2, NULL, 1, lab_top_lab_solution};
     for (size_t i = 0; i < sizeof mutants / sizeof mutants[0]; i++) {
         const mutant_case *m = &mutants[i];
         if (m->step != step) continue;
@@ -156,6 +165,7 @@ TEST(lab_mutants_step1) { run_mutants(1); }
 TEST(lab_mutants_step2) { run_mutants(2); }
 TEST(lab_mutants_step3) { run_mutants(3); }
 TEST(lab_mutants_step4) { run_mutants(4); }
+TEST(lab_mutants_step7) { run_mutants(7); }
 
 /* The solution is the starter with its four functions written: the rest
  * (the build's frame and its tree check, lab_walk, the batch entries) is

@@ -63,7 +63,7 @@ TEST(lab_depth_view_pixels)
     char dir[] = "/tmp/gridbvh_lab_view_XXXXXX";
     CHECK(bvh != NULL);
     if (!bvh || !mkdtemp(dir)) return;
-    lab_subject own = {bvh, "build=median", 1, dir, 1};
+    lab_subject own = {bvh, "build=median", 1, dir, 1, NULL};
     lab_result r;
     accel_error err = {0};
     CHECK(lab_check(2, &own, &r, &err) == 0);
