@@ -44,9 +44,12 @@ static inline int lab_box_fail(accel_error *err, uint32_t idx, const char *what,
     return accel_fail(err, ACCEL_ERR_INTERNAL,
                       "node %u: its box (%g %g %g)-(%g %g %g) does not hold %s %u's box "
                       "(%g %g %g)-(%g %g %g): a node's box is the union of its primitives' "
-                      "full boxes (accel_prim_bounds), not of their centroids or of one of them",
+                      "full boxes (accel_prim_bounds), not of their centroids or of one of "
+                      "them%s",
                       idx, nd->bmin[0], nd->bmin[1], nd->bmin[2], nd->bmax[0], nd->bmax[1],
-                      nd->bmax[2], what, id, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+                      nd->bmax[2], what, id, lo[0], lo[1], lo[2], hi[0], hi[1], hi[2],
+                      nd->count ? "; and a leaf's left_first is `first`, the start of the "
+                                  "range its box was made from" : "");
 }
 
 /* Checks one leaf: its range, its primitives (each seen once), their boxes. */
