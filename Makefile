@@ -145,7 +145,7 @@ lab:
 	@$(MAKE) -s --no-print-directory BUILD=build-lab BIN=bin-lab LAB=1 bin-lab/lab bin-lab/trace \
 	  bin-lab/run_tests bin-lab/mkreport $(patsubst $(BIN)/%,bin-lab/%,$(EXP_BINS))
 	@if [ -n "$(STEP)" ]; then ./bin-lab/lab --step $(STEP) --out lab/out $(if $(filter 5,$(STEP)),&& \
-	   { echo "step 5, last: your kind through the conformance suite (bin-lab/run_tests conformance_student)"; \
+	   { echo "step 5 (last): your kind through the conformance suite (bin-lab/run_tests conformance_student)"; \
 	     KINDS=student ./bin-lab/run_tests conformance_student > lab/out/conformance.txt 2>&1 && tail -n 1 lab/out/conformance.txt || \
 	     { grep -v '^ *ok ' lab/out/conformance.txt | head -n 40; echo "step 5: not yet (lab/out/conformance.txt)"; exit 1; }; }); \
 	 else echo "lab: built bin-lab/ (trace, run_tests, experiments) with your kind 'student'; make lab STEP=1..5 checks a step (optional: 6 a grid, 7 your top level)"; fi
