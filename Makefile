@@ -27,7 +27,7 @@ endif
 ROOT :=
 include sources.mk
 ifdef LAB
-LIB_SRC     += lab/student.c
+LIB_SRC     += lab/student.c lab/student_grid.c
 BASE_CFLAGS += -DGRIDBVH_LAB
 endif
 LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/%.o)
@@ -49,6 +49,8 @@ EXP_BINS := $(patsubst experiments/%.c,$(BIN)/%,$(wildcard experiments/exp_*.c))
 # The lab's checks and its untouched starter kind are part of the tests
 # (tests/test_lab.c: every check passes on the project and fails on the starter).
 TEST_SRC := $(wildcard tests/*.c) lab/check.c lab/check_common.c lab/check_step3.c lab/starter.c \
+            lab/check_top.c \
+            lab/grid_starter.c \
             experiments/claims.c experiments/stats.c experiments/svg.c experiments/mdcut.c
 
 .PHONY: all test report sanitize fuzz clean bench lab lab-report FORCE
@@ -84,7 +86,8 @@ $(BIN)/mkreport: $(BUILD)/experiments/mkreport.o $(BUILD)/experiments/mdcut.o $(
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $^ -o $@ $(LDLIBS)
 
-$(BIN)/lab: $(BUILD)/lab/lab.o $(BUILD)/lab/check.o $(BUILD)/lab/check_common.o $(BUILD)/lab/check_step3.o $(LIB)
+$(BIN)/lab: $(BUILD)/lab/lab.o $(BUILD)/lab/check.o $(BUILD)/lab/check_common.o $(BUILD)/lab/check_step3.o \
+            $(BUILD)/lab/check_top.o $(LIB)
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $^ -o $@ $(LDLIBS)
 
@@ -130,15 +133,22 @@ fuzz:
 # The build is quiet (-s): only the compiler's warnings and errors show, so
 # the check's report is not buried under link lines.
 lab:
-	@test -f lab/student.c || { sed -e 's/accel_kind_starter/accel_kind_student/' \
+	@test -f lab/student.c || { sed -e 's/accel_kind_starter/accel_kind_student/' -e 's/lab_top_starter/lab_top_student/' \
 	  -e 's/"starter"/"student"/' -e 's@^ \* starter.c - @ * student.c - @' lab/starter.c > lab/student.c && \
 	  echo "lab: made lab/student.c from lab/starter.c: your kind is 'student'"; }
+	@test -f lab/student_grid.c || { sed -e 's/accel_kind_grid_starter/accel_kind_student_grid/' \
+	  -e 's/"grid_starter"/"student_grid"/' -e 's@^ \* grid_starter.c - @ * student_grid.c - @' \
+	  lab/grid_starter.c > lab/student_grid.c && \
+	  echo "lab: made lab/student_grid.c from lab/grid_starter.c (the optional grid step, STEP=6)"; }
 	@mkdir -p lab/out
 	@test -x bin-lab/lab || echo "lab: building bin-lab/ (the first time takes minutes: make -j2 lab uses 2 cores)"
 	@$(MAKE) -s --no-print-directory BUILD=build-lab BIN=bin-lab LAB=1 bin-lab/lab bin-lab/trace \
 	  bin-lab/run_tests bin-lab/mkreport $(patsubst $(BIN)/%,bin-lab/%,$(EXP_BINS))
-	@if [ -n "$(STEP)" ]; then ./bin-lab/lab --step $(STEP) --out lab/out; \
-	 else echo "lab: built bin-lab/ (trace, run_tests, experiments) with your kind 'student'; make lab STEP=1..5 checks a step"; fi
+	@if [ -n "$(STEP)" ]; then ./bin-lab/lab --step $(STEP) --out lab/out $(if $(filter 5,$(STEP)),&& \
+	   { echo "step 5 (last): your kind through the conformance suite (bin-lab/run_tests conformance_student)"; \
+	     KINDS=student ./bin-lab/run_tests conformance_student > lab/out/conformance.txt 2>&1 && tail -n 1 lab/out/conformance.txt || \
+	     { grep -v '^ *ok ' lab/out/conformance.txt | head -n 40; echo "step 5: not yet (lab/out/conformance.txt)"; exit 1; }; }); \
+	 else echo "lab: built bin-lab/ (trace, run_tests, experiments) with your kind 'student'; make lab STEP=1..5 checks a step (optional: 6 a grid, 7 your top level)"; fi
 
 # The study's report with the student's kind beside the project's, into
 # lab/out/report/REPORT.md (QUICK=1: the smoke budget, a minute; KINDS=

@@ -28,6 +28,8 @@ const char *lab_step_title(int step)
         "many meshes: your kind as the bottom level, rays in object space",
         "packet traversal (traverse=packet)",
         "real time: frames per second at 800x600, primary and shadow rays",
+        "optional: a uniform grid (lab/grid_starter.c), single rays and the cells they step",
+        "optional: your own top level (lab_top_student): instances, inverse transforms",
     };
     return step >= 1 && step <= LAB_STEPS ? titles[step] : "no such step";
 }
@@ -45,6 +47,24 @@ static int build(const lab_subject *s, const char *extra, const accel_scene *sce
  * not registered, e.g. in a trimmed lab build). */
 static const accel_kind *reference_kind(void) { return accel_find_kind("bvh"); }
 
+/* The yardstick of step 2's cost rule (step 6: the project's grid in its
+ * plain form, with the subject's parameters, e.g. lambda). */
+typedef struct {
+    const char *kind, *kv, *what, *unit, *hint;
+} yardstick;
+
+static const yardstick bvh_yard = {
+    "bvh", "build=median", "a median-split BVH", "nodes",
+    "visit the nearer child first (the smaller entry distance), test boxes against the closest "
+    "hit so far (the t that accel_prim_hit shrinks), drop a popped node with "
+    "!box3_entry_before(entry, t), and split at the median of the sorted centroids"};
+static const yardstick grid_yard = {
+    "grid", "overlap=bbox,mailbox=0", "the project's grid at the same lambda", "cells",
+    "step only through the cells the ray crosses, in its order (3D DDA), start at the cell where "
+    "it enters the grid's box, and stop once the closest hit lies before the current cell's "
+    "exit"};
+static const yardstick *yard = &bvh_yard; /* set by lab_check before the children start */
+
 /* ---- step 1 -------------------------------------------------------------- */
 
 static void check_build(const lab_subject *s, const char *spec, lab_result *r, accel_error *err)
@@ -57,6 +77,7 @@ static void check_build(const lab_subject *s, const char *spec, lab_result *r, a
     void *a = NULL;
     accel_build_stats st;
     uint32_t n = scene.live_count;
+    lab_where(r, "scene %s, your build", spec);
     if (build(s, "", &scene, &a, &st, err)) {
         lab_fail(r, "%s: your build failed: %s", spec, err->msg);
     } else if (st.nodes == 0 || st.leaves == 0) {
@@ -93,7 +114,7 @@ static void check_build(const lab_subject *s, const char *spec, lab_result *r, a
 typedef struct {
     const char *name;
     rays_set rays;
-    int occlusion; /* shadow rays: compared with occluded() */
+    int packets; /* traced in 8x8 packets: a failure names the packet and the lane */
 } ray_group;
 
 static void describe_ray(lab_result *r, const accel_ray *ray)
@@ -115,6 +136,7 @@ static int compare_group(const accel_kind *k, const void *a, const accel_scene *
         ok = 0;
         goto out;
     }
+    lab_where(r, "scene %s, ray set %s", sc->name, g->name);
     accel_reference_trace(sc, g->rays.rays, ref, n, threads);
     accel_counters c = {0};
     accel_trace(k, a, g->rays.rays, hits, n, 1, &c);
@@ -130,6 +152,9 @@ static int compare_group(const accel_kind *k, const void *a, const accel_scene *
         lab_fail(r, "%s / %s rays: %zu holes (the reference hits, you miss), %zu false hits, %zu "
                 "other disagreements of %zu rays. First: ray %zu",
              sc->name, g->name, d.holes, d.false_hits, d.disagreements, n, i);
+        if (g->packets)
+            lab_say(r, "         (packet %zu, lane %zu: rays %zu..%zu travel together)\n", i / 64,
+                    i % 64, i - i % 64, (i - i % 64 + 64 < n ? i - i % 64 + 64 : n) - 1);
         describe_ray(r, &g->rays.rays[i]);
         if (ref[i].prim != ACCEL_MISS)
             lab_say(r, "         the reference hits triangle %u at t=%.9g; ", ref[i].prim, ref[i].t);
@@ -141,9 +166,22 @@ static int compare_group(const accel_kind *k, const void *a, const accel_scene *
             lab_say(r, "you report a miss\n");
         size_t mine = 0;
         for (size_t j = 0; j < n; j++) mine += hits[j].prim != ACCEL_MISS;
+        int ending = strstr(g->name, "ending") != NULL;
         lab_say(r, "         hint: %s\n",
             mine == 0 ? "you report no hit on any ray: is the traversal written (trace_ray, "
                         "step 2; trace_packet, step 4) and does it return the local id it hit?"
+            : ending && g->packets && hits[i].prim == ACCEL_MISS
+                ? "these rays end exactly at their hit (t_far = the hit's t): a lane enters a "
+                  "box when box3_slab(..., p->t_near, t[lane], &entry) says so, with the lane's "
+                  "closest t as the far end; a cull of your own (entry < t) loses the hit"
+            : ending && hits[i].prim == ACCEL_MISS
+                ? "these rays end exactly at their hit (t_far = the hit's t), where a box's "
+                  "entry can round to just past t: cull a popped node with "
+                  "!box3_entry_before(entry, t) (geom.h), the slab test's own padding, never "
+                  "`entry < t` or `entry <= t`"
+            : g->packets && hits[i].prim == ACCEL_MISS
+                ? "a packet enters a node when ANY active lane from `first` on hits its box, "
+                  "not only the first lane; a leaf is tested with every active lane from there"
             : hits[i].prim == ACCEL_MISS
                 ? "a box test that rejects a box the ray touches (t range, +-0 directions), or "
                   "a node never visited (is the far child pushed and popped?)"
@@ -184,8 +222,8 @@ static double steps_per_ray(const accel_kind *k, const void *a, const rays_set *
 /* The depth view: nodes visited per pixel, at 256x256 (the check's own
  * rays are too few pixels to see a tree in). */
 #define LAB_VIEW_SIZE 256
-static void write_depth_view(const lab_subject *s, const char *scene, const accel_scene *sc,
-                             const void *a, lab_result *r)
+static void write_depth_view(const lab_subject *s, const accel_kind *kind, const char *whose,
+                             const char *scene, const accel_scene *sc, const void *a, lab_result *r)
 {
     if (!s->out_dir) return;
     const int w = LAB_VIEW_SIZE, h = LAB_VIEW_SIZE;
@@ -196,20 +234,22 @@ static void write_depth_view(const lab_subject *s, const char *scene, const acce
     accel_error err = {0};
     float vmax = 1.0f;
     char path[512];
-    snprintf(path, sizeof path, "%s/step2_depth_%s.png", s->out_dir, scene);
+    snprintf(path, sizeof path, "%s/%s_depth_%s%s.png", s->out_dir,
+             yard == &grid_yard ? "grid" : "step2", scene, whose);
     for (char *p = path + strlen(s->out_dir) + 1; *p; p++)
         if (*p == ':' || *p == '=' || *p == ',') *p = '_';
     if (!steps || !v || rays_primary(&sc->camera, w, h, &rays, &err)) goto out;
-    steps_per_ray(s->kind, a, &rays, steps);
+    steps_per_ray(kind, a, &rays, steps);
     for (size_t i = 0; i < rays.count; i++) { /* rays come in 8x8 tiles: pixel[] places them */
         float x = (float)steps[i];
         v[rays.pixel ? rays.pixel[i] : i] = x;
         if (x > vmax) vmax = x;
     }
     char title[128];
-    image_heat_title(title, sizeof title, s->kind->name, s->kind, 0);
+    image_heat_title(title, sizeof title, kind->name, kind, 0);
     if (image_heatmap(v, w, h, NULL, title, &img, &err) == 0 && image_write(path, &img, &err) == 0)
-        lab_say(r, "       depth view (nodes visited per pixel, white = %.0f): %s\n", vmax, path);
+        lab_say(r, "       depth view (%s per pixel, white = %.0f), %s: %s\n", kind->step_name,
+                vmax, *whose ? "the reference's" : "yours", path);
 out:
     if (err.code) lab_say(r, "       no depth view %s: %s\n", path, err.msg);
     image_free(&img);
@@ -229,59 +269,69 @@ static void check_traversal(const lab_subject *s, const char *spec, lab_result *
         return;
     }
     int size = s->quick ? 32 : 64;
-    ray_group g[4];
+    enum { GROUPS = 5 };
+    ray_group g[GROUPS];
     memset(g, 0, sizeof g);
     g[0].name = "primary";
     g[1].name = "shadow";
-    g[1].occlusion = 1;
     g[2].name = "diffuse";
     g[3].name = "vertex and axis";
+    g[4].name = "ending exactly at the hit";
     accel_hit *ph = NULL;
     void *a = NULL, *ref_a = NULL;
     accel_build_stats st;
-    const accel_kind *refk = reference_kind();
+    const accel_kind *refk = accel_find_kind(yard->kind);
     int ok = rays_primary(&sc.camera, size, size, &g[0].rays, err) == 0;
     if (ok) ph = malloc(g[0].rays.count * sizeof *ph);
     ok = ok && ph;
     if (ok) accel_reference_trace(&sc, g[0].rays.rays, ph, g[0].rays.count, s->threads);
     ok = ok && rays_shadow(&sc, &g[0].rays, ph, &g[1].rays, err) == 0 &&
          rays_diffuse(&sc, &g[0].rays, ph, 7, &g[2].rays, err) == 0 &&
-         lab_make_stiff_rays(&sc, &g[3].rays, err) == 0;
+         lab_make_stiff_rays(&sc, &g[3].rays, err) == 0 &&
+         rays_ending_at_hit(&g[0].rays, ph, &g[4].rays, err) == 0;
     if (!ok) {
         lab_fail(r, "%s: could not make the rays: %s", spec, err->msg);
         goto out;
     }
+    lab_where(r, "scene %s, your build", spec);
     if (build(s, "", &sc, &a, &st, err)) {
         lab_fail(r, "%s: your build failed: %s", spec, err->msg);
         goto out;
     }
-    for (int i = 0; i < 4; i++)
+    for (int i = 0; i < GROUPS; i++)
         if (!compare_group(s->kind, a, &sc, &g[i], s->threads, r)) goto out;
     double mine = steps_per_ray(s->kind, a, &g[0].rays, NULL);
     if (!(mine > 0.0)) {
-        lab_fail(r, "%s: your traversal counts no node visits (*steps stays 0): the depth view "
-                "and the cost comparison need them",
-             spec);
+        lab_fail(r, "%s: your traversal counts no %s (*steps stays 0): the depth view and the "
+                "cost comparison need them",
+             spec, yard == &grid_yard ? "cells stepped" : "node visits");
         goto out;
     }
-    write_depth_view(s, spec, &sc, a, r);
+    write_depth_view(s, s->kind, "", spec, &sc, a, r);
     double theirs = NAN;
-    if (refk && accel_build_kind(refk, "build=median", &sc, 1, &ref_a, &st, err) == 0)
+    char ykv[256];
+    snprintf(ykv, sizeof ykv, "%s%s%s", yard->kv, yard == &grid_yard && *s->kv ? "," : "",
+             yard == &grid_yard ? s->kv : "");
+    if (refk && accel_build_kind(refk, ykv, &sc, 1, &ref_a, &st, err) == 0)
         theirs = steps_per_ray(refk, ref_a, &g[0].rays, NULL);
-    if (theirs > 0.0 && mine > 2.0 * theirs) {
-        lab_fail(r, "%s: your traversal visits %.1fx the nodes of a median-split BVH (%.1f against "
-                "%.1f per primary ray). Hint: visit the nearer child first, and drop a popped "
-                "node whose entry distance lies beyond the closest hit found so far",
-             spec, mine / theirs, mine, theirs);
+    if (ref_a) write_depth_view(s, refk, "_reference", spec, &sc, ref_a, r);
+    size_t rays = 0;
+    for (int i = 0; i < GROUPS; i++) rays += g[i].rays.count;
+    if (theirs > 0.0 && mine > LAB_SLOW_RATIO * theirs) {
+        lab_slow(r, "%s: all %zu rays agree with the reference, but your traversal visits %.2fx "
+                "the %s of %s (%.1f against %.1f per primary ray; a good solution: at most "
+                "%.2fx). Hint: %s",
+             spec, rays, mine / theirs, yard->unit, yard->what, mine, theirs, LAB_SLOW_RATIO,
+             yard->hint);
         goto out;
     }
-    lab_say(r, "  ok   %s: %zu rays agree with the reference; %.1f nodes per primary ray (median-split "
-           "BVH: %.1f)\n",
-        spec, g[0].rays.count + g[1].rays.count + g[2].rays.count + g[3].rays.count, mine, theirs);
+    lab_say(r, "  ok   %s: %zu rays agree with the reference; %.1f %s per primary ray (%s: %.1f, "
+           "%.2fx)\n",
+        spec, rays, mine, yard->unit, yard->what, theirs, mine / theirs);
 out:
     if (a) s->kind->destroy(a);
     if (ref_a) refk->destroy(ref_a);
-    for (int i = 0; i < 4; i++) rays_free(&g[i].rays);
+    for (int i = 0; i < GROUPS; i++) rays_free(&g[i].rays);
     free(ph);
     scene_free(&sc);
 }
@@ -295,10 +345,12 @@ static void check_packets(const lab_subject *s, const char *spec, lab_result *r,
         lab_fail(r, "scene %s: %s", spec, err->msg);
         return;
     }
-    ray_group g[2];
+    ray_group g[3];
     memset(g, 0, sizeof g);
     g[0].name = "primary (8x8 packets)";
     g[1].name = "shadow (packets)";
+    g[2].name = "primary ending exactly at the hit (packets)";
+    for (int i = 0; i < 3; i++) g[i].packets = 1;
     void *single = NULL, *packet = NULL;
     accel_build_stats st;
     accel_hit *ph = NULL;
@@ -309,15 +361,17 @@ static void check_packets(const lab_subject *s, const char *spec, lab_result *r,
         goto out;
     }
     accel_reference_trace(&sc, g[0].rays.rays, ph, g[0].rays.count, s->threads);
-    if (rays_shadow(&sc, &g[0].rays, ph, &g[1].rays, err)) {
+    if (rays_shadow(&sc, &g[0].rays, ph, &g[1].rays, err) ||
+        rays_ending_at_hit(&g[0].rays, ph, &g[2].rays, err)) {
         lab_fail(r, "%s: could not make the shadow rays: %s", spec, err->msg);
         goto out;
     }
+    lab_where(r, "scene %s, your build with traverse=packet", spec);
     if (build(s, "traverse=packet", &sc, &packet, &st, err)) {
         lab_fail(r, "%s: your kind does not build with traverse=packet: %s", spec, err->msg);
         goto out;
     }
-    for (int i = 0; i < 2; i++)
+    for (int i = 0; i < 3; i++)
         if (!compare_group(s->kind, packet, &sc, &g[i], s->threads, r)) goto out;
     if (build(s, "", &sc, &single, &st, err)) {
         lab_fail(r, "%s: your build failed: %s", spec, err->msg);
@@ -338,8 +392,20 @@ static void check_packets(const lab_subject *s, const char *spec, lab_result *r,
              spec);
         goto out;
     }
+    /* A packet fetches at least every node its busiest ray needs, so the
+     * fetches of all packets are at least the single rays' visits / 64. */
+    size_t packets = (g[0].rays.count + 63) / 64;
+    if (fetched * 64.0 < per_ray) {
+        lab_fail(r, "%s: your %zu packets fetch %llu nodes in all (%.3f per ray), fewer than "
+                "their rays need: single rays visit %.2f nodes each, so a packet of 64 fetches "
+                "at least %.1f (every node its busiest ray visits). *packet_steps must count "
+                "the nodes the packet's one walk enters, once per node, not packets or a "
+                "number of your own",
+             spec, packets, (unsigned long long)cp.packet_steps, fetched, per_ray, per_ray);
+        goto out;
+    }
     if (fetched > 0.25 * per_ray) {
-        lab_fail(r, "%s: your packets fetch %.2f nodes per ray, single rays visit %.2f: a packet of "
+        lab_slow(r, "%s: your packets fetch %.2f nodes per ray, single rays visit %.2f: a packet of "
                 "64 coherent rays should share most nodes (at most a quarter of a single ray's "
                 "visits per ray). Hint: keep the first active ray's index, and pop a node "
                 "only when no ray of the packet needs it",
@@ -352,7 +418,7 @@ static void check_packets(const lab_subject *s, const char *spec, lab_result *r,
 out:
     if (single) s->kind->destroy(single);
     if (packet) s->kind->destroy(packet);
-    for (int i = 0; i < 2; i++) rays_free(&g[i].rays);
+    for (int i = 0; i < 3; i++) rays_free(&g[i].rays);
     free(ph);
     scene_free(&sc);
 }
@@ -385,9 +451,9 @@ static int time_frames(const accel_kind *k, const void *a, const rays_set *prim,
     return rc;
 }
 
-static void check_real_time(const lab_subject *s, lab_result *r, accel_error *err)
+static void check_real_time(const lab_subject *s, const char *spec, lab_result *r,
+                            accel_error *err)
 {
-    const char *spec = "teapot_stadium:n=16";
     int w = s->quick ? 200 : 800, h = s->quick ? 150 : 600;
     accel_scene sc;
     if (scene_create(spec, &sc, err)) {
@@ -480,22 +546,32 @@ int lab_check(int step, const lab_subject *s, lab_result *out, accel_error *err)
                           LAB_STEPS);
     lab_say(out, "step %d: %s, kind %s%s%s\n", step, lab_step_title(step), s->kind->name,
         *s->kv ? ":" : "", s->kv);
+    /* Each scene's check runs in a child process: a crash is a report. */
     size_t n = sizeof step_scenes / sizeof step_scenes[0];
     switch (step) {
     case 1:
-        for (size_t i = 0; i < n && out->passed; i++) check_build(s, step_scenes[i], out, err);
+        for (size_t i = 0; i < n && out->passed; i++)
+            lab_run_isolated(check_build, s, step_scenes[i], out, err);
         break;
     case 2:
-        for (size_t i = 0; i < n && out->passed; i++) check_traversal(s, step_scenes[i], out, err);
+    case 6:
+        yard = step == 6 ? &grid_yard : &bvh_yard;
+        for (size_t i = 0; i < n && out->passed; i++)
+            lab_run_isolated(check_traversal, s, step_scenes[i], out, err);
+        yard = &bvh_yard;
         break;
     case 3:
         lab_check_step3(s, out, err);
         break;
     case 4:
-        for (size_t i = 0; i < 2 && out->passed; i++) check_packets(s, step_scenes[i], out, err);
+        for (size_t i = 0; i < 2 && out->passed; i++)
+            lab_run_isolated(check_packets, s, step_scenes[i], out, err);
         break;
     case 5:
-        check_real_time(s, out, err);
+        lab_run_isolated(check_real_time, s, "teapot_stadium:n=16", out, err);
+        break;
+    case 7:
+        lab_check_top(s, out, err);
         break;
     }
     return 0;

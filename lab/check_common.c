@@ -8,6 +8,11 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <signal.h>
+#include <sys/mman.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "check_common.h"
 
@@ -21,18 +26,93 @@ void lab_say(lab_result *r, const char *fmt, ...)
     va_end(ap);
 }
 
-void lab_fail(lab_result *r, const char *fmt, ...)
+static void failv(lab_result *r, lab_outcome how, const char *tag, const char *fmt, va_list ap)
 {
-    size_t len = strlen(r->report);
-    if (len + 8 < sizeof r->report) {
-        memcpy(r->report + len, "  FAIL ", 8);
-        va_list ap;
-        va_start(ap, fmt);
-        vsnprintf(r->report + len + 7, sizeof r->report - len - 7, fmt, ap);
-        va_end(ap);
+    size_t len = strlen(r->report), tl = strlen(tag);
+    if (len + tl + 1 < sizeof r->report) {
+        memcpy(r->report + len, tag, tl + 1);
+        vsnprintf(r->report + len + tl, sizeof r->report - len - tl, fmt, ap);
         lab_say(r, "\n");
     }
+    if (r->passed) r->outcome = how; /* the first failure is the one to fix */
     r->passed = 0;
+}
+
+void lab_fail(lab_result *r, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    failv(r, LAB_WRONG, "  FAIL ", fmt, ap);
+    va_end(ap);
+}
+
+void lab_slow(lab_result *r, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    failv(r, LAB_SLOW, "  SLOW correct but slow: ", fmt, ap);
+    va_end(ap);
+}
+
+static void crashed(lab_result *r, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+static void crashed(lab_result *r, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    failv(r, LAB_CRASHED, "  CRASH ", fmt, ap);
+    va_end(ap);
+}
+
+void lab_where(lab_result *r, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(r->where, sizeof r->where, fmt, ap);
+    va_end(ap);
+}
+
+/* The child runs the check on a copy of the result in shared memory, so
+ * that what it found before dying, and where it was, reach the parent. */
+void lab_run_isolated(lab_scene_check fn, const lab_subject *s, const char *scene, lab_result *r,
+                      accel_error *err)
+{
+    lab_result *shared = mmap(NULL, sizeof *shared, PROT_READ | PROT_WRITE,
+                              MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+    pid_t pid = -1;
+    if (shared != MAP_FAILED) {
+        *shared = *r;
+        lab_where(shared, "scene %s", scene);
+        fflush(NULL);
+        pid = fork();
+    }
+    if (pid < 0) { /* no child: run here (a crash then ends the check) */
+        if (shared != MAP_FAILED) munmap(shared, sizeof *shared);
+        fn(s, scene, r, err);
+        return;
+    }
+    if (pid == 0) {
+        struct rlimit no_core = {0, 0};
+        setrlimit(RLIMIT_CORE, &no_core); /* a crash leaves a report, not a core file */
+        alarm(LAB_SCENE_TIMEOUT);
+        fn(s, scene, shared, err);
+        fflush(NULL);
+        _exit(0);
+    }
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0) continue;
+    *r = *shared;
+    munmap(shared, sizeof *shared);
+    if (WIFSIGNALED(status) && WTERMSIG(status) == SIGALRM)
+        crashed(r, "no answer within %d s on %s: an endless loop (a node that is its own "
+                   "child, a pop that never empties the stack)?",
+                LAB_SCENE_TIMEOUT, r->where);
+    else if (WIFSIGNALED(status))
+        crashed(r, "crashed (%s) on %s: a node index out of range or a traversal stack "
+                   "overflow? (a child index past b->node_count, a pop from an empty stack, a "
+                   "push beyond LAB_MAX_DEPTH)",
+                strsignal(WTERMSIG(status)), r->where);
+    else if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
+        crashed(r, "ended with status %d on %s", WEXITSTATUS(status), r->where);
 }
 
 /* Rays from the eye through triangle vertices (the cases that leak through

@@ -13,12 +13,16 @@
 
 #include "check.h"
 
+#ifdef GRIDBVH_LAB
+void lab_top_student(const lab_top *top, const accel_ray *ray, accel_hit *hit); /* student.c */
+#endif
+
 static int usage(const char *msg)
 {
     if (msg) fprintf(stderr, "lab: %s\n", msg);
     fprintf(stderr, "usage: lab --step N [--accel SPEC] [--threads N] [--out DIR] [--quick]\n"
-                    "  --step N      lab step 1..%d (LAB.md)\n"
-                    "  --accel SPEC  the kind to check (default: student)\n"
+                    "  --step N      lab step 1..%d (LAB.md; optional: 6 a grid, 7 your top level)\n"
+                    "  --accel SPEC  the kind to check (default: student; step 6: student_grid)\n"
                     "  --threads N   threads for step 5 (default: all cores)\n"
                     "  --out DIR     where the depth view and images go (default: none)\n"
                     "  --quick       smaller sizes\n"
@@ -30,7 +34,7 @@ static int usage(const char *msg)
 int main(int argc, char **argv)
 {
     int step = 0, threads = accel_cpu_count(), quick = 0;
-    const char *spec = "student", *out_dir = NULL;
+    const char *spec = NULL, *out_dir = NULL;
     for (int i = 1; i < argc; i++) {
         const char *a = argv[i];
         const char *v = i + 1 < argc ? argv[i + 1] : NULL;
@@ -44,7 +48,7 @@ int main(int argc, char **argv)
         i++;
         if (!strcmp(a, "--step")) {
             step = (int)strtol(v, &end, 10);
-            if (*end || step < 1 || step > LAB_STEPS) return usage("--step takes 1..5");
+            if (*end || step < 1 || step > LAB_STEPS) return usage("--step takes 1..7");
         } else if (!strcmp(a, "--accel")) {
             spec = v;
         } else if (!strcmp(a, "--threads")) {
@@ -57,6 +61,7 @@ int main(int argc, char **argv)
         }
     }
     if (!step) return usage("--step is required");
+    if (!spec) spec = step == 6 ? "student_grid" : "student";
     accel_params p;
     accel_error err = {0};
     if (accel_params_parse(spec, &p, &err)) {
@@ -64,7 +69,10 @@ int main(int argc, char **argv)
         return 2;
     }
     const char *colon = strchr(spec, ':');
-    lab_subject s = {p.kind, colon ? colon + 1 : "", threads, out_dir, quick};
+    lab_subject s = {p.kind, colon ? colon + 1 : "", threads, out_dir, quick, NULL};
+#ifdef GRIDBVH_LAB
+    if (!strcmp(p.kind->name, "student")) s.top = lab_top_student; /* step 7 */
+#endif
     lab_result r;
     if (lab_check(step, &s, &r, &err)) {
         fprintf(stderr, "lab: %s\n", err.msg);

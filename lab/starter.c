@@ -19,6 +19,9 @@
  *           callback: your kind becomes the bottom level of the two-level
  *           kind `instanced`, which transforms rays to object space
  *   step 4  trace_packet(): 8x8 packets of rays (traverse=packet)
+ *   step 7  (optional) lab_top_starter(): the top level of a scene of
+ *           instances yourself: the loop, the inverse transforms, t in world
+ *           units (lab/top.h)
  *
  * Step 5 measures your frames per second.
  *
@@ -32,6 +35,8 @@
 
 #include "core/prim.h"
 #include "core/variant.h"
+#include "top.h"      /* step 7 (optional): the top level */
+#include "validate.h" /* the tree check run after your build (nothing to do there) */
 
 /* The lecture's node: a leaf holds `count` primitives starting at
  * order[left_first]; an interior node (count == 0) has its children at
@@ -44,6 +49,9 @@ typedef struct {
 } lab_node;
 
 _Static_assert(sizeof(lab_node) == 32, "the lecture's 32-byte node");
+_Static_assert(sizeof(lab_node) == sizeof(lab_tree_node) &&
+                   offsetof(lab_node, count) == offsetof(lab_tree_node, count),
+               "validate.h reads the nodes");
 
 /* Deepest tree the traversal stack allows (a median split halves the
  * primitives at every level, so 64 levels hold 2^64 of them). */
@@ -140,7 +148,7 @@ static int lab_build(const accel_scene *scene, const accel_params *params, int t
     b->packet = spec->traverse == 1;
     b->naive = params->naive;
     uint32_t n = b->store.prims.prim_count;
-    b->nodes = malloc(((size_t)2 * n + 1) * sizeof *b->nodes);
+    b->nodes = calloc((size_t)2 * n + 1, sizeof *b->nodes);
     b->order = malloc(((size_t)n + 1) * sizeof *b->order);
     if (!b->nodes || !b->order) {
         lab_destroy(b);
@@ -150,6 +158,11 @@ static int lab_build(const accel_scene *scene, const accel_params *params, int t
     if (n > 0) {
         b->node_count = 1; /* the root; build_node takes its children from here on */
         rc = build_node(b, 0, 0, n, 1, err);
+        /* Your tree, checked (validate.h): a wrong box or a lost primitive
+         * fails here with "node 17: ...", not later as a hole or a crash. */
+        if (!rc)
+            rc = lab_validate_tree((const lab_tree_node *)b->nodes, b->node_count, b->order,
+                                   &b->store.prims, err);
         if (rc) {
             lab_destroy(b);
             return rc;
@@ -176,7 +189,11 @@ static int lab_build(const accel_scene *scene, const accel_params *params, int t
  * its primitives with accel_prim_hit(&b->store.prims, prim, p, &t, &u, &v,
  * naive, spheres), which keeps the nearest hit in t; at an interior node
  * visit the nearer child first and push the other on a stack of
- * LAB_MAX_DEPTH entries. Count every node visited in *steps, every box
+ * LAB_MAX_DEPTH entries, with its entry distance. Drop a popped node whose
+ * entry lies beyond the closest hit t with !box3_entry_before(entry, t)
+ * (geom.h): `entry < t` or `entry <= t` loses hits on rays that end exactly
+ * at the hit (t_far == the hit's t), where the entry's rounding can land
+ * just past t. Count every node visited in *steps, every box
  * test in *boxes, every primitive test in *prims (the depth view and the
  * checks read them). Return the local id hit (or ACCEL_MISS) and fill
  * *t_out, *u_out, *v_out.
@@ -237,6 +254,28 @@ static int walk_ray(const lab_bvh *b, const accel_ray_prep *p, float pad, accel_
     return ACCEL_OK; /* TODO step 3: visits nothing yet */
 }
 
+/*
+ * Optional step 7 (LAB.md): the top level yourself, as the lecture's step 3
+ * means it. `top` holds your kind built once per mesh in the mesh's object
+ * space (top->mesh_accel[mesh]) and the instances (top->instances[k]: its
+ * mesh, the id `base` of its first primitive in the flattened scene, and
+ * `inverse`, the world -> object 3x4 matrix, rows: x' = m[0]x + m[1]y +
+ * m[2]z + m[3], ...). To do: for every instance, transform the ray's origin
+ * (a point: with the translation column) and direction (a vector: without
+ * it) by `inverse`, in double, and do NOT renormalize the direction: then
+ * t along the object ray is t along the world ray, so t_near, t_far and
+ * the hit's t stay in world units. Trace it with
+ * top->kind->intersect(top->mesh_accel[mesh], &object_ray, &h, 1, NULL),
+ * with t_far the nearest hit so far; keep the nearest hit over all
+ * instances, its id base + h.prim. *hit = accel_hit_miss() when none.
+ */
+void lab_top_starter(const lab_top *top, const accel_ray *ray, accel_hit *hit)
+{
+    (void)top;
+    (void)ray;
+    *hit = accel_hit_miss(); /* TODO step 7 (optional) */
+}
+
 static int lab_walk(const void *a, const accel_ray *ray, float pad, accel_walk_visit visit,
                     void *ctx, uint32_t *steps)
 {
@@ -257,7 +296,9 @@ static int lab_walk(const void *a, const accel_ray *ray, float pad, accel_walk_v
  * then each ray is traced alone, which is correct but not a packet.
  * Fill hit_local[i] (local id or ACCEL_MISS), t[i], u[i], v[i], and the
  * per-ray counters as in step 2; count each node the packet enters (once
- * for the whole packet) in *packet_steps: the check's sharing figure.
+ * for the whole packet) in *packet_steps: the check's sharing figure. The
+ * check holds it against the per-ray work (a packet fetches at least every
+ * node its busiest ray needs): a count that is not the walk's is caught.
  */
 static inline __attribute__((always_inline)) void
 trace_packet(const lab_bvh *b, const accel_ray_prep *p, const int *valid, uint32_t n,

@@ -301,12 +301,15 @@ void test_rays_shortened(test_rays *r, const accel_ray *rays, const accel_hit *r
 
 void test_rays_ending_at_hit(test_rays *r, const accel_ray *rays, const accel_hit *ref, size_t n)
 {
-    for (size_t i = 0; i < n; i++) {
-        if (ref[i].prim == ACCEL_MISS) continue;
-        accel_ray ray = rays[i];
-        ray.t_far = ref[i].t;
-        test_rays_push(r, ray);
+    rays_set in = {(accel_ray *)rays, NULL, n, 0, 0}, out;
+    accel_error err = {0};
+    if (rays_ending_at_hit(&in, ref, &out, &err)) {
+        test_fail(__FILE__, __LINE__, "%s", err.msg);
+        r->failed = 1;
+        return;
     }
+    for (size_t i = 0; i < out.count; i++) test_rays_push(r, out.rays[i]);
+    rays_free(&out);
 }
 
 void test_rays_behind(test_rays *r, const accel_ray *rays, const accel_hit *ref, size_t n)

@@ -170,7 +170,7 @@ TEST(anybottom_lab_step3_catches_a_walk_without_pad)
     accel_kind broken = *accel_find_kind("bvh");
     broken.name = "bvh_without_pad";
     broken.walk = nopad_walk;
-    lab_subject sub = {&broken, "build=median", 2, NULL, 1};
+    lab_subject sub = {&broken, "build=median", 2, NULL, 1, NULL};
     lab_result r;
     accel_error err = {0};
     CHECK(lab_check(3, &sub, &r, &err) == 0);

@@ -1,15 +1,29 @@
 /*
- * test_lab.c - the lab's checks can pass and can fail: each step's check
+ * test_lab.c - the lab's checks can pass and can fail. Each step's check
  * passes on the project's own implementation (bvh:build=median, with
- * traverse=packet for step 4) and fails on the untouched starter
- * (lab/starter.c), which is compiled into the test binary for this.
+ * traverse=packet for step 4) and on the lab's reference solution
+ * (tests/lab_solution.c, the starter with its four functions written), and
+ * fails on the untouched starter (lab/starter.c) and on every mutant
+ * student (lab_solution.h: one typical mistake each), each with the
+ * outcome it deserves: wrong, crashed, or correct but slow. A check that
+ * cannot fail is caught here, not by a student.
+ *
+ * LAB_MUTANT_TABLE=1 bin/run_tests lab_mutants prints the table of
+ * mutants: step, outcome, the first line of the report's failure.
  */
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "lab/check.h"
+#include "tests/lab_solution.h"
+#include "support.h"
 #include "test.h"
 
 extern const accel_kind accel_kind_starter;
+extern const accel_kind accel_kind_grid_starter;
+void lab_top_starter(const lab_top *top, const accel_ray *ray, accel_hit *hit);
+void lab_top_lab_solution(const lab_top *top, const accel_ray *ray, accel_hit *hit);
 
 static void run_step(int step)
 {
@@ -18,10 +32,18 @@ static void run_step(int step)
     if (!bvh) return;
     accel_error err = {0};
     lab_result r;
-    lab_subject own = {bvh, "build=median", 2, NULL, 1};
-    CHECK(lab_check(step, &own, &r, &err) == 0);
-    CHECKF(r.passed, "step %d fails on the project's own implementation:\n%s", step, r.report);
-    lab_subject starter = {&accel_kind_starter, "", 2, NULL, 1};
+    lab_subject own = {bvh, "build=median", 2, NULL, 1, NULL};
+    if (step != 7) { /* step 7 checks a function of the student's file, not a kind */
+        CHECK(lab_check(step, &own, &r, &err) == 0);
+        CHECKF(r.passed, "step %d fails on the project's own implementation:\n%s", step, r.report);
+    }
+    lab_solution_mutant = LM_NONE;
+    lab_subject sol = {&accel_kind_lab_solution, "", 2, NULL, 1, lab_top_lab_solution};
+    CHECK(lab_check(step, &sol, &r, &err) == 0);
+    CHECKF(r.passed && r.outcome == LAB_PASSED,
+           "step %d fails on the reference solution (tests/lab_solution.c):\n%s", step, r.report);
+    if (getenv("LAB_MUTANT_TABLE")) fputs(r.report, stdout);
+    lab_subject starter = {&accel_kind_starter, "", 2, NULL, 1, lab_top_starter};
     CHECK(lab_check(step, &starter, &r, &err) == 0);
     CHECKF(!r.passed, "step %d passes on the untouched starter: the check cannot fail\n%s", step,
            r.report);
@@ -34,3 +56,138 @@ TEST(lab_step2_traversal) { run_step(2); }
 TEST(lab_step4_packets) { run_step(4); }
 TEST(lab_step5_real_time) { run_step(5); }
 TEST(lab_step3_many_meshes) { run_step(3); }
+TEST(lab_step7_top_level) { run_step(7); }
+
+/* The optional grid step: the project's grid in its plain form (bounding
+ * box overlap, no mailbox) passes, the untouched lab/grid_starter.c fails. */
+TEST(lab_step6_grid)
+{
+    const accel_kind *grid = accel_find_kind("grid");
+    CHECK(grid != NULL);
+    if (!grid) return;
+    accel_error err = {0};
+    lab_result r;
+    lab_subject own = {grid, "overlap=bbox,mailbox=0", 2, NULL, 1, NULL};
+    CHECK(lab_check(6, &own, &r, &err) == 0);
+    CHECKF(r.passed, "step 6 fails on the project's grid:\n%s", r.report);
+    lab_subject starter = {&accel_kind_grid_starter, "", 2, NULL, 1, NULL};
+    CHECK(lab_check(6, &starter, &r, &err) == 0);
+    CHECKF(!r.passed && r.outcome == LAB_WRONG && strstr(r.report, "FAIL"),
+           "step 6 passes on the untouched grid starter\n%s", r.report);
+}
+
+/* ---- mutant students ------------------------------------------------------ */
+
+typedef struct {
+    int id;
+    int step;           /* the step whose check must fail */
+    lab_outcome expect; /* and how */
+    const char *name;
+} mutant_case;
+
+static const mutant_case mutants[] = {
+    {LM_LEAF_START, 1, LAB_WRONG, "step 1: a leaf's left_first is its node index"},
+    {LM_EMPTY_LEAF, 1, LAB_WRONG, "step 1: empty leaves (box-middle split)"},
+    {LM_CENTROID_BOX, 1, LAB_WRONG, "step 1: node boxes from centroids"},
+    {LM_FIRST_PRIM_BOX, 1, LAB_WRONG, "step 1: node boxes from the first primitive"},
+    {LM_LOST_PRIM, 1, LAB_WRONG, "step 1: the right child loses a primitive"},
+    {LM_NO_LEAF_COUNT, 1, LAB_WRONG, "step 1: leaves never counted"},
+    {LM_CULL_LT, 2, LAB_WRONG, "step 2: pop cull entry < t"},
+    {LM_CULL_LE, 2, LAB_WRONG, "step 2: pop cull entry <= t"},
+    {LM_NO_FAR_PUSH, 2, LAB_WRONG, "step 2: the far child never pushed"},
+    {LM_FIRST_HIT, 2, LAB_WRONG, "step 2: stops at the first leaf that hits"},
+    {LM_POP_EMPTY, 2, LAB_CRASHED, "step 2: pops an empty stack"},
+    {LM_NO_STEPS, 2, LAB_WRONG, "step 2: counts no node visits"},
+    {LM_FAR_FIRST, 2, LAB_SLOW, "step 2: the far child first"},
+    {LM_NO_ORDER, 2, LAB_SLOW, "step 2: no near-first order"},
+    {LM_NO_SHRINK, 2, LAB_SLOW, "step 2: t_max never shrunk"},
+    {LM_NO_SORT, 2, LAB_SLOW, "step 1's split never sorts (step 2's rule)"},
+    {LM_WALK_ALL, 3, LAB_SLOW, "step 3: every primitive to the visitor"},
+    {LM_WALK_NO_PAD, 3, LAB_WRONG, "step 3: boxes not padded"},
+    {LM_WALK_PRIM_HIT, 3, LAB_WRONG, "step 3: filters with its own triangle test"},
+    {LM_WALK_T_ONE, 3, LAB_WRONG, "step 3: boxes against [t_near, 1]"},
+    {LM_PACKET_FAKE, 4, LAB_WRONG, "step 4: single rays, packet_steps += 1"},
+    {LM_PACKET_CULL_LT, 4, LAB_WRONG, "step 4: a lane's cull entry < t"},
+    {LM_PACKET_FIRST_ONLY, 4, LAB_WRONG, "step 4: only the first lane's box test"},
+    {LM_PACKET_NO_COUNT, 4, LAB_WRONG, "step 4: packet_steps never counted"},
+    {LM_TOP_FORWARD, 7, LAB_WRONG, "step 7: object -> world matrix, not its inverse"},
+    {LM_TOP_DIR_MOVED, 7, LAB_WRONG, "step 7: the direction translated too"},
+    {LM_TOP_NORMALIZE, 7, LAB_WRONG, "step 7: object direction renormalized"},
+    {LM_TOP_FIRST_INSTANCE, 7, LAB_WRONG, "step 7: the first instance hit, not the nearest"},
+};
+
+static const char *outcome_name(lab_outcome o)
+{
+    static const char *const names[] = {"PASSED", "wrong", "crashed", "correct but slow"};
+    return o <= LAB_SLOW ? names[o] : "?";
+}
+
+/* The first failure line of a report, without its tag. */
+static void first_failure(const char *report, char *out, size_t size)
+{
+    const char *tags[] = {"  FAIL ", "  SLOW ", "  CRASH "}, *at = NULL;
+    for (int i = 0; i < 3; i++) {
+        const char *p = strstr(report, tags[i]);
+        if (p && (!at || p < at)) at = p;
+    }
+    snprintf(out, size, "%s", at ? at + 2 : "(no failure line)");
+    char *nl = strchr(out, '\n');
+    if (nl) *nl = '\0';
+}
+
+/* Every mutant of `step`, and of the steps before it that it must pass. */
+static void run_mutants(int step)
+{
+    int table = getenv("LAB_MUTANT_TABLE") != NULL;
+    lab_subject sol = {&accel_kind_lab_solution, "", 2, NULL, 1, lab_top_lab_solution};
+    for (size_t i = 0; i < sizeof mutants / sizeof mutants[0]; i++) {
+        const mutant_case *m = &mutants[i];
+        if (m->step != step) continue;
+        accel_error err = {0};
+        lab_result r;
+        lab_solution_mutant = m->id;
+        int rc = lab_check(step, &sol, &r, &err);
+        lab_solution_mutant = LM_NONE;
+        CHECK(rc == 0);
+        char line[200];
+        first_failure(r.report, line, sizeof line);
+        CHECKF(!r.passed, "mutant %s passes step %d: the check cannot catch it\n%s", m->name,
+               step, r.report);
+        CHECKF(r.passed || r.outcome == m->expect, "mutant %s fails step %d as %s, not as %s:\n%s",
+               m->name, step, outcome_name(r.outcome), outcome_name(m->expect), r.report);
+        if (table)
+            printf("| %d | %s | %s | %s | %.160s |\n", m->step, m->name,
+                   r.passed ? "NO" : "yes", outcome_name(r.outcome), line);
+    }
+}
+
+TEST(lab_mutants_step1) { run_mutants(1); }
+TEST(lab_mutants_step2) { run_mutants(2); }
+TEST(lab_mutants_step3) { run_mutants(3); }
+TEST(lab_mutants_step4) { run_mutants(4); }
+TEST(lab_mutants_step7) { run_mutants(7); }
+
+/* The solution is the starter with its four functions written: the rest
+ * (the build's frame and its tree check, lab_walk, the batch entries) is
+ * the starter's word for word, so the checks see it as a student's kind. */
+TEST(lab_solution_keeps_the_starter)
+{
+    static const char *const parts[][2] = {
+        {"static void lab_destroy", "/* ---- step 2"},
+        {"static int lab_walk(", "/* ---- step 4"},
+        {"/* ---- batch entries", "const accel_kind accel_kind_"},
+    };
+    char *st = test_read_file("lab/starter.c", NULL);
+    char *sol = test_read_file("tests/lab_solution.c", NULL);
+    CHECK(st && sol);
+    for (size_t i = 0; st && sol && i < sizeof parts / sizeof parts[0]; i++) {
+        const char *a = strstr(st, parts[i][0]), *b = strstr(sol, parts[i][0]);
+        const char *ae = a ? strstr(a, parts[i][1]) : NULL, *be = b ? strstr(b, parts[i][1]) : NULL;
+        CHECKF(ae && be, "part %s..%s missing", parts[i][0], parts[i][1]);
+        if (!ae || !be) continue;
+        CHECKF(ae - a == be - b && memcmp(a, b, (size_t)(ae - a)) == 0,
+               "tests/lab_solution.c's part from \"%s\" differs from lab/starter.c's", parts[i][0]);
+    }
+    free(st);
+    free(sol);
+}

@@ -63,7 +63,7 @@ TEST(lab_depth_view_pixels)
     char dir[] = "/tmp/gridbvh_lab_view_XXXXXX";
     CHECK(bvh != NULL);
     if (!bvh || !mkdtemp(dir)) return;
-    lab_subject own = {bvh, "build=median", 1, dir, 1};
+    lab_subject own = {bvh, "build=median", 1, dir, 1, NULL};
     lab_result r;
     accel_error err = {0};
     CHECK(lab_check(2, &own, &r, &err) == 0);
@@ -100,8 +100,18 @@ TEST(lab_depth_view_pixels)
     const char *names[] = {"soup_tris_3000_seed_7", "teapot_stadium_n_4", "sphereflake_level_2",
                            "cube_n_6"};
     for (int i = 0; i < 4; i++) {
+        /* the reference's view beside it: here the subject is the reference */
+        char ref_path[300];
         snprintf(path, sizeof path, "%s/step2_depth_%s.png", dir, names[i]);
+        snprintf(ref_path, sizeof ref_path, "%s/step2_depth_%s_reference.png", dir, names[i]);
+        size_t na = 0, nb = 0;
+        char *a = test_read_file(path, &na), *b = test_read_file(ref_path, &nb);
+        CHECKF(a && b && na == nb && memcmp(a, b, na) == 0,
+               "%s: the reference's view is missing or differs from the same kind's", ref_path);
+        free(a);
+        free(b);
         remove(path);
+        remove(ref_path);
     }
     rmdir(dir);
 }

@@ -17,6 +17,7 @@ extern const accel_kind accel_kind_nested_grid;
 extern const accel_kind accel_kind_instanced;
 #ifdef GRIDBVH_LAB
 extern const accel_kind accel_kind_student; /* lab/student.c, in `make lab` builds only */
+extern const accel_kind accel_kind_student_grid; /* lab/student_grid.c, likewise */
 #endif
 
 const accel_kind *const accel_kinds[] = {
@@ -28,6 +29,7 @@ const accel_kind *const accel_kinds[] = {
     &accel_kind_instanced,
 #ifdef GRIDBVH_LAB
     &accel_kind_student,
+    &accel_kind_student_grid,
 #endif
 };
 const size_t accel_kind_count = sizeof accel_kinds / sizeof accel_kinds[0];

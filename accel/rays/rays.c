@@ -246,6 +246,22 @@ int rays_ao(const accel_scene *s, const rays_set *prim, const accel_hit *hits, i
                      err);
 }
 
+int rays_ending_at_hit(const rays_set *prim, const accel_hit *hits, rays_set *out,
+                       accel_error *err)
+{
+    memset(out, 0, sizeof *out);
+    size_t n = 0;
+    for (size_t i = 0; i < prim->count; i++) n += hits[i].prim != ACCEL_MISS;
+    out->rays = malloc((n ? n : 1) * sizeof *out->rays);
+    if (!out->rays) return accel_fail(err, ACCEL_ERR_NOMEM, "rays: out of memory for %zu rays", n);
+    for (size_t i = 0; i < prim->count; i++) {
+        if (hits[i].prim == ACCEL_MISS) continue;
+        out->rays[out->count] = prim->rays[i];
+        out->rays[out->count++].t_far = hits[i].t;
+    }
+    return 0;
+}
+
 /* ---- files ---------------------------------------------------------------- */
 
 static int write_file(const char *path, const char magic[4], const void *data, size_t elem,

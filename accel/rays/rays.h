@@ -53,6 +53,12 @@ int rays_shadow(const accel_scene *s, const rays_set *prim, const accel_hit *hit
                 accel_error *err);
 int rays_diffuse(const accel_scene *s, const rays_set *prim, const accel_hit *hits, uint64_t seed,
                  rays_set *out, accel_error *err);
+/* The rays of `prim` that hit (hits[i].prim != ACCEL_MISS), each ending
+ * exactly at its hit (t_far = hits[i].t): a hit at the very end of the
+ * range, where a traversal that culls boxes with an unpadded `entry < t`
+ * loses it (the conformance suite's "ending at the hit" set). */
+int rays_ending_at_hit(const rays_set *prim, const accel_hit *hits, rays_set *out,
+                       accel_error *err);
 int rays_ao(const accel_scene *s, const rays_set *prim, const accel_hit *hits, int samples,
             float ao_radius, uint64_t seed, rays_set *out, accel_error *err);
 
