@@ -5,11 +5,11 @@
 #
 #   tools/vs_embree.sh SCENE [SPEC ...]
 #   MODE=occluded tools/vs_embree.sh ../shared/scenes/bunny.off
-#   MODE=packet ROUNDS=1 SIZE=64x48 tools/vs_embree.sh sphereflake:depth=1
+#   MODE=packet ROUNDS=1 SIZE=64x48 tools/vs_embree.sh sphereflake:level=1
 #
 # SCENE is anything bin/trace --scene takes. Once per scene (in DIR), bin/trace
 # writes it as OBJ (--export-obj) and writes the ray sets (--dump-rays):
-# SIZE primary rays (default 1024x768, in bin/trace's order) and one diffuse
+# SIZE primary rays (default 1024x768, in bin/trace's order: 8x8 tiles) and one diffuse
 # and one shadow ray per primary hit. Both tracers then read that OBJ and
 # those .rays files, so triangle ids and rays are the same.
 #
@@ -22,7 +22,10 @@
 # passes per process, 5, after a warm-up pass), THREADS (1), QUALITY (Embree's
 # build quality, medium), DIR (build/vs_embree/<scene>-<size>), BIN (bin),
 # BUILD (build: its .flags name our compiler target),
-# FRESH=1 remakes the OBJ and rays, CHECK=0 skips the hit comparison.
+# FRESH=1 remakes the OBJ and rays, CHECK=0 skips the hit comparison,
+# TRACE_OPTS and EMBREE_OPTS add options to every bin/trace or bin/embree_ref
+# run (e.g. EMBREE_OPTS="--isa avx2" or "--coherent"). Run it from the top of
+# the checkout.
 #
 # Printed per ray set: the median Mrays/s of each tracer over the rounds,
 # each SPEC's ratio to Embree (median over median) with the min-max of the
@@ -47,6 +50,8 @@ THREADS=${THREADS:-1}
 SIZE=${SIZE:-1024x768}
 QUALITY=${QUALITY:-medium}
 CHECK=${CHECK:-1}
+read -r -a trace_opts <<< "${TRACE_OPTS:-}"
+read -r -a embree_opts <<< "${EMBREE_OPTS:-}"
 occl=()
 case $MODE in
 single) emode=single; defspec=bvh:width=8 ;;
@@ -124,7 +129,7 @@ for ((r = 1; r <= ROUNDS; r++)); do
             [ "$r" = 1 ] && [ "$k" = 0 ] && [ "$CHECK" = 1 ] && dump=(--dump-hits "$DIR/ours.$MODE.$set.hits")
             out=$("$BIN/trace" --scene "$obj" --rays "$rays" "${occl[@]}" --accel "${specs[$k]}" \
                 --threads "$THREADS" --repeat "$PASSES" --warmup 1 --build-repeat 1 --no-counters \
-                --csv --quiet "${dump[@]}")
+                --csv --quiet "${dump[@]}" "${trace_opts[@]}")
             mr=$(printf '%s\n' "$out" | csv_field mrays_median | head -n 1)
             [ -n "$mr" ] || { echo "vs_embree: no Mrays/s from bin/trace:"; echo "$out"; exit 1; } >&2
             [ "$r" = 1 ] && ours_isa=$(our_isa "$out")
@@ -132,7 +137,7 @@ for ((r = 1; r <= ROUNDS; r++)); do
             hits=()
             [ "$r" = 1 ] && [ "$k" = 0 ] && [ "$CHECK" = 1 ] && hits=(--hits "$DIR/embree.$MODE.$set.hits")
             out=$("$BIN/embree_ref" --obj "$obj" --rays "$rays" --mode "$emode" --threads "$THREADS" \
-                --passes "$PASSES" --builds 1 --quality "$QUALITY" "${hits[@]}")
+                --passes "$PASSES" --builds 1 --quality "$QUALITY" "${hits[@]}" "${embree_opts[@]}")
             mr=$(printf '%s\n' "$out" | sed -n 's/.* mrays=\([0-9.]*\) .*/\1/p')
             embree_isa=$(printf '%s\n' "$out" | sed -n 's/.* isa=\([^ ]*\) .*/\1/p')
             echo "$set $r embree$k $mr" >> "$res"
