@@ -576,6 +576,7 @@ static int measure(const options *o, int layout, const ref_mesh *m, accel_ray *r
     double build_ms, mr[3];
     long long bytes = 0;
     RTCScene sc = build(dev, m, o->builds, &build_ms, &bytes);
+    long long peak = mem_peak; /* of the builds, before the recording scene */
     job proto = {sc, rays, 0, n, layout, o->occluded, o->coherent, hits, occ};
     time_passes(&proto, n, o, mr);
     size_t lost = o->occluded ? anyhit_answers(dev, m, sc, rays, occ, n, hits) : 0;
@@ -586,7 +587,7 @@ static int measure(const options *o, int layout, const ref_mesh *m, accel_ray *r
            "peak_bytes=%lld isa=%s version=%s\n",
            o->mode, o->occluded && strcmp(o->mode, "occluded") ? "+occluded" : "", n, hit_count,
            mr[0], mr[1], mr[2], o->passes, build_ms, o->builds, o->quality, o->build_threads,
-           o->threads, bytes, mem_peak, isa, RTC_VERSION_STRING);
+           o->threads, bytes, peak, isa, RTC_VERSION_STRING);
     fflush(stdout);
     if (lost)
         fprintf(stderr, "embree_ref: %zu occluded rays without a triangle to record (written as "
