@@ -43,7 +43,8 @@ $(SLOW_SRC:%.c=$(BUILD)/%.o): ALL_CFLAGS += $(if $(filter -g,$(CFLAGS)),-g1)
 DEPFLAGS  = -MMD -MP
 FLAGS_STAMP := $(BUILD)/.flags
 
-TOOLS    := $(patsubst tools/%.c,$(BIN)/%,$(wildcard tools/*.c))
+# tools/embree_ref.c is optional (libembree-dev): only `make embree` builds it.
+TOOLS    := $(patsubst tools/%.c,$(BIN)/%,$(filter-out tools/embree_ref.c,$(wildcard tools/*.c)))
 EXP_LIB  := $(filter-out experiments/exp_%.c experiments/mkreport.c,$(wildcard experiments/*.c))
 EXP_BINS := $(patsubst experiments/%.c,$(BIN)/%,$(wildcard experiments/exp_*.c))
 # The lab's checks and its untouched starter kind are part of the tests
@@ -53,7 +54,7 @@ TEST_SRC := $(wildcard tests/*.c) lab/check.c lab/check_common.c lab/check_step3
             lab/grid_starter.c \
             experiments/claims.c experiments/stats.c experiments/svg.c experiments/mdcut.c
 
-.PHONY: all test report sanitize fuzz clean bench lab lab-report FORCE
+.PHONY: all test report sanitize fuzz clean bench lab lab-report embree embree-header FORCE
 all: $(TOOLS) $(EXP_BINS) $(BIN)/mkreport $(BIN)/run_tests
 
 $(FLAGS_STAMP): FORCE
@@ -77,6 +78,26 @@ $(TOOLS): $(TOOL_PARTS)
 $(BIN)/%: $(BUILD)/tools/%.o $(LIB)
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $< $(patsubst %.c,$(BUILD)/%.o,$(wildcard tools/$*/*.c)) $(LIB) -o $@ $(LDLIBS)
+
+# The optional industrial reference (README.md): bin/embree_ref, Embree 3
+# on the project's triangles and rays, built only here and only when the
+# Debian package libembree-dev is installed (EMBREE_CFLAGS / EMBREE_LIBS for
+# another install). make, make test and make report never need it.
+EMBREE_CFLAGS ?=
+EMBREE_LIBS   ?= -lembree3
+embree: $(BIN)/embree_ref
+embree-header:
+	@printf '#include <embree3/rtcore.h>\n' | $(CC) $(EMBREE_CFLAGS) -E -x c - -o /dev/null 2>/dev/null || \
+	  { echo "make embree: libembree-dev not installed (no embree3/rtcore.h; EMBREE_CFLAGS=-I... if elsewhere)"; exit 1; }
+
+# Its own compile line, after the header check: a target-specific
+# ALL_CFLAGS would reach the flags stamp (a prerequisite) and rebuild all.
+$(BUILD)/tools/embree_ref.o: tools/embree_ref.c $(FLAGS_STAMP) | embree-header
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(EMBREE_CFLAGS) $(DEPFLAGS) -c $< -o $@
+$(BIN)/embree_ref: $(BUILD)/tools/embree_ref.o $(LIB)
+	@mkdir -p $(BIN)
+	$(CC) $(ALL_CFLAGS) $^ -o $@ $(LDLIBS) $(EMBREE_LIBS)
 
 $(BIN)/exp_%: $(BUILD)/experiments/exp_%.o $(EXP_OBJ) $(LIB)
 	@mkdir -p $(BIN)
