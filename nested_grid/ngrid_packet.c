@@ -44,6 +44,7 @@
  * grid_packet_trace.c; level_steps are not split by level in packet mode. The
  * step bound is the top grid's slice count per packet.
  */
+#include "core/coherence.h"
 #include "grid/grid_packet_walk.h"
 #include "ngrid_impl.h"
 
@@ -340,5 +341,8 @@ npacket_batch(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint
 
 ACCEL_KERNEL_PAIR(npacket, npacket_batch)
 
-ACCEL_KERNEL_ENTRIES(ngrid_packet_intersect, ngrid_packet_occluded, const ngrid_accel,
-                     npacket_hit_table, npacket_occ_table, ngrid_flags)
+/* Packets in any ray order (core/coherence.h): incoherent groups go to the
+ * single-ray nested grid. */
+ACCEL_COHERENT_ENTRIES(ngrid_packet_intersect, ngrid_packet_occluded, const ngrid_accel,
+                       npacket_hit_table, npacket_occ_table, ngrid_flags, ngrid_single_intersect,
+                       ngrid_single_occluded)
