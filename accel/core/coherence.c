@@ -28,6 +28,11 @@
 #define DIMS 5           /* origin x, y, z; octahedral direction x, y */
 #define MORTON_BITS 28   /* under the 3 octant bits: a 31-bit key */
 #define MAX_DIM_BITS 10  /* per dimension: 1024 levels */
+/* Two varying dimensions (a camera's rays: one origin) take a Hilbert curve
+ * instead, 256 x 256 cells for at most 4096 rays: a Morton curve's jumps
+ * (between quadrants) split a third of a camera's groups of 64 into far
+ * apart pieces, the Hilbert curve's consecutive cells are neighbours. */
+#define HILBERT_BITS 8
 /* A group is traced as a packet when its rays share an octant, its
  * directions span at most DIR_SPREAD in octahedral units (an octant is the
  * unit triangle; 0.1 is about 9 degrees) and its origins at most
@@ -133,6 +138,7 @@ static void plan_quant(const accel_ray *rays, size_t n, quant *qz)
         if (hi[d] > lo[d]) qz->active[qz->k++] = d;
     qz->bits = qz->k ? MORTON_BITS / qz->k : 0;
     if (qz->bits > MAX_DIM_BITS) qz->bits = MAX_DIM_BITS;
+    if (qz->k == 2) qz->bits = HILBERT_BITS;
     const float levels = (float)((1u << qz->bits) - 1u);
     for (int d = 0; d < DIMS; d++) {
         const float e = d < 3 ? ext_o : ext_d;
@@ -149,6 +155,23 @@ static inline uint16_t quantize(float x, float lo, float scale, float levels)
     v = v > 0.0f ? v : 0.0f; /* NaN and below the range: 0 */
     v = v < levels ? v : levels;
     return (uint16_t)v;
+}
+
+/* The Hilbert index of cell (x, y) of a 2^bits square (Hilbert 1891; the
+ * loop of the usual xy2d, e.g. Wikipedia's "Hilbert curve"): per level the
+ * quadrant's digit, then the quadrant rotated into the curve's frame. */
+static inline uint32_t hilbert_index(uint32_t x, uint32_t y, int bits)
+{
+    uint32_t d = 0;
+    for (uint32_t s = 1u << (bits - 1); s > 0; s >>= 1) {
+        const uint32_t rx = (x & s) != 0, ry = (y & s) != 0;
+        d += s * s * ((3u * rx) ^ ry);
+        if (ry == 0) {
+            if (rx == 1) x = s - 1 - (x & (s - 1)), y = s - 1 - (y & (s - 1));
+            const uint32_t t = x; x = y, y = t;
+        }
+    }
+    return d;
 }
 
 /* Keys and quantized coordinates of the block; returns the summed extents
@@ -174,6 +197,8 @@ static double make_keys(const accel_ray *rays, size_t n, const quant *qz, scratc
                 mn[d] = v < mn[d] ? v : mn[d], mx[d] = v > mx[d] ? v : mx[d];
                 m |= spread[v] << (qz->k - 1 - j);
             }
+            if (qz->k == 2)
+                m = hilbert_index(s->q[i][qz->active[0]], s->q[i][qz->active[1]], qz->bits);
             s->oct[i] = (uint8_t)oct;
             s->key[i] = (uint32_t)oct << MORTON_BITS | m;
             s->idx[i] = (uint16_t)i;
