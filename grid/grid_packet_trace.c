@@ -177,8 +177,8 @@ packet_batch(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_
 
 ACCEL_KERNEL_PAIR(grid_packet, packet_batch)
 
-/* Packets in any ray order (core/coherence.h): incoherent groups go to the
- * single-ray grid. */
+/* Packets in any ray order (core/coherence.h); incoherent packets fall
+ * back to the single-ray grid in packet_batch, on the walk's criterion. */
 ACCEL_COHERENT_ENTRIES(grid_packet_intersect, grid_packet_occluded, const void,
                        grid_packet_hit_table, grid_packet_occ_table, grid_variant_flags,
-                       grid_intersect, grid_occluded)
+                       (accel_hit_batch_fn)NULL, (accel_occ_batch_fn)NULL)

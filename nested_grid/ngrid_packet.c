@@ -341,8 +341,9 @@ npacket_batch(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint
 
 ACCEL_KERNEL_PAIR(npacket, npacket_batch)
 
-/* Packets in any ray order (core/coherence.h): incoherent groups go to the
- * single-ray nested grid. */
+/* Packets in any ray order (core/coherence.h); incoherent packets fall
+ * back to the single-ray nested grid in npacket_batch, on the walk's
+ * criterion. */
 ACCEL_COHERENT_ENTRIES(ngrid_packet_intersect, ngrid_packet_occluded, const ngrid_accel,
-                       npacket_hit_table, npacket_occ_table, ngrid_flags, ngrid_single_intersect,
-                       ngrid_single_occluded)
+                       npacket_hit_table, npacket_occ_table, ngrid_flags,
+                       (accel_hit_batch_fn)NULL, (accel_occ_batch_fn)NULL)

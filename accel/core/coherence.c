@@ -311,8 +311,21 @@ static void trace_runs(const job *j, const scratch *s, const accel_ray *rays, ch
         size_t end = start;
         while (end < n && s->coherent[end / P] == coh) end += P;
         if (end > n) end = n;
-        if (c) c->ray_steps = steps ? steps + start : NULL, c->ray_prims = prims ? prims + start : NULL;
-        call(j, coh, rays + start, out + start * j->esz, end - start, c);
+        uint32_t *rs = steps ? steps + start : NULL, *rp = prims ? prims + start : NULL;
+        if (c && !coh) {
+            /* The single-ray runs' counters without their per-level steps:
+             * the packet kernels do not split steps by level (nested_grid),
+             * and a batch's levels must add up to its steps or be zero. */
+            accel_counters sub;
+            memset(&sub, 0, sizeof sub);
+            sub.ray_steps = rs, sub.ray_prims = rp;
+            call(j, 0, rays + start, out + start * j->esz, end - start, &sub);
+            memset(sub.level_steps, 0, sizeof sub.level_steps);
+            accel_counters_add(c, &sub);
+        } else {
+            if (c) c->ray_steps = rs, c->ray_prims = rp;
+            call(j, coh, rays + start, out + start * j->esz, end - start, c);
+        }
         if (coh) packed += end - start;
         start = end;
     }
@@ -334,12 +347,14 @@ static void trace_block(const job *j, scratch *s, const accel_ray *rays, char *o
         sort_keys(s, n);
         keep = kept <= KEEP_SLACK * sorted_extent(s, n, &qz);
     }
+    const int split = j->esz == 1 ? j->occ_single != NULL : j->hit_single != NULL;
+    if (!split) memset(s->coherent, 1, (n + P - 1) / P);
     if (keep) {
-        classify(s, n, &qz, NULL);
+        if (split) classify(s, n, &qz, NULL);
         trace_runs(j, s, rays, out, n, c, steps, prims);
         atomic_fetch_add_explicit(&st_kept, 1, memory_order_relaxed);
     } else {
-        classify(s, n, &qz, s->idx);
+        if (split) classify(s, n, &qz, s->idx);
         for (size_t i = 0; i < n; i++) s->rays[i] = rays[s->idx[i]];
         trace_runs(j, s, s->rays, (char *)s->hits, n, c, steps ? s->steps : NULL,
                    prims ? s->prims : NULL);

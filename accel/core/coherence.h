@@ -15,15 +15,22 @@
  *      sorted ones (8x8 tiles stay as they are, no copy), else gather the
  *      rays in sorted order,
  *   4. trace every group of 64 whose rays share an octant and whose
- *      directions and origins are close (a measured spread, below) with the
- *      packet kernel, every other group with the kind's single-ray kernel,
- *      so incoherent (diffuse) rays never pay for packets,
+ *      directions and origins are close (a measured spread, coherence.c)
+ *      with the packet kernel, every other group with the kind's
+ *      single-ray kernel, so incoherent (diffuse) rays never pay for
+ *      packets (kinds whose packet kernel has its own fallback skip this),
  *   5. scatter the answers (and the per-ray counters) back to the caller's
  *      order.
  * Exactness: a packet kernel's answer for a ray must not depend on the
  * other rays of its packet (tests/test_coherence.c traces shuffled ray sets
- * against the unshuffled ones, bit for bit, for every packet mode). Scratch
- * memory is per thread, allocated once (freed when the thread ends).
+ * against the unshuffled ones for every packet mode). The BVH packets (binary
+ * and wide) give the same bits whatever the mates. The grids' packets give
+ * the same primitive and occlusion, but t/u/v may move by a few float
+ * steps: core/prim.h's watertight test decides a hit within its error of
+ * the current nearest one in double, so which primitives a ray tested
+ * before (its packet's walk, mailbox repeats) picks the float or the
+ * double computation of the same hit. Scratch memory is per thread,
+ * allocated once (freed when the thread ends).
  */
 #ifndef ACCEL_CORE_COHERENCE_H
 #define ACCEL_CORE_COHERENCE_H
@@ -52,7 +59,11 @@ int accel_coherence_get(void);
 #define ACCEL_COHERENCE_BLOCK 4096
 
 /* The batch entry of a packet mode: packet(accel, ...) traces groups of 64
- * consecutive rays as packets, single(accel, ...) the incoherent rays. */
+ * consecutive rays as packets, single(accel, ...) the incoherent rays.
+ * single == NULL: no split, every group goes to the packet kernel (the
+ * grids: their packet kernels fall back to single rays themselves, on
+ * their walk's own criterion, and a collapsed grid's single-ray walk costs
+ * thousands of tests per ray where its packets cost a hundred). */
 void accel_coherent_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
                               size_t count, accel_counters *c, accel_hit_batch_fn packet,
                               accel_hit_batch_fn single);
@@ -63,7 +74,7 @@ void accel_coherent_occluded(const void *accel, const accel_ray *rays, uint8_t *
 /* A packet mode's two batch entries, as ACCEL_KERNEL_ENTRIES (variant.h)
  * but through the layer above: HIT_TABLE/OCC_TABLE are the packet kernels,
  * SINGLE_HIT/SINGLE_OCC the kind's single-ray batch functions (taking
- * const void *accel) for the incoherent groups. */
+ * const void *accel) for the incoherent groups, or NULL. */
 #define ACCEL_COHERENT_ENTRIES(HIT_FN, OCC_FN, ACCEL_T, HIT_TABLE, OCC_TABLE, FLAGS, SINGLE_HIT,  \
                                SINGLE_OCC)                                                      \
     static void HIT_FN##_packets_(const void *a, const accel_ray *r, accel_hit *h, size_t n,      \
