@@ -300,6 +300,7 @@ static void retrace(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits
     if (c) {
         sub.rays = 0; /* counted with the packet */
         sub.ray_steps = sub.ray_prims = NULL;
+        memset(sub.level_steps, 0, sizeof sub.level_steps); /* not split in packet mode */
         accel_counters_add(c, &sub);
     }
 }
@@ -320,9 +321,15 @@ npacket_batch(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint
             __builtin_prefetch(&rays[i]); /* the next packet: 2 rays per cache line */
         const int mode = grid_packet_setup(top, g->ref_count, GRID_PACKET_MAX_CELLS, &pk, rays + base, n);
         if (mode == GRID_PACKET_SINGLE) {
+            /* level_steps are not split in packet mode: the single-ray
+             * walk's are dropped, so that a batch mixing walked and
+             * fallen-back packets (any ray order) keeps levels 0 or all */
+            uint64_t levels[NGRID_MAX_LEVELS];
+            if (c) memcpy(levels, c->level_steps, sizeof levels);
             grid_packet_trace_single(g, ngrid_single_intersect, ngrid_single_occluded,
                                      rays + base, hits ? hits + base : NULL,
                                      occ ? occ + base : NULL, n, c, base);
+            if (c) memcpy(c->level_steps, levels, sizeof levels);
             continue;
         }
         if (c) memset(&cn, 0, sizeof cn);
