@@ -14,6 +14,7 @@
 #include "split_common.h"
 #include "bvh.h"
 #include "wide/wide.h"
+#include "core/coherence.h"
 
 /* Named once: the table's choices and a message that names the one chosen. */
 #define BVH_BUILD_CHOICES "binned|sah|mid|median|sbvh"
@@ -219,16 +220,52 @@ const bvh_path *bvh_binary_path(int traverse)
 
 /* The wide path: the tree in b->wide; the binary pools were freed by the
  * collapse. The kernels take the scene flags the kind keeps. */
+static void wide_hit_rays(const void *a, const accel_ray *rays, accel_hit *hits, size_t count,
+                          accel_counters *c)
+{
+    const bvh *b = a;
+    bvh_wide_intersect(b->wide, rays, hits, count, c, b->naive, b->has_spheres);
+}
+
+static void wide_occ_rays(const void *a, const accel_ray *rays, uint8_t *occ, size_t count,
+                          accel_counters *c)
+{
+    const bvh *b = a;
+    bvh_wide_occluded(b->wide, rays, occ, count, c, b->naive, b->has_spheres);
+}
+
+static void wide_hit_single(const void *a, const accel_ray *rays, accel_hit *hits, size_t count,
+                            accel_counters *c)
+{
+    const bvh *b = a;
+    bvh_wide_single_intersect(b->wide, rays, hits, count, c, b->naive, b->has_spheres);
+}
+
+static void wide_occ_single(const void *a, const accel_ray *rays, uint8_t *occ, size_t count,
+                            accel_counters *c)
+{
+    const bvh *b = a;
+    bvh_wide_single_occluded(b->wide, rays, occ, count, c, b->naive, b->has_spheres);
+}
+
+/* Wide packets take their rays through the packet layer (core/coherence.h):
+ * packets in any ray order, incoherent groups ray by ray. */
 static void wide_intersect(const bvh *b, const accel_ray *rays, accel_hit *hits, size_t count,
                            accel_counters *c)
 {
-    bvh_wide_intersect(b->wide, rays, hits, count, c, b->naive, b->has_spheres);
+    if (b->wide->packets)
+        accel_coherent_intersect(b, rays, hits, count, c, wide_hit_rays, wide_hit_single);
+    else
+        wide_hit_rays(b, rays, hits, count, c);
 }
 
 static void wide_occluded(const bvh *b, const accel_ray *rays, uint8_t *occ, size_t count,
                           accel_counters *c)
 {
-    bvh_wide_occluded(b->wide, rays, occ, count, c, b->naive, b->has_spheres);
+    if (b->wide->packets)
+        accel_coherent_occluded(b, rays, occ, count, c, wide_occ_rays, wide_occ_single);
+    else
+        wide_occ_rays(b, rays, occ, count, c);
 }
 
 static void wide_walk(const bvh *b, const accel_ray_prep *p, float pad, accel_walk_visit visit,

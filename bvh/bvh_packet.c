@@ -48,6 +48,7 @@
 #include <string.h>
 
 #include "bvh_node.h"
+#include "core/coherence.h"
 
 #if BVH_SSE || BVH_AVX
 #include <immintrin.h>
@@ -496,5 +497,17 @@ packet_batch(const bvh *b, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
 
 ACCEL_KERNEL_PAIR(packet, packet_batch)
 
-ACCEL_KERNEL_ENTRIES(bvh_packet_intersect, bvh_packet_occluded, const bvh, packet_hit_table,
-                     packet_occ_table, bvh_variant_flags)
+static void single_hit(const void *b, const accel_ray *r, accel_hit *h, size_t n, accel_counters *c)
+{
+    bvh_trace_intersect(b, r, h, n, c);
+}
+
+static void single_occ(const void *b, const accel_ray *r, uint8_t *o, size_t n, accel_counters *c)
+{
+    bvh_trace_occluded(b, r, o, n, c);
+}
+
+/* Packets in any ray order (core/coherence.h): incoherent groups go to the
+ * single-ray traversal of the same tree. */
+ACCEL_COHERENT_ENTRIES(bvh_packet_intersect, bvh_packet_occluded, const bvh, packet_hit_table,
+                       packet_occ_table, bvh_variant_flags, single_hit, single_occ)

@@ -81,6 +81,7 @@
  * Packets traced by the single-ray kernel count as in grid_trace.c. The
  * step bound is res[K] slices per packet (ACCEL_STEP_BOUND_BROKEN).
  */
+#include "core/coherence.h"
 #include "grid_packet_walk.h"
 
 #define P GRID_PACKET_SIZE
@@ -176,5 +177,8 @@ packet_batch(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_
 
 ACCEL_KERNEL_PAIR(grid_packet, packet_batch)
 
-ACCEL_KERNEL_ENTRIES(grid_packet_intersect, grid_packet_occluded, const void, grid_packet_hit_table,
-                     grid_packet_occ_table, grid_variant_flags)
+/* Packets in any ray order (core/coherence.h); incoherent packets fall
+ * back to the single-ray grid in packet_batch, on the walk's criterion. */
+ACCEL_COHERENT_ENTRIES(grid_packet_intersect, grid_packet_occluded, const void,
+                       grid_packet_hit_table, grid_packet_occ_table, grid_variant_flags,
+                       (accel_hit_batch_fn)NULL, (accel_occ_batch_fn)NULL)

@@ -44,6 +44,7 @@
  * grid_packet_trace.c; level_steps are not split by level in packet mode. The
  * step bound is the top grid's slice count per packet.
  */
+#include "core/coherence.h"
 #include "grid/grid_packet_walk.h"
 #include "ngrid_impl.h"
 
@@ -299,6 +300,7 @@ static void retrace(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits
     if (c) {
         sub.rays = 0; /* counted with the packet */
         sub.ray_steps = sub.ray_prims = NULL;
+        memset(sub.level_steps, 0, sizeof sub.level_steps); /* not split in packet mode */
         accel_counters_add(c, &sub);
     }
 }
@@ -319,9 +321,15 @@ npacket_batch(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint
             __builtin_prefetch(&rays[i]); /* the next packet: 2 rays per cache line */
         const int mode = grid_packet_setup(top, g->ref_count, GRID_PACKET_MAX_CELLS, &pk, rays + base, n);
         if (mode == GRID_PACKET_SINGLE) {
+            /* level_steps are not split in packet mode: the single-ray
+             * walk's are dropped, so that a batch mixing walked and
+             * fallen-back packets (any ray order) keeps levels 0 or all */
+            uint64_t levels[NGRID_MAX_LEVELS];
+            if (c) memcpy(levels, c->level_steps, sizeof levels);
             grid_packet_trace_single(g, ngrid_single_intersect, ngrid_single_occluded,
                                      rays + base, hits ? hits + base : NULL,
                                      occ ? occ + base : NULL, n, c, base);
+            if (c) memcpy(c->level_steps, levels, sizeof levels);
             continue;
         }
         if (c) memset(&cn, 0, sizeof cn);
@@ -340,5 +348,9 @@ npacket_batch(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint
 
 ACCEL_KERNEL_PAIR(npacket, npacket_batch)
 
-ACCEL_KERNEL_ENTRIES(ngrid_packet_intersect, ngrid_packet_occluded, const ngrid_accel,
-                     npacket_hit_table, npacket_occ_table, ngrid_flags)
+/* Packets in any ray order (core/coherence.h); incoherent packets fall
+ * back to the single-ray nested grid in npacket_batch, on the walk's
+ * criterion. */
+ACCEL_COHERENT_ENTRIES(ngrid_packet_intersect, ngrid_packet_occluded, const ngrid_accel,
+                       npacket_hit_table, npacket_occ_table, ngrid_flags,
+                       (accel_hit_batch_fn)NULL, (accel_occ_batch_fn)NULL)

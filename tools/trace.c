@@ -24,6 +24,7 @@
 #include "image/shade.h"
 #include "scene/scene.h"
 #include "cli/spec_check.h"
+#include "core/coherence.h"
 #include "tools/trace/hitfiles.h"
 #include "tools/trace/run.h"
 
@@ -42,6 +43,23 @@ static int opt_heatmap(const cli_option *o, void *field, char **v, accel_error *
     if (strcmp(v[0], "steps") && strcmp(v[0], "prims"))
         return accel_fail(err, ACCEL_ERR_SPEC, "%s %s: expected steps or prims", o->name, v[0]);
     hm[0] = v[0], hm[1] = v[1];
+    return 0;
+}
+
+static int opt_ray_order(const cli_option *o, void *field, char **v, accel_error *err)
+{
+    rays_order ord;
+    if (rays_order_parse(v[0], &ord))
+        return accel_fail(err, ACCEL_ERR_SPEC, "%s %s: expected tiles8, scanline or shuffle", o->name, v[0]);
+    *(int *)field = (int)ord + 1;
+    return 0;
+}
+
+static int opt_packet_order(const cli_option *o, void *field, char **v, accel_error *err)
+{
+    if (strcmp(v[0], "sort") && strcmp(v[0], "keep"))
+        return accel_fail(err, ACCEL_ERR_SPEC, "%s %s: expected sort or keep", o->name, v[0]);
+    *(int *)field = strcmp(v[0], "sort") ? ACCEL_ORDER_KEEP : ACCEL_ORDER_SORT;
     return 0;
 }
 
@@ -89,6 +107,12 @@ static const cli_option trace_options[] = {
      OPT(csv), 0, 0},
     {"--gen-accel", "SPEC", "accelerator that finds the primary hits secondary rays start from\n"
      "(default bvh, else brute)", cli_string, OPT(gen_accel), 0, 0},
+    {"--ray-order", "tiles8|scanline|shuffle", "put every ray set (before --dump-rays) in 8x8 pixel\n"
+     "tiles, scanline (pixel) order or a shuffle seeded by --seed (default: as made, tiles)",
+     opt_ray_order, OPT(ray_order), 0, 0},
+    {"--packet-order", "sort|keep", "packet modes sort rays into coherent packets (default), or\n"
+     "keep: 64 consecutive rays a packet, as given (core/coherence.h)", opt_packet_order,
+     OPT(packet_order), 0, 0},
     {"--seed", "N", "seed of the secondary rays (default 1)", cli_u64, OPT(seed), 0, 0},
     {"--ao-samples", "N", "ambient occlusion rays per primary hit (default 4)", cli_int,
      OPT(ao_samples), 1, 4096},
@@ -288,6 +312,11 @@ static int make_rays(const options *o, run *r, accel_error *err)
         rc = bench_sets_make(&r->scene, &so, mask, &r->sets, err);
         bench_progress_end(r->progress);
     }
+    for (int s = 0; !rc && o->ray_order && s < r->set_count; s++) {
+        rays_set *rs = r->from_file ? &r->file_rays : (rays_set *)bench_sets_get(&r->sets, r->bits[s]);
+        rc = rays_reorder(rs, (rays_order)(o->ray_order - 1), o->seed, err);
+    }
+    accel_coherence_set(o->packet_order);
     for (int s = 0; !rc && o->dump_rays && s < r->set_count; s++) {
         const rays_set *rs = r->from_file ? &r->file_rays : bench_sets_get(&r->sets, r->bits[s]);
         char path[1024];

@@ -459,3 +459,66 @@ hits_diff hits_compare(const accel_hit *a, const accel_hit *b, size_t n)
     }
     return d;
 }
+
+/* ---- ray orders ------------------------------------------------------------- */
+
+int rays_order_parse(const char *name, rays_order *out)
+{
+    static const char *const names[] = {"tiles8", "scanline", "shuffle"};
+    for (int i = 0; i < 3; i++)
+        if (!strcmp(name, names[i])) return *out = (rays_order)i, 0;
+    return -1;
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* The sort key of pixel p in order `order` (the ray index below it keeps
+ * the sort stable). */
+static uint64_t pixel_key(uint32_t p, int width, rays_order order)
+{
+    if (order == RAYS_ORDER_SCANLINE) return p;
+    const uint64_t x = p % (uint32_t)width, y = p / (uint32_t)width;
+    const uint64_t tiles_x = ((uint64_t)width + 7) / 8;
+    return ((y / 8) * tiles_x + x / 8) * 64 + (y % 8) * 8 + x % 8;
+}
+
+int rays_reorder(rays_set *r, rays_order order, uint64_t seed, accel_error *err)
+{
+    const size_t n = r->count;
+    if (order != RAYS_ORDER_SHUFFLE && (!r->pixel || r->width < 1))
+        return accel_fail(err, ACCEL_ERR_SPEC, "ray order tiles8/scanline needs rays made from a "
+                          "camera (a .rays file has no pixels)");
+    if (n > UINT32_MAX) return accel_fail(err, ACCEL_ERR_RANGE, "%zu rays: too many to reorder", n);
+    uint64_t *perm = malloc((n ? n : 1) * sizeof *perm);
+    accel_ray *rays = malloc((n ? n : 1) * sizeof *rays);
+    uint32_t *pix = r->pixel ? malloc((n ? n : 1) * sizeof *pix) : NULL;
+    if (!perm || !rays || (r->pixel && !pix)) {
+        free(perm), free(rays), free(pix);
+        return accel_fail(err, ACCEL_ERR_NOMEM, "no memory to reorder %zu rays", n);
+    }
+    for (size_t i = 0; i < n; i++) perm[i] = i;
+    if (order == RAYS_ORDER_SHUFFLE) { /* Fisher-Yates, one hashed draw per step */
+        for (size_t i = n; i > 1; i--) {
+            size_t j = (size_t)(rays_rand(seed, i, 0) * (float)i);
+            if (j >= i) j = i - 1;
+            uint64_t t = perm[i - 1]; perm[i - 1] = perm[j], perm[j] = t;
+        }
+    } else {
+        /* key in the high bits, ray index in the low 32 */
+        for (size_t i = 0; i < n; i++) perm[i] |= pixel_key(r->pixel[i], r->width, order) << 32;
+        qsort(perm, n, sizeof *perm, cmp_u64);
+    }
+    for (size_t i = 0; i < n; i++) {
+        const size_t k = (size_t)(perm[i] & 0xFFFFFFFFu);
+        rays[i] = r->rays[k];
+        if (pix) pix[i] = r->pixel[k];
+    }
+    free(perm);
+    free(r->rays), r->rays = rays;
+    if (pix) free(r->pixel), r->pixel = pix;
+    return 0;
+}

@@ -62,6 +62,15 @@ int rays_ending_at_hit(const rays_set *prim, const accel_hit *hits, rays_set *ou
 int rays_ao(const accel_scene *s, const rays_set *prim, const accel_hit *hits, int samples,
             float ao_radius, uint64_t seed, rays_set *out, accel_error *err);
 
+/* The order of a ray set: 8x8 pixel tiles (rays_primary's), scanline
+ * (pixel index order, as a renderer writes an image) or a seeded shuffle.
+ * rays_reorder puts r's rays (and pixel[]) in that order, stable within a
+ * pixel (ao samples stay together); tiles and scanline need pixel[] and
+ * width (ACCEL_ERR_SPEC without them), shuffle works on any set. */
+typedef enum { RAYS_ORDER_TILES8, RAYS_ORDER_SCANLINE, RAYS_ORDER_SHUFFLE } rays_order;
+int rays_order_parse(const char *name, rays_order *out); /* 0, or -1 on an unknown name */
+int rays_reorder(rays_set *r, rays_order order, uint64_t seed, accel_error *err);
+
 /* A deterministic uniform float in [0,1) from (seed, index, dimension). */
 float rays_rand(uint64_t seed, uint64_t index, uint32_t dim);
 

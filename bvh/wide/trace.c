@@ -57,3 +57,24 @@ void bvh_wide_occluded(const bvh_wide *w, const accel_ray *rays, uint8_t *occ, s
     accel_run_kernel(table_of(w, table_row(w), 1), w, rays, occ, count, c,
                      kernel_flags(w, naive, has_spheres));
 }
+
+/* The single-ray row of w (w->packets ignored): the packet layer's
+ * fallback for incoherent groups (core/coherence.h). */
+static int single_row(const bvh_wide *w)
+{
+    return w->quant ? WIDE_ROW_QUANT : w->order == WIDE_ORDER_BRANCHY ? WIDE_ROW_BRANCHY : WIDE_ROW_SINGLE;
+}
+
+void bvh_wide_single_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hits,
+                               size_t count, accel_counters *c, int naive, int has_spheres)
+{
+    accel_run_kernel(table_of(w, single_row(w), 0), w, rays, hits, count, c,
+                     kernel_flags(w, naive, has_spheres));
+}
+
+void bvh_wide_single_occluded(const bvh_wide *w, const accel_ray *rays, uint8_t *occ, size_t count,
+                              accel_counters *c, int naive, int has_spheres)
+{
+    accel_run_kernel(table_of(w, single_row(w), 1), w, rays, occ, count, c,
+                     kernel_flags(w, naive, has_spheres));
+}

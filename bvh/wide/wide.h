@@ -75,6 +75,12 @@ void bvh_wide_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hit
                         accel_counters *c, int naive, int has_spheres);
 void bvh_wide_occluded(const bvh_wide *w, const accel_ray *rays, uint8_t *occ, size_t count,
                        accel_counters *c, int naive, int has_spheres);
+/* The same with the single-ray table whatever w->packets: where the packet
+ * layer (core/coherence.h) sends the rays of an incoherent group. */
+void bvh_wide_single_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hits,
+                               size_t count, accel_counters *c, int naive, int has_spheres);
+void bvh_wide_single_occluded(const bvh_wide *w, const accel_ray *rays, uint8_t *occ, size_t count,
+                              accel_counters *c, int naive, int has_spheres);
 
 /* accel.h's conservative walk over the wide tree (walk.c): bvh_walk's
  * contract, for a prepared ray. */

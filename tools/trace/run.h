@@ -35,6 +35,8 @@ typedef struct {
     int ao_samples;
     float ao_radius;
     image_heat_scale heat_scale;
+    int ray_order;    /* rays_order + 1; 0: as made (tiles for camera sets, a file's own) */
+    int packet_order; /* core/coherence.h's ACCEL_ORDER_* */
 } options;
 
 /* One cell of the closing summary: an accelerator on a ray set. */

@@ -1,0 +1,404 @@
+/*
+ * coherence.c - packets in any ray order (core/coherence.h): sort keys,
+ * the keep-or-sort decision, the coherent/incoherent split and the
+ * scatter back to the caller's order.
+ *
+ * The sort key follows ray-sorting work (Garanzha & Loop, "Fast ray sorting
+ * and breadth-first packet traversal for GPU ray tracing", EG 2010: a key of
+ * quantized origin and direction; Moon et al., "Cache-oblivious ray
+ * reordering", TOG 2010: a space-filling curve over ray space): the octant
+ * of the direction on top, under it a Morton code interleaving the
+ * quantized origin (x, y, z) and the octahedral direction
+ * (|dx|, |dy|) / (|dx| + |dy| + |dz|) (Meyer et al., "On floating-point
+ * normal vectors", EGSR 2010). Only the dimensions that vary in a block
+ * take part, each with the same number of bits, so a camera's rays (one
+ * origin) are ordered by a 2D Morton curve over the image: groups of 64
+ * become 8x8-like tiles whatever the file order.
+ */
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/coherence.h"
+
+#define BLOCK ACCEL_COHERENCE_BLOCK
+#define P 64             /* rays per packet, as every packet kernel */
+#define DIMS 5           /* origin x, y, z; octahedral direction x, y */
+#define MORTON_BITS 28   /* under the 3 octant bits: a 31-bit key */
+#define MAX_DIM_BITS 10  /* per dimension: 1024 levels */
+/* Two varying dimensions (a camera's rays: one origin) take a Hilbert curve
+ * instead, 256 x 256 cells for at most 4096 rays: a Morton curve's jumps
+ * (between quadrants) split a third of a camera's groups of 64 into far
+ * apart pieces, the Hilbert curve's consecutive cells are neighbours. */
+#define HILBERT_BITS 8
+/* A group is traced as a packet when its rays share an octant, its
+ * directions span at most DIR_SPREAD in octahedral units (an octant is the
+ * unit triangle; 0.1 is about 9 degrees) and its origins at most
+ * ORIGIN_FRAC of the block's origin extent. Diffuse bounces sorted in a
+ * 4096-ray block keep about one bit per dimension per group of 64 (5
+ * dimensions, 6 bits): a spread of half the range, far above both. */
+#define DIR_SPREAD 0.1f
+#define ORIGIN_FRAC 0.25f
+/* The caller's order is kept when its groups are at most this much looser
+ * than the sorted ones (summed extents of the quantized coordinates). */
+#define KEEP_SLACK 1.125
+
+static atomic_int order_mode;
+static _Atomic uint64_t st_kept, st_sorted, st_packet, st_single;
+
+void accel_coherence_set(int order) { atomic_store(&order_mode, order); }
+int accel_coherence_get(void) { return atomic_load(&order_mode); }
+
+void accel_coherence_stats_get(accel_coherence_stats *out)
+{
+    out->kept_blocks = atomic_load(&st_kept), out->sorted_blocks = atomic_load(&st_sorted);
+    out->packet_rays = atomic_load(&st_packet), out->single_rays = atomic_load(&st_single);
+}
+
+/* ---- per-thread scratch, allocated once ----------------------------------- */
+
+typedef struct {
+    accel_ray rays[BLOCK];          /* the block in sorted order */
+    accel_hit hits[BLOCK];          /* answers in sorted order (occ: as bytes) */
+    uint32_t steps[BLOCK], prims[BLOCK];
+    uint32_t key[BLOCK], key2[BLOCK];
+    uint16_t idx[BLOCK], idx2[BLOCK];
+    uint16_t q[BLOCK][DIMS];        /* quantized coordinates, caller's order */
+    uint8_t oct[BLOCK];             /* direction octants, caller's order */
+    uint8_t coherent[BLOCK / P];
+} scratch;
+
+static pthread_key_t scratch_key;
+static pthread_once_t scratch_once = PTHREAD_ONCE_INIT;
+static uint32_t spread_table[DIMS + 1][1u << MAX_DIM_BITS];
+
+/* spread_table[k][v]: the bits of v at positions 0, k, 2k, ... */
+static void init_once(void)
+{
+    (void)pthread_key_create(&scratch_key, free);
+    for (int k = 1; k <= DIMS; k++)
+        for (uint32_t v = 0; v < (1u << MAX_DIM_BITS); v++) {
+            uint32_t s = 0;
+            for (int b = 0; b < MAX_DIM_BITS && b * k < 32; b++) s |= ((v >> b) & 1u) << (b * k);
+            spread_table[k][v] = s;
+        }
+}
+
+static scratch *get_scratch(void)
+{
+    pthread_once(&scratch_once, init_once);
+    scratch *s = pthread_getspecific(scratch_key);
+    if (!s) {
+        s = aligned_alloc(64, (sizeof(scratch) + 63) / 64 * 64);
+        if (s && pthread_setspecific(scratch_key, s) != 0) free(s), s = NULL;
+    }
+    return s;
+}
+
+/* ---- keys ------------------------------------------------------------------ */
+
+typedef struct {
+    int active[DIMS], k, bits;   /* the varying dimensions, how many, bits each */
+    float lo[DIMS], scale[DIMS]; /* quantization: (x - lo) * scale */
+    float dir_limit, origin_limit; /* the coherence spreads in quantized units */
+} quant;
+
+static inline void ray_coords(const accel_ray *r, float x[DIMS], unsigned *oct)
+{
+    const float ax = fabsf(r->dx), ay = fabsf(r->dy), az = fabsf(r->dz), l1 = ax + ay + az;
+    x[0] = r->ox, x[1] = r->oy, x[2] = r->oz;
+    x[3] = l1 > 0.0f ? ax / l1 : 0.0f; /* NaN stays NaN, quantized to 0 below */
+    x[4] = l1 > 0.0f ? ay / l1 : 0.0f;
+    *oct = (r->dx < 0.0f) | (unsigned)(r->dy < 0.0f) << 1 | (unsigned)(r->dz < 0.0f) << 2;
+}
+
+/* The block's bounds (finite values only), its varying dimensions and the
+ * quantization that gives every varying dimension the same bits. */
+static void plan_quant(const accel_ray *rays, size_t n, quant *qz)
+{
+    float lo[DIMS], hi[DIMS];
+    for (int d = 0; d < DIMS; d++) lo[d] = INFINITY, hi[d] = -INFINITY;
+    for (size_t i = 0; i < n; i++) {
+        float x[DIMS];
+        unsigned oct;
+        ray_coords(&rays[i], x, &oct);
+        for (int d = 0; d < DIMS; d++)
+            if (fabsf(x[d]) < INFINITY) lo[d] = x[d] < lo[d] ? x[d] : lo[d], hi[d] = x[d] > hi[d] ? x[d] : hi[d];
+    }
+    float ext_o = 0.0f, ext_d = 0.0f;
+    for (int d = 0; d < DIMS; d++) {
+        if (!(hi[d] > lo[d])) lo[d] = hi[d] = 0.0f;
+        if (d < 3 && hi[d] - lo[d] > ext_o) ext_o = hi[d] - lo[d];
+        if (d >= 3 && hi[d] - lo[d] > ext_d) ext_d = hi[d] - lo[d];
+    }
+    qz->k = 0;
+    for (int d = 0; d < DIMS; d++)
+        if (hi[d] > lo[d]) qz->active[qz->k++] = d;
+    qz->bits = qz->k ? MORTON_BITS / qz->k : 0;
+    if (qz->bits > MAX_DIM_BITS) qz->bits = MAX_DIM_BITS;
+    if (qz->k == 2) qz->bits = HILBERT_BITS;
+    const float levels = (float)((1u << qz->bits) - 1u);
+    for (int d = 0; d < DIMS; d++) {
+        const float e = d < 3 ? ext_o : ext_d;
+        qz->lo[d] = lo[d];
+        qz->scale[d] = e > 0.0f && !(hi[d] == lo[d]) ? levels / e : 0.0f;
+    }
+    qz->dir_limit = ext_d > 0.0f ? DIR_SPREAD * levels / ext_d : 0.0f;
+    qz->origin_limit = ORIGIN_FRAC * levels;
+}
+
+static inline uint16_t quantize(float x, float lo, float scale, float levels)
+{
+    float v = (x - lo) * scale;
+    v = v > 0.0f ? v : 0.0f; /* NaN and below the range: 0 */
+    v = v < levels ? v : levels;
+    return (uint16_t)v;
+}
+
+/* The Hilbert index of cell (x, y) of a 2^bits square (Hilbert 1891; the
+ * loop of the usual xy2d, e.g. Wikipedia's "Hilbert curve"): per level the
+ * quadrant's digit, then the quadrant rotated into the curve's frame. */
+static inline uint32_t hilbert_index(uint32_t x, uint32_t y, int bits)
+{
+    uint32_t d = 0;
+    for (uint32_t s = 1u << (bits - 1); s > 0; s >>= 1) {
+        const uint32_t rx = (x & s) != 0, ry = (y & s) != 0;
+        d += s * s * ((3u * rx) ^ ry);
+        if (ry == 0) {
+            if (rx == 1) x = s - 1 - (x & (s - 1)), y = s - 1 - (y & (s - 1));
+            const uint32_t t = x; x = y, y = t;
+        }
+    }
+    return d;
+}
+
+/* Keys and quantized coordinates of the block; returns the summed extents
+ * of the quantized coordinates over the groups of 64 in the given order. */
+static double make_keys(const accel_ray *rays, size_t n, const quant *qz, scratch *s)
+{
+    const float levels = (float)((1u << qz->bits) - 1u);
+    const uint32_t *spread = spread_table[qz->k ? qz->k : 1];
+    double sum = 0.0;
+    for (size_t g = 0; g < n; g += P) {
+        const size_t end = g + P < n ? g + P : n;
+        uint16_t mn[DIMS], mx[DIMS];
+        for (int d = 0; d < DIMS; d++) mn[d] = 0xFFFF, mx[d] = 0;
+        for (size_t i = g; i < end; i++) {
+            float x[DIMS];
+            unsigned oct;
+            ray_coords(&rays[i], x, &oct);
+            uint32_t m = 0;
+            for (int j = 0; j < qz->k; j++) {
+                const int d = qz->active[j];
+                const uint16_t v = quantize(x[d], qz->lo[d], qz->scale[d], levels);
+                s->q[i][d] = v;
+                mn[d] = v < mn[d] ? v : mn[d], mx[d] = v > mx[d] ? v : mx[d];
+                m |= spread[v] << (qz->k - 1 - j);
+            }
+            if (qz->k == 2)
+                m = hilbert_index(s->q[i][qz->active[0]], s->q[i][qz->active[1]], qz->bits);
+            s->oct[i] = (uint8_t)oct;
+            s->key[i] = (uint32_t)oct << MORTON_BITS | m;
+            s->idx[i] = (uint16_t)i;
+        }
+        for (int j = 0; j < qz->k; j++) sum += mx[qz->active[j]] - mn[qz->active[j]];
+    }
+    return sum;
+}
+
+/* Stable LSD radix sort of (key, idx) by bytes, skipping constant bytes. */
+static void sort_keys(scratch *s, size_t n)
+{
+    uint32_t hist[4][256];
+    memset(hist, 0, sizeof hist);
+    for (size_t i = 0; i < n; i++)
+        for (int b = 0; b < 4; b++) hist[b][(s->key[i] >> (8 * b)) & 0xFF]++;
+    uint32_t *k = s->key, *k2 = s->key2;
+    uint16_t *x = s->idx, *x2 = s->idx2;
+    for (int b = 0; b < 4; b++) {
+        if (hist[b][(k[0] >> (8 * b)) & 0xFF] == n) continue; /* one value: no change */
+        uint32_t pos[256], sum = 0;
+        for (int v = 0; v < 256; v++) pos[v] = sum, sum += hist[b][v];
+        for (size_t i = 0; i < n; i++) {
+            const uint32_t p = pos[(k[i] >> (8 * b)) & 0xFF]++;
+            k2[p] = k[i], x2[p] = x[i];
+        }
+        uint32_t *tk = k; k = k2, k2 = tk;
+        uint16_t *tx = x; x = x2, x2 = tx;
+    }
+    if (k != s->key) {
+        memcpy(s->key, k, n * sizeof *k);
+        memcpy(s->idx, x, n * sizeof *x);
+    }
+}
+
+/* Summed group extents in sorted order (s->idx), as make_keys's. */
+static double sorted_extent(const scratch *s, size_t n, const quant *qz)
+{
+    double sum = 0.0;
+    for (size_t g = 0; g < n; g += P) {
+        const size_t end = g + P < n ? g + P : n;
+        for (int j = 0; j < qz->k; j++) {
+            const int d = qz->active[j];
+            uint16_t mn = 0xFFFF, mx = 0;
+            for (size_t i = g; i < end; i++) {
+                const uint16_t v = s->q[s->idx[i]][d];
+                mn = v < mn ? v : mn, mx = v > mx ? v : mx;
+            }
+            sum += mx - mn;
+        }
+    }
+    return sum;
+}
+
+/* Marks the groups of the order map[] (NULL: the caller's) that are
+ * coherent enough for a packet. */
+static void classify(scratch *s, size_t n, const quant *qz, const uint16_t *map)
+{
+    for (size_t g = 0; g < n; g += P) {
+        const size_t end = g + P < n ? g + P : n;
+        const uint8_t oct = s->oct[map ? map[g] : g];
+        uint16_t mn[DIMS], mx[DIMS];
+        for (int d = 0; d < DIMS; d++) mn[d] = 0xFFFF, mx[d] = 0;
+        int ok = 1;
+        for (size_t i = g; i < end; i++) {
+            const size_t r = map ? map[i] : i;
+            ok &= s->oct[r] == oct;
+            for (int j = 0; j < qz->k; j++) {
+                const int d = qz->active[j];
+                const uint16_t v = s->q[r][d];
+                mn[d] = v < mn[d] ? v : mn[d], mx[d] = v > mx[d] ? v : mx[d];
+            }
+        }
+        for (int j = 0; j < qz->k && ok; j++) {
+            const int d = qz->active[j];
+            const float spread = (float)(mx[d] - mn[d]);
+            ok = d < 3 ? spread <= qz->origin_limit : spread <= qz->dir_limit;
+        }
+        s->coherent[g / P] = (uint8_t)ok;
+    }
+}
+
+/* ---- tracing ---------------------------------------------------------------- */
+
+typedef struct {
+    const void *accel;
+    accel_hit_batch_fn hit_packet, hit_single;
+    accel_occ_batch_fn occ_packet, occ_single;
+    size_t esz; /* sizeof(accel_hit), or 1 for any hit */
+} job;
+
+static void call(const job *j, int packet, const accel_ray *rays, void *out, size_t n,
+                 accel_counters *c)
+{
+    if (j->esz == 1)
+        (packet ? j->occ_packet : j->occ_single)(j->accel, rays, out, n, c);
+    else
+        (packet ? j->hit_packet : j->hit_single)(j->accel, rays, out, n, c);
+}
+
+/* Traces rays[0..n) into out in runs of equally classified groups; the
+ * per-ray counters go to steps/prims (either may be NULL) at the same
+ * index. */
+static void trace_runs(const job *j, const scratch *s, const accel_ray *rays, char *out, size_t n,
+                       accel_counters *c, uint32_t *steps, uint32_t *prims)
+{
+    uint64_t packed = 0;
+    for (size_t start = 0; start < n;) {
+        const int coh = s->coherent[start / P];
+        size_t end = start;
+        while (end < n && s->coherent[end / P] == coh) end += P;
+        if (end > n) end = n;
+        uint32_t *rs = steps ? steps + start : NULL, *rp = prims ? prims + start : NULL;
+        if (c && !coh) {
+            /* The single-ray runs' counters without their per-level steps:
+             * the packet kernels do not split steps by level (nested_grid),
+             * and a batch's levels must add up to its steps or be zero. */
+            accel_counters sub;
+            memset(&sub, 0, sizeof sub);
+            sub.ray_steps = rs, sub.ray_prims = rp;
+            call(j, 0, rays + start, out + start * j->esz, end - start, &sub);
+            memset(sub.level_steps, 0, sizeof sub.level_steps);
+            accel_counters_add(c, &sub);
+        } else {
+            if (c) c->ray_steps = rs, c->ray_prims = rp;
+            call(j, coh, rays + start, out + start * j->esz, end - start, c);
+        }
+        if (coh) packed += end - start;
+        start = end;
+    }
+    atomic_fetch_add_explicit(&st_packet, packed, memory_order_relaxed);
+    atomic_fetch_add_explicit(&st_single, n - packed, memory_order_relaxed);
+}
+
+/* One block of at most BLOCK rays: keys, the keep-or-sort decision, the
+ * split, the trace and the scatter back. */
+static void trace_block(const job *j, scratch *s, const accel_ray *rays, char *out, size_t n,
+                        accel_counters *c)
+{
+    uint32_t *steps = c ? c->ray_steps : NULL, *prims = c ? c->ray_prims : NULL;
+    quant qz;
+    plan_quant(rays, n, &qz);
+    const double kept = make_keys(rays, n, &qz, s);
+    int keep = n <= P;
+    if (!keep) {
+        sort_keys(s, n);
+        keep = kept <= KEEP_SLACK * sorted_extent(s, n, &qz);
+    }
+    const int split = j->esz == 1 ? j->occ_single != NULL : j->hit_single != NULL;
+    if (!split) memset(s->coherent, 1, (n + P - 1) / P);
+    if (keep) {
+        if (split) classify(s, n, &qz, NULL);
+        trace_runs(j, s, rays, out, n, c, steps, prims);
+        atomic_fetch_add_explicit(&st_kept, 1, memory_order_relaxed);
+    } else {
+        if (split) classify(s, n, &qz, s->idx);
+        for (size_t i = 0; i < n; i++) s->rays[i] = rays[s->idx[i]];
+        trace_runs(j, s, s->rays, (char *)s->hits, n, c, steps ? s->steps : NULL,
+                   prims ? s->prims : NULL);
+        if (j->esz == 1)
+            for (size_t i = 0; i < n; i++) out[s->idx[i]] = ((const char *)s->hits)[i];
+        else
+            for (size_t i = 0; i < n; i++) ((accel_hit *)out)[s->idx[i]] = s->hits[i];
+        if (steps)
+            for (size_t i = 0; i < n; i++) steps[s->idx[i]] = s->steps[i];
+        if (prims)
+            for (size_t i = 0; i < n; i++) prims[s->idx[i]] = s->prims[i];
+        atomic_fetch_add_explicit(&st_sorted, 1, memory_order_relaxed);
+    }
+    if (c) c->ray_steps = steps, c->ray_prims = prims;
+}
+
+static void run(const job *j, const accel_ray *rays, char *out, size_t count, accel_counters *c)
+{
+    scratch *s = accel_coherence_get() == ACCEL_ORDER_SORT ? get_scratch() : NULL;
+    if (!s) { /* ACCEL_ORDER_KEEP, or no memory: the caller's order as it is */
+        call(j, 1, rays, out, count, c);
+        return;
+    }
+    uint32_t *steps = c ? c->ray_steps : NULL, *prims = c ? c->ray_prims : NULL;
+    for (size_t b = 0; b < count; b += BLOCK) {
+        const size_t n = count - b < BLOCK ? count - b : BLOCK;
+        if (c) c->ray_steps = steps ? steps + b : NULL, c->ray_prims = prims ? prims + b : NULL;
+        trace_block(j, s, rays + b, out + b * j->esz, n, c);
+    }
+    if (c) c->ray_steps = steps, c->ray_prims = prims;
+}
+
+void accel_coherent_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
+                              size_t count, accel_counters *c, accel_hit_batch_fn packet,
+                              accel_hit_batch_fn single)
+{
+    const job j = {accel, packet, single, NULL, NULL, sizeof(accel_hit)};
+    run(&j, rays, (char *)hits, count, c);
+}
+
+void accel_coherent_occluded(const void *accel, const accel_ray *rays, uint8_t *occ, size_t count,
+                             accel_counters *c, accel_occ_batch_fn packet,
+                             accel_occ_batch_fn single)
+{
+    const job j = {accel, NULL, NULL, packet, single, 1};
+    run(&j, rays, (char *)occ, count, c);
+}

@@ -1,0 +1,266 @@
+/*
+ * test_coherence.c - packets in any ray order (core/coherence.h): every
+ * packet mode traced on shuffled and scanline-ordered rays gives, ray by
+ * ray and bit for bit, the answers of the same kernel on 8x8 tiles without
+ * reordering (ACCEL_ORDER_KEEP); the packet kernels' answers do not depend
+ * on their packet mates (shuffled rays with ACCEL_ORDER_KEEP); per-ray
+ * counters land at the caller's index; scanline primaries are sorted into
+ * packets and diffuse bounces go ray by ray. Also rays_reorder's orders.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/coherence.h"
+#include "rays/rays.h"
+#include "scene/scene.h"
+#include "support.h"
+#include "test.h"
+
+static const char *const packet_specs[] = {
+    "grid:traverse=packet",          "nested_grid:traverse=packet",
+    "bvh:traverse=packet",           "bvh:traverse=packet,frustum=1",
+    "bvh:width=4,traverse=packet",   "bvh:width=8,traverse=packet",
+    "bvh:width=8,traverse=packet,hybrid=0",
+};
+
+/* perm: a seeded shuffle of 0..n-1 */
+static size_t *shuffle_perm(size_t n, uint64_t seed)
+{
+    size_t *p = malloc((n ? n : 1) * sizeof *p);
+    for (size_t i = 0; i < n; i++) p[i] = i;
+    for (size_t i = n; i > 1; i--) {
+        size_t j = (size_t)(rays_rand(seed, i, 7) * (float)i);
+        if (j >= i) j = i - 1;
+        size_t t = p[i - 1]; p[i - 1] = p[j], p[j] = t;
+    }
+    return p;
+}
+
+/* Traces rays[perm[i]] (perm NULL: in order) with the packet order `order`
+ * and returns the answers at the original indices. */
+static void trace_perm(const accel_kind *k, const void *a, const accel_ray *rays, const size_t *perm,
+                       size_t n, int occl, int order, accel_hit *hits, uint8_t *occ)
+{
+    accel_ray *r = malloc((n ? n : 1) * sizeof *r);
+    accel_hit *h = malloc((n ? n : 1) * sizeof *h);
+    uint8_t *o = malloc(n ? n : 1);
+    for (size_t i = 0; i < n; i++) r[i] = rays[perm ? perm[i] : i];
+    accel_coherence_set(order);
+    if (occl) k->occluded(a, r, o, n, NULL);
+    else k->intersect(a, r, h, n, NULL);
+    accel_coherence_set(ACCEL_ORDER_SORT);
+    for (size_t i = 0; i < n; i++) {
+        const size_t j = perm ? perm[i] : i;
+        if (occl) occ[j] = o[i];
+        else hits[j] = h[i];
+    }
+    free(r), free(h), free(o);
+}
+
+/* Within `ulps` float steps of the larger (0: the same bits); barycentrics
+ * (in [0, 1], rounded on the scale of 1) within ulps steps of 1. */
+static int close_floats(float a, float b, int ulps, int bary)
+{
+    if (!memcmp(&a, &b, sizeof a)) return 1;
+    const float scale = bary ? 1.0f : fmaxf(fabsf(a), fabsf(b));
+    return ulps > 0 && fabsf(a - b) <= (float)ulps * 0x1p-23f * scale;
+}
+
+/* Rays whose answers differ from the reference: any bit when ulps == 0,
+ * else the primitive or the occlusion, or t, u, v by more than ulps steps. */
+static size_t differences(const accel_hit *ref, const accel_hit *hits, const uint8_t *ref_occ,
+                          const uint8_t *occ, size_t n, int occl, int ulps)
+{
+    size_t bad = 0;
+    for (size_t i = 0; i < n; i++) {
+        const int d = occl ? ref_occ[i] != occ[i]
+                           : ref[i].prim != hits[i].prim || !close_floats(ref[i].t, hits[i].t, ulps, 0) ||
+                                 !close_floats(ref[i].u, hits[i].u, ulps, 1) ||
+                                 !close_floats(ref[i].v, hits[i].v, ulps, 1);
+        if (d && bad < 3 && !occl && getenv("COH_DEBUG"))
+            test_note("ray %zu: %a %u %a %a vs %a %u %a %a", i, ref[i].t, ref[i].prim, ref[i].u,
+                      ref[i].v, hits[i].t, hits[i].prim, hits[i].u, hits[i].v);
+        bad += d;
+    }
+    return bad;
+}
+
+/* The bits a packet mode's answers may change with its packet mates. The
+ * grids' packets test a primitive for a ray in another order, and with
+ * other repeats, than their single-ray kernel: the watertight test decides
+ * a hit within its error of the current nearest one in double
+ * (core/prim.h), so t, u, v of the same primitive may come from either
+ * computation (a few float steps apart). The BVH packets' answers are the
+ * same bits whatever their mates. */
+static int mate_ulps(const char *spec)
+{
+    return strncmp(spec, "bvh", 3) ? 16 : 0;
+}
+
+typedef struct {
+    const char *name;
+    rays_set set;
+    int occl;
+} ray_case;
+
+/* Primary rays (tiles), their shadow and diffuse rays on s. */
+static int make_cases(const accel_scene *s, ray_case c[3])
+{
+    accel_error err;
+    memset(c, 0, 3 * sizeof *c);
+    if (rays_primary(&s->camera, 88, 64, &c[0].set, &err)) return 0;
+    accel_hit *ref = malloc(c[0].set.count * sizeof *ref);
+    accel_reference_trace(s, c[0].set.rays, ref, c[0].set.count, 1);
+    int ok = !rays_shadow(s, &c[0].set, ref, &c[1].set, &err) &&
+             !rays_diffuse(s, &c[0].set, ref, 3, &c[2].set, &err);
+    free(ref);
+    c[0].name = "primary", c[1].name = "shadow", c[2].name = "diffuse", c[1].occl = 1;
+    return ok;
+}
+
+TEST(coherence_any_order_same_answers)
+{
+    accel_scene s;
+    if (!test_make_scene("sphereflake:level=2", &s)) return;
+    ray_case cases[3];
+    CHECK(make_cases(&s, cases));
+    for (size_t k = 0; k < sizeof packet_specs / sizeof *packet_specs; k++) {
+        const accel_kind *kind;
+        void *a = test_build_kind(packet_specs[k], &s, 1, &kind, NULL);
+        if (!a) continue;
+        for (int ci = 0; ci < 3; ci++) {
+            const ray_case *c = &cases[ci];
+            const size_t n = c->set.count;
+            accel_hit *ref = malloc(n * sizeof *ref), *hits = malloc(n * sizeof *hits);
+            uint8_t *ref_occ = malloc(n), *occ = malloc(n);
+            size_t *perm = shuffle_perm(n, 11 + (uint64_t)ci);
+            trace_perm(kind, a, c->set.rays, NULL, n, c->occl, ACCEL_ORDER_KEEP, ref, ref_occ);
+            /* packet mates must not matter: shuffled packets as they come */
+            trace_perm(kind, a, c->set.rays, perm, n, c->occl, ACCEL_ORDER_KEEP, hits, occ);
+            size_t bad = differences(ref, hits, ref_occ, occ, n, c->occl, mate_ulps(packet_specs[k]));
+            CHECKF(bad == 0, "%s, %s rays shuffled, packets kept: %zu of %zu answers differ",
+                   packet_specs[k], c->name, bad, n);
+            /* sorted into packets, scattered back */
+            trace_perm(kind, a, c->set.rays, perm, n, c->occl, ACCEL_ORDER_SORT, hits, occ);
+            bad = differences(ref, hits, ref_occ, occ, n, c->occl, mate_ulps(packet_specs[k]));
+            CHECKF(bad == 0, "%s, %s rays shuffled, sorted: %zu of %zu answers differ",
+                   packet_specs[k], c->name, bad, n);
+            free(ref), free(hits), free(ref_occ), free(occ), free(perm);
+        }
+        kind->destroy(a);
+    }
+    for (int ci = 0; ci < 3; ci++) rays_free(&cases[ci].set);
+    scene_free(&s);
+}
+
+/* Scanline primaries: sorted into packets (not kept, not sent ray by ray),
+ * the same answers, per-ray counters at the caller's index. */
+TEST(coherence_scanline_sorted_into_packets)
+{
+    accel_scene s;
+    if (!test_make_scene("sphereflake:level=2", &s)) return;
+    ray_case cases[3];
+    CHECK(make_cases(&s, cases));
+    rays_set scan = cases[0].set;
+    const size_t n = scan.count;
+    scan.rays = malloc(n * sizeof *scan.rays), scan.pixel = malloc(n * sizeof *scan.pixel);
+    memcpy(scan.rays, cases[0].set.rays, n * sizeof *scan.rays);
+    memcpy(scan.pixel, cases[0].set.pixel, n * sizeof *scan.pixel);
+    accel_error err;
+    CHECK(rays_reorder(&scan, RAYS_ORDER_SCANLINE, 0, &err) == 0);
+    size_t *perm = malloc(n * sizeof *perm), *tile_of = malloc(n * sizeof *tile_of);
+    for (size_t i = 0; i < n; i++) tile_of[cases[0].set.pixel[i]] = i;
+    for (size_t i = 0; i < n; i++) {
+        CHECK(scan.pixel[i] == i); /* scanline: pixel index order */
+        perm[i] = tile_of[scan.pixel[i]];
+    }
+    for (size_t k = 0; k < sizeof packet_specs / sizeof *packet_specs; k++) {
+        const accel_kind *kind;
+        void *a = test_build_kind(packet_specs[k], &s, 1, &kind, NULL);
+        if (!a) continue;
+        accel_hit *ref = malloc(n * sizeof *ref), *hits = malloc(n * sizeof *hits);
+        trace_perm(kind, a, cases[0].set.rays, NULL, n, 0, ACCEL_ORDER_KEEP, ref, NULL);
+        accel_coherence_stats st0, st1;
+        accel_coherence_stats_get(&st0);
+        trace_perm(kind, a, cases[0].set.rays, perm, n, 0, ACCEL_ORDER_SORT, hits, NULL);
+        accel_coherence_stats_get(&st1);
+        const size_t bad = differences(ref, hits, NULL, NULL, n, 0, mate_ulps(packet_specs[k]));
+        CHECKF(bad == 0, "%s, scanline primaries: %zu of %zu answers differ", packet_specs[k], bad, n);
+        /* other tests may run at once in this process: lower bounds only */
+        CHECKF(st1.sorted_blocks - st0.sorted_blocks >= 1, "%s: scanline blocks were not sorted",
+               packet_specs[k]);
+        CHECKF(st1.packet_rays - st0.packet_rays >= n * 8 / 10, "%s: %llu of %zu rays in packets",
+               packet_specs[k], (unsigned long long)(st1.packet_rays - st0.packet_rays), n);
+        /* per-ray counters at the caller's index: their sum is the total */
+        accel_counters c;
+        memset(&c, 0, sizeof c);
+        uint32_t *steps = calloc(n, sizeof *steps);
+        c.ray_steps = steps;
+        kind->intersect(a, scan.rays, hits, n, &c);
+        uint64_t sum = 0;
+        for (size_t i = 0; i < n; i++) sum += steps[i];
+        CHECKF(sum == c.steps && c.ray_steps == steps, "%s: per-ray steps sum %llu, total %llu",
+               packet_specs[k], (unsigned long long)sum, (unsigned long long)c.steps);
+        free(steps), free(ref), free(hits);
+        kind->destroy(a);
+    }
+    free(perm), free(tile_of), rays_free(&scan);
+    for (int ci = 0; ci < 3; ci++) rays_free(&cases[ci].set);
+    scene_free(&s);
+}
+
+/* Diffuse bounces are not traced as packets: the spread test sends them
+ * ray by ray. */
+TEST(coherence_diffuse_rays_go_single)
+{
+    accel_scene s;
+    if (!test_make_scene("sphereflake:level=2", &s)) return;
+    ray_case cases[3];
+    CHECK(make_cases(&s, cases));
+    const accel_kind *kind;
+    void *a = test_build_kind("bvh:traverse=packet", &s, 1, &kind, NULL);
+    if (a) {
+        const size_t n = cases[2].set.count;
+        accel_hit *hits = malloc(n * sizeof *hits);
+        accel_coherence_stats st0, st1;
+        accel_coherence_stats_get(&st0);
+        kind->intersect(a, cases[2].set.rays, hits, n, NULL);
+        accel_coherence_stats_get(&st1);
+        CHECKF(st1.single_rays - st0.single_rays >= n * 9 / 10, "diffuse: %llu of %zu rays single",
+               (unsigned long long)(st1.single_rays - st0.single_rays), n);
+        free(hits);
+        kind->destroy(a);
+    }
+    for (int ci = 0; ci < 3; ci++) rays_free(&cases[ci].set);
+    scene_free(&s);
+}
+
+TEST(coherence_ray_orders)
+{
+    accel_scene s;
+    if (!test_make_scene("sphere:segments=8", &s)) return;
+    rays_set r;
+    accel_error err;
+    if (rays_primary(&s.camera, 20, 12, &r, &err)) return;
+    CHECK(rays_reorder(&r, RAYS_ORDER_SCANLINE, 0, &err) == 0);
+    for (size_t i = 0; i < r.count; i++) CHECK(r.pixel[i] == i);
+    CHECK(rays_reorder(&r, RAYS_ORDER_TILES8, 0, &err) == 0);
+    /* the first 8x8 tile, then the next one to its right */
+    CHECK(r.pixel[0] == 0 && r.pixel[7] == 7 && r.pixel[8] == 20 && r.pixel[63] == 7 * 20 + 7);
+    CHECK(r.pixel[64] == 8);
+    rays_order o;
+    CHECK(rays_order_parse("shuffle", &o) == 0 && o == RAYS_ORDER_SHUFFLE);
+    CHECK(rays_order_parse("zigzag", &o) != 0);
+    CHECK(rays_reorder(&r, RAYS_ORDER_SHUFFLE, 5, &err) == 0);
+    uint8_t *seen = calloc(r.count, 1);
+    size_t moved = 0;
+    for (size_t i = 0; i < r.count; i++) seen[r.pixel[i]]++, moved += r.pixel[i] != i;
+    for (size_t i = 0; i < r.count; i++) CHECK(seen[i] == 1);
+    CHECK(moved > r.count / 2);
+    free(seen);
+    free(r.pixel), r.pixel = NULL;
+    CHECK(rays_reorder(&r, RAYS_ORDER_SCANLINE, 0, &err) == ACCEL_ERR_SPEC);
+    rays_free(&r);
+    scene_free(&s);
+}
