@@ -52,7 +52,7 @@ const char *exp_anim_ratio(char *buf, size_t n, const exp_est *r, double floor);
 /* A single value as an estimate of n samples (a count, bytes). */
 static inline exp_est exp_est_one(double v, int n)
 {
-    exp_est e = {v, v, v, v, v, n};
+    exp_est e = {v, v, v, v, v, n, 0, 0, 0, 0};
     return e;
 }
 

@@ -59,7 +59,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
             if (!cf->ok || !cf->set[exp_set_index(bit)].have) continue;
             int b = base_of(&g, c);
             exp_est m = exp_group_mrays(&g, c, bit);
-            exp_est sp = b >= 0 && b != c ? exp_group_speedup(&g, b, c, bit) : (exp_est){1, 1, 1, 1, 1, 0};
+            exp_est sp = b >= 0 && b != c ? exp_group_speedup(&g, b, c, bit) : (exp_est){1, 1, 1, 1, 1, 0, 0, 0, 0, 0};
             char mt[96], st_[96];
             exp_md(x, "| `%s` | %s | %zu | %s | %s | %.1f | %.1f | %.1f |\n", cf->spec,
                    bench_set_name(bit), cf->set[exp_set_index(bit)].rays,
