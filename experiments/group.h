@@ -13,6 +13,17 @@
  * x->sample_ms; a configuration gets x->repeats rounds, fewer when its
  * passes are slow (x->set_budget_ms of timed work per ray set, at least one).
  *
+ * Replication (issue 38): the same kernel on the same rays varies by up to a
+ * third between fresh processes, which rounds inside one process cannot
+ * see. Round r runs in process r % x->procs: this one, then each replica
+ * in turn, a forked process that builds every configuration again and
+ * copies the rays, so that structures and rays lie in its own fresh
+ * memory (the code is the parent's: its placement is not varied), times
+ * its rounds and sends them back through a pipe. One replica at a time:
+ * they never compete for the cores. Every estimate of the group takes the
+ * wider of the pooled interval and the t-interval on the processes'
+ * medians (stats.h), and keeps both spreads.
+ *
  * The A/A control: configuration 0 is timed twice per round, in two slots;
  * the paired ratio of the two is what an identical configuration differs
  * by here and now, and its interval gives the group's noise floor.
@@ -92,6 +103,8 @@ typedef struct {
     exp_est probe;      /* time(1 thread) / time(probe_threads), paired per round (n 0: none) */
     double floor;       /* the noise floor of this group, relative */
     int rounds;
+    int procs;          /* processes the rounds ran in (the replicas that returned, plus this one) */
+    int round_proc[EXP_MAX_SAMPLES]; /* the process of each round (0: this one) */
 } exp_group;
 
 /* The smallest noise floor the study uses: differences under 1% are never findings. */

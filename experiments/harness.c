@@ -90,8 +90,11 @@ static const cli_option exp_options[] = {
      OPT(out_dir), 0, 0},
     {"--threads", "N", "threads of every build, trace and reference (default 1;\n"
      "exp_threads: the largest count, default every core)", opt_threads, OPT(threads), 1, 256},
-    {"--repeat", "N", "interleaved timed rounds per configuration (default 7, quick 3)", cli_int,
+    {"--repeat", "N", "interleaved timed rounds per configuration (default 12, quick 3)", cli_int,
      OPT(repeats), 1, EXP_MAX_SAMPLES},
+    {"--procs", "N", "spread the timed rounds over N processes: this one and N-1 forked\n"
+     "replicas that rebuild every structure in fresh memory (default 3; 1: no replicas)", cli_int,
+     OPT(procs), 1, 16},
     {"--size", "N", "primary image N x N (default 128, quick 64)", cli_int, OPT(size), 8, 8192},
     {"--rt-size", "WxH", "image of the lecture's real-time claims (default 800x600, quick 160x120)",
      cli_size, OPT(rt_size), 8, 8192},
@@ -168,10 +171,13 @@ void exp_init(exp_ctx *x, int argc, char **argv, const char *name, const char *q
         usage(x, question, extra_help);
         exit(CLI_EXIT_OK);
     }
-    if (x->repeats < 0) x->repeats = x->quick ? 3 : 7;
+    /* 12 rounds, 4 in each of 3 processes: a verdict needs 10 (issue 38);
+     * samples of 10 ms (was 20 ms with 7 rounds) keep the time. */
+    if (x->repeats < 0) x->repeats = x->quick ? 3 : 12;
+    if (x->procs <= 0) x->procs = 3;
     if (x->size < 0) x->size = x->quick ? 64 : 128;
     if (x->rt_size[0] <= 0) x->rt_size[0] = x->quick ? 160 : 800, x->rt_size[1] = x->quick ? 120 : 600;
-    x->sample_ms = x->quick ? 2.0 : 20.0;
+    x->sample_ms = x->quick ? 2.0 : 10.0;
     x->set_budget_ms = x->quick ? 100.0 : 1500.0;
     x->build_budget_ms = x->quick ? 100.0 : 2000.0;
     x->meshes_given = x->mesh_count > 0;
@@ -260,6 +266,12 @@ int exp_finish(exp_ctx *x)
            x->name, s, cpu, x->quick ? "quick" : "full", x->threads, x->threads > 1 ? "s" : "",
            x->rounds_lo, x->rounds_hi, x->repeats, x->sample_ms, x->size, x->size, x->rt_size[0],
            x->rt_size[1], x->load_start[0], load_end[0], x->others_start);
+    if (x->procs_used > 1)
+        exp_md(x, "\n_Timed rounds spread over %d processes (this one and %d forked replicas that "
+                  "rebuild every structure and copy the rays into fresh memory); intervals are "
+                  "distribution-free order-statistic intervals of the median, widened to the "
+                  "t-interval on the processes' medians where that is wider._\n",
+               x->procs_used, x->procs_used - 1);
     bench_progress_stop(x->progress);
     x->progress = NULL;
     if (x->csv.bad_rows || x->verdicts.bad_rows) {

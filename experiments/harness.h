@@ -62,6 +62,8 @@ typedef struct {
     int threads;          /* threads of every build, trace and reference (default 1) */
     int threads_given;    /* --threads was on the command line */
     int repeats;          /* timed passes per measurement */
+    int procs;            /* processes the timed rounds are spread over (group.h; default 3) */
+    int procs_used;       /* the most that returned rounds in one group of this section */
     int size;             /* primary image size (square) */
     int rt_size[2];       /* the lecture's real-time image (default 800x600) */
     const char *accels[EXP_MAX_ACCELS]; /* --accel: specs added to the experiment's list */
