@@ -621,13 +621,28 @@ exp_est exp_group_mrays(const exp_group *g, int c, int mask)
     return exp_est_inv(&ns, 1e3);
 }
 
-exp_est exp_group_speedup(const exp_group *g, int base, int c, int mask)
+exp_est exp_group_speedup_level(const exp_group *g, int base, int c, int mask, double level)
 {
     double a[EXP_MAX_SAMPLES], b[EXP_MAX_SAMPLES];
     int na = exp_group_round_ms(g, base, mask, a), nb = exp_group_round_ms(g, c, mask, b);
     exp_est e;
-    exp_est_ratio_procs(a, b, g->round_proc, na < nb ? na : nb, &e);
+    exp_est_ratio_level(a, b, g->round_proc, na < nb ? na : nb, level, &e);
     return e;
+}
+
+exp_est exp_group_speedup(const exp_group *g, int base, int c, int mask)
+{
+    return exp_group_speedup_level(g, base, c, mask, 0.95);
+}
+
+exp_est exp_group_ns_level(const exp_group *g, int c, int mask, double level)
+{
+    double v[EXP_MAX_SAMPLES];
+    int n = exp_group_round_ms(g, c, mask, v);
+    exp_est e;
+    exp_est_of_level(v, g->round_proc, n, level, &e);
+    size_t rays = exp_group_rays(g, c, mask);
+    return exp_est_scale(&e, rays ? 1e6 / (double)rays : 0);
 }
 
 static double per_ray(const exp_group *g, int c, int mask, int what)

@@ -132,6 +132,11 @@ exp_est exp_group_mrays(const exp_group *g, int c, int mask);
 /* Speed of c relative to base over the sets in mask: time(base) / time(c)
  * per round (> 1: c is faster), paired. */
 exp_est exp_group_speedup(const exp_group *g, int base, int c, int mask);
+/* The same with its interval at `level` (a verdict over m comparisons:
+ * exp_tally_level). */
+exp_est exp_group_speedup_level(const exp_group *g, int base, int c, int mask, double level);
+/* ns per ray with its interval at `level`. */
+exp_est exp_group_ns_level(const exp_group *g, int c, int mask, double level);
 /* Counts per ray over the sets in mask. */
 double exp_group_steps(const exp_group *g, int c, int mask);
 double exp_group_prims(const exp_group *g, int c, int mask);

@@ -422,6 +422,12 @@ void exp_verdict_num(exp_ctx *x, const char *claim, const char *verdict, const e
     va_end(ap);
 }
 
+exp_decider exp_decider_of(const char *what, const exp_est *e, double threshold, int sense)
+{
+    exp_decider d = {what, e->median, e->lo, e->hi, threshold, sense, e->n};
+    return d;
+}
+
 const char *exp_no_difference(double floor)
 {
     return floor <= EXP_NOISY ? EXP_REFUTED : EXP_UNTESTABLE;

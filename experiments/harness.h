@@ -180,6 +180,8 @@ void exp_verdict_num(exp_ctx *x, const char *claim, const char *verdict, const e
  * otherwise not testable (the run was too noisy to tell). */
 #define EXP_NOISY 0.25
 const char *exp_no_difference(double floor);
+/* A decider from an estimate: value median, interval [lo, hi], n. */
+exp_decider exp_decider_of(const char *what, const exp_est *e, double threshold, int sense);
 /* For a verdict that says "too slow": on a busy machine (exp_busy) a
  * refutation is not testable here, since the measured times are upper
  * bounds of a quiet machine's. */
