@@ -261,7 +261,7 @@ static void build_rounds(exp_group *g)
     for (int c = 0; c < n; c++) {
         if (!g->cfg[c].ok) continue;
         double first = g->cfg[c].build.ms;
-        int r = x->quick ? 3 : 5;
+        int r = x->quick ? 3 : 10; /* 10 rounds for verdicts on build time (issue 38) */
         if (first > 0 && first * r > x->build_budget_ms) r = (int)(x->build_budget_ms / first);
         /* A build longer than half the budget keeps its first (add-time) sample
          * instead of being built once more for a single sample. */
