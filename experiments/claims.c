@@ -175,3 +175,32 @@ const char *exp_tally_verdict(const exp_tally *t)
     if (t->confirmed && t->refuted) return EXP_PARTLY;
     return EXP_ON_LINE;
 }
+
+/* A compound claim from its parts' words (NULL: a part not measured):
+ * the same word everywhere is the word; parts that confirm and parts that
+ * miss (or a part itself "partly") make it partly; else on the line. The
+ * decider is the first part whose word is the compound's (for partly: a
+ * part that misses). */
+const char *exp_compound(exp_tally *const *parts, int n, const exp_decider **dec)
+{
+    int measured = 0, conf = 0, ref = 0, part = 0, line = 0;
+    for (int i = 0; i < n; i++) {
+        const char *v = exp_tally_verdict(parts[i]);
+        if (!v) continue;
+        measured++;
+        conf += !strcmp(v, EXP_CONFIRMED), ref += !strcmp(v, EXP_REFUTED);
+        part += !strcmp(v, EXP_PARTLY), line += !strcmp(v, EXP_ON_LINE);
+    }
+    if (!measured) return NULL;
+    const char *word = conf == measured ? EXP_CONFIRMED : ref == measured ? EXP_REFUTED
+                       : part || (conf && ref) ? EXP_PARTLY : EXP_ON_LINE;
+    const char *want = !strcmp(word, EXP_PARTLY) ? EXP_REFUTED : word;
+    *dec = NULL;
+    for (int i = 0; i < n && !*dec; i++) {
+        const char *v = exp_tally_verdict(parts[i]);
+        if (v && (!strcmp(v, want) || (!strcmp(word, EXP_PARTLY) && !strcmp(v, EXP_PARTLY))))
+            *dec = &parts[i]->worst;
+    }
+    return word;
+}
+

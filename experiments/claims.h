@@ -77,5 +77,11 @@ double exp_tally_level(const exp_tally *t);
 void exp_tally_add(exp_tally *t, const exp_decider *d);
 /* The word; NULL when nothing was added. */
 const char *exp_tally_verdict(const exp_tally *t);
+/* A compound claim from its parts (tallies with nothing added: parts not
+ * measured): one word everywhere is the word; parts that confirm and parts
+ * that miss (or a part "partly") make it partly; else on the line. *dec:
+ * the deciding part's decider (for partly, a part that misses). NULL when
+ * no part was measured. */
+const char *exp_compound(exp_tally *const *parts, int n, const exp_decider **dec);
 
 #endif

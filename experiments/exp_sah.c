@@ -360,34 +360,6 @@ static void spatial_splits(exp_ctx *x, study *st)
     scene_free(&s);
 }
 
-/* A compound claim from its parts' words (NULL: a part not measured):
- * the same word everywhere is the word; parts that confirm and parts that
- * miss (or a part itself "partly") make it partly; else on the line. The
- * decider is the first part whose word is the compound's (for partly: a
- * part that misses). */
-static const char *compound(exp_tally *const *parts, int n, const exp_decider **dec)
-{
-    int measured = 0, conf = 0, ref = 0, part = 0, line = 0;
-    for (int i = 0; i < n; i++) {
-        const char *v = exp_tally_verdict(parts[i]);
-        if (!v) continue;
-        measured++;
-        conf += !strcmp(v, EXP_CONFIRMED), ref += !strcmp(v, EXP_REFUTED);
-        part += !strcmp(v, EXP_PARTLY), line += !strcmp(v, EXP_ON_LINE);
-    }
-    if (!measured) return NULL;
-    const char *word = conf == measured ? EXP_CONFIRMED : ref == measured ? EXP_REFUTED
-                       : part || (conf && ref) ? EXP_PARTLY : EXP_ON_LINE;
-    const char *want = !strcmp(word, EXP_PARTLY) ? EXP_REFUTED : word;
-    *dec = NULL;
-    for (int i = 0; i < n && !*dec; i++) {
-        const char *v = exp_tally_verdict(parts[i]);
-        if (v && (!strcmp(v, want) || (!strcmp(word, EXP_PARTLY) && !strcmp(v, EXP_PARTLY))))
-            *dec = &parts[i]->worst;
-    }
-    return word;
-}
-
 static const char *part_word(const exp_tally *t)
 {
     const char *v = exp_tally_verdict(t);
@@ -418,7 +390,7 @@ static void verdicts(exp_ctx *x, study *st)
                         st->build.refuted, st->build.online, exp_text_str(&st->build_ev));
     exp_tally *parts[5] = {&st->order[0], &st->order[1], &st->order[2], &st->pairs, &st->size};
     const exp_decider *dec = NULL;
-    const char *word = compound(parts, 5, &dec);
+    const char *word = exp_compound(parts, 5, &dec);
     if (word && dec)
         exp_verdict_num(x, "bvh-layout", word, dec, exp_text_str(&st->names),
                         "three parts, each faster than its control (threshold 1.0x, Bonferroni "
