@@ -42,7 +42,7 @@ static const char *const contenders[] = {
 #define LECTURE_16 "bvh:build=binned,bins=16,axes=1"
 #define QUALITY_MAX 1.10
 #define BUILD_MAX 0.5
-static void quality_verdict(exp_ctx *x, exp_group *g, const accel_scene *s)
+static void quality_verdict(exp_ctx *x, exp_group *g, const accel_scene *s, int stride)
 {
     int c = exp_group_find(g, LECTURE_16);
     if (c < 0 || !g->cfg[c].ok || !g->cfg[0].ok) {
@@ -55,7 +55,8 @@ static void quality_verdict(exp_ctx *x, exp_group *g, const accel_scene *s)
     exp_est_ratio(g->cfg[c].build_samples, g->cfg[0].build_samples, m, &br);
     char wt[400], wb[400], a[96], b[96], sd[160];
     snprintf(wt, sizeof wt, "16-bin longest-axis / full-sweep trace time, %s %u tris, primary+"
-             "diffuse %dx%d", s->name, s->live_count, x->size, x->size);
+             "diffuse %dx%d (1 in %d tiles)", s->name, s->live_count, x->rt_size[0],
+             x->rt_size[1], stride);
     snprintf(wb, sizeof wb, "16-bin longest-axis / full-sweep build time, %s %u tris", s->name,
              s->live_count);
     exp_decider dt = exp_decider_of(wt, &tr, QUALITY_MAX, -1), db = exp_decider_of(wb, &br, BUILD_MAX, -1);
@@ -84,7 +85,7 @@ static void bins_against_quality(exp_ctx *x, exp_text *findings)
     accel_scene s;
     exp_scene(x, scene_spec, &s);
     bench_sets sets;
-    exp_sets(x, &s, MASK, &sets);
+    int stride = exp_sets_tiles(x, &s, MASK, 0, &sets); /* 800x600 density (harness.h) */
     exp_md(x, "\n### Bins against quality on %s (%u primitives)\n", s.name, s.live_count);
     static const int full_bins[] = {2, 4, 8, 16, 32, 64, 128, 256};
     static const int quick_bins[] = {2, 16};
@@ -181,7 +182,7 @@ static void bins_against_quality(exp_ctx *x, exp_text *findings)
                      100 * (g.cfg[fastest1].build.sah_cost / ref_sah - 1));
     }
     (void)tie3;
-    quality_verdict(x, &g, &s);
+    quality_verdict(x, &g, &s, stride);
     exp_group_free(&g);
     bench_sets_free(&sets);
     scene_free(&s);

@@ -58,6 +58,7 @@ static const char *const builders[] = {
 #define DOUBLE 2.0
 
 typedef struct {
+    int stride; /* 1 in stride of the 800x600 image's 8x8 tiles (exp_sets_tiles) */
     int scenes, build_scenes;
     /* Issue 38's rules over every scene and ray set (exp_tally: Bonferroni
      * intervals): SAH >= 2x the pure median split; its build >= 2x slower;
@@ -133,8 +134,8 @@ static void claim(exp_group *g, study *st, const char *scene)
         char buf[128], sp[96], what[256];
         exp_group_compare(g, sah, pure, bit, buf, sizeof buf);
         exp_est e = exp_group_speedup_level(g, pure, sah, bit, exp_tally_level(&st->sah));
-        snprintf(what, sizeof what, "SAH / pure median speed-up, %s, %s %dx%d", tag,
-                 bench_set_name(bit), g->x->size, g->x->size);
+        snprintf(what, sizeof what, "SAH / pure median speed-up, %s, %s %dx%d (1 in %d tiles)",
+                 tag, bench_set_name(bit), g->x->rt_size[0], g->x->rt_size[1], st->stride);
         exp_decider d = exp_decider_of(what, &e, DOUBLE, +1);
         exp_tally_add(&st->sah, &d);
         char sd[160];
@@ -204,7 +205,8 @@ static void sbvh_notes(exp_group *g, study *st, const accel_scene *s, int is_mes
         st->sb_mesh_slower += cmp > 0;
         char what[400];
         snprintf(what, sizeof what, "sbvh / binned SAH trace time, %s %u tris, primary+shadow+diffuse "
-                 "%dx%d", s->name, s->live_count, g->x->size, g->x->size);
+                 "%dx%d (1 in %d tiles)", s->name, s->live_count, g->x->rt_size[0],
+                 g->x->rt_size[1], st->stride);
         exp_est e = exp_group_speedup_level(g, sb, b16, g->mask, exp_tally_level(&st->sb_mesh));
         exp_decider d = exp_decider_of(what, &e, NOTHING_LOST, -1);
         exp_tally_add(&st->sb_mesh, &d);
@@ -269,7 +271,9 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
 {
     accel_scene s;
     bench_sets sets;
-    exp_scene_section(x, spec, &s, MASK, 0, &sets);
+    exp_scene(x, spec, &s);
+    st->stride = exp_sets_tiles(x, &s, MASK, 0, &sets);
+    exp_md(x, "\n### %s (%u primitives)\n", s.name, s.live_count);
     exp_text_add(&st->names, "%s%s", st->names.len ? ", " : "", s.name);
     exp_group g;
     exp_group_init(&g, x, &s, &sets, MASK);
@@ -313,7 +317,7 @@ static void spatial_splits(exp_ctx *x, study *st)
     accel_scene s;
     exp_scene(x, spec, &s);
     bench_sets sets;
-    exp_sets(x, &s, MASK, &sets);
+    exp_sets_tiles(x, &s, MASK, st->stride, &sets);
     exp_md(x, "\n### Spatial splits where they matter: %s (%u primitives)\n\n"
               "Long thin triangles crossing the scene among small ones: an object split cannot "
               "separate them, so their boxes overlap every node's; spatial splits cut them. Issue "
@@ -447,11 +451,14 @@ int main(int argc, char **argv)
                "normalized by the root's area (for `width=4|8`, of the wide tree: its nodes and "
                "leaves under the same formula, a wide node visit counting C_trav like a binary "
                "one: fewer nodes and larger leaves than its binary tree, so not comparable with a "
-               "binary tree's cost). %dx%d primary rays, shadow rays to the scene's "
+               "binary tree's cost). The primary rays of one in %d of the 8x8 tiles of a %dx%d "
+               "image (the lecture's size: its rays' density and coherence at the work of a "
+               "%dx%d image), shadow rays to the scene's "
                "light, one diffuse bounce; every builder of a scene in interleaved rounds (builds "
                "too). Two controls test the lecture's node layout on the binned tree: `first=left` "
                "(the left hit child always first, not the nearer) and `pairs=split` (the same "
                "nodes shifted by 32 bytes, every sibling pair straddling two cache lines).",
+               x.rt_size[0] * x.rt_size[1] / (x.size * x.size), x.rt_size[0], x.rt_size[1],
                x.size, x.size);
     if (!accel_find_kind("bvh") || !exp_kind_wanted(&x, "bvh")) {
         exp_md(&x, "\nLeft out: no `bvh` kind in this run.\n");

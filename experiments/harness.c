@@ -596,6 +596,37 @@ void exp_sets_wh(exp_ctx *x, const accel_scene *s, int mask, int w, int h, int a
     }
 }
 
+/* Keeps the rays of r (and hits, when given) whose pixel lies in a kept
+ * tile; rays without pixels are kept. */
+static void keep_tiles(rays_set *r, accel_hit *hits, int w, int stride)
+{
+    if (!r->pixel || !r->count || w <= 0) return;
+    size_t k = 0;
+    int tiles_x = (w + 7) / 8;
+    for (size_t i = 0; i < r->count; i++) {
+        uint32_t p = r->pixel[i];
+        uint32_t tile = (p / (uint32_t)w / 8) * (uint32_t)tiles_x + (p % (uint32_t)w) / 8;
+        if (tile % (uint32_t)stride) continue;
+        r->rays[k] = r->rays[i], r->pixel[k] = p;
+        if (hits) hits[k] = hits[i];
+        k++;
+    }
+    r->count = k;
+}
+
+int exp_sets_tiles(exp_ctx *x, const accel_scene *s, int mask, int stride, bench_sets *out)
+{
+    int w = x->rt_size[0], h = x->rt_size[1];
+    if (stride <= 0) stride = (int)((double)w * h / ((double)x->size * x->size));
+    if (stride < 1) stride = 1;
+    exp_sets_wh(x, s, mask, w, h, 1, out);
+    keep_tiles(&out->primary, out->primary_hits, w, stride);
+    keep_tiles(&out->shadow, NULL, w, stride);
+    keep_tiles(&out->diffuse, NULL, w, stride);
+    keep_tiles(&out->ao, NULL, w, stride);
+    return stride;
+}
+
 void exp_reference(exp_ctx *x, const accel_scene *s, const accel_ray *rays, accel_hit *hits,
                    size_t count)
 {

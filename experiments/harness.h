@@ -141,6 +141,13 @@ void exp_scene_section(exp_ctx *x, const char *spec, accel_scene *s, int mask, i
                        bench_sets *sets);
 /* Builds the standard ray sets (mask of bench_set_bit) for s at x->size. */
 void exp_sets(exp_ctx *x, const accel_scene *s, int mask, bench_sets *out);
+/* The lecture's image at a smaller cost (issue 38: every lecture claim
+ * measured at 800x600): the ray sets of x->rt_size (one AO ray per hit),
+ * keeping the rays of one in `stride` of its 8x8 pixel tiles (tile index
+ * mod stride == 0), so that rays keep the density and coherence of the
+ * 800x600 image at the work of a smaller one. stride <= 0: the stride that
+ * leaves about x->size^2 primary rays. Returns the stride used. */
+int exp_sets_tiles(exp_ctx *x, const accel_scene *s, int mask, int stride, bench_sets *out);
 /* The same at w x h with ao_samples ambient occlusion rays per hit. */
 void exp_sets_wh(exp_ctx *x, const accel_scene *s, int mask, int w, int h, int ao_samples,
                  bench_sets *out);
