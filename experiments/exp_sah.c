@@ -77,6 +77,7 @@ typedef struct {
      * one line faster than split; evidence */
     int lay_scenes;
     exp_text lay_ev;
+    csv_file speedups; /* DIR/exp_sah_speedup.csv (f NULL: not written) */
 } study;
 
 /* "Several times faster": a paired speed-up of spatial splits on the
@@ -267,6 +268,40 @@ static void layout_notes(exp_group *g, study *st, const char *scene)
     exp_text_free(&ev);
 }
 
+/* Issue 39's third question: every builder's speed-up over the pure median
+ * split per ray set, build time beside it (Markdown, and the rows of
+ * DIR/exp_sah_speedup.csv for the report). */
+static void speedup_table(exp_ctx *x, study *st, const exp_group *g, const accel_scene *s)
+{
+    int pure = exp_group_find(g, PURE);
+    if (pure < 0 || !g->cfg[pure].ok) return;
+    exp_md(x, "\nSpeed-up over the pure median split (`%s`), paired per round, %dx%d rays (1 in %d "
+              "tiles), build time beside it:\n", PURE + 4, x->rt_size[0], x->rt_size[1], st->stride);
+    exp_md_table(x, "builder|primary|shadow|diffuse|build ms [95% CI]|build time over pure median");
+    for (int c = 0; c < g->count; c++) {
+        const exp_cfg *cf = &g->cfg[c];
+        if (!cf->ok || c == pure) continue;
+        char cell[3][96], b[96], br[96];
+        exp_est e[3];
+        for (int k = 0; k < 3; k++) {
+            int bit = k == 0 ? BENCH_PRIMARY : k == 1 ? BENCH_SHADOW : BENCH_DIFFUSE;
+            e[k] = exp_group_speedup(g, pure, c, bit);
+            exp_fmt_x(cell[k], sizeof cell[k], &e[k]);
+        }
+        exp_est r;
+        int m = cf->build_ms.n < g->cfg[pure].build_ms.n ? cf->build_ms.n : g->cfg[pure].build_ms.n;
+        exp_est_ratio(cf->build_samples, g->cfg[pure].build_samples, m, &r);
+        exp_md(x, "| `%s` | %s | %s | %s | %s | %s |\n", cf->spec + 4, cell[0], cell[1], cell[2],
+               exp_fmt_est(b, sizeof b, &cf->build_ms, 1), exp_fmt_x(br, sizeof br, &r));
+        if (st->speedups.f)
+            for (int k = 0; k < 3; k++)
+                csv_row(&st->speedups, "%s,%u,%s,%s,%d,%d,%.4f,%.4f,%.4f,%d,%.4f,%.4f,%.4f,%.4f\n",
+                        s->name, s->live_count, cf->spec, k == 0 ? "primary" : k == 1 ? "shadow"
+                        : "diffuse", x->rt_size[0], x->rt_size[1], e[k].median, e[k].lo, e[k].hi,
+                        e[k].n, cf->build_ms.median, cf->build_ms.lo, cf->build_ms.hi, r.median);
+    }
+}
+
 static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_list *list, int is_mesh)
 {
     accel_scene s;
@@ -292,6 +327,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     exp_group_run(&g);
     table(x, &g, &s);
     exp_group_note(&g);
+    speedup_table(x, st, &g, &s);
     exp_group_compare_head(&g);
     claim(&g, st, s.name);
     binned_notes(x, &g, st, s.name);
@@ -492,6 +528,16 @@ int main(int argc, char **argv)
     for (int i = 0; i < 3; i++) exp_tally_init(&st.order[i], scene_count);
     exp_tally_init(&st.pairs, scene_count);
     exp_tally_init(&st.size, scene_count);
+    {
+        char path[1024];
+        snprintf(path, sizeof path, "%s/exp_sah_speedup.csv", x.out_dir);
+        FILE *f = fopen(path, "w");
+        if (f) {
+            csv_open(&st.speedups, f);
+            csv_row(&st.speedups, "scene,tris,spec,rayset,width,height,speedup_over_pure_median,lo,"
+                                  "hi,n,build_ms,build_lo,build_hi,build_over_pure_median\n");
+        }
+    }
     exp_tally_init(&st.sb_sliv, 6); /* binary and 8-wide, three ray sets */
     exp_tally_init(&st.sb_mesh, mesh_scenes);
     for (int si = 0; si < scene_count; si++) measure_scene(&x, &st, scenes[si], &list, si < mesh_scenes);
@@ -506,5 +552,6 @@ int main(int argc, char **argv)
     exp_text_free(&st.sb_ev);
     exp_text_free(&st.lay_ev);
     exp_list_free(&list);
+    if (st.speedups.f) fclose(st.speedups.f);
     return exp_finish(&x);
 }
