@@ -169,7 +169,8 @@ static void bins_against_quality(exp_ctx *x, exp_text *findings, const char *sce
     svg_add(&pl, "full sweep (reference)", &rx, &ry, NULL, NULL, 1, SVG_POINTS);
     static int plots;
     char pname[64];
-    snprintf(pname, sizeof pname, plots++ ? "binning_quality_%d" : "binning_quality", plots);
+    plots++;
+    snprintf(pname, sizeof pname, plots > 1 ? "binning_quality_%d" : "binning_quality", plots);
     exp_svg(x, &pl, pname, "Build time against SAH cost, one point per bin count "
             "(more bins: right and down)");
     if (chosen >= 0) {
