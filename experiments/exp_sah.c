@@ -127,28 +127,31 @@ static void claim(exp_group *g, study *st, const char *scene)
 {
     int pure = exp_group_find(g, PURE), sah = exp_group_find(g, SAH);
     if (pure < 0 || sah < 0 || !g->cfg[pure].ok || !g->cfg[sah].ok) return;
-    exp_text line = {0};
+    exp_text line = {0}, spread = {0}; /* for the findings; for the verdict, with both spreads */
     char tag[200];
     scene_tag(tag, sizeof tag, g, scene);
     for (int bit = 1; bit <= BENCH_DIFFUSE; bit <<= 1) {
         if (!(g->mask & bit)) continue;
         char buf[128], sp[96], what[256];
         exp_group_compare(g, sah, pure, bit, buf, sizeof buf);
-        exp_est e = exp_group_speedup_level(g, pure, sah, bit, exp_tally_level(&st->sah));
+        exp_est e = exp_group_speedup_level(g, pure, sah, bit, exp_tally_level(&st->sah)),
+                e95 = exp_group_speedup(g, pure, sah, bit); /* the table's, for the findings */
         snprintf(what, sizeof what, "SAH / pure median speed-up, %s, %s %dx%d (1 in %d tiles)",
                  tag, bench_set_name(bit), g->x->rt_size[0], g->x->rt_size[1], st->stride);
         exp_decider d = exp_decider_of(what, &e, DOUBLE, +1);
         exp_tally_add(&st->sah, &d);
         char sd[160];
-        exp_text_add(&line, "%s%s %s (%s%s%s)", line.len ? ", " : "", bench_set_name(bit),
-                     exp_fmt_x(sp, sizeof sp, &e), exp_judge(&d), e.procs > 1 ? "; " : "",
-                     exp_fmt_spreads(sd, sizeof sd, &e));
+        exp_text_add(&line, "%s%s %s (%s)", line.len ? ", " : "", bench_set_name(bit),
+                     exp_fmt_x(sp, sizeof sp, &e95), exp_judge(&d));
+        exp_text_add(&spread, "%s%s %s (%s%s%s)", spread.len ? ", " : "", bench_set_name(bit),
+                     exp_fmt_x(sp, sizeof sp, &e95), exp_judge(&d), e.procs > 1 ? "; " : "",
+                     exp_fmt_spreads(sd, sizeof sd, &e95));
     }
     st->scenes++;
-    exp_text_add(&st->findings, "- %s: `sah` over the pure median split (intervals at %.2f%%, "
-                 "Bonferroni over the section's comparisons): %s.\n", scene,
-                 100 * exp_tally_level(&st->sah), exp_text_str(&line));
-    exp_text_add(&st->ev, "%s%s: %s", st->ev.len ? "; " : "", scene, exp_text_str(&line));
+    exp_text_add(&st->findings, "- %s: `sah` over the pure median split (95%% intervals; the "
+                 "verdict judges each on a Bonferroni interval): %s.\n", scene, exp_text_str(&line));
+    exp_text_add(&st->ev, "%s%s: %s", st->ev.len ? "; " : "", scene, exp_text_str(&spread));
+    exp_text_free(&spread);
     char b[128];
     exp_group_compare_build(g, sah, pure, b, sizeof b);
     exp_est r;
@@ -220,17 +223,19 @@ static void sbvh_notes(exp_group *g, study *st, const accel_scene *s, int is_mes
 }
 
 /* One layout comparison into its tally: the control's time over the
- * tree as built (> 1: the lecture's layout is faster), threshold 1. */
+ * tree as built (> 1: the lecture's layout is faster), threshold 1. The
+ * comparisons table gets its row (95%); the findings quote that row. */
 static void layout_one(exp_group *g, exp_tally *t, int control, int built, int mask,
                        const char *what_fmt, const char *tag, exp_text *ev)
 {
-    char what[256], sp[96];
+    char what[256], row[128];
     exp_est e = exp_group_speedup_level(g, control, built, mask, exp_tally_level(t));
     snprintf(what, sizeof what, what_fmt, tag);
     exp_decider d = exp_decider_of(what, &e, 1.0, +1);
     exp_tally_add(t, &d);
-    exp_text_add(ev, "%s%s %s (%s)", ev->len ? ", " : "", what, exp_fmt_x(sp, sizeof sp, &e),
-                 exp_judge(&d));
+    exp_group_compare(g, control, built, mask, row, sizeof row);
+    exp_text_add(ev, "%s`%s` %s time %s (%s)", ev->len ? ", " : "", g->cfg[control].spec + 4,
+                 strrchr(what, ',') ? strrchr(what, ',') + 2 : "", row, exp_judge(&d));
 }
 
 /* The lecture's layout claim on one scene, in three parts (issue 38):
@@ -383,11 +388,12 @@ static void spatial_splits(exp_ctx *x, study *st)
             /* the table's estimate (exp_group_compare): the inverse of the
              * time ratio */
             exp_est tr = exp_group_speedup_level(&g, c, base, bit, exp_tally_level(&st->sb_sliv)),
-                    e = exp_est_inv(&tr, 1.0);
+                    el = exp_est_inv(&tr, 1.0), t95 = exp_group_speedup(&g, c, base, bit),
+                    e = exp_est_inv(&t95, 1.0); /* the table's, for the findings */
             char what[400];
             snprintf(what, sizeof what, "sbvh over binned SAH speed-up, %s, %s %s", s.name,
                      w ? "8-wide" : "binary", bench_set_name(bit));
-            exp_decider dd = exp_decider_of(what, &e, SEVERAL, +1);
+            exp_decider dd = exp_decider_of(what, &el, SEVERAL, +1);
             exp_tally_add(&st->sb_sliv, &dd);
             pairs++;
             faster += cmp < 0;

@@ -245,7 +245,14 @@ int exp_group_add(exp_group *g, const char *spec, int threads)
     double budget = x->set_budget_ms * (nsets ? nsets : 1);
     c->want = round_ms > 0 ? (int)(budget / round_ms) : x->repeats;
     if (c->want > x->repeats) c->want = x->repeats;
-    if (c->want < g->min_rounds) c->want = g->min_rounds < x->repeats ? g->min_rounds : x->repeats;
+    if (c->want < g->min_rounds) {
+        /* min_rounds, but within 4 budgets: a configuration of seconds per
+         * pass keeps fewer rounds (its n says so) rather than minutes. */
+        int most = round_ms > 0 ? (int)(4 * budget / round_ms) : g->min_rounds;
+        int want = g->min_rounds < x->repeats ? g->min_rounds : x->repeats;
+        if (want > most) want = most > 3 ? most : 3 < want ? 3 : want;
+        if (want > c->want) c->want = want;
+    }
     if (c->want < 1) c->want = 1;
     if (c->want > EXP_MAX_SAMPLES) c->want = EXP_MAX_SAMPLES;
     c->ok = 1;

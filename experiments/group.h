@@ -93,7 +93,8 @@ typedef struct {
     int keep_same;      /* measure configurations of the same structure too (a control whose
                            difference the counts cannot show, e.g. instanced:world=flat) */
     int add_mask;       /* sets of the next exp_group_add (0: every set of mask) */
-    int min_rounds;     /* timed rounds even for slow passes (default 1; an interval needs 3) */
+    int min_rounds;     /* timed rounds even for slow passes, up to 4x the set budget (then at
+                           least 3; default 1; an interval needs 3; a verdict 10) */
     int thread_probe;   /* time the thread probe in the rounds (default 0) */
     /* Results of exp_group_run. */
     double aa_samples[4][EXP_MAX_SAMPLES];

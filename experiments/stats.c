@@ -174,11 +174,32 @@ static void est_core(const double *samples, const int *proc, int n, double level
     }
 }
 
+/* Positive samples (times) from several processes: the between-process
+ * t-interval is taken on the logs of the processes' medians, so that it
+ * stays positive and treats a process 1.3x slower and one 1.3x faster
+ * alike; the order statistics are the same in either scale. */
 void exp_est_of_level(const double *samples, const int *proc, int n, double level, exp_est *out)
 {
-    est_core(samples, proc, n, level, out);
-    double scale = fabs(out->median) > 0 ? fabs(out->median) : 1;
-    out->within /= scale, out->between /= scale;
+    int positive = n > 0;
+    for (int i = 0; i < n && i < EXP_MAX_SAMPLES; i++) positive &= samples[i] > 0;
+    if (!proc || !positive) {
+        est_core(samples, proc, n, level, out);
+        double scale = fabs(out->median) > 0 ? fabs(out->median) : 1;
+        out->within /= scale, out->between /= scale;
+        return;
+    }
+    double lg[EXP_MAX_SAMPLES];
+    int m = n < EXP_MAX_SAMPLES ? n : EXP_MAX_SAMPLES;
+    for (int i = 0; i < m; i++) lg[i] = log(samples[i]);
+    exp_est l;
+    est_core(lg, proc, m, level, &l);
+    est_core(samples, NULL, m, level, out);
+    out->within /= out->median > 0 ? out->median : 1;
+    out->procs = l.procs, out->between = l.between;
+    if (l.procs > 1 && l.between > l.within) { /* l: widened to the log t-interval */
+        out->lo = fmin(exp(l.lo), out->median);
+        out->hi = fmax(exp(l.hi), out->median);
+    }
 }
 
 void exp_est_of_procs(const double *samples, const int *proc, int n, exp_est *out)
