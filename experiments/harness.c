@@ -374,6 +374,9 @@ void exp_list_free(exp_list *l)
     memset(l, 0, sizeof *l);
 }
 
+/* The longest evidence a verdicts record holds (csv.c: 1023 per field). */
+#define EVIDENCE_MAX 1000
+
 /* Writes one verdicts row; d may be NULL (no deciding number). */
 static void verdict_row(exp_ctx *x, const char *claim, const char *verdict, const exp_decider *d,
                         const char *scenes, const char *evidence_fmt, va_list ap0)
@@ -392,8 +395,17 @@ static void verdict_row(exp_ctx *x, const char *claim, const char *verdict, cons
     va_copy(ap, ap0);
     vsnprintf(ev, (size_t)need + 1, evidence_fmt, ap);
     va_end(ap);
-    /* A record too long for the CSV writer is refused and fails the run
-     * (exit 4): evidence is never cut short silently. */
+    /* The CSV writer takes fields of at most 1023 characters: a longer
+     * evidence goes to the section in full and is cut in the CSV at a list
+     * boundary, saying so (never silently; a record it still refuses fails
+     * the run, exit 4). */
+    if (strlen(ev) > EVIDENCE_MAX) {
+        exp_md(x, "\n_The evidence of the `%s` verdict in full: %s._\n", claim, ev);
+        size_t cut = EVIDENCE_MAX - 80;
+        while (cut > 200 && !(ev[cut] == ';' || (ev[cut] == ',' && ev[cut + 1] == ' '))) cut--;
+        snprintf(ev + cut, (size_t)need + 1 - cut, " ... (cut here: the whole evidence is in the "
+                 "section %s)", x->name);
+    }
     if (d)
         csv_row(&x->verdicts, "%s,%s,%s,%s,%s,%s,%.6g,%.6g,%.6g,%.6g,%d,%.3g,%d\n", claim,
                 verdict, ev, scenes, x->name, d->what ? d->what : "", d->value, d->lo, d->hi,
