@@ -29,6 +29,12 @@ typedef struct {
      * over a rebuild's (> 0: faster), with the numbers that decide. */
     int loss_cmp, update_cmp;
     char loss_ev[1024], update_ev[512];
+    /* Issue 38's numbers: refit's trace time over a fresh build's after
+     * the last k (loss), with box tests per ray refit over fresh
+     * (box_ratio); the rebuild's update time over refit's (speed). */
+    exp_est loss, speed;
+    double box_ratio;
+    int have_loss, have_speed;
 } exp_anim;
 
 /* Refit against rebuild on a->anim (tables, CSV part "refit", findings). */
@@ -52,7 +58,7 @@ const char *exp_anim_ratio(char *buf, size_t n, const exp_est *r, double floor);
 /* A single value as an estimate of n samples (a count, bytes). */
 static inline exp_est exp_est_one(double v, int n)
 {
-    exp_est e = {v, v, v, v, v, n};
+    exp_est e = {v, v, v, v, v, n, 0, 0, 0, 0};
     return e;
 }
 

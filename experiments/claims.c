@@ -2,6 +2,7 @@
  * claims.c - the claims of the study, in the order the summary lists them.
  */
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "claims.h"
@@ -126,3 +127,80 @@ double exp_margin(const exp_decider *d)
     double m = (d->value - d->threshold) * d->sense / half;
     return d->sense ? m : NAN;
 }
+
+void exp_tally_init(exp_tally *t, int m)
+{
+    memset(t, 0, sizeof *t);
+    t->m = m > 0 ? m : 1;
+}
+
+double exp_tally_level(const exp_tally *t) { return t->m > 1 ? 1 - 0.05 / t->m : 0.95; }
+
+/* Whether d decides t's word better than the current worst: the tally's
+ * word after d is added, and d's margin against it. */
+void exp_tally_add(exp_tally *t, const exp_decider *d)
+{
+    const char *v = exp_judge(d);
+    t->added++;
+    t->confirmed += !strcmp(v, EXP_CONFIRMED);
+    t->refuted += !strcmp(v, EXP_REFUTED);
+    t->online += !strcmp(v, EXP_ON_LINE);
+    /* The decider: the comparison nearest to the threshold (smallest
+     * |margin|), except that a straddling one is preferred while the word
+     * is "on the line", and a refuting one while it is "partly" or
+     * "refuted": the number quoted is the one that makes the word. */
+    double m = fabs(exp_margin(d)), mw = fabs(exp_margin(&t->worst));
+    int first = t->added == 1, take;
+    const char *word = exp_tally_verdict(t), *wv = first ? "" : exp_judge(&t->worst);
+    if (first)
+        take = 1;
+    else if (!strcmp(word, EXP_ON_LINE))
+        take = !strcmp(v, EXP_ON_LINE) && (strcmp(wv, EXP_ON_LINE) || m < mw);
+    else if (!strcmp(word, EXP_CONFIRMED))
+        take = m < mw;
+    else /* partly or refuted: the miss nearest the line */
+        take = !strcmp(v, EXP_REFUTED) && (strcmp(wv, EXP_REFUTED) || m < mw);
+    if (take || m != m) {
+        t->worst = *d;
+        snprintf(t->what, sizeof t->what, "%s", d->what ? d->what : "");
+        t->worst.what = t->what;
+    }
+}
+
+const char *exp_tally_verdict(const exp_tally *t)
+{
+    if (!t->added) return NULL;
+    if (t->confirmed == t->added) return EXP_CONFIRMED;
+    if (t->refuted == t->added) return EXP_REFUTED;
+    if (t->confirmed && t->refuted) return EXP_PARTLY;
+    return EXP_ON_LINE;
+}
+
+/* A compound claim from its parts' words (NULL: a part not measured):
+ * the same word everywhere is the word; parts that confirm and parts that
+ * miss (or a part itself "partly") make it partly; else on the line. The
+ * decider is the first part whose word is the compound's (for partly: a
+ * part that misses). */
+const char *exp_compound(exp_tally *const *parts, int n, const exp_decider **dec)
+{
+    int measured = 0, conf = 0, ref = 0, part = 0, line = 0;
+    for (int i = 0; i < n; i++) {
+        const char *v = exp_tally_verdict(parts[i]);
+        if (!v) continue;
+        measured++;
+        conf += !strcmp(v, EXP_CONFIRMED), ref += !strcmp(v, EXP_REFUTED);
+        part += !strcmp(v, EXP_PARTLY), line += !strcmp(v, EXP_ON_LINE);
+    }
+    if (!measured) return NULL;
+    const char *word = conf == measured ? EXP_CONFIRMED : ref == measured ? EXP_REFUTED
+                       : part || (conf && ref) ? EXP_PARTLY : EXP_ON_LINE;
+    const char *want = !strcmp(word, EXP_PARTLY) ? EXP_REFUTED : word;
+    *dec = NULL;
+    for (int i = 0; i < n && !*dec; i++) {
+        const char *v = exp_tally_verdict(parts[i]);
+        if (v && (!strcmp(v, want) || (!strcmp(word, EXP_PARTLY) && !strcmp(v, EXP_PARTLY))))
+            *dec = &parts[i]->worst;
+    }
+    return word;
+}
+

@@ -55,4 +55,33 @@ const char *exp_judge(const exp_decider *d);
  * wide. NaN when a number is missing. */
 double exp_margin(const exp_decider *d);
 
+/* A verdict over m comparisons ("on k of m scenes"): each comparison's
+ * interval is taken at the Bonferroni level 1 - 0.05 / m (stats.h:
+ * exp_bonferroni_level), so that all m hold together with 95%. Confirmed
+ * when every comparison confirms, refuted when every one misses, partly
+ * when some confirm and some miss (the evidence says which), on the line
+ * otherwise (some straddle and none contradicts the rest). The decider is
+ * the comparison with the smallest |margin| among those that decide the
+ * word (the one nearest to flipping it). */
+typedef struct {
+    int m;                      /* comparisons announced (for the level) */
+    int added, confirmed, refuted, online;
+    exp_decider worst;          /* the deciding comparison so far */
+    char what[256];             /* worst.what's text */
+} exp_tally;
+/* Starts a tally of m comparisons. */
+void exp_tally_init(exp_tally *t, int m);
+/* The per-comparison coverage its intervals must have. */
+double exp_tally_level(const exp_tally *t);
+/* Adds one comparison (its interval at exp_tally_level). */
+void exp_tally_add(exp_tally *t, const exp_decider *d);
+/* The word; NULL when nothing was added. */
+const char *exp_tally_verdict(const exp_tally *t);
+/* A compound claim from its parts (tallies with nothing added: parts not
+ * measured): one word everywhere is the word; parts that confirm and parts
+ * that miss (or a part "partly") make it partly; else on the line. *dec:
+ * the deciding part's decider (for partly, a part that misses). NULL when
+ * no part was measured. */
+const char *exp_compound(exp_tally *const *parts, int n, const exp_decider **dec);
+
 #endif

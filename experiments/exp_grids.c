@@ -36,6 +36,7 @@ static const char *const configs[] = {
 static const int set_bits[3] = {BENCH_PRIMARY, BENCH_SHADOW, BENCH_DIFFUSE};
 
 typedef struct {
+    exp_tally t; /* issue 38: every target comparison, Bonferroni intervals */
     exp_text findings;
     int n[3], met[3], tie[3]; /* per target: packets 5x, grid near bvh, irregular ahead */
     int met_est; /* of met[0]: on the collapse probe's estimate, no interval */
@@ -47,6 +48,17 @@ static void count(study *st, int which, const char *outcome)
     st->met[which] += !strncmp(outcome, "met", 3);
     st->met_est += !strncmp(outcome, "met", 3) && strstr(outcome, "on the estimate") != NULL;
     st->tie[which] += !strncmp(outcome, "a tie", 5) && which != 2; /* a tie is "not met" there */
+}
+
+/* One target comparison into the tally: r at the tally's level against
+ * threshold t (sense +1: at least t; -1: at most t). */
+static void judge(study *st, const char *what, const char *scene, int bit, const exp_est *r,
+                  double t, int sense)
+{
+    char w[900];
+    snprintf(w, sizeof w, "%s, %s, %s", what, scene, bench_set_name(bit));
+    exp_decider d = exp_decider_of(w, r, t, sense);
+    exp_tally_add(&st->t, &d);
 }
 
 static int is_mesh(const char *name) { return strstr(name, ".off") || strstr(name, ".obj") || strstr(name, ".ply"); }
@@ -98,8 +110,9 @@ static void findings(exp_ctx *x, study *st, const exp_group *g, const accel_scen
     /* 1. Coherent grid traversal against the single-ray grid, primary rays. */
     if (pk >= 0 && g->cfg[pk].ok && grid >= 0) {
         if (g->cfg[grid].ok) {
-            exp_est r = exp_group_speedup(g, grid, pk, BENCH_PRIMARY);
+            exp_est r = exp_group_speedup_level(g, grid, pk, BENCH_PRIMARY, exp_tally_level(&st->t));
             const char *o = exp_target_outcome(&r, 5, 1);
+            judge(st, "speed of `grid:traverse=packet` over `grid`", s->name, BENCH_PRIMARY, &r, 5, +1);
             target_row(x, &st->findings, "speed of `grid:traverse=packet` over `grid`",
                        BENCH_PRIMARY, exp_fmt_x(a, sizeof a, &r), "at least 5x", o);
             count(st, 0, o);
@@ -117,8 +130,10 @@ static void findings(exp_ctx *x, study *st, const exp_group *g, const accel_scen
     /* 1b. The same walk through the nested grid's levels, against its
      * single-ray walk. */
     if (npk >= 0 && nested >= 0 && g->cfg[npk].ok && g->cfg[nested].ok) {
-        exp_est r = exp_group_speedup(g, nested, npk, BENCH_PRIMARY);
+        exp_est r = exp_group_speedup_level(g, nested, npk, BENCH_PRIMARY, exp_tally_level(&st->t));
         const char *o = exp_target_outcome(&r, 5, 1);
+        judge(st, "speed of `nested_grid:traverse=packet` over `nested_grid`", s->name,
+              BENCH_PRIMARY, &r, 5, +1);
         target_row(x, &st->findings, "speed of `nested_grid:traverse=packet` over `nested_grid`",
                    BENCH_PRIMARY, exp_fmt_x(a, sizeof a, &r), "at least 5x", o);
         count(st, 0, o);
@@ -143,13 +158,14 @@ static void findings(exp_ctx *x, study *st, const exp_group *g, const accel_scen
         for (int k = 0; k < 3; k += 2) {
             int bit = set_bits[k], best = fastest(g, bit, 0, bvh);
             if (best < 0) continue;
-            exp_est r = rel_bvh(g, bvh, best, bit);
+            exp_est r = t > 0 ? exp_group_speedup_level(g, best, bvh, bit, exp_tally_level(&st->t))
+                              : rel_bvh(g, bvh, best, bit);
             snprintf(what, sizeof what, "time of the best single-ray grid `%s` over `bvh`",
                      g->cfg[best].spec);
             snprintf(tt, sizeof tt, t > 0 ? "at most %gx" : "-", t);
             const char *o = t > 0 ? exp_target_outcome(&r, t, 0) : "no target on this scene";
             target_row(x, &st->findings, what, bit, exp_fmt_x(a, sizeof a, &r), tt, o);
-            if (t > 0) count(st, 1, o);
+            if (t > 0) count(st, 1, o), judge(st, what, s->name, bit, &r, t, -1);
         }
     }
     /* 3. Irregular against nested where nested beats the regular grid. */
@@ -165,8 +181,9 @@ static void findings(exp_ctx *x, study *st, const exp_group *g, const accel_scen
                                  : "nested does not beat regular: no irregular target here");
                 if (!beats) continue;
             }
-            exp_est r = exp_group_speedup(g, nested, irr, bit);
+            exp_est r = exp_group_speedup_level(g, nested, irr, bit, exp_tally_level(&st->t));
             int cmp = exp_ratio_cmp(&r, g->floor);
+            judge(st, "speed of `irregular_grid` over `nested_grid`", s->name, bit, &r, 1.0, +1);
             target_row(x, &st->findings, g->cfg[grid].ok ? "speed of `irregular_grid` over "
                        "`nested_grid`" : "speed of `irregular_grid` over `nested_grid` (`grid` "
                        "collapsed, so nested beats it)", bit, exp_fmt_x(a, sizeof a, &r), "ahead",
@@ -271,29 +288,29 @@ int main(int argc, char **argv)
         scenes[n++] = "teapot_stadium:n=8";
         scenes[n++] = "tetra"; /* a Sierpinski pyramid: mostly empty space */
     }
-    if (!x.quick) x.set_budget_ms = 600, x.build_budget_ms = 800, x.repeats = 5;
+    if (!x.quick) x.set_budget_ms = 600, x.build_budget_ms = 800, x.repeats = 10;
     exp_list list;
     exp_list_make(&x, configs, (int)(sizeof configs / sizeof configs[0]), NULL, &list);
     study st = {0};
+    exp_tally_init(&st.t, 7 * n); /* at most 7 target comparisons per scene */
     for (int i = 0; i < n; i++) measure_scene(&x, &st, scenes[i], &list);
     exp_md(&x, "\n**Findings** (issue 13's targets; \"best single-ray grid\": the grid kind with "
                "the lowest median time on that set, packets excluded; \"the faster grid "
                "packets\": `grid:traverse=packet` or `nested_grid:traverse=packet`, whichever has "
                "the lower median time):\n\n%s",
            exp_text_str(&st.findings));
-    int all = st.n[0] + st.n[1] + st.n[2], met = st.met[0] + st.met[1] + st.met[2];
-    if (all) {
-        const char *v = met == all ? EXP_CONFIRMED
-                        : met + st.tie[0] + st.tie[1] > 0 ? EXP_PARTLY
-                                                          : exp_slow_verdict(&x, EXP_REFUTED);
-        exp_verdict(&x, "grids-best", v, "the scenes of the section",
-                    "paired ratios per scene and ray set: packets 5x over their single-ray grid "
-                    "(`grid`, `nested_grid`) met %d of %d (%d of them on the collapse probe's "
-                    "estimate, with no interval; a tie %d); best single-ray grid within the target "
-                    "of `bvh` met %d of %d (a tie %d); irregular ahead of nested where nested beats "
-                    "regular: %d of %d",
-                    st.met[0], st.n[0], st.met_est, st.tie[0], st.met[1], st.n[1], st.tie[1],
-                    st.met[2], st.n[2]);
+    if (st.t.added) {
+        const char *v = exp_tally_verdict(&st.t);
+        if (!strcmp(v, EXP_REFUTED)) v = exp_slow_verdict(&x, v);
+        exp_verdict_num(&x, "grids-best", v, &st.t.worst, "the scenes of the section",
+                        "%d target comparisons (intervals at %.2f%%, Bonferroni): %d confirm, %d "
+                        "miss, %d on the line; by target: packets 5x over their single-ray grid "
+                        "met %d of %d (%d of them on the collapse probe's estimate, with no "
+                        "interval, outside the tally); best single-ray grid within the target of "
+                        "`bvh` met %d of %d; irregular ahead of nested where nested beats regular: "
+                        "%d of %d", st.t.added, 100 * exp_tally_level(&st.t), st.t.confirmed,
+                        st.t.refuted, st.t.online, st.met[0], st.n[0], st.met_est, st.met[1],
+                        st.n[1], st.met[2], st.n[2]);
     }
     exp_md(&x, "\nSteps: cells visited (for the packet: cells visited times the rays active "
                "there); tests: exact primitive tests. Rounds: at most %d, at least 3, fewer for "

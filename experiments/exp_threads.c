@@ -25,7 +25,13 @@
 #define SCALE_MASK (BENCH_PRIMARY | BENCH_DIFFUSE)
 #define FRAME_MASK (BENCH_PRIMARY | BENCH_SHADOW)
 #define TARGET_FPS 20.0
-#define NEAR_LINEAR 0.85
+/* "Near-linear scaling in cores": a parallel efficiency (speed-up over 1
+ * thread, divided by the threads) of at least 90%, i.e. less than a tenth
+ * of each added core lost, on 2 cores at least 1.8x (issue 38 asks for the
+ * claim's number; 0.85 before it). */
+#define NEAR_LINEAR 0.90
+/* Ray generation timed per frame (issue 38: one frame definition). */
+#define GEN_REPS 10
 
 /* The fastest kernel of exp_wide (8-wide packets) is among them, so that
  * the 100M rays/s verdict rests on the study's fastest primary rays. */
@@ -38,6 +44,9 @@ static const char *const frame_specs[] = {"bvh", "bvh:traverse=packet",
 
 typedef struct {
     int linear, kinds;
+    exp_tally lin, rt; /* issue 38's rules: efficiency >= NEAR_LINEAR, fps >= TARGET_FPS */
+    int rt_count;      /* the scenes of the real-time test (the tally's m) */
+    exp_est best_est;  /* the fastest primary Mrays/s, with its interval */
     double best_mrays, best_per_thread;
     char best_spec[512];
     exp_text lin_ev, findings;
@@ -72,6 +81,9 @@ static void scaling(exp_ctx *x, study *st, int max_t, const exp_machine *mach)
             if (g.cfg[c].left == EXP_LEFT_UNPARSED) break;
         }
     exp_group_run(&g);
+    int at_max = 0;
+    for (int c = 0; c < g.count; c++) at_max += g.cfg[c].ok && g.cfg[c].threads == max_t && max_t > 1;
+    exp_tally_init(&st->lin, 2 * at_max); /* primary and diffuse of each configuration */
     exp_md_table(x, "configuration|threads|build ms [95% CI]|build speed-up|primary Mrays/s|"
                     "speed-up|efficiency|diffuse Mrays/s|speed-up|efficiency");
     for (int c = 0; c < g.count; c++) {
@@ -97,7 +109,7 @@ static void scaling(exp_ctx *x, study *st, int max_t, const exp_machine *mach)
                 cf->spec, cf->threads, cf->build_ms.median, cf->build_ms.lo, cf->build_ms.hi,
                 pm.median, pm.lo, pm.hi, ps.median, dm.median, dm.lo, dm.hi, ds.median);
         if (pm.median > st->best_mrays)
-            st->best_mrays = pm.median, st->best_per_thread = pm.median / t,
+            st->best_mrays = pm.median, st->best_per_thread = pm.median / t, st->best_est = pm,
             snprintf(st->best_spec, sizeof st->best_spec, "%s on %d thread%s, %s", cf->spec,
                      cf->threads, cf->threads > 1 ? "s" : "", s.name);
         if (cf->threads == max_t && max_t > 1) {
@@ -105,6 +117,17 @@ static void scaling(exp_ctx *x, study *st, int max_t, const exp_machine *mach)
              * above on both sets (the report's rule for every target). */
             int ok = ps.lo / t >= NEAR_LINEAR && ds.lo / t >= NEAR_LINEAR;
             st->kinds++, st->linear += ok;
+            for (int k = 0; k < 2; k++) {
+                int bit = k ? BENCH_DIFFUSE : BENCH_PRIMARY;
+                exp_est e = exp_group_speedup_level(&g, one, c, bit, exp_tally_level(&st->lin));
+                e = exp_est_scale(&e, 1.0 / t);
+                char what[700];
+                snprintf(what, sizeof what, "efficiency of `%s` on %d threads, %s %u tris, %s "
+                         "%dx%d", cf->spec, cf->threads, s.name, s.live_count,
+                         bench_set_name(bit), x->rt_size[0], x->rt_size[1]);
+                exp_decider d = exp_decider_of(what, &e, NEAR_LINEAR, +1);
+                exp_tally_add(&st->lin, &d);
+            }
             exp_text_add(&st->findings, "- `%s`: %d threads trace primary rays %s and diffuse rays "
                          "%s as fast as 1 (efficiency %.0f%% / %.0f%%); build %s.\n", cf->spec,
                          cf->threads, p2, d2, 100 * ps.median / t, 100 * ds.median / t, b2);
@@ -141,6 +164,28 @@ static void scaling(exp_ctx *x, study *st, int max_t, const exp_machine *mach)
     scene_free(&s);
 }
 
+/* The time to generate one frame's rays at x->rt_size (issue 38: one frame
+ * definition, ray generation included): primary rays from the camera and
+ * shadow rays from the primary hits, GEN_REPS times on one thread. */
+static exp_est ray_gen_ms(exp_ctx *x, const accel_scene *s, const bench_sets *sets)
+{
+    double v[GEN_REPS];
+    int n = 0;
+    for (int r = 0; r < GEN_REPS; r++) {
+        rays_set p = {0}, sh = {0};
+        accel_error err = {0};
+        double t0 = accel_now_ms();
+        int rc = rays_primary(&s->camera, x->rt_size[0], x->rt_size[1], &p, &err);
+        if (!rc && sets->primary_hits) rc = rays_shadow(s, &p, sets->primary_hits, &sh, &err);
+        double t1 = accel_now_ms();
+        rays_free(&p), rays_free(&sh);
+        if (!rc) v[n++] = t1 - t0;
+    }
+    exp_est e;
+    exp_est_of(v, n, &e);
+    return e;
+}
+
 /* One scene of the real-time test: the fastest configuration's frame. */
 static void frame_scene(exp_ctx *x, study *st, const char *spec, int max_t, int animated)
 {
@@ -158,8 +203,10 @@ static void frame_scene(exp_ctx *x, study *st, const char *spec, int max_t, int 
     exp_group g;
     exp_group_init(&g, x, &s, &sets, FRAME_MASK);
     g.collapse_ms = x->quick ? 1000 : 3000;
+    g.min_rounds = 10; /* realtime-20fps is decided here (issue 38: 10 rounds) */
     for (int i = 0; i < list.count; i++) exp_group_add(&g, list.spec[i], max_t);
     exp_group_run(&g);
+    exp_est gen = ray_gen_ms(x, &s, &sets);
     int best = -1;
     for (int c = 0; c < g.count; c++)
         if (g.cfg[c].ok && (best < 0 || exp_group_ns(&g, c, FRAME_MASK).median <
@@ -171,7 +218,10 @@ static void frame_scene(exp_ctx *x, study *st, const char *spec, int max_t, int 
         double v[EXP_MAX_SAMPLES];
         int n = exp_group_round_ms(&g, c, FRAME_MASK, v);
         exp_est frame, fps;
-        exp_est_of(v, n, &frame);
+        exp_est_of_level(v, g.round_proc, n, exp_tally_level(&st->rt), &frame);
+        /* The rays of the frame are made in the frame (ray generation's
+         * interval added, as the build's below). */
+        frame.median += gen.median, frame.lo += gen.lo, frame.hi += gen.hi;
         if (animated) { /* the structure is rebuilt every frame */
             frame.median += cf->build_ms.median, frame.lo += cf->build_ms.lo, frame.hi += cf->build_ms.hi;
         }
@@ -184,6 +234,12 @@ static void frame_scene(exp_ctx *x, study *st, const char *spec, int max_t, int 
         exp_csv(x, "frame,%s,%s,%d,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,,,,,\n", s.name, cf->spec, max_t,
                 frame.median, frame.lo, frame.hi, fps.median, fps.lo, fps.hi);
         if (c == best) {
+            char what[700];
+            snprintf(what, sizeof what, "fps of `%s` on %d threads, %s %u tris, primary+shadow "
+                     "%dx%d, ray generation%s included", cf->spec, max_t, s.name, s.live_count,
+                     x->rt_size[0], x->rt_size[1], animated ? " and rebuild" : "");
+            exp_decider d = exp_decider_of(what, &fps, TARGET_FPS, +1);
+            exp_tally_add(&st->rt, &d);
             int yes = fps.lo >= TARGET_FPS;
             st->rt_scenes++, st->rt_yes += yes;
             exp_text_add(&st->rt_ev, "%s%s %s fps", st->rt_ev.len ? ", " : "", s.name, p);
@@ -195,6 +251,9 @@ static void frame_scene(exp_ctx *x, study *st, const char *spec, int max_t, int 
         if (g.cfg[c].left)
             exp_text_add(&left, "%s`%s` (%s)", left.len ? "; " : "", g.cfg[c].spec, g.cfg[c].why);
     if (left.len) exp_text_add(&st->left, "- %s: %s.\n", s.name, exp_text_str(&left));
+    char gb[96];
+    exp_md(x, "| %s | (ray generation, 1 thread, in every frame above) | %s | | | |\n", s.name,
+           exp_fmt_est(gb, sizeof gb, &gen, 1));
     exp_text_free(&left);
     exp_group_free(&g);
     exp_list_free(&list);
@@ -216,12 +275,15 @@ static void verdicts(exp_ctx *x, study *st, int max_t, const exp_machine *m)
                     "memory) reached %.0f%% efficiency on %d threads, below the %.0f%% asked of the "
                     "kernels: the machine, not the kernels, held them down (%s)", 100 * st->probe_eff,
                     max_t, 100 * NEAR_LINEAR, exp_text_str(&st->lin_ev));
-    else
-        exp_verdict(x, "threads-linear", st->linear == st->kinds ? EXP_CONFIRMED
-                    : st->linear ? EXP_PARTLY : EXP_REFUTED, x->quick ? "soup:tris=20000" : "see the table",
-                    "%d of %d configurations reach %.0f%% efficiency (the whole 95%% interval) "
-                    "on %d threads on primary and diffuse rays (%s)", st->linear, st->kinds, 100 * NEAR_LINEAR, max_t,
-                    exp_text_str(&st->lin_ev));
+    else if (st->lin.added)
+        exp_verdict_num(x, "threads-linear", exp_tally_verdict(&st->lin), &st->lin.worst,
+                        x->quick ? "soup:tris=20000" : "see the table",
+                        "near-linear read as a parallel efficiency of at least %.0f%% on %d threads, "
+                        "on each of %d comparisons (configuration x primary/diffuse; intervals at "
+                        "%.2f%%, Bonferroni): %d confirm, %d miss, %d on the line (medians: %s)",
+                        100 * NEAR_LINEAR, max_t, st->lin.added, 100 * exp_tally_level(&st->lin),
+                        st->lin.confirmed, st->lin.refuted, st->lin.online,
+                        exp_text_str(&st->lin_ev));
     if (!st->ht_tested)
         exp_verdict(x, "threads-ht", EXP_UNTESTABLE, "-", "the CPU presents %d thread%s per core "
                     "(%d logical CPUs, %d cores%s): no SMT siblings to add", m->threads_per_core,
@@ -231,24 +293,32 @@ static void verdicts(exp_ctx *x, study *st, int max_t, const exp_machine *m)
         exp_verdict(x, "threads-ht", fabs(st->ht_gain - 0.2) <= 0.1 ? EXP_CONFIRMED : EXP_PARTLY,
                     "see the table", "the SMT threads add %+.0f%% over one thread per core",
                     100 * st->ht_gain);
-    if (st->best_mrays >= 100)
-        exp_verdict(x, "threads-100m", EXP_CONFIRMED, "see the table", "%.1f Mrays/s (%s)",
-                    st->best_mrays, st->best_spec);
-    else if (st->best_mrays > 0)
-        exp_verdict(x, "threads-100m", EXP_UNTESTABLE, "see the table",
-                    "%d logical CPUs reach %.1f Mrays/s on primary rays (%s, %.1f per thread); "
-                    "100M would need about %.0f threads at that rate", m->logical, st->best_mrays,
-                    st->best_spec, st->best_per_thread, ceil(100 / st->best_per_thread));
-    if (st->rt_scenes)
-        exp_verdict(x, "realtime-20fps", x->quick ? EXP_UNTESTABLE : st->rt_yes == st->rt_scenes
-                    ? EXP_CONFIRMED : st->rt_yes ? EXP_PARTLY : exp_slow_verdict(x, EXP_REFUTED), exp_text_str(&st->rt_names),
-                    "the fastest configuration on %d thread%s reaches %.0f fps (lower end of the "
-                    "interval) at %dx%d, primary plus shadow rays, on %d of %d scenes (%s)%s",
-                    max_t, max_t > 1 ? "s" : "", TARGET_FPS, x->rt_size[0], x->rt_size[1],
-                    st->rt_yes, st->rt_scenes, exp_text_str(&st->rt_ev),
-                    x->quick ? "; quick budget: not the lecture's image size"
-                    : exp_busy(x) ? "; the machine was busy (other runnable threads at the start): "
-                                                "these rates are lower bounds" : "");
+    if (st->best_mrays > 0) {
+        exp_decider d = exp_decider_of("the fastest primary Mrays/s of the scaling table", &st->best_est,
+                                       100.0, +1);
+        const char *v = exp_judge(&d);
+        /* A miss on a machine with few cores says nothing of "easily past
+         * 100M with multithreading": not testable unless it is reached. */
+        if (strcmp(v, EXP_CONFIRMED)) v = EXP_UNTESTABLE;
+        exp_verdict_num(x, "threads-100m", v, &d, "see the table",
+                        "%d logical CPUs reach %.1f Mrays/s on primary rays (%s, %.1f per thread); "
+                        "100M would need about %.0f threads at that rate", m->logical, st->best_mrays,
+                        st->best_spec, st->best_per_thread, ceil(100 / st->best_per_thread));
+    }
+    if (st->rt.added) {
+        const char *v = exp_tally_verdict(&st->rt);
+        v = x->quick ? EXP_UNTESTABLE : strcmp(v, EXP_REFUTED) ? v : exp_slow_verdict(x, v);
+        exp_verdict_num(x, "realtime-20fps", v, &st->rt.worst, exp_text_str(&st->rt_names),
+                        "the fastest configuration per scene on %d thread%s against 20 fps at "
+                        "%dx%d, a frame being ray generation plus primary and shadow traces, on "
+                        "each of %d scenes (intervals at %.2f%%, Bonferroni): %d confirm, %d miss, "
+                        "%d on the line (%s)%s", max_t, max_t > 1 ? "s" : "", x->rt_size[0],
+                        x->rt_size[1], st->rt.added, 100 * exp_tally_level(&st->rt),
+                        st->rt.confirmed, st->rt.refuted, st->rt.online, exp_text_str(&st->rt_ev),
+                        x->quick ? "; quick budget: not the lecture's image size"
+                        : exp_busy(x) ? "; the machine was busy (other runnable threads at the "
+                                        "start): these rates are lower bounds" : "");
+    }
 }
 
 int main(int argc, char **argv)
@@ -281,6 +351,8 @@ int main(int argc, char **argv)
     exp_md(&x, "\n### Real time: frames per second at %dx%d, primary plus shadow rays, %d "
                "thread%s\n", x.rt_size[0], x.rt_size[1], max_t, max_t > 1 ? "s" : "");
     exp_md_table(&x, "scene|configuration|frame ms [95% CI]|fps [95% CI]|Mrays/s [95% CI]|note");
+    exp_tally_init(&st.rt, x.scene_count ? x.scene_count : x.quick ? 1
+                           : (x.mesh_count < 2 ? x.mesh_count : 2) + 3);
     if (x.scene_count) {
         const char *given[EXP_MAX_MESHES];
         int n = exp_scene_list(&x, given, 0, EXP_MAX_MESHES);

@@ -1,9 +1,12 @@
 /*
  * group.c - configurations measured in interleaved rounds (see group.h).
  */
+#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "group.h"
 #include "cli/cli.h"
@@ -242,7 +245,14 @@ int exp_group_add(exp_group *g, const char *spec, int threads)
     double budget = x->set_budget_ms * (nsets ? nsets : 1);
     c->want = round_ms > 0 ? (int)(budget / round_ms) : x->repeats;
     if (c->want > x->repeats) c->want = x->repeats;
-    if (c->want < g->min_rounds) c->want = g->min_rounds < x->repeats ? g->min_rounds : x->repeats;
+    if (c->want < g->min_rounds) {
+        /* min_rounds, but within 4 budgets: a configuration of seconds per
+         * pass keeps fewer rounds (its n says so) rather than minutes. */
+        int most = round_ms > 0 ? (int)(4 * budget / round_ms) : g->min_rounds;
+        int want = g->min_rounds < x->repeats ? g->min_rounds : x->repeats;
+        if (want > most) want = most > 3 ? most : 3 < want ? 3 : want;
+        if (want > c->want) c->want = want;
+    }
     if (c->want < 1) c->want = 1;
     if (c->want > EXP_MAX_SAMPLES) c->want = EXP_MAX_SAMPLES;
     c->ok = 1;
@@ -258,7 +268,7 @@ static void build_rounds(exp_group *g)
     for (int c = 0; c < n; c++) {
         if (!g->cfg[c].ok) continue;
         double first = g->cfg[c].build.ms;
-        int r = x->quick ? 3 : 5;
+        int r = x->quick ? 3 : 10; /* 10 rounds for verdicts on build time (issue 38) */
         if (first > 0 && first * r > x->build_budget_ms) r = (int)(x->build_budget_ms / first);
         /* A build longer than half the budget keeps its first (add-time) sample
          * instead of being built once more for a single sample. */
@@ -340,31 +350,21 @@ static long probe_size(const exp_ctx *x)
     return ms > 0 ? (long)fmax(1.0, (double)j.iters * want / ms) : j.iters;
 }
 
-void exp_group_run(exp_group *g)
+/* Times the rounds r of [0, most) with r % procs == part (group.h: the
+ * replicas). progress: report to the progress line (never in a forked
+ * replica: the progress thread did not survive the fork). */
+static void run_rounds(exp_group *g, int most, int procs, int part, probe_job *probe, int aa,
+                       int progress)
 {
     exp_ctx *x = g->x;
-    if (g->time_builds) build_rounds(g);
-    g->probe_threads = 1;
-    for (int c = 0; g->thread_probe && c < g->count; c++)
-        if (g->cfg[c].ok && g->cfg[c].threads > g->probe_threads) g->probe_threads = g->cfg[c].threads;
-    probe_job probe = {.iters = g->probe_threads > 1 ? probe_size(x) : 0};
-    int aa = g->control && g->count && g->cfg[0].ok;
-    int most = 0, slots = g->count + aa + (g->probe_threads > 1);
-    double total_ms = 0;
-    for (int c = 0; c < g->count; c++) {
-        if (!g->cfg[c].ok) continue;
-        if (g->cfg[c].want > most) most = g->cfg[c].want;
-        for (int i = 0; i < 4; i++)
-            total_ms += g->cfg[c].want * g->cfg[c].set[i].batch * g->cfg[c].set[i].pass_ms;
-    }
+    int slots = g->count + aa + (g->probe_threads > 1);
     scratch sc = scratch_make(g);
-    bench_progress_begin(x->progress, "interleaved timed rounds", total_ms, 0);
-    for (int r = 0; r < most; r++)
+    for (int r = part; r < most; r += procs)
         for (int k = 0; k < slots; k++) {
             int slot = (k + r) % slots;
             if (slot == g->count + aa) { /* the probe's slot: 1 thread, then all */
-                g->probe_samples[0][r] = probe_ms(&probe, 1);
-                g->probe_samples[1][r] = probe_ms(&probe, g->probe_threads);
+                g->probe_samples[0][r] = probe_ms(probe, 1);
+                g->probe_samples[1][r] = probe_ms(probe, g->probe_threads);
                 continue;
             }
             int c = slot == g->count ? 0 : slot; /* slot count: the A/A control */
@@ -377,12 +377,161 @@ void exp_group_run(exp_group *g)
                 if (slot == g->count)
                     g->aa_samples[exp_set_index(bit)][r] = ms;
                 else
-                    t->samples[r] = ms, t->n = r + 1;
-                bench_progress_add(x->progress, ms * t->batch);
+                    t->samples[r] = ms;
+                if (progress) bench_progress_add(x->progress, ms * t->batch);
             }
         }
-    bench_progress_end(x->progress);
     free(sc.hits), free(sc.occ);
+}
+
+/* The numbers a replica sends back, in this order, for its rounds: every
+ * configuration's four sets, the A/A control's four, the probe's two. With
+ * v NULL only counts them. */
+static int replica_values(exp_group *g, int most, int procs, int part, double **v)
+{
+    int n = 0;
+    for (int r = part; r < most; r += procs) {
+        for (int c = 0; c < g->count; c++)
+            for (int i = 0; i < 4; i++, n++)
+                if (v) v[n] = &g->cfg[c].set[i].samples[r];
+        for (int i = 0; i < 4; i++, n++)
+            if (v) v[n] = &g->aa_samples[i][r];
+        for (int i = 0; i < 2; i++, n++)
+            if (v) v[n] = &g->probe_samples[i][r];
+    }
+    return n;
+}
+
+/* A fresh copy of one ray set (the replica's own memory). */
+static void copy_set(rays_set *r)
+{
+    accel_ray *rays = malloc((r->count ? r->count : 1) * sizeof *rays);
+    if (!rays) _exit(1);
+    memcpy(rays, r->rays, r->count * sizeof *rays);
+    r->rays = rays;
+}
+
+/* Replica `part` in a forked process: every configuration built again and
+ * the rays copied, so that the structures and rays lie in the replica's
+ * own fresh memory (the page placement a fresh process gets), then its
+ * share of the rounds, sent to the parent through the pipe. 0 when its
+ * values arrived. */
+static int run_replica(exp_group *g, int most, int procs, int part, probe_job *probe, int aa)
+{
+    int fd[2];
+    if (pipe(fd)) return -1;
+    fflush(NULL); /* nothing buffered is written twice */
+    pid_t pid = fork();
+    if (pid < 0) {
+        close(fd[0]), close(fd[1]);
+        return -1;
+    }
+    int n = replica_values(g, most, procs, part, NULL);
+    double **where = malloc((size_t)(n ? n : 1) * sizeof *where);
+    if (!where) {
+        if (pid == 0) _exit(1);
+        return -1;
+    }
+    replica_values(g, most, procs, part, where);
+    if (pid == 0) {
+        close(fd[0]);
+        bench_sets fresh = *g->sets;
+        rays_set *all[4] = {&fresh.primary, &fresh.shadow, &fresh.diffuse, &fresh.ao};
+        for (int i = 0; i < 4; i++)
+            if (all[i]->count) copy_set(all[i]);
+        g->sets = &fresh;
+        for (int c = 0; c < g->count; c++) {
+            exp_cfg *cf = &g->cfg[c];
+            if (!cf->ok) continue;
+            accel_build_stats st;
+            accel_error err = {0};
+            /* The parent's copy stays where it is (never freed here). */
+            if (accel_build_spec(cf->spec, g->s, cf->threads, &cf->kind, &cf->accel, &st, &err))
+                _exit(2);
+        }
+        /* One warm pass each, as the parent's warm-up before its rounds. */
+        scratch sc = scratch_make(g);
+        for (int c = 0; c < g->count; c++)
+            for (int bit = 1; bit <= BENCH_AO; bit <<= 1)
+                if (g->cfg[c].ok && g->cfg[c].set[exp_set_index(bit)].have)
+                    one_pass(&g->cfg[c], bit, bench_sets_get(g->sets, bit), sc.hits, sc.occ, NULL);
+        free(sc.hits), free(sc.occ);
+        run_rounds(g, most, procs, part, probe, aa, 0);
+        double *buf = malloc((size_t)(n ? n : 1) * sizeof *buf);
+        if (!buf) _exit(1);
+        for (int i = 0; i < n; i++) buf[i] = *where[i];
+        size_t left = (size_t)n * sizeof *buf;
+        const char *p = (const char *)buf;
+        while (left) {
+            ssize_t w = write(fd[1], p, left);
+            if (w < 0 && errno == EINTR) continue;
+            if (w <= 0) _exit(1);
+            p += w, left -= (size_t)w;
+        }
+        _exit(0);
+    }
+    close(fd[1]);
+    double *buf = malloc((size_t)(n ? n : 1) * sizeof *buf);
+    size_t got = 0, want = (size_t)n * sizeof *buf;
+    while (buf && got < want) {
+        ssize_t rd = read(fd[0], (char *)buf + got, want - got);
+        if (rd < 0 && errno == EINTR) continue;
+        if (rd <= 0) break;
+        got += (size_t)rd;
+    }
+    close(fd[0]);
+    int status = 0;
+    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {}
+    int ok = buf && got == want && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+    if (ok)
+        for (int i = 0; i < n; i++) *where[i] = buf[i];
+    free(buf), free(where);
+    return ok ? 0 : -1;
+}
+
+void exp_group_run(exp_group *g)
+{
+    exp_ctx *x = g->x;
+    if (g->time_builds) build_rounds(g);
+    g->probe_threads = 1;
+    for (int c = 0; g->thread_probe && c < g->count; c++)
+        if (g->cfg[c].ok && g->cfg[c].threads > g->probe_threads) g->probe_threads = g->cfg[c].threads;
+    probe_job probe = {.iters = g->probe_threads > 1 ? probe_size(x) : 0};
+    int aa = g->control && g->count && g->cfg[0].ok;
+    int most = 0;
+    double total_ms = 0;
+    for (int c = 0; c < g->count; c++) {
+        if (!g->cfg[c].ok) continue;
+        if (g->cfg[c].want > most) most = g->cfg[c].want;
+        for (int i = 0; i < 4; i++)
+            total_ms += g->cfg[c].want * g->cfg[c].set[i].batch * g->cfg[c].set[i].pass_ms;
+    }
+    /* Round r runs in process r % procs: the parent, then each replica in
+     * turn (one at a time: they never compete for the cores). */
+    int procs = x->procs < 1 ? 1 : x->procs > most ? (most > 0 ? most : 1) : x->procs;
+    bench_progress_begin(x->progress, "interleaved timed rounds", total_ms, 0);
+    run_rounds(g, most, procs, 0, &probe, aa, 1);
+    bench_progress_end(x->progress);
+    g->procs = 1;
+    for (int r = 0; r < most; r++) g->round_proc[r] = 0;
+    for (int p = 1; p < procs; p++) {
+        char phase[80];
+        snprintf(phase, sizeof phase, "replica %d of %d (a forked process)", p + 1, procs);
+        bench_progress_begin(x->progress, phase, 0, 0);
+        int ok = run_replica(g, most, procs, p, &probe, aa) == 0;
+        bench_progress_end(x->progress);
+        if (!ok) { /* the replica failed: its rounds run here (and count as the parent's) */
+            fprintf(stderr, "%s: replica %d failed; its rounds run in this process\n", x->name, p + 1);
+            run_rounds(g, most, procs, p, &probe, aa, 0);
+            continue;
+        }
+        g->procs++;
+        for (int r = p; r < most; r += procs) g->round_proc[r] = p;
+    }
+    x->procs_used = g->procs > x->procs_used ? g->procs : x->procs_used;
+    for (int c = 0; c < g->count; c++)
+        for (int i = 0; i < 4; i++)
+            if (g->cfg[c].ok && g->cfg[c].set[i].have) g->cfg[c].set[i].n = g->cfg[c].want;
     g->rounds = most;
     for (int c = 0; c < g->count; c++) {
         if (!g->cfg[c].ok) continue;
@@ -392,9 +541,10 @@ void exp_group_run(exp_group *g)
     for (int c = 0; c < g->count; c++)
         for (int i = 0; i < 4; i++)
             if (g->cfg[c].ok && g->cfg[c].set[i].have)
-                exp_est_of(g->cfg[c].set[i].samples, g->cfg[c].set[i].n, &g->cfg[c].set[i].ms);
+                exp_est_of_procs(g->cfg[c].set[i].samples, g->round_proc, g->cfg[c].set[i].n,
+                                 &g->cfg[c].set[i].ms);
     if (g->probe_threads > 1 && most >= 3)
-        exp_est_ratio(g->probe_samples[0], g->probe_samples[1], most, &g->probe);
+        exp_est_ratio_procs(g->probe_samples[0], g->probe_samples[1], g->round_proc, most, &g->probe);
     /* The floor: how far configuration 0 strays from itself. */
     g->floor = 0.05;
     if (aa && g->cfg[0].want >= 3) {
@@ -405,7 +555,7 @@ void exp_group_run(exp_group *g)
             for (int i = 0; i < 4; i++)
                 if (g->cfg[0].set[i].have) b[r] += g->aa_samples[i][r];
         }
-        exp_est_ratio(a, b, n, &g->aa);
+        exp_est_ratio_procs(a, b, g->round_proc, n, &g->aa);
         g->floor = fmax(fabs(g->aa.median - 1), fmax(fabs(g->aa.hi - 1), fabs(1 - g->aa.lo)));
         if (g->floor < EXP_MIN_FLOOR) g->floor = EXP_MIN_FLOOR;
     }
@@ -434,136 +584,3 @@ void exp_group_free(exp_group *g)
     memset(g, 0, sizeof *g);
 }
 
-int exp_group_round_ms(const exp_group *g, int c, int mask, double *out)
-{
-    const exp_cfg *cf = &g->cfg[c];
-    int n = EXP_MAX_SAMPLES;
-    for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
-        const exp_trace *t = &cf->set[exp_set_index(bit)];
-        if ((mask & bit) && t->have && t->n < n) n = t->n;
-    }
-    if (n == EXP_MAX_SAMPLES) n = 0;
-    for (int r = 0; r < n; r++) {
-        out[r] = 0;
-        for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
-            const exp_trace *t = &cf->set[exp_set_index(bit)];
-            if ((mask & bit) && t->have) out[r] += t->samples[r];
-        }
-    }
-    return n;
-}
-
-size_t exp_group_rays(const exp_group *g, int c, int mask)
-{
-    size_t n = 0;
-    for (int bit = 1; bit <= BENCH_AO; bit <<= 1)
-        if ((mask & bit) && g->cfg[c].set[exp_set_index(bit)].have)
-            n += g->cfg[c].set[exp_set_index(bit)].rays;
-    return n;
-}
-
-exp_est exp_group_ns(const exp_group *g, int c, int mask)
-{
-    double v[EXP_MAX_SAMPLES];
-    int n = exp_group_round_ms(g, c, mask, v);
-    exp_est e;
-    exp_est_of(v, n, &e);
-    size_t rays = exp_group_rays(g, c, mask);
-    return exp_est_scale(&e, rays ? 1e6 / (double)rays : 0);
-}
-
-exp_est exp_group_mrays(const exp_group *g, int c, int mask)
-{
-    exp_est ns = exp_group_ns(g, c, mask);
-    return exp_est_inv(&ns, 1e3);
-}
-
-exp_est exp_group_speedup(const exp_group *g, int base, int c, int mask)
-{
-    double a[EXP_MAX_SAMPLES], b[EXP_MAX_SAMPLES];
-    int na = exp_group_round_ms(g, base, mask, a), nb = exp_group_round_ms(g, c, mask, b);
-    exp_est e;
-    exp_est_ratio(a, b, na < nb ? na : nb, &e);
-    return e;
-}
-
-static double per_ray(const exp_group *g, int c, int mask, int what)
-{
-    uint64_t v = 0;
-    size_t rays = exp_group_rays(g, c, mask);
-    for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
-        const exp_trace *t = &g->cfg[c].set[exp_set_index(bit)];
-        if (!(mask & bit) || !t->have) continue;
-        v += what == 0 ? t->counters.steps : what == 1 ? t->counters.prim_tests : t->counters.box_tests;
-    }
-    return rays ? (double)v / (double)rays : 0;
-}
-
-double exp_group_steps(const exp_group *g, int c, int mask) { return per_ray(g, c, mask, 0); }
-double exp_group_prims(const exp_group *g, int c, int mask) { return per_ray(g, c, mask, 1); }
-double exp_group_boxes(const exp_group *g, int c, int mask) { return per_ray(g, c, mask, 2); }
-
-void exp_group_compare_head(exp_group *g)
-{
-    exp_md(g->x, "\nComparisons (paired rounds; a tie is inside the interval or under the noise "
-                 "floor of %.1f%%):\n", 100 * g->floor);
-    exp_md_table(g->x, "comparison|rays|time change [95% CI]|speed-up [95% CI]|outcome");
-}
-
-int exp_group_compare(exp_group *g, int c, int base, int mask, char *buf, size_t n)
-{
-    exp_est r = exp_group_speedup(g, c, base, mask), sp = exp_est_inv(&r, 1.0);
-    exp_fmt_pct(buf, n, &r);
-    int cmp = exp_ratio_cmp(&r, g->floor);
-    char s[96], sets[64] = "";
-    for (int bit = 1; bit <= BENCH_AO; bit <<= 1)
-        if ((mask & g->mask) & bit)
-            snprintf(sets + strlen(sets), sizeof sets - strlen(sets), "%s%s", sets[0] ? "+" : "",
-                     bench_set_name(bit));
-    exp_md(g->x, "| `%s` against `%s` | %s | %s | %s | %s |\n", g->cfg[c].spec, g->cfg[base].spec,
-           sets, buf, exp_fmt_x(s, sizeof s, &sp), cmp == 0 ? "a tie" : cmp < 0 ? "faster" : "slower");
-    if (cmp == 0) snprintf(buf + strlen(buf), n - strlen(buf), " (a tie)");
-    return cmp;
-}
-
-int exp_group_compare_build(exp_group *g, int c, int base, char *buf, size_t n)
-{
-    const exp_cfg *a = &g->cfg[c], *b = &g->cfg[base];
-    exp_est r, sp;
-    int m = a->build_ms.n < b->build_ms.n ? a->build_ms.n : b->build_ms.n;
-    exp_est_ratio(a->build_samples, b->build_samples, m, &r);
-    sp = exp_est_inv(&r, 1.0);
-    exp_fmt_pct(buf, n, &r);
-    int cmp = exp_ratio_cmp(&r, g->floor);
-    char s[96];
-    exp_md(g->x, "| `%s` against `%s` | build | %s | %s | %s |\n", a->spec, b->spec, buf,
-           exp_fmt_x(s, sizeof s, &sp), cmp == 0 ? "a tie" : cmp < 0 ? "faster" : "slower");
-    if (cmp == 0) snprintf(buf + strlen(buf), n - strlen(buf), " (a tie)");
-    return cmp;
-}
-
-int exp_group_best(const exp_group *g, int mask, int lo, int hi, const char *prefix)
-{
-    int best = -1;
-    size_t pl = strlen(prefix);
-    for (int c = lo; c < hi && c < g->count; c++)
-        if (g->cfg[c].ok && !strncmp(g->cfg[c].spec, prefix, pl) &&
-            (best < 0 || exp_group_ns(g, c, mask).median < exp_group_ns(g, best, mask).median))
-            best = c;
-    if (best < 0) return -1;
-    int refined = best;
-    double low = 1.0;
-    for (int c = lo; c < hi && c < g->count; c++) {
-        if (!g->cfg[c].ok || c == best || strncmp(g->cfg[c].spec, prefix, pl)) continue;
-        exp_est r = exp_group_speedup(g, c, best, mask);
-        if (r.n && r.median < low) low = r.median, refined = c;
-    }
-    return refined;
-}
-
-int exp_group_find(const exp_group *g, const char *spec)
-{
-    for (int c = 0; c < g->count; c++)
-        if (!strcmp(g->cfg[c].spec, spec)) return c;
-    return -1;
-}

@@ -13,6 +13,17 @@
  * x->sample_ms; a configuration gets x->repeats rounds, fewer when its
  * passes are slow (x->set_budget_ms of timed work per ray set, at least one).
  *
+ * Replication (issue 38): the same kernel on the same rays varies by up to a
+ * third between fresh processes, which rounds inside one process cannot
+ * see. Round r runs in process r % x->procs: this one, then each replica
+ * in turn, a forked process that builds every configuration again and
+ * copies the rays, so that structures and rays lie in its own fresh
+ * memory (the code is the parent's: its placement is not varied), times
+ * its rounds and sends them back through a pipe. One replica at a time:
+ * they never compete for the cores. Every estimate of the group takes the
+ * wider of the pooled interval and the t-interval on the processes'
+ * medians (stats.h), and keeps both spreads.
+ *
  * The A/A control: configuration 0 is timed twice per round, in two slots;
  * the paired ratio of the two is what an identical configuration differs
  * by here and now, and its interval gives the group's noise floor.
@@ -82,7 +93,8 @@ typedef struct {
     int keep_same;      /* measure configurations of the same structure too (a control whose
                            difference the counts cannot show, e.g. instanced:world=flat) */
     int add_mask;       /* sets of the next exp_group_add (0: every set of mask) */
-    int min_rounds;     /* timed rounds even for slow passes (default 1; an interval needs 3) */
+    int min_rounds;     /* timed rounds even for slow passes, up to 4x the set budget (then at
+                           least 3; default 1; an interval needs 3; a verdict 10) */
     int thread_probe;   /* time the thread probe in the rounds (default 0) */
     /* Results of exp_group_run. */
     double aa_samples[4][EXP_MAX_SAMPLES];
@@ -92,6 +104,8 @@ typedef struct {
     exp_est probe;      /* time(1 thread) / time(probe_threads), paired per round (n 0: none) */
     double floor;       /* the noise floor of this group, relative */
     int rounds;
+    int procs;          /* processes the rounds ran in (the replicas that returned, plus this one) */
+    int round_proc[EXP_MAX_SAMPLES]; /* the process of each round (0: this one) */
 } exp_group;
 
 /* The smallest noise floor the study uses: differences under 1% are never findings. */
@@ -119,6 +133,11 @@ exp_est exp_group_mrays(const exp_group *g, int c, int mask);
 /* Speed of c relative to base over the sets in mask: time(base) / time(c)
  * per round (> 1: c is faster), paired. */
 exp_est exp_group_speedup(const exp_group *g, int base, int c, int mask);
+/* The same with its interval at `level` (a verdict over m comparisons:
+ * exp_tally_level). */
+exp_est exp_group_speedup_level(const exp_group *g, int base, int c, int mask, double level);
+/* ns per ray with its interval at `level`. */
+exp_est exp_group_ns_level(const exp_group *g, int c, int mask, double level);
 /* Counts per ray over the sets in mask. */
 double exp_group_steps(const exp_group *g, int c, int mask);
 double exp_group_prims(const exp_group *g, int c, int mask);

@@ -62,6 +62,8 @@ typedef struct {
     int threads;          /* threads of every build, trace and reference (default 1) */
     int threads_given;    /* --threads was on the command line */
     int repeats;          /* timed passes per measurement */
+    int procs;            /* processes the timed rounds are spread over (group.h; default 3) */
+    int procs_used;       /* the most that returned rounds in one group of this section */
     int size;             /* primary image size (square) */
     int rt_size[2];       /* the lecture's real-time image (default 800x600) */
     const char *accels[EXP_MAX_ACCELS]; /* --accel: specs added to the experiment's list */
@@ -143,6 +145,13 @@ void exp_scene_section(exp_ctx *x, const char *spec, accel_scene *s, int mask, i
 void exp_note_image(exp_ctx *x, int w, int h);
 /* Builds the standard ray sets (mask of bench_set_bit) for s at x->size. */
 void exp_sets(exp_ctx *x, const accel_scene *s, int mask, bench_sets *out);
+/* The lecture's image at a smaller cost (issue 38: every lecture claim
+ * measured at 800x600): the ray sets of x->rt_size (one AO ray per hit),
+ * keeping the rays of one in `stride` of its 8x8 pixel tiles (tile index
+ * mod stride == 0), so that rays keep the density and coherence of the
+ * 800x600 image at the work of a smaller one. stride <= 0: the stride that
+ * leaves about x->size^2 primary rays. Returns the stride used. */
+int exp_sets_tiles(exp_ctx *x, const accel_scene *s, int mask, int stride, bench_sets *out);
 /* The same at w x h with ao_samples ambient occlusion rays per hit. */
 void exp_sets_wh(exp_ctx *x, const accel_scene *s, int mask, int w, int h, int ao_samples,
                  bench_sets *out);
@@ -182,6 +191,8 @@ void exp_verdict_num(exp_ctx *x, const char *claim, const char *verdict, const e
  * otherwise not testable (the run was too noisy to tell). */
 #define EXP_NOISY 0.25
 const char *exp_no_difference(double floor);
+/* A decider from an estimate: value median, interval [lo, hi], n. */
+exp_decider exp_decider_of(const char *what, const exp_est *e, double threshold, int sense);
 /* For a verdict that says "too slow": on a busy machine (exp_busy) a
  * refutation is not testable here, since the measured times are upper
  * bounds of a quiet machine's. */

@@ -1,5 +1,5 @@
 /*
- * stats.c - medians with bootstrap intervals, ties, paired ratios, binomial
+ * stats.c - medians with order-statistic intervals, ties, paired ratios, binomial
  * bounds and the fits of the study (see stats.h).
  */
 #include <math.h>
@@ -34,7 +34,8 @@ static double median_sorted(const double *v, int n)
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-void exp_est_of(const double *samples, int n, exp_est *out)
+/* The percentile bootstrap (stats.h: kept for the coverage test). */
+void exp_est_boot(const double *samples, int n, exp_est *out)
 {
     memset(out, 0, sizeof *out);
     if (n <= 0) return;
@@ -42,13 +43,13 @@ void exp_est_of(const double *samples, int n, exp_est *out)
     double v[EXP_MAX_SAMPLES], r[EXP_MAX_SAMPLES];
     memcpy(v, samples, (size_t)n * sizeof *v);
     qsort(v, (size_t)n, sizeof *v, cmp_double);
-    out->n = n;
+    out->n = n, out->procs = 1, out->level = 0.95;
     out->min = v[0];
     out->max = v[n - 1];
     out->median = median_sorted(v, n);
     out->lo = out->hi = out->median;
     if (n < 2) return;
-    double meds[BOOT_RESAMPLES];
+    static double meds[BOOT_RESAMPLES];
     uint64_t seed = 0x5EEDull ^ (uint64_t)n;
     for (int b = 0; b < BOOT_RESAMPLES; b++) {
         for (int i = 0; i < n; i++) r[i] = v[next_rand(&seed) % (uint64_t)n];
@@ -60,6 +61,157 @@ void exp_est_of(const double *samples, int n, exp_est *out)
     out->hi = meds[BOOT_RESAMPLES - 1 - BOOT_RESAMPLES / 40];
 }
 
+/* P(B <= k) for B ~ Binomial(n, 1/2), n <= 64: exact in doubles. */
+static double binom_half_cdf(int k, int n)
+{
+    double c = 1, sum = 0; /* c = C(n, i) */
+    for (int i = 0; i <= k && i <= n; i++) {
+        sum += c;
+        c = c * (n - i) / (i + 1);
+    }
+    return sum * pow(0.5, n);
+}
+
+/* exp_median_rank at any level: the largest k with 1 - 2 P(B <= k - 1) >=
+ * level (k = 1 when none reaches it). */
+static int median_rank_at(int n, double want, double *level)
+{
+    int k = 1;
+    while (k + 1 <= (n + 1) / 2 && 1 - 2 * binom_half_cdf(k, n) >= want) k++;
+    if (level) *level = n >= 1 ? 1 - 2 * binom_half_cdf(k - 1, n) : 0;
+    return k;
+}
+
+int exp_median_rank(int n, double *level) { return median_rank_at(n, 0.95, level); }
+
+double exp_bonferroni_level(int m) { return m > 1 ? 1 - 0.05 / m : 0.95; }
+
+/* Student's t density with df degrees of freedom. */
+static double t_density(double t, int df)
+{
+    double v = df;
+    return exp(lgamma((v + 1) / 2) - lgamma(v / 2)) / sqrt(v * M_PI) * pow(1 + t * t / v, -(v + 1) / 2);
+}
+
+/* P(0 <= T <= t) by Simpson's rule (t >= 0). */
+static double t_mass(double t, int df)
+{
+    const int steps = 2000;
+    double h = t / steps, sum = t_density(0, df) + t_density(t, df);
+    for (int i = 1; i < steps; i++) sum += (i % 2 ? 4 : 2) * t_density(i * h, df);
+    return sum * h / 3;
+}
+
+/* The few (level, df) pairs a run asks for, remembered: each costs about
+ * 10^5 density evaluations. The experiments compute estimates on one thread. */
+#define T_CACHE 16
+static struct { double level, t; int df; } t_cache[T_CACHE];
+static int t_cached;
+
+double exp_t_quantile(double level, int df)
+{
+    if (df < 1) return INFINITY;
+    for (int i = 0; i < t_cached; i++)
+        if (t_cache[i].df == df && t_cache[i].level == level) return t_cache[i].t;
+    double lo = 0, hi = 1;
+    while (t_mass(hi, df) < level / 2 && hi < 1e6) hi *= 2;
+    for (int it = 0; it < 50; it++) {
+        double mid = 0.5 * (lo + hi);
+        if (t_mass(mid, df) < level / 2)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    double t = 0.5 * (lo + hi);
+    int slot = t_cached < T_CACHE ? t_cached++ : df % T_CACHE;
+    t_cache[slot].level = level, t_cache[slot].df = df, t_cache[slot].t = t;
+    return t;
+}
+
+/* The order-statistic interval at `level` of n pooled samples; with
+ * samples from two or more processes, also the t-interval on the
+ * processes' medians (df = processes - 1), and the wider of the two. */
+static void est_core(const double *samples, const int *proc, int n, double level, exp_est *out)
+{
+    memset(out, 0, sizeof *out);
+    if (n <= 0) return;
+    if (n > EXP_MAX_SAMPLES) n = EXP_MAX_SAMPLES;
+    double v[EXP_MAX_SAMPLES];
+    memcpy(v, samples, (size_t)n * sizeof *v);
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    out->n = n, out->procs = 1;
+    out->min = v[0];
+    out->max = v[n - 1];
+    out->median = median_sorted(v, n);
+    out->lo = out->hi = out->median;
+    if (n < 2) return;
+    int k = median_rank_at(n, level, &out->level);
+    out->lo = v[k - 1], out->hi = v[n - k];
+    out->within = (out->hi - out->lo) / 2; /* absolute here; callers scale */
+    if (!proc) return;
+    /* The processes' medians. */
+    double meds[EXP_MAX_SAMPLES], one[EXP_MAX_SAMPLES];
+    int p = 0;
+    for (int id = 0; id < EXP_MAX_SAMPLES; id++) {
+        int m = 0;
+        for (int i = 0; i < n; i++)
+            if (proc[i] == id) one[m++] = samples[i];
+        if (!m) continue;
+        qsort(one, (size_t)m, sizeof *one, cmp_double);
+        meds[p++] = median_sorted(one, m);
+    }
+    out->procs = p;
+    if (p < 2) return;
+    double mean = 0, ss = 0;
+    for (int i = 0; i < p; i++) mean += meds[i];
+    mean /= p;
+    for (int i = 0; i < p; i++) ss += (meds[i] - mean) * (meds[i] - mean);
+    double half = exp_t_quantile(level, p - 1) * sqrt(ss / (p - 1) / p);
+    out->between = half;
+    if (out->between > out->within) {
+        out->lo = fmin(mean - half, out->median);
+        out->hi = fmax(mean + half, out->median);
+    }
+}
+
+/* Positive samples (times) from several processes: the between-process
+ * t-interval is taken on the logs of the processes' medians, so that it
+ * stays positive and treats a process 1.3x slower and one 1.3x faster
+ * alike; the order statistics are the same in either scale. */
+void exp_est_of_level(const double *samples, const int *proc, int n, double level, exp_est *out)
+{
+    int positive = n > 0;
+    for (int i = 0; i < n && i < EXP_MAX_SAMPLES; i++) positive &= samples[i] > 0;
+    if (!proc || !positive) {
+        est_core(samples, proc, n, level, out);
+        double scale = fabs(out->median) > 0 ? fabs(out->median) : 1;
+        out->within /= scale, out->between /= scale;
+        return;
+    }
+    double lg[EXP_MAX_SAMPLES];
+    int m = n < EXP_MAX_SAMPLES ? n : EXP_MAX_SAMPLES;
+    for (int i = 0; i < m; i++) lg[i] = log(samples[i]);
+    exp_est l;
+    est_core(lg, proc, m, level, &l);
+    est_core(samples, NULL, m, level, out);
+    out->within /= out->median > 0 ? out->median : 1;
+    out->procs = l.procs, out->between = l.between;
+    if (l.procs > 1 && l.between > l.within) { /* l: widened to the log t-interval */
+        out->lo = fmin(exp(l.lo), out->median);
+        out->hi = fmax(exp(l.hi), out->median);
+    }
+}
+
+void exp_est_of_procs(const double *samples, const int *proc, int n, exp_est *out)
+{
+    exp_est_of_level(samples, proc, n, 0.95, out);
+}
+
+void exp_est_of(const double *samples, int n, exp_est *out)
+{
+    exp_est_of_level(samples, NULL, n, 0.95, out);
+}
+
 /* Ratios are estimated in log space, so that a median of an even count is
  * the geometric mean of the middle two: the estimate of b/a is then the
  * inverse of that of a/b (exp_est_inv), median and interval alike. With the
@@ -67,16 +219,28 @@ void exp_est_of(const double *samples, int n, exp_est *out)
  * which prints the inverse of the time ratio, showed as 1.98x [1.42, 3.29]
  * (four rounds of a quick report). Odd counts give the same order
  * statistics either way. */
-void exp_est_ratio(const double *a, const double *b, int n, exp_est *out)
+void exp_est_ratio_level(const double *a, const double *b, const int *proc, int n, double level,
+                         exp_est *out)
 {
     double r[EXP_MAX_SAMPLES];
-    int m = 0;
+    int m = 0, pr[EXP_MAX_SAMPLES];
     for (int i = 0; i < n && m < EXP_MAX_SAMPLES; i++)
-        if (b[i] > 0) r[m++] = log(a[i] / b[i]);
-    exp_est_of(r, m, out);
+        if (b[i] > 0) pr[m] = proc ? proc[i] : 0, r[m++] = log(a[i] / b[i]);
+    est_core(r, proc ? pr : NULL, m, level, out);
     if (out->n == 0) return;
+    /* Half-widths in log space are relative spreads already. */
     out->median = exp(out->median), out->lo = exp(out->lo), out->hi = exp(out->hi);
     out->min = exp(out->min), out->max = exp(out->max);
+}
+
+void exp_est_ratio(const double *a, const double *b, int n, exp_est *out)
+{
+    exp_est_ratio_level(a, b, NULL, n, 0.95, out);
+}
+
+void exp_est_ratio_procs(const double *a, const double *b, const int *proc, int n, exp_est *out)
+{
+    exp_est_ratio_level(a, b, proc, n, 0.95, out);
 }
 
 exp_est exp_est_scale(const exp_est *e, double k)
@@ -136,8 +300,18 @@ const char *exp_fmt_est(char *buf, size_t n, const exp_est *e, int decimals)
     if (e->n < 2 || !(e->hi > e->lo))
         snprintf(buf, n, "%.*f", decimals, e->median);
     else
-        snprintf(buf, n, "%.*f [%.*f, %.*f]", decimals, e->median, decimals, e->lo, decimals,
-                 e->hi);
+        snprintf(buf, n, "%.*f [%.*f, %.*f] n=%d", decimals, e->median, decimals, e->lo, decimals,
+                 e->hi, e->n);
+    return buf;
+}
+
+const char *exp_fmt_spreads(char *buf, size_t n, const exp_est *e)
+{
+    if (e->procs < 2)
+        snprintf(buf, n, "%s", "");
+    else
+        snprintf(buf, n, "within +-%.1f%%, between processes +-%.1f%% (%d processes)",
+                 100 * e->within, 100 * e->between, e->procs);
     return buf;
 }
 
@@ -146,8 +320,8 @@ const char *exp_fmt_pct(char *buf, size_t n, const exp_est *r)
     if (r->n < 2 || !(r->hi > r->lo))
         snprintf(buf, n, "%+.1f%%", 100 * (r->median - 1));
     else
-        snprintf(buf, n, "%+.1f%% [%+.1f%%, %+.1f%%]", 100 * (r->median - 1), 100 * (r->lo - 1),
-                 100 * (r->hi - 1));
+        snprintf(buf, n, "%+.1f%% [%+.1f%%, %+.1f%%] n=%d", 100 * (r->median - 1),
+                 100 * (r->lo - 1), 100 * (r->hi - 1), r->n);
     return buf;
 }
 
@@ -156,7 +330,7 @@ const char *exp_fmt_x(char *buf, size_t n, const exp_est *e)
     if (e->n < 2 || !(e->hi > e->lo))
         snprintf(buf, n, "%.2fx", e->median);
     else
-        snprintf(buf, n, "%.2fx [%.2f, %.2f]", e->median, e->lo, e->hi);
+        snprintf(buf, n, "%.2fx [%.2f, %.2f] n=%d", e->median, e->lo, e->hi, e->n);
     return buf;
 }
 

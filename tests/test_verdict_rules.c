@@ -34,3 +34,32 @@ TEST(verdict_rules_judge_and_margin)
     CHECK(exp_verdict_valid(EXP_ON_LINE) && exp_verdict_valid(EXP_ANSWERED));
     CHECK(!exp_verdict_valid("probably"));
 }
+
+/* "k of m scenes": confirmed only when every comparison confirms, refuted
+ * when every one misses, partly when they contradict each other, else on
+ * the line; the decider is the comparison nearest to the threshold. */
+TEST(verdict_rules_tally)
+{
+    exp_tally t;
+    exp_tally_init(&t, 4);
+    CHECK(fabs(exp_tally_level(&t) - 0.9875) < 1e-12 && exp_tally_verdict(&t) == NULL);
+    exp_decider a = {"scene a", 2.6, 2.3, 2.9, 2.0, +1, 12}, b = {"scene b", 2.15, 2.05, 2.3, 2.0, +1, 12};
+    exp_tally_add(&t, &a);
+    exp_tally_add(&t, &b);
+    CHECKF(!strcmp(exp_tally_verdict(&t), EXP_CONFIRMED) && !strcmp(t.worst.what, "scene b"),
+           "%s, decider %s", exp_tally_verdict(&t), t.worst.what);
+    exp_decider c = {"scene c", 1.9, 1.7, 2.1, 2.0, +1, 12};
+    exp_tally_add(&t, &c);
+    CHECKF(!strcmp(exp_tally_verdict(&t), EXP_ON_LINE) && !strcmp(t.worst.what, "scene c"),
+           "%s, decider %s", exp_tally_verdict(&t), t.worst.what);
+    exp_decider d = {"scene d", 1.4, 1.2, 1.6, 2.0, +1, 12};
+    exp_tally_add(&t, &d);
+    CHECKF(!strcmp(exp_tally_verdict(&t), EXP_PARTLY) && !strcmp(t.worst.what, "scene d"),
+           "%s, decider %s", exp_tally_verdict(&t), t.worst.what);
+    exp_tally_init(&t, 2);
+    exp_tally_add(&t, &d);
+    d.what = "scene e", d.value = 1.7, d.lo = 1.5, d.hi = 1.8;
+    exp_tally_add(&t, &d);
+    CHECKF(!strcmp(exp_tally_verdict(&t), EXP_REFUTED) && !strcmp(t.worst.what, "scene e"),
+           "%s, decider %s", exp_tally_verdict(&t), t.worst.what);
+}
