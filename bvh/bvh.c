@@ -478,6 +478,10 @@ static const char *const bvh_variants[] = {
     "build=sbvh,width=8,traverse=packet",
     "width=8,quant=1",
     "width=8,quant=1,block=4,build=sbvh",
+    /* the baseline tables where auto picks AVX-512 (core/isa.h; tests/test_isa.c: same bits) */
+    "width=8,isa=avx2",
+    "width=4,block=4,isa=avx2",
+    "width=8,traverse=packet,isa=avx2",
     "first=left",
     "pairs=split",
     "first=left,pairs=split,traverse=single",

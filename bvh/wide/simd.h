@@ -2,10 +2,13 @@
  * simd.h - the few float-vector operations the wide BVH kernels use,
  * for 4 lanes (f4: SSE) and 8 lanes (f8: AVX2), each with a plain-C twin
  * (a struct of floats and a loop per operation) used when the compiler
- * does not target the instruction set, or with -DBVH_NO_SIMD. AVX-512 is
- * never used: the kernels must build and run on an AVX2-only machine, and
- * -march=native on an AVX-512 machine changes nothing here but the
- * encoding the compiler picks.
+ * does not target the instruction set, or with -DBVH_NO_SIMD. AVX-512
+ * (WIDE_AVX512) only in the kernel units' second copies, compiled with
+ * WIDE_AVX512_UNIT and the Makefile's ARCH512 and run where the CPU has
+ * it (trace.c, core/isa.h): there the fN operations are the same and
+ * kernel.h adds the mask-register forms of its data movement. Never in the
+ * baseline units, even under -march=native, so that their tables stay
+ * the AVX2 ones.
  * A kernel body (C only): included by the .c files of its folder, not part
  * of the interface a C++ program includes.
  *
@@ -42,6 +45,12 @@
 #define WIDE_AVX 1
 #else
 #define WIDE_AVX 0
+#endif
+#if WIDE_AVX && defined(WIDE_AVX512_UNIT) && defined(__AVX512F__) && defined(__AVX512VL__) &&     \
+    defined(__AVX512DQ__) && defined(__AVX512BW__)
+#define WIDE_AVX512 1
+#else
+#define WIDE_AVX512 0
 #endif
 
 #ifdef __cplusplus
