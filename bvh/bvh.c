@@ -102,9 +102,9 @@ static const accel_param_def bvh_params[] = {
              "order=branchy; update rebuilds) (0/1)",
      .offset = offsetof(bvh_spec, quant)},
     {.key = "isa", .type = ACCEL_PARAM_ENUM, .def = "auto", .choices = ACCEL_ISA_CHOICES,
-     .help = "width=4|8: the kernels' instruction set: auto (AVX-512 where the CPU has it, else "
-             "GRIDBVH_ISA if set), avx2, or avx512 (an error where the CPU lacks it); the hits are "
-             "the same bits on both",
+     .help = "width=4|8: the kernels' instruction set: auto (GRIDBVH_ISA if set, else AVX-512 "
+             "where the CPU has it, else AVX2), avx2, or avx512 (an error where the CPU lacks it); "
+             "the same hits, bit for bit",
      .offset = offsetof(bvh_spec, isa)},
     {.key = "first", .type = ACCEL_PARAM_ENUM, .def = "near", .choices = "near|left",
      .help = "width=2, single rays: of two hit children visit the nearer first (the lecture's "
