@@ -8,7 +8,13 @@
 #   make sanitize   the test suite under AddressSanitizer + UBSan
 #   make fuzz       libFuzzer targets for the loaders (clang)
 CC      ?= cc
-ARCH    ?= -march=native
+# The baseline instruction set of every unit is AVX2 (x86-64-v3), whatever
+# the build machine; the wide BVH's kernel units (SLOW_SRC) are compiled a
+# second time with ARCH512 and picked at run time where the CPU has it
+# (accel/core/isa.c; GRIDBVH_ISA=avx2 forces the baseline). ARCH512= (empty)
+# or a compiler that refuses it builds the AVX2 kernels only.
+ARCH    ?= -march=x86-64-v3
+ARCH512 ?= -march=x86-64-v4
 OPT     ?= -O3
 CFLAGS  ?= $(OPT) $(ARCH) -g
 # Flags every build needs, kept apart so that `make CFLAGS=...` cannot drop them.
@@ -31,13 +37,22 @@ LIB_SRC     += lab/student.c lab/student_grid.c
 BASE_CFLAGS += -DGRIDBVH_LAB
 endif
 LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/%.o)
+# The AVX-512 twins of the kernel units: the same sources with ARCH512 in
+# place of ARCH and WIDE_AVX512_UNIT defined (their symbols end in _avx512,
+# bvh/wide/node.h), linked beside the AVX2 ones.
+HAVE_512 := $(if $(strip $(ARCH512)),$(shell $(CC) $(ARCH512) -x c -c /dev/null -o /dev/null 2>/dev/null && echo 1))
+ifeq ($(HAVE_512),1)
+SLOW_512 := $(SLOW_SRC:%.c=$(BUILD)/%.avx512.o)
+LIB_OBJ  := $(SLOW_512) $(LIB_OBJ)
+$(BUILD)/accel/core/isa.o $(BUILD)/bvh/wide/trace.o: ALL_CFLAGS += -DGRIDBVH_AVX512
+endif
 LIB      := $(BUILD)/libgridbvh.a
 # The kernel units first compiled (SLOW_SRC, sources.mk) keep line tables
 # only (-g1) where the build asks for -g: full debug information of their
 # forced-inline copies was 40% of their compile time (bvh/wide/
 # k4_packet_hit.c: 12.0 s with -g, 7.5 s with -g1), and line tables are what
 # perf and a backtrace need. GCC's code does not depend on the debug level.
-$(SLOW_SRC:%.c=$(BUILD)/%.o): ALL_CFLAGS += $(if $(filter -g,$(CFLAGS)),-g1)
+$(SLOW_SRC:%.c=$(BUILD)/%.o) $(SLOW_512): ALL_CFLAGS += $(if $(filter -g,$(CFLAGS)),-g1)
 # Header dependencies come from the compiler (-MMD -MP, the .d files); a
 # change of compiler or flags rebuilds everything through the flags stamp.
 DEPFLAGS  = -MMD -MP
@@ -59,11 +74,18 @@ all: $(TOOLS) $(EXP_BINS) $(BIN)/mkreport $(BIN)/run_tests
 
 $(FLAGS_STAMP): FORCE
 	@mkdir -p $(dir $@)
-	@echo '$(CC) $(ALL_CFLAGS) $(LDLIBS)' | cmp -s - $@ || echo '$(CC) $(ALL_CFLAGS) $(LDLIBS)' > $@
+	@echo '$(CC) $(ALL_CFLAGS) $(LDLIBS) 512:$(HAVE_512) $(ARCH512)' | cmp -s - $@ || \
+	  echo '$(CC) $(ALL_CFLAGS) $(LDLIBS) 512:$(HAVE_512) $(ARCH512)' > $@
 
 $(BUILD)/%.o: %.c $(FLAGS_STAMP)
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) $(DEPFLAGS) -c $< -o $@
+
+ifeq ($(HAVE_512),1)
+$(SLOW_512): $(BUILD)/%.avx512.o: %.c $(FLAGS_STAMP)
+	@mkdir -p $(dir $@)
+	$(CC) $(filter-out $(ARCH),$(ALL_CFLAGS)) $(ARCH512) -DWIDE_AVX512_UNIT $(DEPFLAGS) -c $< -o $@
+endif
 
 $(LIB): $(LIB_OBJ)
 	@rm -f $@

@@ -352,6 +352,7 @@ typedef struct {
     double sah_cost;   /* BVH: SAH cost normalized by the root area; NAN if n/a */
     int depth;         /* tree depth / grid nesting depth */
     int res[3];        /* grids: top-level resolution */
+    const char *isa;   /* kernels of several ISAs (wide BVH): the one built for; else NULL */
 } accel_build_stats;
 
 /* What a per-frame update (accel_kind.update) did, and how long it took. */
@@ -528,6 +529,9 @@ void accel_oracle_free(accel_oracle *oracle);
 double accel_now_ms(void);
 /* Number of usable cores. */
 int accel_cpu_count(void);
+/* The instruction set the kernels that have several (the wide BVH's) run
+ * on by default in this process: "avx512" or "avx2" (core/isa.h). */
+const char *accel_isa_name(void);
 
 #ifdef __cplusplus
 }

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/isa.h"
 #include "split_common.h"
 #include "bvh.h"
 #include "wide/wide.h"
@@ -101,6 +102,11 @@ static const accel_param_def bvh_params[] = {
              "outward (128-byte nodes instead of 256; the octant order pushed by branches, as "
              "order=branchy; update rebuilds) (0/1)",
      .offset = offsetof(bvh_spec, quant)},
+    {.key = "isa", .type = ACCEL_PARAM_ENUM, .def = "auto", .choices = ACCEL_ISA_CHOICES,
+     .help = "width=4|8: the kernels' instruction set: auto (GRIDBVH_ISA if set, else AVX-512 "
+             "where the CPU has it, else AVX2), avx2, or avx512 (an error where the CPU lacks it); "
+             "the same hits, bit for bit",
+     .offset = offsetof(bvh_spec, isa)},
     {.key = "first", .type = ACCEL_PARAM_ENUM, .def = "near", .choices = "near|left",
      .help = "width=2, single rays: of two hit children visit the nearer first (the lecture's "
              "\"better\"), or always the left one (a control for that claim)",
@@ -120,6 +126,7 @@ typedef struct {
     int hybrid;                  /* wide packets: hand-over span (wide/packet.h) */
     bvh_wide_collapse collapse;  /* wide: greedy or dp */
     int leaf_below;              /* wide: the binary build's leaf_below (0: block) */
+    int isa;                     /* wide: ACCEL_ISA_AVX2 or _AVX512, resolved (core/isa.h) */
 } wide_opts;
 
 static int options_from_params(const accel_params *p, bvh_build_opts *o, int *traverse,
@@ -186,6 +193,9 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: order=branchy applies to traverse=single only");
     if (wo->width > 2 && *frustum)
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: frustum applies to width=2 (wide packets always use it)");
+    if (wo->width == 2 && GIVEN(isa))
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: isa applies to width=4|8 (the binary kernels have one)");
+    if (wo->width > 2 && accel_isa_resolve(s->isa, &wo->isa, err)) return ACCEL_ERR_SPEC;
     return 0;
 #undef GIVEN
 }
@@ -341,6 +351,7 @@ static int build_tree(const accel_scene *scene, const bvh_build_opts *opts, cons
         rc = bvh_wide_build(out, &out->wide, wo->width, block, wo->order, wo->quant, &cc,
                             threads < 1 ? 1 : threads, o.ct, o.ci, stats, err);
         if (rc == 0) out->wide->packets = traverse == BVH_TRAVERSE_PACKET, out->wide->hybrid = wo->hybrid;
+        if (rc == 0) out->wide->isa = wo->isa, stats->isa = accel_isa_label(wo->isa);
         if (rc == 0) out->path = out->wide->quant ? &bvh_path_wide_quant : &bvh_path_wide;
         if (rc) bvh_release(out);
     }
@@ -352,7 +363,7 @@ static int bvh_kind_build(const accel_scene *scene, const accel_params *params, 
 {
     bvh_build_opts opts;
     int traverse, frustum;
-    wide_opts wo = {2, 4, 1, 0, 0, 0, 0, {1, 1.5, 2, 0}, 0};
+    wide_opts wo = {2, 4, 1, 0, 0, 0, 0, {1, 1.5, 2, 0}, 0, ACCEL_ISA_AVX2};
     int rc = options_from_params(params, &opts, &traverse, &frustum, &wo, err);
     if (rc) return rc;
     bvh *b = calloc(1, sizeof *b);
@@ -504,6 +515,10 @@ static const char *const bvh_variants[] = {
     "build=sbvh,width=8,traverse=packet",
     "width=8,quant=1",
     "width=8,quant=1,block=4,build=sbvh",
+    /* the baseline tables where auto picks AVX-512 (core/isa.h; tests/test_isa.c: same bits) */
+    "width=8,isa=avx2",
+    "width=4,block=4,isa=avx2",
+    "width=8,traverse=packet,isa=avx2",
     "first=left",
     "pairs=split",
     "first=left,pairs=split,traverse=single",

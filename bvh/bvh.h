@@ -93,7 +93,7 @@ typedef struct {
     double split_budget, alpha, max_mb, ct, ci;
     int term, traverse, frustum, width, block, order, collapse;
     double leaf_cost;
-    int leaf_blocks, leaf_below, hybrid, quant, first, pairs;
+    int leaf_blocks, leaf_below, hybrid, quant, first, pairs, isa;
 } bvh_spec;
 
 /* The node pool of a built bvh (node 0 is the root; node 1 is padding) and

@@ -36,7 +36,7 @@ for sc in "$bunny" soup:tris=1000000 teapot_stadium sphereflake; do
 done
 
 # Counters off: a build without any counter code against the normal build.
-make -s BUILD=build-nocount BIN=bin-nocount CFLAGS="-O3 -march=native -g -DACCEL_COUNTERS=0" bin-nocount/trace
+make -s BUILD=build-nocount BIN=bin-nocount CFLAGS="-O3 -march=x86-64-v3 -g -DACCEL_COUNTERS=0" bin-nocount/trace
 for k in grid bvh nested_grid; do
   for b in bin bin-nocount; do
     echo "== counters $b $k" >&2

@@ -217,7 +217,7 @@ static void judge_pick(exp_ctx *x, study *st, const exp_group *g, scene_result *
     int pick = st->calibrated ? model_pick(g, st->fit.coef) : -1;
     if (best < 0 || pick < 0) return;
     exp_est ex = exp_group_speedup(g, pick, best, MASK);
-    if (pick == best) ex = (exp_est){1, 1, 1, 1, 1, ex.n};
+    if (pick == best) ex = (exp_est){.median = 1, .lo = 1, .hi = 1, .min = 1, .max = 1, .n = ex.n, .level = 1};
     int hit = pick == best || exp_ratio_cmp(&ex, g->floor) == 0 || ex.median - 1 <= WITHIN;
     st->model_hits += hit;
     st->model_scenes++;

@@ -8,6 +8,7 @@
 #include <sys/utsname.h>
 #include <unistd.h>
 
+#include "accel.h"
 #include "machine.h"
 
 /* The value after "key<tabs>: " of a /proc/cpuinfo line, or NULL. */
@@ -183,31 +184,22 @@ const char *exp_compiler(void)
 #endif
 }
 
-/* The ISA the kernels were compiled for: the widest of the intrinsics
- * paths (bvh/wide/simd.h uses AVX2 at most) that this build's flags
- * enable, and what the CPU has beyond it (its "flags", as m->vector).
- * TODO(merge): the kernels issue's runtime dispatch brings
- * accel_isa_name(); print that instead. */
+/* The ISA the wide kernels use in this run (accel_isa_name: picked at
+ * run time from cpuid, GRIDBVH_ISA=avx2 forces the baseline), the
+ * baseline every other unit was compiled for, and the CPU's own. */
 static void kernel_isa(const exp_machine *m, char *buf, size_t n)
 {
-#if defined(__AVX2__)
-    const char *used = "AVX2";
-#elif defined(__SSE2__)
-    const char *used = "SSE2";
+#if defined(__AVX512F__)
+    const char *base = "AVX-512";
+#elif defined(__AVX2__)
+    const char *base = "AVX2";
 #else
-    const char *used = "scalar C";
+    const char *base = "SSE2";
 #endif
     char padded[128];
     snprintf(padded, sizeof padded, " %s ", m->vector);
-    const char *extra = strstr(padded, " avx512f ") ? " (AVX-512 present, not used by the kernels)"
-                        : strstr(padded, " avx2 ") && strcmp(used, "AVX2") ? " (AVX2 present, not used)"
-                        : "";
-#if defined(__AVX512F__)
-    const char *cc = "; the compiler may emit AVX-512 elsewhere (-march)";
-#else
-    const char *cc = "";
-#endif
-    snprintf(buf, n, "%s%s%s", used, extra, cc);
+    snprintf(buf, n, "wide BVH kernels %s (picked at run time), other code %s; the CPU has %s",
+             accel_isa_name(), base, strstr(padded, " avx512f ") ? "AVX-512" : "AVX2 at most");
 }
 
 void exp_machine_markdown(const exp_machine *m, char *buf, size_t n)

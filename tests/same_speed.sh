@@ -2,6 +2,7 @@
 # same_speed.sh - is a new build as fast as an old one, on the same rays?
 #
 #   tests/same_speed.sh OLD_BIN NEW_BIN [ROUNDS]
+#   SAME_SPEED_ENV_A="GRIDBVH_ISA=avx2" tests/same_speed.sh bin bin   # one build, two ISAs
 #
 # For each kind below, on the same scene, camera and seed, runs
 # OLD_BIN/trace and NEW_BIN/trace in alternation (A B, then B A, ...) in
@@ -9,11 +10,15 @@
 # process's median Mrays/s of 5 timed passes per ray set. Prints, per kind
 # and ray set, the median of the per-round ratios new/old with their
 # minimum and maximum: a ratio whose min-max range holds 1.00 is a tie.
-# Run it on a quiet machine (no build or test running).
+# SAME_SPEED_ENV_A and SAME_SPEED_ENV_B (NAME=value words) are set in the
+# environment of OLD_BIN's and NEW_BIN's processes: the same binary with
+# two settings. Run it on a quiet machine (no build or test running).
 set -u
 old=${1:?usage: same_speed.sh OLD_BIN NEW_BIN [ROUNDS]}
 new=${2:?usage: same_speed.sh OLD_BIN NEW_BIN [ROUNDS]}
 rounds=${3:-5}
+env_a=${SAME_SPEED_ENV_A:-}
+env_b=${SAME_SPEED_ENV_B:-}
 here=$(dirname "$0")/..
 mesh=$here/../shared/scenes/bunny.off
 # The mesh's camera is given, so that a change of the default view (which
@@ -29,9 +34,9 @@ instanced|field:instances=60,detail=3|400x300|"
 tmp=$(mktemp -d)
 # One process's Mrays/s per set, as "set value" lines.
 mrays() {
-    # $5: camera options, word-split on purpose
+    # $5: camera options, $6: NAME=value words for env, both word-split on purpose
     # shellcheck disable=SC2086
-    "$1/trace" --scene "$2" --accel "$3" --size "$4" $5 --rays primary,shadow,diffuse --repeat 5 \
+    env $6 "$1/trace" --scene "$2" --accel "$3" --size "$4" $5 --rays primary,shadow,diffuse --repeat 5 \
         --warmup 1 --build-repeat 1 --no-counters --quiet 2>/dev/null |
         awk '/Mrays\/s/ { for (i = 1; i < NF; i++) if ($(i + 1) == "Mrays/s") print $1, $i }'
 }
@@ -41,11 +46,11 @@ echo "$runs" | while IFS='|' read -r spec scene size cam; do
     r=0
     while [ $r -lt "$rounds" ]; do
         if [ $((r % 2)) -eq 0 ]; then
-            mrays "$old" "$scene" "$spec" "$size" "$cam" > "$tmp/o"
-            mrays "$new" "$scene" "$spec" "$size" "$cam" > "$tmp/n"
+            mrays "$old" "$scene" "$spec" "$size" "$cam" "$env_a" > "$tmp/o"
+            mrays "$new" "$scene" "$spec" "$size" "$cam" "$env_b" > "$tmp/n"
         else
-            mrays "$new" "$scene" "$spec" "$size" "$cam" > "$tmp/n"
-            mrays "$old" "$scene" "$spec" "$size" "$cam" > "$tmp/o"
+            mrays "$new" "$scene" "$spec" "$size" "$cam" "$env_b" > "$tmp/n"
+            mrays "$old" "$scene" "$spec" "$size" "$cam" "$env_a" > "$tmp/o"
         fi
         paste -d" " "$tmp/o" "$tmp/n" | awk '$1 == $3 { print $1, $2, $4 }' >> "$tmp/r"
         r=$((r + 1))

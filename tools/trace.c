@@ -445,6 +445,7 @@ static void run_accel(const options *o, run *r, int a)
         if (!isnan(st.sah_cost) && st.sah_cost != 0) printf(", SAH cost %.2f", st.sah_cost);
         if (st.depth) printf(", depth %d", st.depth);
         if (st.res[0]) printf(", res %dx%dx%d", st.res[0], st.res[1], st.res[2]);
+        if (st.isa) printf(", isa %s", st.isa);
         printf("\n");
     }
     for (int s = 0; s < r->set_count; s++)

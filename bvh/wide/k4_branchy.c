@@ -6,7 +6,7 @@
 #define WIDE_ROW WIDE_ROW_BRANCHY
 #include "tables.h"
 
-const accel_kernel_table *bvh_wide_k4_branchy(int any_hit, int block8)
+const accel_kernel_table *WIDE_UNIT(bvh_wide_k4_branchy)(int any_hit, int block8)
 {
     return wide_row[any_hit][block8];
 }

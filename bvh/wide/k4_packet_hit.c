@@ -8,7 +8,7 @@
 #define WIDE_ANY 0
 #include "tables.h"
 
-const accel_kernel_table *bvh_wide_k4_packet_hit(int block8)
+const accel_kernel_table *WIDE_UNIT(bvh_wide_k4_packet_hit)(int block8)
 {
     return wide_query[block8];
 }

@@ -288,6 +288,31 @@ WIDE_INLINE int WK(push_octant)(const uint32_t *child, const uint32_t *perm, NF 
         *ref = child[j_near ? j : i];
         return 1;
     }
+#if WIDE_AVX512
+    if (!branchy) {
+        /* AVX-512 (VL, DQ): the ranks farthest first (the perm row read
+         * backwards, off the critical path like the child row), the hit
+         * lanes in that order as a mask register, and the children and
+         * their entry distances compressed in registers (vpcompressd/ps;
+         * the register form: the store form is microcoded on Zen 4) and
+         * stored whole onto the stack's slack: the same slots, in the same
+         * order, as the table form below, without its table load and
+         * shifts on the path from the slab test to the next address. */
+        const __m256i back = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
+        __m256i pv = _mm256_and_si256(_mm256_srl_epi32(_mm256_permutevar8x32_epi32(
+                                                           _mm256_load_si256((const __m256i *)perm), back),
+                                                       _mm_cvtsi32_si128(shift)),
+                                      _mm256_set1_epi32(7));
+        __mmask8 m = _mm256_movepi32_mask(_mm256_permutevar8x32_epi32(_mm256_castps_si256(hit), pv));
+        __m256i kids = _mm256_permutevar8x32_epi32(_mm256_load_si256((const __m256i *)child), pv);
+        _mm256_storeu_si256((__m256i *)(sref + sp), _mm256_maskz_compress_epi32(m, kids));
+        _mm256_storeu_ps(st + sp, _mm256_maskz_compress_ps(m, _mm256_permutevar8x32_ps(t0, pv)));
+        sp += __builtin_popcount(mask);
+        *ref = sref[--sp];
+        *sp_io = sp;
+        return 1;
+    }
+#endif
     if (!branchy) {
         /* rank -> child lane for this octant; hit bits in rank order; the
          * ranks of the hits, farthest first (the compress table); composed,

@@ -46,6 +46,8 @@
 #define WL(name) WL_CAT(name, WIDE_LB)
 #define LV(op) WIDE_V(WIDE_LB, op)
 #define LF WIDE_T(WIDE_LB)
+#define LK WIDE_KT(WIDE_LB)
+#define KV(op) WIDE_K(WIDE_LB, op)
 #define WL_JOIN_(a, b) a##b
 #define WL_JOIN(a, b) WL_JOIN_(a, b)
 #define LBLOCK WL_JOIN(wide_block, WIDE_LB)
@@ -271,21 +273,23 @@ WL(leaf_block_rel)(const LBLOCK *blk, const WL(wide_leaf_rel) *q, const WL(wide_
     LF eu = LV(fmadd)(filter, LV(fmadd)(mcx_, mby_, LV(mul)(mcy_, mbx_)), tiny);
     LF ev = LV(fmadd)(filter, LV(fmadd)(max_, mcy_, LV(mul)(may_, mcx_)), tiny);
     LF ew = LV(fmadd)(filter, LV(fmadd)(mbx_, may_, LV(mul)(mby_, max_)), tiny);
-    LF sure_neg, sure_pos, edge_ok;
+    /* The classes as lane masks (simd.h's kN: mask registers in the
+     * AVX-512 units, vector masks elsewhere) and as bits. */
+    LK sure_neg, sure_pos, edge_ok;
     int miss, ok, unsure;
     for (int pass = 0;; pass++) {
         LF zero = LV(set1)(0.0f);
         LF neu = LV(sub)(zero, eu), nev = LV(sub)(zero, ev), new_ = LV(sub)(zero, ew);
         /* Ordered compares: a NaN lane is neither, so uncertain. |U| > eu
          * is "surely negative or surely positive". */
-        LF nu = LV(lt)(U, neu), nv = LV(lt)(V, nev), nw = LV(lt)(W, new_);
-        LF pu = LV(gt)(U, eu), pv = LV(gt)(V, ev), pw = LV(gt)(W, ew);
-        sure_neg = LV(or)(LV(or)(nu, nv), nw);
-        sure_pos = LV(or)(LV(or)(pu, pv), pw);
-        edge_ok = LV(and)(LV(and)(LV(or)(nu, pu), LV(or)(nv, pv)), LV(or)(nw, pw));
-        miss = LV(mask)(LV(and)(sure_neg, sure_pos)) | spheres;
-        ok = LV(mask)(edge_ok) & ~miss;
-        unsure = all & ~miss & ~LV(mask)(edge_ok);
+        LK nu = LV(ltk)(U, neu), nv = LV(ltk)(V, nev), nw = LV(ltk)(W, new_);
+        LK pu = LV(gtk)(U, eu), pv = LV(gtk)(V, ev), pw = LV(gtk)(W, ew);
+        sure_neg = KV(or)(KV(or)(nu, nv), nw);
+        sure_pos = KV(or)(KV(or)(pu, pv), pw);
+        edge_ok = KV(and)(KV(and)(KV(or)(nu, pu), KV(or)(nv, pv)), KV(or)(nw, pw));
+        miss = KV(bits)(KV(and)(sure_neg, sure_pos)) | spheres;
+        ok = KV(bits)(edge_ok) & ~miss;
+        unsure = all & ~miss & ~KV(bits)(edge_ok);
         if (!unsure || pass) break;
         LF f2 = LV(set1)(ACCEL_EDGE_FILTER2 / ACCEL_EDGE_FILTER);
         LF aax = LV(abs)(ax), aay = LV(abs)(ay), abx = LV(abs)(bx), aby = LV(abs)(by);
@@ -301,10 +305,10 @@ WL(leaf_block_rel)(const LBLOCK *blk, const WL(wide_leaf_rel) *q, const WL(wide_
                           LV(fmadd)(f2, ew, tiny));
         /* The smaller on the uncertain lanes only, as the scalar test does
          * (a NaN bound stays NaN: the lane stays uncertain). */
-        LF keep = LV(or)(LV(and)(sure_neg, sure_pos), edge_ok);
-        eu = LV(blend)(LV(min)(tu, eu), eu, keep);
-        ev = LV(blend)(LV(min)(tv, ev), ev, keep);
-        ew = LV(blend)(LV(min)(tw, ew), ew, keep);
+        LK keep = KV(or)(KV(and)(sure_neg, sure_pos), edge_ok);
+        eu = LV(blendk)(LV(min)(tu, eu), eu, keep);
+        ev = LV(blendk)(LV(min)(tv, ev), ev, keep);
+        ew = LV(blendk)(LV(min)(tw, ew), ew, keep);
     }
     int hit = 0;
     if (ok) {
@@ -327,20 +331,20 @@ WL(leaf_block_rel)(const LBLOCK *blk, const WL(wide_leaf_rel) *q, const WL(wide_
         /* A subnormal det has no finite reciprocal and underflows the
          * range products: such lanes are neither in nor out, so the double
          * test decides them (accel_tri_watertight). */
-        LF det_ok = LV(le)(LV(set1)(0x1p-126f), det);
-        LF t_out = LV(and)(det_ok, LV(or)(LV(lt)(T, LV(sub)(lo_out, et)), LV(gt)(T, LV(add)(hi_out, et))));
-        LF t_in = LV(and)(det_ok, LV(and)(LV(gt)(T, LV(add)(lo_in, et)), LV(lt)(T, LV(sub)(hi_in, et))));
-        /* The same classes as vector masks (sure_v) and as bits. */
-        LF sure_v = LV(and)(LV(andnot)(t_out, LV(andnot)(LV(and)(sure_neg, sure_pos), edge_ok)), t_in);
-        int live = ok & ~LV(mask)(t_out);
-        int sure = live & LV(mask)(t_in);
+        LK det_ok = LV(lek)(LV(set1)(0x1p-126f), det);
+        LK t_out = KV(and)(det_ok, KV(or)(LV(ltk)(T, LV(sub)(lo_out, et)), LV(gtk)(T, LV(add)(hi_out, et))));
+        LK t_in = KV(and)(det_ok, KV(and)(LV(gtk)(T, LV(add)(lo_in, et)), LV(ltk)(T, LV(sub)(hi_in, et))));
+        /* The same classes as lane masks (sure_v) and as bits. */
+        LK sure_v = KV(and)(KV(andnot)(t_out, KV(andnot)(KV(and)(sure_neg, sure_pos), edge_ok)), t_in);
+        int live = ok & ~KV(bits)(t_out);
+        int sure = live & KV(bits)(t_in);
         unsure |= live & ~sure;
         if (sure) {
             if (any_hit) return 1;
             /* The nearest sure hit; ties go to the lowest lane. */
             LF rcp = LV(div)(LV(set1)(1.0f), det);
             LF tt = LV(mul)(T, rcp);
-            LF masked = LV(blend)(LV(set1)(INFINITY), tt, sure_v);
+            LF masked = LV(blendk)(LV(set1)(INFINITY), tt, sure_v);
             if (has_spheres && spheres) {
                 float lane_t[WIDE_LB] __attribute__((aligned(32)));
                 LV(store)(lane_t, masked);
@@ -349,7 +353,7 @@ WL(leaf_block_rel)(const LBLOCK *blk, const WL(wide_leaf_rel) *q, const WL(wide_
                 masked = LV(load)(lane_t);
             }
             float t_min = LV(hmin)(masked);
-            int lane = __builtin_ctz((unsigned)(LV(mask)(LV(le)(masked, LV(set1)(t_min))) & sure));
+            int lane = __builtin_ctz((unsigned)(KV(bits)(LV(lek)(masked, LV(set1)(t_min))) & sure));
             float lane_u[WIDE_LB] __attribute__((aligned(32))), lane_v[WIDE_LB] __attribute__((aligned(32)));
             LV(store)(lane_u, LV(mul)(LV(xor)(V, sgn), rcp));
             LV(store)(lane_v, LV(mul)(LV(xor)(W, sgn), rcp));
@@ -388,6 +392,8 @@ WL(leaf_block)(const LBLOCK *blk, const WL(wide_leaf_ray) *r, const accel_ray_pr
 #undef WL
 #undef LV
 #undef LF
+#undef LK
+#undef KV
 #undef LBLOCK
 #undef WL_JOIN_
 #undef WL_JOIN

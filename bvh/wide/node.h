@@ -199,17 +199,28 @@ static inline void wide_put_lane(float *v, int block, int lane, const float *slo
 
 /* One row's kernel table of one width, for a query and a block size: each
  * defined by its own unit, k<width>_<row>.c (tables.h; the packet row one
- * unit per query, k<width>_packet_<query>.c), and dispatched by trace.c. */
+ * unit per query, k<width>_packet_<query>.c), and dispatched by trace.c.
+ * Every unit is compiled twice (Makefile): for the baseline (AVX2) and,
+ * with WIDE_AVX512_UNIT defined, for AVX-512, whose functions carry the
+ * suffix _avx512 (WIDE_UNIT names a unit's own function). */
+#ifdef WIDE_AVX512_UNIT
+#define WIDE_UNIT(name) name##_avx512
+#else
+#define WIDE_UNIT(name) name
+#endif
 typedef const accel_kernel_table *(*wide_row_fn)(int any_hit, int block8);
-const accel_kernel_table *bvh_wide_k4_single(int any_hit, int block8);
-const accel_kernel_table *bvh_wide_k4_packet_hit(int block8);
-const accel_kernel_table *bvh_wide_k4_packet_any(int block8);
-const accel_kernel_table *bvh_wide_k4_branchy(int any_hit, int block8);
-const accel_kernel_table *bvh_wide_k8_single(int any_hit, int block8);
-const accel_kernel_table *bvh_wide_k8_packet_hit(int block8);
-const accel_kernel_table *bvh_wide_k8_packet_any(int block8);
-const accel_kernel_table *bvh_wide_k8_branchy(int any_hit, int block8);
-const accel_kernel_table *bvh_wide_k8_quant(int any_hit, int block8);
+#define WIDE_UNITS_DECLARE(sfx)                                                                     \
+    const accel_kernel_table *bvh_wide_k4_single##sfx(int any_hit, int block8);                    \
+    const accel_kernel_table *bvh_wide_k4_packet_hit##sfx(int block8);                             \
+    const accel_kernel_table *bvh_wide_k4_packet_any##sfx(int block8);                             \
+    const accel_kernel_table *bvh_wide_k4_branchy##sfx(int any_hit, int block8);                   \
+    const accel_kernel_table *bvh_wide_k8_single##sfx(int any_hit, int block8);                    \
+    const accel_kernel_table *bvh_wide_k8_packet_hit##sfx(int block8);                             \
+    const accel_kernel_table *bvh_wide_k8_packet_any##sfx(int block8);                             \
+    const accel_kernel_table *bvh_wide_k8_branchy##sfx(int any_hit, int block8);                   \
+    const accel_kernel_table *bvh_wide_k8_quant##sfx(int any_hit, int block8);
+WIDE_UNITS_DECLARE()
+WIDE_UNITS_DECLARE(_avx512)
 
 #ifdef __cplusplus
 }

@@ -2,10 +2,13 @@
  * simd.h - the few float-vector operations the wide BVH kernels use,
  * for 4 lanes (f4: SSE) and 8 lanes (f8: AVX2), each with a plain-C twin
  * (a struct of floats and a loop per operation) used when the compiler
- * does not target the instruction set, or with -DBVH_NO_SIMD. AVX-512 is
- * never used: the kernels must build and run on an AVX2-only machine, and
- * -march=native on an AVX-512 machine changes nothing here but the
- * encoding the compiler picks.
+ * does not target the instruction set, or with -DBVH_NO_SIMD. AVX-512
+ * (WIDE_AVX512) only in the kernel units' second copies, compiled with
+ * WIDE_AVX512_UNIT and the Makefile's ARCH512 and run where the CPU has
+ * it (trace.c, core/isa.h): there the fN operations are the same and
+ * kernel.h adds the mask-register forms of its data movement. Never in the
+ * baseline units, even under -march=native, so that their tables stay
+ * the AVX2 ones.
  * A kernel body (C only): included by the .c files of its folder, not part
  * of the interface a C++ program includes.
  *
@@ -42,6 +45,12 @@
 #define WIDE_AVX 1
 #else
 #define WIDE_AVX 0
+#endif
+#if WIDE_AVX && defined(WIDE_AVX512_UNIT) && defined(__AVX512F__) && defined(__AVX512VL__) &&     \
+    defined(__AVX512DQ__) && defined(__AVX512BW__)
+#define WIDE_AVX512 1
+#else
+#define WIDE_AVX512 0
 #endif
 
 #ifdef __cplusplus
@@ -223,6 +232,44 @@ WIDE_INLINE f8 f8_from_u8(const uint8_t *p)
 }
 #endif
 
+/*
+ * Lane masks of compares, for the leaf test's classes (leaf.h): kN holds
+ * one lane's truth per lane; fN_ltk / _gtk / _lek compare as fN_lt / _gt /
+ * _le (ordered), kN_or / _and / _andnot (~a & b) combine, kN_bits gives
+ * the bits fN_mask would, fN_blendk(a, b, m) takes b where m holds. In the
+ * AVX-512 units a kN is a mask register (__mmask8: vcmpps into k, kor,
+ * vblendmps); elsewhere it is the vector mask itself and every operation
+ * is its fN twin, so the AVX2 code is the same instructions as before.
+ */
+#if WIDE_AVX512
+#define WIDE_KMASK(N, P, SFX)                                                                       \
+    typedef __mmask8 k##N;                                                                          \
+    WIDE_INLINE k##N f##N##_ltk(f##N a, f##N b) { return P##_cmp_ps_mask(a, b, _CMP_LT_OQ); }       \
+    WIDE_INLINE k##N f##N##_gtk(f##N a, f##N b) { return P##_cmp_ps_mask(a, b, _CMP_GT_OQ); }       \
+    WIDE_INLINE k##N f##N##_lek(f##N a, f##N b) { return P##_cmp_ps_mask(a, b, _CMP_LE_OQ); }       \
+    WIDE_INLINE k##N k##N##_or(k##N a, k##N b) { return (k##N)(a | b); }                           \
+    WIDE_INLINE k##N k##N##_and(k##N a, k##N b) { return (k##N)(a & b); }                          \
+    WIDE_INLINE k##N k##N##_andnot(k##N a, k##N b) { return (k##N)(~a & b); }                      \
+    WIDE_INLINE int k##N##_bits(k##N a) { return (int)a; }                                         \
+    WIDE_INLINE f##N f##N##_blendk(f##N a, f##N b, k##N m) { return P##_mask_blend_##SFX(m, a, b); }
+WIDE_KMASK(4, _mm, ps)
+WIDE_KMASK(8, _mm256, ps)
+#else
+#define WIDE_KMASK(N)                                                                               \
+    typedef f##N k##N;                                                                              \
+    WIDE_INLINE k##N f##N##_ltk(f##N a, f##N b) { return f##N##_lt(a, b); }                        \
+    WIDE_INLINE k##N f##N##_gtk(f##N a, f##N b) { return f##N##_gt(a, b); }                        \
+    WIDE_INLINE k##N f##N##_lek(f##N a, f##N b) { return f##N##_le(a, b); }                        \
+    WIDE_INLINE k##N k##N##_or(k##N a, k##N b) { return f##N##_or(a, b); }                         \
+    WIDE_INLINE k##N k##N##_and(k##N a, k##N b) { return f##N##_and(a, b); }                       \
+    WIDE_INLINE k##N k##N##_andnot(k##N a, k##N b) { return f##N##_andnot(a, b); }                 \
+    WIDE_INLINE int k##N##_bits(k##N a) { return f##N##_mask(a); }                                 \
+    WIDE_INLINE f##N f##N##_blendk(f##N a, f##N b, k##N m) { return f##N##_blend(a, b, m); }
+WIDE_KMASK(4)
+WIDE_KMASK(8)
+#endif
+#undef WIDE_KMASK
+
 /* |a| and the sign bits of a, both widths. */
 WIDE_INLINE f4 f4_abs(f4 a) { return f4_andnot(f4_set1(-0.0f), a); }
 WIDE_INLINE f4 f4_signs(f4 a) { return f4_and(f4_set1(-0.0f), a); }
@@ -294,6 +341,11 @@ static_assert(WIDE_LUT(0x26u) == 0x125u, "compress table: positions 5, 2, 1");
 #define WIDE_V(n, op) WIDE_V_(n, op)
 #define WIDE_T_(n) f##n
 #define WIDE_T(n) WIDE_T_(n)
+/* kN_op and kN for a width given as a macro: WIDE_K(8, or) is k8_or. */
+#define WIDE_K_(n, op) k##n##_##op
+#define WIDE_K(n, op) WIDE_K_(n, op)
+#define WIDE_KT_(n) k##n
+#define WIDE_KT(n) WIDE_KT_(n)
 
 #ifdef __cplusplus
 }

@@ -3,30 +3,49 @@
  * of the tree's width, row (single rays, packets, order=branchy, quant=1),
  * block size and query, each compiled from the templates leaf.h (the SIMD
  * watertight leaf test), kernel.h and packet.h (the traversals) by its own
- * unit k<width>_<row>.c (tables.h).
+ * unit k<width>_<row>.c (tables.h), once for AVX2 and once for AVX-512
+ * (the tree's isa, chosen by the kind at build time: core/isa.h).
  */
+#include "core/isa.h"
 #include "node.h"
 
-static const accel_kernel_table *bvh_wide_k4_packet(int any_hit, int block8)
-{
-    return any_hit ? bvh_wide_k4_packet_any(block8) : bvh_wide_k4_packet_hit(block8);
-}
-
-static const accel_kernel_table *bvh_wide_k8_packet(int any_hit, int block8)
-{
-    return any_hit ? bvh_wide_k8_packet_any(block8) : bvh_wide_k8_packet_hit(block8);
-}
-
+#define WIDE_PACKET_ROWS(sfx)                                                                       \
+    static const accel_kernel_table *bvh_wide_k4_packet##sfx(int any_hit, int block8)                \
+    {                                                                                              \
+        return any_hit ? bvh_wide_k4_packet_any##sfx(block8) : bvh_wide_k4_packet_hit##sfx(block8); \
+    }                                                                                              \
+    static const accel_kernel_table *bvh_wide_k8_packet##sfx(int any_hit, int block8)                \
+    {                                                                                              \
+        return any_hit ? bvh_wide_k8_packet_any##sfx(block8) : bvh_wide_k8_packet_hit##sfx(block8); \
+    }
 /* [width 8][row]: width 4 has no quantized row (quant=1 is width 8 only;
  * the build refuses it), so its slot repeats the branchy one. */
-static const wide_row_fn wide_rows[2][4] = {
-    {bvh_wide_k4_single, bvh_wide_k4_packet, bvh_wide_k4_branchy, bvh_wide_k4_branchy},
-    {bvh_wide_k8_single, bvh_wide_k8_packet, bvh_wide_k8_branchy, bvh_wide_k8_quant},
+#define WIDE_ROWS(sfx)                                                                              \
+    {{bvh_wide_k4_single##sfx, bvh_wide_k4_packet##sfx, bvh_wide_k4_branchy##sfx,                 \
+      bvh_wide_k4_branchy##sfx},                                                                  \
+     {bvh_wide_k8_single##sfx, bvh_wide_k8_packet##sfx, bvh_wide_k8_branchy##sfx,                 \
+      bvh_wide_k8_quant##sfx}}
+
+WIDE_PACKET_ROWS()
+#ifdef GRIDBVH_AVX512
+WIDE_PACKET_ROWS(_avx512)
+#endif
+
+/* [AVX-512][width 8][row]: the units compiled for each ISA (Makefile,
+ * node.h); a build without the AVX-512 units repeats the AVX2 ones, which
+ * accel_isa_resolve never lets a tree choose then. */
+static const wide_row_fn wide_rows[2][2][4] = {
+    WIDE_ROWS(),
+#ifdef GRIDBVH_AVX512
+    WIDE_ROWS(_avx512),
+#else
+    WIDE_ROWS(),
+#endif
 };
 
 static const accel_kernel_table *table_of(const bvh_wide *w, int row, int any_hit)
 {
-    return wide_rows[w->width == 8][row](any_hit, w->block == 8);
+    return wide_rows[w->isa == ACCEL_ISA_AVX512][w->width == 8][row](any_hit, w->block == 8);
 }
 
 /* Packets keep their own order (octant); order=branchy selects the third

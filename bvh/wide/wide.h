@@ -34,6 +34,7 @@ typedef struct bvh_wide {
     int packets;          /* traverse=packet: 64-ray packets (packet.h) */
     int hybrid;           /* packets: entries spanning at most this many rays go ray by ray */
     int quant;            /* quant=1: nodes are wide_qnode8 (width 8 only) */
+    int isa;              /* ACCEL_ISA_AVX2 or _AVX512 (core/isa.h): whose kernel units run */
     uint32_t root;        /* reference of the root, WIDE_EMPTY for an empty scene */
     uint32_t node_count;  /* wide nodes */
     uint32_t leaf_count;  /* leaves */

@@ -1,0 +1,285 @@
+/*
+ * test_isa.c - the wide BVH's two instruction sets (core/isa.h): the
+ * detection agrees with the kernel's own list of CPU flags, the switches
+ * (isa=, GRIDBVH_ISA) choose what they say and refuse what cannot run, and
+ * the AVX-512 tables answer bit for bit what the AVX2 tables answer (t, u,
+ * v, prim, the any-hit answers and every counter) for every row: single
+ * rays in both orders, branchy, quantized, packets, widths 4 and 8, blocks
+ * of 4 and 8, on built-in scenes with primary, shadow and diffuse rays and
+ * on the stability study's stiff cases. Where the CPU or the build has no
+ * AVX-512 the comparison is skipped (a note says why) and the AVX2 tables
+ * are still checked against the reference.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "core/isa.h"
+#include "rays/rays.h"
+#include "rays/stiff.h"
+#include "scene/scene.h"
+#include "support.h"
+#include "test.h"
+
+/* Every row of the tables (bvh/wide/trace.c): width, block, order, packets, quant. */
+static const char *const isa_specs[] = {
+    "width=8",          "width=4",           "width=8,block=4",
+    "width=4,block=8",  "width=8,order=dist", "width=4,block=4,order=dist",
+    "width=8,order=branchy", "width=4,order=branchy", "width=8,quant=1",
+    "width=8,quant=1,block=4", "width=8,traverse=packet", "width=4,traverse=packet",
+    "width=8,block=4,traverse=packet", "width=4,block=4,traverse=packet,hybrid=0",
+};
+#define ISA_SPEC_COUNT (sizeof isa_specs / sizeof *isa_specs)
+
+static int avx512_usable(void) { return accel_isa_built_avx512() && accel_isa_cpu_avx512(); }
+
+/* Whether /proc/cpuinfo's flags (which Linux clears when the OS does not
+ * save the state) list every AVX-512 subset the units need; -1 unreadable. */
+static int cpuinfo_avx512(void)
+{
+    FILE *f = fopen("/proc/cpuinfo", "r");
+    if (!f) return -1;
+    static char line[8192];
+    int all = -1;
+    while (all < 0 && fgets(line, sizeof line, f)) {
+        if (strncmp(line, "flags", 5)) continue;
+        line[strcspn(line, "\n")] = 0;
+        static const char *const need[] = {" avx512f", " avx512cd", " avx512bw", " avx512dq", " avx512vl"};
+        all = 1;
+        for (size_t i = 0; i < 5; i++) {
+            const char *at = strstr(line, need[i]);
+            all &= at != NULL && (at[strlen(need[i])] == ' ' || at[strlen(need[i])] == 0);
+        }
+    }
+    fclose(f);
+    return all;
+}
+
+/* GRIDBVH_ISA set to value (NULL: unset) for one call of resolve. */
+static int resolve_with_env(const char *value, int requested, int *isa, accel_error *err)
+{
+    const char *old = getenv("GRIDBVH_ISA");
+    char *saved = old ? strdup(old) : NULL;
+    if (value)
+        setenv("GRIDBVH_ISA", value, 1);
+    else
+        unsetenv("GRIDBVH_ISA");
+    int rc = accel_isa_resolve(requested, isa, err);
+    if (saved)
+        setenv("GRIDBVH_ISA", saved, 1);
+    else
+        unsetenv("GRIDBVH_ISA");
+    free(saved);
+    return rc;
+}
+
+TEST(isa_detection_and_switches)
+{
+    int proc = cpuinfo_avx512();
+    if (proc >= 0)
+        CHECKF(proc == accel_isa_cpu_avx512(), "cpuid/xgetbv say AVX-512 %s, /proc/cpuinfo %s",
+               accel_isa_cpu_avx512() ? "usable" : "not usable", proc ? "lists it" : "does not");
+    int have = avx512_usable(), isa = -1;
+    accel_error err = {0};
+    CHECK(resolve_with_env(NULL, ACCEL_ISA_AVX2, &isa, &err) == 0 && isa == ACCEL_ISA_AVX2);
+    CHECK(resolve_with_env(NULL, ACCEL_ISA_AUTO, &isa, &err) == 0 &&
+          isa == (have ? ACCEL_ISA_AVX512 : ACCEL_ISA_AVX2));
+    CHECK(resolve_with_env("avx2", ACCEL_ISA_AUTO, &isa, &err) == 0 && isa == ACCEL_ISA_AVX2);
+    CHECK(resolve_with_env("auto", ACCEL_ISA_AUTO, &isa, &err) == 0 &&
+          isa == (have ? ACCEL_ISA_AVX512 : ACCEL_ISA_AVX2));
+    /* a parameter wins over the environment */
+    CHECK(resolve_with_env("avx512", ACCEL_ISA_AVX2, &isa, &err) == 0 && isa == ACCEL_ISA_AVX2);
+    CHECKF(resolve_with_env("sse9", ACCEL_ISA_AUTO, &isa, &err) == ACCEL_ERR_SPEC &&
+               strstr(err.msg, "GRIDBVH_ISA=sse9"),
+           "GRIDBVH_ISA=sse9: %s", err.msg);
+    int rc = resolve_with_env(NULL, ACCEL_ISA_AVX512, &isa, &err);
+    CHECKF(have ? rc == 0 && isa == ACCEL_ISA_AVX512 : rc == ACCEL_ERR_SPEC && strstr(err.msg, "isa=avx512"),
+           "isa=avx512 with AVX-512 %s: rc %d, %s", have ? "usable" : "absent", rc, err.msg);
+    CHECK(!strcmp(accel_isa_label(ACCEL_ISA_AVX2), "avx2") && !strcmp(accel_isa_label(ACCEL_ISA_AVX512), "avx512"));
+
+    /* The kind: the tree records the ISA in its statistics; isa= on the
+     * binary tree and avx512 where it cannot run are spec errors. */
+    accel_scene s;
+    if (scene_create("soup:tris=500", &s, &err)) {
+        test_fail(__FILE__, __LINE__, "soup: %s", err.msg);
+        return;
+    }
+    const accel_kind *kind;
+    void *a;
+    accel_build_stats st;
+    CHECK(accel_build_spec("bvh:width=8,isa=avx2", &s, 1, &kind, &a, &st, &err) == 0);
+    if (st.isa) CHECKF(!strcmp(st.isa, "avx2"), "isa=avx2 built with %s", st.isa);
+    CHECK(st.isa != NULL);
+    kind->destroy(a);
+    CHECK(accel_build_spec("bvh:isa=avx2", &s, 1, &kind, &a, &st, &err) == ACCEL_ERR_SPEC);
+    rc = accel_build_spec("bvh:width=4,isa=avx512", &s, 1, &kind, &a, &st, &err);
+    CHECKF(have ? rc == 0 : rc == ACCEL_ERR_SPEC, "bvh:width=4,isa=avx512: rc %d (%s)", rc, rc ? err.msg : "");
+    if (rc == 0) {
+        CHECK(st.isa && !strcmp(st.isa, "avx512"));
+        kind->destroy(a);
+    }
+    scene_free(&s);
+}
+
+/* Rays plus the reference's answers, and the counters of one trace. */
+typedef struct {
+    const char *name;
+    const accel_ray *rays;
+    size_t n;
+    const accel_hit *ref;
+} isa_set;
+
+typedef struct {
+    accel_hit *hits;
+    uint8_t *occ;
+    accel_counters c;
+} isa_run;
+
+/* Timed (uncounted) closest and any hit, and a counted closest-hit trace. */
+static void isa_trace(const accel_kind *kind, const void *a, const isa_set *set, isa_run *r)
+{
+    size_t n = set->n ? set->n : 1;
+    r->hits = malloc(n * sizeof *r->hits);
+    r->occ = malloc(n);
+    accel_hit *counted = malloc(n * sizeof *counted);
+    memset(&r->c, 0, sizeof r->c);
+    accel_trace(kind, a, set->rays, r->hits, set->n, 1, NULL);
+    accel_trace_occluded(kind, a, set->rays, r->occ, set->n, 1, NULL);
+    accel_trace(kind, a, set->rays, counted, set->n, 1, &r->c);
+    CHECKF(!memcmp(counted, r->hits, set->n * sizeof *counted), "%s: counted trace differs", set->name);
+    free(counted);
+}
+
+/* One spec built for both ISAs (or AVX2 alone), compared ray by ray.
+ * Returns the rays that differ. */
+static size_t isa_compare(const accel_scene *s, const char *spec, const isa_set *sets, int set_count,
+                          int both)
+{
+    char specs[2][256];
+    snprintf(specs[0], sizeof specs[0], "bvh:%s,isa=avx2", spec);
+    snprintf(specs[1], sizeof specs[1], "bvh:%s,isa=avx512", spec);
+    const accel_kind *kind;
+    void *a[2] = {NULL, NULL};
+    accel_build_stats st;
+    accel_error err = {0};
+    for (int i = 0; i < 1 + both; i++)
+        if (accel_build_spec(specs[i], s, 1, &kind, &a[i], &st, &err)) {
+            test_fail(__FILE__, __LINE__, "%s on %s: %s", specs[i], s->name, err.msg);
+            if (a[0]) kind->destroy(a[0]);
+            return 1;
+        }
+    size_t bad = 0;
+    for (int k = 0; k < set_count; k++) {
+        const isa_set *set = &sets[k];
+        isa_run r[2];
+        isa_trace(kind, a[0], set, &r[0]);
+        /* the AVX2 tables against the reference (FORMATS.md's rule) */
+        test_diff d = test_trace_diff(kind, a[0], set->rays, set->n, set->ref, 1, NULL, NULL);
+        if (test_diff_bad(&d))
+            test_fail_diff(__FILE__, __LINE__, specs[0], &d, set->rays, set->ref, r[0].hits, r[0].occ);
+        bad += test_diff_bad(&d);
+        if (both) {
+            isa_trace(kind, a[1], set, &r[1]);
+            size_t diff = 0, first = SIZE_MAX;
+            for (size_t i = 0; i < set->n; i++)
+                if (memcmp(&r[0].hits[i], &r[1].hits[i], sizeof r[0].hits[i]) || r[0].occ[i] != r[1].occ[i]) {
+                    diff++;
+                    if (first == SIZE_MAX) first = i;
+                }
+            if (diff) {
+                const accel_hit *h0 = &r[0].hits[first], *h1 = &r[1].hits[first];
+                test_fail(__FILE__, __LINE__,
+                          "%s on %s/%s: %zu of %zu rays differ between avx2 and avx512 (first %zu: prim %u "
+                          "t %a u %a v %a occ %d, avx512 prim %u t %a u %a v %a occ %d)",
+                          spec, s->name, set->name, diff, set->n, first, h0->prim, h0->t, h0->u, h0->v,
+                          r[0].occ[first], h1->prim, h1->t, h1->u, h1->v, r[1].occ[first]);
+            }
+            CHECKF(r[0].c.steps == r[1].c.steps && r[0].c.box_tests == r[1].c.box_tests &&
+                       r[0].c.prim_tests == r[1].c.prim_tests && r[0].c.rays == r[1].c.rays,
+                   "%s on %s/%s: counters differ (steps %llu/%llu, boxes %llu/%llu, prims %llu/%llu)", spec,
+                   s->name, set->name, (unsigned long long)r[0].c.steps, (unsigned long long)r[1].c.steps,
+                   (unsigned long long)r[0].c.box_tests, (unsigned long long)r[1].c.box_tests,
+                   (unsigned long long)r[0].c.prim_tests, (unsigned long long)r[1].c.prim_tests);
+            bad += diff;
+            free(r[1].hits);
+            free(r[1].occ);
+        }
+        free(r[0].hits);
+        free(r[0].occ);
+    }
+    kind->destroy(a[0]);
+    if (a[1]) kind->destroy(a[1]);
+    return bad;
+}
+
+static int isa_both(void)
+{
+    if (avx512_usable()) return 1;
+    test_note("avx512 comparison skipped: %s; the AVX2 tables are checked against the reference",
+              !accel_isa_built_avx512() ? "this build has no AVX-512 units (ARCH512 empty or refused)"
+                                        : "this CPU lacks AVX-512 F/CD/BW/DQ/VL or the OS does not save "
+                                          "its registers");
+    return 0;
+}
+
+/* Built-in scenes (spheres included) and the bunny if ../shared is there,
+ * with primary, shadow and diffuse rays. */
+TEST(isa_same_hits_scenes)
+{
+    int both = isa_both();
+    char bunny[512] = "";
+    const char *dir = test_shared_scenes();
+    if (dir) snprintf(bunny, sizeof bunny, "%s/bunny.off", dir);
+    const char *const scenes[] = {"teapot_stadium:n=4,stadium=16,tiers=3", "sphereflake:level=2",
+                                  "soup:tris=4000", "slivers:tris=3000,slivers=100", bunny};
+    for (size_t si = 0; si < sizeof scenes / sizeof *scenes; si++) {
+        if (!scenes[si][0]) continue;
+        accel_scene s;
+        accel_error err = {0};
+        if (scene_create(scenes[si], &s, &err)) {
+            test_fail(__FILE__, __LINE__, "%s: %s", scenes[si], err.msg);
+            continue;
+        }
+        rays_set rs[3];
+        memset(rs, 0, sizeof rs);
+        accel_hit *ref[3] = {NULL, NULL, NULL};
+        int ok = rays_primary(&s.camera, 32, 32, &rs[0], &err) == 0;
+        if (ok) {
+            ref[0] = test_oracle_hits(&s, rs[0].rays, rs[0].count, TEST_ORACLE_REFERENCE);
+            ok = ref[0] && !rays_shadow(&s, &rs[0], ref[0], &rs[1], &err) &&
+                 !rays_diffuse(&s, &rs[0], ref[0], 3, &rs[2], &err);
+        }
+        for (int k = 1; ok && k < 3; k++) ok = (ref[k] = test_oracle_hits(&s, rs[k].rays, rs[k].count,
+                                                                       TEST_ORACLE_REFERENCE)) != NULL;
+        if (ok) {
+            static const char *const names[] = {"primary", "shadow", "diffuse"};
+            isa_set sets[3];
+            for (int k = 0; k < 3; k++) sets[k] = (isa_set){names[k], rs[k].rays, rs[k].count, ref[k]};
+            for (size_t i = 0; i < ISA_SPEC_COUNT; i++) isa_compare(&s, isa_specs[i], sets, 3, both);
+        } else {
+            test_fail(__FILE__, __LINE__, "%s: rays: %s", scenes[si], err.msg);
+        }
+        for (int k = 0; k < 3; k++) {
+            rays_free(&rs[k]);
+            free(ref[k]);
+        }
+        scene_free(&s);
+    }
+}
+
+/* The stability study's stiff cases (vertex and edge rays, axis rays on
+ * split planes, far and tiny scenes...), every row. */
+TEST(isa_same_hits_stiff)
+{
+    int both = isa_both();
+    for (int ci = 0; ci < stiff_case_count(); ci++) {
+        stiff_case c;
+        if (!test_stiff_case(ci, &c)) continue;
+        accel_hit *ref = test_oracle_hits(&c.scene, c.rays.rays, c.rays.count, TEST_ORACLE_REFERENCE);
+        if (ref) {
+            isa_set set = {c.name, c.rays.rays, c.rays.count, ref};
+            for (size_t i = 0; i < ISA_SPEC_COUNT; i++) isa_compare(&c.scene, isa_specs[i], &set, 1, both);
+        }
+        free(ref);
+        stiff_case_free(&c);
+    }
+}
