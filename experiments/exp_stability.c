@@ -408,9 +408,9 @@ int main(int argc, char **argv)
                  (unsigned long long)st.cert_min_n, cb, (unsigned long long)st.cert_leak_min, lb,
                  (unsigned long long)st.cert_traces);
     exp_text_add(&findings, "- Light leaking at contacts of closed meshes (touching, "
-                 "interpenetrating): %llu leaks in %llu leak and shadow rays (%.2f per million).\n",
-                 (unsigned long long)st.contact_leaks, (unsigned long long)st.contact_leak_rays,
-                 st.contact_leak_rays ? 1e6 * (double)st.contact_leaks / (double)st.contact_leak_rays : 0);
+                 "interpenetrating): %llu leaks in %llu leak and shadow rays, each configuration "
+                 "(the certification rows of the contact cases).\n",
+                 (unsigned long long)st.contact_leaks, (unsigned long long)st.contact_leak_rays);
     exp_text_add(&findings, "- The naive kernels: up to %.0f holes per million rays (%s) and %.0f "
                  "leaks per million leak rays (%s).\n", st.holes.value,
                  st.holes.what.len ? exp_text_str(&st.holes.what) : "none", st.leaks.value,
@@ -419,9 +419,14 @@ int main(int argc, char **argv)
     exp_text_add(&findings, "- Secondary-ray origins (%zu rays, at least %zu per case):",
                  off.rays, off.min_n);
     for (int m = 0; m < STAB_OFFSET_RULES; m++)
-        exp_text_add(&findings, "%s %s: worst case %.1f faults per million, %zu self-hits, %zu "
-                     "leaks", m ? ";" : "", stab_offsets_name(m), off.worst_ppm[m], off.self[m],
-                     off.leaks[m]);
+    {
+        char sb[32], fb[32];
+        snprintf(sb, sizeof sb, off.worst_self[m] > 0 ? "%.1f" : "0", off.worst_self[m]);
+        snprintf(fb, sizeof fb, off.worst_false[m] > 0 ? "%.1f" : "0", off.worst_false[m]);
+        exp_text_add(&findings, "%s %s: up to %s self-hits and %s false hits per million in a "
+                     "case, %zu self-hits and %zu closest-hit and shadow leaks in all",
+                     m ? ";" : "", stab_offsets_name(m), sb, fb, off.self[m], off.leaks[m]);
+    }
     exp_text_add(&findings, ".%s\n", off.planted ? " PLANTED broken robust offset." : "");
     exp_md(&x, "\n**Findings:**\n\n%s", exp_text_str(&findings));
     size_t rob_bad = off.self[STAB_OFFSET_ROBUST] + off.leaks[STAB_OFFSET_ROBUST];
@@ -433,14 +438,14 @@ int main(int argc, char **argv)
                 "leak at >= %llu rays per case (rule of three: each configuration below %.1f per "
                 "million per case; leak rays >= %llu per case: below %.1f), %llu of %llu on the "
                 "base rays; contacts: %llu leaks in %llu leak and shadow rays; robust offset: "
-                "%zu self-hits and leaks in %zu secondary rays (worst epsilon rule: %.0f faults "
-                "per million); naive kernels up to %.0f holes per million rays and %.0f leaks per "
+                "%zu self-hits and leaks in %zu secondary rays (epsilon rules: up to %.0f "
+                "self-hits per million in a case); naive kernels up to %.0f holes per million rays and %.0f leaks per "
                 "million leak rays%s", (unsigned long long)st.cert_bad,
                 (unsigned long long)st.cert_cases, (unsigned long long)st.cert_min_n, cb,
                 (unsigned long long)st.cert_leak_min, lb, (unsigned long long)st.robust_bad_cases,
                 (unsigned long long)st.cases, (unsigned long long)st.contact_leaks,
                 (unsigned long long)st.contact_leak_rays, rob_bad, off.rays,
-                fmax(fmax(off.worst_ppm[0], off.worst_ppm[1]), fmax(off.worst_ppm[2], off.worst_ppm[3])),
+                fmax(fmax(off.worst_self[0], off.worst_self[1]), fmax(off.worst_self[2], off.worst_self[3])),
                 st.holes.value, st.leaks.value,
                 st.cliffs.len ? "; performance cliffs: see the findings" : "");
     exp_text_free(&findings);

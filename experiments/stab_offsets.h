@@ -11,8 +11,8 @@
 #define STAB_OFFSET_ROBUST 4
 
 typedef struct {
-    double worst_ppm[STAB_OFFSET_RULES]; /* self-hits + holes + false hits,
-                                            per million, worst case */
+    double worst_self[STAB_OFFSET_RULES];  /* self-hits per million, worst case */
+    double worst_false[STAB_OFFSET_RULES]; /* false hits per million, worst case */
     size_t leaks[STAB_OFFSET_RULES];     /* closest-hit and shadow leaks, all cases */
     size_t self[STAB_OFFSET_RULES];
     size_t rays, inside, min_n;          /* secondary rays; leaving inside hits; fewest of a case */
