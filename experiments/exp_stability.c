@@ -22,9 +22,16 @@
 #include "group.h"
 #include "cli/cli.h"
 #include "rays/stiff.h"
+#include "stab_offsets.h"
 
 #define MAX_CFG 32
 #define CLIFF 10.0
+/* Rays per built-in case in the certification, and the longest one
+ * configuration may trace them (estimated from its speed on the case's
+ * base rays): over that it is named as left out. */
+#define CERT_RAYS 1000000
+#define CERT_RAYS_QUICK 20000
+#define CERT_LIMIT_S 6.0
 
 static const char *const extras[] = {"bvh:traverse=packet", "bvh:width=4", "bvh:width=8",
                                      "grid:traverse=packet", "grid:skip=macro", "irregular_grid",
@@ -42,6 +49,10 @@ typedef struct {
     uint64_t distinct_rays;
     worst holes, leaks;
     exp_text clean, cliffs, speeds, left;
+    /* the certification: every built-in case again with >= 10^6 rays */
+    uint64_t cert_cases, cert_bad, cert_rays, cert_min_n, cert_leak_min, cert_traces;
+    uint64_t cert_leaks, cert_leak_rays, contact_leak_rays, contact_leaks;
+    exp_text cert_rows;
 } study;
 
 typedef struct {
@@ -85,7 +96,86 @@ static void note_worst(worst *w, const exp_group *g, const counts *cnt, int m, s
     exp_text_add(&w->what, " on %s", name);
 }
 
-static void measure_case(exp_ctx *x, study *st, stiff_case *c, const exp_list *list)
+static int cert_threads(const exp_ctx *x)
+{
+    return x->threads_given ? x->threads : accel_cpu_count();
+}
+
+/* Case ci again with at least CERT_RAYS distinct rays, traced by every
+ * watertight configuration of g but brute force (the reference's own
+ * loop), on every core: holes, false hits and disagreements against the
+ * exact reference, leaks of the rays from inside, and of the shadow rays. */
+static void certify(exp_ctx *x, study *st, int ci, const exp_group *g, int m)
+{
+    stiff_case big;
+    accel_error err = {0};
+    if (stiff_case_make_n(ci, x->quick ? CERT_RAYS_QUICK : CERT_RAYS, &big, &err)) {
+        exp_internal(x, "stiff case", &err);
+        return;
+    }
+    int T = cert_threads(x);
+    size_t n = big.rays.count, nl = n - big.leak_begin, ns = big.shadow.count, ref_leaks = 0;
+    accel_hit *ref = malloc(n * sizeof *ref), *h = malloc(n * sizeof *h);
+    uint8_t *occ = malloc(ns ? ns : 1);
+    if (!ref || !h || !occ) exit(CLI_EXIT_INTERNAL);
+    char phase[160];
+    snprintf(phase, sizeof phase, "certification of %s (%zu rays)", big.name, n);
+    bench_progress_begin(x->progress, phase, 0, 1);
+    stiff_reference(&big.scene, big.rays.rays, ref, n, T);
+    for (size_t i = big.leak_begin; i < n; i++) ref_leaks += ref[i].prim == ACCEL_MISS;
+    exp_text faults = {0};
+    int done = 0;
+    for (int k = 0; k < m; k++) {
+        const exp_cfg *f = &g->cfg[k];
+        if (!f->ok || strstr(f->spec, "tri=naive") || !strncmp(f->spec, "brute", 5)) continue;
+        double mr = exp_group_mrays(g, k, BENCH_PRIMARY).median;
+        double est = mr > 0 ? (double)n / (mr * 1e6) * x->threads / T : INFINITY;
+        if (est > (x->quick ? 1.0 : CERT_LIMIT_S)) {
+            exp_text_add(&st->left, "- %s: `%s` not certified on %zu rays (about %.0f s at its "
+                         "speed on the base rays).\n", big.name, f->spec, n, est);
+            continue;
+        }
+        accel_trace(f->kind, f->accel, big.rays.rays, h, n, T, NULL);
+        hits_diff d = hits_compare(ref, h, n);
+        size_t leaks = 0, sleaks = 0;
+        for (size_t i = big.leak_begin; i < n; i++) leaks += h[i].prim == ACCEL_MISS;
+        if (ns) accel_trace_occluded(f->kind, f->accel, big.shadow.rays, occ, ns, T, NULL);
+        for (size_t i = 0; i < ns; i++) sleaks += !occ[i];
+        exp_csv(x, "cert,%s,%s,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,,,\n", big.name, f->spec, n, nl, ns,
+                d.holes, d.false_hits, d.disagreements, leaks, sleaks);
+        if (d.holes || d.false_hits || d.disagreements || leaks || sleaks)
+            exp_text_add(&faults, "%s`%s` %zu/%zu/%zu/%zu/%zu", faults.len ? ", " : "", f->spec,
+                         d.holes, d.false_hits, d.disagreements, leaks, sleaks);
+        st->cert_traces += n + ns;
+        st->cert_leaks += leaks + sleaks;
+        if (strstr(big.name, "touching") || strstr(big.name, "interpenetrating"))
+            st->contact_leaks += leaks + sleaks;
+        done++;
+    }
+    bench_progress_end(x->progress);
+    if (ref_leaks) exp_text_add(&faults, "%sthe reference itself misses %zu leak rays (the case "
+                                "is wrong)", faults.len ? "; " : "", ref_leaks);
+    char lb[48] = "-", sb[48] = "-";
+    if (nl) snprintf(lb, sizeof lb, "%zu (< %.1f)", nl, 3e6 / (double)nl);
+    if (ns) snprintf(sb, sizeof sb, "%zu (< %.1f)", ns, 3e6 / (double)ns);
+    exp_text_add(&st->cert_rows, "| %s | %zu (< %.1f) | %s | %s | %d | %s |\n", big.name, n,
+                 3e6 / (double)n, lb, sb, done, faults.len ? exp_text_str(&faults) : "none");
+    st->cert_cases++;
+    st->cert_bad += faults.len > 0;
+    st->cert_rays += n;
+    st->cert_min_n = st->cert_min_n && st->cert_min_n < n ? st->cert_min_n : n;
+    if (nl) {
+        st->cert_leak_min = st->cert_leak_min && st->cert_leak_min < nl ? st->cert_leak_min : nl;
+        st->cert_leak_rays += nl + ns;
+        if (strstr(big.name, "touching") || strstr(big.name, "interpenetrating"))
+            st->contact_leak_rays += nl + ns;
+    }
+    exp_text_free(&faults);
+    free(ref), free(h), free(occ);
+    stiff_case_free(&big);
+}
+
+static void measure_case(exp_ctx *x, study *st, stiff_case *c, int ci, const exp_list *list)
 {
     size_t n = c->rays.count, leakable = n - c->leak_begin;
     accel_hit *ref = malloc((n ? n : 1) * sizeof *ref), *h = malloc((n ? n : 1) * sizeof *h);
@@ -126,7 +216,7 @@ static void measure_case(exp_ctx *x, study *st, stiff_case *c, const exp_list *l
             any_wt = 1;
             st->robust_rays += n;
         }
-        exp_csv(x, "stiff,%s,%s,%zu,%zu,%zu,%zu,%zu,%zu,%.4f,,,\n", c->name, g.cfg[k].spec, n,
+        exp_csv(x, "stiff,%s,%s,%zu,%zu,0,%zu,%zu,%zu,%zu,,,%.4f,\n", c->name, g.cfg[k].spec, n,
                 leakable, cnt[k].holes, cnt[k].false_hits, cnt[k].dis, cnt[k].leaks,
                 exp_group_mrays(&g, k, BENCH_PRIMARY).median);
     }
@@ -183,6 +273,7 @@ static void measure_case(exp_ctx *x, study *st, stiff_case *c, const exp_list *l
                          "`%s`.\n", c->name, g.cfg[slow].spec, ratio, g.cfg[fast].spec);
     }
     exp_text_add(&st->speeds, " | %.1f |\n", ratio);
+    if (ci >= 0) certify(x, st, ci, &g, m);
     for (int k = 0; k < g.count; k++)
         if (g.cfg[k].left && (g.cfg[k].left != EXP_LEFT_UNPARSED ||
                               (st->cases == 1 && !strstr(g.cfg[k].spec, "tri=naive"))))
@@ -192,77 +283,6 @@ static void measure_case(exp_ctx *x, study *st, stiff_case *c, const exp_list *l
     exp_group_free(&g);
     free(ref);
     free(h);
-}
-
-/* Fraction of secondary rays whose first hit is their own triangle. */
-static void self_intersection(exp_ctx *x, exp_text *findings)
-{
-    static const float offsets[] = {0, 1e2f, 1e4f, 1e5f, 1e6f};
-    const int no = x->quick ? 2 : 5;
-    exp_md(x, "\n### Self-intersection of secondary rays\n\n"
-              "Diffuse rays leave the primary hits of a closed sphere moved to (d, d, d); a ray "
-              "whose first hit is its own triangle is a self-intersection. Fixed: origin = hit "
-              "point + 1e-4 * normal, t_near = 0. Robust: the integer-ULP offset of Waechter and "
-              "Binder (2019), t_near = 0. Per million rays (95%% upper bound), default "
-              "accelerator.\n");
-    exp_md_table(x, "distance d|rays|fixed epsilon 1e-4|robust offset");
-    double worst_fixed = 0;
-    size_t robust_bad = 0, total = 0;
-    for (int i = 0; i < no; i++) {
-        accel_scene base, s;
-        accel_error err = {0};
-        exp_scene(x, "sphere:segments=24", &base);
-        if (scene_transform(&base, 1.0f, v3(offsets[i], offsets[i], offsets[i]), &s, &err)) {
-            fprintf(stderr, "exp_stability: %s\n", err.msg);
-            exit(cli_exit_of(err.code));
-        }
-        scene_free(&base);
-        bench_sets sets;
-        exp_sets(x, &s, BENCH_PRIMARY, &sets);
-        const char *gen = accel_find_kind("bvh") ? "bvh" : "brute";
-        const accel_kind *k;
-        void *a;
-        accel_build_stats bs;
-        if (accel_build_spec(gen, &s, x->threads, &k, &a, &bs, &err)) {
-            fprintf(stderr, "exp_stability: %s\n", err.msg);
-            exit(cli_exit_of(err.code));
-        }
-        accel_hit *ph = malloc(sets.primary.count * sizeof *ph);
-        if (!ph) exit(CLI_EXIT_INTERNAL);
-        accel_trace(k, a, sets.primary.rays, ph, sets.primary.count, x->threads, NULL);
-        size_t n = 0, self_fixed = 0, self_robust = 0;
-        for (size_t r = 0; r < sets.primary.count; r++) {
-            vec3 p, nn;
-            if (!rays_hit_frame(&s, &sets.primary.rays[r], &ph[r], &p, &nn)) continue;
-            /* Leave towards the outside (the mesh is closed and convex: the
-             * true first hit of an outgoing ray is nothing at all). */
-            vec3 d = v3_norm(v3_add(nn, v3(rays_rand(3, r, 0) - 0.5f, rays_rand(3, r, 1) - 0.5f,
-                                           rays_rand(3, r, 2) - 0.5f)));
-            if (v3_dot(d, nn) <= 0.05f) continue;
-            vec3 of = v3_add(p, v3_scale(nn, 1e-4f)), ro = rays_offset_origin(p, nn);
-            accel_ray rr[2] = {{of.x, of.y, of.z, 0, d.x, d.y, d.z, INFINITY},
-                               {ro.x, ro.y, ro.z, 0, d.x, d.y, d.z, INFINITY}};
-            accel_hit hh[2];
-            k->intersect(a, rr, hh, 2, NULL);
-            self_fixed += hh[0].prim != ACCEL_MISS;
-            self_robust += hh[1].prim != ACCEL_MISS;
-            n++;
-        }
-        char f[64], r[64];
-        rate(f, sizeof f, self_fixed, n), rate(r, sizeof r, self_robust, n);
-        exp_md(x, "| %g | %zu | %s | %s |\n", offsets[i], n, f, r);
-        exp_csv(x, "selfhit,sphere:segments=24,%s,%zu,,,,%zu,%zu,,%g,,\n", gen, n, self_fixed,
-                self_robust, offsets[i]);
-        worst_fixed = fmax(worst_fixed, n ? 1e6 * (double)self_fixed / (double)n : 0);
-        robust_bad += self_robust, total += n;
-        free(ph);
-        k->destroy(a);
-        bench_sets_free(&sets);
-        scene_free(&s);
-    }
-    exp_text_add(findings, "- Self-intersection: a fixed 1e-4 offset self-intersects up to %.0f "
-                 "rays per million as the scene moves away from the origin; the robust offset "
-                 "%s in %zu rays.\n", worst_fixed, robust_bad ? "also fails" : "never does", total);
 }
 
 /* Every stiff case (three in the quick budget), then the meshes. */
@@ -278,14 +298,14 @@ static void stiff_cases(exp_ctx *x, study *st, const exp_list *list)
             exp_text_add(&st->left, "- case %d: %s.\n", i, err.msg);
             continue;
         }
-        measure_case(x, st, &c, list);
+        measure_case(x, st, &c, i, list);
         stiff_case_free(&c);
     }
     for (int m = 0; m < x->mesh_count; m++) {
         stiff_case c;
         accel_error err = {0};
         if (stiff_case_from_scene(x->meshes[m], 0, &c, &err)) continue;
-        measure_case(x, st, &c, list);
+        measure_case(x, st, &c, -1, list);
         stiff_case_free(&c);
     }
     for (int m = 0; m < x->scene_count; m++) { /* a scene given explicitly: measured, or an error */
@@ -295,7 +315,7 @@ static void stiff_cases(exp_ctx *x, study *st, const exp_list *list)
             fprintf(stderr, "%s: --scene %s: %s\n", x->name, x->scenes[m], err.msg);
             exit(CLI_EXIT_INPUT);
         }
-        measure_case(x, st, &c, list);
+        measure_case(x, st, &c, -1, list);
         stiff_case_free(&c);
     }
 }
@@ -312,15 +332,21 @@ int main(int argc, char **argv)
     exp_header(&x, "Stability on stiff and extreme cases", "the user's request: \"stability on "
                "stiff and extreme cases\"",
                "on rays aimed exactly at shared vertices and edges of closed meshes, along axes "
-               "and cell diagonals from cell boundaries and split planes, grazing faces, and on "
-               "far, tiny, huge, flat, degenerate, coincident and same-centroid scenes: how many "
-               "holes (reference hits, tracer misses), false hits, disagreements and leaks (rays "
-               "from inside a closed mesh that escape) does each configuration make with the "
-               "watertight test (Woop et al. 2013, default) and with the naive Moller-Trumbore "
-               "test, and at what speed? The reference is exact (double precision). Rates of zero "
-               "carry their 95%% upper bound; rows equal for every configuration are folded.");
-    exp_csv(&x, "part,case,spec,rays,leak_rays,holes,false_hits,disagreements,leaks,mrays,"
-                "distance,fixed_selfhits,robust_selfhits\n");
+               "and cell diagonals from cell boundaries and split planes, grazing faces, at "
+               "contacts of closed meshes that touch or interpenetrate, and on far (up to 1e6 "
+               "times their size from the origin), tiny, huge, flat, degenerate, coincident and "
+               "same-centroid scenes: how many holes (reference hits, tracer misses), false hits, "
+               "disagreements and leaks (rays and shadow rays from inside a closed mesh that "
+               "escape) does each configuration make with the watertight test (Woop et al. 2013, "
+               "default) and with the naive Moller-Trumbore test, at what speed, and how do "
+               "scene-scaled epsilons compare with the robust offset for secondary rays? The "
+               "reference is exact (double precision). First every configuration and both tests "
+               "on each case's base rays (rates of zero with their 95%% bound; rows equal for every "
+               "configuration folded); then the watertight kernels on every built-in case again "
+               "with a million distinct rays and more (a zero is below 3/n by the rule of three: "
+               "Hanley and Lippman-Hand, JAMA 249, 1983: 3 per million at n = 10^6).");
+    exp_csv(&x, "part,case,spec,rays,leak_rays,shadow_rays,holes,false_hits,disagreements,leaks,"
+                "shadow_leaks,self_hits,mrays,distance\n");
     const char *names[MAX_CFG / 2];
     int nk = 0;
     for (size_t k = 0; k < accel_kind_count && nk < MAX_CFG / 2 - 8; k++) names[nk++] = accel_kinds[k]->name;
@@ -350,36 +376,84 @@ int main(int argc, char **argv)
                "million (95%%, over its %llu rays).\n", (unsigned long long)st.robust_rays,
            (unsigned long long)st.distinct_rays, (unsigned long long)st.robust_bad_cases,
            st.robust_bad_cases == 1 ? "" : "s", bound, (unsigned long long)st.distinct_rays);
+    exp_md(&x, "\n### Certification: a million rays and more per case (watertight kernels)\n\n"
+               "Each built-in case again, its scene unchanged, with every random count scaled up "
+               "and its lattices refined until it has at least %d distinct rays (repeats "
+               "dropped: a repeat is no new trial), traced on %d thread%s by every watertight "
+               "configuration of the table above but brute force (the reference's own loop). "
+               "Bounds are per configuration and case, rule of three (95%%): 3/n per million "
+               "rays. Faults: holes/false hits/disagreements/leaks/shadow leaks.\n",
+           x.quick ? CERT_RAYS_QUICK : CERT_RAYS, cert_threads(&x), cert_threads(&x) > 1 ? "s" : "");
+    exp_md_table(&x, "case|rays (bound per million)|leak rays (bound)|shadow rays (bound)|"
+                     "configurations|faults");
+    exp_md(&x, "%s", exp_text_str(&st.cert_rows));
     exp_md(&x, "\n### Speed on the stiff cases (watertight, Mrays/s, interleaved rounds)\n");
     exp_md_table(&x, "case|Mrays/s per configuration|fastest / slowest (brute aside)");
     exp_md(&x, "%s", exp_text_str(&st.speeds));
+    stab_offsets_result off;
+    stab_offsets(&x, cert_threads(&x), &off);
+    double cb = st.cert_min_n ? 3e6 / (double)st.cert_min_n : 0;
+    double lb = st.cert_leak_min ? 3e6 / (double)st.cert_leak_min : 0;
     exp_text findings = {0};
-    exp_text_add(&findings, "- The watertight kernels: %s over %llu distinct rays in %llu cases "
-                 "(%llu ray traces in all; each configuration: fewer than %.1f per million at "
-                 "95%%).\n", st.robust_bad_cases ? "SOME CASES FAILED (see the rows above)"
+    exp_text_add(&findings, "- The watertight kernels, base rays: %s over %llu distinct rays in "
+                 "%llu cases (each configuration: fewer than %.1f per million at 95%%).\n",
+                 st.robust_bad_cases ? "SOME CASES FAILED (see the rows above)"
                  : "no hole, false hit, disagreement or leak", (unsigned long long)st.distinct_rays,
-                 (unsigned long long)st.cases, (unsigned long long)st.robust_rays, bound);
+                 (unsigned long long)st.cases, bound);
+    exp_text_add(&findings, "- Certification: %llu of %llu cases with any fault, %llu rays in all "
+                 "(at least %llu per case: each configuration's rate per case below %.1f per "
+                 "million by the rule of three; leak rays at least %llu per case: below %.1f), "
+                 "%llu ray traces.\n", (unsigned long long)st.cert_bad,
+                 (unsigned long long)st.cert_cases, (unsigned long long)st.cert_rays,
+                 (unsigned long long)st.cert_min_n, cb, (unsigned long long)st.cert_leak_min, lb,
+                 (unsigned long long)st.cert_traces);
+    exp_text_add(&findings, "- Light leaking at contacts of closed meshes (touching, "
+                 "interpenetrating): %llu leaks in %llu leak and shadow rays, each configuration "
+                 "(the certification rows of the contact cases).\n",
+                 (unsigned long long)st.contact_leaks, (unsigned long long)st.contact_leak_rays);
     exp_text_add(&findings, "- The naive kernels: up to %.0f holes per million rays (%s) and %.0f "
                  "leaks per million leak rays (%s).\n", st.holes.value,
                  st.holes.what.len ? exp_text_str(&st.holes.what) : "none", st.leaks.value,
                  st.leaks.what.len ? exp_text_str(&st.leaks.what) : "none");
     exp_text_add(&findings, "%s", exp_text_str(&st.cliffs));
-    self_intersection(&x, &findings);
+    exp_text_add(&findings, "- Secondary-ray origins (%zu rays, at least %zu per case):",
+                 off.rays, off.min_n);
+    for (int m = 0; m < STAB_OFFSET_RULES; m++)
+    {
+        char sb[32], fb[32];
+        snprintf(sb, sizeof sb, off.worst_self[m] > 0 ? "%.1f" : "0", off.worst_self[m]);
+        snprintf(fb, sizeof fb, off.worst_false[m] > 0 ? "%.1f" : "0", off.worst_false[m]);
+        exp_text_add(&findings, "%s %s: up to %s self-hits and %s false hits per million in a "
+                     "case, %zu self-hits and %zu closest-hit and shadow leaks in all",
+                     m ? ";" : "", stab_offsets_name(m), sb, fb, off.self[m], off.leaks[m]);
+    }
+    exp_text_add(&findings, ".%s\n", off.planted ? " PLANTED broken robust offset." : "");
     exp_md(&x, "\n**Findings:**\n\n%s", exp_text_str(&findings));
-    exp_verdict(&x, "stability", !st.robust_bad_cases ? EXP_CONFIRMED
-                : st.robust_bad_cases * 2 < st.cases ? EXP_PARTLY : EXP_REFUTED, "every stiff case",
+    size_t rob_bad = off.self[STAB_OFFSET_ROBUST] + off.leaks[STAB_OFFSET_ROBUST];
+    uint64_t bad = st.robust_bad_cases + st.cert_bad + (rob_bad > 0), all = st.cases + st.cert_cases + 1;
+    /* TODO(merge): EXP_ANSWERED (a request is answered with its numbers) */
+    exp_verdict(&x, "stability", !bad ? EXP_CONFIRMED : bad * 2 < all ? EXP_PARTLY : EXP_REFUTED,
+                "every stiff case",
                 "watertight kernels: %llu of %llu cases with any hole, false hit, disagreement or "
-                "leak (%llu distinct rays, each traced by every configuration; a configuration's "
-                "rate below %.1f per million at 95%% if none); naive kernels "
-                "up to %.0f holes per million rays and %.0f leaks per million leak rays%s",
-                (unsigned long long)st.robust_bad_cases, (unsigned long long)st.cases,
-                (unsigned long long)st.distinct_rays, bound, st.holes.value, st.leaks.value,
+                "leak at >= %llu rays per case (rule of three: each configuration below %.1f per "
+                "million per case; leak rays >= %llu per case: below %.1f), %llu of %llu on the "
+                "base rays; contacts: %llu leaks in %llu leak and shadow rays; robust offset: "
+                "%zu self-hits and leaks in %zu secondary rays (epsilon rules: up to %.0f "
+                "self-hits per million in a case); naive kernels up to %.0f holes per million rays and %.0f leaks per "
+                "million leak rays%s", (unsigned long long)st.cert_bad,
+                (unsigned long long)st.cert_cases, (unsigned long long)st.cert_min_n, cb,
+                (unsigned long long)st.cert_leak_min, lb, (unsigned long long)st.robust_bad_cases,
+                (unsigned long long)st.cases, (unsigned long long)st.contact_leaks,
+                (unsigned long long)st.contact_leak_rays, rob_bad, off.rays,
+                fmax(fmax(off.worst_self[0], off.worst_self[1]), fmax(off.worst_self[2], off.worst_self[3])),
+                st.holes.value, st.leaks.value,
                 st.cliffs.len ? "; performance cliffs: see the findings" : "");
     exp_text_free(&findings);
     exp_text_free(&st.clean);
     exp_text_free(&st.cliffs);
     exp_text_free(&st.speeds);
     exp_text_free(&st.left);
+    exp_text_free(&st.cert_rows);
     exp_text_free(&st.holes.what);
     exp_text_free(&st.leaks.what);
     exp_list_free(&base);

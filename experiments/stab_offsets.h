@@ -1,0 +1,27 @@
+/*
+ * stab_offsets.h - exp_stability's study of secondary-ray origins
+ * (stab_offsets.c): four epsilon rules against the robust offset.
+ */
+#ifndef EXP_STAB_OFFSETS_H
+#define EXP_STAB_OFFSETS_H
+
+#include "harness.h"
+
+#define STAB_OFFSET_RULES 5
+#define STAB_OFFSET_ROBUST 4
+
+typedef struct {
+    double worst_self[STAB_OFFSET_RULES];  /* self-hits per million, worst case */
+    double worst_false[STAB_OFFSET_RULES]; /* false hits per million, worst case */
+    size_t leaks[STAB_OFFSET_RULES];     /* closest-hit and shadow leaks, all cases */
+    size_t self[STAB_OFFSET_RULES];
+    size_t rays, inside, min_n;          /* secondary rays; leaving inside hits; fewest of a case */
+    int planted;                         /* GRIDBVH_STABILITY_PLANT was set */
+} stab_offsets_result;
+
+/* Writes the study's table and CSV rows (part "offset"). */
+void stab_offsets(exp_ctx *x, int threads, stab_offsets_result *res);
+/* The rule's name (0 .. STAB_OFFSET_RULES-1). */
+const char *stab_offsets_name(int m);
+
+#endif
