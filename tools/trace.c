@@ -110,8 +110,8 @@ static const cli_option trace_options[] = {
     {"--ray-order", "tiles8|scanline|shuffle", "put every ray set (before --dump-rays) in 8x8 pixel\n"
      "tiles, scanline (pixel) order or a shuffle seeded by --seed (default: as made, tiles)",
      opt_ray_order, OPT(ray_order), 0, 0},
-    {"--packet-order", "sort|keep", "packet modes sort rays into coherent packets (default), or\n"
-     "keep: 64 consecutive rays a packet, as given (core/coherence.h)", opt_packet_order,
+    {"--packet-order", "sort|keep", "keep: 64 consecutive rays a packet, as given (default), or\n"
+     "sort: packet modes sort rays into coherent packets first (core/coherence.h)", opt_packet_order,
      OPT(packet_order), 0, 0},
     {"--seed", "N", "seed of the secondary rays (default 1)", cli_u64, OPT(seed), 0, 0},
     {"--ao-samples", "N", "ambient occlusion rays per primary hit (default 4)", cli_int,
