@@ -123,9 +123,15 @@ void md_put(md_out *o, const char *line, const char *anchor)
         fprintf(o->f, "%s\n", line);
         return;
     }
-    char cut[MD_CUT_AT + 8];
-    md_cut(cut, sizeof cut, line, MD_CUT_AT);
-    fprintf(o->f, "%s [cut: full text in the appendix](%sappendix.md#%s)\n", cut, o->links, anchor);
+    /* The cut line with its link stays within MD_MAX_CHARS bytes: the
+     * text gets what the link and the ellipsis (3 bytes) leave, at most
+     * MD_CUT_AT. */
+    char link[256], cut[MD_CUT_AT + 8];
+    snprintf(link, sizeof link, " [cut: full text in the appendix](%sappendix.md#%s)", o->links,
+             anchor);
+    size_t room = strlen(link) + 3 < MD_MAX_CHARS ? MD_MAX_CHARS - strlen(link) - 3 : 0;
+    md_cut(cut, sizeof cut, line, room < MD_CUT_AT ? room : MD_CUT_AT);
+    fprintf(o->f, "%s%s\n", cut, link);
 }
 
 
