@@ -430,10 +430,8 @@ int main(int argc, char **argv)
     exp_text_add(&findings, ".%s\n", off.planted ? " PLANTED broken robust offset." : "");
     exp_md(&x, "\n**Findings:**\n\n%s", exp_text_str(&findings));
     size_t rob_bad = off.self[STAB_OFFSET_ROBUST] + off.leaks[STAB_OFFSET_ROBUST];
-    uint64_t bad = st.robust_bad_cases + st.cert_bad + (rob_bad > 0), all = st.cases + st.cert_cases + 1;
     /* A request is answered with its numbers (issue 38); the counts of
      * cases with faults lead the evidence. */
-    (void)all, (void)bad; /* the counts below carry the answer */
     exp_verdict(&x, "stability", EXP_ANSWERED, "every stiff case",
                 "watertight kernels: %llu of %llu cases with any hole, false hit, disagreement or "
                 "leak at >= %llu rays per case (rule of three: each configuration below %.1f per "
