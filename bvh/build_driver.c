@@ -248,19 +248,22 @@ int bvh_build_run(const accel_scene *scene, const bvh_build_opts *opts, int thre
     return 0;
 }
 
-/* pairs=split: the nodes moved into a pool that starts 32 bytes past a
- * 64-byte boundary, so that every sibling pair (nodes 2k and 2k+1, 64 bytes
- * together) straddles two cache lines. The tree and its answers are
- * unchanged; only the memory layout differs (the control of exp_sah's
- * layout verdict). */
-int bvh_split_pairs(bvh *b, accel_error *err)
+/* pairs=split (shift 1): the nodes moved into a fresh pool that starts 32
+ * bytes past a 64-byte boundary, so that every sibling pair (nodes 2k and
+ * 2k+1, 64 bytes together) straddles two cache lines; pairs=fresh (shift 0):
+ * the same move without the shift, so that the two differ in nothing but
+ * the 32 bytes (issue 38: the control of a fresh allocation, not of the
+ * builder's). The tree and its answers are unchanged (exp_sah's layout
+ * verdict). */
+int bvh_split_pairs(bvh *b, int shift, accel_error *err)
 {
     if (b->node_count == 0 || b->nodes_block) return 0;
     bvh_node *block = bvh_alloc_nodes((size_t)b->node_count + 2);
-    if (!block) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for pairs=split");
-    memcpy(block + 1, b->nodes, (size_t)b->node_count * sizeof(bvh_node));
+    if (!block) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for pairs=%s",
+                                  shift ? "split" : "fresh");
+    memcpy(block + (shift ? 1 : 0), b->nodes, (size_t)b->node_count * sizeof(bvh_node));
     free(b->nodes);
-    b->nodes = block + 1;
+    b->nodes = block + (shift ? 1 : 0);
     b->nodes_block = block;
     return 0;
 }

@@ -111,17 +111,18 @@ static const accel_param_def bvh_params[] = {
      .help = "width=2, single rays: of two hit children visit the nearer first (the lecture's "
              "\"better\"), or always the left one (a control for that claim)",
      .offset = offsetof(bvh_spec, first)},
-    {.key = "pairs", .type = ACCEL_PARAM_ENUM, .def = "line", .choices = "line|split",
-     .help = "width=2: sibling pairs in one 64-byte cache line (the lecture's layout), or the "
-             "node pool shifted by 32 bytes so that every pair straddles two lines (a control "
-             "for that claim)",
+    {.key = "pairs", .type = ACCEL_PARAM_ENUM, .def = "line", .choices = "line|split|fresh",
+     .help = "width=2: sibling pairs in one 64-byte cache line (the lecture's layout); split: "
+             "the nodes copied to a fresh pool shifted by 32 bytes, so that every pair "
+             "straddles two lines (a control for that claim); fresh: the same copy unshifted "
+             "(split's exact control: only the 32 bytes differ)",
      .offset = offsetof(bvh_spec, pairs)},
 };
 #define BVH_PARAM_COUNT (sizeof bvh_params / sizeof bvh_params[0])
 
 typedef struct {
     int width, block, order; /* width 2: the binary tree */
-    int first_left, split_pairs; /* width 2: first=left, pairs=split */
+    int first_left, split_pairs; /* width 2: first=left, pairs (0 line, 1 split, 2 fresh) */
     int quant;                   /* width 8: quantized nodes */
     int hybrid;                  /* wide packets: hand-over span (wide/packet.h) */
     bvh_wide_collapse collapse;  /* wide: greedy or dp */
@@ -169,7 +170,7 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
     if (wo->width == 2 && (GIVEN(block) || GIVEN(order)))
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: block and order apply to width=4|8 only");
     wo->first_left = s->first == 1;
-    wo->split_pairs = s->pairs == 1;
+    wo->split_pairs = s->pairs;
     if (wo->width > 2 && (GIVEN(first) || GIVEN(pairs)))
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: first and pairs apply to width=2 only");
     if (GIVEN(first) && *traverse != BVH_TRAVERSE_SINGLE)
@@ -346,7 +347,7 @@ static int build_tree(const accel_scene *scene, const bvh_build_opts *opts, cons
     cc.max_mb = o.max_mb;
     int rc = bvh_build_run(scene, &o, threads, out, stats, err);
     out->path = bvh_binary_path(traverse);
-    if (rc == 0 && wo->width == 2 && wo->split_pairs) rc = bvh_split_pairs(out, err);
+    if (rc == 0 && wo->width == 2 && wo->split_pairs) rc = bvh_split_pairs(out, wo->split_pairs == 1, err);
     if (rc == 0 && wo->width > 2) {
         rc = bvh_wide_build(out, &out->wide, wo->width, block, wo->order, wo->quant, &cc,
                             threads < 1 ? 1 : threads, o.ct, o.ci, stats, err);
@@ -523,6 +524,7 @@ static const char *const bvh_variants[] = {
     "pairs=split",
     "first=left,pairs=split,traverse=single",
     "pairs=split,traverse=packet",
+    "pairs=fresh",
     NULL,
 };
 

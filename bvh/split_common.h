@@ -278,7 +278,7 @@ int bvh_build_run(const accel_scene *scene, const bvh_build_opts *opts, int thre
 void bvh_release(bvh *b);
 /* pairs=split (build_driver.c): moves the node pool 32 bytes off the cache line
  * grid; frees the old pool. */
-int bvh_split_pairs(bvh *b, accel_error *err);
+int bvh_split_pairs(bvh *b, int shift, accel_error *err);
 
 /* bvh_refit.c (the kind's update). bvh_refit_compatible: 0 when s holds the
  * same primitives the tree traces (counts, and the same live, finite ids:
