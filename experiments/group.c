@@ -442,7 +442,9 @@ static int run_replica(exp_group *g, int most, int procs, int part, probe_job *p
         g->sets = &fresh;
         for (int c = 0; c < g->count; c++) {
             exp_cfg *cf = &g->cfg[c];
-            if (!cf->ok) continue;
+            /* A slow build is not repeated (group.h: EXP_REPLICA_REBUILD_MS):
+             * the replica times the parent's structure, inherited by fork. */
+            if (!cf->ok || cf->build.ms > EXP_REPLICA_REBUILD_MS) continue;
             accel_build_stats st;
             accel_error err = {0};
             /* The parent's copy stays where it is (never freed here). */

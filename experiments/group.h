@@ -20,7 +20,12 @@
  * copies the rays, so that structures and rays lie in its own fresh
  * memory (the code is the parent's: its placement is not varied), times
  * its rounds and sends them back through a pipe. One replica at a time:
- * they never compete for the cores. Every estimate of the group takes the
+ * they never compete for the cores. A structure whose build took more than
+ * EXP_REPLICA_REBUILD_MS is not built again (irregular grids and spatial
+ * splits take seconds, and rebuilt in two replicas they made a section
+ * three to five times slower: issue 38's 20-minute budget): the replica
+ * times the parent's copy, which fork hands it, so its rounds there vary
+ * the process but not the structure's placement. Every estimate of the group takes the
  * wider of the pooled interval and the t-interval on the processes'
  * medians (stats.h), and keeps both spreads.
  *

@@ -274,10 +274,11 @@ int exp_finish(exp_ctx *x)
            load_end[0], x->others_start);
     if (x->procs_used > 1)
         exp_md(x, "\n_Timed rounds spread over %d processes (this one and %d forked replicas that "
-                  "rebuild every structure and copy the rays into fresh memory); intervals are "
-                  "distribution-free order-statistic intervals of the median, widened to the "
-                  "t-interval on the processes' medians where that is wider._\n",
-               x->procs_used, x->procs_used - 1);
+                  "rebuild every structure built in under %.0f ms, and copy the rays, into fresh "
+                  "memory); intervals are distribution-free order-statistic intervals of the "
+                  "median, widened to the t-interval on the processes' medians where that is "
+                  "wider._\n",
+               x->procs_used, x->procs_used - 1, EXP_REPLICA_REBUILD_MS);
     bench_progress_stop(x->progress);
     x->progress = NULL;
     if (x->csv.bad_rows || x->verdicts.bad_rows) {

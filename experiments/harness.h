@@ -55,6 +55,9 @@ enum {
     EXP_LEFT_KINDS
 };
 
+/* Builds longer than this are not repeated in the replicas (group.h). */
+#define EXP_REPLICA_REBUILD_MS 250.0
+
 typedef struct {
     const char *name;     /* e.g. "exp_sah" */
     int quick;            /* smoke-test budget: tiny scenes, few repeats */
