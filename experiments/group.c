@@ -411,6 +411,8 @@ static void copy_set(rays_set *r)
     r->rays = rays;
 }
 
+#define REPLICA_WARM_MS 200.0 /* passes longer than this are not warmed in a replica */
+
 /* Replica `part` in a forked process: every configuration built again and
  * the rays copied, so that the structures and rays lie in the replica's
  * own fresh memory (the page placement a fresh process gets), then its
@@ -451,11 +453,16 @@ static int run_replica(exp_group *g, int most, int procs, int part, probe_job *p
             if (accel_build_spec(cf->spec, g->s, cf->threads, &cf->kind, &cf->accel, &st, &err))
                 _exit(2);
         }
-        /* One warm pass each, as the parent's warm-up before its rounds. */
+        /* One warm pass each, as the parent's warm-up before its rounds;
+         * not for passes over REPLICA_WARM_MS, whose first sample the
+         * refill of the caches cannot move by more than a few tenths of
+         * a percent (a cache of megabytes refills in about a millisecond),
+         * and whose warm pass was a third of a slow replica's time. */
         scratch sc = scratch_make(g);
         for (int c = 0; c < g->count; c++)
             for (int bit = 1; bit <= BENCH_AO; bit <<= 1)
-                if (g->cfg[c].ok && g->cfg[c].set[exp_set_index(bit)].have)
+                if (g->cfg[c].ok && g->cfg[c].set[exp_set_index(bit)].have &&
+                    g->cfg[c].set[exp_set_index(bit)].pass_ms <= REPLICA_WARM_MS)
                     one_pass(&g->cfg[c], bit, bench_sets_get(g->sets, bit), sc.hits, sc.occ, NULL);
         free(sc.hits), free(sc.occ);
         run_rounds(g, most, procs, part, probe, aa, 0);
