@@ -139,8 +139,9 @@ void exp_scene(exp_ctx *x, const char *spec, accel_scene *s);
  * merged yet): 0, or nonzero with the reason in why. */
 int exp_scene_try(exp_ctx *x, const char *spec, accel_scene *s, char *why, size_t why_n);
 /* A scene's subsection: exp_scene, its ray sets of mask (exp_sets; with rt
- * at x->rt_size with one AO sample per hit, as exp_sets_wh), and the
- * heading "### name (N primitives)". */
+ * at x->rt_size with one AO sample per hit, as exp_sets_wh; rt > 1: one in
+ * rt of that image's 8x8 tiles, exp_sets_tiles, said under the heading),
+ * and the heading "### name (N primitives)". */
 void exp_scene_section(exp_ctx *x, const char *spec, accel_scene *s, int mask, int rt,
                        bench_sets *sets);
 /* Records a ray image size this section used (exp_sets_wh does it); the

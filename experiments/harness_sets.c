@@ -13,11 +13,16 @@ void exp_scene_section(exp_ctx *x, const char *spec, accel_scene *s, int mask, i
                        bench_sets *sets)
 {
     exp_scene(x, spec, s);
-    if (rt)
+    if (rt > 1)
+        exp_sets_tiles(x, s, mask, rt, sets);
+    else if (rt)
         exp_sets_wh(x, s, mask, x->rt_size[0], x->rt_size[1], 1, sets);
     else
         exp_sets(x, s, mask, sets);
     exp_md(x, "\n### %s (%u primitives)\n", s->name, s->live_count);
+    if (rt > 1)
+        exp_md(x, "\nRays of one in %d of the 8x8 pixel tiles of the %dx%d image (its density "
+                  "and coherence at 1/%d of its work).\n", rt, x->rt_size[0], x->rt_size[1], rt);
 }
 
 void exp_sets(exp_ctx *x, const accel_scene *s, int mask, bench_sets *out)
