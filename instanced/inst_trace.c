@@ -61,7 +61,7 @@ INLINE void test_prim(const inst_accel *a, const inst_item *it, const accel_scen
      * reaches the triangles (width=2 or 8, top=grid, bottom=grid, ...),
      * however often each is met; the current best is not tested again. */
     if (id == r->prim) return;
-    float t = r->p.t_far, u = 0.0f, v = 0.0f, w[9];
+    float t = r->p.t_far, u = 0.0f, v = 0.0f, w[12];
     const float *tri;
     r->prims++;
     if (spheres && id >= s->tri_count) {
@@ -73,10 +73,7 @@ INLINE void test_prim(const inst_accel *a, const inst_item *it, const accel_scen
         if (it->identity || a->world_flat) {
             tri = s->tris + 9 * (size_t)id;
         } else {
-            const float *m = mesh->tris + 9 * (size_t)q;
-            accel_xform_vertex(it->xform, m, w);
-            accel_xform_vertex(it->xform, m + 3, w + 3);
-            accel_xform_vertex(it->xform, m + 6, w + 6);
+            inst_xform_tri(it, mesh->tris + 9 * (size_t)q, w);
             tri = w;
         }
         int hit = naive ? accel_tri_naive(&r->p, tri, &t, &u, &v)
@@ -183,9 +180,10 @@ INLINE void walk_wide(const inst_accel *a, const inst_item *it, const bvh_box_tr
     struct { uint32_t ref; float entry; } stack[(INST_WIDE - 1) * INST_STACK + 1], hit[INST_WIDE];
     int sp = 0;
     uint32_t ref = w->root;
+    /* The end of the range in the walk's parameter: changes only at leaves. */
+    float hi_t = top ? r->t : (float)((double)r->t - shift);
+    if (slack != 0.0f) hi_t += fabsf(hi_t) * slack;
     for (;;) {
-        float hi_t = top ? r->t : (float)((double)r->t - shift);
-        if (slack != 0.0f) hi_t += fabsf(hi_t) * slack;
         if (ref & INST_WIDE_LEAF) {
             const bvh_node *n = &h->nodes[ref & ~INST_WIDE_LEAF];
             for (uint32_t i = 0; i < n->count; i++) {
@@ -196,6 +194,8 @@ INLINE void walk_wide(const inst_accel *a, const inst_item *it, const bvh_box_tr
                     test_prim(a, it, mesh, q, r, naive, spheres);
                 if (r->done) return;
             }
+            hi_t = top ? r->t : (float)((double)r->t - shift);
+            if (slack != 0.0f) hi_t += fabsf(hi_t) * slack;
         } else {
             const inst_wnode *nd = &w->nodes[ref];
             float e[INST_WIDE];
@@ -224,8 +224,6 @@ INLINE void walk_wide(const inst_accel *a, const inst_item *it, const bvh_box_tr
         for (;;) {
             if (sp == 0) return;
             --sp;
-            hi_t = top ? r->t : (float)((double)r->t - shift);
-            if (slack != 0.0f) hi_t += fabsf(hi_t) * slack;
             if (box3_entry_before(stack[sp].entry, hi_t)) break;
         }
         ref = stack[sp].ref;
@@ -430,7 +428,11 @@ INLINE void visit_instance(const inst_accel *a, uint32_t k, ray_state *r, int na
             if (o[i] < lo || o[i] > hi) return;
             continue;
         }
-        double t0 = (lo - o[i]) / d[i], t1 = (hi - o[i]) / d[i];
+        /* One division (a product's extra rounding is far inside the
+         * slack); a reciprocal that overflows (d subnormal) divides. */
+        double inv = 1.0 / d[i];
+        double t0 = isfinite(inv) ? (lo - o[i]) * inv : (lo - o[i]) / d[i];
+        double t1 = isfinite(inv) ? (hi - o[i]) * inv : (hi - o[i]) / d[i];
         if (t0 > t1) { double x = t0; t0 = t1; t1 = x; }
         double slack = 0x1p-40 * (fabs(t0) + fabs(t1));
         s0 = inst_dmax(s0, t0 - slack);

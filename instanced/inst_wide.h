@@ -1,7 +1,8 @@
 /*
- * inst_wide.h - the slab test of one 8-wide node (inst_impl.h's
- * inst_wnode) against one ray, every child box grown by a pad: internal to
- * instanced/ (the walks of inst_trace.c).
+ * inst_wide.h - the SIMD pieces of the `instanced` traversal, internal to
+ * instanced/ (inst_trace.c): the slab test of one 8-wide node (inst_impl.h's
+ * inst_wnode) against one ray, every child box grown by a pad; and the
+ * world triangle of an instance, as the flattener computes it.
  *
  * Lane by lane it is box3_slab (core/geom.h, Ize's robust test) on the box
  * grown as inst_trace.c's binary walk grows it (lo - pad, hi + pad, in
@@ -58,6 +59,28 @@ inst_wide_hits(const inst_wnode *n, vec3 org, vec3 inv, const int *neg, float pa
         m |= (unsigned)box3_slab(lo, hi, org, inv, neg, t_near, t_far, &entry[c]) << c;
     }
     return m;
+#endif
+}
+
+/* The world triangle of mesh triangle m: accel_xform_vertex, the
+ * flattener's expression, bit for bit (per row fma(r0, x, fma(r1, y,
+ * fma(r2, z, r3))) rounded once to float), with the three rows as the
+ * lanes of one 4-double vector. w gets 12 floats (the last unused). */
+static inline __attribute__((always_inline)) void
+inst_xform_tri(const inst_item *it, const float *m, float *w)
+{
+#if INST_WIDE_AVX && defined(__FMA__)
+    __m256d c0 = _mm256_loadu_pd(it->cols), c1 = _mm256_loadu_pd(it->cols + 4);
+    __m256d c2 = _mm256_loadu_pd(it->cols + 8), c3 = _mm256_loadu_pd(it->cols + 12);
+    for (int k = 0; k < 3; k++) {
+        const float *p = m + 3 * k;
+        __m256d acc = _mm256_fmadd_pd(c2, _mm256_set1_pd((double)p[2]), c3);
+        acc = _mm256_fmadd_pd(c1, _mm256_set1_pd((double)p[1]), acc);
+        acc = _mm256_fmadd_pd(c0, _mm256_set1_pd((double)p[0]), acc);
+        _mm_storeu_ps(w + 3 * k, _mm256_cvtpd_ps(acc));
+    }
+#else
+    for (int k = 0; k < 3; k++) accel_xform_vertex(it->xform, m + 3 * k, w + 3 * k);
 #endif
 }
 
