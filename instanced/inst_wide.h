@@ -26,6 +26,10 @@
 #define INST_WIDE_AVX 0
 #endif
 
+#ifdef __cplusplus
+extern "C" {
+#endif
+
 /* Bit c set when child c's box grown by pad meets [t_near, t_far] of the ray
  * (org, inv = 1/dir, neg = sign bits of dir); entry[c] its entry distance.
  * padded = 0 skips the growth (pad 0: the top level, identity instances). */
@@ -83,5 +87,9 @@ inst_xform_tri(const inst_item *it, const float *m, float *w)
     for (int k = 0; k < 3; k++) accel_xform_vertex(it->xform, m + 3 * k, w + 3 * k);
 #endif
 }
+
+#ifdef __cplusplus
+}
+#endif
 
 #endif
