@@ -46,6 +46,35 @@ int inst_grid_build(const box3 *boxes, uint32_t n, double lambda, double pad, in
                     accel_error *err);
 void inst_grid_free(inst_grid *g);
 
+/* The 8-wide form of a bvh_box_tree (inst_wide.c): the binary tree
+ * collapsed (each wide node opens, greedily, its largest interior
+ * descendant until it has 8 children), children's boxes in SoA rows so that
+ * one ray meets all 8 in one sequence of 8-lane instructions (the layout of
+ * Embree's BVH8: Wald et al., SIGGRAPH 2014). Every slot's box is the very
+ * box of a binary node (src), so a walk of it reaches what a walk of the
+ * binary tree reaches, and a refit of the binary tree is a copy. */
+enum { INST_WIDE = 8 };
+#define INST_WIDE_LEAF 0x80000000u /* child: | binary leaf node index */
+#define INST_WIDE_NONE 0xffffffffu /* child: empty slot (box lo +inf, hi -inf) */
+typedef struct {
+    float box[6][INST_WIDE]; /* rows lo_x, hi_x, lo_y, hi_y, lo_z, hi_z */
+    uint32_t child[INST_WIDE]; /* wide node index, INST_WIDE_LEAF | leaf, or INST_WIDE_NONE */
+    uint32_t src[INST_WIDE];   /* the binary node the slot copies */
+} inst_wnode;
+static_assert(sizeof(inst_wnode) == 256, "four cache lines");
+
+typedef struct {
+    inst_wnode *nodes; /* 64-byte aligned */
+    uint32_t node_count;
+    uint32_t root;     /* wide node 0, INST_WIDE_LEAF | 0 (a lone leaf), INST_WIDE_NONE */
+} inst_wide;
+
+/* Collapses h (built, not freed: the leaves stay its nodes) into *out. */
+int inst_wide_build(const bvh_box_tree *h, inst_wide *out, accel_error *err);
+/* After the binary tree's boxes changed (a refit): copies them again. */
+void inst_wide_refit(const bvh_box_tree *h, inst_wide *w);
+void inst_wide_free(inst_wide *w);
+
 /* ---- the kind ------------------------------------------------------------- */
 
 enum { INST_BVH = 0, INST_GRID = 1, INST_WALK = 2 };
@@ -59,6 +88,7 @@ typedef struct {
     double vert_abs_max;     /* largest |coordinate| of any vertex (dead triangles too) */
     double grid_pad;         /* bottom=grid: how far its boxes were grown */
     bvh_box_tree bvh;
+    inst_wide wide;          /* bottom=bvh, width=8: bvh collapsed */
     inst_grid grid;
     /* bottom=<kind spec>: the kind's structure over the mesh, walked
      * (accel.h's walk); and the mesh's triangles with no area in object
@@ -71,6 +101,10 @@ typedef struct {
 
 /* One per instance: what the traversal reads, packed together. */
 typedef struct {
+    /* xform's columns (x, y, z, translation), each padded to 4 doubles:
+     * the world vertex as 3 four-lane fused multiply-adds (inst_trace.c),
+     * the same operations as accel_xform_vertex's rows. */
+    double cols[16];
     double inverse[12];   /* world -> object */
     double xform[12];     /* object -> world (for the world triangles) */
     double pad;           /* object-space distance covering the flattening's rounding */
@@ -89,12 +123,14 @@ typedef struct {
     int naive, world_flat, spheres;
     int no_pad;               /* pad=0: boxes not grown (shows what the pad is for) */
     int leaf;                 /* bottom=bvh: largest leaf */
+    int width;                /* BVH levels walked as the binary tree (2) or 8-wide (8) */
     double lambda, top_lambda;
     uint32_t bottom_count, item_count;
     inst_bottom *bottoms;
     inst_item *items;
     box3 *item_boxes;         /* world bounds per instance (top level) */
     bvh_box_tree top_bvh;
+    inst_wide top_wide;       /* top=bvh, width=8 */
     inst_grid top_grid;
 } inst_accel;
 

@@ -26,6 +26,7 @@
 #include "core/prim.h"
 #include "core/variant.h"
 #include "inst_impl.h"
+#include "inst_wide.h"
 
 #define INST_STACK BVH_MAX_DEPTH /* bvh_build_boxes builds no deeper tree (bvh.h) */
 
@@ -51,27 +52,34 @@ INLINE void test_prim(const inst_accel *a, const inst_item *it, const accel_scen
 {
     const accel_scene *s = a->scene;
     uint32_t id = it->base + q;
-    float t = r->t, u = 0.0f, v = 0.0f, w[9];
+    /* The test runs on the ray's whole range, not up to the closest hit so
+     * far: the shared kernels' answer for a triangle (which of their float
+     * or double paths decides it, hence the last bits of t, u, v) depends
+     * on the range they are given, so with the current hit as its end it
+     * would depend on the order the walk meets the triangles. Then the
+     * closest (t, id) wins: the answer is the same for every walk that
+     * reaches the triangles (width=2 or 8, top=grid, bottom=grid, ...),
+     * however often each is met; the current best is not tested again. */
+    if (id == r->prim) return;
+    float t = r->p.t_far, u = 0.0f, v = 0.0f, w[12];
     const float *tri;
     r->prims++;
     if (spheres && id >= s->tri_count) {
         /* Only plain scenes hold spheres (meshes of instances cannot). */
-        if (!accel_sphere_hit(&r->p, s->spheres + 4 * (size_t)(id - s->tri_count), &t, &u, &v))
+        if (!accel_sphere_hit(&r->p, s->spheres + 4 * (size_t)(id - s->tri_count), &t, &u, &v) ||
+            t > r->t || (t == r->t && id > r->prim))
             return;
     } else {
         if (it->identity || a->world_flat) {
             tri = s->tris + 9 * (size_t)id;
         } else {
-            const float *m = mesh->tris + 9 * (size_t)q;
-            accel_xform_vertex(it->xform, m, w);
-            accel_xform_vertex(it->xform, m + 3, w + 3);
-            accel_xform_vertex(it->xform, m + 6, w + 6);
+            inst_xform_tri(it, mesh->tris + 9 * (size_t)q, w);
             tri = w;
         }
         int hit = naive ? accel_tri_naive(&r->p, tri, &t, &u, &v)
                         : accel_tri_watertight(&r->p, tri, &t, &u, &v);
         /* A triangle dead in the flattened scene (no area) is never hit. */
-        if (!hit || accel_tri_is_degenerate(tri)) return;
+        if (!hit || t > r->t || (t == r->t && id > r->prim) || accel_tri_is_degenerate(tri)) return;
     }
     r->t = t, r->u = u, r->v = v, r->prim = id;
     if (r->any) r->done = 1;
@@ -143,6 +151,82 @@ INLINE void walk_bvh(const inst_accel *a, const inst_item *it, const inst_bottom
             if (box3_entry_before(stack[sp].entry, hi_t)) break;
         }
         node = stack[sp].node;
+    }
+}
+
+/* ---- both BVH levels, 8-wide (inst_wide.c) --------------------------------------- */
+
+static void visit_instance_flat(const inst_accel *a, uint32_t k, ray_state *r, int naive,
+                                int spheres);
+
+/* The walk of an inst_wide: the bottom level of instance `it` (as walk_bvh:
+ * the ray shifted by `shift`, t range widened by the slack, boxes grown by
+ * pad), or the top level (it == NULL: the world ray, no pad, no slack;
+ * leaves are instances). Hit children are ordered by entry distance, the
+ * nearest taken next, the others pushed far to near; a pushed child is
+ * skipped when it starts beyond the closest hit found since. */
+INLINE void walk_wide(const inst_accel *a, const inst_item *it, const bvh_box_tree *h,
+                      const inst_wide *w, const accel_scene *mesh, ray_state *r, vec3 org,
+                      vec3 dir, float pad, double shift, int naive, int spheres)
+{
+    if (w->root == INST_WIDE_NONE) return;
+    const int top = it == NULL;
+    vec3 inv = top ? r->p.inv_dir : v3(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
+    int neg[3] = {signbit(dir.x) != 0, signbit(dir.y) != 0, signbit(dir.z) != 0};
+    float slack = top || it->identity ? 0.0f : 0x1p-20f;
+    float lo_t = top ? r->p.t_near : (float)((double)r->p.t_near - shift);
+    if (slack != 0.0f) lo_t -= fabsf(lo_t) * slack; /* never 0 * inf */
+    const int padded = pad != 0.0f;
+    struct { uint32_t ref; float entry; } stack[(INST_WIDE - 1) * INST_STACK + 1], hit[INST_WIDE];
+    int sp = 0;
+    uint32_t ref = w->root;
+    /* The end of the range in the walk's parameter: changes only at leaves. */
+    float hi_t = top ? r->t : (float)((double)r->t - shift);
+    if (slack != 0.0f) hi_t += fabsf(hi_t) * slack;
+    for (;;) {
+        if (ref & INST_WIDE_LEAF) {
+            const bvh_node *n = &h->nodes[ref & ~INST_WIDE_LEAF];
+            for (uint32_t i = 0; i < n->count; i++) {
+                uint32_t q = h->order[n->left_first + i];
+                if (top)
+                    visit_instance_flat(a, q, r, naive, spheres);
+                else
+                    test_prim(a, it, mesh, q, r, naive, spheres);
+                if (r->done) return;
+            }
+            hi_t = top ? r->t : (float)((double)r->t - shift);
+            if (slack != 0.0f) hi_t += fabsf(hi_t) * slack;
+        } else {
+            const inst_wnode *nd = &w->nodes[ref];
+            float e[INST_WIDE];
+            unsigned m = inst_wide_hits(nd, org, inv, neg, pad, lo_t, hi_t, padded, e);
+            if (top)
+                r->top_steps++;
+            else
+                r->bottom_steps++;
+            r->boxes += INST_WIDE;
+            if (m && !(m & (m - 1))) {
+                ref = nd->child[__builtin_ctz(m)];
+                continue;
+            }
+            if (m) {
+                int k = 0;
+                for (; m; m &= m - 1) { /* insertion, farthest first */
+                    int c = __builtin_ctz(m), j = k++;
+                    while (j > 0 && hit[j - 1].entry < e[c]) hit[j] = hit[j - 1], j--;
+                    hit[j].ref = nd->child[c], hit[j].entry = e[c];
+                }
+                for (int j = 0; j < k - 1; j++) stack[sp++] = hit[j];
+                ref = hit[k - 1].ref;
+                continue;
+            }
+        }
+        for (;;) {
+            if (sp == 0) return;
+            --sp;
+            if (box3_entry_before(stack[sp].entry, hi_t)) break;
+        }
+        ref = stack[sp].ref;
     }
 }
 
@@ -223,6 +307,20 @@ walk_bvh_flat(const inst_accel *a, const inst_item *it, const inst_bottom *b, ra
 }
 
 static __attribute__((flatten, noinline)) void
+walk_wide_flat(const inst_accel *a, const inst_item *it, const inst_bottom *b, ray_state *r,
+               vec3 org, vec3 dir, float pad, double shift, int naive, int spheres)
+{
+    const bvh_box_tree *h = &b->bvh;
+    const inst_wide *w = &b->wide;
+    if (naive)
+        walk_wide(a, it, h, w, b->mesh, r, org, dir, pad, shift, 1, spheres);
+    else if (spheres)
+        walk_wide(a, it, h, w, b->mesh, r, org, dir, pad, shift, 0, 1);
+    else
+        walk_wide(a, it, h, w, b->mesh, r, org, dir, pad, shift, 0, 0);
+}
+
+static __attribute__((flatten, noinline)) void
 walk_grid_flat(const inst_accel *a, const inst_item *it, const inst_bottom *b, ray_state *r,
                const double *o, const double *d, double t0, int naive, int spheres)
 {
@@ -296,6 +394,8 @@ INLINE void visit_instance(const inst_accel *a, uint32_t k, ray_state *r, int na
          * floats the world test uses). */
         if (a->bottom_kind == INST_WALK)
             walk_kind(a, it, b, r, r->p.org, r->p.dir, 0.0f, 0.0, naive, spheres);
+        else if (a->bottom_kind == INST_BVH && a->width == INST_WIDE)
+            walk_wide_flat(a, it, b, r, r->p.org, r->p.dir, 0.0f, 0.0, naive, spheres);
         else if (a->bottom_kind == INST_BVH)
             walk_bvh_flat(a, it, b, r, r->p.org, r->p.dir, 0.0f, 0.0, naive, spheres);
         else
@@ -328,7 +428,11 @@ INLINE void visit_instance(const inst_accel *a, uint32_t k, ray_state *r, int na
             if (o[i] < lo || o[i] > hi) return;
             continue;
         }
-        double t0 = (lo - o[i]) / d[i], t1 = (hi - o[i]) / d[i];
+        /* One division (a product's extra rounding is far inside the
+         * slack); a reciprocal that overflows (d subnormal) divides. */
+        double inv = 1.0 / d[i];
+        double t0 = isfinite(inv) ? (lo - o[i]) * inv : (lo - o[i]) / d[i];
+        double t1 = isfinite(inv) ? (hi - o[i]) * inv : (hi - o[i]) / d[i];
         if (t0 > t1) { double x = t0; t0 = t1; t1 = x; }
         double slack = 0x1p-40 * (fabs(t0) + fabs(t1));
         s0 = inst_dmax(s0, t0 - slack);
@@ -354,10 +458,19 @@ INLINE void visit_instance(const inst_accel *a, uint32_t k, ray_state *r, int na
     vec3 df = v3((float)d[0], (float)d[1], (float)d[2]);
     double pf = a->no_pad ? 0.0
                           : pad + 0x1p-20 * (b->abs_max + 2.0 * pad) + 0x1p-50 * (oa + fabs(s0) * da);
+    float padf = (float)(pf * (1.0 + 0x1p-20));
     if (a->bottom_kind == INST_WALK)
-        walk_kind(a, it, b, r, of, df, (float)(pf * (1.0 + 0x1p-20)), s0, naive, spheres);
+        walk_kind(a, it, b, r, of, df, padf, s0, naive, spheres);
+    else if (a->width == INST_WIDE)
+        walk_wide_flat(a, it, b, r, of, df, padf, s0, naive, spheres);
     else
-        walk_bvh_flat(a, it, b, r, of, df, (float)(pf * (1.0 + 0x1p-20)), s0, naive, spheres);
+        walk_bvh_flat(a, it, b, r, of, df, padf, s0, naive, spheres);
+}
+
+static void visit_instance_flat(const inst_accel *a, uint32_t k, ray_state *r, int naive,
+                                int spheres)
+{
+    visit_instance(a, k, r, naive, spheres);
 }
 
 /* ---- top level ------------------------------------------------------------------ */
@@ -467,7 +580,10 @@ INLINE void kernel(const void *acc, const accel_ray *rays, void *out, size_t cou
             r.t = r.p.t_far;
             r.o[0] = r.p.org.x, r.o[1] = r.p.org.y, r.o[2] = r.p.org.z;
             r.d[0] = r.p.dir.x, r.d[1] = r.p.dir.y, r.d[2] = r.p.dir.z;
-            if (a->top == INST_BVH)
+            if (a->top == INST_BVH && a->width == INST_WIDE)
+                walk_wide(a, NULL, &a->top_bvh, &a->top_wide, NULL, &r, r.p.org, r.p.dir, 0.0f,
+                          0.0, naive, spheres);
+            else if (a->top == INST_BVH)
                 top_bvh(a, &r, naive, spheres);
             else
                 top_grid(a, &r, naive, spheres);

@@ -20,7 +20,7 @@
  * t the world parameter, u and v of the world triangle).
  *
  * Parameters (bin/trace --help): top, bottom (bvh|grid or a kind spec), leaf (bottom BVH
- * leaf size), lambda and top_lambda (grid cells per primitive / instance),
+ * leaf size), width (BVH levels walked 8-wide, or 2: the binary tree), lambda and top_lambda (grid cells per primitive / instance),
  * world (compute|flat), and the common tri=watertight|naive.
  *
  * A plain scene is one identity instance of itself. The kind is reached
