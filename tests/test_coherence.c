@@ -154,9 +154,9 @@ TEST(coherence_any_order_same_answers)
     scene_free(&s);
 }
 
-/* Scanline primaries: sorted into packets (not kept, not sent ray by ray),
+/* Scanline primaries: gathered into tiles (not kept, not sent ray by ray),
  * the same answers, per-ray counters at the caller's index. */
-TEST(coherence_scanline_sorted_into_packets)
+TEST(coherence_scanline_tiled_into_packets)
 {
     accel_scene s;
     if (!test_make_scene("sphereflake:level=2", &s)) return;
@@ -187,8 +187,10 @@ TEST(coherence_scanline_sorted_into_packets)
         accel_coherence_stats_get(&st1);
         const size_t bad = differences(ref, hits, NULL, NULL, n, 0, mate_ulps(packet_specs[k]));
         CHECKF(bad == 0, "%s, scanline primaries: %zu of %zu answers differ", packet_specs[k], bad, n);
-        /* other tests may run at once in this process: lower bounds only */
-        CHECKF(st1.sorted_blocks - st0.sorted_blocks >= 1, "%s: scanline blocks were not sorted",
+        /* other tests may run at once in this process: lower bounds only.
+         * 88 wide: both blocks (the second starts mid-row) are gathered
+         * into 8x8 tiles, no key sort */
+        CHECKF(st1.tiled_blocks - st0.tiled_blocks >= 2, "%s: scanline blocks were not tiled",
                packet_specs[k]);
         CHECKF(st1.packet_rays - st0.packet_rays >= n * 8 / 10, "%s: %llu of %zu rays in packets",
                packet_specs[k], (unsigned long long)(st1.packet_rays - st0.packet_rays), n);
@@ -207,6 +209,51 @@ TEST(coherence_scanline_sorted_into_packets)
     }
     free(perm), free(tile_of), rays_free(&scan);
     for (int ci = 0; ci < 3; ci++) rays_free(&cases[ci].set);
+    scene_free(&s);
+}
+
+/* The block decisions on one camera's rays in the three orders, 96 x 64
+ * (two blocks, the second starting mid-row): 8x8 tiles are kept as they
+ * come, scanline blocks gathered into tiles, shuffled ones key-sorted;
+ * every ray in a packet either way. */
+TEST(coherence_block_decisions)
+{
+    accel_scene s;
+    if (!test_make_scene("sphereflake:level=1", &s)) return;
+    const accel_kind *kind;
+    void *a = test_build_kind("bvh:traverse=packet", &s, 1, &kind, NULL);
+    rays_set r;
+    accel_error err;
+    if (!a || rays_primary(&s.camera, 96, 64, &r, &err)) {
+        if (a) kind->destroy(a);
+        scene_free(&s);
+        CHECK(0);
+        return;
+    }
+    const rays_order orders[3] = {RAYS_ORDER_TILES8, RAYS_ORDER_SCANLINE, RAYS_ORDER_SHUFFLE};
+    accel_hit *hits = malloc(r.count * sizeof *hits);
+    for (int o = 0; o < 3; o++) {
+        CHECK(rays_reorder(&r, orders[o], 3, &err) == 0);
+        accel_coherence_stats st0, st1;
+        accel_coherence_set(ACCEL_ORDER_SORT);
+        accel_coherence_stats_get(&st0);
+        kind->intersect(a, r.rays, hits, r.count, NULL);
+        accel_coherence_stats_get(&st1);
+        accel_coherence_set(ACCEL_ORDER_KEEP);
+        const uint64_t kept = st1.kept_blocks - st0.kept_blocks,
+                       tiled = st1.tiled_blocks - st0.tiled_blocks,
+                       sorted = st1.sorted_blocks - st0.sorted_blocks;
+        CHECKF(o != 0 || (kept == 2 && tiled == 0 && sorted == 0), "tiles: %llu kept, %llu tiled",
+               (unsigned long long)kept, (unsigned long long)tiled);
+        CHECKF(o != 1 || (kept == 0 && tiled == 2 && sorted == 0), "scanline: %llu kept, %llu tiled",
+               (unsigned long long)kept, (unsigned long long)tiled);
+        CHECKF(o != 2 || (tiled == 0 && kept + sorted == 2), "shuffle: %llu tiled, %llu sorted",
+               (unsigned long long)tiled, (unsigned long long)sorted);
+        CHECK(o == 2 || st1.packet_rays - st0.packet_rays == r.count);
+    }
+    free(hits);
+    rays_free(&r);
+    kind->destroy(a);
     scene_free(&s);
 }
 

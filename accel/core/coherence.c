@@ -46,7 +46,7 @@
 #define KEEP_SLACK 1.125
 
 static atomic_int order_mode;
-static _Atomic uint64_t st_kept, st_sorted, st_packet, st_single;
+static _Atomic uint64_t st_kept, st_sorted, st_tiled, st_packet, st_single;
 
 void accel_coherence_set(int order) { atomic_store(&order_mode, order); }
 int accel_coherence_get(void) { return atomic_load(&order_mode); }
@@ -55,6 +55,7 @@ void accel_coherence_stats_get(accel_coherence_stats *out)
 {
     out->kept_blocks = atomic_load(&st_kept), out->sorted_blocks = atomic_load(&st_sorted);
     out->packet_rays = atomic_load(&st_packet), out->single_rays = atomic_load(&st_single);
+    out->tiled_blocks = atomic_load(&st_tiled);
 }
 
 /* ---- per-thread scratch, allocated once ----------------------------------- */
@@ -281,6 +282,90 @@ static void classify(scratch *s, size_t n, const quant *qz, const uint16_t *map)
     }
 }
 
+/* ---- raster order ------------------------------------------------------------ */
+
+/* A raster (a camera's rays in pixel order, rows W wide, or 8x8 tiles, which
+ * look like a raster 8 wide) steps regularly from ray to ray and jumps at
+ * the start of each row: a step (max-norm, origins and directions apart)
+ * over RASTER_JUMP times the last regular one is a row start. Going back
+ * W - 1 pixels and down one is about W - 1 steps, so rows of at least
+ * RASTER_MIN_W rays are told apart from their steps. Whatever this finds,
+ * the answers are the same (only the packets change). */
+#define RASTER_JUMP 4.0f
+#define RASTER_MIN_W 5
+/* Rasters at most this wide are kept as they come: 64 consecutive rays
+ * span at least four rows, as tight as a tile. */
+#define RASTER_KEEP_W 16
+
+static inline void ray_step(const accel_ray *a, const accel_ray *b, float *so, float *sd)
+{
+    const float ox = fabsf(b->ox - a->ox), oy = fabsf(b->oy - a->oy), oz = fabsf(b->oz - a->oz);
+    const float dx = fabsf(b->dx - a->dx), dy = fabsf(b->dy - a->dy), dz = fabsf(b->dz - a->dz);
+    const float o = ox > oy ? ox : oy, d = dx > dy ? dx : dy;
+    *so = o > oz ? o : oz, *sd = d > dz ? d : dz;
+}
+
+/* 1 when rays[0..n) are a raster: every row start W rays after the last
+ * one (*w = W, *first = the first row start in the block; *w = 0 when the
+ * block holds fewer than two row starts); 0 at the first irregular step. */
+static int find_raster(const accel_ray *rays, size_t n, size_t *w, size_t *first)
+{
+    *w = *first = 0;
+    if (n < 3) return 0;
+    float ro, rd, so, sd;
+    ray_step(&rays[0], &rays[1], &ro, &rd);
+    ray_step(&rays[1], &rays[2], &so, &sd);
+    ro = so < ro ? so : ro, rd = sd < rd ? sd : rd; /* one of the two is in a row */
+    size_t last = 0;
+    for (size_t i = 1; i < n; i++) {
+        ray_step(&rays[i - 1], &rays[i], &so, &sd);
+        /* NaN steps are jumps; both parts at most RASTER_JUMP times the last regular */
+        const int jump = !(so <= RASTER_JUMP * ro) || !(sd <= RASTER_JUMP * rd);
+        if (!jump) {
+            ro = so, rd = sd;
+            if (*w && i - last >= *w) return 0; /* a row longer than W */
+            continue;
+        }
+        if (*w) {
+            if (i - last != *w) return 0;
+        } else if (*first) {
+            if ((*w = i - *first) < RASTER_MIN_W || *first > *w) return 0;
+        } else {
+            *first = i;
+        }
+        last = i;
+    }
+    return 1;
+}
+
+/* The block's rays in tiles (8 rows of 8, or 4 of 16, 2 of 32: as many
+ * whole rows as the block holds) of a raster W wide whose first row
+ * starts at index first (0 < first <= W), into idx; the rays of no whole
+ * tile (partial rows, a band's last columns) follow in their order.
+ * Returns 0 (order kept) when the block holds fewer than two whole rows. */
+static int tile_order(size_t n, size_t w, size_t first, uint16_t *idx)
+{
+    const size_t c0 = first < w ? w - first : 0; /* the column of ray 0 */
+    const size_t y0 = c0 ? 1 : 0, y1 = (c0 + n) / w, rows = y1 > y0 ? y1 - y0 : 0;
+    const size_t th = rows >= 8 ? 8 : rows >= 4 ? 4 : rows >= 2 ? 2 : 0;
+    if (!th) return 0;
+    const size_t tw = P / th, bands = rows / th, tiles = w / tw;
+    size_t k = 0;
+    for (size_t b = 0; b < bands; b++)
+        for (size_t t = 0; t < tiles; t++)
+            for (size_t y = 0; y < th; y++) {
+                const size_t base = (y0 + b * th + y) * w + t * tw - c0;
+                for (size_t x = 0; x < tw; x++) idx[k++] = (uint16_t)(base + x);
+            }
+    const size_t yend = y0 + bands * th, xend = tiles * tw;
+    size_t x = c0, y = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (y < y0 || y >= yend || x >= xend) idx[k++] = (uint16_t)i;
+        if (++x == w) x = 0, y++;
+    }
+    return 1;
+}
+
 /* ---- tracing ---------------------------------------------------------------- */
 
 typedef struct {
@@ -333,12 +418,51 @@ static void trace_runs(const job *j, const scratch *s, const accel_ray *rays, ch
     atomic_fetch_add_explicit(&st_single, n - packed, memory_order_relaxed);
 }
 
-/* One block of at most BLOCK rays: keys, the keep-or-sort decision, the
- * split, the trace and the scatter back. */
+/* Traces the block in the order idx (all groups as classified in
+ * s->coherent) and scatters the answers and per-ray counters back. */
+static void trace_gathered(const job *j, scratch *s, const accel_ray *rays, char *out, size_t n,
+                           accel_counters *c, uint32_t *steps, uint32_t *prims)
+{
+    for (size_t i = 0; i < n; i++) s->rays[i] = rays[s->idx[i]];
+    trace_runs(j, s, s->rays, (char *)s->hits, n, c, steps ? s->steps : NULL,
+               prims ? s->prims : NULL);
+    if (j->esz == 1)
+        for (size_t i = 0; i < n; i++) out[s->idx[i]] = ((const char *)s->hits)[i];
+    else
+        for (size_t i = 0; i < n; i++) ((accel_hit *)out)[s->idx[i]] = s->hits[i];
+    if (steps)
+        for (size_t i = 0; i < n; i++) steps[s->idx[i]] = s->steps[i];
+    if (prims)
+        for (size_t i = 0; i < n; i++) prims[s->idx[i]] = s->prims[i];
+}
+
+/* A raster block: kept as it comes (8x8 tiles, narrow rasters, a row or
+ * two) or gathered into tiles, every group a packet. Returns 0 when the
+ * block is no raster. */
+static int trace_raster(const job *j, scratch *s, const accel_ray *rays, char *out, size_t n,
+                        accel_counters *c, uint32_t *steps, uint32_t *prims)
+{
+    size_t w, first;
+    if (!find_raster(rays, n, &w, &first)) return 0;
+    memset(s->coherent, 1, (n + P - 1) / P);
+    if (w > RASTER_KEEP_W && tile_order(n, w, first, s->idx)) {
+        trace_gathered(j, s, rays, out, n, c, steps, prims);
+        atomic_fetch_add_explicit(&st_tiled, 1, memory_order_relaxed);
+    } else {
+        call(j, 1, rays, out, n, c);
+        atomic_fetch_add_explicit(&st_kept, 1, memory_order_relaxed);
+        atomic_fetch_add_explicit(&st_packet, n, memory_order_relaxed);
+    }
+    return 1;
+}
+
+/* One block of at most BLOCK rays: a raster's tiles, or keys, the
+ * keep-or-sort decision, the split, the trace and the scatter back. */
 static void trace_block(const job *j, scratch *s, const accel_ray *rays, char *out, size_t n,
                         accel_counters *c)
 {
     uint32_t *steps = c ? c->ray_steps : NULL, *prims = c ? c->ray_prims : NULL;
+    if (trace_raster(j, s, rays, out, n, c, steps, prims)) return;
     quant qz;
     plan_quant(rays, n, &qz);
     const double kept = make_keys(rays, n, &qz, s);
@@ -355,17 +479,7 @@ static void trace_block(const job *j, scratch *s, const accel_ray *rays, char *o
         atomic_fetch_add_explicit(&st_kept, 1, memory_order_relaxed);
     } else {
         if (split) classify(s, n, &qz, s->idx);
-        for (size_t i = 0; i < n; i++) s->rays[i] = rays[s->idx[i]];
-        trace_runs(j, s, s->rays, (char *)s->hits, n, c, steps ? s->steps : NULL,
-                   prims ? s->prims : NULL);
-        if (j->esz == 1)
-            for (size_t i = 0; i < n; i++) out[s->idx[i]] = ((const char *)s->hits)[i];
-        else
-            for (size_t i = 0; i < n; i++) ((accel_hit *)out)[s->idx[i]] = s->hits[i];
-        if (steps)
-            for (size_t i = 0; i < n; i++) steps[s->idx[i]] = s->steps[i];
-        if (prims)
-            for (size_t i = 0; i < n; i++) prims[s->idx[i]] = s->prims[i];
+        trace_gathered(j, s, rays, out, n, c, steps, prims);
         atomic_fetch_add_explicit(&st_sorted, 1, memory_order_relaxed);
     }
     if (c) c->ray_steps = steps, c->ray_prims = prims;

@@ -105,9 +105,10 @@ void accel_coherent_occluded(const void *accel, const accel_ray *rays, uint8_t *
 
 /* Counts of the last-block decisions, summed process-wide (relaxed atomics,
  * once per block): blocks kept in their order, blocks sorted, rays traced in
- * packets and rays sent to the single-ray kernel. For tests and tools. */
+ * packets and rays sent to the single-ray kernel, raster blocks gathered
+ * into tiles. For tests and tools. */
 typedef struct {
-    uint64_t kept_blocks, sorted_blocks, packet_rays, single_rays;
+    uint64_t kept_blocks, sorted_blocks, packet_rays, single_rays, tiled_blocks;
 } accel_coherence_stats;
 void accel_coherence_stats_get(accel_coherence_stats *out);
 
