@@ -104,12 +104,19 @@ typedef struct {
     int occl;
 } ray_case;
 
-/* Primary rays (tiles), their shadow and diffuse rays on s. */
-static int make_cases(const accel_scene *s, ray_case c[3])
+/* Primary rays (tiles), their shadow and diffuse rays on s, and primary
+ * rays of a 4-degree view (shuffled, they still sort into packets: the
+ * gather path of every kind). */
+#define CASES 4
+static int make_cases(const accel_scene *s, ray_case c[CASES])
 {
     accel_error err;
-    memset(c, 0, 3 * sizeof *c);
+    memset(c, 0, CASES * sizeof *c);
+    accel_camera narrow = s->camera;
+    narrow.fov_deg = 4.0f;
     if (rays_primary(&s->camera, 88, 64, &c[0].set, &err)) return 0;
+    if (rays_primary(&narrow, 88, 64, &c[3].set, &err)) return 0;
+    c[3].name = "narrow primary";
     accel_hit *ref = malloc(c[0].set.count * sizeof *ref);
     accel_reference_trace(s, c[0].set.rays, ref, c[0].set.count, 1);
     int ok = !rays_shadow(s, &c[0].set, ref, &c[1].set, &err) &&
@@ -123,13 +130,13 @@ TEST(coherence_any_order_same_answers)
 {
     accel_scene s;
     if (!test_make_scene("sphereflake:level=2", &s)) return;
-    ray_case cases[3];
+    ray_case cases[CASES];
     CHECK(make_cases(&s, cases));
     for (size_t k = 0; k < sizeof packet_specs / sizeof *packet_specs; k++) {
         const accel_kind *kind;
         void *a = test_build_kind(packet_specs[k], &s, 1, &kind, NULL);
         if (!a) continue;
-        for (int ci = 0; ci < 3; ci++) {
+        for (int ci = 0; ci < CASES; ci++) {
             const ray_case *c = &cases[ci];
             const size_t n = c->set.count;
             accel_hit *ref = malloc(n * sizeof *ref), *hits = malloc(n * sizeof *hits);
@@ -142,15 +149,21 @@ TEST(coherence_any_order_same_answers)
             CHECKF(bad == 0, "%s, %s rays shuffled, packets kept: %zu of %zu answers differ",
                    packet_specs[k], c->name, bad, n);
             /* sorted into packets, scattered back */
+            accel_coherence_stats st0, st1;
+            accel_coherence_stats_get(&st0);
             trace_perm(kind, a, c->set.rays, perm, n, c->occl, ACCEL_ORDER_SORT, hits, occ);
+            accel_coherence_stats_get(&st1);
             bad = differences(ref, hits, ref_occ, occ, n, c->occl, mate_ulps(packet_specs[k]));
             CHECKF(bad == 0, "%s, %s rays shuffled, sorted: %zu of %zu answers differ",
                    packet_specs[k], c->name, bad, n);
+            CHECKF(ci != 3 || (st1.sorted_blocks > st0.sorted_blocks &&
+                               st1.packet_rays - st0.packet_rays >= n / 2),
+                   "%s, %s rays shuffled: not sorted into packets", packet_specs[k], c->name);
             free(ref), free(hits), free(ref_occ), free(occ), free(perm);
         }
         kind->destroy(a);
     }
-    for (int ci = 0; ci < 3; ci++) rays_free(&cases[ci].set);
+    for (int ci = 0; ci < CASES; ci++) rays_free(&cases[ci].set);
     scene_free(&s);
 }
 
@@ -160,7 +173,7 @@ TEST(coherence_scanline_tiled_into_packets)
 {
     accel_scene s;
     if (!test_make_scene("sphereflake:level=2", &s)) return;
-    ray_case cases[3];
+    ray_case cases[CASES];
     CHECK(make_cases(&s, cases));
     rays_set scan = cases[0].set;
     const size_t n = scan.count;
@@ -208,7 +221,7 @@ TEST(coherence_scanline_tiled_into_packets)
         kind->destroy(a);
     }
     free(perm), free(tile_of), rays_free(&scan);
-    for (int ci = 0; ci < 3; ci++) rays_free(&cases[ci].set);
+    for (int ci = 0; ci < CASES; ci++) rays_free(&cases[ci].set);
     scene_free(&s);
 }
 
@@ -263,7 +276,7 @@ TEST(coherence_diffuse_rays_go_single)
 {
     accel_scene s;
     if (!test_make_scene("sphereflake:level=2", &s)) return;
-    ray_case cases[3];
+    ray_case cases[CASES];
     CHECK(make_cases(&s, cases));
     const accel_kind *kind;
     void *a = test_build_kind("bvh:traverse=packet", &s, 1, &kind, NULL);
@@ -281,7 +294,7 @@ TEST(coherence_diffuse_rays_go_single)
         free(hits);
         kind->destroy(a);
     }
-    for (int ci = 0; ci < 3; ci++) rays_free(&cases[ci].set);
+    for (int ci = 0; ci < CASES; ci++) rays_free(&cases[ci].set);
     scene_free(&s);
 }
 

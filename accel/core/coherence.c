@@ -35,11 +35,14 @@
 #define HILBERT_BITS 8
 /* A group is traced as a packet when its rays share an octant, its
  * directions span at most DIR_SPREAD in octahedral units (an octant is the
- * unit triangle; 0.1 is about 9 degrees) and its origins at most
+ * unit triangle; 0.03 is about 3 degrees) and its origins at most
  * ORIGIN_FRAC of the block's origin extent. Diffuse bounces sorted in a
  * 4096-ray block keep about one bit per dimension per group of 64 (5
- * dimensions, 6 bits): a spread of half the range, far above both. */
-#define DIR_SPREAD 0.1f
+ * dimensions, 6 bits): a spread of half the range, far above both. So do
+ * shuffled primaries: 4096 of armadillo's 1024x768 rays sorted make groups
+ * of about 128x96 pixels (5 degrees); as packets they ran at half the
+ * single-ray speed with a spread limit of 0.1 (bvh:width=8). */
+#define DIR_SPREAD 0.03f
 #define ORIGIN_FRAC 0.25f
 /* The caller's order is kept when its groups are at most this much looser
  * than the sorted ones (summed extents of the quantized coordinates). */
@@ -71,9 +74,30 @@ typedef struct {
     uint8_t coherent[BLOCK / P];
 } scratch;
 
+/* The Hilbert index of cell (x, y) of a 2^bits square (Hilbert 1891; the
+ * loop of the usual xy2d, e.g. Wikipedia's "Hilbert curve"): per level the
+ * quadrant's digit, then the quadrant rotated into the curve's frame. */
+static inline uint32_t hilbert_index(uint32_t x, uint32_t y, int bits)
+{
+    uint32_t d = 0;
+    for (uint32_t s = 1u << (bits - 1); s > 0; s >>= 1) {
+        const uint32_t rx = (x & s) != 0, ry = (y & s) != 0;
+        d += s * s * ((3u * rx) ^ ry);
+        if (ry == 0) {
+            if (rx == 1) x = s - 1 - (x & (s - 1)), y = s - 1 - (y & (s - 1));
+            const uint32_t t = x; x = y, y = t;
+        }
+    }
+    return d;
+}
+
 static pthread_key_t scratch_key;
 static pthread_once_t scratch_once = PTHREAD_ONCE_INIT;
 static uint32_t spread_table[DIMS + 1][1u << MAX_DIM_BITS];
+/* hilbert_table[y << HILBERT_BITS | x]: hilbert_index(x, y), looked up (the
+ * loop's branches on random rays' bits mispredict: perf put it at half of
+ * the layer's time on shuffled primaries) */
+static uint16_t hilbert_table[1u << (2 * HILBERT_BITS)];
 
 /* spread_table[k][v]: the bits of v at positions 0, k, 2k, ... */
 static void init_once(void)
@@ -85,6 +109,9 @@ static void init_once(void)
             for (int b = 0; b < MAX_DIM_BITS && b * k < 32; b++) s |= ((v >> b) & 1u) << (b * k);
             spread_table[k][v] = s;
         }
+    for (uint32_t y = 0; y < (1u << HILBERT_BITS); y++)
+        for (uint32_t x = 0; x < (1u << HILBERT_BITS); x++)
+            hilbert_table[y << HILBERT_BITS | x] = (uint16_t)hilbert_index(x, y, HILBERT_BITS);
 }
 
 static scratch *get_scratch(void)
@@ -104,6 +131,7 @@ typedef struct {
     int active[DIMS], k, bits;   /* the varying dimensions, how many, bits each */
     float lo[DIMS], scale[DIMS]; /* quantization: (x - lo) * scale */
     float dir_limit, origin_limit; /* the coherence spreads in quantized units */
+    float dir_ext, ext[DIMS];      /* the largest direction extent, each extent */
 } quant;
 
 static inline void ray_coords(const accel_ray *r, float x[DIMS], unsigned *oct)
@@ -143,11 +171,33 @@ static void plan_quant(const accel_ray *rays, size_t n, quant *qz)
     const float levels = (float)((1u << qz->bits) - 1u);
     for (int d = 0; d < DIMS; d++) {
         const float e = d < 3 ? ext_o : ext_d;
-        qz->lo[d] = lo[d];
+        qz->lo[d] = lo[d], qz->ext[d] = hi[d] - lo[d];
         qz->scale[d] = e > 0.0f && !(hi[d] == lo[d]) ? levels / e : 0.0f;
     }
+    qz->dir_ext = ext_d;
     qz->dir_limit = ext_d > 0.0f ? DIR_SPREAD * levels / ext_d : 0.0f;
     qz->origin_limit = ORIGIN_FRAC * levels;
+}
+
+/* 1 when no group of 64 can pass the spread limits however the block is
+ * sorted. A camera's block (directions alone vary, k <= 2 of them) evenly
+ * filled leaves a group (64/n * the product of the extents)^(1/k) wide
+ * (shuffled primaries of armadillo 1024x768: 0.048, over DIR_SPREAD; a
+ * block of 4 scanline rows: far under it). Otherwise n rays spread over k
+ * varying dimensions leave a group 1 / (n / 64)^(1/k) of each extent, k
+ * taken as at most 3 (shadow rays' directions follow their origins):
+ * diffuse bounces (a direction extent near 1) leave 1/4 of it, far above
+ * the limit; twice the limits leave room for uneven spreads (armadillo's
+ * shadow rays, an extent of 0.2, still sort into packets). */
+static int hopeless(const quant *qz, size_t n)
+{
+    if (!qz->k || n <= P) return 0;
+    int origins = 0;
+    float area = (float)P / (float)n;
+    for (int j = 0; j < qz->k; j++) origins |= qz->active[j] < 3, area *= qz->ext[qz->active[j]];
+    if (!origins) return powf(area, 1.0f / (float)qz->k) > DIR_SPREAD;
+    const float frac = powf((float)P / (float)n, 1.0f / (float)(qz->k < 3 ? qz->k : 3));
+    return frac * qz->dir_ext > 2.0f * DIR_SPREAD || frac > 2.0f * ORIGIN_FRAC;
 }
 
 static inline uint16_t quantize(float x, float lo, float scale, float levels)
@@ -156,23 +206,6 @@ static inline uint16_t quantize(float x, float lo, float scale, float levels)
     v = v > 0.0f ? v : 0.0f; /* NaN and below the range: 0 */
     v = v < levels ? v : levels;
     return (uint16_t)v;
-}
-
-/* The Hilbert index of cell (x, y) of a 2^bits square (Hilbert 1891; the
- * loop of the usual xy2d, e.g. Wikipedia's "Hilbert curve"): per level the
- * quadrant's digit, then the quadrant rotated into the curve's frame. */
-static inline uint32_t hilbert_index(uint32_t x, uint32_t y, int bits)
-{
-    uint32_t d = 0;
-    for (uint32_t s = 1u << (bits - 1); s > 0; s >>= 1) {
-        const uint32_t rx = (x & s) != 0, ry = (y & s) != 0;
-        d += s * s * ((3u * rx) ^ ry);
-        if (ry == 0) {
-            if (rx == 1) x = s - 1 - (x & (s - 1)), y = s - 1 - (y & (s - 1));
-            const uint32_t t = x; x = y, y = t;
-        }
-    }
-    return d;
 }
 
 /* Keys and quantized coordinates of the block; returns the summed extents
@@ -199,7 +232,8 @@ static double make_keys(const accel_ray *rays, size_t n, const quant *qz, scratc
                 m |= spread[v] << (qz->k - 1 - j);
             }
             if (qz->k == 2)
-                m = hilbert_index(s->q[i][qz->active[0]], s->q[i][qz->active[1]], qz->bits);
+                m = hilbert_table[(uint32_t)s->q[i][qz->active[1]] << HILBERT_BITS |
+                                  s->q[i][qz->active[0]]];
             s->oct[i] = (uint8_t)oct;
             s->key[i] = (uint32_t)oct << MORTON_BITS | m;
             s->idx[i] = (uint16_t)i;
@@ -255,9 +289,10 @@ static double sorted_extent(const scratch *s, size_t n, const quant *qz)
 }
 
 /* Marks the groups of the order map[] (NULL: the caller's) that are
- * coherent enough for a packet. */
-static void classify(scratch *s, size_t n, const quant *qz, const uint16_t *map)
+ * coherent enough for a packet; returns how many. */
+static size_t classify(scratch *s, size_t n, const quant *qz, const uint16_t *map)
 {
+    size_t count = 0;
     for (size_t g = 0; g < n; g += P) {
         const size_t end = g + P < n ? g + P : n;
         const uint8_t oct = s->oct[map ? map[g] : g];
@@ -279,7 +314,9 @@ static void classify(scratch *s, size_t n, const quant *qz, const uint16_t *map)
             ok = d < 3 ? spread <= qz->origin_limit : spread <= qz->dir_limit;
         }
         s->coherent[g / P] = (uint8_t)ok;
+        count += (size_t)ok;
     }
+    return count;
 }
 
 /* ---- raster order ------------------------------------------------------------ */
@@ -465,20 +502,24 @@ static void trace_block(const job *j, scratch *s, const accel_ray *rays, char *o
     if (trace_raster(j, s, rays, out, n, c, steps, prims)) return;
     quant qz;
     plan_quant(rays, n, &qz);
-    const double kept = make_keys(rays, n, &qz, s);
-    int keep = n <= P;
-    if (!keep) {
-        sort_keys(s, n);
-        keep = kept <= KEEP_SLACK * sorted_extent(s, n, &qz);
-    }
     const int split = j->esz == 1 ? j->occ_single != NULL : j->hit_single != NULL;
-    if (!split) memset(s->coherent, 1, (n + P - 1) / P);
+    int keep = 1, packets = !split;
+    if (split && hopeless(&qz, n)) { /* ray by ray as they come: no keys, no copy */
+        memset(s->coherent, 0, (n + P - 1) / P);
+    } else {
+        const double kept = make_keys(rays, n, &qz, s);
+        if (n > P) {
+            sort_keys(s, n);
+            keep = kept <= KEEP_SLACK * sorted_extent(s, n, &qz);
+        }
+        if (split) packets = classify(s, n, &qz, keep ? NULL : s->idx);
+        else memset(s->coherent, 1, (n + P - 1) / P);
+        if (!packets) keep = 1; /* every group ray by ray: the caller's order, no copy */
+    }
     if (keep) {
-        if (split) classify(s, n, &qz, NULL);
         trace_runs(j, s, rays, out, n, c, steps, prims);
         atomic_fetch_add_explicit(&st_kept, 1, memory_order_relaxed);
     } else {
-        if (split) classify(s, n, &qz, s->idx);
         trace_gathered(j, s, rays, out, n, c, steps, prims);
         atomic_fetch_add_explicit(&st_sorted, 1, memory_order_relaxed);
     }
