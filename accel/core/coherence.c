@@ -342,9 +342,23 @@ static inline void ray_step(const accel_ray *a, const accel_ray *b, float *so, f
     *so = o > oz ? o : oz, *sd = d > dz ? d : dz;
 }
 
-/* 1 when rays[0..n) are a raster: every row start W rays after the last
- * one (*w = W, *first = the first row start in the block; *w = 0 when the
- * block holds fewer than two row starts); 0 at the first irregular step. */
+/* A step from a to b (max-norm of the origin and direction parts) jumps
+ * over the step from c to d: NaN steps jump. */
+static inline int jumps(const accel_ray *a, const accel_ray *b, const accel_ray *c,
+                        const accel_ray *d)
+{
+    float so, sd, ro, rd;
+    ray_step(a, b, &so, &sd);
+    ray_step(c, d, &ro, &rd);
+    return !(so <= RASTER_JUMP * ro) || !(sd <= RASTER_JUMP * rd);
+}
+
+/* 1 when rays[0..n) look like a raster: rows W long (*w = W, *first = the
+ * first row start in the block; *w = 0 when the block holds fewer than
+ * two row starts). The rays are scanned up to the second row start; after
+ * it, each predicted row start p is checked (a jump from p - 1 to p over
+ * the steps on both sides, which agree), not every ray: tile order (W = 8)
+ * costs a few operations a ray, and a wrong guess only loses speed. */
 static int find_raster(const accel_ray *rays, size_t n, size_t *w, size_t *first)
 {
     *w = *first = 0;
@@ -353,24 +367,24 @@ static int find_raster(const accel_ray *rays, size_t n, size_t *w, size_t *first
     ray_step(&rays[0], &rays[1], &ro, &rd);
     ray_step(&rays[1], &rays[2], &so, &sd);
     ro = so < ro ? so : ro, rd = sd < rd ? sd : rd; /* one of the two is in a row */
-    size_t last = 0;
-    for (size_t i = 1; i < n; i++) {
+    size_t i = 1;
+    for (; i < n && !*w; i++) {
         ray_step(&rays[i - 1], &rays[i], &so, &sd);
-        /* NaN steps are jumps; both parts at most RASTER_JUMP times the last regular */
-        const int jump = !(so <= RASTER_JUMP * ro) || !(sd <= RASTER_JUMP * rd);
-        if (!jump) {
+        if (so <= RASTER_JUMP * ro && sd <= RASTER_JUMP * rd) {
             ro = so, rd = sd;
-            if (*w && i - last >= *w) return 0; /* a row longer than W */
-            continue;
-        }
-        if (*w) {
-            if (i - last != *w) return 0;
-        } else if (*first) {
-            if ((*w = i - *first) < RASTER_MIN_W || *first > *w) return 0;
-        } else {
+        } else if (!*first) {
             *first = i;
+        } else if ((*w = i - *first) < RASTER_MIN_W || *first > *w) {
+            return 0;
         }
-        last = i;
+    }
+    if (!*w) return 1; /* a row or two */
+    const accel_ray *r = rays;
+    for (size_t p = *first + 2 * *w; p < n; p += *w) {
+        const size_t q = p + 1 < n ? p + 1 : p - 2; /* the step after p, or before p - 1 */
+        if (!jumps(&r[p - 1], &r[p], &r[p - 2], &r[p - 1]) || !jumps(&r[p - 1], &r[p], &r[q - 1], &r[q]) ||
+            jumps(&r[p - 2], &r[p - 1], &r[q - 1], &r[q]) || jumps(&r[q - 1], &r[q], &r[p - 2], &r[p - 1]))
+            return 0;
     }
     return 1;
 }
