@@ -46,10 +46,11 @@ static void trace_perm(const accel_kind *k, const void *a, const accel_ray *rays
     accel_hit *h = malloc((n ? n : 1) * sizeof *h);
     uint8_t *o = malloc(n ? n : 1);
     for (size_t i = 0; i < n; i++) r[i] = rays[perm ? perm[i] : i];
+    const int before = accel_coherence_get();
     accel_coherence_set(order);
     if (occl) k->occluded(a, r, o, n, NULL);
     else k->intersect(a, r, h, n, NULL);
-    accel_coherence_set(ACCEL_ORDER_KEEP); /* the default */
+    accel_coherence_set(before);
     for (size_t i = 0; i < n; i++) {
         const size_t j = perm ? perm[i] : i;
         if (occl) occ[j] = o[i];
@@ -212,7 +213,10 @@ TEST(coherence_scanline_tiled_into_packets)
         memset(&c, 0, sizeof c);
         uint32_t *steps = calloc(n, sizeof *steps);
         c.ray_steps = steps;
+        const int before = accel_coherence_get();
+        accel_coherence_set(ACCEL_ORDER_SORT);
         kind->intersect(a, scan.rays, hits, n, &c);
+        accel_coherence_set(before);
         uint64_t sum = 0;
         for (size_t i = 0; i < n; i++) sum += steps[i];
         CHECKF(sum == c.steps && c.ray_steps == steps, "%s: per-ray steps sum %llu, total %llu",
@@ -248,11 +252,12 @@ TEST(coherence_block_decisions)
     for (int o = 0; o < 3; o++) {
         CHECK(rays_reorder(&r, orders[o], 3, &err) == 0);
         accel_coherence_stats st0, st1;
+        const int before = accel_coherence_get();
         accel_coherence_set(ACCEL_ORDER_SORT);
         accel_coherence_stats_get(&st0);
         kind->intersect(a, r.rays, hits, r.count, NULL);
         accel_coherence_stats_get(&st1);
-        accel_coherence_set(ACCEL_ORDER_KEEP);
+        accel_coherence_set(before);
         const uint64_t kept = st1.kept_blocks - st0.kept_blocks,
                        tiled = st1.tiled_blocks - st0.tiled_blocks,
                        sorted = st1.sorted_blocks - st0.sorted_blocks;
@@ -284,11 +289,12 @@ TEST(coherence_diffuse_rays_go_single)
         const size_t n = cases[2].set.count;
         accel_hit *hits = malloc(n * sizeof *hits);
         accel_coherence_stats st0, st1;
+        const int before = accel_coherence_get();
         accel_coherence_set(ACCEL_ORDER_SORT);
         accel_coherence_stats_get(&st0);
         kind->intersect(a, cases[2].set.rays, hits, n, NULL);
         accel_coherence_stats_get(&st1);
-        accel_coherence_set(ACCEL_ORDER_KEEP);
+        accel_coherence_set(before);
         CHECKF(st1.single_rays - st0.single_rays >= n * 9 / 10, "diffuse: %llu of %zu rays single",
                (unsigned long long)(st1.single_rays - st0.single_rays), n);
         free(hits);

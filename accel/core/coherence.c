@@ -48,7 +48,7 @@
  * than the sorted ones (summed extents of the quantized coordinates). */
 #define KEEP_SLACK 1.125
 
-static atomic_int order_mode;
+static atomic_int order_mode = ACCEL_ORDER_SORT;
 static _Atomic uint64_t st_kept, st_sorted, st_tiled, st_packet, st_single;
 
 void accel_coherence_set(int order) { atomic_store(&order_mode, order); }

@@ -21,6 +21,12 @@
  *      packets (kinds whose packet kernel has its own fallback skip this),
  *   5. scatter the answers (and the per-ray counters) back to the caller's
  *      order.
+ * Before all this, a block that is a raster (a camera's rays in pixel order,
+ * found from the steps between consecutive rays) skips the keys: 8x8 tile
+ * order and rasters up to 16 wide are kept, wider ones gathered into tiles
+ * of whole rows (8x8, or 16x4 when a 4096-ray block holds 4 rows of 1024).
+ * A block that no sort could make coherent (diffuse bounces, by its
+ * extents) goes ray by ray in its order, for the kinds with a split.
  * Exactness: a packet kernel's answer for a ray must not depend on the
  * other rays of its packet (tests/test_coherence.c traces shuffled ray sets
  * against the unshuffled ones for every packet mode). The BVH packets (binary
@@ -48,14 +54,14 @@ typedef void (*accel_occ_batch_fn)(const void *accel, const accel_ray *rays, uin
                                    size_t count, accel_counters *c);
 
 /* How the packet modes order their rays (process-wide; tools set it once
- * before tracing): ACCEL_ORDER_KEEP (default) hands the caller's order to
- * the packet kernel as it is, 64 consecutive rays a packet;
- * ACCEL_ORDER_SORT sorts as above. KEEP is the default because SORT, as
- * measured on armadillo 1024x768 primary rays (one thread, fresh
- * processes), cost more than it gained: bvh:width=8,traverse=packet 15.6
- * Mrays/s sorted against 41.0 kept in 8x8-tile order, 11.3 against 29.4 in
- * scanline order (the grids 8.4 against 12.0 in scanline order): the block
- * by block hand-over to the packet kernels has not been made cheap yet. */
+ * before tracing): ACCEL_ORDER_SORT (default) forms packets as above;
+ * ACCEL_ORDER_KEEP hands the caller's order to the packet kernel as it is,
+ * 64 consecutive rays a packet. SORT became the default once it stopped
+ * losing in tile order: 8x8 tiles are found as a raster 8 wide and kept
+ * (no keys, no copy), scanline blocks are gathered into tiles by index.
+ * Measured before that (armadillo 1024x768 primaries, one thread):
+ * bvh:width=8,traverse=packet 15.6 Mrays/s sorted against 41.0 kept in
+ * tile order: every kept block had paid for keys and a sort first. */
 enum { ACCEL_ORDER_KEEP = 0, ACCEL_ORDER_SORT = 1 };
 void accel_coherence_set(int order);
 int accel_coherence_get(void);
