@@ -29,13 +29,16 @@
  * extents) goes ray by ray in its order, for the kinds with a split.
  * Exactness: a packet kernel's answer for a ray must not depend on the
  * other rays of its packet (tests/test_coherence.c traces shuffled ray sets
- * against the unshuffled ones for every packet mode). The BVH packets (binary
- * and wide) give the same bits whatever the mates. The grids' packets give
- * the same primitive and occlusion, but t/u/v may move by a few float
+ * against the unshuffled ones for every packet mode). The binary and 4-wide
+ * BVH packets give the same bits whatever the mates. The grids' packets
+ * give the same primitive and occlusion, but t/u/v may move by a few float
  * steps: core/prim.h's watertight test decides a hit within its error of
  * the current nearest one in double, so which primitives a ray tested
  * before (its packet's walk, mailbox repeats) picks the float or the
- * double computation of the same hit. Scratch memory is per thread,
+ * double computation of the same hit. The 8-wide packets keep t and the
+ * primitive but, rarely, not u/v: bunny's 96x72 primaries in scanline
+ * against tile order, packets kept as given, differ in u/v on 4 of 6912
+ * rays (sphereflake, the test's scene, on none). Scratch memory is per thread,
  * allocated once (freed when the thread ends).
  */
 #ifndef ACCEL_CORE_COHERENCE_H
