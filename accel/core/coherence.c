@@ -526,19 +526,24 @@ static void trace_block(const job *j, scratch *s, const accel_ray *rays, char *o
     quant qz;
     plan_quant(rays, n, &qz);
     const int split = j->esz == 1 ? j->occ_single != NULL : j->hit_single != NULL;
-    int keep = 1, packets = !split;
-    if (split && hopeless(&qz, n)) { /* ray by ray as they come: no keys, no copy */
-        memset(s->coherent, 0, (n + P - 1) / P);
-    } else {
+    /* Without a coherent group (none possible, or none after the sort) the
+     * block goes as it comes, no copy: ray by ray where the kind has a
+     * split, else to the packet kernel, whose own fallback then sees
+     * packets as incoherent as they come (nested_grid's packets walked
+     * sorted shuffled primaries at a quarter of their single-ray speed,
+     * armadillo 1024x768). */
+    int keep = 1;
+    if (!hopeless(&qz, n)) {
         const double kept = make_keys(rays, n, &qz, s);
         if (n > P) {
             sort_keys(s, n);
             keep = kept <= KEEP_SLACK * sorted_extent(s, n, &qz);
         }
-        if (split) packets = classify(s, n, &qz, keep ? NULL : s->idx);
-        else memset(s->coherent, 1, (n + P - 1) / P);
-        if (!packets) keep = 1; /* every group ray by ray: the caller's order, no copy */
+        if (!classify(s, n, &qz, keep ? NULL : s->idx)) keep = 1;
+    } else {
+        memset(s->coherent, 0, (n + P - 1) / P);
     }
+    if (!split) memset(s->coherent, 1, (n + P - 1) / P);
     if (keep) {
         trace_runs(j, s, rays, out, n, c, steps, prims);
         atomic_fetch_add_explicit(&st_kept, 1, memory_order_relaxed);
