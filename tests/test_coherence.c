@@ -46,10 +46,11 @@ static void trace_perm(const accel_kind *k, const void *a, const accel_ray *rays
     accel_hit *h = malloc((n ? n : 1) * sizeof *h);
     uint8_t *o = malloc(n ? n : 1);
     for (size_t i = 0; i < n; i++) r[i] = rays[perm ? perm[i] : i];
+    const int before = accel_coherence_get();
     accel_coherence_set(order);
     if (occl) k->occluded(a, r, o, n, NULL);
     else k->intersect(a, r, h, n, NULL);
-    accel_coherence_set(ACCEL_ORDER_KEEP); /* the default */
+    accel_coherence_set(before);
     for (size_t i = 0; i < n; i++) {
         const size_t j = perm ? perm[i] : i;
         if (occl) occ[j] = o[i];
@@ -104,12 +105,19 @@ typedef struct {
     int occl;
 } ray_case;
 
-/* Primary rays (tiles), their shadow and diffuse rays on s. */
-static int make_cases(const accel_scene *s, ray_case c[3])
+/* Primary rays (tiles), their shadow and diffuse rays on s, and primary
+ * rays of a 4-degree view (shuffled, they still sort into packets: the
+ * gather path of every kind). */
+#define CASES 4
+static int make_cases(const accel_scene *s, ray_case c[CASES])
 {
     accel_error err;
-    memset(c, 0, 3 * sizeof *c);
+    memset(c, 0, CASES * sizeof *c);
+    accel_camera narrow = s->camera;
+    narrow.fov_deg = 4.0f;
     if (rays_primary(&s->camera, 88, 64, &c[0].set, &err)) return 0;
+    if (rays_primary(&narrow, 88, 64, &c[3].set, &err)) return 0;
+    c[3].name = "narrow primary";
     accel_hit *ref = malloc(c[0].set.count * sizeof *ref);
     accel_reference_trace(s, c[0].set.rays, ref, c[0].set.count, 1);
     int ok = !rays_shadow(s, &c[0].set, ref, &c[1].set, &err) &&
@@ -123,13 +131,13 @@ TEST(coherence_any_order_same_answers)
 {
     accel_scene s;
     if (!test_make_scene("sphereflake:level=2", &s)) return;
-    ray_case cases[3];
+    ray_case cases[CASES];
     CHECK(make_cases(&s, cases));
     for (size_t k = 0; k < sizeof packet_specs / sizeof *packet_specs; k++) {
         const accel_kind *kind;
         void *a = test_build_kind(packet_specs[k], &s, 1, &kind, NULL);
         if (!a) continue;
-        for (int ci = 0; ci < 3; ci++) {
+        for (int ci = 0; ci < CASES; ci++) {
             const ray_case *c = &cases[ci];
             const size_t n = c->set.count;
             accel_hit *ref = malloc(n * sizeof *ref), *hits = malloc(n * sizeof *hits);
@@ -142,25 +150,31 @@ TEST(coherence_any_order_same_answers)
             CHECKF(bad == 0, "%s, %s rays shuffled, packets kept: %zu of %zu answers differ",
                    packet_specs[k], c->name, bad, n);
             /* sorted into packets, scattered back */
+            accel_coherence_stats st0, st1;
+            accel_coherence_stats_get(&st0);
             trace_perm(kind, a, c->set.rays, perm, n, c->occl, ACCEL_ORDER_SORT, hits, occ);
+            accel_coherence_stats_get(&st1);
             bad = differences(ref, hits, ref_occ, occ, n, c->occl, mate_ulps(packet_specs[k]));
             CHECKF(bad == 0, "%s, %s rays shuffled, sorted: %zu of %zu answers differ",
                    packet_specs[k], c->name, bad, n);
+            CHECKF(ci != 3 || (st1.sorted_blocks > st0.sorted_blocks &&
+                               st1.packet_rays - st0.packet_rays >= n / 2),
+                   "%s, %s rays shuffled: not sorted into packets", packet_specs[k], c->name);
             free(ref), free(hits), free(ref_occ), free(occ), free(perm);
         }
         kind->destroy(a);
     }
-    for (int ci = 0; ci < 3; ci++) rays_free(&cases[ci].set);
+    for (int ci = 0; ci < CASES; ci++) rays_free(&cases[ci].set);
     scene_free(&s);
 }
 
-/* Scanline primaries: sorted into packets (not kept, not sent ray by ray),
+/* Scanline primaries: gathered into tiles (not kept, not sent ray by ray),
  * the same answers, per-ray counters at the caller's index. */
-TEST(coherence_scanline_sorted_into_packets)
+TEST(coherence_scanline_tiled_into_packets)
 {
     accel_scene s;
     if (!test_make_scene("sphereflake:level=2", &s)) return;
-    ray_case cases[3];
+    ray_case cases[CASES];
     CHECK(make_cases(&s, cases));
     rays_set scan = cases[0].set;
     const size_t n = scan.count;
@@ -187,8 +201,10 @@ TEST(coherence_scanline_sorted_into_packets)
         accel_coherence_stats_get(&st1);
         const size_t bad = differences(ref, hits, NULL, NULL, n, 0, mate_ulps(packet_specs[k]));
         CHECKF(bad == 0, "%s, scanline primaries: %zu of %zu answers differ", packet_specs[k], bad, n);
-        /* other tests may run at once in this process: lower bounds only */
-        CHECKF(st1.sorted_blocks - st0.sorted_blocks >= 1, "%s: scanline blocks were not sorted",
+        /* other tests may run at once in this process: lower bounds only.
+         * 88 wide: both blocks (the second starts mid-row) are gathered
+         * into 8x8 tiles, no key sort */
+        CHECKF(st1.tiled_blocks - st0.tiled_blocks >= 2, "%s: scanline blocks were not tiled",
                packet_specs[k]);
         CHECKF(st1.packet_rays - st0.packet_rays >= n * 8 / 10, "%s: %llu of %zu rays in packets",
                packet_specs[k], (unsigned long long)(st1.packet_rays - st0.packet_rays), n);
@@ -197,7 +213,10 @@ TEST(coherence_scanline_sorted_into_packets)
         memset(&c, 0, sizeof c);
         uint32_t *steps = calloc(n, sizeof *steps);
         c.ray_steps = steps;
+        const int before = accel_coherence_get();
+        accel_coherence_set(ACCEL_ORDER_SORT);
         kind->intersect(a, scan.rays, hits, n, &c);
+        accel_coherence_set(before);
         uint64_t sum = 0;
         for (size_t i = 0; i < n; i++) sum += steps[i];
         CHECKF(sum == c.steps && c.ray_steps == steps, "%s: per-ray steps sum %llu, total %llu",
@@ -206,7 +225,53 @@ TEST(coherence_scanline_sorted_into_packets)
         kind->destroy(a);
     }
     free(perm), free(tile_of), rays_free(&scan);
-    for (int ci = 0; ci < 3; ci++) rays_free(&cases[ci].set);
+    for (int ci = 0; ci < CASES; ci++) rays_free(&cases[ci].set);
+    scene_free(&s);
+}
+
+/* The block decisions on one camera's rays in the three orders, 96 x 64
+ * (two blocks, the second starting mid-row): 8x8 tiles are kept as they
+ * come, scanline blocks gathered into tiles, shuffled ones key-sorted;
+ * every ray in a packet either way. */
+TEST(coherence_block_decisions)
+{
+    accel_scene s;
+    if (!test_make_scene("sphereflake:level=1", &s)) return;
+    const accel_kind *kind;
+    void *a = test_build_kind("bvh:traverse=packet", &s, 1, &kind, NULL);
+    rays_set r;
+    accel_error err;
+    if (!a || rays_primary(&s.camera, 96, 64, &r, &err)) {
+        if (a) kind->destroy(a);
+        scene_free(&s);
+        CHECK(0);
+        return;
+    }
+    const rays_order orders[3] = {RAYS_ORDER_TILES8, RAYS_ORDER_SCANLINE, RAYS_ORDER_SHUFFLE};
+    accel_hit *hits = malloc(r.count * sizeof *hits);
+    for (int o = 0; o < 3; o++) {
+        CHECK(rays_reorder(&r, orders[o], 3, &err) == 0);
+        accel_coherence_stats st0, st1;
+        const int before = accel_coherence_get();
+        accel_coherence_set(ACCEL_ORDER_SORT);
+        accel_coherence_stats_get(&st0);
+        kind->intersect(a, r.rays, hits, r.count, NULL);
+        accel_coherence_stats_get(&st1);
+        accel_coherence_set(before);
+        const uint64_t kept = st1.kept_blocks - st0.kept_blocks,
+                       tiled = st1.tiled_blocks - st0.tiled_blocks,
+                       sorted = st1.sorted_blocks - st0.sorted_blocks;
+        CHECKF(o != 0 || (kept == 2 && tiled == 0 && sorted == 0), "tiles: %llu kept, %llu tiled",
+               (unsigned long long)kept, (unsigned long long)tiled);
+        CHECKF(o != 1 || (kept == 0 && tiled == 2 && sorted == 0), "scanline: %llu kept, %llu tiled",
+               (unsigned long long)kept, (unsigned long long)tiled);
+        CHECKF(o != 2 || (tiled == 0 && kept + sorted == 2), "shuffle: %llu tiled, %llu sorted",
+               (unsigned long long)tiled, (unsigned long long)sorted);
+        CHECK(o == 2 || st1.packet_rays - st0.packet_rays == r.count);
+    }
+    free(hits);
+    rays_free(&r);
+    kind->destroy(a);
     scene_free(&s);
 }
 
@@ -216,7 +281,7 @@ TEST(coherence_diffuse_rays_go_single)
 {
     accel_scene s;
     if (!test_make_scene("sphereflake:level=2", &s)) return;
-    ray_case cases[3];
+    ray_case cases[CASES];
     CHECK(make_cases(&s, cases));
     const accel_kind *kind;
     void *a = test_build_kind("bvh:traverse=packet", &s, 1, &kind, NULL);
@@ -224,17 +289,18 @@ TEST(coherence_diffuse_rays_go_single)
         const size_t n = cases[2].set.count;
         accel_hit *hits = malloc(n * sizeof *hits);
         accel_coherence_stats st0, st1;
+        const int before = accel_coherence_get();
         accel_coherence_set(ACCEL_ORDER_SORT);
         accel_coherence_stats_get(&st0);
         kind->intersect(a, cases[2].set.rays, hits, n, NULL);
         accel_coherence_stats_get(&st1);
-        accel_coherence_set(ACCEL_ORDER_KEEP);
+        accel_coherence_set(before);
         CHECKF(st1.single_rays - st0.single_rays >= n * 9 / 10, "diffuse: %llu of %zu rays single",
                (unsigned long long)(st1.single_rays - st0.single_rays), n);
         free(hits);
         kind->destroy(a);
     }
-    for (int ci = 0; ci < 3; ci++) rays_free(&cases[ci].set);
+    for (int ci = 0; ci < CASES; ci++) rays_free(&cases[ci].set);
     scene_free(&s);
 }
 

@@ -257,6 +257,7 @@ TEST(grid_packet_incoherent_packets_fall_back)
     const char *specs[2] = {"grid", "grid:traverse=packet"};
     /* the packets as given: sorted (core/coherence.h), these rays make
      * coherent packets that walk */
+    const int order = accel_coherence_get();
     accel_coherence_set(ACCEL_ORDER_KEEP);
     for (int i = 0; i < 2; i++) {
         const accel_kind *k;
@@ -268,7 +269,7 @@ TEST(grid_packet_incoherent_packets_fall_back)
         accel_trace(k, a, rays, h[i], n, 1, &cn[i]);
         k->destroy(a);
     }
-    accel_coherence_set(ACCEL_ORDER_KEEP); /* the default */
+    accel_coherence_set(order);
     CHECK(memcmp(h[0], h[1], n * sizeof *h[0]) == 0);
     CHECK(cn[1].packet_box_tests == 0);
     CHECK(cn[0].steps == cn[1].steps && cn[0].prim_tests == cn[1].prim_tests && cn[1].rays == n);

@@ -110,8 +110,8 @@ static const cli_option trace_options[] = {
     {"--ray-order", "tiles8|scanline|shuffle", "put every ray set (before --dump-rays) in 8x8 pixel\n"
      "tiles, scanline (pixel) order or a shuffle seeded by --seed (default: as made, tiles)",
      opt_ray_order, OPT(ray_order), 0, 0},
-    {"--packet-order", "sort|keep", "keep: 64 consecutive rays a packet, as given (default), or\n"
-     "sort: packet modes sort rays into coherent packets first (core/coherence.h)", opt_packet_order,
+    {"--packet-order", "sort|keep", "sort (default): packet modes form coherent packets first\n"
+     "(raster tiles or a key sort, core/coherence.h); keep: 64 consecutive rays a packet", opt_packet_order,
      OPT(packet_order), 0, 0},
     {"--seed", "N", "seed of the secondary rays (default 1)", cli_u64, OPT(seed), 0, 0},
     {"--ao-samples", "N", "ambient occlusion rays per primary hit (default 4)", cli_int,
@@ -190,6 +190,7 @@ static int parse_options(int argc, char **argv, options *o, run *r, accel_error 
     o->seed = 1;
     o->ao_samples = 4;
     o->progress_after = BENCH_PROGRESS_AFTER_MS / 1e3;
+    o->packet_order = accel_coherence_get(); /* the library's default */
     int rc = cli_parse(trace_options, OPTION_COUNT, argc, argv, 1, o, err);
     if (rc || o->help) return rc;
     if (o->accel_count == 0) o->accels[o->accel_count++] = accel_find_kind("bvh") ? "bvh" : "brute";

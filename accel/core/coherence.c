@@ -1,7 +1,16 @@
 /*
- * coherence.c - packets in any ray order (core/coherence.h): sort keys,
- * the keep-or-sort decision, the coherent/incoherent split and the
+ * coherence.c - packets in any ray order (core/coherence.h): the raster
+ * path (a camera's rays in pixel order: tiles by index arithmetic), sort
+ * keys, the keep-or-sort decision, the coherent/incoherent split and the
  * scatter back to the caller's order.
+ *
+ * Where the time went before the raster path (perf, armadillo 1024x768
+ * primaries): every block paid for keys (two divisions and a branchy
+ * Hilbert loop per ray), a radix sort and group extents before the
+ * keep-or-sort decision, even in tile order, where every block was kept:
+ * the layer took about as long as the grid's packet kernel. Now tile order
+ * costs one pass over the first 16 rays and a check per row start (perf:
+ * 1.5% of bvh:width=8 packets), scanline order an index gather.
  *
  * The sort key follows ray-sorting work (Garanzha & Loop, "Fast ray sorting
  * and breadth-first packet traversal for GPU ray tracing", EG 2010: a key of
@@ -35,18 +44,21 @@
 #define HILBERT_BITS 8
 /* A group is traced as a packet when its rays share an octant, its
  * directions span at most DIR_SPREAD in octahedral units (an octant is the
- * unit triangle; 0.1 is about 9 degrees) and its origins at most
+ * unit triangle; 0.03 is about 3 degrees) and its origins at most
  * ORIGIN_FRAC of the block's origin extent. Diffuse bounces sorted in a
  * 4096-ray block keep about one bit per dimension per group of 64 (5
- * dimensions, 6 bits): a spread of half the range, far above both. */
-#define DIR_SPREAD 0.1f
+ * dimensions, 6 bits): a spread of half the range, far above both. So do
+ * shuffled primaries: 4096 of armadillo's 1024x768 rays sorted make groups
+ * of about 128x96 pixels (5 degrees); as packets they ran at half the
+ * single-ray speed with a spread limit of 0.1 (bvh:width=8). */
+#define DIR_SPREAD 0.03f
 #define ORIGIN_FRAC 0.25f
 /* The caller's order is kept when its groups are at most this much looser
  * than the sorted ones (summed extents of the quantized coordinates). */
 #define KEEP_SLACK 1.125
 
-static atomic_int order_mode;
-static _Atomic uint64_t st_kept, st_sorted, st_packet, st_single;
+static atomic_int order_mode = ACCEL_ORDER_SORT;
+static _Atomic uint64_t st_kept, st_sorted, st_tiled, st_packet, st_single;
 
 void accel_coherence_set(int order) { atomic_store(&order_mode, order); }
 int accel_coherence_get(void) { return atomic_load(&order_mode); }
@@ -55,6 +67,7 @@ void accel_coherence_stats_get(accel_coherence_stats *out)
 {
     out->kept_blocks = atomic_load(&st_kept), out->sorted_blocks = atomic_load(&st_sorted);
     out->packet_rays = atomic_load(&st_packet), out->single_rays = atomic_load(&st_single);
+    out->tiled_blocks = atomic_load(&st_tiled);
 }
 
 /* ---- per-thread scratch, allocated once ----------------------------------- */
@@ -70,9 +83,30 @@ typedef struct {
     uint8_t coherent[BLOCK / P];
 } scratch;
 
+/* The Hilbert index of cell (x, y) of a 2^bits square (Hilbert 1891; the
+ * loop of the usual xy2d, e.g. Wikipedia's "Hilbert curve"): per level the
+ * quadrant's digit, then the quadrant rotated into the curve's frame. */
+static inline uint32_t hilbert_index(uint32_t x, uint32_t y, int bits)
+{
+    uint32_t d = 0;
+    for (uint32_t s = 1u << (bits - 1); s > 0; s >>= 1) {
+        const uint32_t rx = (x & s) != 0, ry = (y & s) != 0;
+        d += s * s * ((3u * rx) ^ ry);
+        if (ry == 0) {
+            if (rx == 1) x = s - 1 - (x & (s - 1)), y = s - 1 - (y & (s - 1));
+            const uint32_t t = x; x = y, y = t;
+        }
+    }
+    return d;
+}
+
 static pthread_key_t scratch_key;
 static pthread_once_t scratch_once = PTHREAD_ONCE_INIT;
 static uint32_t spread_table[DIMS + 1][1u << MAX_DIM_BITS];
+/* hilbert_table[y << HILBERT_BITS | x]: hilbert_index(x, y), looked up (the
+ * loop's branches on random rays' bits mispredict: perf put it at half of
+ * the layer's time on shuffled primaries) */
+static uint16_t hilbert_table[1u << (2 * HILBERT_BITS)];
 
 /* spread_table[k][v]: the bits of v at positions 0, k, 2k, ... */
 static void init_once(void)
@@ -84,6 +118,9 @@ static void init_once(void)
             for (int b = 0; b < MAX_DIM_BITS && b * k < 32; b++) s |= ((v >> b) & 1u) << (b * k);
             spread_table[k][v] = s;
         }
+    for (uint32_t y = 0; y < (1u << HILBERT_BITS); y++)
+        for (uint32_t x = 0; x < (1u << HILBERT_BITS); x++)
+            hilbert_table[y << HILBERT_BITS | x] = (uint16_t)hilbert_index(x, y, HILBERT_BITS);
 }
 
 static scratch *get_scratch(void)
@@ -103,14 +140,15 @@ typedef struct {
     int active[DIMS], k, bits;   /* the varying dimensions, how many, bits each */
     float lo[DIMS], scale[DIMS]; /* quantization: (x - lo) * scale */
     float dir_limit, origin_limit; /* the coherence spreads in quantized units */
+    float dir_ext, ext[DIMS];      /* the largest direction extent, each extent */
 } quant;
 
 static inline void ray_coords(const accel_ray *r, float x[DIMS], unsigned *oct)
 {
     const float ax = fabsf(r->dx), ay = fabsf(r->dy), az = fabsf(r->dz), l1 = ax + ay + az;
     x[0] = r->ox, x[1] = r->oy, x[2] = r->oz;
-    x[3] = l1 > 0.0f ? ax / l1 : 0.0f; /* NaN stays NaN, quantized to 0 below */
-    x[4] = l1 > 0.0f ? ay / l1 : 0.0f;
+    const float inv = l1 > 0.0f ? 1.0f / l1 : 0.0f; /* NaN stays NaN, quantized to 0 below */
+    x[3] = ax * inv, x[4] = ay * inv;
     *oct = (r->dx < 0.0f) | (unsigned)(r->dy < 0.0f) << 1 | (unsigned)(r->dz < 0.0f) << 2;
 }
 
@@ -142,11 +180,33 @@ static void plan_quant(const accel_ray *rays, size_t n, quant *qz)
     const float levels = (float)((1u << qz->bits) - 1u);
     for (int d = 0; d < DIMS; d++) {
         const float e = d < 3 ? ext_o : ext_d;
-        qz->lo[d] = lo[d];
+        qz->lo[d] = lo[d], qz->ext[d] = hi[d] - lo[d];
         qz->scale[d] = e > 0.0f && !(hi[d] == lo[d]) ? levels / e : 0.0f;
     }
+    qz->dir_ext = ext_d;
     qz->dir_limit = ext_d > 0.0f ? DIR_SPREAD * levels / ext_d : 0.0f;
     qz->origin_limit = ORIGIN_FRAC * levels;
+}
+
+/* 1 when no group of 64 can pass the spread limits however the block is
+ * sorted. A camera's block (directions alone vary, k <= 2 of them) evenly
+ * filled leaves a group (64/n * the product of the extents)^(1/k) wide
+ * (shuffled primaries of armadillo 1024x768: 0.048, over DIR_SPREAD; a
+ * block of 4 scanline rows: far under it). Otherwise n rays spread over k
+ * varying dimensions leave a group 1 / (n / 64)^(1/k) of each extent, k
+ * taken as at most 3 (shadow rays' directions follow their origins):
+ * diffuse bounces (a direction extent near 1) leave 1/4 of it, far above
+ * the limit; twice the limits leave room for uneven spreads (armadillo's
+ * shadow rays, an extent of 0.2, still sort into packets). */
+static int hopeless(const quant *qz, size_t n)
+{
+    if (!qz->k || n <= P) return 0;
+    int origins = 0;
+    float area = (float)P / (float)n;
+    for (int j = 0; j < qz->k; j++) origins |= qz->active[j] < 3, area *= qz->ext[qz->active[j]];
+    if (!origins) return powf(area, 1.0f / (float)qz->k) > DIR_SPREAD;
+    const float frac = powf((float)P / (float)n, 1.0f / (float)(qz->k < 3 ? qz->k : 3));
+    return frac * qz->dir_ext > 2.0f * DIR_SPREAD || frac > 2.0f * ORIGIN_FRAC;
 }
 
 static inline uint16_t quantize(float x, float lo, float scale, float levels)
@@ -155,23 +215,6 @@ static inline uint16_t quantize(float x, float lo, float scale, float levels)
     v = v > 0.0f ? v : 0.0f; /* NaN and below the range: 0 */
     v = v < levels ? v : levels;
     return (uint16_t)v;
-}
-
-/* The Hilbert index of cell (x, y) of a 2^bits square (Hilbert 1891; the
- * loop of the usual xy2d, e.g. Wikipedia's "Hilbert curve"): per level the
- * quadrant's digit, then the quadrant rotated into the curve's frame. */
-static inline uint32_t hilbert_index(uint32_t x, uint32_t y, int bits)
-{
-    uint32_t d = 0;
-    for (uint32_t s = 1u << (bits - 1); s > 0; s >>= 1) {
-        const uint32_t rx = (x & s) != 0, ry = (y & s) != 0;
-        d += s * s * ((3u * rx) ^ ry);
-        if (ry == 0) {
-            if (rx == 1) x = s - 1 - (x & (s - 1)), y = s - 1 - (y & (s - 1));
-            const uint32_t t = x; x = y, y = t;
-        }
-    }
-    return d;
 }
 
 /* Keys and quantized coordinates of the block; returns the summed extents
@@ -198,7 +241,8 @@ static double make_keys(const accel_ray *rays, size_t n, const quant *qz, scratc
                 m |= spread[v] << (qz->k - 1 - j);
             }
             if (qz->k == 2)
-                m = hilbert_index(s->q[i][qz->active[0]], s->q[i][qz->active[1]], qz->bits);
+                m = hilbert_table[(uint32_t)s->q[i][qz->active[1]] << HILBERT_BITS |
+                                  s->q[i][qz->active[0]]];
             s->oct[i] = (uint8_t)oct;
             s->key[i] = (uint32_t)oct << MORTON_BITS | m;
             s->idx[i] = (uint16_t)i;
@@ -254,9 +298,10 @@ static double sorted_extent(const scratch *s, size_t n, const quant *qz)
 }
 
 /* Marks the groups of the order map[] (NULL: the caller's) that are
- * coherent enough for a packet. */
-static void classify(scratch *s, size_t n, const quant *qz, const uint16_t *map)
+ * coherent enough for a packet; returns how many. */
+static size_t classify(scratch *s, size_t n, const quant *qz, const uint16_t *map)
 {
+    size_t count = 0;
     for (size_t g = 0; g < n; g += P) {
         const size_t end = g + P < n ? g + P : n;
         const uint8_t oct = s->oct[map ? map[g] : g];
@@ -278,7 +323,107 @@ static void classify(scratch *s, size_t n, const quant *qz, const uint16_t *map)
             ok = d < 3 ? spread <= qz->origin_limit : spread <= qz->dir_limit;
         }
         s->coherent[g / P] = (uint8_t)ok;
+        count += (size_t)ok;
     }
+    return count;
+}
+
+/* ---- raster order ------------------------------------------------------------ */
+
+/* A raster (a camera's rays in pixel order, rows W wide, or 8x8 tiles, which
+ * look like a raster 8 wide) steps regularly from ray to ray and jumps at
+ * the start of each row: a step (max-norm, origins and directions apart)
+ * over RASTER_JUMP times the last regular one is a row start. Going back
+ * W - 1 pixels and down one is about W - 1 steps, so rows of at least
+ * RASTER_MIN_W rays are told apart from their steps. Whatever this finds,
+ * the answers are the same (only the packets change). */
+#define RASTER_JUMP 4.0f
+#define RASTER_MIN_W 5
+/* Rasters at most this wide are kept as they come: 64 consecutive rays
+ * span at least four rows, as tight as a tile. */
+#define RASTER_KEEP_W 16
+
+static inline void ray_step(const accel_ray *a, const accel_ray *b, float *so, float *sd)
+{
+    const float ox = fabsf(b->ox - a->ox), oy = fabsf(b->oy - a->oy), oz = fabsf(b->oz - a->oz);
+    const float dx = fabsf(b->dx - a->dx), dy = fabsf(b->dy - a->dy), dz = fabsf(b->dz - a->dz);
+    const float o = ox > oy ? ox : oy, d = dx > dy ? dx : dy;
+    *so = o > oz ? o : oz, *sd = d > dz ? d : dz;
+}
+
+/* A step from a to b (max-norm of the origin and direction parts) jumps
+ * over the step from c to d: NaN steps jump. */
+static inline int jumps(const accel_ray *a, const accel_ray *b, const accel_ray *c,
+                        const accel_ray *d)
+{
+    float so, sd, ro, rd;
+    ray_step(a, b, &so, &sd);
+    ray_step(c, d, &ro, &rd);
+    return !(so <= RASTER_JUMP * ro) || !(sd <= RASTER_JUMP * rd);
+}
+
+/* 1 when rays[0..n) look like a raster: rows W long (*w = W, *first = the
+ * first row start in the block; *w = 0 when the block holds fewer than
+ * two row starts). The rays are scanned up to the second row start; after
+ * it, each predicted row start p is checked (a jump from p - 1 to p over
+ * the steps on both sides, which agree), not every ray: tile order (W = 8)
+ * costs a few operations a ray, and a wrong guess only loses speed. */
+static int find_raster(const accel_ray *rays, size_t n, size_t *w, size_t *first)
+{
+    *w = *first = 0;
+    if (n < 3) return 0;
+    float ro, rd, so, sd;
+    ray_step(&rays[0], &rays[1], &ro, &rd);
+    ray_step(&rays[1], &rays[2], &so, &sd);
+    ro = so < ro ? so : ro, rd = sd < rd ? sd : rd; /* one of the two is in a row */
+    size_t i = 1;
+    for (; i < n && !*w; i++) {
+        ray_step(&rays[i - 1], &rays[i], &so, &sd);
+        if (so <= RASTER_JUMP * ro && sd <= RASTER_JUMP * rd) {
+            ro = so, rd = sd;
+        } else if (!*first) {
+            *first = i;
+        } else if ((*w = i - *first) < RASTER_MIN_W || *first > *w) {
+            return 0;
+        }
+    }
+    if (!*w) return 1; /* a row or two */
+    const accel_ray *r = rays;
+    for (size_t p = *first + 2 * *w; p < n; p += *w) {
+        const size_t q = p + 1 < n ? p + 1 : p - 2; /* the step after p, or before p - 1 */
+        if (!jumps(&r[p - 1], &r[p], &r[p - 2], &r[p - 1]) || !jumps(&r[p - 1], &r[p], &r[q - 1], &r[q]) ||
+            jumps(&r[p - 2], &r[p - 1], &r[q - 1], &r[q]) || jumps(&r[q - 1], &r[q], &r[p - 2], &r[p - 1]))
+            return 0;
+    }
+    return 1;
+}
+
+/* The block's rays in tiles (8 rows of 8, or 4 of 16, 2 of 32: as many
+ * whole rows as the block holds) of a raster W wide whose first row
+ * starts at index first (0 < first <= W), into idx; the rays of no whole
+ * tile (partial rows, a band's last columns) follow in their order.
+ * Returns 0 (order kept) when the block holds fewer than two whole rows. */
+static int tile_order(size_t n, size_t w, size_t first, uint16_t *idx)
+{
+    const size_t c0 = first < w ? w - first : 0; /* the column of ray 0 */
+    const size_t y0 = c0 ? 1 : 0, y1 = (c0 + n) / w, rows = y1 > y0 ? y1 - y0 : 0;
+    const size_t th = rows >= 8 ? 8 : rows >= 4 ? 4 : rows >= 2 ? 2 : 0;
+    if (!th) return 0;
+    const size_t tw = P / th, bands = rows / th, tiles = w / tw;
+    size_t k = 0;
+    for (size_t b = 0; b < bands; b++)
+        for (size_t t = 0; t < tiles; t++)
+            for (size_t y = 0; y < th; y++) {
+                const size_t base = (y0 + b * th + y) * w + t * tw - c0;
+                for (size_t x = 0; x < tw; x++) idx[k++] = (uint16_t)(base + x);
+            }
+    const size_t yend = y0 + bands * th, xend = tiles * tw;
+    size_t x = c0, y = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (y < y0 || y >= yend || x >= xend) idx[k++] = (uint16_t)i;
+        if (++x == w) x = 0, y++;
+    }
+    return 1;
 }
 
 /* ---- tracing ---------------------------------------------------------------- */
@@ -333,39 +478,77 @@ static void trace_runs(const job *j, const scratch *s, const accel_ray *rays, ch
     atomic_fetch_add_explicit(&st_single, n - packed, memory_order_relaxed);
 }
 
-/* One block of at most BLOCK rays: keys, the keep-or-sort decision, the
- * split, the trace and the scatter back. */
+/* Traces the block in the order idx (all groups as classified in
+ * s->coherent) and scatters the answers and per-ray counters back. */
+static void trace_gathered(const job *j, scratch *s, const accel_ray *rays, char *out, size_t n,
+                           accel_counters *c, uint32_t *steps, uint32_t *prims)
+{
+    for (size_t i = 0; i < n; i++) s->rays[i] = rays[s->idx[i]];
+    trace_runs(j, s, s->rays, (char *)s->hits, n, c, steps ? s->steps : NULL,
+               prims ? s->prims : NULL);
+    if (j->esz == 1)
+        for (size_t i = 0; i < n; i++) out[s->idx[i]] = ((const char *)s->hits)[i];
+    else
+        for (size_t i = 0; i < n; i++) ((accel_hit *)out)[s->idx[i]] = s->hits[i];
+    if (steps)
+        for (size_t i = 0; i < n; i++) steps[s->idx[i]] = s->steps[i];
+    if (prims)
+        for (size_t i = 0; i < n; i++) prims[s->idx[i]] = s->prims[i];
+}
+
+/* A raster block: kept as it comes (8x8 tiles, narrow rasters, a row or
+ * two) or gathered into tiles, every group a packet. Returns 0 when the
+ * block is no raster. */
+static int trace_raster(const job *j, scratch *s, const accel_ray *rays, char *out, size_t n,
+                        accel_counters *c, uint32_t *steps, uint32_t *prims)
+{
+    size_t w, first;
+    if (!find_raster(rays, n, &w, &first)) return 0;
+    memset(s->coherent, 1, (n + P - 1) / P);
+    if (w > RASTER_KEEP_W && tile_order(n, w, first, s->idx)) {
+        trace_gathered(j, s, rays, out, n, c, steps, prims);
+        atomic_fetch_add_explicit(&st_tiled, 1, memory_order_relaxed);
+    } else {
+        call(j, 1, rays, out, n, c);
+        atomic_fetch_add_explicit(&st_kept, 1, memory_order_relaxed);
+        atomic_fetch_add_explicit(&st_packet, n, memory_order_relaxed);
+    }
+    return 1;
+}
+
+/* One block of at most BLOCK rays: a raster's tiles, or keys, the
+ * keep-or-sort decision, the split, the trace and the scatter back. */
 static void trace_block(const job *j, scratch *s, const accel_ray *rays, char *out, size_t n,
                         accel_counters *c)
 {
     uint32_t *steps = c ? c->ray_steps : NULL, *prims = c ? c->ray_prims : NULL;
+    if (trace_raster(j, s, rays, out, n, c, steps, prims)) return;
     quant qz;
     plan_quant(rays, n, &qz);
-    const double kept = make_keys(rays, n, &qz, s);
-    int keep = n <= P;
-    if (!keep) {
-        sort_keys(s, n);
-        keep = kept <= KEEP_SLACK * sorted_extent(s, n, &qz);
-    }
     const int split = j->esz == 1 ? j->occ_single != NULL : j->hit_single != NULL;
+    /* Without a coherent group (none possible, or none after the sort) the
+     * block goes as it comes, no copy: ray by ray where the kind has a
+     * split, else to the packet kernel, whose own fallback then sees
+     * packets as incoherent as they come (nested_grid's packets walked
+     * sorted shuffled primaries at a quarter of their single-ray speed,
+     * armadillo 1024x768). */
+    int keep = 1;
+    if (!hopeless(&qz, n)) {
+        const double kept = make_keys(rays, n, &qz, s);
+        if (n > P) {
+            sort_keys(s, n);
+            keep = kept <= KEEP_SLACK * sorted_extent(s, n, &qz);
+        }
+        if (!classify(s, n, &qz, keep ? NULL : s->idx)) keep = 1;
+    } else {
+        memset(s->coherent, 0, (n + P - 1) / P);
+    }
     if (!split) memset(s->coherent, 1, (n + P - 1) / P);
     if (keep) {
-        if (split) classify(s, n, &qz, NULL);
         trace_runs(j, s, rays, out, n, c, steps, prims);
         atomic_fetch_add_explicit(&st_kept, 1, memory_order_relaxed);
     } else {
-        if (split) classify(s, n, &qz, s->idx);
-        for (size_t i = 0; i < n; i++) s->rays[i] = rays[s->idx[i]];
-        trace_runs(j, s, s->rays, (char *)s->hits, n, c, steps ? s->steps : NULL,
-                   prims ? s->prims : NULL);
-        if (j->esz == 1)
-            for (size_t i = 0; i < n; i++) out[s->idx[i]] = ((const char *)s->hits)[i];
-        else
-            for (size_t i = 0; i < n; i++) ((accel_hit *)out)[s->idx[i]] = s->hits[i];
-        if (steps)
-            for (size_t i = 0; i < n; i++) steps[s->idx[i]] = s->steps[i];
-        if (prims)
-            for (size_t i = 0; i < n; i++) prims[s->idx[i]] = s->prims[i];
+        trace_gathered(j, s, rays, out, n, c, steps, prims);
         atomic_fetch_add_explicit(&st_sorted, 1, memory_order_relaxed);
     }
     if (c) c->ray_steps = steps, c->ray_prims = prims;

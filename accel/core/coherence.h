@@ -21,15 +21,24 @@
  *      packets (kinds whose packet kernel has its own fallback skip this),
  *   5. scatter the answers (and the per-ray counters) back to the caller's
  *      order.
+ * Before all this, a block that is a raster (a camera's rays in pixel order,
+ * found from the steps between consecutive rays) skips the keys: 8x8 tile
+ * order and rasters up to 16 wide are kept, wider ones gathered into tiles
+ * of whole rows (8x8, or 16x4 when a 4096-ray block holds 4 rows of 1024).
+ * A block that no sort could make coherent (diffuse bounces, by its
+ * extents) goes ray by ray in its order, for the kinds with a split.
  * Exactness: a packet kernel's answer for a ray must not depend on the
  * other rays of its packet (tests/test_coherence.c traces shuffled ray sets
- * against the unshuffled ones for every packet mode). The BVH packets (binary
- * and wide) give the same bits whatever the mates. The grids' packets give
- * the same primitive and occlusion, but t/u/v may move by a few float
+ * against the unshuffled ones for every packet mode). The binary and 4-wide
+ * BVH packets give the same bits whatever the mates. The grids' packets
+ * give the same primitive and occlusion, but t/u/v may move by a few float
  * steps: core/prim.h's watertight test decides a hit within its error of
  * the current nearest one in double, so which primitives a ray tested
  * before (its packet's walk, mailbox repeats) picks the float or the
- * double computation of the same hit. Scratch memory is per thread,
+ * double computation of the same hit. The 8-wide packets keep t and the
+ * primitive but, rarely, not u/v: bunny's 96x72 primaries in scanline
+ * against tile order, packets kept as given, differ in u/v on 4 of 6912
+ * rays (sphereflake, the test's scene, on none). Scratch memory is per thread,
  * allocated once (freed when the thread ends).
  */
 #ifndef ACCEL_CORE_COHERENCE_H
@@ -48,14 +57,14 @@ typedef void (*accel_occ_batch_fn)(const void *accel, const accel_ray *rays, uin
                                    size_t count, accel_counters *c);
 
 /* How the packet modes order their rays (process-wide; tools set it once
- * before tracing): ACCEL_ORDER_KEEP (default) hands the caller's order to
- * the packet kernel as it is, 64 consecutive rays a packet;
- * ACCEL_ORDER_SORT sorts as above. KEEP is the default because SORT, as
- * measured on armadillo 1024x768 primary rays (one thread, fresh
- * processes), cost more than it gained: bvh:width=8,traverse=packet 15.6
- * Mrays/s sorted against 41.0 kept in 8x8-tile order, 11.3 against 29.4 in
- * scanline order (the grids 8.4 against 12.0 in scanline order): the block
- * by block hand-over to the packet kernels has not been made cheap yet. */
+ * before tracing): ACCEL_ORDER_SORT (default) forms packets as above;
+ * ACCEL_ORDER_KEEP hands the caller's order to the packet kernel as it is,
+ * 64 consecutive rays a packet. SORT became the default once it stopped
+ * losing in tile order: 8x8 tiles are found as a raster 8 wide and kept
+ * (no keys, no copy), scanline blocks are gathered into tiles by index.
+ * Measured before that (armadillo 1024x768 primaries, one thread):
+ * bvh:width=8,traverse=packet 15.6 Mrays/s sorted against 41.0 kept in
+ * tile order: every kept block had paid for keys and a sort first. */
 enum { ACCEL_ORDER_KEEP = 0, ACCEL_ORDER_SORT = 1 };
 void accel_coherence_set(int order);
 int accel_coherence_get(void);
@@ -105,9 +114,10 @@ void accel_coherent_occluded(const void *accel, const accel_ray *rays, uint8_t *
 
 /* Counts of the last-block decisions, summed process-wide (relaxed atomics,
  * once per block): blocks kept in their order, blocks sorted, rays traced in
- * packets and rays sent to the single-ray kernel. For tests and tools. */
+ * packets and rays sent to the single-ray kernel, raster blocks gathered
+ * into tiles. For tests and tools. */
 typedef struct {
-    uint64_t kept_blocks, sorted_blocks, packet_rays, single_rays;
+    uint64_t kept_blocks, sorted_blocks, packet_rays, single_rays, tiled_blocks;
 } accel_coherence_stats;
 void accel_coherence_stats_get(accel_coherence_stats *out);
 
