@@ -462,7 +462,7 @@ int accel_build_kind(const accel_kind *kind, const char *kv, const accel_scene *
  * packets stay whole, at most ACCEL_CHUNK, about 16 per thread. counters may
  * be NULL; a counted run records broken invariants in them
  * (accel_counters_status). */
-#define ACCEL_CHUNK 4096
+#define ACCEL_CHUNK 8192 /* 8 rows of 1024: scanline files tile 8x8 (core/coherence.h) */
 size_t accel_trace_chunk(size_t count, int threads);
 void accel_trace(const accel_kind *kind, const void *accel, const accel_ray *rays, accel_hit *hits,
                  size_t count, int threads, accel_counters *counters);

@@ -115,7 +115,11 @@ static int make_cases(const accel_scene *s, ray_case c[CASES])
     memset(c, 0, CASES * sizeof *c);
     accel_camera narrow = s->camera;
     narrow.fov_deg = 4.0f;
-    if (rays_primary(&s->camera, 88, 64, &c[0].set, &err)) return 0;
+    /* Two sorting blocks, the second starting mid-row (88 does not divide
+     * the block). */
+    _Static_assert(88 * 128 > ACCEL_COHERENCE_BLOCK && 88 * 128 <= 2 * ACCEL_COHERENCE_BLOCK &&
+                       ACCEL_COHERENCE_BLOCK % 88 != 0, "two blocks, the second mid-row");
+    if (rays_primary(&s->camera, 88, 128, &c[0].set, &err)) return 0;
     if (rays_primary(&narrow, 88, 64, &c[3].set, &err)) return 0;
     c[3].name = "narrow primary";
     accel_hit *ref = malloc(c[0].set.count * sizeof *ref);
@@ -241,7 +245,9 @@ TEST(coherence_block_decisions)
     void *a = test_build_kind("bvh:traverse=packet", &s, 1, &kind, NULL);
     rays_set r;
     accel_error err;
-    if (!a || rays_primary(&s.camera, 96, 64, &r, &err)) {
+    _Static_assert(96 * 128 > ACCEL_COHERENCE_BLOCK && 96 * 128 <= 2 * ACCEL_COHERENCE_BLOCK,
+                   "two sorting blocks");
+    if (!a || rays_primary(&s.camera, 96, 128, &r, &err)) {
         if (a) kind->destroy(a);
         scene_free(&s);
         CHECK(0);

@@ -24,7 +24,9 @@
  * Before all this, a block that is a raster (a camera's rays in pixel order,
  * found from the steps between consecutive rays) skips the keys: 8x8 tile
  * order and rasters up to 16 wide are kept, wider ones gathered into tiles
- * of whole rows (8x8, or 16x4 when a 4096-ray block holds 4 rows of 1024).
+ * of whole rows (8x8 when a block holds 8 rows: 8192 rays, 8 rows of 1024;
+ * 4096-ray blocks gave 1024-wide images 16x4 tiles, and the grid packets
+ * 0.75 of their tile-order speed in scanline order where 8x8 give 0.96).
  * A block that no sort could make coherent (diffuse bounces, by its
  * extents) goes ray by ray in its order, for the kinds with a split.
  * Exactness: a packet kernel's answer for a ray must not depend on the
@@ -70,7 +72,7 @@ void accel_coherence_set(int order);
 int accel_coherence_get(void);
 
 /* Rays per sorting block: a larger batch is ordered block by block. */
-#define ACCEL_COHERENCE_BLOCK 4096
+#define ACCEL_COHERENCE_BLOCK 8192
 
 /* The batch entry of a packet mode: packet(accel, ...) traces groups of 64
  * consecutive rays as packets, single(accel, ...) the incoherent rays.
