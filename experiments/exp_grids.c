@@ -290,7 +290,7 @@ int main(int argc, char **argv)
         scenes[n++] = "teapot_stadium:n=8";
         scenes[n++] = "tetra"; /* a Sierpinski pyramid: mostly empty space */
     }
-    if (!x.quick) x.set_budget_ms = 600, x.build_budget_ms = 800, x.repeats = 10;
+    if (!x.quick) x.set_budget_ms = 400, x.build_budget_ms = 800, x.repeats = 10;
     exp_list list;
     exp_list_make(&x, configs, (int)(sizeof configs / sizeof configs[0]), NULL, &list);
     study st = {0};

@@ -155,7 +155,7 @@ int main(int argc, char **argv)
         scenes[scene_count++] = "teapot_stadium";
     }
     scene_count = exp_scene_list(&x, scenes, scene_count, 8);
-    if (!x.quick) x.set_budget_ms = 800; /* 800x600 passes: fewer, longer rounds */
+    if (!x.quick) x.set_budget_ms = 500; /* 800x600 passes: fewer, longer rounds */
     exp_csv(&x, "scene,spec,rayset,rays,mrays,mrays_lo,mrays_hi,speedup,speedup_lo,speedup_hi,"
                 "steps_per_ray,box_per_ray,prims_per_ray\n");
     exp_list list;

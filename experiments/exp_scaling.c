@@ -207,7 +207,7 @@ int main(int argc, char **argv)
      * rests on seven sizes, not on one size's interval; no verdict rests
      * on build time here, nor on one size's trace time: accel-sublinear is
      * decided by the counts, brute-cost by the fit over the sizes). */
-    if (!x.quick) x.build_budget_ms = 600, x.set_budget_ms = 600;
+    if (!x.quick) x.build_budget_ms = 600, x.set_budget_ms = 400;
     exp_header(&x, "Scaling with scene size", "\"Primary rays cost O(N\xc2\xb7M) without "
                "acceleration\"; structures \"reduce M\"",
                "how do build time, memory and trace time per ray grow with the number of "

@@ -31,7 +31,7 @@
  * base rays): over that it is named as left out. */
 #define CERT_RAYS 1000000
 #define CERT_RAYS_QUICK 20000
-#define CERT_LIMIT_S 2.5 /* was 6: coincident and same_centroid took 44 and 62 s (issue 38's budget) */
+#define CERT_LIMIT_S 1.5 /* was 6: coincident and same_centroid took 44 and 62 s (issue 38's budget) */
 
 static const char *const extras[] = {"bvh:traverse=packet", "bvh:width=4", "bvh:width=8",
                                      "grid:traverse=packet", "grid:skip=macro", "irregular_grid",

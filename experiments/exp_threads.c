@@ -346,7 +346,7 @@ int main(int argc, char **argv)
                 "primary_speedup,diffuse_mrays,diffuse_lo,diffuse_hi,diffuse_speedup\n");
     study st = {0};
     st.probe_eff = -1;
-    if (!x.quick) x.set_budget_ms = 800; /* 800x600 passes: fewer, longer rounds */
+    if (!x.quick) x.set_budget_ms = 500; /* 800x600 passes: fewer, longer rounds */
     scaling(&x, &st, max_t, &mach);
     exp_md(&x, "\n### Real time: frames per second at %dx%d, primary plus shadow rays, %d "
                "thread%s\n", x.rt_size[0], x.rt_size[1], max_t, max_t > 1 ? "s" : "");

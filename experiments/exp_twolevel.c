@@ -387,7 +387,7 @@ int main(int argc, char **argv)
         scenes[scene_count++] = x.quick ? "field:instances=40,detail=2" : "field";
         scenes[scene_count++] = anim0;
     }
-    if (!x.quick) x.set_budget_ms = 800, x.build_budget_ms = 1000; /* 800x600 passes */
+    if (!x.quick) x.set_budget_ms = 500, x.build_budget_ms = 1000; /* 800x600 passes */
     exp_header(&x, "Scenes of many meshes: two-level, refit, frames per second",
                "lab step 1: \"build a BVH per mesh over world-space transformed triangles\"; step "
                "3: \"handle multiple meshes ... optionally transform rays to object space\"; "

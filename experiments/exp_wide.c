@@ -467,7 +467,7 @@ int main(int argc, char **argv)
     }
     /* 800x600 passes of 1.4M-triangle scenes: a measured budget per
      * configuration and set, so that big scenes get fewer rounds. */
-    if (!x.quick) x.set_budget_ms = 500, x.build_budget_ms = 800;
+    if (!x.quick) x.set_budget_ms = 350, x.build_budget_ms = 800;
     exp_header(&x, "Wide BVHs", "(not a lecture claim: issue 11's targets) best wide single-ray "
                "kernel >= 2.8x `bvh` on primary rays and >= 3.7x on shadow and diffuse rays; "
                "coherent mode >= 1.5x the best wide single-ray kernel on primary rays; 2 threads "

@@ -180,7 +180,7 @@ void exp_init(exp_ctx *x, int argc, char **argv, const char *name, const char *q
     if (x->size < 0) x->size = x->quick ? 64 : 128;
     if (x->rt_size[0] <= 0) x->rt_size[0] = x->quick ? 160 : 800, x->rt_size[1] = x->quick ? 120 : 600;
     x->sample_ms = x->quick ? 2.0 : 10.0;
-    x->set_budget_ms = x->quick ? 100.0 : 600.0;
+    x->set_budget_ms = x->quick ? 100.0 : 400.0;
     x->build_budget_ms = x->quick ? 100.0 : 1000.0;
     x->meshes_given = x->mesh_count > 0;
     if (x->quick && x->meshes_given) {

@@ -56,7 +56,7 @@ enum {
 };
 
 /* Builds longer than this are not repeated in the replicas (group.h). */
-#define EXP_REPLICA_REBUILD_MS 250.0
+#define EXP_REPLICA_REBUILD_MS 100.0
 
 typedef struct {
     const char *name;     /* e.g. "exp_sah" */
