@@ -460,10 +460,11 @@ static int run_replica(exp_group *g, int most, int procs, int part, probe_job *p
          * and whose warm pass was a third of a slow replica's time. */
         scratch sc = scratch_make(g);
         for (int c = 0; c < g->count; c++)
-            for (int bit = 1; bit <= BENCH_AO; bit <<= 1)
-                if (g->cfg[c].ok && g->cfg[c].set[exp_set_index(bit)].have &&
-                    g->cfg[c].set[exp_set_index(bit)].pass_ms <= REPLICA_WARM_MS)
+            for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
+                const exp_trace *t = &g->cfg[c].set[exp_set_index(bit)];
+                if (g->cfg[c].ok && t->have && t->pass_ms <= REPLICA_WARM_MS)
                     one_pass(&g->cfg[c], bit, bench_sets_get(g->sets, bit), sc.hits, sc.occ, NULL);
+            }
         free(sc.hits), free(sc.occ);
         run_rounds(g, most, procs, part, probe, aa, 0);
         double *buf = malloc((size_t)(n ? n : 1) * sizeof *buf);
