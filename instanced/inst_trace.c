@@ -26,6 +26,7 @@
 #include "core/prim.h"
 #include "core/variant.h"
 #include "inst_impl.h"
+#include "inst_ray.h"
 #include "inst_wide.h"
 
 #define INST_STACK BVH_MAX_DEPTH /* bvh_build_boxes builds no deeper tree (bvh.h) */
@@ -41,10 +42,6 @@ typedef struct {
 
 #define INLINE static inline __attribute__((always_inline))
 
-/* Compare-and-select (libm's fmax is a call: it must order NaNs). */
-INLINE double inst_dmax(double a, double b) { return a > b ? a : b; }
-INLINE double inst_dmin(double a, double b) { return a < b ? a : b; }
-
 /* ---- the world-space decision ------------------------------------------------ */
 
 INLINE void test_prim(const inst_accel *a, const inst_item *it, const accel_scene *mesh,
@@ -52,37 +49,21 @@ INLINE void test_prim(const inst_accel *a, const inst_item *it, const accel_scen
 {
     const accel_scene *s = a->scene;
     uint32_t id = it->base + q;
-    /* The test runs on the ray's whole range, not up to the closest hit so
-     * far: the shared kernels' answer for a triangle (which of their float
-     * or double paths decides it, hence the last bits of t, u, v) depends
-     * on the range they are given, so with the current hit as its end it
-     * would depend on the order the walk meets the triangles. Then the
-     * closest (t, id) wins: the answer is the same for every walk that
-     * reaches the triangles (width=2 or 8, top=grid, bottom=grid, ...),
-     * however often each is met; the current best is not tested again. */
-    if (id == r->prim) return;
-    float t = r->p.t_far, u = 0.0f, v = 0.0f, w[12];
-    const float *tri;
+    if (id == r->prim) return; /* the current best is not tested again (inst_decide) */
+    float w[12];
+    const float *tri = NULL, *sphere = NULL;
     r->prims++;
     if (spheres && id >= s->tri_count) {
         /* Only plain scenes hold spheres (meshes of instances cannot). */
-        if (!accel_sphere_hit(&r->p, s->spheres + 4 * (size_t)(id - s->tri_count), &t, &u, &v) ||
-            t > r->t || (t == r->t && id > r->prim))
-            return;
+        sphere = s->spheres + 4 * (size_t)(id - s->tri_count);
+    } else if (it->identity || a->world_flat) {
+        tri = s->tris + 9 * (size_t)id;
     } else {
-        if (it->identity || a->world_flat) {
-            tri = s->tris + 9 * (size_t)id;
-        } else {
-            inst_xform_tri(it, mesh->tris + 9 * (size_t)q, w);
-            tri = w;
-        }
-        int hit = naive ? accel_tri_naive(&r->p, tri, &t, &u, &v)
-                        : accel_tri_watertight(&r->p, tri, &t, &u, &v);
-        /* A triangle dead in the flattened scene (no area) is never hit. */
-        if (!hit || t > r->t || (t == r->t && id > r->prim) || accel_tri_is_degenerate(tri)) return;
+        inst_xform_tri(it, mesh->tris + 9 * (size_t)q, w);
+        tri = w;
     }
-    r->t = t, r->u = u, r->v = v, r->prim = id;
-    if (r->any) r->done = 1;
+    if (inst_decide(&r->p, tri, sphere, id, naive, &r->t, &r->u, &r->v, &r->prim) && r->any)
+        r->done = 1;
 }
 
 /* ---- bottom level: BVH ------------------------------------------------------ */
@@ -109,8 +90,7 @@ INLINE void walk_bvh(const inst_accel *a, const inst_item *it, const inst_bottom
     vec3 inv = v3(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
     int neg[3] = {signbit(dir.x) != 0, signbit(dir.y) != 0, signbit(dir.z) != 0};
     float slack = it->identity ? 0.0f : 0x1p-20f;
-    float lo_t = (float)((double)r->p.t_near - shift);
-    if (slack != 0.0f) lo_t -= fabsf(lo_t) * slack; /* never 0 * inf */
+    float lo_t = inst_walk_lo(r->p.t_near, shift, slack);
     struct { uint32_t node; float entry; } stack[INST_STACK];
     int sp = 0;
     uint32_t node = 0;
@@ -123,8 +103,7 @@ INLINE void walk_bvh(const inst_accel *a, const inst_item *it, const inst_bottom
                 if (r->done) return;
             }
         } else {
-            float hi_t = (float)((double)r->t - shift);
-            if (slack != 0.0f) hi_t += fabsf(hi_t) * slack;
+            float hi_t = inst_walk_hi(r->t, shift, slack);
             uint32_t c0 = n->left_first, c1 = c0 + 1;
             float e0, e1;
             int h0 = node_slab(&h->nodes[c0], pad, org, inv, neg, lo_t, hi_t, &e0);
@@ -146,8 +125,7 @@ INLINE void walk_bvh(const inst_accel *a, const inst_item *it, const inst_bottom
         for (;;) {
             if (sp == 0) return;
             --sp;
-            float hi_t = (float)((double)r->t - shift);
-            if (slack != 0.0f) hi_t += fabsf(hi_t) * slack;
+            float hi_t = inst_walk_hi(r->t, shift, slack);
             if (box3_entry_before(stack[sp].entry, hi_t)) break;
         }
         node = stack[sp].node;
@@ -174,15 +152,13 @@ INLINE void walk_wide(const inst_accel *a, const inst_item *it, const bvh_box_tr
     vec3 inv = top ? r->p.inv_dir : v3(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
     int neg[3] = {signbit(dir.x) != 0, signbit(dir.y) != 0, signbit(dir.z) != 0};
     float slack = top || it->identity ? 0.0f : 0x1p-20f;
-    float lo_t = top ? r->p.t_near : (float)((double)r->p.t_near - shift);
-    if (slack != 0.0f) lo_t -= fabsf(lo_t) * slack; /* never 0 * inf */
+    float lo_t = inst_walk_lo(r->p.t_near, shift, slack); /* top: shift 0, slack 0 */
     const int padded = pad != 0.0f;
     struct { uint32_t ref; float entry; } stack[(INST_WIDE - 1) * INST_STACK + 1], hit[INST_WIDE];
     int sp = 0;
     uint32_t ref = w->root;
     /* The end of the range in the walk's parameter: changes only at leaves. */
-    float hi_t = top ? r->t : (float)((double)r->t - shift);
-    if (slack != 0.0f) hi_t += fabsf(hi_t) * slack;
+    float hi_t = inst_walk_hi(r->t, shift, slack);
     for (;;) {
         if (ref & INST_WIDE_LEAF) {
             const bvh_node *n = &h->nodes[ref & ~INST_WIDE_LEAF];
@@ -194,8 +170,7 @@ INLINE void walk_wide(const inst_accel *a, const inst_item *it, const bvh_box_tr
                     test_prim(a, it, mesh, q, r, naive, spheres);
                 if (r->done) return;
             }
-            hi_t = top ? r->t : (float)((double)r->t - shift);
-            if (slack != 0.0f) hi_t += fabsf(hi_t) * slack;
+            hi_t = inst_walk_hi(r->t, shift, slack);
         } else {
             const inst_wnode *nd = &w->nodes[ref];
             float e[INST_WIDE];
@@ -357,8 +332,7 @@ static float walk_visit(void *ctx, uint32_t q, float t_max)
     else
         test_prim(w->a, w->it, w->b->mesh, q, w->r, 0, 0);
     if (w->r->done) return -INFINITY;
-    float hi_t = (float)((double)w->r->t - w->shift);
-    if (w->slack != 0.0f) hi_t += fabsf(hi_t) * w->slack; /* never 0 * inf */
+    float hi_t = inst_walk_hi(w->r->t, w->shift, w->slack);
     return hi_t < t_max ? hi_t : t_max;
 }
 
@@ -368,12 +342,8 @@ static __attribute__((noinline)) void walk_kind(const inst_accel *a, const inst_
                                                 int spheres)
 {
     walk_ctx w = {a, it, b, r, shift, it->identity ? 0.0f : 0x1p-20f, naive, spheres};
-    float lo_t = (float)((double)r->p.t_near - shift);
-    float hi_t = (float)((double)r->t - shift);
-    if (w.slack != 0.0f) {
-        lo_t -= fabsf(lo_t) * w.slack; /* never 0 * inf */
-        hi_t += fabsf(hi_t) * w.slack;
-    }
+    float lo_t = inst_walk_lo(r->p.t_near, shift, w.slack);
+    float hi_t = inst_walk_hi(r->t, shift, w.slack);
     accel_ray ray = {org.x, org.y, org.z, lo_t, dir.x, dir.y, dir.z, hi_t};
     uint32_t steps = 0;
     if (b->walk) a->walk_kind->walk(b->walk, &ray, pad, walk_visit, &w, &steps);
@@ -402,63 +372,29 @@ INLINE void visit_instance(const inst_accel *a, uint32_t k, ray_state *r, int na
             walk_grid_flat(a, it, b, r, r->o, r->d, r->p.t_near, naive, spheres);
         return;
     }
-    /* The ray in object space, in double, with a bound on its rounding. */
-    const double *m = it->inverse;
-    double o[3], d[3], eo = 0.0, ed = 0.0, oa = 0.0, da = 0.0;
-    for (int i = 0; i < 3; i++) {
-        const double *row = m + 4 * i;
-        o[i] = row[0] * r->o[0] + row[1] * r->o[1] + row[2] * r->o[2] + row[3];
-        d[i] = row[0] * r->d[0] + row[1] * r->d[1] + row[2] * r->d[2];
-        eo = inst_dmax(eo, fabs(row[0] * r->o[0]) + fabs(row[1] * r->o[1]) + fabs(row[2] * r->o[2]) +
-                          fabs(row[3]));
-        ed = inst_dmax(ed, fabs(row[0] * r->d[0]) + fabs(row[1] * r->d[1]) + fabs(row[2] * r->d[2]));
-        oa = inst_dmax(oa, fabs(o[i]));
-        da = inst_dmax(da, fabs(d[i]));
-    }
-    if (!(da > 0.0) || !isfinite(oa) || !isfinite(da)) return;
-    /* Points that matter lie in the padded box: |t d| <= |o| + B + pad. */
-    double reach = oa + b->abs_max + 4.0 * it->pad + 1.0;
-    double e_ray = 0x1p-50 * (eo + ed * reach / da);
-    double pad = a->no_pad ? 0.0 : 2.0 * it->pad + e_ray;
-    /* Clip to the mesh's box grown by the pad. */
-    double s0 = r->p.t_near, s1 = r->t;
-    for (int i = 0; i < 3; i++) {
-        double lo = b->box_lo[i] - pad, hi = b->box_hi[i] + pad;
-        if (d[i] == 0.0) {
-            if (o[i] < lo || o[i] > hi) return;
-            continue;
-        }
-        /* One division (a product's extra rounding is far inside the
-         * slack); a reciprocal that overflows (d subnormal) divides. */
-        double inv = 1.0 / d[i];
-        double t0 = isfinite(inv) ? (lo - o[i]) * inv : (lo - o[i]) / d[i];
-        double t1 = isfinite(inv) ? (hi - o[i]) * inv : (hi - o[i]) / d[i];
-        if (t0 > t1) { double x = t0; t0 = t1; t1 = x; }
-        double slack = 0x1p-40 * (fabs(t0) + fabs(t1));
-        s0 = inst_dmax(s0, t0 - slack);
-        s1 = inst_dmin(s1, t1 + slack);
-    }
+    /* The ray in object space, in double, with a bound on its rounding,
+     * clipped to the mesh's padded box (inst_ray.h). */
+    inst_oray q;
+    int clip = inst_object_ray(a, it, b, r->o, r->d, r->p.t_near, r->t, &q);
+    if (clip < 0) return;
     r->boxes++;
-    if (!(s0 <= s1)) return;
+    if (!clip) return;
+    const double *o = q.o, *d = q.d, s0 = q.s0, e_ray = q.e_ray;
     if (a->bottom_kind == INST_GRID) {
         /* The grid holds boxes grown by the largest pad of the mesh's
          * instances plus 2^-24 of its size; a ray known more loosely than
          * that (an origin some 2^20 mesh sizes away) tests every triangle. */
         if (e_ray > 0x1p-26 * b->abs_max) {
-            for (uint32_t q = 0; q < b->mesh->tri_count && !r->done; q++)
-                test_prim(a, it, b->mesh, q, r, naive, 0);
+            for (uint32_t k = 0; k < b->mesh->tri_count && !r->done; k++)
+                test_prim(a, it, b->mesh, k, r, naive, 0);
             return;
         }
         walk_grid_flat(a, it, b, r, o, d, s0, naive, spheres);
         return;
     }
-    /* Float ray from the box entry: its rounding is then bounded by the
-     * box's size, not by how far away the ray started. */
-    vec3 of = v3((float)(o[0] + s0 * d[0]), (float)(o[1] + s0 * d[1]), (float)(o[2] + s0 * d[2]));
-    vec3 df = v3((float)d[0], (float)d[1], (float)d[2]);
-    double pf = a->no_pad ? 0.0
-                          : pad + 0x1p-20 * (b->abs_max + 2.0 * pad) + 0x1p-50 * (oa + fabs(s0) * da);
-    float padf = (float)(pf * (1.0 + 0x1p-20));
+    vec3 of, df;
+    float padf;
+    inst_object_float(a, b, &q, &of, &df, &padf);
     if (a->bottom_kind == INST_WALK)
         walk_kind(a, it, b, r, of, df, padf, s0, naive, spheres);
     else if (a->width == INST_WIDE)
