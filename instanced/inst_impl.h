@@ -124,6 +124,7 @@ typedef struct {
     int no_pad;               /* pad=0: boxes not grown (shows what the pad is for) */
     int leaf;                 /* bottom=bvh: largest leaf */
     int width;                /* BVH levels walked as the binary tree (2) or 8-wide (8) */
+    int packets;              /* traverse=packet (inst_packet.c) */
     double lambda, top_lambda;
     uint32_t bottom_count, item_count;
     inst_bottom *bottoms;
@@ -151,10 +152,20 @@ int inst_use_bottom_kind(inst_accel *a, const accel_kind *k, accel_error *err);
 int inst_update(void *a, const accel_scene *scene, int refit, accel_update_stats *st,
                 accel_error *err);
 
+/* The kind's entries (inst_packet.c): packets with traverse=packet, else
+ * ray by ray (inst_trace.c). */
 void inst_intersect(const void *a, const accel_ray *rays, accel_hit *hits, size_t n,
                     accel_counters *c);
 void inst_occluded(const void *a, const accel_ray *rays, uint8_t *occ, size_t n,
                    accel_counters *c);
+void inst_single_intersect(const void *a, const accel_ray *rays, accel_hit *hits, size_t n,
+                           accel_counters *c);
+void inst_single_occluded(const void *a, const accel_ray *rays, uint8_t *occ, size_t n,
+                          accel_counters *c);
+void inst_packet_intersect(const void *a, const accel_ray *rays, accel_hit *hits, size_t n,
+                           accel_counters *c);
+void inst_packet_occluded(const void *a, const accel_ray *rays, uint8_t *occ, size_t n,
+                          accel_counters *c);
 
 #ifdef __cplusplus
 }

@@ -20,7 +20,7 @@
 /* The kind's parameters as parsed, one field per key; choices hold their
  * position in the table's list (top: bvh 0, grid 1; world: compute 0, flat 1). */
 typedef struct {
-    int top, leaf, world, pad, width;
+    int top, leaf, world, pad, width, traverse;
     double lambda, top_lambda;
     char bottom[ACCEL_PARAM_TEXT];
 } inst_spec;
@@ -41,6 +41,11 @@ static const accel_param_def inst_params[] = {
      .help = "BVH levels (top=bvh, bottom=bvh): walked as the binary tree (2) or collapsed to "
              "8-wide nodes whose 8 boxes a ray tests at once (8); the same boxes and leaves",
      .offset = offsetof(inst_spec, width)},
+    {.key = "traverse", .type = ACCEL_PARAM_ENUM, .def = "single", .choices = "single|packet",
+     .help = "single: ray by ray; packet: 64 rays walk both 8-wide BVH levels together, each "
+             "world triangle computed once per leaf for all of them (needs top=bvh, bottom=bvh, "
+             "width=8; any ray order: core/coherence.h)",
+     .offset = offsetof(inst_spec, traverse)},
     {.key = "lambda", .type = ACCEL_PARAM_FLOAT, .def = "2", .min = 0.01, .max = 64,
      .help = "bottom=grid: cells per primitive",
      .offset = offsetof(inst_spec, lambda)},
@@ -399,6 +404,12 @@ int inst_build_with(const accel_scene *scene, const accel_params *params, int th
     a->no_pad = spec->pad == 0;
     a->leaf = spec->leaf;
     a->width = spec->width;
+    a->packets = spec->traverse == 1;
+    if (a->packets && (a->top != INST_BVH || a->bottom_kind != INST_BVH || a->width != INST_WIDE)) {
+        free(a);
+        return accel_fail(err, ACCEL_ERR_SPEC,
+                          "instanced: traverse=packet needs top=bvh, bottom=bvh and width=8");
+    }
     a->lambda = spec->lambda;
     a->top_lambda = spec->top_lambda;
     const accel_instances *set = scene->instances;
@@ -446,7 +457,8 @@ int instanced_build_with_bottom(const accel_scene *scene, const char *kv, const 
 
 static const char *const inst_variants[] = {
     "", "top=grid", "bottom=grid", "top=grid,bottom=grid", "world=flat,leaf=1", "width=2",
-    "bottom=bvh:width=8", "top=grid,bottom=nested_grid", "bottom=grid:", NULL,
+    "bottom=bvh:width=8", "top=grid,bottom=nested_grid", "bottom=grid:", "traverse=packet",
+    "traverse=packet,world=flat,leaf=1", NULL,
 };
 
 const accel_kind accel_kind_instanced = {

@@ -62,7 +62,7 @@ INLINE void test_prim(const inst_accel *a, const inst_item *it, const accel_scen
         inst_xform_tri(it, mesh->tris + 9 * (size_t)q, w);
         tri = w;
     }
-    if (inst_decide(&r->p, tri, sphere, id, naive, &r->t, &r->u, &r->v, &r->prim) && r->any)
+    if (inst_decide(&r->p, tri, NULL, sphere, id, naive, &r->t, &r->u, &r->v, &r->prim) && r->any)
         r->done = 1;
 }
 
@@ -550,5 +550,5 @@ static unsigned flags_of(const inst_accel *a)
     return accel_variant_flags(a->naive, a->spheres, 0);
 }
 
-ACCEL_KERNEL_ENTRIES(inst_intersect, inst_occluded, const void, inst_closest_table, inst_any_table,
+ACCEL_KERNEL_ENTRIES(inst_single_intersect, inst_single_occluded, const void, inst_closest_table, inst_any_table,
                      flags_of)

@@ -1,0 +1,518 @@
+/*
+ * inst_packet.c - traverse=packet: the `instanced` kind's rays walked in
+ * packets of 64 through both 8-wide levels (top=bvh, bottom=bvh, width=8).
+ *
+ * The packet walks the top level's wide nodes together: one child box is
+ * tested against 8 rays per AVX sequence, lane by lane the very float
+ * operations of the single-ray walk's inst_wide_hits (the near and far
+ * planes picked per lane by the sign of the reciprocal direction, so rays
+ * of several octants may share a packet). At an instance, every ray of the
+ * packet that reached it goes to object space as the single-ray walk takes
+ * it (inst_ray.h: the same double transform, pad, clip and float ray from
+ * the box entry), and the rays that reach the mesh's padded box walk its
+ * wide bottom level as a packet, each lane's box grown by its own ray's
+ * pad. At a bottom leaf each world triangle is computed once
+ * (inst_xform_tri) and decided for every ray of the packet that reached
+ * the leaf, with inst_decide on the ray's whole range: so a ray gets the
+ * answer the single-ray walk gives it, bit for bit, whatever its packet's
+ * other rays (README.md: every walk that reaches the triangles names the
+ * same triangle with the same bits).
+ *
+ * A stack entry holds the mask of the rays that hit its box and the
+ * smallest of their entry distances; at the pop, rays whose closest hit
+ * now lies before that entry leave the entry. When the walk's rays share
+ * one octant (per level: a rotation may split an octant), a frustum test
+ * first bounds every ray's slab interval for the node's 8 children at
+ * once by interval arithmetic over the rays' origins, reciprocal
+ * directions, ranges and pads (the largest), as bvh/wide/packet.h does
+ * (Boulos, Wald and Shirley, UUCS-06-010, 2006): a child no ray can hit
+ * is dropped before its per-ray tests.
+ *
+ * Rays reach the packets through core/coherence.h: any ray order, and
+ * groups of 64 with no coherence go to the single-ray walk instead.
+ */
+#include <math.h>
+#include <string.h>
+
+#include "core/coherence.h"
+#include "core/prim.h"
+#include "core/variant.h"
+#include "inst_impl.h"
+#include "inst_ray.h"
+#include "inst_wide.h"
+
+enum { IP_RAYS = 64 };
+#define IP_STACK ((INST_WIDE - 1) * BVH_MAX_DEPTH + 1)
+#define IP_BIT(r) ((uint64_t)1 << (r))
+
+/* The packet's rays as one walk sees them: the world rays at the top
+ * level, one instance's object-space rays (from its box entry) below.
+ * Rows of 64 floats, each 32-byte aligned for 8-lane loads. */
+typedef struct {
+    float ox[IP_RAYS] __attribute__((aligned(32)));
+    float oy[IP_RAYS], oz[IP_RAYS], ix[IP_RAYS], iy[IP_RAYS], iz[IP_RAYS];
+    float lo[IP_RAYS], hi[IP_RAYS]; /* the range in the walk's parameter */
+    float pad[IP_RAYS];             /* each ray's box growth (padded) */
+    double shift[IP_RAYS];          /* walk parameter = t - shift */
+    float slack;                    /* relative widening of hi (inst_walk_hi) */
+    int padded;
+    /* The frustum (frustum != 0: one octant, finite reciprocals). */
+    int frustum, octant;
+    float o_lo[3], o_hi[3], i_lo[3], i_hi[3], t_lo, t_hi, pad_max;
+} ip_view;
+
+typedef struct {
+    ip_view top;                /* world rays: shift 0, slack 0, no pad */
+    accel_ray_prep p[IP_RAYS];  /* world rays for the triangle tests */
+    double o[IP_RAYS][3], d[IP_RAYS][3];
+    float t[IP_RAYS], u[IP_RAYS], v[IP_RAYS];
+    uint32_t prim[IP_RAYS];
+    uint64_t live;              /* valid rays still looking (any hit: until one) */
+    int any;
+    int shared;                 /* every valid ray has the same origin and axes */
+    uint32_t top_steps[IP_RAYS], bottom_steps[IP_RAYS], boxes[IP_RAYS], prims[IP_RAYS];
+} ip_packet;
+
+typedef struct {
+    uint32_t ref;
+    float entry; /* smallest entry distance of the rays in mask */
+    uint64_t mask;
+} ip_entry;
+
+/* ---- 8 rays against one child box ------------------------------------------------ */
+
+/* Rays of group g (candidates m) whose range meets child c's box grown by
+ * their pads; *entry lowered to the smallest entry among them. Lane by
+ * lane inst_wide_hits (inst_wide.h) on that ray. */
+INST_INLINE unsigned ip_group(const ip_view *v, const inst_wnode *n, unsigned c, unsigned g,
+                              unsigned m, float *entry)
+{
+    const unsigned r = 8 * g;
+#if INST_WIDE_AVX
+    const float *org[3] = {v->ox + r, v->oy + r, v->oz + r};
+    const float *inv[3] = {v->ix + r, v->iy + r, v->iz + r};
+    __m256 t0 = _mm256_load_ps(v->lo + r), t1 = _mm256_load_ps(v->hi + r);
+    __m256 p = _mm256_load_ps(v->pad + r);
+    for (int a = 0; a < 3; a++) {
+        __m256 lo = _mm256_set1_ps(n->box[2 * a][c]), hi = _mm256_set1_ps(n->box[2 * a + 1][c]);
+        if (v->padded) lo = _mm256_sub_ps(lo, p), hi = _mm256_add_ps(hi, p);
+        __m256 iv = _mm256_load_ps(inv[a]), ov = _mm256_load_ps(org[a]);
+        /* The near plane is hi where the direction is negative. */
+        __m256 nr = _mm256_blendv_ps(lo, hi, iv), fr = _mm256_blendv_ps(hi, lo, iv);
+        t0 = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(nr, ov), iv), t0);
+        t1 = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(fr, ov), iv), t1);
+    }
+    __m256 abs1 = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), t1);
+    __m256 lim = _mm256_add_ps(t1, _mm256_mul_ps(abs1, _mm256_set1_ps(ACCEL_SLAB_PAD)));
+    unsigned h = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(t0, lim, _CMP_LE_OQ)) & m;
+    if (h) {
+        float e[8];
+        _mm256_storeu_ps(e, t0);
+        for (unsigned k = h; k; k &= k - 1) {
+            float x = e[__builtin_ctz(k)];
+            if (x < *entry) *entry = x;
+        }
+    }
+    return h;
+#else
+    unsigned h = 0;
+    for (unsigned k = m; k; k &= k - 1) {
+        unsigned l = (unsigned)__builtin_ctz(k), q = r + l;
+        float lo[3] = {n->box[0][c], n->box[2][c], n->box[4][c]};
+        float hi[3] = {n->box[1][c], n->box[3][c], n->box[5][c]};
+        if (v->padded)
+            for (int a = 0; a < 3; a++) lo[a] -= v->pad[q], hi[a] += v->pad[q];
+        vec3 o = v3(v->ox[q], v->oy[q], v->oz[q]), iv = v3(v->ix[q], v->iy[q], v->iz[q]);
+        int neg[3] = {signbit(iv.x) != 0, signbit(iv.y) != 0, signbit(iv.z) != 0};
+        float e;
+        if (box3_slab(lo, hi, o, iv, neg, v->lo[q], v->hi[q], &e)) {
+            h |= 1u << l;
+            if (e < *entry) *entry = e;
+        }
+    }
+    return h;
+#endif
+}
+
+/* Children some ray of the view may hit (the frustum test, see above). */
+INST_INLINE unsigned ip_frustum(const ip_view *v, const inst_wnode *n)
+{
+#if INST_WIDE_AVX
+    __m256 t0 = _mm256_set1_ps(v->t_lo), t1 = _mm256_set1_ps(v->t_hi);
+    __m256 p = _mm256_set1_ps(v->pad_max);
+    for (int a = 0; a < 3; a++) {
+        __m256 lo = _mm256_sub_ps(_mm256_load_ps(n->box[2 * a]), p);
+        __m256 hi = _mm256_add_ps(_mm256_load_ps(n->box[2 * a + 1]), p);
+        int neg = v->octant >> a & 1;
+        __m256 nr = neg ? hi : lo, fr = neg ? lo : hi;
+        __m256 olo = _mm256_set1_ps(v->o_lo[a]), ohi = _mm256_set1_ps(v->o_hi[a]);
+        __m256 ilo = _mm256_set1_ps(v->i_lo[a]), ihi = _mm256_set1_ps(v->i_hi[a]);
+        __m256 d0 = _mm256_sub_ps(nr, ohi), d1 = _mm256_sub_ps(nr, olo);
+        __m256 e0 = _mm256_sub_ps(fr, ohi), e1 = _mm256_sub_ps(fr, olo);
+        __m256 l = _mm256_min_ps(_mm256_min_ps(_mm256_mul_ps(d0, ilo), _mm256_mul_ps(d0, ihi)),
+                                 _mm256_min_ps(_mm256_mul_ps(d1, ilo), _mm256_mul_ps(d1, ihi)));
+        __m256 h = _mm256_max_ps(_mm256_max_ps(_mm256_mul_ps(e0, ilo), _mm256_mul_ps(e0, ihi)),
+                                 _mm256_max_ps(_mm256_mul_ps(e1, ilo), _mm256_mul_ps(e1, ihi)));
+        t0 = _mm256_max_ps(l, t0);
+        t1 = _mm256_min_ps(h, t1);
+    }
+    __m256 abs1 = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), t1);
+    __m256 lim = _mm256_add_ps(t1, _mm256_mul_ps(abs1, _mm256_set1_ps(ACCEL_SLAB_PAD)));
+    return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(t0, lim, _CMP_LE_OQ));
+#else
+    (void)v, (void)n;
+    return 0xFFu;
+#endif
+}
+
+/* The frustum's bounds over the rays m of the view; none unless they
+ * share an octant and their reciprocals are finite. */
+static void ip_bounds(ip_view *v, uint64_t m)
+{
+    v->frustum = 0;
+    if (!m) return;
+    const float *row[9] = {v->ox, v->oy, v->oz, v->ix, v->iy, v->iz, v->lo, v->hi, v->pad};
+    unsigned r0 = (unsigned)__builtin_ctzll(m);
+    int oct = (signbit(v->ix[r0]) != 0) | (signbit(v->iy[r0]) != 0) << 1 |
+              (signbit(v->iz[r0]) != 0) << 2;
+    float lo[9], hi[9];
+#if INST_WIDE_AVX
+    __m256 vlo[9], vhi[9];
+    for (int k = 0; k < 9; k++) vlo[k] = _mm256_set1_ps(INFINITY), vhi[k] = _mm256_set1_ps(-INFINITY);
+    const __m256 inf = _mm256_set1_ps(INFINITY), sign = _mm256_set1_ps(-0.0f);
+    for (unsigned g = 0; g < IP_RAYS / 8; g++) {
+        unsigned gm = (unsigned)(m >> (8 * g)) & 0xFFu;
+        if (!gm) continue;
+        __m256 keep = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+            _mm256_and_si256(_mm256_set1_epi32((int)gm), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+            _mm256_setzero_si256()));
+        for (int k = 0; k < 9; k++) {
+            __m256 x = _mm256_load_ps(row[k] + 8 * g);
+            vlo[k] = _mm256_min_ps(vlo[k], _mm256_blendv_ps(inf, x, keep));
+            vhi[k] = _mm256_max_ps(vhi[k], _mm256_blendv_ps(_mm256_xor_ps(inf, sign), x, keep));
+            if (k >= 3 && k < 6) {
+                int a = k - 3;
+                unsigned neg = (unsigned)_mm256_movemask_ps(x) & gm;
+                if (neg != ((oct >> a & 1) ? gm : 0u)) return;
+                __m256 fin = _mm256_cmp_ps(_mm256_andnot_ps(sign, x), inf, _CMP_LT_OQ);
+                if (((unsigned)_mm256_movemask_ps(fin) & gm) != gm) return;
+            }
+        }
+    }
+    for (int k = 0; k < 9; k++) {
+        float l[8], h[8];
+        _mm256_storeu_ps(l, vlo[k]);
+        _mm256_storeu_ps(h, vhi[k]);
+        lo[k] = l[0], hi[k] = h[0];
+        for (int j = 1; j < 8; j++) lo[k] = minf(lo[k], l[j]), hi[k] = maxf(hi[k], h[j]);
+    }
+#else
+    for (int k = 0; k < 9; k++) lo[k] = hi[k] = row[k][r0];
+    for (uint64_t q = m; q; q &= q - 1) {
+        unsigned r = (unsigned)__builtin_ctzll(q);
+        int o = (signbit(v->ix[r]) != 0) | (signbit(v->iy[r]) != 0) << 1 | (signbit(v->iz[r]) != 0) << 2;
+        if (o != oct || !isfinite(v->ix[r]) || !isfinite(v->iy[r]) || !isfinite(v->iz[r])) return;
+        for (int k = 0; k < 9; k++) lo[k] = minf(lo[k], row[k][r]), hi[k] = maxf(hi[k], row[k][r]);
+    }
+#endif
+    for (int a = 0; a < 3; a++) {
+        v->o_lo[a] = lo[a], v->o_hi[a] = hi[a];
+        v->i_lo[a] = lo[3 + a], v->i_hi[a] = hi[3 + a];
+    }
+    v->t_lo = lo[6], v->t_hi = hi[7], v->pad_max = v->padded ? hi[8] : 0.0f;
+    v->octant = oct;
+    v->frustum = 1;
+}
+
+/* The rays of m whose range still reaches an entry at `entry`
+ * (box3_entry_before on each ray's current end). */
+INST_INLINE uint64_t ip_still(const ip_view *v, uint64_t m, float entry)
+{
+    uint64_t keep = 0;
+    for (unsigned g = 0; g < IP_RAYS / 8; g++) {
+        unsigned gm = (unsigned)(m >> (8 * g)) & 0xFFu;
+        if (!gm) continue;
+#if INST_WIDE_AVX
+        __m256 hi = _mm256_load_ps(v->hi + 8 * g);
+        __m256 lim = _mm256_add_ps(
+            hi, _mm256_mul_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0f), hi), _mm256_set1_ps(ACCEL_SLAB_PAD)));
+        gm &= (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(_mm256_set1_ps(entry), lim, _CMP_LE_OQ));
+#else
+        for (unsigned k = gm; k; k &= k - 1) {
+            unsigned l = (unsigned)__builtin_ctz(k);
+            if (!box3_entry_before(entry, v->hi[8 * g + l])) gm &= ~(1u << l);
+        }
+#endif
+        keep |= (uint64_t)gm << (8 * g);
+    }
+    return keep;
+}
+
+/* ---- leaves ----------------------------------------------------------------------- */
+
+/* A bottom leaf: its triangles (mesh ids qs) decided in world space for
+ * the rays m, each world triangle computed once for all of them. */
+INST_INLINE void ip_leaf(const inst_accel *a, ip_packet *pk, ip_view *v, const inst_item *it,
+                         const accel_scene *mesh, const uint32_t *qs, uint32_t count, uint64_t m,
+                         int naive, int spheres, int counted)
+{
+    const accel_scene *s = a->scene;
+    for (uint32_t i = 0; i < count && (m &= pk->live); i++) {
+        uint32_t q = qs[i], id = it->base + q;
+        float w[12];
+        const float *tri = NULL, *sphere = NULL;
+        if (spheres && id >= s->tri_count) { /* only plain scenes hold spheres */
+            sphere = s->spheres + 4 * (size_t)(id - s->tri_count);
+        } else if (it->identity || a->world_flat) {
+            tri = s->tris + 9 * (size_t)id;
+        } else {
+            inst_xform_tri(it, mesh->tris + 9 * (size_t)q, w);
+            tri = w;
+        }
+        /* Rays that share their origin and axes (a pinhole camera's)
+         * share the triangle's relative vertices, and skip it where its
+         * edge functions, affine in their shear, surely mix signs: the
+         * exact test's first rule (core/prim.h), so the answer stands. */
+        accel_tri_rel rel;
+        accel_tri_aff f;
+        const int cull = pk->shared && tri && !naive;
+        if (cull) {
+            accel_tri_rel_of(&pk->p[__builtin_ctzll(m)], tri, &rel);
+            accel_tri_aff_of(&rel, &f);
+        }
+        for (uint64_t k = m; k; k &= k - 1) {
+            unsigned r = (unsigned)__builtin_ctzll(k);
+            if (id == pk->prim[r]) continue;
+            if (counted) pk->prims[r]++;
+            if (cull && accel_tri_aff_miss(&f, pk->p[r].sx, pk->p[r].sy)) continue;
+            if (inst_decide(&pk->p[r], tri, cull ? &rel : NULL, sphere, id, naive, &pk->t[r],
+                            &pk->u[r], &pk->v[r], &pk->prim[r]) &&
+                pk->any)
+                pk->live &= ~IP_BIT(r);
+        }
+    }
+    for (uint64_t k = m; k; k &= k - 1) {
+        unsigned r = (unsigned)__builtin_ctzll(k);
+        v->hi[r] = inst_walk_hi(pk->t[r], v->shift[r], v->slack);
+        pk->top.hi[r] = pk->t[r];
+    }
+}
+
+static void ip_instance(const inst_accel *a, ip_packet *pk, uint32_t k, uint64_t m, int naive,
+                        int spheres, int counted);
+
+/* ---- the walk of one level ------------------------------------------------------- */
+
+/* The packet's rays m through the wide tree (h, w): the top level (it ==
+ * NULL, view pk->top, leaves are instances) or instance it's bottom level
+ * (view v). */
+INST_INLINE void ip_walk(const inst_accel *a, ip_packet *pk, ip_view *v, const bvh_box_tree *h,
+                         const inst_wide *w, const inst_item *it, const accel_scene *mesh,
+                         uint64_t m, int naive, int spheres, int counted)
+{
+    if (w->root == INST_WIDE_NONE || !m) return;
+    const int top = it == NULL;
+    ip_entry stack[IP_STACK];
+    int sp = 0;
+    stack[sp++] = (ip_entry){w->root, -INFINITY, m};
+    while (sp > 0) {
+        ip_entry e = stack[--sp];
+        uint64_t em = e.mask & pk->live;
+        if (em && e.entry > -INFINITY) em = ip_still(v, em, e.entry);
+        if (!em) continue;
+        if (e.ref & INST_WIDE_LEAF) {
+            const bvh_node *n = &h->nodes[e.ref & ~INST_WIDE_LEAF];
+            if (top) {
+                for (uint32_t i = 0; i < n->count && (em &= pk->live); i++)
+                    ip_instance(a, pk, h->order[n->left_first + i], em, naive, spheres, counted);
+            } else {
+                ip_leaf(a, pk, v, it, mesh, h->order + n->left_first, n->count, em, naive, spheres,
+                        counted);
+            }
+            continue;
+        }
+        const inst_wnode *nd = &w->nodes[e.ref];
+        if (counted)
+            for (uint64_t k = em; k; k &= k - 1) {
+                unsigned r = (unsigned)__builtin_ctzll(k);
+                if (top)
+                    pk->top_steps[r]++;
+                else
+                    pk->bottom_steps[r]++;
+                pk->boxes[r] += INST_WIDE;
+            }
+        unsigned cand = 0;
+        for (unsigned c = 0; c < INST_WIDE; c++) cand |= (unsigned)(nd->child[c] != INST_WIDE_NONE) << c;
+        if (v->frustum) cand &= ip_frustum(v, nd);
+        ip_entry hit[INST_WIDE];
+        int nh = 0;
+        for (; cand; cand &= cand - 1) {
+            unsigned c = (unsigned)__builtin_ctz(cand);
+            uint64_t cm = 0;
+            float entry = INFINITY;
+            for (unsigned g = 0; g < IP_RAYS / 8; g++) {
+                unsigned gm = (unsigned)(em >> (8 * g)) & 0xFFu;
+                if (gm) cm |= (uint64_t)ip_group(v, nd, c, g, gm, &entry) << (8 * g);
+            }
+            if (!cm) continue;
+            int j = nh++; /* insertion, farthest first */
+            while (j > 0 && hit[j - 1].entry < entry) hit[j] = hit[j - 1], j--;
+            hit[j] = (ip_entry){nd->child[c], entry, cm};
+        }
+        /* The nearest child is tested again at its pop: its entry is
+         * already known to be reached. */
+        for (int j = 0; j < nh; j++) stack[sp++] = hit[j];
+        if (nh) stack[sp - 1].entry = -INFINITY;
+    }
+}
+
+/* The rays m of the packet through instance k (see the file's comment). */
+static __attribute__((noinline)) void ip_instance(const inst_accel *a, ip_packet *pk, uint32_t k,
+                                                  uint64_t m, int naive, int spheres, int counted)
+{
+    const inst_item *it = &a->items[k];
+    const inst_bottom *b = &a->bottoms[it->bottom];
+    if (it->identity) { /* the world rays themselves, no pad */
+        ip_walk(a, pk, &pk->top, &b->bvh, &b->wide, it, b->mesh, m, naive, spheres, counted);
+        return;
+    }
+    ip_view ov;
+    ov.slack = 0x1p-20f;
+    ov.padded = !a->no_pad;
+    uint64_t keep = 0;
+    /* Rays that share their origin share its object-space image. */
+    inst_oray o0;
+    if (pk->shared) inst_object_origin(it, pk->o[__builtin_ctzll(m)], &o0);
+    for (uint64_t q = m; q; q &= q - 1) {
+        unsigned r = (unsigned)__builtin_ctzll(q);
+        inst_oray o;
+        int clip;
+        if (pk->shared) {
+            o = o0;
+            clip = inst_object_dir(a, it, b, pk->d[r], pk->p[r].t_near, pk->t[r], &o);
+        } else {
+            clip = inst_object_ray(a, it, b, pk->o[r], pk->d[r], pk->p[r].t_near, pk->t[r], &o);
+        }
+        if (clip >= 0 && counted) pk->boxes[r]++;
+        if (clip <= 0) continue;
+        vec3 of, df;
+        float padf;
+        inst_object_float(a, b, &o, &of, &df, &padf);
+        ov.ox[r] = of.x, ov.oy[r] = of.y, ov.oz[r] = of.z;
+        ov.ix[r] = 1.0f / df.x, ov.iy[r] = 1.0f / df.y, ov.iz[r] = 1.0f / df.z;
+        ov.pad[r] = padf;
+        ov.shift[r] = o.s0;
+        ov.lo[r] = inst_walk_lo(pk->p[r].t_near, o.s0, ov.slack);
+        ov.hi[r] = inst_walk_hi(pk->t[r], o.s0, ov.slack);
+        keep |= IP_BIT(r);
+    }
+    if (!keep) return;
+    /* Lanes of the groups in use that hold no ray: an empty range. */
+    for (unsigned g = 0; g < IP_RAYS / 8; g++) {
+        unsigned gm = (unsigned)(keep >> (8 * g)) & 0xFFu;
+        if (!gm || gm == 0xFFu) continue;
+        for (unsigned l = 0; l < 8; l++) {
+            unsigned r = 8 * g + l;
+            if (gm >> l & 1u) continue;
+            ov.ox[r] = ov.oy[r] = ov.oz[r] = 0.0f, ov.ix[r] = ov.iy[r] = ov.iz[r] = 1.0f;
+            ov.pad[r] = 0.0f, ov.lo[r] = INFINITY, ov.hi[r] = -INFINITY, ov.shift[r] = 0.0;
+        }
+    }
+    ip_bounds(&ov, keep);
+    ip_walk(a, pk, &ov, &b->bvh, &b->wide, it, b->mesh, keep, naive, spheres, counted);
+}
+
+/* ---- the batch kernel --------------------------------------------------------------- */
+
+/* Rays [0, n) into the packet; the rest of its 64 lanes dead. */
+static void ip_load(ip_packet *pk, const accel_ray *rays, unsigned n, int any)
+{
+    ip_view *v = &pk->top;
+    pk->live = 0;
+    pk->any = any;
+    pk->shared = 1;
+    v->slack = 0.0f, v->padded = 0;
+    for (unsigned r = 0; r < IP_RAYS; r++) {
+        accel_ray_prep *p = &pk->p[r];
+        pk->prim[r] = ACCEL_MISS, pk->u[r] = pk->v[r] = 0.0f;
+        pk->top_steps[r] = pk->bottom_steps[r] = pk->boxes[r] = pk->prims[r] = 0;
+        v->pad[r] = 0.0f, v->shift[r] = 0.0;
+        if (!(r < n && accel_prep_ray(&rays[r], p))) { /* dead: an empty range */
+            v->ox[r] = v->oy[r] = v->oz[r] = 0.0f, v->ix[r] = v->iy[r] = v->iz[r] = 1.0f;
+            v->lo[r] = INFINITY, v->hi[r] = -INFINITY, pk->t[r] = -INFINITY;
+            continue;
+        }
+        v->ox[r] = p->org.x, v->oy[r] = p->org.y, v->oz[r] = p->org.z;
+        v->ix[r] = p->inv_dir.x, v->iy[r] = p->inv_dir.y, v->iz[r] = p->inv_dir.z;
+        v->lo[r] = p->t_near, v->hi[r] = pk->t[r] = p->t_far;
+        pk->o[r][0] = p->org.x, pk->o[r][1] = p->org.y, pk->o[r][2] = p->org.z;
+        pk->d[r][0] = p->dir.x, pk->d[r][1] = p->dir.y, pk->d[r][2] = p->dir.z;
+        if (pk->live) pk->shared &= accel_prep_same_frame(p, &pk->p[__builtin_ctzll(pk->live)]);
+        pk->live |= IP_BIT(r);
+    }
+    ip_bounds(v, pk->live);
+}
+
+INST_INLINE void ip_kernel(const void *acc, const accel_ray *rays, void *out, size_t count,
+                           accel_counters *c, unsigned flags, int any)
+{
+    const inst_accel *a = acc;
+    const int naive = (flags & ACCEL_V_NAIVE) != 0, spheres = (flags & ACCEL_V_SPHERES) != 0;
+    ip_packet pk;
+    for (size_t base = 0; base < count; base += IP_RAYS) {
+        unsigned n = count - base < IP_RAYS ? (unsigned)(count - base) : IP_RAYS;
+        ip_load(&pk, rays + base, n, any);
+        ip_walk(a, &pk, &pk.top, &a->top_bvh, &a->top_wide, NULL, NULL, pk.live, naive, spheres,
+                c != NULL);
+        for (unsigned r = 0; r < n; r++) {
+            size_t i = base + r;
+            if (any) {
+                ((uint8_t *)out)[i] = pk.prim[r] != ACCEL_MISS;
+            } else {
+                accel_hit hh = accel_hit_miss();
+                if (pk.prim[r] != ACCEL_MISS)
+                    hh.t = pk.t[r], hh.prim = pk.prim[r], hh.u = pk.u[r], hh.v = pk.v[r];
+                ((accel_hit *)out)[i] = hh;
+            }
+            if (c) {
+                accel_count_ray(c, i, pk.top_steps[r] + pk.bottom_steps[r], 0, pk.boxes[r],
+                                pk.prims[r], 0);
+                c->level_steps[0] += pk.top_steps[r];
+                c->level_steps[1] += pk.bottom_steps[r];
+            }
+        }
+    }
+}
+
+#define IP_CLOSEST(a, r, o, n, c, f) ip_kernel(a, r, o, n, c, f, 0)
+#define IP_ANY(a, r, o, n, c, f) ip_kernel(a, r, o, n, c, f, 1)
+ACCEL_KERNEL_TABLE(ip_closest_table, IP_CLOSEST)
+ACCEL_KERNEL_TABLE(ip_any_table, IP_ANY)
+
+static unsigned ip_flags(const inst_accel *a)
+{
+    return accel_variant_flags(a->naive, a->spheres, 0);
+}
+
+ACCEL_COHERENT_ENTRIES(inst_packet_intersect, inst_packet_occluded, const void, ip_closest_table,
+                       ip_any_table, ip_flags, inst_single_intersect, inst_single_occluded)
+
+void inst_intersect(const void *acc, const accel_ray *rays, accel_hit *hits, size_t n,
+                    accel_counters *c)
+{
+    const inst_accel *a = acc;
+    if (a->packets)
+        inst_packet_intersect(acc, rays, hits, n, c);
+    else
+        inst_single_intersect(acc, rays, hits, n, c);
+}
+
+void inst_occluded(const void *acc, const accel_ray *rays, uint8_t *occ, size_t n,
+                   accel_counters *c)
+{
+    const inst_accel *a = acc;
+    if (a->packets)
+        inst_packet_occluded(acc, rays, occ, n, c);
+    else
+        inst_single_occluded(acc, rays, occ, n, c);
+}
