@@ -64,6 +64,8 @@ typedef struct {
 typedef struct {
     ip_view top;                /* world rays: shift 0, slack 0, no pad */
     accel_ray_prep p[IP_RAYS];  /* world rays for the triangle tests */
+    float sx[IP_RAYS] __attribute__((aligned(32))); /* their shears (shared: the affine cull) */
+    float sy[IP_RAYS] __attribute__((aligned(32)));
     double o[IP_RAYS][3], d[IP_RAYS][3];
     float t[IP_RAYS], u[IP_RAYS], v[IP_RAYS];
     uint32_t prim[IP_RAYS];
@@ -82,10 +84,16 @@ typedef struct {
 /* ---- 8 rays against one child box ------------------------------------------------ */
 
 /* Rays of group g (candidates m) whose range meets child c's box grown by
- * their pads; *entry lowered to the smallest entry among them. Lane by
- * lane inst_wide_hits (inst_wide.h) on that ray. */
+ * their pads; *entry lowered to the smallest entry among them (lane-wise:
+ * the caller reduces it). Lane by lane inst_wide_hits (inst_wide.h) on
+ * that ray. */
+#if INST_WIDE_AVX
+typedef __m256 ip_entries;
+#else
+typedef float ip_entries;
+#endif
 INST_INLINE unsigned ip_group(const ip_view *v, const inst_wnode *n, unsigned c, unsigned g,
-                              unsigned m, float *entry)
+                              unsigned m, ip_entries *entry)
 {
     const unsigned r = 8 * g;
 #if INST_WIDE_AVX
@@ -104,14 +112,12 @@ INST_INLINE unsigned ip_group(const ip_view *v, const inst_wnode *n, unsigned c,
     }
     __m256 abs1 = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), t1);
     __m256 lim = _mm256_add_ps(t1, _mm256_mul_ps(abs1, _mm256_set1_ps(ACCEL_SLAB_PAD)));
-    unsigned h = (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(t0, lim, _CMP_LE_OQ)) & m;
+    __m256 in = _mm256_cmp_ps(t0, lim, _CMP_LE_OQ);
+    unsigned h = (unsigned)_mm256_movemask_ps(in) & m;
     if (h) {
-        float e[8];
-        _mm256_storeu_ps(e, t0);
-        for (unsigned k = h; k; k &= k - 1) {
-            float x = e[__builtin_ctz(k)];
-            if (x < *entry) *entry = x;
-        }
+        __m256i bits = _mm256_and_si256(_mm256_set1_epi32((int)h), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128));
+        __m256 sel = _mm256_castsi256_ps(_mm256_cmpgt_epi32(bits, _mm256_setzero_si256()));
+        *entry = _mm256_min_ps(*entry, _mm256_blendv_ps(_mm256_set1_ps(INFINITY), t0, sel));
     }
     return h;
 #else
@@ -131,6 +137,33 @@ INST_INLINE unsigned ip_group(const ip_view *v, const inst_wnode *n, unsigned c,
         }
     }
     return h;
+#endif
+}
+
+/* The smallest of the lanes ip_group lowered. */
+INST_INLINE float ip_entry_min(ip_entries e)
+{
+#if INST_WIDE_AVX
+    __m128 x = _mm_min_ps(_mm256_castps256_ps128(e), _mm256_extractf128_ps(e, 1));
+    x = _mm_min_ps(x, _mm_movehl_ps(x, x));
+    x = _mm_min_ss(x, _mm_shuffle_ps(x, x, 1));
+    return _mm_cvtss_f32(x);
+#else
+    return e;
+#endif
+}
+
+/* Slots of node n that hold a child. */
+INST_INLINE unsigned ip_children(const inst_wnode *n)
+{
+#if INST_WIDE_AVX
+    __m256i none = _mm256_cmpeq_epi32(_mm256_load_si256((const __m256i *)n->child),
+                                      _mm256_set1_epi32((int)INST_WIDE_NONE));
+    return ~(unsigned)_mm256_movemask_ps(_mm256_castsi256_ps(none)) & 0xFFu;
+#else
+    unsigned cand = 0;
+    for (unsigned c = 0; c < INST_WIDE; c++) cand |= (unsigned)(n->child[c] != INST_WIDE_NONE) << c;
+    return cand;
 #endif
 }
 
@@ -250,6 +283,43 @@ INST_INLINE uint64_t ip_still(const ip_view *v, uint64_t m, float entry)
 
 /* ---- leaves ----------------------------------------------------------------------- */
 
+/* The rays of m (sharing their origin and axes) that the affine cull of
+ * *f does not rule out: accel_tri_aff_miss on 8 rays at once, the same
+ * float operations lane by lane. */
+INST_INLINE uint64_t ip_aff_keep(const ip_packet *pk, const accel_tri_aff *f, uint64_t m)
+{
+#if INST_WIDE_AVX
+    uint64_t keep = 0;
+    const __m256 sign = _mm256_set1_ps(-0.0f);
+    for (unsigned g = 0; g < IP_RAYS / 8; g++) {
+        unsigned gm = (unsigned)(m >> (8 * g)) & 0xFFu;
+        if (!gm) continue;
+        __m256 sx = _mm256_load_ps(pk->sx + 8 * g), sy = _mm256_load_ps(pk->sy + 8 * g);
+        __m256 sxa = _mm256_andnot_ps(sign, sx), sya = _mm256_andnot_ps(sign, sy);
+        __m256 neg = _mm256_setzero_ps(), pos = _mm256_setzero_ps();
+        for (int k = 0; k < 3; k++) {
+            __m256 e = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(f->e0[k]), _mm256_mul_ps(sx, _mm256_set1_ps(f->e1[k]))),
+                                     _mm256_mul_ps(sy, _mm256_set1_ps(f->e2[k])));
+            __m256 mg = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(f->m0[k]), _mm256_mul_ps(sxa, _mm256_set1_ps(f->m1[k]))),
+                                      _mm256_mul_ps(sya, _mm256_set1_ps(f->m2[k])));
+            mg = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(ACCEL_AFF_REL), mg), _mm256_set1_ps(ACCEL_AFF_ABS));
+            neg = _mm256_or_ps(neg, _mm256_cmp_ps(e, _mm256_xor_ps(mg, sign), _CMP_LT_OQ));
+            pos = _mm256_or_ps(pos, _mm256_cmp_ps(e, mg, _CMP_GT_OQ));
+        }
+        unsigned miss = (unsigned)_mm256_movemask_ps(_mm256_and_ps(neg, pos));
+        keep |= (uint64_t)(gm & ~miss) << (8 * g);
+    }
+    return keep;
+#else
+    uint64_t keep = m;
+    for (uint64_t k = m; k; k &= k - 1) {
+        unsigned r = (unsigned)__builtin_ctzll(k);
+        if (accel_tri_aff_miss(f, pk->sx[r], pk->sy[r])) keep &= ~IP_BIT(r);
+    }
+    return keep;
+#endif
+}
+
 /* A bottom leaf: its triangles (mesh ids qs) decided in world space for
  * the rays m, each world triangle computed once for all of them. */
 INST_INLINE void ip_leaf(const inst_accel *a, ip_packet *pk, ip_view *v, const inst_item *it,
@@ -274,18 +344,23 @@ INST_INLINE void ip_leaf(const inst_accel *a, ip_packet *pk, ip_view *v, const i
          * edge functions, affine in their shear, surely mix signs: the
          * exact test's first rule (core/prim.h), so the answer stands. */
         accel_tri_rel rel;
-        accel_tri_aff f;
-        const int cull = pk->shared && tri && !naive;
-        if (cull) {
+        const int shared = pk->shared && tri && !naive;
+        uint64_t todo = m;
+        if (shared) {
+            accel_tri_aff f;
             accel_tri_rel_of(&pk->p[__builtin_ctzll(m)], tri, &rel);
             accel_tri_aff_of(&rel, &f);
+            todo = ip_aff_keep(pk, &f, m);
         }
-        for (uint64_t k = m; k; k &= k - 1) {
+        if (counted)
+            for (uint64_t k = m; k; k &= k - 1) {
+                unsigned r = (unsigned)__builtin_ctzll(k);
+                pk->prims[r] += id != pk->prim[r];
+            }
+        for (uint64_t k = todo; k; k &= k - 1) {
             unsigned r = (unsigned)__builtin_ctzll(k);
             if (id == pk->prim[r]) continue;
-            if (counted) pk->prims[r]++;
-            if (cull && accel_tri_aff_miss(&f, pk->p[r].sx, pk->p[r].sy)) continue;
-            if (inst_decide(&pk->p[r], tri, cull ? &rel : NULL, sphere, id, naive, &pk->t[r],
+            if (inst_decide(&pk->p[r], tri, shared ? &rel : NULL, sphere, id, naive, &pk->t[r],
                             &pk->u[r], &pk->v[r], &pk->prim[r]) &&
                 pk->any)
                 pk->live &= ~IP_BIT(r);
@@ -341,20 +416,23 @@ INST_INLINE void ip_walk(const inst_accel *a, ip_packet *pk, ip_view *v, const b
                     pk->bottom_steps[r]++;
                 pk->boxes[r] += INST_WIDE;
             }
-        unsigned cand = 0;
-        for (unsigned c = 0; c < INST_WIDE; c++) cand |= (unsigned)(nd->child[c] != INST_WIDE_NONE) << c;
-        if (v->frustum) cand &= ip_frustum(v, nd);
+        unsigned cand = v->frustum ? ip_frustum(v, nd) : ip_children(nd); /* empty slots fail both */
         ip_entry hit[INST_WIDE];
         int nh = 0;
         for (; cand; cand &= cand - 1) {
             unsigned c = (unsigned)__builtin_ctz(cand);
             uint64_t cm = 0;
-            float entry = INFINITY;
+#if INST_WIDE_AVX
+            ip_entries es = _mm256_set1_ps(INFINITY);
+#else
+            ip_entries es = INFINITY;
+#endif
             for (unsigned g = 0; g < IP_RAYS / 8; g++) {
                 unsigned gm = (unsigned)(em >> (8 * g)) & 0xFFu;
-                if (gm) cm |= (uint64_t)ip_group(v, nd, c, g, gm, &entry) << (8 * g);
+                if (gm) cm |= (uint64_t)ip_group(v, nd, c, g, gm, &es) << (8 * g);
             }
             if (!cm) continue;
+            float entry = ip_entry_min(es);
             int j = nh++; /* insertion, farthest first */
             while (j > 0 && hit[j - 1].entry < entry) hit[j] = hit[j - 1], j--;
             hit[j] = (ip_entry){nd->child[c], entry, cm};
@@ -437,6 +515,7 @@ static void ip_load(ip_packet *pk, const accel_ray *rays, unsigned n, int any)
         pk->prim[r] = ACCEL_MISS, pk->u[r] = pk->v[r] = 0.0f;
         pk->top_steps[r] = pk->bottom_steps[r] = pk->boxes[r] = pk->prims[r] = 0;
         v->pad[r] = 0.0f, v->shift[r] = 0.0;
+        pk->sx[r] = pk->sy[r] = 0.0f;
         if (!(r < n && accel_prep_ray(&rays[r], p))) { /* dead: an empty range */
             v->ox[r] = v->oy[r] = v->oz[r] = 0.0f, v->ix[r] = v->iy[r] = v->iz[r] = 1.0f;
             v->lo[r] = INFINITY, v->hi[r] = -INFINITY, pk->t[r] = -INFINITY;
@@ -445,6 +524,7 @@ static void ip_load(ip_packet *pk, const accel_ray *rays, unsigned n, int any)
         v->ox[r] = p->org.x, v->oy[r] = p->org.y, v->oz[r] = p->org.z;
         v->ix[r] = p->inv_dir.x, v->iy[r] = p->inv_dir.y, v->iz[r] = p->inv_dir.z;
         v->lo[r] = p->t_near, v->hi[r] = pk->t[r] = p->t_far;
+        pk->sx[r] = p->sx, pk->sy[r] = p->sy;
         pk->o[r][0] = p->org.x, pk->o[r][1] = p->org.y, pk->o[r][2] = p->org.z;
         pk->d[r][0] = p->dir.x, pk->d[r][1] = p->dir.y, pk->d[r][2] = p->dir.z;
         if (pk->live) pk->shared &= accel_prep_same_frame(p, &pk->p[__builtin_ctzll(pk->live)]);
