@@ -89,6 +89,8 @@ typedef struct {
     double grid_pad;         /* bottom=grid: how far its boxes were grown */
     bvh_box_tree bvh;
     inst_wide wide;          /* bottom=bvh, width=8: bvh collapsed */
+    float *leaf_tris;        /* traverse=packet: the triangles in leaf order (bvh.order[k]'s
+                              * 9 floats at 9 k; a sphere's slot unused), object space */
     inst_grid grid;
     /* bottom=<kind spec>: the kind's structure over the mesh, walked
      * (accel.h's walk); and the mesh's triangles with no area in object
@@ -139,6 +141,9 @@ typedef struct {
 int inst_set_items(inst_accel *a, const accel_scene *scene, double *grid_pad, accel_error *err);
 int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *err);
 int inst_build_top(inst_accel *a, accel_error *err);
+/* traverse=packet: (re)copies bottom b's triangles in leaf order (after a
+ * build or a refit). */
+int inst_leaf_tris(const inst_accel *a, inst_bottom *b, accel_error *err);
 void inst_fill_stats(const inst_accel *a, accel_build_stats *stats);
 size_t inst_memory(const void *a);
 void inst_destroy(void *a);

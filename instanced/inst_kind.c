@@ -98,6 +98,7 @@ void inst_destroy(void *p)
         bvh_box_tree_free(&a->bottoms[i].bvh);
         inst_wide_free(&a->bottoms[i].wide);
         inst_grid_free(&a->bottoms[i].grid);
+        free(a->bottoms[i].leaf_tris);
         if (a->bottoms[i].walk) a->walk_kind->destroy(a->bottoms[i].walk);
         free(a->bottoms[i].dead);
     }
@@ -137,6 +138,7 @@ size_t inst_memory(const void *p)
     for (uint32_t i = 0; i < a->bottom_count; i++) {
         const inst_bottom *b = &a->bottoms[i];
         bytes += bvh_bytes(&b->bvh) + wide_bytes(&b->wide) + grid_bytes(&b->grid) + b->dead_count * sizeof(uint32_t);
+        if (b->leaf_tris) bytes += 9 * sizeof(float) * (size_t)b->bvh.count;
         if (b->walk) bytes += a->walk_kind->memory(b->walk);
     }
     return bytes;
@@ -174,12 +176,30 @@ static int build_walk_bottom(inst_accel *a, inst_bottom *b, accel_error *err)
 
 /* The bottom level of mesh i over its primitives (a plain scene: the live
  * ones), boxes grown by grid_pad in a grid. */
+int inst_leaf_tris(const inst_accel *a, inst_bottom *b, accel_error *err)
+{
+    (void)a;
+    const bvh_box_tree *h = &b->bvh;
+    const accel_scene *m = b->mesh;
+    if (!b->leaf_tris) {
+        b->leaf_tris = malloc(9 * sizeof(float) * (h->count ? h->count : 1));
+        if (!b->leaf_tris) return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
+    }
+    for (uint32_t k = 0; k < h->count; k++) {
+        uint32_t id = h->order[k];
+        if (id < m->tri_count) memcpy(b->leaf_tris + 9 * (size_t)k, m->tris + 9 * (size_t)id, 9 * sizeof(float));
+    }
+    return 0;
+}
+
 int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *err)
 {
     inst_bottom *b = &a->bottoms[i];
     bvh_box_tree_free(&b->bvh);
     inst_wide_free(&b->wide);
     inst_grid_free(&b->grid);
+    free(b->leaf_tris);
+    b->leaf_tris = NULL;
     if (b->walk) a->walk_kind->destroy(b->walk);
     b->walk = NULL;
     free(b->dead);
@@ -223,6 +243,7 @@ int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *e
     free(boxes);
     if (rc == 0 && a->bottom_kind == INST_BVH && a->width == INST_WIDE)
         rc = inst_wide_build(&b->bvh, &b->wide, err);
+    if (rc == 0 && a->packets) rc = inst_leaf_tris(a, b, err);
     if (rc || !ids || a->bottom_kind == INST_BVH) return rc;
     for (uint64_t k = 0; k < b->grid.cells.ref_count; k++)
         b->grid.cells.refs[k] = ids[b->grid.cells.refs[k]];

@@ -323,7 +323,7 @@ INST_INLINE uint64_t ip_aff_keep(const ip_packet *pk, const accel_tri_aff *f, ui
 /* A bottom leaf: its triangles (mesh ids qs) decided in world space for
  * the rays m, each world triangle computed once for all of them. */
 INST_INLINE void ip_leaf(const inst_accel *a, ip_packet *pk, ip_view *v, const inst_item *it,
-                         const accel_scene *mesh, const uint32_t *qs, uint32_t count, uint64_t m,
+                         const uint32_t *qs, const float *lt, uint32_t count, uint64_t m,
                          int naive, int spheres, int counted)
 {
     const accel_scene *s = a->scene;
@@ -333,10 +333,12 @@ INST_INLINE void ip_leaf(const inst_accel *a, ip_packet *pk, ip_view *v, const i
         const float *tri = NULL, *sphere = NULL;
         if (spheres && id >= s->tri_count) { /* only plain scenes hold spheres */
             sphere = s->spheres + 4 * (size_t)(id - s->tri_count);
-        } else if (it->identity || a->world_flat) {
+        } else if (a->world_flat || (it->identity && s->instances)) {
             tri = s->tris + 9 * (size_t)id;
+        } else if (it->identity) { /* a plain scene: its own triangles */
+            tri = lt + 9 * (size_t)i;
         } else {
-            inst_xform_tri(it, mesh->tris + 9 * (size_t)q, w);
+            inst_xform_tri(it, lt + 9 * (size_t)i, w);
             tri = w;
         }
         /* Rays that share their origin and axes (a pinhole camera's)
@@ -380,9 +382,9 @@ static void ip_instance(const inst_accel *a, ip_packet *pk, uint32_t k, uint64_t
 
 /* The packet's rays m through the wide tree (h, w): the top level (it ==
  * NULL, view pk->top, leaves are instances) or instance it's bottom level
- * (view v). */
+ * (view v; lt its leaf-ordered triangles). */
 INST_INLINE void ip_walk(const inst_accel *a, ip_packet *pk, ip_view *v, const bvh_box_tree *h,
-                         const inst_wide *w, const inst_item *it, const accel_scene *mesh,
+                         const inst_wide *w, const inst_item *it, const float *lt,
                          uint64_t m, int naive, int spheres, int counted)
 {
     if (w->root == INST_WIDE_NONE || !m) return;
@@ -401,8 +403,8 @@ INST_INLINE void ip_walk(const inst_accel *a, ip_packet *pk, ip_view *v, const b
                 for (uint32_t i = 0; i < n->count && (em &= pk->live); i++)
                     ip_instance(a, pk, h->order[n->left_first + i], em, naive, spheres, counted);
             } else {
-                ip_leaf(a, pk, v, it, mesh, h->order + n->left_first, n->count, em, naive, spheres,
-                        counted);
+                ip_leaf(a, pk, v, it, h->order + n->left_first, lt + 9 * (size_t)n->left_first,
+                        n->count, em, naive, spheres, counted);
             }
             continue;
         }
@@ -451,7 +453,7 @@ static __attribute__((noinline)) void ip_instance(const inst_accel *a, ip_packet
     const inst_item *it = &a->items[k];
     const inst_bottom *b = &a->bottoms[it->bottom];
     if (it->identity) { /* the world rays themselves, no pad */
-        ip_walk(a, pk, &pk->top, &b->bvh, &b->wide, it, b->mesh, m, naive, spheres, counted);
+        ip_walk(a, pk, &pk->top, &b->bvh, &b->wide, it, b->leaf_tris, m, naive, spheres, counted);
         return;
     }
     ip_view ov;
@@ -497,7 +499,7 @@ static __attribute__((noinline)) void ip_instance(const inst_accel *a, ip_packet
         }
     }
     ip_bounds(&ov, keep);
-    ip_walk(a, pk, &ov, &b->bvh, &b->wide, it, b->mesh, keep, naive, spheres, counted);
+    ip_walk(a, pk, &ov, &b->bvh, &b->wide, it, b->leaf_tris, keep, naive, spheres, counted);
 }
 
 /* ---- the batch kernel --------------------------------------------------------------- */
