@@ -446,6 +446,141 @@ INST_INLINE void ip_walk(const inst_accel *a, ip_packet *pk, ip_view *v, const b
     }
 }
 
+/* Ray r of the packet in instance it's object space (inst_ray.h), into
+ * the view ov; 1 when it reaches the mesh's padded box. */
+static int ip_object1(const inst_accel *a, const inst_item *it, const inst_bottom *b, ip_packet *pk,
+                      ip_view *ov, unsigned r, int counted)
+{
+    inst_oray o;
+    int clip = inst_object_ray(a, it, b, pk->o[r], pk->d[r], pk->p[r].t_near, pk->t[r], &o);
+    if (clip >= 0 && counted) pk->boxes[r]++;
+    if (clip <= 0) return 0;
+    vec3 of, df;
+    float padf;
+    inst_object_float(a, b, &o, &of, &df, &padf);
+    ov->ox[r] = of.x, ov->oy[r] = of.y, ov->oz[r] = of.z;
+    ov->ix[r] = 1.0f / df.x, ov->iy[r] = 1.0f / df.y, ov->iz[r] = 1.0f / df.z;
+    ov->pad[r] = padf;
+    ov->shift[r] = o.s0;
+    ov->lo[r] = inst_walk_lo(pk->p[r].t_near, o.s0, ov->slack);
+    ov->hi[r] = inst_walk_hi(pk->t[r], o.s0, ov->slack);
+    return 1;
+}
+
+#if INST_WIDE_AVX
+/* ip_object1 for the 4 rays rr[0..n) at once: inst_object_ray and
+ * inst_object_float written in 4-lane double operations, each the same
+ * IEEE operation on the same operands in the same order as the scalar
+ * code (its compare-and-selects are max_pd/min_pd, which select as
+ * inst_dmax/inst_dmin do, and its swap a blend on t0 > t1), so every lane
+ * gets the scalar code's bits. A lane the scalar code would branch on (an
+ * object-space direction component that is zero or has no finite
+ * reciprocal) is left to ip_object1. Returns the mask of kept rays. */
+static uint64_t ip_object4(const inst_accel *a, const inst_item *it, const inst_bottom *b,
+                           ip_packet *pk, ip_view *ov, const unsigned *rr, int n, int counted)
+{
+    const double *m = it->inverse;
+    const __m256d sign = _mm256_set1_pd(-0.0), inf = _mm256_set1_pd(INFINITY), zero = _mm256_setzero_pd();
+#define IP_DABS(x) _mm256_andnot_pd(sign, (x))
+    __m256d wo[3], wd[3], o[3], d[3];
+    for (int k = 0; k < 3; k++) {
+        wo[k] = _mm256_set_pd(pk->o[rr[3]][k], pk->o[rr[2]][k], pk->o[rr[1]][k], pk->o[rr[0]][k]);
+        wd[k] = _mm256_set_pd(pk->d[rr[3]][k], pk->d[rr[2]][k], pk->d[rr[1]][k], pk->d[rr[0]][k]);
+    }
+    __m256d eo = zero, oa = zero, ed = zero, da = zero;
+    for (int i = 0; i < 3; i++) {
+        const double *row = m + 4 * i;
+        __m256d r0 = _mm256_set1_pd(row[0]), r1 = _mm256_set1_pd(row[1]), r2 = _mm256_set1_pd(row[2]);
+        __m256d r3 = _mm256_set1_pd(row[3]);
+        __m256d p0 = _mm256_mul_pd(r0, wo[0]), p1 = _mm256_mul_pd(r1, wo[1]), p2 = _mm256_mul_pd(r2, wo[2]);
+        o[i] = _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(p0, p1), p2), r3);
+        eo = _mm256_max_pd(eo, _mm256_add_pd(_mm256_add_pd(_mm256_add_pd(IP_DABS(p0), IP_DABS(p1)), IP_DABS(p2)),
+                                             IP_DABS(r3)));
+        oa = _mm256_max_pd(oa, IP_DABS(o[i]));
+        __m256d q0 = _mm256_mul_pd(r0, wd[0]), q1 = _mm256_mul_pd(r1, wd[1]), q2 = _mm256_mul_pd(r2, wd[2]);
+        d[i] = _mm256_add_pd(_mm256_add_pd(q0, q1), q2);
+        ed = _mm256_max_pd(ed, _mm256_add_pd(_mm256_add_pd(IP_DABS(q0), IP_DABS(q1)), IP_DABS(q2)));
+        da = _mm256_max_pd(da, IP_DABS(d[i]));
+    }
+    __m256d valid = _mm256_and_pd(_mm256_cmp_pd(da, zero, _CMP_GT_OQ),
+                                  _mm256_and_pd(_mm256_cmp_pd(IP_DABS(oa), inf, _CMP_LT_OQ),
+                                                _mm256_cmp_pd(IP_DABS(da), inf, _CMP_LT_OQ)));
+    __m256d reach = _mm256_add_pd(
+        _mm256_add_pd(_mm256_add_pd(oa, _mm256_set1_pd(b->abs_max)), _mm256_set1_pd(4.0 * it->pad)),
+        _mm256_set1_pd(1.0));
+    __m256d e_ray = _mm256_mul_pd(_mm256_set1_pd(0x1p-50),
+                                  _mm256_add_pd(eo, _mm256_div_pd(_mm256_mul_pd(ed, reach), da)));
+    __m256d pad = a->no_pad ? zero : _mm256_add_pd(_mm256_set1_pd(2.0 * it->pad), e_ray);
+    __m256d tn = _mm256_set_pd(pk->p[rr[3]].t_near, pk->p[rr[2]].t_near, pk->p[rr[1]].t_near, pk->p[rr[0]].t_near);
+    __m256d s0 = tn, s1 = _mm256_set_pd(pk->t[rr[3]], pk->t[rr[2]], pk->t[rr[1]], pk->t[rr[0]]);
+    __m256d branch = zero; /* lanes the scalar code would take apart */
+    for (int i = 0; i < 3; i++) {
+        __m256d lo = _mm256_sub_pd(_mm256_set1_pd(b->box_lo[i]), pad);
+        __m256d hi = _mm256_add_pd(_mm256_set1_pd(b->box_hi[i]), pad);
+        __m256d inv = _mm256_div_pd(_mm256_set1_pd(1.0), d[i]);
+        branch = _mm256_or_pd(branch, _mm256_or_pd(_mm256_cmp_pd(d[i], zero, _CMP_EQ_OQ),
+                                                   _mm256_cmp_pd(IP_DABS(inv), inf, _CMP_NLT_UQ)));
+        __m256d t0 = _mm256_mul_pd(_mm256_sub_pd(lo, o[i]), inv);
+        __m256d t1 = _mm256_mul_pd(_mm256_sub_pd(hi, o[i]), inv);
+        __m256d sw = _mm256_cmp_pd(t0, t1, _CMP_GT_OQ);
+        __m256d u0 = _mm256_blendv_pd(t0, t1, sw), u1 = _mm256_blendv_pd(t1, t0, sw);
+        __m256d slack = _mm256_mul_pd(_mm256_set1_pd(0x1p-40), _mm256_add_pd(IP_DABS(u0), IP_DABS(u1)));
+        s0 = _mm256_max_pd(s0, _mm256_sub_pd(u0, slack));
+        s1 = _mm256_min_pd(s1, _mm256_add_pd(u1, slack));
+    }
+    unsigned ok = (unsigned)_mm256_movemask_pd(valid), apart = (unsigned)_mm256_movemask_pd(branch);
+    unsigned in = (unsigned)_mm256_movemask_pd(_mm256_cmp_pd(s0, s1, _CMP_LE_OQ));
+    /* The float ray from the box entry, its pad, its range. */
+    __m128 of[3], df[3];
+    for (int i = 0; i < 3; i++) {
+        of[i] = _mm256_cvtpd_ps(_mm256_add_pd(o[i], _mm256_mul_pd(s0, d[i])));
+        df[i] = _mm256_cvtpd_ps(d[i]);
+    }
+    __m256d pf = a->no_pad ? zero
+                           : _mm256_add_pd(_mm256_add_pd(pad, _mm256_mul_pd(_mm256_set1_pd(0x1p-20),
+                                                                            _mm256_add_pd(_mm256_set1_pd(b->abs_max),
+                                                                                          _mm256_mul_pd(_mm256_set1_pd(2.0), pad)))),
+                                           _mm256_mul_pd(_mm256_set1_pd(0x1p-50),
+                                                         _mm256_add_pd(oa, _mm256_mul_pd(IP_DABS(s0), da))));
+    __m128 padf = _mm256_cvtpd_ps(_mm256_mul_pd(pf, _mm256_set1_pd(1.0 + 0x1p-20)));
+    __m128 lo = _mm256_cvtpd_ps(_mm256_sub_pd(tn, s0));
+    __m128 sl = _mm_set1_ps(ov->slack), fsign = _mm_set1_ps(-0.0f);
+    lo = _mm_sub_ps(lo, _mm_mul_ps(_mm_andnot_ps(fsign, lo), sl));
+    __m128 tt = _mm256_cvtpd_ps(_mm256_sub_pd(_mm256_set_pd(pk->t[rr[3]], pk->t[rr[2]], pk->t[rr[1]], pk->t[rr[0]]), s0));
+    tt = _mm_add_ps(tt, _mm_mul_ps(_mm_andnot_ps(fsign, tt), sl));
+    float fo[3][4], fd[3][4], fp[4], flo[4], fhi[4];
+    double ds0[4];
+    for (int i = 0; i < 3; i++) {
+        _mm_storeu_ps(fo[i], of[i]);
+        _mm_storeu_ps(fd[i], _mm_div_ps(_mm_set1_ps(1.0f), df[i]));
+    }
+    _mm_storeu_ps(fp, padf);
+    _mm_storeu_ps(flo, lo);
+    _mm_storeu_ps(fhi, tt);
+    _mm256_storeu_pd(ds0, s0);
+#undef IP_DABS
+    uint64_t keep = 0;
+    for (int l = 0; l < n; l++) {
+        unsigned r = rr[l];
+        if (apart >> l & 1u) {
+            if (ip_object1(a, it, b, pk, ov, r, counted)) keep |= IP_BIT(r);
+            continue;
+        }
+        if (!(ok >> l & 1u)) continue;
+        if (counted) pk->boxes[r]++;
+        if (!(in >> l & 1u)) continue;
+        ov->ox[r] = fo[0][l], ov->oy[r] = fo[1][l], ov->oz[r] = fo[2][l];
+        ov->ix[r] = fd[0][l], ov->iy[r] = fd[1][l], ov->iz[r] = fd[2][l];
+        ov->pad[r] = fp[l];
+        ov->shift[r] = ds0[l];
+        ov->lo[r] = flo[l];
+        ov->hi[r] = fhi[l];
+        keep |= IP_BIT(r);
+    }
+    return keep;
+}
+#endif
+
 /* The rays m of the packet through instance k (see the file's comment). */
 static __attribute__((noinline)) void ip_instance(const inst_accel *a, ip_packet *pk, uint32_t k,
                                                   uint64_t m, int naive, int spheres, int counted)
@@ -460,32 +595,22 @@ static __attribute__((noinline)) void ip_instance(const inst_accel *a, ip_packet
     ov.slack = 0x1p-20f;
     ov.padded = !a->no_pad;
     uint64_t keep = 0;
-    /* Rays that share their origin share its object-space image. */
-    inst_oray o0;
-    if (pk->shared) inst_object_origin(it, pk->o[__builtin_ctzll(m)], &o0);
+#if INST_WIDE_AVX
+    unsigned rr[4];
+    int n = 0;
     for (uint64_t q = m; q; q &= q - 1) {
-        unsigned r = (unsigned)__builtin_ctzll(q);
-        inst_oray o;
-        int clip;
-        if (pk->shared) {
-            o = o0;
-            clip = inst_object_dir(a, it, b, pk->d[r], pk->p[r].t_near, pk->t[r], &o);
-        } else {
-            clip = inst_object_ray(a, it, b, pk->o[r], pk->d[r], pk->p[r].t_near, pk->t[r], &o);
+        rr[n++] = (unsigned)__builtin_ctzll(q);
+        if (n == 4 || !(q & (q - 1))) {
+            for (int l = n; l < 4; l++) rr[l] = rr[0]; /* lanes beyond n: ignored */
+            keep |= ip_object4(a, it, b, pk, &ov, rr, n, counted);
+            n = 0;
         }
-        if (clip >= 0 && counted) pk->boxes[r]++;
-        if (clip <= 0) continue;
-        vec3 of, df;
-        float padf;
-        inst_object_float(a, b, &o, &of, &df, &padf);
-        ov.ox[r] = of.x, ov.oy[r] = of.y, ov.oz[r] = of.z;
-        ov.ix[r] = 1.0f / df.x, ov.iy[r] = 1.0f / df.y, ov.iz[r] = 1.0f / df.z;
-        ov.pad[r] = padf;
-        ov.shift[r] = o.s0;
-        ov.lo[r] = inst_walk_lo(pk->p[r].t_near, o.s0, ov.slack);
-        ov.hi[r] = inst_walk_hi(pk->t[r], o.s0, ov.slack);
-        keep |= IP_BIT(r);
     }
+#else
+    for (uint64_t q = m; q; q &= q - 1)
+        if (ip_object1(a, it, b, pk, &ov, (unsigned)__builtin_ctzll(q), counted))
+            keep |= IP_BIT(__builtin_ctzll(q));
+#endif
     if (!keep) return;
     /* Lanes of the groups in use that hold no ray: an empty range. */
     for (unsigned g = 0; g < IP_RAYS / 8; g++) {
