@@ -66,6 +66,9 @@ typedef struct {
     accel_ray_prep p[IP_RAYS];  /* world rays for the triangle tests */
     float sx[IP_RAYS] __attribute__((aligned(32))); /* their shears (shared: the affine cull) */
     float sy[IP_RAYS] __attribute__((aligned(32)));
+    int32_t kx[IP_RAYS] __attribute__((aligned(32))); /* their permuted axes */
+    int32_t ky[IP_RAYS] __attribute__((aligned(32)));
+    int32_t kz[IP_RAYS] __attribute__((aligned(32)));
     double o[IP_RAYS][3], d[IP_RAYS][3];
     float t[IP_RAYS], u[IP_RAYS], v[IP_RAYS];
     uint32_t prim[IP_RAYS];
@@ -320,6 +323,70 @@ INST_INLINE uint64_t ip_aff_keep(const ip_packet *pk, const accel_tri_aff *f, ui
 #endif
 }
 
+/* The rays of m that the watertight test's first rule does not rule out
+ * for triangle tri: for 8 rays at once, the relative and sheared
+ * vertices, the edge functions U, V, W and their cheap bounds, each the
+ * same float operation on the same operands as accel_tri_watertight_impl
+ * (core/prim.h) computes them (a lane's permuted axes picked by blends);
+ * a ray whose edge functions surely mix signs is a miss there, before
+ * anything else, so skipping it changes no answer. */
+INST_INLINE uint64_t ip_edge_keep(const ip_packet *pk, const float *tri, uint64_t m)
+{
+#if INST_WIDE_AVX
+    uint64_t keep = 0;
+    const __m256 sign = _mm256_set1_ps(-0.0f), filt = _mm256_set1_ps(ACCEL_EDGE_FILTER);
+    const __m256 tiny = _mm256_set1_ps(ACCEL_EDGE_TINY);
+    const __m256i one = _mm256_set1_epi32(1), two = _mm256_set1_epi32(2);
+    for (unsigned g = 0; g < IP_RAYS / 8; g++) {
+        unsigned gm = (unsigned)(m >> (8 * g)) & 0xFFu;
+        if (!gm) continue;
+        const unsigned r = 8 * g;
+        __m256 o[3] = {_mm256_load_ps(pk->top.ox + r), _mm256_load_ps(pk->top.oy + r),
+                       _mm256_load_ps(pk->top.oz + r)};
+        __m256i kx = _mm256_load_si256((const __m256i *)(pk->kx + r));
+        __m256i ky = _mm256_load_si256((const __m256i *)(pk->ky + r));
+        __m256i kz = _mm256_load_si256((const __m256i *)(pk->kz + r));
+        __m256 x1 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kx, one)), x2 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kx, two));
+        __m256 y1 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(ky, one)), y2 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(ky, two));
+        __m256 z1 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kz, one)), z2 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kz, two));
+        __m256 sx = _mm256_load_ps(pk->sx + r), sy = _mm256_load_ps(pk->sy + r);
+        __m256 sxa = _mm256_andnot_ps(sign, sx), sya = _mm256_andnot_ps(sign, sy);
+        __m256 px[3], py[3], mx[3], my[3]; /* sheared x, y and their magnitudes, per vertex */
+        for (int j = 0; j < 3; j++) {
+            __m256 e0 = _mm256_sub_ps(_mm256_set1_ps(tri[3 * j]), o[0]);
+            __m256 e1 = _mm256_sub_ps(_mm256_set1_ps(tri[3 * j + 1]), o[1]);
+            __m256 e2 = _mm256_sub_ps(_mm256_set1_ps(tri[3 * j + 2]), o[2]);
+            __m256 vx = _mm256_blendv_ps(_mm256_blendv_ps(e0, e1, x1), e2, x2);
+            __m256 vy = _mm256_blendv_ps(_mm256_blendv_ps(e0, e1, y1), e2, y2);
+            __m256 vz = _mm256_blendv_ps(_mm256_blendv_ps(e0, e1, z1), e2, z2);
+            px[j] = _mm256_sub_ps(vx, _mm256_mul_ps(sx, vz));
+            py[j] = _mm256_sub_ps(vy, _mm256_mul_ps(sy, vz));
+            __m256 az = _mm256_andnot_ps(sign, vz);
+            mx[j] = _mm256_add_ps(_mm256_andnot_ps(sign, vx), _mm256_mul_ps(sxa, az));
+            my[j] = _mm256_add_ps(_mm256_andnot_ps(sign, vy), _mm256_mul_ps(sya, az));
+        }
+        /* U = cx by - cy bx, V = ax cy - ay cx, W = bx ay - by ax (a, b, c: vertices 0, 1, 2) */
+        __m256 U = _mm256_sub_ps(_mm256_mul_ps(px[2], py[1]), _mm256_mul_ps(py[2], px[1]));
+        __m256 V = _mm256_sub_ps(_mm256_mul_ps(px[0], py[2]), _mm256_mul_ps(py[0], px[2]));
+        __m256 W = _mm256_sub_ps(_mm256_mul_ps(px[1], py[0]), _mm256_mul_ps(py[1], px[0]));
+        __m256 eu = _mm256_add_ps(_mm256_mul_ps(filt, _mm256_add_ps(_mm256_mul_ps(mx[2], my[1]), _mm256_mul_ps(my[2], mx[1]))), tiny);
+        __m256 ev = _mm256_add_ps(_mm256_mul_ps(filt, _mm256_add_ps(_mm256_mul_ps(mx[0], my[2]), _mm256_mul_ps(my[0], mx[2]))), tiny);
+        __m256 ew = _mm256_add_ps(_mm256_mul_ps(filt, _mm256_add_ps(_mm256_mul_ps(mx[1], my[0]), _mm256_mul_ps(my[1], mx[0]))), tiny);
+        __m256 neg = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, _mm256_xor_ps(eu, sign), _CMP_LT_OQ),
+                                               _mm256_cmp_ps(V, _mm256_xor_ps(ev, sign), _CMP_LT_OQ)),
+                                  _mm256_cmp_ps(W, _mm256_xor_ps(ew, sign), _CMP_LT_OQ));
+        __m256 pos = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, eu, _CMP_GT_OQ), _mm256_cmp_ps(V, ev, _CMP_GT_OQ)),
+                                  _mm256_cmp_ps(W, ew, _CMP_GT_OQ));
+        unsigned miss = (unsigned)_mm256_movemask_ps(_mm256_and_ps(neg, pos));
+        keep |= (uint64_t)(gm & ~miss) << (8 * g);
+    }
+    return keep;
+#else
+    (void)pk, (void)tri;
+    return m;
+#endif
+}
+
 /* A bottom leaf: its triangles (mesh ids qs) decided in world space for
  * the rays m, each world triangle computed once for all of them. */
 INST_INLINE void ip_leaf(const inst_accel *a, ip_packet *pk, ip_view *v, const inst_item *it,
@@ -353,6 +420,8 @@ INST_INLINE void ip_leaf(const inst_accel *a, ip_packet *pk, ip_view *v, const i
             accel_tri_rel_of(&pk->p[__builtin_ctzll(m)], tri, &rel);
             accel_tri_aff_of(&rel, &f);
             todo = ip_aff_keep(pk, &f, m);
+        } else if (tri && !naive) {
+            todo = ip_edge_keep(pk, tri, m);
         }
         if (counted)
             for (uint64_t k = m; k; k &= k - 1) {
@@ -643,6 +712,7 @@ static void ip_load(ip_packet *pk, const accel_ray *rays, unsigned n, int any)
         pk->top_steps[r] = pk->bottom_steps[r] = pk->boxes[r] = pk->prims[r] = 0;
         v->pad[r] = 0.0f, v->shift[r] = 0.0;
         pk->sx[r] = pk->sy[r] = 0.0f;
+        pk->kx[r] = 0, pk->ky[r] = 1, pk->kz[r] = 2;
         if (!(r < n && accel_prep_ray(&rays[r], p))) { /* dead: an empty range */
             v->ox[r] = v->oy[r] = v->oz[r] = 0.0f, v->ix[r] = v->iy[r] = v->iz[r] = 1.0f;
             v->lo[r] = INFINITY, v->hi[r] = -INFINITY, pk->t[r] = -INFINITY;
@@ -652,6 +722,7 @@ static void ip_load(ip_packet *pk, const accel_ray *rays, unsigned n, int any)
         v->ix[r] = p->inv_dir.x, v->iy[r] = p->inv_dir.y, v->iz[r] = p->inv_dir.z;
         v->lo[r] = p->t_near, v->hi[r] = pk->t[r] = p->t_far;
         pk->sx[r] = p->sx, pk->sy[r] = p->sy;
+        pk->kx[r] = p->kx, pk->ky[r] = p->ky, pk->kz[r] = p->kz;
         pk->o[r][0] = p->org.x, pk->o[r][1] = p->org.y, pk->o[r][2] = p->org.z;
         pk->d[r][0] = p->dir.x, pk->d[r][1] = p->dir.y, pk->d[r][2] = p->dir.z;
         if (pk->live) pk->shared &= accel_prep_same_frame(p, &pk->p[__builtin_ctzll(pk->live)]);
