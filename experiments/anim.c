@@ -261,13 +261,20 @@ void exp_anim_fps(exp_ctx *x, exp_anim *a)
      * the kind has an update (topology kept, boxes recomputed). */
     const accel_kind *bk = accel_find_kind("bvh");
     int can_refit = coherent[0] && bk && bk->update;
-    loop L[8];
+    /* ... and the two-level structure's own packets (instanced: both BVH
+     * levels 8-wide), updated as it is. */
+    char coherent_two[300] = "";
+    if (!strncmp(a->two, "instanced", 9) && !strstr(a->two, "traverse=") && !strstr(a->two, "grid") &&
+        !strstr(a->two, "width=2") && !strstr(a->two, "bottom=bvh:"))
+        snprintf(coherent_two, sizeof coherent_two, "%s%straverse=packet", a->two,
+                 strchr(a->two, ':') ? "," : ":");
+    loop L[10];
     memset(L, 0, sizeof L);
-    for (int fam = 0; fam < 4; fam++) {
-        const char *sp = fam == 0 ? a->two : fam == 1 ? a->flat : coherent;
+    for (int fam = 0; fam < 5; fam++) {
+        const char *sp = fam == 0 ? a->two : fam == 1 ? a->flat : fam == 4 ? coherent_two : coherent;
         if (!sp[0] || (fam == 3 && !can_refit)) continue;
         for (int t = 1; t <= tmax; t++) {
-            L[nl].spec = sp, L[nl].threads = t, L[nl].two = fam == 0, L[nl].refit = fam == 3;
+            L[nl].spec = sp, L[nl].threads = t, L[nl].two = fam == 0 || fam == 4, L[nl].refit = fam == 3;
             snprintf(L[nl].label, sizeof L[nl].label, "%s%s", sp, fam == 3 ? " (refit)" : "");
             nl++;
         }
@@ -357,7 +364,7 @@ void exp_anim_fps(exp_ctx *x, exp_anim *a)
                     "[95% CI]|fps [95% CI]|frame over the 50 ms of 20 fps");
     static const char *const q[4] = {"update_ms", "primary_ms", "shadow_ms", "frame_ms"};
     int best = -1, best_flat = -1, best_two = -1, best_ref = -1;
-    exp_est fps[8], e[8][4];
+    exp_est fps[10], e[10][4];
     char b[5][128];
     for (int l = 0; l < nl; l++) {
         double v[MAX_FRAMES];
@@ -418,6 +425,20 @@ void exp_anim_fps(exp_ctx *x, exp_anim *a)
                      fam == 0 ? "updated every frame" : fam == 1 ? "rebuilt every frame"
                                                              : "refit every frame", lp->threads,
                      lp->threads > 1 ? "s" : "", b[0]);
+    }
+    if (best_two >= 0 && best_ref >= 0) { /* issue 41: two levels at the speed of one */
+        double r[MAX_FRAMES];
+        for (int f = 0; f < frames; f++) r[f] = L[best_two].ms[3][f] / L[best_ref].ms[3][f];
+        exp_est re;
+        exp_est_of(r, frames, &re);
+        exp_anim_row(x, "fps", &slot[cur], L[best_two].label, L[best_two].threads, frames,
+                     "frame_ratio_to_flattened_packets", &re);
+        exp_text_add(a->findings, "- Two levels against one: a frame of `%s` on %d thread%s takes "
+                     "%s times one of `%s` (refit) on %d thread%s (per-frame ratios, the same "
+                     "frames; 1.3 or less was issue 41's aim).\n",
+                     L[best_two].spec, L[best_two].threads, L[best_two].threads > 1 ? "s" : "",
+                     exp_fmt_est(b[0], sizeof b[0], &re, 2), L[best_ref].spec, L[best_ref].threads,
+                     L[best_ref].threads > 1 ? "s" : "");
     }
     char what[400];
     snprintf(what, sizeof what, "fps of `%s`%s on %d thread%s, %s %u tris, primary+shadow %dx%d, "

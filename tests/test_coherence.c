@@ -21,7 +21,7 @@ static const char *const packet_specs[] = {
     "grid:traverse=packet",          "nested_grid:traverse=packet",
     "bvh:traverse=packet",           "bvh:traverse=packet,frustum=1",
     "bvh:width=4,traverse=packet",   "bvh:width=8,traverse=packet",
-    "bvh:width=8,traverse=packet,hybrid=0",
+    "bvh:width=8,traverse=packet,hybrid=0", "instanced:traverse=packet",
 };
 
 /* perm: a seeded shuffle of 0..n-1 */
@@ -93,10 +93,11 @@ static size_t differences(const accel_hit *ref, const accel_hit *hits, const uin
  * a hit within its error of the current nearest one in double
  * (core/prim.h), so t, u, v of the same primitive may come from either
  * computation (a few float steps apart). The BVH packets' answers are the
- * same bits whatever their mates. */
+ * same bits whatever their mates, and so are instanced's (each ray's
+ * triangles decided on its whole range, inst_ray.h). */
 static int mate_ulps(const char *spec)
 {
-    return strncmp(spec, "bvh", 3) ? 16 : 0;
+    return strncmp(spec, "bvh", 3) && strncmp(spec, "instanced", 9) ? 16 : 0;
 }
 
 typedef struct {

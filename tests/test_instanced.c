@@ -343,7 +343,7 @@ TEST(instanced_update_frames)
 /* The same answers, bit for bit, from every walk: the world-space decision
  * of a triangle does not depend on the order the walk meets the triangles,
  * nor on how often (inst_trace.c's test_prim), so the 8-wide and binary
- * BVH levels, the grids and a walked bottom kind name the same triangle
+ * BVH levels, the grids, a walked bottom kind and the packets name the same triangle
  * with the same t, u and v. The one latitude: two triangles whose hits
  * round to the same float t (coincident instances, a ray through a vertex
  * at t = 1), where a walk that culls at the closest t may not reach the
@@ -354,6 +354,7 @@ static void same_hits_every_walk(const accel_scene *s, const char *name)
         "instanced:width=2", "instanced:top=grid", "instanced:bottom=grid",
         "instanced:top=grid,bottom=grid,width=2", "instanced:bottom=nested_grid",
         "instanced:bottom=bvh:width=8", "instanced:leaf=1", "instanced:world=flat",
+        "instanced:traverse=packet", "instanced:traverse=packet,world=flat,leaf=1",
     };
     ray_list l = {0};
     inst_make_rays(s, &l);

@@ -1,0 +1,326 @@
+/*
+ * inst_packet.h - the packets of the `instanced` kind (traverse=packet),
+ * internal to instanced/: the packet and its views (inst_packet.c walks
+ * them, inst_packet_rays.c fills them), and the 8-ray pieces both use:
+ * the slab test of 8 rays against one child box, the frustum test of a
+ * node, the entry cull at a pop, and the two triangle culls (shared
+ * origins: the affine edge functions; any origins: the watertight test's
+ * first rule). Each computes, lane by lane, the very float operations of
+ * the single-ray code it stands for (inst_wide.h, core/prim.h), so the
+ * packets' answers are the single-ray walk's, bit for bit.
+ */
+#ifndef INSTANCED_INST_PACKET_H
+#define INSTANCED_INST_PACKET_H
+
+#include <math.h>
+
+#include "core/prim.h"
+#include "inst_impl.h"
+#include "inst_ray.h"
+#include "inst_wide.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+enum { IP_RAYS = 64 };
+#define IP_STACK ((INST_WIDE - 1) * BVH_MAX_DEPTH + 1)
+#define IP_BIT(r) ((uint64_t)1 << (r))
+
+/* The packet's rays as one walk sees them: the world rays at the top
+ * level, one instance's object-space rays (from its box entry) below.
+ * Rows of 64 floats, each 32-byte aligned for 8-lane loads. */
+typedef struct {
+    float ox[IP_RAYS] __attribute__((aligned(32)));
+    float oy[IP_RAYS], oz[IP_RAYS], ix[IP_RAYS], iy[IP_RAYS], iz[IP_RAYS];
+    float lo[IP_RAYS], hi[IP_RAYS]; /* the range in the walk's parameter */
+    float pad[IP_RAYS];             /* each ray's box growth (padded) */
+    double shift[IP_RAYS];          /* walk parameter = t - shift */
+    float slack;                    /* relative widening of hi (inst_walk_hi) */
+    int padded;
+    /* The frustum (frustum != 0: one octant, finite reciprocals). */
+    int frustum, octant;
+    float o_lo[3], o_hi[3], i_lo[3], i_hi[3], t_lo, t_hi, pad_max;
+} ip_view;
+
+typedef struct {
+    ip_view top;                /* world rays: shift 0, slack 0, no pad */
+    accel_ray_prep p[IP_RAYS];  /* world rays for the triangle tests */
+    float sx[IP_RAYS] __attribute__((aligned(32))); /* their shears (shared: the affine cull) */
+    float sy[IP_RAYS] __attribute__((aligned(32)));
+    int32_t kx[IP_RAYS] __attribute__((aligned(32))); /* their permuted axes */
+    int32_t ky[IP_RAYS] __attribute__((aligned(32)));
+    int32_t kz[IP_RAYS] __attribute__((aligned(32)));
+    double o[IP_RAYS][3], d[IP_RAYS][3];
+    float t[IP_RAYS], u[IP_RAYS], v[IP_RAYS];
+    uint32_t prim[IP_RAYS];
+    uint64_t live;              /* valid rays still looking (any hit: until one) */
+    int any;
+    int shared;                 /* every valid ray has the same origin and axes */
+    uint32_t top_steps[IP_RAYS], bottom_steps[IP_RAYS], boxes[IP_RAYS], prims[IP_RAYS];
+} ip_packet;
+
+typedef struct {
+    uint32_t ref;
+    float entry; /* smallest entry distance of the rays in mask */
+    uint64_t mask;
+} ip_entry;
+
+/* ---- 8 rays against one child box ------------------------------------------------ */
+
+/* Rays of group g (candidates m) whose range meets child c's box grown by
+ * their pads; *entry lowered to the smallest entry among them (lane-wise:
+ * the caller reduces it). Lane by lane inst_wide_hits (inst_wide.h) on
+ * that ray. */
+#if INST_WIDE_AVX
+typedef __m256 ip_entries;
+#else
+typedef float ip_entries;
+#endif
+INST_INLINE unsigned ip_group(const ip_view *v, const inst_wnode *n, unsigned c, unsigned g,
+                              unsigned m, ip_entries *entry)
+{
+    const unsigned r = 8 * g;
+#if INST_WIDE_AVX
+    const float *org[3] = {v->ox + r, v->oy + r, v->oz + r};
+    const float *inv[3] = {v->ix + r, v->iy + r, v->iz + r};
+    __m256 t0 = _mm256_load_ps(v->lo + r), t1 = _mm256_load_ps(v->hi + r);
+    __m256 p = _mm256_load_ps(v->pad + r);
+    for (int a = 0; a < 3; a++) {
+        __m256 lo = _mm256_set1_ps(n->box[2 * a][c]), hi = _mm256_set1_ps(n->box[2 * a + 1][c]);
+        if (v->padded) lo = _mm256_sub_ps(lo, p), hi = _mm256_add_ps(hi, p);
+        __m256 iv = _mm256_load_ps(inv[a]), ov = _mm256_load_ps(org[a]);
+        /* The near plane is hi where the direction is negative. */
+        __m256 nr = _mm256_blendv_ps(lo, hi, iv), fr = _mm256_blendv_ps(hi, lo, iv);
+        t0 = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(nr, ov), iv), t0);
+        t1 = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(fr, ov), iv), t1);
+    }
+    __m256 abs1 = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), t1);
+    __m256 lim = _mm256_add_ps(t1, _mm256_mul_ps(abs1, _mm256_set1_ps(ACCEL_SLAB_PAD)));
+    __m256 in = _mm256_cmp_ps(t0, lim, _CMP_LE_OQ);
+    unsigned h = (unsigned)_mm256_movemask_ps(in) & m;
+    if (h) {
+        __m256i bits = _mm256_and_si256(_mm256_set1_epi32((int)h), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128));
+        __m256 sel = _mm256_castsi256_ps(_mm256_cmpgt_epi32(bits, _mm256_setzero_si256()));
+        *entry = _mm256_min_ps(*entry, _mm256_blendv_ps(_mm256_set1_ps(INFINITY), t0, sel));
+    }
+    return h;
+#else
+    unsigned h = 0;
+    for (unsigned k = m; k; k &= k - 1) {
+        unsigned l = (unsigned)__builtin_ctz(k), q = r + l;
+        float lo[3] = {n->box[0][c], n->box[2][c], n->box[4][c]};
+        float hi[3] = {n->box[1][c], n->box[3][c], n->box[5][c]};
+        if (v->padded)
+            for (int a = 0; a < 3; a++) lo[a] -= v->pad[q], hi[a] += v->pad[q];
+        vec3 o = v3(v->ox[q], v->oy[q], v->oz[q]), iv = v3(v->ix[q], v->iy[q], v->iz[q]);
+        int neg[3] = {signbit(iv.x) != 0, signbit(iv.y) != 0, signbit(iv.z) != 0};
+        float e;
+        if (box3_slab(lo, hi, o, iv, neg, v->lo[q], v->hi[q], &e)) {
+            h |= 1u << l;
+            if (e < *entry) *entry = e;
+        }
+    }
+    return h;
+#endif
+}
+
+/* The smallest of the lanes ip_group lowered. */
+INST_INLINE float ip_entry_min(ip_entries e)
+{
+#if INST_WIDE_AVX
+    __m128 x = _mm_min_ps(_mm256_castps256_ps128(e), _mm256_extractf128_ps(e, 1));
+    x = _mm_min_ps(x, _mm_movehl_ps(x, x));
+    x = _mm_min_ss(x, _mm_shuffle_ps(x, x, 1));
+    return _mm_cvtss_f32(x);
+#else
+    return e;
+#endif
+}
+
+/* Slots of node n that hold a child. */
+INST_INLINE unsigned ip_children(const inst_wnode *n)
+{
+#if INST_WIDE_AVX
+    __m256i none = _mm256_cmpeq_epi32(_mm256_load_si256((const __m256i *)n->child),
+                                      _mm256_set1_epi32((int)INST_WIDE_NONE));
+    return ~(unsigned)_mm256_movemask_ps(_mm256_castsi256_ps(none)) & 0xFFu;
+#else
+    unsigned cand = 0;
+    for (unsigned c = 0; c < INST_WIDE; c++) cand |= (unsigned)(n->child[c] != INST_WIDE_NONE) << c;
+    return cand;
+#endif
+}
+
+/* Children some ray of the view may hit (the frustum test, see above). */
+INST_INLINE unsigned ip_frustum(const ip_view *v, const inst_wnode *n)
+{
+#if INST_WIDE_AVX
+    __m256 t0 = _mm256_set1_ps(v->t_lo), t1 = _mm256_set1_ps(v->t_hi);
+    __m256 p = _mm256_set1_ps(v->pad_max);
+    for (int a = 0; a < 3; a++) {
+        __m256 lo = _mm256_sub_ps(_mm256_load_ps(n->box[2 * a]), p);
+        __m256 hi = _mm256_add_ps(_mm256_load_ps(n->box[2 * a + 1]), p);
+        int neg = v->octant >> a & 1;
+        __m256 nr = neg ? hi : lo, fr = neg ? lo : hi;
+        __m256 olo = _mm256_set1_ps(v->o_lo[a]), ohi = _mm256_set1_ps(v->o_hi[a]);
+        __m256 ilo = _mm256_set1_ps(v->i_lo[a]), ihi = _mm256_set1_ps(v->i_hi[a]);
+        __m256 d0 = _mm256_sub_ps(nr, ohi), d1 = _mm256_sub_ps(nr, olo);
+        __m256 e0 = _mm256_sub_ps(fr, ohi), e1 = _mm256_sub_ps(fr, olo);
+        __m256 l = _mm256_min_ps(_mm256_min_ps(_mm256_mul_ps(d0, ilo), _mm256_mul_ps(d0, ihi)),
+                                 _mm256_min_ps(_mm256_mul_ps(d1, ilo), _mm256_mul_ps(d1, ihi)));
+        __m256 h = _mm256_max_ps(_mm256_max_ps(_mm256_mul_ps(e0, ilo), _mm256_mul_ps(e0, ihi)),
+                                 _mm256_max_ps(_mm256_mul_ps(e1, ilo), _mm256_mul_ps(e1, ihi)));
+        t0 = _mm256_max_ps(l, t0);
+        t1 = _mm256_min_ps(h, t1);
+    }
+    __m256 abs1 = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), t1);
+    __m256 lim = _mm256_add_ps(t1, _mm256_mul_ps(abs1, _mm256_set1_ps(ACCEL_SLAB_PAD)));
+    return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(t0, lim, _CMP_LE_OQ));
+#else
+    (void)v, (void)n;
+    return 0xFFu;
+#endif
+}
+
+/* The rays of m whose range still reaches an entry at `entry`
+ * (box3_entry_before on each ray's current end). */
+INST_INLINE uint64_t ip_still(const ip_view *v, uint64_t m, float entry)
+{
+    uint64_t keep = 0;
+    for (unsigned g = 0; g < IP_RAYS / 8; g++) {
+        unsigned gm = (unsigned)(m >> (8 * g)) & 0xFFu;
+        if (!gm) continue;
+#if INST_WIDE_AVX
+        __m256 hi = _mm256_load_ps(v->hi + 8 * g);
+        __m256 lim = _mm256_add_ps(
+            hi, _mm256_mul_ps(_mm256_andnot_ps(_mm256_set1_ps(-0.0f), hi), _mm256_set1_ps(ACCEL_SLAB_PAD)));
+        gm &= (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(_mm256_set1_ps(entry), lim, _CMP_LE_OQ));
+#else
+        for (unsigned k = gm; k; k &= k - 1) {
+            unsigned l = (unsigned)__builtin_ctz(k);
+            if (!box3_entry_before(entry, v->hi[8 * g + l])) gm &= ~(1u << l);
+        }
+#endif
+        keep |= (uint64_t)gm << (8 * g);
+    }
+    return keep;
+}
+
+/* ---- leaves ----------------------------------------------------------------------- */
+
+/* The rays of m (sharing their origin and axes) that the affine cull of
+ * *f does not rule out: accel_tri_aff_miss on 8 rays at once, the same
+ * float operations lane by lane. */
+INST_INLINE uint64_t ip_aff_keep(const ip_packet *pk, const accel_tri_aff *f, uint64_t m)
+{
+#if INST_WIDE_AVX
+    uint64_t keep = 0;
+    const __m256 sign = _mm256_set1_ps(-0.0f);
+    for (unsigned g = 0; g < IP_RAYS / 8; g++) {
+        unsigned gm = (unsigned)(m >> (8 * g)) & 0xFFu;
+        if (!gm) continue;
+        __m256 sx = _mm256_load_ps(pk->sx + 8 * g), sy = _mm256_load_ps(pk->sy + 8 * g);
+        __m256 sxa = _mm256_andnot_ps(sign, sx), sya = _mm256_andnot_ps(sign, sy);
+        __m256 neg = _mm256_setzero_ps(), pos = _mm256_setzero_ps();
+        for (int k = 0; k < 3; k++) {
+            __m256 e = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(f->e0[k]), _mm256_mul_ps(sx, _mm256_set1_ps(f->e1[k]))),
+                                     _mm256_mul_ps(sy, _mm256_set1_ps(f->e2[k])));
+            __m256 mg = _mm256_add_ps(_mm256_add_ps(_mm256_set1_ps(f->m0[k]), _mm256_mul_ps(sxa, _mm256_set1_ps(f->m1[k]))),
+                                      _mm256_mul_ps(sya, _mm256_set1_ps(f->m2[k])));
+            mg = _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(ACCEL_AFF_REL), mg), _mm256_set1_ps(ACCEL_AFF_ABS));
+            neg = _mm256_or_ps(neg, _mm256_cmp_ps(e, _mm256_xor_ps(mg, sign), _CMP_LT_OQ));
+            pos = _mm256_or_ps(pos, _mm256_cmp_ps(e, mg, _CMP_GT_OQ));
+        }
+        unsigned miss = (unsigned)_mm256_movemask_ps(_mm256_and_ps(neg, pos));
+        keep |= (uint64_t)(gm & ~miss) << (8 * g);
+    }
+    return keep;
+#else
+    uint64_t keep = m;
+    for (uint64_t k = m; k; k &= k - 1) {
+        unsigned r = (unsigned)__builtin_ctzll(k);
+        if (accel_tri_aff_miss(f, pk->sx[r], pk->sy[r])) keep &= ~IP_BIT(r);
+    }
+    return keep;
+#endif
+}
+
+/* The rays of m that the watertight test's first rule does not rule out
+ * for triangle tri: for 8 rays at once, the relative and sheared
+ * vertices, the edge functions U, V, W and their cheap bounds, each the
+ * same float operation on the same operands as accel_tri_watertight_impl
+ * (core/prim.h) computes them (a lane's permuted axes picked by blends);
+ * a ray whose edge functions surely mix signs is a miss there, before
+ * anything else, so skipping it changes no answer. */
+INST_INLINE uint64_t ip_edge_keep(const ip_packet *pk, const float *tri, uint64_t m)
+{
+#if INST_WIDE_AVX
+    uint64_t keep = 0;
+    const __m256 sign = _mm256_set1_ps(-0.0f), filt = _mm256_set1_ps(ACCEL_EDGE_FILTER);
+    const __m256 tiny = _mm256_set1_ps(ACCEL_EDGE_TINY);
+    const __m256i one = _mm256_set1_epi32(1), two = _mm256_set1_epi32(2);
+    for (unsigned g = 0; g < IP_RAYS / 8; g++) {
+        unsigned gm = (unsigned)(m >> (8 * g)) & 0xFFu;
+        if (!gm) continue;
+        const unsigned r = 8 * g;
+        __m256 o[3] = {_mm256_load_ps(pk->top.ox + r), _mm256_load_ps(pk->top.oy + r),
+                       _mm256_load_ps(pk->top.oz + r)};
+        __m256i kx = _mm256_load_si256((const __m256i *)(pk->kx + r));
+        __m256i ky = _mm256_load_si256((const __m256i *)(pk->ky + r));
+        __m256i kz = _mm256_load_si256((const __m256i *)(pk->kz + r));
+        __m256 x1 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kx, one)), x2 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kx, two));
+        __m256 y1 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(ky, one)), y2 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(ky, two));
+        __m256 z1 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kz, one)), z2 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(kz, two));
+        __m256 sx = _mm256_load_ps(pk->sx + r), sy = _mm256_load_ps(pk->sy + r);
+        __m256 sxa = _mm256_andnot_ps(sign, sx), sya = _mm256_andnot_ps(sign, sy);
+        __m256 px[3], py[3], mx[3], my[3]; /* sheared x, y and their magnitudes, per vertex */
+        for (int j = 0; j < 3; j++) {
+            __m256 e0 = _mm256_sub_ps(_mm256_set1_ps(tri[3 * j]), o[0]);
+            __m256 e1 = _mm256_sub_ps(_mm256_set1_ps(tri[3 * j + 1]), o[1]);
+            __m256 e2 = _mm256_sub_ps(_mm256_set1_ps(tri[3 * j + 2]), o[2]);
+            __m256 vx = _mm256_blendv_ps(_mm256_blendv_ps(e0, e1, x1), e2, x2);
+            __m256 vy = _mm256_blendv_ps(_mm256_blendv_ps(e0, e1, y1), e2, y2);
+            __m256 vz = _mm256_blendv_ps(_mm256_blendv_ps(e0, e1, z1), e2, z2);
+            px[j] = _mm256_sub_ps(vx, _mm256_mul_ps(sx, vz));
+            py[j] = _mm256_sub_ps(vy, _mm256_mul_ps(sy, vz));
+            __m256 az = _mm256_andnot_ps(sign, vz);
+            mx[j] = _mm256_add_ps(_mm256_andnot_ps(sign, vx), _mm256_mul_ps(sxa, az));
+            my[j] = _mm256_add_ps(_mm256_andnot_ps(sign, vy), _mm256_mul_ps(sya, az));
+        }
+        /* U = cx by - cy bx, V = ax cy - ay cx, W = bx ay - by ax (a, b, c: vertices 0, 1, 2) */
+        __m256 U = _mm256_sub_ps(_mm256_mul_ps(px[2], py[1]), _mm256_mul_ps(py[2], px[1]));
+        __m256 V = _mm256_sub_ps(_mm256_mul_ps(px[0], py[2]), _mm256_mul_ps(py[0], px[2]));
+        __m256 W = _mm256_sub_ps(_mm256_mul_ps(px[1], py[0]), _mm256_mul_ps(py[1], px[0]));
+        __m256 eu = _mm256_add_ps(_mm256_mul_ps(filt, _mm256_add_ps(_mm256_mul_ps(mx[2], my[1]), _mm256_mul_ps(my[2], mx[1]))), tiny);
+        __m256 ev = _mm256_add_ps(_mm256_mul_ps(filt, _mm256_add_ps(_mm256_mul_ps(mx[0], my[2]), _mm256_mul_ps(my[0], mx[2]))), tiny);
+        __m256 ew = _mm256_add_ps(_mm256_mul_ps(filt, _mm256_add_ps(_mm256_mul_ps(mx[1], my[0]), _mm256_mul_ps(my[1], mx[0]))), tiny);
+        __m256 neg = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, _mm256_xor_ps(eu, sign), _CMP_LT_OQ),
+                                               _mm256_cmp_ps(V, _mm256_xor_ps(ev, sign), _CMP_LT_OQ)),
+                                  _mm256_cmp_ps(W, _mm256_xor_ps(ew, sign), _CMP_LT_OQ));
+        __m256 pos = _mm256_or_ps(_mm256_or_ps(_mm256_cmp_ps(U, eu, _CMP_GT_OQ), _mm256_cmp_ps(V, ev, _CMP_GT_OQ)),
+                                  _mm256_cmp_ps(W, ew, _CMP_GT_OQ));
+        unsigned miss = (unsigned)_mm256_movemask_ps(_mm256_and_ps(neg, pos));
+        keep |= (uint64_t)(gm & ~miss) << (8 * g);
+    }
+    return keep;
+#else
+    (void)pk, (void)tri;
+    return m;
+#endif
+}
+
+/* inst_packet_rays.c: rays [0, n) into the packet (the rest of its 64
+ * lanes dead); the rays m of the packet in instance it's object space,
+ * into the view ov (returns the rays that reach its mesh's padded box,
+ * with the frustum's bounds set); the frustum's bounds of a view. */
+void ip_load(ip_packet *pk, const accel_ray *rays, unsigned n, int any);
+uint64_t ip_objects(const inst_accel *a, const inst_item *it, const inst_bottom *b, ip_packet *pk,
+                    ip_view *ov, uint64_t m, int counted);
+void ip_bounds(ip_view *v, uint64_t m);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
