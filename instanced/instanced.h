@@ -10,6 +10,8 @@
  *                                      bottom=<kind>:k=v;k=v (';' for ',')
  *   instanced:world=flat               world triangles read from the
  *                                      flattened scene, not recomputed
+ *   instanced:traverse=packet          64 rays walk both 8-wide levels
+ *                                      together (the same answers, bit for bit)
  *
  * One bottom level per mesh, in object space, shared by all the mesh's
  * instances; one top level over the instances' world bounds. Rays go to
@@ -21,7 +23,7 @@
  *
  * Parameters (bin/trace --help): top, bottom (bvh|grid or a kind spec), leaf (bottom BVH
  * leaf size), width (BVH levels walked 8-wide, or 2: the binary tree), lambda and top_lambda (grid cells per primitive / instance),
- * world (compute|flat), and the common tri=watertight|naive.
+ * world (compute|flat), traverse (single|packet), and the common tri=watertight|naive.
  *
  * A plain scene is one identity instance of itself. The kind is reached
  * through the registry only (registry.c): accel_kind_instanced.
