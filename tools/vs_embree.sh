@@ -21,7 +21,9 @@
 # Other settings: ROUNDS (6), SETS (primary,diffuse,shadow), PASSES (timed
 # passes per process, 5, after a warm-up pass), THREADS (1), QUALITY (Embree's
 # build quality, medium), DIR (build/vs_embree/<scene>-<size>), BIN (bin),
-# BUILD (build: its .flags name our compiler target),
+# BUILD (build: its .flags name our compiler target), ORDER (the rays' order in
+# the files both read: tiles8 as made, or scanline or shuffle: bin/trace's
+# --ray-order; DIR then ends in -ORDER),
 # FRESH=1 remakes the OBJ and rays, CHECK=0 skips the hit comparison,
 # TRACE_OPTS and EMBREE_OPTS add options to every bin/trace or bin/embree_ref
 # run (e.g. EMBREE_OPTS="--isa avx2" or "--coherent"). Run it from the top of
@@ -67,14 +69,17 @@ for b in trace embree_ref; do
 done
 
 name=$(printf '%s' "$(basename -- "$scene")" | tr -c 'A-Za-z0-9_.=-' '_')
-DIR=${DIR:-build/vs_embree/$name-$SIZE}
+ORDER=${ORDER:-}
+order_opt=()
+[ -n "$ORDER" ] && order_opt=(--ray-order "$ORDER")
+DIR=${DIR:-build/vs_embree/$name-$SIZE${ORDER:+-$ORDER}}
 mkdir -p "$DIR"
 obj=$DIR/scene.obj
 if [ "${FRESH:-0}" = 1 ] || [ ! -s "$obj" ] || [ ! -s "$DIR/rays.shadow.rays" ]; then
     echo "vs_embree: making $obj and the rays of $scene ($SIZE) in $DIR"
     "$BIN/trace" --scene "$scene" --size "$SIZE" --rays primary,diffuse,shadow \
         --export-obj "$obj" --dump-rays "$DIR/rays" --repeat 1 --warmup 0 --build-repeat 1 \
-        --no-counters --quiet > "$DIR/make.log"
+        "${order_opt[@]}" --no-counters --quiet > "$DIR/make.log"
 fi
 
 # One field of bin/trace's --csv output (header names it), RFC 4180 quotes.
