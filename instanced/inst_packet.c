@@ -71,17 +71,42 @@ INST_INLINE void ip_leaf(const inst_accel *a, ip_packet *pk, ip_view *v, const i
             accel_tri_rel_of(&pk->p[__builtin_ctzll(m)], tri, &rel);
             accel_tri_aff_of(&rel, &f);
             todo = ip_aff_keep(pk, &f, m);
-        } else if (tri && !naive) {
-            todo = ip_edge_keep(pk, tri, m);
         }
-        if (counted)
-            for (uint64_t k = m; k; k &= k - 1) {
-                unsigned r = (unsigned)__builtin_ctzll(k);
-                pk->prims[r] += id != pk->prim[r];
+        for (uint64_t k = m; k; k &= k - 1) { /* a ray's current best is not tested again */
+            unsigned r = (unsigned)__builtin_ctzll(k);
+            if (id == pk->prim[r]) todo &= ~IP_BIT(r);
+            else if (counted) pk->prims[r]++;
+        }
+#if INST_WIDE_AVX
+        /* The test's float path on 8 rays at once; the rays it leaves
+         * undecided run it alone below. */
+        if (tri && !naive && todo) {
+            ip_rel8 q8 = {0}; /* set below: shared once, else per group */
+            if (shared) ip_rel8_shared(&rel, &q8);
+            int dead = -1;
+            uint64_t rest = 0;
+            for (unsigned g = 0; g < IP_RAYS / 8; g++) {
+                unsigned gm = (unsigned)(todo >> (8 * g)) & 0xFFu;
+                if (!gm) continue;
+                if (!shared) ip_rel8_lanes(pk, tri, g, &q8);
+                ip_tri8_out o;
+                ip_tri8(pk, &q8, g, gm, &o);
+                rest |= (uint64_t)o.scalar << (8 * g);
+                for (unsigned h = o.hit; h; h &= h - 1) {
+                    unsigned l = (unsigned)__builtin_ctz(h), r = 8 * g + l;
+                    float th = o.t[l];
+                    if (th > pk->t[r] || (th == pk->t[r] && id > pk->prim[r])) continue;
+                    if (dead < 0) dead = accel_tri_is_degenerate(tri); /* never hit (inst_decide) */
+                    if (dead) break;
+                    pk->t[r] = th, pk->u[r] = o.u[l], pk->v[r] = o.v[l], pk->prim[r] = id;
+                    if (pk->any) pk->live &= ~IP_BIT(r);
+                }
             }
+            todo = rest;
+        }
+#endif
         for (uint64_t k = todo; k; k &= k - 1) {
             unsigned r = (unsigned)__builtin_ctzll(k);
-            if (id == pk->prim[r]) continue;
             if (inst_decide(&pk->p[r], tri, shared ? &rel : NULL, sphere, id, naive, &pk->t[r],
                             &pk->u[r], &pk->v[r], &pk->prim[r]) &&
                 pk->any)

@@ -254,7 +254,7 @@ void ip_load(ip_packet *pk, const accel_ray *rays, unsigned n, int any)
         pk->prim[r] = ACCEL_MISS, pk->u[r] = pk->v[r] = 0.0f;
         pk->top_steps[r] = pk->bottom_steps[r] = pk->boxes[r] = pk->prims[r] = 0;
         v->pad[r] = 0.0f, v->shift[r] = 0.0;
-        pk->sx[r] = pk->sy[r] = 0.0f;
+        pk->sx[r] = pk->sy[r] = pk->sz[r] = 0.0f, pk->tf[r] = -INFINITY;
         pk->kx[r] = 0, pk->ky[r] = 1, pk->kz[r] = 2;
         if (!(r < n && accel_prep_ray(&rays[r], p))) { /* dead: an empty range */
             v->ox[r] = v->oy[r] = v->oz[r] = 0.0f, v->ix[r] = v->iy[r] = v->iz[r] = 1.0f;
@@ -264,7 +264,7 @@ void ip_load(ip_packet *pk, const accel_ray *rays, unsigned n, int any)
         v->ox[r] = p->org.x, v->oy[r] = p->org.y, v->oz[r] = p->org.z;
         v->ix[r] = p->inv_dir.x, v->iy[r] = p->inv_dir.y, v->iz[r] = p->inv_dir.z;
         v->lo[r] = p->t_near, v->hi[r] = pk->t[r] = p->t_far;
-        pk->sx[r] = p->sx, pk->sy[r] = p->sy;
+        pk->sx[r] = p->sx, pk->sy[r] = p->sy, pk->sz[r] = p->sz, pk->tf[r] = p->t_far;
         pk->kx[r] = p->kx, pk->ky[r] = p->ky, pk->kz[r] = p->kz;
         pk->o[r][0] = p->org.x, pk->o[r][1] = p->org.y, pk->o[r][2] = p->org.z;
         pk->d[r][0] = p->dir.x, pk->d[r][1] = p->dir.y, pk->d[r][2] = p->dir.z;
