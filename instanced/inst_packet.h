@@ -3,9 +3,9 @@
  * internal to instanced/: the packet and its views (inst_packet.c walks
  * them, inst_packet_rays.c fills them), and the 8-ray pieces both use:
  * the slab test of 8 rays against one child box, the frustum test of a
- * node, the entry cull at a pop, and the two triangle culls (shared
- * origins: the affine edge functions; any origins: the watertight test's
- * first rule). Each computes, lane by lane, the very float operations of
+ * node, the entry cull at a pop, the affine triangle cull of rays that
+ * share their origin, and the watertight test's float path on 8 rays.
+ * Each computes, lane by lane, the very float operations of
  * the single-ray code it stands for (inst_wide.h, core/prim.h), so the
  * packets' answers are the single-ray walk's, bit for bit.
  */
