@@ -215,9 +215,10 @@ INST_INLINE void ip_kernel(const void *acc, const accel_ray *rays, void *out, si
     const inst_accel *a = acc;
     const int naive = (flags & ACCEL_V_NAIVE) != 0, spheres = (flags & ACCEL_V_SPHERES) != 0;
     ip_packet pk;
+    for (unsigned r = 0; r < IP_RAYS; r++) pk.top.pad[r] = 0.0f, pk.top.shift[r] = 0.0; /* world rays */
     for (size_t base = 0; base < count; base += IP_RAYS) {
         unsigned n = count - base < IP_RAYS ? (unsigned)(count - base) : IP_RAYS;
-        ip_load(&pk, rays + base, n, any);
+        ip_load(&pk, rays + base, n, any, c != NULL);
         ip_walk(a, &pk, &pk.top, &a->top_bvh, &a->top_wide, NULL, NULL, pk.live, naive, spheres,
                 c != NULL);
         for (unsigned r = 0; r < n; r++) {

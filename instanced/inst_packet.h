@@ -53,7 +53,6 @@ typedef struct {
     int32_t kx[IP_RAYS] __attribute__((aligned(32))); /* their permuted axes */
     int32_t ky[IP_RAYS] __attribute__((aligned(32)));
     int32_t kz[IP_RAYS] __attribute__((aligned(32)));
-    double o[IP_RAYS][3], d[IP_RAYS][3];
     float t[IP_RAYS], u[IP_RAYS], v[IP_RAYS];
     uint32_t prim[IP_RAYS];
     uint64_t live;              /* valid rays still looking (any hit: until one) */
@@ -376,7 +375,7 @@ INST_INLINE void ip_tri8(const ip_packet *pk, const ip_rel8 *q, unsigned g, unsi
  * lanes dead); the rays m of the packet in instance it's object space,
  * into the view ov (returns the rays that reach its mesh's padded box,
  * with the frustum's bounds set); the frustum's bounds of a view. */
-void ip_load(ip_packet *pk, const accel_ray *rays, unsigned n, int any);
+void ip_load(ip_packet *pk, const accel_ray *rays, unsigned n, int any, int counted);
 uint64_t ip_objects(const inst_accel *a, const inst_item *it, const inst_bottom *b, ip_packet *pk,
                     ip_view *ov, uint64_t m, int counted);
 void ip_bounds(ip_view *v, uint64_t m);

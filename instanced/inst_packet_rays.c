@@ -75,7 +75,9 @@ static int ip_object1(const inst_accel *a, const inst_item *it, const inst_botto
                       ip_view *ov, unsigned r, int counted)
 {
     inst_oray o;
-    int clip = inst_object_ray(a, it, b, pk->o[r], pk->d[r], pk->p[r].t_near, pk->t[r], &o);
+    const accel_ray_prep *p = &pk->p[r];
+    const double wo[3] = {p->org.x, p->org.y, p->org.z}, wd[3] = {p->dir.x, p->dir.y, p->dir.z};
+    int clip = inst_object_ray(a, it, b, wo, wd, p->t_near, pk->t[r], &o);
     if (clip >= 0 && counted) pk->boxes[r]++;
     if (clip <= 0) return 0;
     vec3 of, df;
@@ -107,8 +109,10 @@ static uint64_t ip_object4(const inst_accel *a, const inst_item *it, const inst_
 #define IP_DABS(x) _mm256_andnot_pd(sign, (x))
     __m256d wo[3], wd[3], o[3], d[3];
     for (int k = 0; k < 3; k++) {
-        wo[k] = _mm256_set_pd(pk->o[rr[3]][k], pk->o[rr[2]][k], pk->o[rr[1]][k], pk->o[rr[0]][k]);
-        wd[k] = _mm256_set_pd(pk->d[rr[3]][k], pk->d[rr[2]][k], pk->d[rr[1]][k], pk->d[rr[0]][k]);
+        wo[k] = _mm256_cvtps_pd(_mm_set_ps(v3_idx(pk->p[rr[3]].org, k), v3_idx(pk->p[rr[2]].org, k),
+                                           v3_idx(pk->p[rr[1]].org, k), v3_idx(pk->p[rr[0]].org, k)));
+        wd[k] = _mm256_cvtps_pd(_mm_set_ps(v3_idx(pk->p[rr[3]].dir, k), v3_idx(pk->p[rr[2]].dir, k),
+                                           v3_idx(pk->p[rr[1]].dir, k), v3_idx(pk->p[rr[0]].dir, k)));
     }
     __m256d eo = zero, oa = zero, ed = zero, da = zero;
     for (int i = 0; i < 3; i++) {
@@ -242,23 +246,26 @@ uint64_t ip_objects(const inst_accel *a, const inst_item *it, const inst_bottom 
     return keep;
 }
 
-void ip_load(ip_packet *pk, const accel_ray *rays, unsigned n, int any)
+void ip_load(ip_packet *pk, const accel_ray *rays, unsigned n, int any, int counted)
 {
     ip_view *v = &pk->top;
     pk->live = 0;
     pk->any = any;
     pk->shared = 1;
     v->slack = 0.0f, v->padded = 0;
+    /* The top view's pads and shifts stay 0 (ip_kernel); u, v are read
+     * only where a hit set them; the counters only when counted. */
+    if (counted)
+        for (unsigned r = 0; r < IP_RAYS; r++)
+            pk->top_steps[r] = pk->bottom_steps[r] = pk->boxes[r] = pk->prims[r] = 0;
     for (unsigned r = 0; r < IP_RAYS; r++) {
         accel_ray_prep *p = &pk->p[r];
-        pk->prim[r] = ACCEL_MISS, pk->u[r] = pk->v[r] = 0.0f;
-        pk->top_steps[r] = pk->bottom_steps[r] = pk->boxes[r] = pk->prims[r] = 0;
-        v->pad[r] = 0.0f, v->shift[r] = 0.0;
-        pk->sx[r] = pk->sy[r] = pk->sz[r] = 0.0f, pk->tf[r] = -INFINITY;
-        pk->kx[r] = 0, pk->ky[r] = 1, pk->kz[r] = 2;
+        pk->prim[r] = ACCEL_MISS;
         if (!(r < n && accel_prep_ray(&rays[r], p))) { /* dead: an empty range */
             v->ox[r] = v->oy[r] = v->oz[r] = 0.0f, v->ix[r] = v->iy[r] = v->iz[r] = 1.0f;
             v->lo[r] = INFINITY, v->hi[r] = -INFINITY, pk->t[r] = -INFINITY;
+            pk->sx[r] = pk->sy[r] = pk->sz[r] = 0.0f, pk->tf[r] = -INFINITY;
+            pk->kx[r] = 0, pk->ky[r] = 1, pk->kz[r] = 2;
             continue;
         }
         v->ox[r] = p->org.x, v->oy[r] = p->org.y, v->oz[r] = p->org.z;
@@ -266,8 +273,6 @@ void ip_load(ip_packet *pk, const accel_ray *rays, unsigned n, int any)
         v->lo[r] = p->t_near, v->hi[r] = pk->t[r] = p->t_far;
         pk->sx[r] = p->sx, pk->sy[r] = p->sy, pk->sz[r] = p->sz, pk->tf[r] = p->t_far;
         pk->kx[r] = p->kx, pk->ky[r] = p->ky, pk->kz[r] = p->kz;
-        pk->o[r][0] = p->org.x, pk->o[r][1] = p->org.y, pk->o[r][2] = p->org.z;
-        pk->d[r][0] = p->dir.x, pk->d[r][1] = p->dir.y, pk->d[r][2] = p->dir.z;
         if (pk->live) pk->shared &= accel_prep_same_frame(p, &pk->p[__builtin_ctzll(pk->live)]);
         pk->live |= IP_BIT(r);
     }
