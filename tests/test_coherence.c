@@ -282,6 +282,50 @@ TEST(coherence_block_decisions)
     scene_free(&s);
 }
 
+/* Shadow rays cast to the point light from a tiled image's hits converge:
+ * their groups go as packets as they come, no keys and no sort (every
+ * block kept), whatever their directions' spread; the same rays shuffled
+ * are not kept as they come. */
+TEST(coherence_shadow_rays_converge_into_packets)
+{
+    accel_scene s;
+    if (!test_make_scene("sphereflake:level=2", &s)) return;
+    ray_case cases[CASES];
+    CHECK(make_cases(&s, cases));
+    const accel_kind *kind;
+    void *a = test_build_kind("bvh:width=8,traverse=packet", &s, 1, &kind, NULL);
+    if (a) {
+        rays_set *sh = &cases[1].set;
+        const size_t n = sh->count;
+        uint8_t *occ = malloc(n);
+        accel_coherence_stats st0, st1, st2;
+        const int before = accel_coherence_get();
+        accel_coherence_set(ACCEL_ORDER_SORT);
+        accel_coherence_stats_get(&st0);
+        kind->occluded(a, sh->rays, occ, n, NULL);
+        accel_coherence_stats_get(&st1);
+        CHECKF(n > 2 * 64 && st1.sorted_blocks == st0.sorted_blocks &&
+                   st1.kept_blocks > st0.kept_blocks,
+               "tiled shadow rays: %llu blocks sorted, %llu kept",
+               (unsigned long long)(st1.sorted_blocks - st0.sorted_blocks),
+               (unsigned long long)(st1.kept_blocks - st0.kept_blocks));
+        CHECKF(st1.packet_rays - st0.packet_rays >= n * 3 / 4, "tiled shadow rays: %llu of %zu in packets",
+               (unsigned long long)(st1.packet_rays - st0.packet_rays), n);
+        size_t *perm = shuffle_perm(n, 5);
+        accel_ray *shuffled = malloc(n * sizeof *shuffled);
+        for (size_t i = 0; i < n; i++) shuffled[i] = sh->rays[perm[i]];
+        kind->occluded(a, shuffled, occ, n, NULL);
+        accel_coherence_stats_get(&st2);
+        CHECKF(st2.sorted_blocks > st1.sorted_blocks || st2.single_rays > st1.single_rays,
+               "shuffled shadow rays kept as packets as they came");
+        accel_coherence_set(before);
+        free(occ), free(perm), free(shuffled);
+        kind->destroy(a);
+    }
+    for (int ci = 0; ci < CASES; ci++) rays_free(&cases[ci].set);
+    scene_free(&s);
+}
+
 /* Diffuse bounces are not traced as packets: the spread test sends them
  * ray by ray. */
 TEST(coherence_diffuse_rays_go_single)

@@ -21,7 +21,13 @@
  *      packets (kinds whose packet kernel has its own fallback skip this),
  *   5. scatter the answers (and the per-ray counters) back to the caller's
  *      order.
- * Before all this, a block that is a raster (a camera's rays in pixel order,
+ * Before all this, a block of converging rays (shadow rays cast to one
+ * point light: finite ends no farther apart than their origins, origins
+ * within a narrow cone) whose groups of 64 mostly converge as they come is
+ * traced as it comes, those groups as packets, no keys and no sort; after
+ * a sort, converging groups are packets too, whatever their directions'
+ * spread (coherence.c: ORIGIN_FRAC).
+ * Before that, a block that is a raster (a camera's rays in pixel order,
  * found from the steps between consecutive rays) skips the keys: 8x8 tile
  * order and rasters up to 16 wide are kept, wider ones gathered into tiles
  * of whole rows (8x8 when a block holds 8 rows: 8192 rays, 8 rows of 1024;
