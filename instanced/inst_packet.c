@@ -68,7 +68,9 @@ INST_INLINE void ip_leaf(const inst_accel *a, ip_packet *pk, ip_view *v, const i
         uint64_t todo = m;
         if (shared) {
             accel_tri_aff f;
-            accel_tri_rel_of(&pk->p[__builtin_ctzll(m)], tri, &rel);
+            accel_ray_prep p0;
+            ip_prep(pk, (unsigned)__builtin_ctzll(m), &p0);
+            accel_tri_rel_of(&p0, tri, &rel);
             accel_tri_aff_of(&rel, &f);
             todo = ip_aff_keep(pk, &f, m);
         }
@@ -107,7 +109,9 @@ INST_INLINE void ip_leaf(const inst_accel *a, ip_packet *pk, ip_view *v, const i
 #endif
         for (uint64_t k = todo; k; k &= k - 1) {
             unsigned r = (unsigned)__builtin_ctzll(k);
-            if (inst_decide(&pk->p[r], tri, shared ? &rel : NULL, sphere, id, naive, &pk->t[r],
+            accel_ray_prep p;
+            ip_prep(pk, r, &p);
+            if (inst_decide(&p, tri, shared ? &rel : NULL, sphere, id, naive, &pk->t[r],
                             &pk->u[r], &pk->v[r], &pk->prim[r]) &&
                 pk->any)
                 pk->live &= ~IP_BIT(r);

@@ -44,9 +44,14 @@ typedef struct {
 } ip_view;
 
 typedef struct {
+    /* The prepared world rays (accel_prep_ray) as rows: origins, inverse
+     * directions and t_near are the top view's ox..iz and lo; ip_prep
+     * puts one back together for the scalar tests. */
     ip_view top;                /* world rays: shift 0, slack 0, no pad */
-    accel_ray_prep p[IP_RAYS];  /* world rays for the triangle tests */
-    float sx[IP_RAYS] __attribute__((aligned(32))); /* their shears (shared: the affine cull) */
+    float dx[IP_RAYS] __attribute__((aligned(32))); /* directions */
+    float dy[IP_RAYS] __attribute__((aligned(32)));
+    float dz[IP_RAYS] __attribute__((aligned(32)));
+    float sx[IP_RAYS] __attribute__((aligned(32))); /* shears (shared: the affine cull) */
     float sy[IP_RAYS] __attribute__((aligned(32)));
     float sz[IP_RAYS] __attribute__((aligned(32)));
     float tf[IP_RAYS] __attribute__((aligned(32))); /* their t_far: the whole range's end */
@@ -60,6 +65,19 @@ typedef struct {
     int shared;                 /* every valid ray has the same origin and axes */
     uint32_t top_steps[IP_RAYS], bottom_steps[IP_RAYS], boxes[IP_RAYS], prims[IP_RAYS];
 } ip_packet;
+
+/* Ray r's prepared form, as accel_prep_ray made it (ip_load). */
+INST_INLINE void ip_prep(const ip_packet *pk, unsigned r, accel_ray_prep *p)
+{
+    p->org = v3(pk->top.ox[r], pk->top.oy[r], pk->top.oz[r]);
+    p->dir = v3(pk->dx[r], pk->dy[r], pk->dz[r]);
+    p->inv_dir = v3(pk->top.ix[r], pk->top.iy[r], pk->top.iz[r]);
+    p->neg[0] = signbit(pk->dx[r]) != 0, p->neg[1] = signbit(pk->dy[r]) != 0;
+    p->neg[2] = signbit(pk->dz[r]) != 0;
+    p->kx = pk->kx[r], p->ky = pk->ky[r], p->kz = pk->kz[r];
+    p->sx = pk->sx[r], p->sy = pk->sy[r], p->sz = pk->sz[r];
+    p->t_near = pk->top.lo[r], p->t_far = pk->tf[r];
+}
 
 typedef struct {
     uint32_t ref;

@@ -75,9 +75,9 @@ static int ip_object1(const inst_accel *a, const inst_item *it, const inst_botto
                       ip_view *ov, unsigned r, int counted)
 {
     inst_oray o;
-    const accel_ray_prep *p = &pk->p[r];
-    const double wo[3] = {p->org.x, p->org.y, p->org.z}, wd[3] = {p->dir.x, p->dir.y, p->dir.z};
-    int clip = inst_object_ray(a, it, b, wo, wd, p->t_near, pk->t[r], &o);
+    const double wo[3] = {pk->top.ox[r], pk->top.oy[r], pk->top.oz[r]};
+    const double wd[3] = {pk->dx[r], pk->dy[r], pk->dz[r]};
+    int clip = inst_object_ray(a, it, b, wo, wd, pk->top.lo[r], pk->t[r], &o);
     if (clip >= 0 && counted) pk->boxes[r]++;
     if (clip <= 0) return 0;
     vec3 of, df;
@@ -87,7 +87,7 @@ static int ip_object1(const inst_accel *a, const inst_item *it, const inst_botto
     ov->ix[r] = 1.0f / df.x, ov->iy[r] = 1.0f / df.y, ov->iz[r] = 1.0f / df.z;
     ov->pad[r] = padf;
     ov->shift[r] = o.s0;
-    ov->lo[r] = inst_walk_lo(pk->p[r].t_near, o.s0, ov->slack);
+    ov->lo[r] = inst_walk_lo(pk->top.lo[r], o.s0, ov->slack);
     ov->hi[r] = inst_walk_hi(pk->t[r], o.s0, ov->slack);
     return 1;
 }
@@ -109,10 +109,10 @@ static uint64_t ip_object4(const inst_accel *a, const inst_item *it, const inst_
 #define IP_DABS(x) _mm256_andnot_pd(sign, (x))
     __m256d wo[3], wd[3], o[3], d[3];
     for (int k = 0; k < 3; k++) {
-        wo[k] = _mm256_cvtps_pd(_mm_set_ps(v3_idx(pk->p[rr[3]].org, k), v3_idx(pk->p[rr[2]].org, k),
-                                           v3_idx(pk->p[rr[1]].org, k), v3_idx(pk->p[rr[0]].org, k)));
-        wd[k] = _mm256_cvtps_pd(_mm_set_ps(v3_idx(pk->p[rr[3]].dir, k), v3_idx(pk->p[rr[2]].dir, k),
-                                           v3_idx(pk->p[rr[1]].dir, k), v3_idx(pk->p[rr[0]].dir, k)));
+        const float *ro = k == 0 ? pk->top.ox : k == 1 ? pk->top.oy : pk->top.oz;
+        const float *rd = k == 0 ? pk->dx : k == 1 ? pk->dy : pk->dz;
+        wo[k] = _mm256_cvtps_pd(_mm_set_ps(ro[rr[3]], ro[rr[2]], ro[rr[1]], ro[rr[0]]));
+        wd[k] = _mm256_cvtps_pd(_mm_set_ps(rd[rr[3]], rd[rr[2]], rd[rr[1]], rd[rr[0]]));
     }
     __m256d eo = zero, oa = zero, ed = zero, da = zero;
     for (int i = 0; i < 3; i++) {
@@ -138,7 +138,8 @@ static uint64_t ip_object4(const inst_accel *a, const inst_item *it, const inst_
     __m256d e_ray = _mm256_mul_pd(_mm256_set1_pd(0x1p-50),
                                   _mm256_add_pd(eo, _mm256_div_pd(_mm256_mul_pd(ed, reach), da)));
     __m256d pad = a->no_pad ? zero : _mm256_add_pd(_mm256_set1_pd(2.0 * it->pad), e_ray);
-    __m256d tn = _mm256_set_pd(pk->p[rr[3]].t_near, pk->p[rr[2]].t_near, pk->p[rr[1]].t_near, pk->p[rr[0]].t_near);
+    const float *ptn = pk->top.lo;
+    __m256d tn = _mm256_set_pd(ptn[rr[3]], ptn[rr[2]], ptn[rr[1]], ptn[rr[0]]);
     __m256d s0 = tn, s1 = _mm256_set_pd(pk->t[rr[3]], pk->t[rr[2]], pk->t[rr[1]], pk->t[rr[0]]);
     __m256d branch = zero; /* lanes the scalar code would take apart */
     for (int i = 0; i < 3; i++) {
@@ -246,36 +247,145 @@ uint64_t ip_objects(const inst_accel *a, const inst_item *it, const inst_bottom 
     return keep;
 }
 
+/* Ray r of the packet from its prepared form p (valid), or dead (p NULL:
+ * an empty range). */
+static void ip_put(ip_packet *pk, unsigned r, const accel_ray_prep *p)
+{
+    ip_view *v = &pk->top;
+    if (!p) {
+        v->ox[r] = v->oy[r] = v->oz[r] = 0.0f, v->ix[r] = v->iy[r] = v->iz[r] = 1.0f;
+        v->lo[r] = INFINITY, v->hi[r] = -INFINITY, pk->t[r] = -INFINITY;
+        pk->dx[r] = pk->dy[r] = pk->dz[r] = 0.0f;
+        pk->sx[r] = pk->sy[r] = pk->sz[r] = 0.0f, pk->tf[r] = -INFINITY;
+        pk->kx[r] = 0, pk->ky[r] = 1, pk->kz[r] = 2;
+        pk->live &= ~IP_BIT(r);
+        return;
+    }
+    v->ox[r] = p->org.x, v->oy[r] = p->org.y, v->oz[r] = p->org.z;
+    v->ix[r] = p->inv_dir.x, v->iy[r] = p->inv_dir.y, v->iz[r] = p->inv_dir.z;
+    v->lo[r] = p->t_near, v->hi[r] = pk->t[r] = p->t_far;
+    pk->dx[r] = p->dir.x, pk->dy[r] = p->dir.y, pk->dz[r] = p->dir.z;
+    pk->sx[r] = p->sx, pk->sy[r] = p->sy, pk->sz[r] = p->sz, pk->tf[r] = p->t_far;
+    pk->kx[r] = p->kx, pk->ky[r] = p->ky, pk->kz[r] = p->kz;
+    pk->live |= IP_BIT(r);
+}
+
+#if INST_WIDE_AVX
+/* accel_prep_ray (core/prim.h) for the 8 rays of group g at once, into
+ * the packet's rows: the same IEEE operations (the reciprocals and shears
+ * are divisions, exactly rounded in both), the same choice of axes. A
+ * lane the scalar code would reject (a ray that can hit nothing) goes to
+ * it. Writing rows, not 8 prepared structures, halves the load's stores. */
+static void ip_prep8(ip_packet *pk, const accel_ray *rays, unsigned g)
+{
+    __m256 row[8], t[8], u[8], f[8];
+    for (int i = 0; i < 8; i++) row[i] = _mm256_loadu_ps(&rays[i].ox);
+    /* 8x8 transpose: f[k] holds field k (ox, oy, oz, t_near, dx, dy, dz, t_far) of the 8 rays */
+    for (int i = 0; i < 8; i += 2) {
+        t[i] = _mm256_unpacklo_ps(row[i], row[i + 1]);
+        t[i + 1] = _mm256_unpackhi_ps(row[i], row[i + 1]);
+    }
+    for (int i = 0; i < 8; i += 4) {
+        u[i] = _mm256_shuffle_ps(t[i], t[i + 2], _MM_SHUFFLE(1, 0, 1, 0));
+        u[i + 1] = _mm256_shuffle_ps(t[i], t[i + 2], _MM_SHUFFLE(3, 2, 3, 2));
+        u[i + 2] = _mm256_shuffle_ps(t[i + 1], t[i + 3], _MM_SHUFFLE(1, 0, 1, 0));
+        u[i + 3] = _mm256_shuffle_ps(t[i + 1], t[i + 3], _MM_SHUFFLE(3, 2, 3, 2));
+    }
+    for (int i = 0; i < 4; i++) {
+        f[i] = _mm256_permute2f128_ps(u[i], u[i + 4], 0x20);
+        f[i + 4] = _mm256_permute2f128_ps(u[i], u[i + 4], 0x31);
+    }
+    const __m256 sign = _mm256_set1_ps(-0.0f), inf = _mm256_set1_ps(INFINITY), one = _mm256_set1_ps(1.0f);
+    const __m256 zero = _mm256_setzero_ps();
+    const __m256 *o = f, *d = f + 4;
+    const __m256 tn = f[3], tf = f[7];
+    __m256 ok = _mm256_cmp_ps(tn, tf, _CMP_LE_OQ);
+    for (int k = 0; k < 3; k++) {
+        ok = _mm256_and_ps(ok, _mm256_cmp_ps(_mm256_andnot_ps(sign, o[k]), inf, _CMP_LT_OQ));
+        ok = _mm256_and_ps(ok, _mm256_cmp_ps(_mm256_andnot_ps(sign, d[k]), inf, _CMP_LT_OQ));
+    }
+    __m256 ax = _mm256_andnot_ps(sign, d[0]), ay = _mm256_andnot_ps(sign, d[1]), az = _mm256_andnot_ps(sign, d[2]);
+    /* kz = (ax >= ay && ax >= az) ? 0 : (ay >= az ? 1 : 2); then kx, ky
+     * (kz 0: 1, 2; kz 1: 2, 0; kz 2: 0, 1), swapped where d[kz] < 0 */
+    __m256 c0 = _mm256_and_ps(_mm256_cmp_ps(ax, ay, _CMP_GE_OQ), _mm256_cmp_ps(ax, az, _CMP_GE_OQ));
+    __m256 c1 = _mm256_cmp_ps(ay, az, _CMP_GE_OQ);
+    __m256 dkz = _mm256_blendv_ps(_mm256_blendv_ps(d[2], d[1], c1), d[0], c0);
+    __m256 dkx = _mm256_blendv_ps(_mm256_blendv_ps(d[0], d[2], c1), d[1], c0);
+    __m256 dky = _mm256_blendv_ps(_mm256_blendv_ps(d[1], d[0], c1), d[2], c0);
+    __m256 swap = _mm256_cmp_ps(dkz, zero, _CMP_LT_OQ);
+    ok = _mm256_and_ps(ok, _mm256_cmp_ps(dkz, zero, _CMP_NEQ_UQ));
+    __m256i kz = _mm256_castps_si256(_mm256_blendv_ps(_mm256_blendv_ps(_mm256_castsi256_ps(_mm256_set1_epi32(2)),
+                                                                      _mm256_castsi256_ps(_mm256_set1_epi32(1)), c1),
+                                                     _mm256_castsi256_ps(_mm256_setzero_si256()), c0));
+    __m256i kx0 = _mm256_castps_si256(_mm256_blendv_ps(_mm256_blendv_ps(_mm256_castsi256_ps(_mm256_setzero_si256()),
+                                                                       _mm256_castsi256_ps(_mm256_set1_epi32(2)), c1),
+                                                      _mm256_castsi256_ps(_mm256_set1_epi32(1)), c0));
+    __m256i ky0 = _mm256_castps_si256(_mm256_blendv_ps(_mm256_blendv_ps(_mm256_castsi256_ps(_mm256_set1_epi32(1)),
+                                                                       _mm256_castsi256_ps(_mm256_setzero_si256()), c1),
+                                                      _mm256_castsi256_ps(_mm256_set1_epi32(2)), c0));
+    __m256 kxs = _mm256_blendv_ps(_mm256_castsi256_ps(kx0), _mm256_castsi256_ps(ky0), swap);
+    __m256 kys = _mm256_blendv_ps(_mm256_castsi256_ps(ky0), _mm256_castsi256_ps(kx0), swap);
+    __m256 sxn = _mm256_blendv_ps(dkx, dky, swap), syn = _mm256_blendv_ps(dky, dkx, swap);
+    const unsigned r = 8 * g;
+    ip_view *v = &pk->top;
+    _mm256_store_ps(v->ox + r, o[0]), _mm256_store_ps(v->oy + r, o[1]), _mm256_store_ps(v->oz + r, o[2]);
+    _mm256_store_ps(pk->dx + r, d[0]), _mm256_store_ps(pk->dy + r, d[1]), _mm256_store_ps(pk->dz + r, d[2]);
+    _mm256_store_ps(v->ix + r, _mm256_div_ps(one, d[0]));
+    _mm256_store_ps(v->iy + r, _mm256_div_ps(one, d[1]));
+    _mm256_store_ps(v->iz + r, _mm256_div_ps(one, d[2]));
+    _mm256_store_ps(v->lo + r, tn), _mm256_store_ps(v->hi + r, tf);
+    _mm256_storeu_ps(pk->t + r, tf), _mm256_store_ps(pk->tf + r, tf);
+    _mm256_store_ps(pk->sx + r, _mm256_div_ps(sxn, dkz));
+    _mm256_store_ps(pk->sy + r, _mm256_div_ps(syn, dkz));
+    _mm256_store_ps(pk->sz + r, _mm256_div_ps(one, dkz));
+    _mm256_store_si256((__m256i *)(pk->kx + r), _mm256_castps_si256(kxs));
+    _mm256_store_si256((__m256i *)(pk->ky + r), _mm256_castps_si256(kys));
+    _mm256_store_si256((__m256i *)(pk->kz + r), kz);
+    unsigned valid = (unsigned)_mm256_movemask_ps(ok);
+    pk->live |= (uint64_t)valid << r;
+    for (unsigned bad = ~valid & 0xFFu; bad; bad &= bad - 1) { /* the scalar code decides */
+        unsigned l = (unsigned)__builtin_ctz(bad);
+        accel_ray_prep p;
+        ip_put(pk, r + l, accel_prep_ray(&rays[l], &p) ? &p : NULL);
+    }
+}
+#endif
+
 void ip_load(ip_packet *pk, const accel_ray *rays, unsigned n, int any, int counted)
 {
     ip_view *v = &pk->top;
     pk->live = 0;
     pk->any = any;
-    pk->shared = 1;
     v->slack = 0.0f, v->padded = 0;
     /* The top view's pads and shifts stay 0 (ip_kernel); u, v are read
      * only where a hit set them; the counters only when counted. */
     if (counted)
         for (unsigned r = 0; r < IP_RAYS; r++)
             pk->top_steps[r] = pk->bottom_steps[r] = pk->boxes[r] = pk->prims[r] = 0;
-    for (unsigned r = 0; r < IP_RAYS; r++) {
-        accel_ray_prep *p = &pk->p[r];
-        pk->prim[r] = ACCEL_MISS;
-        if (!(r < n && accel_prep_ray(&rays[r], p))) { /* dead: an empty range */
-            v->ox[r] = v->oy[r] = v->oz[r] = 0.0f, v->ix[r] = v->iy[r] = v->iz[r] = 1.0f;
-            v->lo[r] = INFINITY, v->hi[r] = -INFINITY, pk->t[r] = -INFINITY;
-            pk->sx[r] = pk->sy[r] = pk->sz[r] = 0.0f, pk->tf[r] = -INFINITY;
-            pk->kx[r] = 0, pk->ky[r] = 1, pk->kz[r] = 2;
+    for (unsigned r = 0; r < IP_RAYS; r++) pk->prim[r] = ACCEL_MISS;
+    for (unsigned g = 0; g < IP_RAYS / 8; g++) {
+#if INST_WIDE_AVX
+        if (8 * g + 8 <= n) {
+            ip_prep8(pk, rays + 8 * g, g);
             continue;
         }
-        v->ox[r] = p->org.x, v->oy[r] = p->org.y, v->oz[r] = p->org.z;
-        v->ix[r] = p->inv_dir.x, v->iy[r] = p->inv_dir.y, v->iz[r] = p->inv_dir.z;
-        v->lo[r] = p->t_near, v->hi[r] = pk->t[r] = p->t_far;
-        pk->sx[r] = p->sx, pk->sy[r] = p->sy, pk->sz[r] = p->sz, pk->tf[r] = p->t_far;
-        pk->kx[r] = p->kx, pk->ky[r] = p->ky, pk->kz[r] = p->kz;
-        if (pk->live) pk->shared &= accel_prep_same_frame(p, &pk->p[__builtin_ctzll(pk->live)]);
-        pk->live |= IP_BIT(r);
+#endif
+        for (unsigned r = 8 * g; r < 8 * g + 8; r++) {
+            accel_ray_prep p;
+            ip_put(pk, r, r < n && accel_prep_ray(&rays[r], &p) ? &p : NULL);
+        }
+    }
+    /* shared: every live ray has the first one's origin (bits) and axes */
+    pk->shared = 1;
+    if (pk->live) {
+        const unsigned r0 = (unsigned)__builtin_ctzll(pk->live);
+        for (uint64_t k = pk->live & (pk->live - 1); k && pk->shared; k &= k - 1) {
+            const unsigned r = (unsigned)__builtin_ctzll(k);
+            pk->shared = !memcmp(&v->ox[r], &v->ox[r0], sizeof(float)) &&
+                         !memcmp(&v->oy[r], &v->oy[r0], sizeof(float)) &&
+                         !memcmp(&v->oz[r], &v->oz[r0], sizeof(float)) && pk->kx[r] == pk->kx[r0] &&
+                         pk->ky[r] == pk->ky[r0] && pk->kz[r] == pk->kz[r0];
+        }
     }
     ip_bounds(v, pk->live);
 }
-
