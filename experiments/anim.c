@@ -433,6 +433,10 @@ void exp_anim_fps(exp_ctx *x, exp_anim *a)
         exp_est_of(r, frames, &re);
         exp_anim_row(x, "fps", &slot[cur], L[best_two].label, L[best_two].threads, frames,
                      "frame_ratio_to_flattened_packets", &re);
+        exp_md(x, "\nTwo levels against one, frame by frame (the same frames):\n");
+        exp_md_table(x, "two-level loop|threads|flattened loop|threads|frame time ratio [95% CI]");
+        exp_md(x, "| `%s` | %d | `%s` (refit) | %d | %s |\n", L[best_two].spec, L[best_two].threads,
+               L[best_ref].spec, L[best_ref].threads, exp_fmt_est(b[0], sizeof b[0], &re, 2));
         exp_text_add(a->findings, "- Two levels against one: a frame of `%s` on %d thread%s takes "
                      "%s times one of `%s` (refit) on %d thread%s (per-frame ratios, the same "
                      "frames; 1.3 or less was issue 41's aim).\n",
