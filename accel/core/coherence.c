@@ -54,19 +54,21 @@
  * single-ray speed with a spread limit of 0.1 (bvh:width=8). */
 #define DIR_SPREAD 0.03f
 #define ORIGIN_FRAC 0.25f
-/* Rays that converge pass too (sharing an octant), whatever the spreads of
- * their directions and origins: finite ends o + t_far d no farther apart
- * (max-norm) than their origins, as shadow rays cast to one point light. A
- * tile's shadow rays exceed the spreads wherever its hits lie at different
- * depths (a third of animated's groups), and went ray by ray: as packets,
- * on animated's shadow rays (800x600, tile order, 1 thread),
- * bvh:width=8,traverse=packet ran 2.0x and instanced:traverse=packet 1.8x
- * faster (issue 41). Their origins must lie within CONE_SPREAD of the
- * shortest ray's length (max-norm): tiles of animated's shadow rays
- * (800x600) have at most 0.16 in 19 of 20 groups, of sphereflake's
- * (88x128) 0.6 in 7 of 8; the same rays shuffled 0.68 to 0.9 and 1.9 to
- * 2.9. A block whose groups converge as given, 3 in 4 or more, is traced
- * as it comes (the rest ray by ray): no keys, no sort. */
+/* Converging rays as they come: a block whose groups of 64, as given,
+ * mostly share an octant and converge (finite ends o + t_far d no farther
+ * apart, max-norm, than their origins: shadow rays cast to one point
+ * light) and fold (see FOLD) is traced in its order, those groups as
+ * packets whatever the spreads of their directions and origins, no keys
+ * and no sort. A tile's shadow rays exceed the spreads wherever its hits
+ * lie at different depths (a third of animated's groups) and went ray by
+ * ray after a sort: as packets, on animated's shadow rays (800x600, tile
+ * order, 1 thread), bvh:width=8,traverse=packet ran 1.5x and
+ * instanced:traverse=packet 1.3x faster (issue 41). Their origins must
+ * lie within CONE_SPREAD of the shortest ray's length (max-norm): tiles of
+ * animated's shadow rays (800x600) have at most 0.16 in 19 of 20 groups,
+ * of sphereflake's (88x128) 0.6 in 7 of 8; the same rays shuffled 0.68 to
+ * 0.9 and 1.9 to 2.9. Other blocks are sorted as before, their groups
+ * judged by the spreads alone. */
 #define CONE_SPREAD 0.5f
 /* The caller's order is kept when its groups are at most this much looser
  * than the sorted ones (summed extents of the quantized coordinates). */
@@ -156,20 +158,18 @@ typedef struct {
     float lo[DIMS], scale[DIMS]; /* quantization: (x - lo) * scale */
     float dir_limit, origin_limit; /* the coherence spreads in quantized units */
     float dir_ext, ext[DIMS];      /* the largest direction extent, each extent */
-    int converge;                  /* the block's rays converge (see ORIGIN_FRAC) */
 } quant;
 
-/* Whether the rays i of [g, end) (through map, NULL: in order) converge:
- * finite ends no farther apart than their origins, and origins within
- * CONE_SPREAD of the shortest ray's length (a narrow cone; see
- * ORIGIN_FRAC). */
-static int converging(const accel_ray *rays, size_t g, size_t end, const uint16_t *map)
+/* Whether the rays [g, end) converge: finite ends no farther apart than
+ * their origins, and origins within CONE_SPREAD of the shortest ray's
+ * length (a narrow cone; see ORIGIN_FRAC). */
+static int converging(const accel_ray *rays, size_t g, size_t end)
 {
     float olo[3] = {INFINITY, INFINITY, INFINITY}, ohi[3] = {-INFINITY, -INFINITY, -INFINITY};
     float elo[3] = {INFINITY, INFINITY, INFINITY}, ehi[3] = {-INFINITY, -INFINITY, -INFINITY};
     float len = INFINITY;
     for (size_t i = g; i < end; i++) {
-        const accel_ray *r = &rays[map ? map[i] : i];
+        const accel_ray *r = &rays[i];
         if (!(fabsf(r->t_far) < INFINITY)) return 0;
         const float l = fabsf(r->t_far) * fmaxf(fabsf(r->dx), fmaxf(fabsf(r->dy), fabsf(r->dz)));
         len = l < len ? l : len;
@@ -229,7 +229,6 @@ static void plan_quant(const accel_ray *rays, size_t n, quant *qz)
         qz->scale[d] = e > 0.0f && !(hi[d] == lo[d]) ? levels / e : 0.0f;
     }
     qz->dir_ext = ext_d;
-    qz->converge = n > 0 && converging(rays, 0, n, NULL);
     qz->dir_limit = ext_d > 0.0f ? DIR_SPREAD * levels / ext_d : 0.0f;
     qz->origin_limit = ORIGIN_FRAC * levels;
 }
@@ -246,7 +245,7 @@ static void plan_quant(const accel_ray *rays, size_t n, quant *qz)
  * shadow rays, an extent of 0.2, still sort into packets). */
 static int hopeless(const quant *qz, size_t n)
 {
-    if (!qz->k || n <= P || qz->converge) return 0;
+    if (!qz->k || n <= P) return 0;
     int origins = 0;
     float area = (float)P / (float)n;
     for (int j = 0; j < qz->k; j++) origins |= qz->active[j] < 3, area *= qz->ext[qz->active[j]];
@@ -345,8 +344,7 @@ static double sorted_extent(const scratch *s, size_t n, const quant *qz)
 
 /* Marks the groups of the order map[] (NULL: the caller's) that are
  * coherent enough for a packet; returns how many. */
-static size_t classify(scratch *s, const accel_ray *rays, size_t n, const quant *qz,
-                       const uint16_t *map)
+static size_t classify(scratch *s, size_t n, const quant *qz, const uint16_t *map)
 {
     size_t count = 0;
     for (size_t g = 0; g < n; g += P) {
@@ -364,39 +362,68 @@ static size_t classify(scratch *s, const accel_ray *rays, size_t n, const quant 
                 mn[d] = v < mn[d] ? v : mn[d], mx[d] = v > mx[d] ? v : mx[d];
             }
         }
-        int tight = 1;
-        for (int j = 0; j < qz->k && ok && tight; j++) {
+        for (int j = 0; j < qz->k && ok; j++) {
             const int d = qz->active[j];
             const float spread = (float)(mx[d] - mn[d]);
-            tight = d < 3 ? spread <= qz->origin_limit : spread <= qz->dir_limit;
+            ok = d < 3 ? spread <= qz->origin_limit : spread <= qz->dir_limit;
         }
-        ok = ok && (tight || (qz->converge && converging(rays, g, end, map)));
         s->coherent[g / P] = (uint8_t)ok;
         count += (size_t)ok;
     }
     return count;
 }
 
-/* Converging rays (shadow rays to a point light, in any order that keeps
- * neighbours together): marks each group of 64 as given coherent when its
- * rays share an octant and converge (see ORIGIN_FRAC); returns how many. */
-static size_t converging_groups(const accel_ray *rays, size_t n, scratch *s)
+/* Converging rays (shadow rays to a point light, in an order that keeps
+ * neighbours together, see CONE_SPREAD): a group's origins fold back on
+ * themselves when the path from ray to ray (max-norm steps) is at least
+ * FOLD times the group's origin extent, as a tile's 8 rows do (median 5.9
+ * to 6.5 on animated, sphereflake and armadillo), where a scanline's 64
+ * consecutive rays run straight along one row (median 2.05 on armadillo,
+ * whose shadow rays as such strips ran at 0.70 of the sorted ones:
+ * bvh:width=8,traverse=packet, 800x600). */
+#define FOLD 3.0f
+/* Group [g, end): 1 when it converges; *fold when its origins fold too. */
+static int converging_group(const accel_ray *rays, size_t g, size_t end, int *fold)
 {
-    size_t count = 0;
-    for (size_t g = 0; g < n; g += P) {
-        const size_t end = g + P < n ? g + P : n;
-        const accel_ray *r0 = &rays[g];
-        const unsigned oct0 = (r0->dx < 0.0f) | (unsigned)(r0->dy < 0.0f) << 1 | (unsigned)(r0->dz < 0.0f) << 2;
-        int ok = 1;
-        for (size_t i = g + 1; i < end && ok; i++) {
-            const accel_ray *r = &rays[i];
-            ok = ((r->dx < 0.0f) | (unsigned)(r->dy < 0.0f) << 1 | (unsigned)(r->dz < 0.0f) << 2) == oct0;
-        }
-        ok = ok && converging(rays, g, end, NULL);
-        s->coherent[g / P] = (uint8_t)ok;
-        count += (size_t)ok;
+    const accel_ray *r0 = &rays[g];
+    const unsigned oct0 = (r0->dx < 0.0f) | (unsigned)(r0->dy < 0.0f) << 1 | (unsigned)(r0->dz < 0.0f) << 2;
+    float path = 0.0f, lo[3] = {r0->ox, r0->oy, r0->oz}, hi[3] = {r0->ox, r0->oy, r0->oz};
+    *fold = 0;
+    for (size_t i = g + 1; i < end; i++) {
+        const accel_ray *r = &rays[i], *q = &rays[i - 1];
+        if (((r->dx < 0.0f) | (unsigned)(r->dy < 0.0f) << 1 | (unsigned)(r->dz < 0.0f) << 2) != oct0) return 0;
+        const float o[3] = {r->ox, r->oy, r->oz};
+        const float st[3] = {fabsf(r->ox - q->ox), fabsf(r->oy - q->oy), fabsf(r->oz - q->oz)};
+        path += st[0] > st[1] ? (st[0] > st[2] ? st[0] : st[2]) : (st[1] > st[2] ? st[1] : st[2]);
+        for (int a = 0; a < 3; a++) lo[a] = o[a] < lo[a] ? o[a] : lo[a], hi[a] = o[a] > hi[a] ? o[a] : hi[a];
     }
-    return count;
+    if (!converging(rays, g, end)) return 0;
+    float ext = hi[0] - lo[0];
+    ext = hi[1] - lo[1] > ext ? hi[1] - lo[1] : ext;
+    ext = hi[2] - lo[2] > ext ? hi[2] - lo[2] : ext;
+    *fold = path >= FOLD * ext;
+    return 1;
+}
+
+/* Whether the block goes as it comes: its groups, 3 in 4 or more, converge
+ * and, 1 in 2 or more, fold; then each group is marked coherent when it
+ * converges. One group in 8 is looked at first (a block that is not such
+ * costs an eighth of a pass). */
+static int converging_block(const accel_ray *rays, size_t n, scratch *s)
+{
+    const size_t groups = (n + P - 1) / P;
+    for (int pass = 0; pass < 2; pass++) {
+        const size_t stride = pass ? 1 : 8, looked = (groups + stride - 1) / stride;
+        size_t conv = 0, folded = 0;
+        for (size_t k = 0; k < groups; k += stride) {
+            const size_t g = k * P, end = g + P < n ? g + P : n;
+            int fold, ok = converging_group(rays, g, end, &fold);
+            conv += (size_t)ok, folded += (size_t)(ok && fold);
+            if (pass) s->coherent[k] = (uint8_t)ok;
+        }
+        if (conv < looked * 3 / 4 || folded < looked / 2) return 0;
+    }
+    return 1;
 }
 
 /* ---- tracing ---------------------------------------------------------------- */
@@ -498,9 +525,10 @@ static void trace_block(const job *j, scratch *s, const accel_ray *rays, char *o
     if (trace_raster(j, s, rays, out, n, c, steps, prims)) return;
     const int split = j->esz == 1 ? j->occ_single != NULL : j->hit_single != NULL;
     /* Converging rays whose groups of 64 are mostly packets as they come
-     * (shadow rays cast from a tiled image's hits): no keys, no sort. A
-     * group of rays with an infinite end fails at its first ray. */
-    if (converging_groups(rays, n, s) >= (n + P - 1) / P * 3 / 4) {
+     * and mostly folded (shadow rays cast from a tiled image's hits): no
+     * keys, no sort. A group of rays with an infinite end fails at its
+     * first ray. */
+    if (converging_block(rays, n, s)) {
         if (!split) memset(s->coherent, 1, (n + P - 1) / P);
         trace_runs(j, s, rays, out, n, c, steps, prims);
         atomic_fetch_add_explicit(&st_kept, 1, memory_order_relaxed);
@@ -517,18 +545,11 @@ static void trace_block(const job *j, scratch *s, const accel_ray *rays, char *o
     int keep = 1;
     if (!hopeless(&qz, n)) {
         const double kept = make_keys(rays, n, &qz, s);
-        /* Every group already a packet as it comes (shadow rays cast from
-         * a tiled image's hits): no sort. Sorting such a block cost the
-         * 8-wide packets of bvh and instanced about half of their shadow
-         * rays' time (animated, 800x600; issue 41). */
-        const size_t groups = (n + P - 1) / P;
-        if (classify(s, rays, n, &qz, NULL) < groups && n > P) {
+        if (n > P) {
             sort_keys(s, n);
             keep = kept <= KEEP_SLACK * sorted_extent(s, n, &qz);
-            /* (the flags of the given order stand when it is kept; none
-             * coherent after the sort: every group ray by ray, as given) */
-            if (!keep && !classify(s, rays, n, &qz, s->idx)) keep = 1;
         }
+        if (!classify(s, n, &qz, keep ? NULL : s->idx)) keep = 1;
     } else {
         memset(s->coherent, 0, (n + P - 1) / P);
     }
