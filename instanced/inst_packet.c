@@ -13,10 +13,12 @@
  * wide bottom level as a packet, each lane's box grown by its own ray's
  * pad. At a bottom leaf each world triangle is computed once
  * (inst_xform_tri) and decided for every ray of the packet that reached
- * the leaf, with inst_decide on the ray's whole range: so a ray gets the
- * answer the single-ray walk gives it, bit for bit, whatever its packet's
- * other rays (README.md: every walk that reaches the triangles names the
- * same triangle with the same bits).
+ * the leaf, on the ray's whole range: the watertight test's float path on
+ * 8 rays at once (ip_tri8, the scalar operations lane by lane), inst_decide
+ * for the rays it leaves undecided. So a ray gets the answer the
+ * single-ray walk gives it, bit for bit, whatever its packet's other rays
+ * (README.md: every walk that reaches the triangles names the same
+ * triangle with the same bits).
  *
  * A stack entry holds the mask of the rays that hit its box and the
  * smallest of their entry distances; at the pop, rays whose closest hit
