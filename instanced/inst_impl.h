@@ -143,7 +143,7 @@ int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *e
 int inst_build_top(inst_accel *a, accel_error *err);
 /* traverse=packet: (re)copies bottom b's triangles in leaf order (after a
  * build or a refit). */
-int inst_leaf_tris(const inst_accel *a, inst_bottom *b, accel_error *err);
+int inst_leaf_tris(inst_bottom *b, accel_error *err);
 void inst_fill_stats(const inst_accel *a, accel_build_stats *stats);
 size_t inst_memory(const void *a);
 void inst_destroy(void *a);

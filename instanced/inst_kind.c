@@ -176,9 +176,8 @@ static int build_walk_bottom(inst_accel *a, inst_bottom *b, accel_error *err)
 
 /* The bottom level of mesh i over its primitives (a plain scene: the live
  * ones), boxes grown by grid_pad in a grid. */
-int inst_leaf_tris(const inst_accel *a, inst_bottom *b, accel_error *err)
+int inst_leaf_tris(inst_bottom *b, accel_error *err)
 {
-    (void)a;
     const bvh_box_tree *h = &b->bvh;
     const accel_scene *m = b->mesh;
     if (!b->leaf_tris) {
@@ -243,7 +242,7 @@ int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *e
     free(boxes);
     if (rc == 0 && a->bottom_kind == INST_BVH && a->width == INST_WIDE)
         rc = inst_wide_build(&b->bvh, &b->wide, err);
-    if (rc == 0 && a->packets) rc = inst_leaf_tris(a, b, err);
+    if (rc == 0 && a->packets) rc = inst_leaf_tris(b, err);
     if (rc || !ids || a->bottom_kind == INST_BVH) return rc;
     for (uint64_t k = 0; k < b->grid.cells.ref_count; k++)
         b->grid.cells.refs[k] = ids[b->grid.cells.refs[k]];

@@ -87,6 +87,16 @@ typedef struct {
 
 /* ---- 8 rays against one child box ------------------------------------------------ */
 
+#if INST_WIDE_AVX
+/* The lanes of bits m (8 rays) as an AVX mask. */
+INST_INLINE __m256 ip_lanes(unsigned m)
+{
+    return _mm256_castsi256_ps(_mm256_cmpgt_epi32(
+        _mm256_and_si256(_mm256_set1_epi32((int)m), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
+        _mm256_setzero_si256()));
+}
+#endif
+
 /* Rays of group g (candidates m) whose range meets child c's box grown by
  * their pads; *entry lowered to the smallest entry among them (lane-wise:
  * the caller reduces it). Lane by lane inst_wide_hits (inst_wide.h) on
@@ -119,9 +129,7 @@ INST_INLINE unsigned ip_group(const ip_view *v, const inst_wnode *n, unsigned c,
     __m256 in = _mm256_cmp_ps(t0, lim, _CMP_LE_OQ);
     unsigned h = (unsigned)_mm256_movemask_ps(in) & m;
     if (h) {
-        __m256i bits = _mm256_and_si256(_mm256_set1_epi32((int)h), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128));
-        __m256 sel = _mm256_castsi256_ps(_mm256_cmpgt_epi32(bits, _mm256_setzero_si256()));
-        *entry = _mm256_min_ps(*entry, _mm256_blendv_ps(_mm256_set1_ps(INFINITY), t0, sel));
+        *entry = _mm256_min_ps(*entry, _mm256_blendv_ps(_mm256_set1_ps(INFINITY), t0, ip_lanes(h)));
     }
     return h;
 #else

@@ -28,9 +28,7 @@ void ip_bounds(ip_view *v, uint64_t m)
     for (unsigned g = 0; g < IP_RAYS / 8; g++) {
         unsigned gm = (unsigned)(m >> (8 * g)) & 0xFFu;
         if (!gm) continue;
-        __m256 keep = _mm256_castsi256_ps(_mm256_cmpgt_epi32(
-            _mm256_and_si256(_mm256_set1_epi32((int)gm), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
-            _mm256_setzero_si256()));
+        __m256 keep = ip_lanes(gm);
         for (int k = 0; k < 9; k++) {
             __m256 x = _mm256_load_ps(row[k] + 8 * g);
             vlo[k] = _mm256_min_ps(vlo[k], _mm256_blendv_ps(inf, x, keep));

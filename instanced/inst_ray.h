@@ -28,47 +28,37 @@ INST_INLINE double inst_dmin(double a, double b) { return a < b ? a : b; }
 typedef struct {
     double o[3], d[3]; /* o' = A^-1 (o - T), d' = A^-1 d, in double */
     double oa, da;     /* max |o'|, max |d'| */
-    double eo;         /* max over rows of sum |A^-1_ij o_j| + |row translation| */
     double e_ray;      /* bound on the rounding of o' and d' */
     double pad;        /* the object-space pad (0 with pad=0) */
     double s0;         /* start of the range clipped to the mesh's padded box */
 } inst_oray;
 
-/* The origin's part of inst_object_ray: o' and its rounding terms (rays
- * that share their origin share it). */
-INST_INLINE void inst_object_origin(const inst_item *it, const double *wo, inst_oray *q)
+/* Takes the world ray (wo, wd) with range [t_near, t_far] to instance
+ * it's object space and clips it to its mesh's box grown by the pad.
+ * Returns -1 when the ray cannot reach the mesh without a box test (a
+ * direction that vanishes in object space, an axis-parallel ray outside
+ * the slab), 0 when the clipped range is empty, 1 when it is not. */
+INST_INLINE int inst_object_ray(const inst_accel *a, const inst_item *it, const inst_bottom *b,
+                                const double *wo, const double *wd, double t_near, double t_far,
+                                inst_oray *q)
 {
     const double *m = it->inverse;
-    double eo = 0.0, oa = 0.0;
+    double eo = 0.0, ed = 0.0, oa = 0.0, da = 0.0;
     for (int i = 0; i < 3; i++) {
         const double *row = m + 4 * i;
         q->o[i] = row[0] * wo[0] + row[1] * wo[1] + row[2] * wo[2] + row[3];
+        q->d[i] = row[0] * wd[0] + row[1] * wd[1] + row[2] * wd[2];
         eo = inst_dmax(eo, fabs(row[0] * wo[0]) + fabs(row[1] * wo[1]) + fabs(row[2] * wo[2]) +
                               fabs(row[3]));
-        oa = inst_dmax(oa, fabs(q->o[i]));
-    }
-    q->eo = eo, q->oa = oa;
-}
-
-/* The rest, given q's origin part (inst_object_origin): the direction,
- * the pad, the clip. Returns as inst_object_ray. */
-INST_INLINE int inst_object_dir(const inst_accel *a, const inst_item *it, const inst_bottom *b,
-                                const double *wd, double t_near, double t_far, inst_oray *q)
-{
-    const double *m = it->inverse;
-    double ed = 0.0, da = 0.0;
-    for (int i = 0; i < 3; i++) {
-        const double *row = m + 4 * i;
-        q->d[i] = row[0] * wd[0] + row[1] * wd[1] + row[2] * wd[2];
         ed = inst_dmax(ed, fabs(row[0] * wd[0]) + fabs(row[1] * wd[1]) + fabs(row[2] * wd[2]));
+        oa = inst_dmax(oa, fabs(q->o[i]));
         da = inst_dmax(da, fabs(q->d[i]));
     }
-    const double oa = q->oa;
     if (!(da > 0.0) || !isfinite(oa) || !isfinite(da)) return -1;
-    q->da = da;
+    q->oa = oa, q->da = da;
     /* Points that matter lie in the padded box: |t d| <= |o| + B + pad. */
     double reach = oa + b->abs_max + 4.0 * it->pad + 1.0;
-    q->e_ray = 0x1p-50 * (q->eo + ed * reach / da);
+    q->e_ray = 0x1p-50 * (eo + ed * reach / da);
     double pad = a->no_pad ? 0.0 : 2.0 * it->pad + q->e_ray;
     q->pad = pad;
     /* Clip to the mesh's box grown by the pad. */
@@ -91,19 +81,6 @@ INST_INLINE int inst_object_dir(const inst_accel *a, const inst_item *it, const 
     }
     q->s0 = s0;
     return s0 <= s1;
-}
-
-/* Takes the world ray (wo, wd) with range [t_near, t_far] to instance
- * it's object space and clips it to its mesh's box grown by the pad.
- * Returns -1 when the ray cannot reach the mesh without a box test (a
- * direction that vanishes in object space, an axis-parallel ray outside
- * the slab), 0 when the clipped range is empty, 1 when it is not. */
-INST_INLINE int inst_object_ray(const inst_accel *a, const inst_item *it, const inst_bottom *b,
-                                const double *wo, const double *wd, double t_near, double t_far,
-                                inst_oray *q)
-{
-    inst_object_origin(it, wo, q);
-    return inst_object_dir(a, it, b, wd, t_near, t_far, q);
 }
 
 /* The float ray a BVH walk follows: from the box entry (parameter t - s0),

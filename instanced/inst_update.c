@@ -110,7 +110,7 @@ int inst_update(void *acc, const accel_scene *scene, int refit, accel_update_sta
             if (refit) {
                 refit_bvh(b);
                 if (a->width == INST_WIDE) inst_wide_refit(&b->bvh, &b->wide);
-                if (a->packets) rc = inst_leaf_tris(a, b, err);
+                if (a->packets) rc = inst_leaf_tris(b, err);
                 st->meshes_refit++;
                 continue;
             }

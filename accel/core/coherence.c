@@ -171,7 +171,8 @@ static int converging(const accel_ray *rays, size_t g, size_t end)
     for (size_t i = g; i < end; i++) {
         const accel_ray *r = &rays[i];
         if (!(fabsf(r->t_far) < INFINITY)) return 0;
-        const float l = fabsf(r->t_far) * fmaxf(fabsf(r->dx), fmaxf(fabsf(r->dy), fabsf(r->dz)));
+        const float ax = fabsf(r->dx), ay = fabsf(r->dy), az = fabsf(r->dz);
+        const float l = fabsf(r->t_far) * (ax > ay ? (ax > az ? ax : az) : (ay > az ? ay : az));
         len = l < len ? l : len;
         const float o[3] = {r->ox, r->oy, r->oz};
         const float e[3] = {r->ox + r->t_far * r->dx, r->oy + r->t_far * r->dy, r->oz + r->t_far * r->dz};

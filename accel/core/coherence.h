@@ -24,9 +24,9 @@
  * Before all this, a block of converging rays (shadow rays cast to one
  * point light: finite ends no farther apart than their origins, origins
  * within a narrow cone) whose groups of 64 mostly converge as they come is
- * traced as it comes, those groups as packets, no keys and no sort; after
- * a sort, converging groups are packets too, whatever their directions'
- * spread (coherence.c: ORIGIN_FRAC).
+ * traced as it comes, those groups as packets whatever their spreads, no
+ * keys and no sort (coherence.c: CONE_SPREAD, FOLD); other blocks are
+ * sorted, their groups judged by the spreads alone.
  * Before that, a block that is a raster (a camera's rays in pixel order,
  * found from the steps between consecutive rays) skips the keys: 8x8 tile
  * order and rasters up to 16 wide are kept, wider ones gathered into tiles
