@@ -173,6 +173,77 @@ TEST(coherence_any_order_same_answers)
     scene_free(&s);
 }
 
+/* Ray i of a set poisoned (every POISON_EVERY-th, and every ray of the
+ * second packet of 64): one of the rays FORMATS.md lets a file hold that
+ * can hit nothing (a NaN or zero direction, an infinite origin, an empty
+ * or NaN range). Returns 1 when ray i was replaced. */
+#define POISON_EVERY 29
+static int poison(accel_ray *r, size_t i)
+{
+    if (i % POISON_EVERY != 3 && (i < 64 || i >= 128)) return 0;
+    switch (i % 6) {
+    case 0: r->dx = NAN; break;
+    case 1: r->dx = r->dy = r->dz = 0.0f; break;
+    case 2: r->ox = INFINITY; break;
+    case 3: r->t_near = 5.0f, r->t_far = 1.0f; break;
+    case 4: r->t_far = NAN; break;
+    default: r->dy = -INFINITY; break;
+    }
+    return 1;
+}
+
+/* Rays that can hit nothing, mixed into the packets (and one packet made
+ * of them alone), in every order: each misses, and every other ray keeps
+ * the answer it has among clean mates. */
+TEST(coherence_bad_rays_in_packets_miss)
+{
+    accel_scene s;
+    if (!test_make_scene("sphereflake:level=2", &s)) return;
+    ray_case cases[CASES];
+    CHECK(make_cases(&s, cases));
+    for (size_t k = 0; k < sizeof packet_specs / sizeof *packet_specs; k++) {
+        const accel_kind *kind;
+        void *a = test_build_kind(packet_specs[k], &s, 1, &kind, NULL);
+        if (!a) continue;
+        for (int ci = 0; ci < 2; ci++) { /* primary, shadow */
+            const ray_case *c = &cases[ci];
+            const size_t n = c->set.count;
+            accel_hit *ref = malloc(n * sizeof *ref), *hits = malloc(n * sizeof *hits);
+            uint8_t *ref_occ = malloc(n), *occ = malloc(n), *bad_ray = malloc(n);
+            accel_ray *rays = malloc(n * sizeof *rays);
+            size_t *perm = shuffle_perm(n, 5 + (uint64_t)ci), poisoned = 0;
+            for (size_t i = 0; i < n; i++) {
+                rays[i] = c->set.rays[i];
+                poisoned += bad_ray[i] = (uint8_t)poison(&rays[i], i);
+            }
+            trace_perm(kind, a, c->set.rays, NULL, n, c->occl, ACCEL_ORDER_KEEP, ref, ref_occ);
+            for (int order = 0; order < 3; order++) {
+                trace_perm(kind, a, rays, order == 2 ? perm : NULL, n, c->occl,
+                           order == 0 ? ACCEL_ORDER_KEEP : ACCEL_ORDER_SORT, hits, occ);
+                size_t missed = 0, differ = 0;
+                for (size_t i = 0; i < n; i++) {
+                    if (bad_ray[i]) {
+                        missed += c->occl ? !occ[i] : hits[i].prim == ACCEL_MISS && hits[i].t == INFINITY;
+                        /* the clean reference takes the ray's answer, so
+                         * that differences() below sees the others only */
+                        if (c->occl) ref_occ[i] = occ[i];
+                        else ref[i] = hits[i];
+                    }
+                }
+                differ = differences(ref, hits, ref_occ, occ, n, c->occl, mate_ulps(packet_specs[k]));
+                CHECKF(missed == poisoned, "%s, %s rays (order %d): %zu of %zu bad rays miss",
+                       packet_specs[k], c->name, order, missed, poisoned);
+                CHECKF(differ == 0, "%s, %s rays (order %d): %zu clean answers changed by bad mates",
+                       packet_specs[k], c->name, order, differ);
+            }
+            free(ref), free(hits), free(ref_occ), free(occ), free(bad_ray), free(rays), free(perm);
+        }
+        kind->destroy(a);
+    }
+    for (int ci = 0; ci < CASES; ci++) rays_free(&cases[ci].set);
+    scene_free(&s);
+}
+
 /* Scanline primaries: gathered into tiles (not kept, not sent ray by ray),
  * the same answers, per-ray counters at the caller's index. */
 TEST(coherence_scanline_tiled_into_packets)
