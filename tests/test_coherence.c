@@ -132,7 +132,11 @@ static int make_cases(const accel_scene *s, ray_case c[CASES])
     return ok;
 }
 
-TEST(coherence_any_order_same_answers)
+/* check(spec, kind, a, case, index) for every packet spec (built on
+ * sphereflake:level=2) and the first `ncases` ray cases of make_cases. */
+typedef void (*case_check)(const char *spec, const accel_kind *kind, const void *a, const ray_case *c,
+                           int ci);
+static void each_packet_case(int ncases, case_check check)
 {
     accel_scene s;
     if (!test_make_scene("sphereflake:level=2", &s)) return;
@@ -142,35 +146,40 @@ TEST(coherence_any_order_same_answers)
         const accel_kind *kind;
         void *a = test_build_kind(packet_specs[k], &s, 1, &kind, NULL);
         if (!a) continue;
-        for (int ci = 0; ci < CASES; ci++) {
-            const ray_case *c = &cases[ci];
-            const size_t n = c->set.count;
-            accel_hit *ref = malloc(n * sizeof *ref), *hits = malloc(n * sizeof *hits);
-            uint8_t *ref_occ = malloc(n), *occ = malloc(n);
-            size_t *perm = shuffle_perm(n, 11 + (uint64_t)ci);
-            trace_perm(kind, a, c->set.rays, NULL, n, c->occl, ACCEL_ORDER_KEEP, ref, ref_occ);
-            /* packet mates must not matter: shuffled packets as they come */
-            trace_perm(kind, a, c->set.rays, perm, n, c->occl, ACCEL_ORDER_KEEP, hits, occ);
-            size_t bad = differences(ref, hits, ref_occ, occ, n, c->occl, mate_ulps(packet_specs[k]));
-            CHECKF(bad == 0, "%s, %s rays shuffled, packets kept: %zu of %zu answers differ",
-                   packet_specs[k], c->name, bad, n);
-            /* sorted into packets, scattered back */
-            accel_coherence_stats st0, st1;
-            accel_coherence_stats_get(&st0);
-            trace_perm(kind, a, c->set.rays, perm, n, c->occl, ACCEL_ORDER_SORT, hits, occ);
-            accel_coherence_stats_get(&st1);
-            bad = differences(ref, hits, ref_occ, occ, n, c->occl, mate_ulps(packet_specs[k]));
-            CHECKF(bad == 0, "%s, %s rays shuffled, sorted: %zu of %zu answers differ",
-                   packet_specs[k], c->name, bad, n);
-            CHECKF(ci != 3 || (st1.sorted_blocks > st0.sorted_blocks &&
-                               st1.packet_rays - st0.packet_rays >= n / 2),
-                   "%s, %s rays shuffled: not sorted into packets", packet_specs[k], c->name);
-            free(ref), free(hits), free(ref_occ), free(occ), free(perm);
-        }
+        for (int ci = 0; ci < ncases; ci++) check(packet_specs[k], kind, a, &cases[ci], ci);
         kind->destroy(a);
     }
     for (int ci = 0; ci < CASES; ci++) rays_free(&cases[ci].set);
     scene_free(&s);
+}
+
+static void same_answers_any_order(const char *spec, const accel_kind *kind, const void *a, const ray_case *c,
+                                   int ci)
+{
+    const size_t n = c->set.count;
+    accel_hit *ref = malloc(n * sizeof *ref), *hits = malloc(n * sizeof *hits);
+    uint8_t *ref_occ = malloc(n), *occ = malloc(n);
+    size_t *perm = shuffle_perm(n, 11 + (uint64_t)ci);
+    trace_perm(kind, a, c->set.rays, NULL, n, c->occl, ACCEL_ORDER_KEEP, ref, ref_occ);
+    /* packet mates must not matter: shuffled packets as they come */
+    trace_perm(kind, a, c->set.rays, perm, n, c->occl, ACCEL_ORDER_KEEP, hits, occ);
+    size_t bad = differences(ref, hits, ref_occ, occ, n, c->occl, mate_ulps(spec));
+    CHECKF(bad == 0, "%s, %s rays shuffled, packets kept: %zu of %zu answers differ", spec, c->name, bad, n);
+    /* sorted into packets, scattered back */
+    accel_coherence_stats st0, st1;
+    accel_coherence_stats_get(&st0);
+    trace_perm(kind, a, c->set.rays, perm, n, c->occl, ACCEL_ORDER_SORT, hits, occ);
+    accel_coherence_stats_get(&st1);
+    bad = differences(ref, hits, ref_occ, occ, n, c->occl, mate_ulps(spec));
+    CHECKF(bad == 0, "%s, %s rays shuffled, sorted: %zu of %zu answers differ", spec, c->name, bad, n);
+    CHECKF(ci != 3 || (st1.sorted_blocks > st0.sorted_blocks && st1.packet_rays - st0.packet_rays >= n / 2),
+           "%s, %s rays shuffled: not sorted into packets", spec, c->name);
+    free(ref), free(hits), free(ref_occ), free(occ), free(perm);
+}
+
+TEST(coherence_any_order_same_answers)
+{
+    each_packet_case(CASES, same_answers_any_order);
 }
 
 /* Ray i of a set poisoned (every POISON_EVERY-th, and every ray of the
@@ -195,53 +204,42 @@ static int poison(accel_ray *r, size_t i)
 /* Rays that can hit nothing, mixed into the packets (and one packet made
  * of them alone), in every order: each misses, and every other ray keeps
  * the answer it has among clean mates. */
+static void bad_rays_miss(const char *spec, const accel_kind *kind, const void *a, const ray_case *c, int ci)
+{
+    const size_t n = c->set.count;
+    accel_hit *ref = malloc(n * sizeof *ref), *hits = malloc(n * sizeof *hits);
+    uint8_t *ref_occ = malloc(n), *occ = malloc(n), *bad_ray = malloc(n);
+    accel_ray *rays = malloc(n * sizeof *rays);
+    size_t *perm = shuffle_perm(n, 5 + (uint64_t)ci), poisoned = 0;
+    for (size_t i = 0; i < n; i++) {
+        rays[i] = c->set.rays[i];
+        poisoned += bad_ray[i] = (uint8_t)poison(&rays[i], i);
+    }
+    trace_perm(kind, a, c->set.rays, NULL, n, c->occl, ACCEL_ORDER_KEEP, ref, ref_occ);
+    for (int order = 0; order < 3; order++) { /* tiles kept, sorted, shuffled and sorted */
+        trace_perm(kind, a, rays, order == 2 ? perm : NULL, n, c->occl,
+                   order == 0 ? ACCEL_ORDER_KEEP : ACCEL_ORDER_SORT, hits, occ);
+        size_t missed = 0;
+        for (size_t i = 0; i < n; i++) {
+            if (!bad_ray[i]) continue;
+            missed += c->occl ? !occ[i] : hits[i].prim == ACCEL_MISS && hits[i].t == INFINITY;
+            /* the reference takes the bad ray's answer: differences() below
+             * sees the clean rays only */
+            if (c->occl) ref_occ[i] = occ[i];
+            else ref[i] = hits[i];
+        }
+        const size_t differ = differences(ref, hits, ref_occ, occ, n, c->occl, mate_ulps(spec));
+        CHECKF(missed == poisoned, "%s, %s rays (order %d): %zu of %zu bad rays miss", spec, c->name, order,
+               missed, poisoned);
+        CHECKF(differ == 0, "%s, %s rays (order %d): %zu clean answers changed by bad mates", spec, c->name,
+               order, differ);
+    }
+    free(ref), free(hits), free(ref_occ), free(occ), free(bad_ray), free(rays), free(perm);
+}
+
 TEST(coherence_bad_rays_in_packets_miss)
 {
-    accel_scene s;
-    if (!test_make_scene("sphereflake:level=2", &s)) return;
-    ray_case cases[CASES];
-    CHECK(make_cases(&s, cases));
-    for (size_t k = 0; k < sizeof packet_specs / sizeof *packet_specs; k++) {
-        const accel_kind *kind;
-        void *a = test_build_kind(packet_specs[k], &s, 1, &kind, NULL);
-        if (!a) continue;
-        for (int ci = 0; ci < 2; ci++) { /* primary, shadow */
-            const ray_case *c = &cases[ci];
-            const size_t n = c->set.count;
-            accel_hit *ref = malloc(n * sizeof *ref), *hits = malloc(n * sizeof *hits);
-            uint8_t *ref_occ = malloc(n), *occ = malloc(n), *bad_ray = malloc(n);
-            accel_ray *rays = malloc(n * sizeof *rays);
-            size_t *perm = shuffle_perm(n, 5 + (uint64_t)ci), poisoned = 0;
-            for (size_t i = 0; i < n; i++) {
-                rays[i] = c->set.rays[i];
-                poisoned += bad_ray[i] = (uint8_t)poison(&rays[i], i);
-            }
-            trace_perm(kind, a, c->set.rays, NULL, n, c->occl, ACCEL_ORDER_KEEP, ref, ref_occ);
-            for (int order = 0; order < 3; order++) {
-                trace_perm(kind, a, rays, order == 2 ? perm : NULL, n, c->occl,
-                           order == 0 ? ACCEL_ORDER_KEEP : ACCEL_ORDER_SORT, hits, occ);
-                size_t missed = 0, differ = 0;
-                for (size_t i = 0; i < n; i++) {
-                    if (bad_ray[i]) {
-                        missed += c->occl ? !occ[i] : hits[i].prim == ACCEL_MISS && hits[i].t == INFINITY;
-                        /* the clean reference takes the ray's answer, so
-                         * that differences() below sees the others only */
-                        if (c->occl) ref_occ[i] = occ[i];
-                        else ref[i] = hits[i];
-                    }
-                }
-                differ = differences(ref, hits, ref_occ, occ, n, c->occl, mate_ulps(packet_specs[k]));
-                CHECKF(missed == poisoned, "%s, %s rays (order %d): %zu of %zu bad rays miss",
-                       packet_specs[k], c->name, order, missed, poisoned);
-                CHECKF(differ == 0, "%s, %s rays (order %d): %zu clean answers changed by bad mates",
-                       packet_specs[k], c->name, order, differ);
-            }
-            free(ref), free(hits), free(ref_occ), free(occ), free(bad_ray), free(rays), free(perm);
-        }
-        kind->destroy(a);
-    }
-    for (int ci = 0; ci < CASES; ci++) rays_free(&cases[ci].set);
-    scene_free(&s);
+    each_packet_case(2, bad_rays_miss); /* primary, shadow */
 }
 
 /* Scanline primaries: gathered into tiles (not kept, not sent ray by ray),
