@@ -132,29 +132,29 @@ static int make_cases(const accel_scene *s, ray_case c[CASES])
     return ok;
 }
 
-/* check(spec, kind, a, case, index) for every packet spec (built on
- * sphereflake:level=2) and the first `ncases` ray cases of make_cases. */
-typedef void (*case_check)(const char *spec, const accel_kind *kind, const void *a, const ray_case *c,
-                           int ci);
-static void each_packet_case(int ncases, case_check check)
+/* check(spec, kind, a, cases) for each spec of specs[0..nspecs) built on
+ * sphereflake:level=2, with its ray cases (make_cases). */
+typedef void (*kind_check)(const char *spec, const accel_kind *kind, const void *a, const ray_case *cases);
+static void each_kind_on_cases(const char *const *specs, size_t nspecs, kind_check check)
 {
     accel_scene s;
     if (!test_make_scene("sphereflake:level=2", &s)) return;
     ray_case cases[CASES];
     CHECK(make_cases(&s, cases));
-    for (size_t k = 0; k < sizeof packet_specs / sizeof *packet_specs; k++) {
+    for (size_t k = 0; k < nspecs; k++) {
         const accel_kind *kind;
-        void *a = test_build_kind(packet_specs[k], &s, 1, &kind, NULL);
+        void *a = test_build_kind(specs[k], &s, 1, &kind, NULL);
         if (!a) continue;
-        for (int ci = 0; ci < ncases; ci++) check(packet_specs[k], kind, a, &cases[ci], ci);
+        check(specs[k], kind, a, cases);
         kind->destroy(a);
     }
     for (int ci = 0; ci < CASES; ci++) rays_free(&cases[ci].set);
     scene_free(&s);
 }
+#define PACKET_SPECS packet_specs, sizeof packet_specs / sizeof *packet_specs
 
-static void same_answers_any_order(const char *spec, const accel_kind *kind, const void *a, const ray_case *c,
-                                   int ci)
+static void same_answers_one_case(const char *spec, const accel_kind *kind, const void *a, const ray_case *c,
+                                  int ci)
 {
     const size_t n = c->set.count;
     accel_hit *ref = malloc(n * sizeof *ref), *hits = malloc(n * sizeof *hits);
@@ -177,9 +177,15 @@ static void same_answers_any_order(const char *spec, const accel_kind *kind, con
     free(ref), free(hits), free(ref_occ), free(occ), free(perm);
 }
 
+static void same_answers_any_order(const char *spec, const accel_kind *kind, const void *a,
+                                   const ray_case *cases)
+{
+    for (int ci = 0; ci < CASES; ci++) same_answers_one_case(spec, kind, a, &cases[ci], ci);
+}
+
 TEST(coherence_any_order_same_answers)
 {
-    each_packet_case(CASES, same_answers_any_order);
+    each_kind_on_cases(PACKET_SPECS, same_answers_any_order);
 }
 
 /* Ray i of a set poisoned (every POISON_EVERY-th, and every ray of the
@@ -204,7 +210,8 @@ static int poison(accel_ray *r, size_t i)
 /* Rays that can hit nothing, mixed into the packets (and one packet made
  * of them alone), in every order: each misses, and every other ray keeps
  * the answer it has among clean mates. */
-static void bad_rays_miss(const char *spec, const accel_kind *kind, const void *a, const ray_case *c, int ci)
+static void bad_rays_miss_one_case(const char *spec, const accel_kind *kind, const void *a, const ray_case *c,
+                                   int ci)
 {
     const size_t n = c->set.count;
     accel_hit *ref = malloc(n * sizeof *ref), *hits = malloc(n * sizeof *hits);
@@ -237,9 +244,14 @@ static void bad_rays_miss(const char *spec, const accel_kind *kind, const void *
     free(ref), free(hits), free(ref_occ), free(occ), free(bad_ray), free(rays), free(perm);
 }
 
+static void bad_rays_miss(const char *spec, const accel_kind *kind, const void *a, const ray_case *cases)
+{
+    for (int ci = 0; ci < 2; ci++) bad_rays_miss_one_case(spec, kind, a, &cases[ci], ci); /* primary, shadow */
+}
+
 TEST(coherence_bad_rays_in_packets_miss)
 {
-    each_packet_case(2, bad_rays_miss); /* primary, shadow */
+    each_kind_on_cases(PACKET_SPECS, bad_rays_miss);
 }
 
 /* Scanline primaries: gathered into tiles (not kept, not sent ray by ray),
@@ -355,73 +367,64 @@ TEST(coherence_block_decisions)
  * their groups go as packets as they come, no keys and no sort (every
  * block kept), whatever their directions' spread; the same rays shuffled
  * are not kept as they come. */
+static void shadow_rays_kept(const char *spec, const accel_kind *kind, const void *a, const ray_case *cases)
+{
+    (void)spec;
+    const rays_set *sh = &cases[1].set;
+    const size_t n = sh->count;
+    uint8_t *occ = malloc(n);
+    accel_coherence_stats st0, st1, st2;
+    const int before = accel_coherence_get();
+    accel_coherence_set(ACCEL_ORDER_SORT);
+    accel_coherence_stats_get(&st0);
+    kind->occluded(a, sh->rays, occ, n, NULL);
+    accel_coherence_stats_get(&st1);
+    CHECKF(n > 2 * 64 && st1.sorted_blocks == st0.sorted_blocks && st1.kept_blocks > st0.kept_blocks,
+           "tiled shadow rays: %llu blocks sorted, %llu kept",
+           (unsigned long long)(st1.sorted_blocks - st0.sorted_blocks),
+           (unsigned long long)(st1.kept_blocks - st0.kept_blocks));
+    CHECKF(st1.packet_rays - st0.packet_rays >= n * 3 / 4, "tiled shadow rays: %llu of %zu in packets",
+           (unsigned long long)(st1.packet_rays - st0.packet_rays), n);
+    size_t *perm = shuffle_perm(n, 5);
+    accel_ray *shuffled = malloc(n * sizeof *shuffled);
+    for (size_t i = 0; i < n; i++) shuffled[i] = sh->rays[perm[i]];
+    kind->occluded(a, shuffled, occ, n, NULL);
+    accel_coherence_stats_get(&st2);
+    CHECKF(st2.sorted_blocks > st1.sorted_blocks || st2.single_rays > st1.single_rays,
+           "shuffled shadow rays kept as packets as they came");
+    accel_coherence_set(before);
+    free(occ), free(perm), free(shuffled);
+}
+
 TEST(coherence_shadow_rays_converge_into_packets)
 {
-    accel_scene s;
-    if (!test_make_scene("sphereflake:level=2", &s)) return;
-    ray_case cases[CASES];
-    CHECK(make_cases(&s, cases));
-    const accel_kind *kind;
-    void *a = test_build_kind("bvh:width=8,traverse=packet", &s, 1, &kind, NULL);
-    if (a) {
-        rays_set *sh = &cases[1].set;
-        const size_t n = sh->count;
-        uint8_t *occ = malloc(n);
-        accel_coherence_stats st0, st1, st2;
-        const int before = accel_coherence_get();
-        accel_coherence_set(ACCEL_ORDER_SORT);
-        accel_coherence_stats_get(&st0);
-        kind->occluded(a, sh->rays, occ, n, NULL);
-        accel_coherence_stats_get(&st1);
-        CHECKF(n > 2 * 64 && st1.sorted_blocks == st0.sorted_blocks &&
-                   st1.kept_blocks > st0.kept_blocks,
-               "tiled shadow rays: %llu blocks sorted, %llu kept",
-               (unsigned long long)(st1.sorted_blocks - st0.sorted_blocks),
-               (unsigned long long)(st1.kept_blocks - st0.kept_blocks));
-        CHECKF(st1.packet_rays - st0.packet_rays >= n * 3 / 4, "tiled shadow rays: %llu of %zu in packets",
-               (unsigned long long)(st1.packet_rays - st0.packet_rays), n);
-        size_t *perm = shuffle_perm(n, 5);
-        accel_ray *shuffled = malloc(n * sizeof *shuffled);
-        for (size_t i = 0; i < n; i++) shuffled[i] = sh->rays[perm[i]];
-        kind->occluded(a, shuffled, occ, n, NULL);
-        accel_coherence_stats_get(&st2);
-        CHECKF(st2.sorted_blocks > st1.sorted_blocks || st2.single_rays > st1.single_rays,
-               "shuffled shadow rays kept as packets as they came");
-        accel_coherence_set(before);
-        free(occ), free(perm), free(shuffled);
-        kind->destroy(a);
-    }
-    for (int ci = 0; ci < CASES; ci++) rays_free(&cases[ci].set);
-    scene_free(&s);
+    static const char *const spec[] = {"bvh:width=8,traverse=packet"};
+    each_kind_on_cases(spec, 1, shadow_rays_kept);
 }
 
 /* Diffuse bounces are not traced as packets: the spread test sends them
  * ray by ray. */
+static void diffuse_rays_single(const char *spec, const accel_kind *kind, const void *a, const ray_case *cases)
+{
+    (void)spec;
+    const size_t n = cases[2].set.count;
+    accel_hit *hits = malloc(n * sizeof *hits);
+    accel_coherence_stats st0, st1;
+    const int before = accel_coherence_get();
+    accel_coherence_set(ACCEL_ORDER_SORT);
+    accel_coherence_stats_get(&st0);
+    kind->intersect(a, cases[2].set.rays, hits, n, NULL);
+    accel_coherence_stats_get(&st1);
+    accel_coherence_set(before);
+    CHECKF(st1.single_rays - st0.single_rays >= n * 9 / 10, "diffuse: %llu of %zu rays single",
+           (unsigned long long)(st1.single_rays - st0.single_rays), n);
+    free(hits);
+}
+
 TEST(coherence_diffuse_rays_go_single)
 {
-    accel_scene s;
-    if (!test_make_scene("sphereflake:level=2", &s)) return;
-    ray_case cases[CASES];
-    CHECK(make_cases(&s, cases));
-    const accel_kind *kind;
-    void *a = test_build_kind("bvh:traverse=packet", &s, 1, &kind, NULL);
-    if (a) {
-        const size_t n = cases[2].set.count;
-        accel_hit *hits = malloc(n * sizeof *hits);
-        accel_coherence_stats st0, st1;
-        const int before = accel_coherence_get();
-        accel_coherence_set(ACCEL_ORDER_SORT);
-        accel_coherence_stats_get(&st0);
-        kind->intersect(a, cases[2].set.rays, hits, n, NULL);
-        accel_coherence_stats_get(&st1);
-        accel_coherence_set(before);
-        CHECKF(st1.single_rays - st0.single_rays >= n * 9 / 10, "diffuse: %llu of %zu rays single",
-               (unsigned long long)(st1.single_rays - st0.single_rays), n);
-        free(hits);
-        kind->destroy(a);
-    }
-    for (int ci = 0; ci < CASES; ci++) rays_free(&cases[ci].set);
-    scene_free(&s);
+    static const char *const spec[] = {"bvh:traverse=packet"};
+    each_kind_on_cases(spec, 1, diffuse_rays_single);
 }
 
 TEST(coherence_ray_orders)
