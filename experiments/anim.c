@@ -87,7 +87,7 @@ static void refit_loss(exp_ctx *x, exp_anim *a, const accel_scene *s, built *ref
         frame_pass(&b[i], &sets, h[i], o[i], &cnt[i]);
         pass = fmin(pass, accel_now_ms() - t0);
     }
-    hits_diff d = hits_compare(h[1], h[0], sets.primary.count);
+    hits_diff d = hits_compare(s, sets.primary.rays, h[1], h[0], sets.primary.count);
     long long bad = (long long)(d.holes + d.false_hits + d.disagreements);
     for (size_t i = 0; i < sets.shadow.count; i++) bad += o[0][i] != o[1][i];
     int batch = pass > 0 ? (int)ceil(x->sample_ms / pass) : 1, rounds = x->repeats;
@@ -335,7 +335,7 @@ void exp_anim_fps(exp_ctx *x, exp_anim *a)
             lp->ms[3][f - 1] = t3 - t0;
         }
         for (int l = 1; l < nl; l++) { /* the same rays: answers must agree with loop 0's */
-            hits_diff d = hits_compare(L[0].hits, L[l].hits, prim.count);
+            hits_diff d = hits_compare(s, prim.rays, L[0].hits, L[l].hits, prim.count);
             bad[0] += (long long)(d.holes + d.false_hits + d.disagreements);
             seen[0] += (long long)prim.count;
             for (size_t i = 0; i < prim.count; i++) {

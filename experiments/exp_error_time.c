@@ -299,7 +299,7 @@ static void robustness_against_speed(exp_ctx *x, study *st)
         const exp_cfg *cf = &g.cfg[c];
         if (!cf->ok) continue;
         accel_trace(cf->kind, cf->accel, one.primary.rays, h, n, x->threads, NULL);
-        hits_diff d = hits_compare(ref, h, n);
+        hits_diff d = hits_compare(&cs, one.primary.rays, ref, h, n);
         size_t dis = d.disagreements + d.false_hits;
         exp_est m = exp_group_mrays(&g, c, BENCH_PRIMARY);
         char mt[96], hb[64], db[64];

@@ -136,7 +136,7 @@ static void certify(exp_ctx *x, study *st, int ci, const exp_group *g, int m)
             continue;
         }
         accel_trace(f->kind, f->accel, big.rays.rays, h, n, T, NULL);
-        hits_diff d = hits_compare(ref, h, n);
+        hits_diff d = hits_compare(&big.scene, big.rays.rays, ref, h, n);
         size_t leaks = 0, sleaks = 0;
         for (size_t i = big.leak_begin; i < n; i++) leaks += h[i].prim == ACCEL_MISS;
         if (ns) accel_trace_occluded(f->kind, f->accel, big.shadow.rays, occ, ns, T, NULL);
@@ -205,7 +205,7 @@ static void measure_case(exp_ctx *x, study *st, stiff_case *c, int ci, const exp
     for (int k = 0; k < m; k++) {
         if (!g.cfg[k].ok) continue;
         accel_trace(g.cfg[k].kind, g.cfg[k].accel, c->rays.rays, h, n, x->threads, NULL);
-        hits_diff d = hits_compare(ref, h, n);
+        hits_diff d = hits_compare(&c->scene, c->rays.rays, ref, h, n);
         cnt[k].holes = d.holes, cnt[k].false_hits = d.false_hits, cnt[k].dis = d.disagreements;
         for (size_t i = c->leak_begin; i < n; i++) cnt[k].leaks += h[i].prim == ACCEL_MISS;
         int zero = !cnt[k].holes && !cnt[k].false_hits && !cnt[k].dis && !cnt[k].leaks;

@@ -103,7 +103,7 @@ static void agreement(exp_ctx *x, exp_group *g, long long (*dis)[3])
                 for (size_t i = 0; i < r->count; i++) bad += o[i] != ro[i];
             } else {
                 accel_trace(cf->kind, cf->accel, r->rays, h, r->count, t, NULL);
-                hits_diff d = hits_compare(ref, h, r->count);
+                hits_diff d = hits_compare(g->s, r->rays, ref, h, r->count);
                 bad = (long long)(d.holes + d.false_hits + d.disagreements);
             }
             dis[c][k] = bad;

@@ -389,8 +389,37 @@ INST_INLINE void ip_tri8(const ip_packet *pk, const ip_rel8 *q, unsigned g, unsi
     out->scalar |= sure & (small | (~out_m & ~in_m));
     out->hit = sure & ~small & ~out_m & in_m;
     if (!out->hit) return;
-    __m256 rcp = _mm256_div_ps(_mm256_set1_ps(1.0f), det);
-    _mm256_storeu_ps(out->t, _mm256_mul_ps(T, rcp));
+    __m256 rcp = _mm256_div_ps(_mm256_set1_ps(1.0f), det), tt = _mm256_mul_ps(T, rcp);
+    /* accel_tri_imprecise, operation for operation: its hits go on to the
+     * scalar test, which sends them to the double test. */
+    {
+        __m256 e[3], s3 = _mm256_setzero_ps(), pt, one = _mm256_set1_ps(1.0f);
+        static const int iu[3][4][2] = {{{2, 1}, {1, 2}, {2, 1}, {1, 2}}, /* U: cx M_by, by M_cx, cy M_bx, bx M_cy */
+                                        {{0, 2}, {2, 0}, {0, 2}, {2, 0}}, /* V: ax M_cy, cy M_ax, ay M_cx, cx M_ay */
+                                        {{1, 0}, {0, 1}, {1, 0}, {0, 1}}}; /* W: bx M_ay, ay M_bx, by M_ax, ax M_by */
+        for (int k = 0; k < 3; k++) {
+            const int (*w)[2] = iu[k];
+            e[k] = _mm256_add_ps(_mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(IP_ABS(px[w[0][0]]), my[w[0][1]]),
+                                                             _mm256_mul_ps(IP_ABS(py[w[1][0]]), mx[w[1][1]])),
+                                               _mm256_mul_ps(IP_ABS(py[w[2][0]]), mx[w[2][1]])),
+                                 _mm256_mul_ps(IP_ABS(px[w[3][0]]), my[w[3][1]]));
+        }
+        __m256 zs[3] = {_mm256_mul_ps(sz, q->z[0]), _mm256_mul_ps(sz, q->z[1]), _mm256_mul_ps(sz, q->z[2])};
+        __m256 m1 = _mm256_max_ps(IP_ABS(tt), one);
+        s3 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(IP_ABS(U), IP_ABS(zs[0])), _mm256_mul_ps(IP_ABS(V), IP_ABS(zs[1]))),
+                           _mm256_mul_ps(IP_ABS(W), IP_ABS(zs[2])));
+        pt = _mm256_mul_ps(_mm256_set1_ps(4.0f), s3);
+        for (int k = 0; k < 3; k++)
+            pt = _mm256_add_ps(pt, _mm256_mul_ps(e[k], IP_ABS(_mm256_sub_ps(zs[k], tt))));
+        __m256 fine = _mm256_and_ps(
+            _mm256_cmp_ps(_mm256_add_ps(_mm256_add_ps(e[0], e[1]), e[2]), _mm256_mul_ps(_mm256_set1_ps(0x1p13f), det), _CMP_LE_OQ),
+            _mm256_cmp_ps(pt, _mm256_mul_ps(_mm256_mul_ps(_mm256_set1_ps(0x1p9f), det), m1), _CMP_LE_OQ));
+        unsigned coarse = out->hit & ~(unsigned)_mm256_movemask_ps(fine);
+        out->hit &= ~coarse;
+        out->scalar |= coarse;
+        if (!out->hit) return;
+    }
+    _mm256_storeu_ps(out->t, tt);
     _mm256_storeu_ps(out->u, _mm256_mul_ps(_mm256_mul_ps(V, sgn), rcp));
     _mm256_storeu_ps(out->v, _mm256_mul_ps(_mm256_mul_ps(W, sgn), rcp));
 #undef IP_ABS

@@ -146,7 +146,7 @@ static int compare_group(const accel_kind *k, const void *a, const accel_scene *
         ok = 0;
         goto out;
     }
-    hits_diff d = hits_compare(ref, hits, n);
+    hits_diff d = hits_compare(sc, g->rays.rays, ref, hits, n);
     if (d.first_bad != SIZE_MAX) {
         size_t i = d.first_bad;
         lab_fail(r, "%s / %s rays: %zu holes (the reference hits, you miss), %zu false hits, %zu "
@@ -492,7 +492,7 @@ static void check_real_time(const lab_subject *s, const char *spec, lab_result *
     if (time_frames(s->kind, mine, &prim, &shadow, threads, &fm, err) ||
         time_frames(refk, theirs, &prim, &shadow, threads, &ft, err))
         goto out;
-    hits_diff d = hits_compare(ft.hits, fm.hits, prim.count);
+    hits_diff d = hits_compare(&sc, prim.rays, ft.hits, fm.hits, prim.count);
     size_t occ_bad = 0;
     for (size_t i = 0; i < shadow.count; i++) occ_bad += fm.occ[i] != ft.occ[i];
     if (d.first_bad != SIZE_MAX || occ_bad) {

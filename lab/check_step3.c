@@ -59,7 +59,7 @@ static int compare(const lab_subject *s, const void *a, const accel_scene *sc, c
     lab_where(r, "scene %s, ray set %s", sc->name, what);
     accel_reference_trace(sc, rays->rays, ref, n, s->threads);
     accel_trace(k, a, rays->rays, hits, n, 1, NULL);
-    hits_diff d = hits_compare(ref, hits, n);
+    hits_diff d = hits_compare(sc, rays->rays, ref, hits, n);
     if (d.first_bad != SIZE_MAX) {
         size_t i = d.first_bad;
         const accel_ray *ray = &rays->rays[i];

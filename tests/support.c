@@ -352,11 +352,11 @@ accel_hit *test_oracle_hits(const accel_scene *s, const accel_ray *rays, size_t 
     return ref;
 }
 
-test_diff test_trace_diff(const accel_kind *kind, const void *accel, const accel_ray *rays,
+test_diff test_trace_diff(const accel_scene *scene, const accel_kind *kind, const void *accel, const accel_ray *rays,
                           size_t n, const accel_hit *ref, int threads, accel_hit *hits,
                           uint8_t *occ)
 {
-    test_diff d = {n, 0, 0, 0, 0, SIZE_MAX};
+    test_diff d = {.rays = n, .first_bad = SIZE_MAX};
     accel_hit *own_hits = hits ? NULL : malloc((n ? n : 1) * sizeof *own_hits);
     uint8_t *own_occ = occ ? NULL : malloc(n ? n : 1);
     if (!hits) hits = own_hits;
@@ -373,10 +373,11 @@ test_diff test_trace_diff(const accel_kind *kind, const void *accel, const accel
         accel_error broken = {0};
         if (accel_counters_status(&c, &broken) || accel_counters_status(&c_occ, &broken))
             test_fail(__FILE__, __LINE__, "%s: %s", kind->name, broken.msg);
-        hits_diff h = hits_compare(ref, hits, n);
+        hits_diff h = hits_compare(scene, rays, ref, hits, n);
         d.holes = h.holes;
         d.false_hits = h.false_hits;
         d.disagreements = h.disagreements;
+        d.ties = h.ties;
         d.first_bad = h.first_bad;
         for (size_t i = 0; i < n; i++)
             if (occ[i] != (ref[i].prim != ACCEL_MISS)) {
@@ -447,7 +448,7 @@ size_t test_check_accel(const accel_scene *s, const accel_kind *kind, const void
         free(occ);
         return n ? n : 1;
     }
-    test_diff d = test_trace_diff(kind, accel, rays, n, ref, 1, hits, occ);
+    test_diff d = test_trace_diff(s, kind, accel, rays, n, ref, 1, hits, occ);
     size_t bad = test_diff_bad(&d);
     if (bad) test_fail_diff(__FILE__, __LINE__, label, &d, rays, ref, hits, occ);
 

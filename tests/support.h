@@ -197,6 +197,7 @@ accel_hit *test_oracle_hits(const accel_scene *s, const accel_ray *rays, size_t 
 /* A comparison with the oracle by the FORMATS.md rule. */
 typedef struct {
     size_t rays, holes, false_hits, disagreements;
+    size_t ties;      /* agreements that are true ties (another triangle at the same t), verified */
     size_t occ_bad;   /* occluded differs from the oracle's hit or miss */
     size_t first_bad; /* first ray with a wrong hit, else with a wrong occluded, else SIZE_MAX */
 } test_diff;
@@ -208,8 +209,9 @@ static inline size_t test_diff_bad(const test_diff *d)
 
 /* Traces rays through a built accelerator on `threads` threads, closest
  * hits into hits and any-hit answers into occ (either may be NULL: then
- * kept internally), and compares both with the oracle's ref. */
-test_diff test_trace_diff(const accel_kind *kind, const void *accel, const accel_ray *rays,
+ * kept internally), and compares both with the oracle's ref by FORMATS.md's
+ * rule, ties verified on scene. */
+test_diff test_trace_diff(const accel_scene *scene, const accel_kind *kind, const void *accel, const accel_ray *rays,
                           size_t n, const accel_hit *ref, int threads, accel_hit *hits,
                           uint8_t *occ);
 

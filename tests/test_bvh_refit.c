@@ -59,7 +59,7 @@ static size_t bad_rays(const accel_kind *k, const void *a, const accel_scene *s,
     accel_hit *ref = test_oracle_hits(s, l.r, l.n, TEST_ORACLE_REFERENCE);
     size_t bad = l.n ? l.n : 1;
     if (ref) {
-        test_diff d = test_trace_diff(k, a, l.r, l.n, ref, 1, NULL, NULL);
+        test_diff d = test_trace_diff(s, k, a, l.r, l.n, ref, 1, NULL, NULL);
         bad = test_diff_bad(&d);
         if (holes) *holes = d.holes;
     }
@@ -320,7 +320,7 @@ static size_t sheet_bad(const accel_kind *k, const void *a, const accel_scene *s
     accel_hit *ref = test_oracle_hits(s, r, n, TEST_ORACLE_REFERENCE);
     size_t bad = n;
     if (ref) {
-        test_diff d = test_trace_diff(k, a, r, n, ref, 1, NULL, NULL);
+        test_diff d = test_trace_diff(s, k, a, r, n, ref, 1, NULL, NULL);
         bad = test_diff_bad(&d);
     }
     free(ref);

@@ -46,7 +46,7 @@ static size_t check_set(const accel_kind *k, const void *a, const accel_scene *s
     uint8_t *occ = malloc(n ? n : 1);
     accel_trace(k, a, r->rays.rays, h, n, 1, NULL);
     accel_trace_occluded(k, a, r->rays.rays, occ, n, 1, NULL);
-    hits_diff d = hits_compare(r->ref, h, n);
+    hits_diff d = hits_compare(s, r->rays.rays, r->ref, h, n);
     size_t occ_bad = 0;
     for (size_t i = 0; i < n; i++) occ_bad += occ[i] != (r->ref[i].prim != ACCEL_MISS);
     size_t bad = d.holes + d.false_hits + d.disagreements + occ_bad;
@@ -221,7 +221,7 @@ TEST(bvh_wide_naive_matches_binary_naive)
                     accel_hit *h1 = malloc((n ? n : 1) * sizeof *h1), *h2 = malloc((n ? n : 1) * sizeof *h2);
                     accel_trace(k, bin, sets[i].rays.rays, h1, n, 1, NULL);
                     accel_trace(k, w, sets[i].rays.rays, h2, n, 1, NULL);
-                    hits_diff d = hits_compare(h1, h2, n);
+                    hits_diff d = hits_compare(&s, sets[i].rays.rays, h1, h2, n);
                     CHECKF(d.agree == n, "%s/%s: %zu of %zu rays differ from bvh:tri=naive", specs[j],
                            sets[i].name, n - d.agree, n);
                     free(h1);

@@ -185,7 +185,7 @@ static size_t check_variant(test_scene *ts, const char *spec, int naive, int inv
             free(occ);
             continue;
         }
-        test_diff d = test_trace_diff(kind, accel, t->rays.rays, n, t->ref, 1, hits, occ);
+        test_diff d = test_trace_diff(&ts->scene, kind, accel, t->rays.rays, n, t->ref, 1, hits, occ);
         size_t bad = test_diff_bad(&d);
         if (naive) {
             /* Reported, not hidden; only gross failure (>1% of ordinary

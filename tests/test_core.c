@@ -13,6 +13,7 @@
 #include "core/prim.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
+#include "support.h"
 #include "test.h"
 
 TEST(core_spec_parsing)
@@ -272,19 +273,68 @@ TEST(core_ray_hit_files_round_trip)
 
 TEST(core_compare_rule)
 {
-    accel_hit a = {10.0f, 1, 0, 0}, b = {10.0005f, 2, 0, 0}, c = {10.01f, 2, 0, 0};
+    /* Without the scene: the same triangle at the same t, u, v agrees; a
+     * different triangle at the same t is an unverified tie, never an
+     * agreement; the same triangle at another t or u is a disagreement. */
+    accel_hit a = {10.0f, 1, 0.25f, 0.25f}, b = {10.0005f, 2, 0, 0}, c = {10.01f, 2, 0, 0};
+    accel_hit a_u = {10.0f, 1, 0.3f, 0.25f}, a_t = {10.01f, 1, 0.25f, 0.25f};
     accel_hit m = accel_hit_miss();
-    CHECK(hits_agree(&a, &a));
-    CHECK(hits_agree(&a, &b));  /* different triangle, same t within 1e-4 relative */
-    CHECK(!hits_agree(&a, &c));
-    CHECK(!hits_agree(&a, &m) && !hits_agree(&m, &a) && hits_agree(&m, &m));
-    /* Two triangles hit beyond FLT_MAX (t rounded to +inf in both) are at
-     * the same distance (FORMATS.md's |t1 - t2| is NaN there). */
+    CHECK(hits_match_ray(NULL, NULL, &a, &a) == HITS_AGREE);
+    CHECK(hits_match_ray(NULL, NULL, &a, &b) == HITS_TIE_UNVERIFIED && !hits_agree(NULL, NULL, &a, &b));
+    CHECK(hits_match_ray(NULL, NULL, &a, &c) == HITS_DISAGREE);
+    CHECK(hits_match_ray(NULL, NULL, &a, &a_u) == HITS_DISAGREE);
+    CHECK(hits_match_ray(NULL, NULL, &a, &a_t) == HITS_DISAGREE);
+    CHECK(hits_match_ray(NULL, NULL, &a, &m) == HITS_HOLE);
+    CHECK(hits_match_ray(NULL, NULL, &m, &a) == HITS_FALSE_HIT);
+    CHECK(hits_agree(NULL, NULL, &m, &m));
+    /* Two hits beyond FLT_MAX (t rounded to +inf in both) on one triangle
+     * are at the same distance (FORMATS.md's |t1 - t2| is NaN there). */
     accel_hit fi = {INFINITY, 3, 0, 0}, gi = {INFINITY, 4, 0, 0};
-    CHECK(hits_agree(&fi, &gi) && hits_agree(&gi, &fi));
-    accel_hit x[3] = {a, a, m}, y[3] = {c, m, a};
-    hits_diff d = hits_compare(x, y, 3);
-    CHECK(d.disagreements == 1 && d.holes == 1 && d.false_hits == 1 && d.first_bad == 0);
+    CHECK(hits_agree(NULL, NULL, &fi, &fi) &&
+          hits_match_ray(NULL, NULL, &fi, &gi) == HITS_TIE_UNVERIFIED);
+    accel_hit x[4] = {a, a, m, a}, y[4] = {c, m, a, b};
+    hits_diff d = hits_compare(NULL, NULL, x, y, 4);
+    CHECK(d.disagreements == 1 && d.holes == 1 && d.false_hits == 1 && d.unverified == 1 &&
+          d.agree == 0 && d.first_bad == 0);
+
+    /* With the scene: two triangles sharing the edge x = 1 of the square
+     * [0,2]x[0,1] in z = 0, rays straight down (t = 5). */
+    scene_builder sb = {0};
+    test_add_tri(&sb, v3(0, 0, 0), v3(1, 0, 0), v3(1, 1, 0)); /* 0 */
+    test_add_tri(&sb, v3(1, 0, 0), v3(2, 0, 0), v3(1, 1, 0)); /* 1: shares the edge (1,0)-(1,1) */
+    test_add_tri(&sb, v3(5, 5, 0), v3(6, 5, 0), v3(5, 6, 0)); /* 2: far away */
+    accel_scene s;
+    if (!test_finish(&sb, "two", &s)) return;
+    accel_ray edge = {1.0f, 0.5f, 5.0f, 0.0f, 0.0f, 0.0f, -1.0f, INFINITY};
+    accel_ray in0 = {0.75f, 0.25f, 5.0f, 0.0f, 0.0f, 0.0f, -1.0f, INFINITY};
+    accel_hit ref[2], got[2];
+    accel_reference_trace(&s, &edge, &ref[0], 1, 1);
+    accel_reference_trace(&s, &in0, &ref[1], 1, 1);
+    CHECKF(ref[0].prim <= 1 && ref[1].prim == 0 && ref[1].t == 5.0f, "oracle: prims %u %u",
+           ref[0].prim, ref[1].prim);
+    /* the other triangle at the shared edge, with its own u, v: a true tie */
+    accel_hit other = {5.0f, 1 - ref[0].prim, 0.0f, 0.0f};
+    other.u = other.prim == 1 ? 0.0f : 0.5f, other.v = 0.5f;
+    CHECK(hits_verify(&s, &edge, &ref[0]) && hits_verify(&s, &edge, &other));
+    CHECK(hits_match_ray(&s, &edge, &ref[0], &other) == HITS_TIE);
+    /* inside triangle 0 only: triangle 1 or 2 at the right t is wrong */
+    got[1] = ref[1], got[1].prim = 1;
+    CHECK(!hits_verify(&s, &in0, &got[1]) && hits_match_ray(&s, &in0, &ref[1], &got[1]) == HITS_DISAGREE);
+    got[1].prim = 2;
+    CHECK(hits_match_ray(&s, &in0, &ref[1], &got[1]) == HITS_DISAGREE);
+    /* a triangle's own hit with u, v of another point: not hit there */
+    got[1] = ref[1], got[1].u += 0.1f;
+    CHECK(!hits_verify(&s, &in0, &got[1]));
+    /* compare over both rays, and the any-hit rule's triangle check */
+    accel_ray rs[2] = {edge, in0};
+    got[0] = other, got[1] = ref[1];
+    d = hits_compare(&s, rs, ref, got, 2);
+    CHECKF(d.agree == 2 && d.ties == 1, "agree %zu ties %zu", d.agree, d.ties);
+    got[1].prim = 2;
+    hits_anyhit_diff ad = hits_compare_anyhit(&s, rs, ref, got, 2);
+    CHECKF(ad.agree == 1 && ad.false_hits == 1 && ad.first_bad == 1, "any-hit: agree %zu false %zu",
+           ad.agree, ad.false_hits);
+    scene_free(&s);
 }
 
 TEST(core_ray_sets_deterministic)

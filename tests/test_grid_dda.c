@@ -92,7 +92,7 @@ TEST(grid_dda_lattice_edges_corners)
     accel_hit *ref = test_oracle_hits(&s, r.rays, r.count, TEST_ORACLE_REFERENCE);
     accel_hit *brute = test_oracle_hits(&s, r.rays, r.count, TEST_ORACLE_FLOAT_BRUTE);
     if (ref && brute) {
-        hits_diff d = hits_compare(ref, brute, r.count);
+        hits_diff d = hits_compare(&s, r.rays, ref, brute, r.count);
         test_note("float kernels vs reference on the lattice: %zu holes, %zu false hits, %zu "
                   "disagreements of %zu rays",
                   d.holes, d.false_hits, d.disagreements, r.count);

@@ -112,7 +112,7 @@ static accel_counters check_spec(const accel_scene *s, const char *spec, const a
     accel_trace(k, a, rays, h, n, 1, NULL);
     accel_trace_occluded(k, a, rays, occ, n, 1, NULL);
     accel_trace(k, a, rays, h2, n, 2, &c);
-    hits_diff d = hits_compare(ref, h, n);
+    hits_diff d = hits_compare(s, rays, ref, h, n);
     size_t occ_bad = 0;
     for (size_t i = 0; i < n; i++) occ_bad += occ[i] != (ref[i].prim != ACCEL_MISS);
     CHECKF(d.holes + d.false_hits + d.disagreements + occ_bad == 0,
@@ -219,7 +219,7 @@ TEST(grid_packet_fewer_tests_than_single_rays)
     }
     size_t agree = 0, hit = 0;
     for (size_t i = 0; i < r.count; i++) {
-        agree += hits_agree(&h[0][i], &h[1][i]);
+        agree += hits_agree(&s, &r.rays[i], &h[0][i], &h[1][i]);
         hit += h[0][i].prim != ACCEL_MISS;
     }
     CHECKF(agree == r.count, "%zu of %zu primary hits differ", r.count - agree, r.count);

@@ -121,7 +121,7 @@ size_t inst_count_bad(const accel_kind *kind, const void *a, const accel_scene *
     uint8_t *occ = malloc(l->n);
     accel_trace(kind, a, l->r, h, l->n, 1, NULL);
     accel_trace_occluded(kind, a, l->r, occ, l->n, 1, NULL);
-    hits_diff d = hits_compare(ref, h, l->n);
+    hits_diff d = hits_compare(s, l->r, ref, h, l->n);
     size_t occ_bad = 0;
     for (size_t i = 0; i < l->n; i++) occ_bad += occ[i] != (ref[i].prim != ACCEL_MISS);
     if (holes) *holes = d.holes;
@@ -312,7 +312,7 @@ TEST(instanced_update_frames)
                 accel_hit *ref = malloc(l.n * sizeof *ref), *h = malloc(l.n * sizeof *h);
                 accel_reference_trace(sc, l.r, ref, l.n, 2);
                 accel_trace(kind, a, l.r, h, l.n, 1, NULL);
-                hits_diff d = hits_compare(ref, h, l.n);
+                hits_diff d = hits_compare(sc, l.r, ref, h, l.n);
                 CHECKF(d.holes + d.false_hits + d.disagreements == 0,
                        "%s refit=%d frame %d: %zu holes %zu false %zu disagreements of %zu",
                        specs[v], refit, frame, d.holes, d.false_hits, d.disagreements, l.n);

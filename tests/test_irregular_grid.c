@@ -221,7 +221,7 @@ static void check_answers(const accel_scene *s, const char *spec, const accel_ra
     accel_trace(kind, accel, rays, h, n, 1, NULL);
     accel_trace(kind, accel, rays, hc, n, 2, &c);
     accel_trace_occluded(kind, accel, rays, occ, n, 1, NULL);
-    hits_diff d = hits_compare(ref, h, n);
+    hits_diff d = hits_compare(s, rays, ref, h, n);
     size_t occ_bad = 0;
     for (size_t i = 0; i < n; i++) occ_bad += occ[i] != (ref[i].prim != ACCEL_MISS);
     size_t i = d.first_bad == SIZE_MAX ? 0 : d.first_bad;

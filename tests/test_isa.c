@@ -173,7 +173,7 @@ static size_t isa_compare(const accel_scene *s, const char *spec, const isa_set 
         isa_run r[2];
         isa_trace(kind, a[0], set, &r[0]);
         /* the AVX2 tables against the reference (FORMATS.md's rule) */
-        test_diff d = test_trace_diff(kind, a[0], set->rays, set->n, set->ref, 1, NULL, NULL);
+        test_diff d = test_trace_diff(s, kind, a[0], set->rays, set->n, set->ref, 1, NULL, NULL);
         if (test_diff_bad(&d))
             test_fail_diff(__FILE__, __LINE__, specs[0], &d, set->rays, set->ref, r[0].hits, r[0].occ);
         bad += test_diff_bad(&d);

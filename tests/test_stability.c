@@ -42,7 +42,7 @@ static void run_spec(const stiff_case *c, const accel_hit *ref, const char *spec
         kind->destroy(accel);
         return;
     }
-    test_diff d = test_trace_diff(kind, accel, c->rays.rays, n, ref, 2, h, NULL);
+    test_diff d = test_trace_diff(&c->scene, kind, accel, c->rays.rays, n, ref, 2, h, NULL);
     t->rays = n;
     t->holes = d.holes;
     t->false_hits = d.false_hits;

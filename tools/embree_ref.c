@@ -532,17 +532,14 @@ static void check_answers(const ref_mesh *m, const accel_ray *rays, const accel_
     }
     accel_reference_trace(&m->scene, rays, ref, n, threads);
     if (occluded) {
-        size_t leaks = 0, false_occ = 0;
-        for (size_t i = 0; i < n; i++) {
-            int a = ref[i].prim != ACCEL_MISS, b = hits[i].prim != ACCEL_MISS;
-            leaks += a && !b, false_occ += !a && b;
-        }
-        printf("check vs oracle, any-hit rule: rays %zu  agree %zu  leaks %zu  false_occlusions %zu\n",
-               n, n - leaks - false_occ, leaks, false_occ);
+        hits_anyhit_diff d = hits_compare_anyhit(&m->scene, rays, ref, hits, n);
+        printf("check vs oracle, any-hit rule: rays %zu  agree %zu  leaks %zu  false_occlusions "
+               "%zu  false_hits %zu\n", d.rays, d.agree, d.leaks, d.false_occlusions, d.false_hits);
     } else {
-        hits_diff d = hits_compare(ref, hits, n);
-        printf("check vs oracle: rays %zu  agree %zu  holes %zu  false_hits %zu  disagreements %zu\n",
-               d.rays, d.agree, d.holes, d.false_hits, d.disagreements);
+        hits_diff d = hits_compare(&m->scene, rays, ref, hits, n);
+        printf("check vs oracle: rays %zu  agree %zu (%zu verified ties)  holes %zu  false_hits "
+               "%zu  disagreements %zu\n", d.rays, d.agree, d.ties, d.holes, d.false_hits,
+               d.disagreements);
     }
     free(ref);
 }

@@ -332,7 +332,7 @@ int main(int argc, char **argv)
             rc = accel_build_spec(o.accel, s, o.threads, &k2, &fresh, &st2, &err);
             if (rc) break;
             accel_trace(k2, fresh, prim.rays, ref, prim.count, o.threads, NULL);
-            hits_diff d = hits_compare(ref, hits, prim.count);
+            hits_diff d = hits_compare(s, prim.rays, ref, hits, prim.count);
             printf("  verify: %zu holes, %zu false hits, %zu disagreements", d.holes, d.false_hits,
                    d.disagreements);
             k2->destroy(fresh);

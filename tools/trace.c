@@ -353,7 +353,7 @@ static int check_set(const options *o, run *r, set_run *t, accel_error *err)
             d.false_hits += !rh && t->occ[i];
         }
     } else {
-        d = hits_compare(ref, t->hits, n);
+        d = hits_compare(&r->scene, t->rays->rays, ref, t->hits, n);
     }
     free(ref);
     t->diff = d;

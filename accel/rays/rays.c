@@ -424,42 +424,6 @@ int hits_read(const char *path, accel_hit **hits, size_t *count, accel_error *er
     return 0;
 }
 
-/* ---- comparison ------------------------------------------------------------ */
-
-int hits_agree(const accel_hit *a, const accel_hit *b)
-{
-    int ha = a->prim != ACCEL_MISS, hb = b->prim != ACCEL_MISS;
-    if (!ha || !hb) return ha == hb;
-    if (a->prim == b->prim) return 1;
-    /* Equal distances are the same distance, +infinity included: a hit
-     * beyond FLT_MAX (a ray from 1e38 away) rounds t to +infinity in every
-     * tracer, where FORMATS.md's |t1 - t2| would be NaN. */
-    if (a->t == b->t) return 1;
-    return fabsf(a->t - b->t) <= 1e-4f * fmaxf(1.0f, fabsf(a->t));
-}
-
-hits_diff hits_compare(const accel_hit *a, const accel_hit *b, size_t n)
-{
-    hits_diff d = {0};
-    d.rays = n;
-    d.first_bad = SIZE_MAX;
-    for (size_t i = 0; i < n; i++) {
-        int ha = a[i].prim != ACCEL_MISS, hb = b[i].prim != ACCEL_MISS;
-        if (hits_agree(&a[i], &b[i])) {
-            d.agree++;
-            continue;
-        }
-        if (d.first_bad == SIZE_MAX) d.first_bad = i;
-        if (ha && !hb)
-            d.holes++;
-        else if (!ha && hb)
-            d.false_hits++;
-        else
-            d.disagreements++;
-    }
-    return d;
-}
-
 /* ---- ray orders ------------------------------------------------------------- */
 
 int rays_order_parse(const char *name, rays_order *out)

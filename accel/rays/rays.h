@@ -87,21 +87,74 @@ int hits_read(const char *path, accel_hit **hits, size_t *count, accel_error *er
  * the first (SIZE_MAX if none) and *why names its fault. */
 size_t rays_invalid_count(const accel_ray *rays, size_t count, size_t *first, const char **why);
 
-/* ---- comparison (FORMATS.md rule) ----------------------------------------- */
+/* ---- comparison (FORMATS.md rule) -----------------------------------------
+ *
+ * FORMATS.md "Comparing two hit files": two closest-hit answers agree when
+ * both miss; or they name the same triangle with t within
+ * tol(t) = 1e-4 max(1, |t|) and u, v each within 1e-3; or they name two
+ * different triangles at the same t and the ray really hits each of them
+ * there (a true tie at a shared edge or vertex, or coincident triangles),
+ * which only the scene can tell. Without the scene (scene == NULL) such a
+ * ray is an unverified tie: counted apart, never as an agreement. A wrong
+ * triangle at the right t, or the right triangle at a wrong t, u or v,
+ * is a disagreement. */
+
+typedef enum {
+    HITS_AGREE,           /* both miss, or the same triangle at the same t, u, v */
+    HITS_TIE,             /* different triangles, the same t, both verified on the scene */
+    HITS_TIE_UNVERIFIED,  /* different triangles, the same t, no scene to verify them on */
+    HITS_HOLE,            /* the reference hits, the other misses */
+    HITS_FALSE_HIT,       /* the reference misses, the other hits */
+    HITS_DISAGREE         /* both hit, and not as above */
+} hits_match;
 
 typedef struct {
     size_t rays;
-    size_t agree;
-    size_t holes;          /* a hits, b misses */
-    size_t false_hits;     /* a misses, b hits */
-    size_t disagreements;  /* both hit, different triangle at a different t */
-    size_t first_bad;      /* index of the first ray that does not agree, or SIZE_MAX */
+    size_t agree;           /* HITS_AGREE and HITS_TIE */
+    size_t ties;            /* of agree: verified ties (different triangles) */
+    size_t unverified;      /* HITS_TIE_UNVERIFIED: neither agree nor a disagreement */
+    size_t holes;           /* a hits, b misses */
+    size_t false_hits;      /* a misses, b hits */
+    size_t disagreements;   /* both hit, not the same answer and not a true tie */
+    size_t first_bad;       /* index of the first ray that does not agree, or SIZE_MAX */
 } hits_diff;
 
-/* Does hit b agree with hit a (the reference) by the FORMATS.md rule? */
-int hits_agree(const accel_hit *a, const accel_hit *b);
-/* Compares b against the reference a over n rays. */
-hits_diff hits_compare(const accel_hit *a, const accel_hit *b, size_t n);
+/* Does ray r really hit primitive h->prim of scene s at h->t, with h's u
+ * and v (a triangle) or u = v = 0 (a sphere)? Decided in double on the
+ * scene's own floats: the edge functions of the watertight test may be
+ * negative by the rounding bound of a float tracer (so a float tracer's
+ * pick at a shared edge counts), t must be within tol(t) of the exact t
+ * and inside [t_near, t_far] (within tol), u and v within 1e-3. A
+ * degenerate or out-of-range primitive is never hit. */
+int hits_verify(const accel_scene *s, const accel_ray *r, const accel_hit *h);
+
+/* Hit b (the tested answer) against a (the reference) on one ray. scene
+ * and ray may be NULL: then different triangles at the same t are
+ * HITS_TIE_UNVERIFIED. */
+hits_match hits_match_ray(const accel_scene *scene, const accel_ray *ray, const accel_hit *a,
+                          const accel_hit *b);
+/* 1 when hits_match_ray says HITS_AGREE or HITS_TIE. */
+int hits_agree(const accel_scene *scene, const accel_ray *ray, const accel_hit *a,
+               const accel_hit *b);
+/* Compares b against the reference a over n rays; scene and rays may be
+ * NULL (a comparison of two files: ties by distance only are counted in
+ * `unverified`). */
+hits_diff hits_compare(const accel_scene *scene, const accel_ray *rays, const accel_hit *a,
+                       const accel_hit *b, size_t n);
+
+/* Any-hit answers (FORMATS.md "Any-hit answers"): both miss or both hit.
+ * With the scene, an occluded answer of b whose triangle is not really hit
+ * (hits_verify) is a false hit too. */
+typedef struct {
+    size_t rays;
+    size_t agree;
+    size_t leaks;            /* a occluded, b lets the ray through */
+    size_t false_occlusions; /* a clear, b occluded */
+    size_t false_hits;       /* both occluded, b's triangle not hit at its t (scene only) */
+    size_t first_bad;
+} hits_anyhit_diff;
+hits_anyhit_diff hits_compare_anyhit(const accel_scene *scene, const accel_ray *rays,
+                                     const accel_hit *a, const accel_hit *b, size_t n);
 
 #ifdef __cplusplus
 }

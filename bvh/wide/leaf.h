@@ -339,11 +339,35 @@ WL(leaf_block_rel)(const LBLOCK *blk, const WL(wide_leaf_rel) *q, const WL(wide_
         int live = ok & ~KV(bits)(t_out);
         int sure = live & KV(bits)(t_in);
         unsure |= live & ~sure;
+        LF rcp = LV(set1)(1.0f), tt = rcp;
+        if (sure && !any_hit) {
+            /* Sure hits whose t, u, v float cannot give to FORMATS.md's
+             * tolerance go to the double test too (accel_tri_imprecise,
+             * core/prim.h: the same bounds, lane by lane). */
+            rcp = LV(div)(LV(set1)(1.0f), det);
+            tt = LV(mul)(T, rcp);
+            LF aax = LV(abs)(ax), aay = LV(abs)(ay), abx = LV(abs)(bx), aby = LV(abs)(by);
+            LF acx = LV(abs)(cx), acy = LV(abs)(cy);
+            LF e_u = LV(fmadd)(acx, mby_, LV(fmadd)(aby, mcx_, LV(fmadd)(acy, mbx_, LV(mul)(abx, mcy_))));
+            LF e_v = LV(fmadd)(aax, mcy_, LV(fmadd)(acy, max_, LV(fmadd)(aay, mcx_, LV(mul)(acx, may_))));
+            LF e_w = LV(fmadd)(abx, may_, LV(fmadd)(aay, mbx_, LV(fmadd)(aby, max_, LV(mul)(aax, mby_))));
+            LF m1 = LV(max)(LV(abs)(tt), LV(set1)(1.0f));
+            LF prec_t = LV(fmadd)(LV(set1)(4.0f), sum,
+                                  LV(fmadd)(e_u, LV(abs)(LV(sub)(zaz, tt)),
+                                            LV(fmadd)(e_v, LV(abs)(LV(sub)(zbz, tt)),
+                                                      LV(mul)(e_w, LV(abs)(LV(sub)(zcz, tt))))));
+            LK fine = KV(and)(LV(lek)(LV(add)(LV(add)(e_u, e_v), e_w), LV(mul)(LV(set1)(0x1p13f), det)),
+                              LV(lek)(prec_t, LV(mul)(LV(mul)(LV(set1)(0x1p9f), det), m1)));
+            int coarse = sure & ~KV(bits)(fine);
+            if (coarse) {
+                sure &= ~coarse;
+                unsure |= coarse;
+                sure_v = KV(and)(sure_v, fine);
+            }
+        }
         if (sure) {
             if (any_hit) return 1;
             /* The nearest sure hit; ties go to the lowest lane. */
-            LF rcp = LV(div)(LV(set1)(1.0f), det);
-            LF tt = LV(mul)(T, rcp);
             LF masked = LV(blendk)(LV(set1)(INFINITY), tt, sure_v);
             if (has_spheres && spheres) {
                 float lane_t[WIDE_LB] __attribute__((aligned(32)));

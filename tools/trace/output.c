@@ -83,8 +83,9 @@ void print_row(const options *o, run *r, const accel_kind *kind, const accel_par
                c->prim_tests / nr, c->mailbox_skips / nr);
     printf("\n");
     if (t->checked)
-        printf("    check vs reference: %zu holes, %zu false hits, %zu disagreements\n",
-               t->diff.holes, t->diff.false_hits, t->diff.disagreements);
+        printf("    check vs reference: %zu holes, %zu false hits, %zu disagreements (%zu true "
+               "ties verified)\n", t->diff.holes, t->diff.false_hits, t->diff.disagreements,
+               t->diff.ties);
 }
 
 void print_summary(const options *o, const run *r)
