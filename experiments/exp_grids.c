@@ -264,6 +264,7 @@ int main(int argc, char **argv)
              "How close do the best grids (coherent traversal, skipping, nested, irregular) come "
              "to the BVH?",
              "Scenes (without --scene): the meshes, sphereflake, teapot_stadium:n=8, tetra.\n");
+    exp_limits(&x, EXP_MAX_MESHES, EXP_MAX_MESHES);
     exp_header(&x, "Grids at their best", "(not a lecture claim: issue 13's targets) coherent "
                "grid traversal >= 5x the single-ray grid on primary rays; the best grid within "
                "1.3x of `bvh` on the scanned meshes (primary, diffuse), within 2x on "

@@ -533,7 +533,7 @@ int main(int argc, char **argv)
              "How much faster do SAH trees trace than median-split trees, and what does their "
              "build cost?",
              NULL);
-    exp_mesh_room(&x, 2);
+    exp_limits(&x, 12, 2);
     exp_header(&x, "The Surface Area Heuristic", "\"SAH will double performance, but "
                "construction becomes much slower\"",
                "how much faster do SAH-built BVHs trace than the lecture's pure median split "

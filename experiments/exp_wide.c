@@ -448,6 +448,7 @@ int main(int argc, char **argv)
              "How much faster than the binary BVH are 4- and 8-wide BVHs, single and coherent?",
              "Scenes (without --scene): the meshes, soup:tris=1000000, teapot_stadium,\n"
              "sphereflake:spheres=0, slivers; heatmaps of the first --scene.\n");
+    exp_limits(&x, MAX_SCENES, EXP_MAX_MESHES);
     if (x.scene_count) {
         const char *given[MAX_SCENES];
         scene_count = exp_scene_list(&x, given, 0, MAX_SCENES);
