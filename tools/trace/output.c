@@ -29,7 +29,7 @@ void print_csv_header(run *r)
             "build_ms_min,build_ms_max,bytes,nodes,refs,sah_cost,depth,grid_res,trace_ms,"
             "timed_passes,mrays_median,mrays_min,"
             "mrays_max,steps_per_ray,empty_per_ray,box_per_ray,prims_per_ray,"
-            "mailbox_skips_per_ray,holes,false_hits,disagreements\n");
+            "mailbox_skips_per_ray,holes,false_hits,disagreements,isa\n");
 }
 
 void print_row(const options *o, run *r, const accel_kind *kind, const accel_params *canon,
@@ -57,11 +57,12 @@ void print_row(const options *o, run *r, const accel_kind *kind, const accel_par
         /* cnt and chk are whole runs of numeric fields: spliced into the format. */
         char fmt[512];
         snprintf(fmt, sizeof fmt, "csv,%%s,%%s,%%s,%%u,%%s,%s,%%zu,%%zu,%%d,%%.4f,%%.4f,%%.4f,%%zu,"
-                 "%%llu,%%llu,%s,%%d,%s,%%.4f,%%d,%%.4f,%%.4f,%%.4f,%s,%s\n", wh, sah, res, cnt, chk);
+                 "%%llu,%%llu,%s,%%d,%s,%%.4f,%%d,%%.4f,%%.4f,%%.4f,%s,%s,%%s\n", wh, sah, res, cnt, chk);
         if (csv_row(&r->csv, fmt, kind->name, canon->spec, r->scene.name, r->scene.live_count, name,
                     t->rays->count, br->hits, o->threads, bt->median, bt->min, bt->max, st->bytes,
                     (unsigned long long)st->nodes, (unsigned long long)st->refs, st->depth,
-                    br->ms.median, br->ms.n, br->mrays.median, br->mrays.min, br->mrays.max))
+                    br->ms.median, br->ms.n, br->mrays.median, br->mrays.min, br->mrays.max,
+                    st->isa ? st->isa : ""))
             report(r, CLI_EXIT_INTERNAL, r->csv.first_bad);
         return;
     }
