@@ -173,6 +173,38 @@ TEST(tools_trace_passes_stop_at_the_budget_and_collapse_warns)
     free(out), free(err);
 }
 
+/* Brute force on a real mesh started without a word, its estimate of over
+ * an hour per pass shown only after 20 s: a pass predicted over a minute
+ * is a warning with the estimate before the work starts. trace is stopped
+ * as soon as the warning is out (its pass takes minutes). */
+TEST(tools_trace_warns_of_a_slow_pass_first)
+{
+    char *out = NULL, *err = NULL;
+    int rc = run("(bin/trace --quiet --scene soup:tris=200000 --accel brute --rays primary "
+                 "--size 512x512 2> " DIR "/slow.err & p=$!; for i in $(seq 300); do "
+                 "grep -q 'warning: brute' " DIR "/slow.err && break; sleep 0.1; done; "
+                 "kill $p; wait $p; cat " DIR "/slow.err >&2)", &out, &err);
+    (void)rc;
+    const char *w = err ? strstr(err, "trace: warning: brute on soup:tris=200000: about ") : NULL;
+    CHECKF(w != NULL, "no warning before the pass: %.400s", err ? err : "");
+    if (w) {
+        double v = 0;
+        char unit[8] = "";
+        sscanf(w + strlen("trace: warning: brute on soup:tris=200000: about "), "%lf %7s", &v, unit);
+        double s = v * (!strcmp(unit, "h") ? 3600 : !strcmp(unit, "min") ? 60 : 1);
+        CHECKF(s > 60, "the estimate %.1f %s is not over a minute", v, unit);
+        CHECKF(strstr(w, " per primary pass of 262144 rays (a probe of "),
+               "the warning names no pass: %.300s", w);
+    }
+    CHECKF(out && !strstr(out, "Mrays/s"), "the warning came after the pass: %.300s", out ? out : "");
+    free(out), free(err);
+    /* A fast structure on the same scene: no warning. */
+    rc = run("bin/trace --quiet --scene soup:tris=200000 --accel bvh --rays primary --size 64x64 "
+             "--repeat 1", &out, &err);
+    CHECKF(rc == 0 && err && !strstr(err, "warning"), "bvh: exit %d: %.300s", rc, err ? err : "");
+    free(out), free(err);
+}
+
 /* Defect 6: a user's own scene in the experiments: --scene measures exactly
  * the scenes given (.scene files too), and a scene given is never dropped
  * without an error that says so. */
@@ -203,8 +235,9 @@ TEST(tools_experiments_measure_the_scenes_given)
     expect_early_error("bin/exp_sah --out " DIR "/sah --mesh " DIR "/my.scene --mesh " DIR
                        "/my.scene --mesh " DIR "/my.scene", CLI_EXIT_USAGE,
                        "measures the first 2", 5000);
-    expect_early_error("bin/exp_binning --quick --out " DIR "/bin --scene sphere --scene tetra",
-                       CLI_EXIT_USAGE, "measures at most 1", 5000);
+    expect_early_error("bin/exp_step_cost --quick --out " DIR "/bin --scene sphere --scene tetra "
+                       "--scene sphere --scene tetra --scene sphere --scene tetra --scene sphere "
+                       "--scene tetra --scene sphere", CLI_EXIT_USAGE, "measures at most 8", 5000);
 }
 
 /* Defect 8: the smaller ones. A closing summary table, the light printed,
