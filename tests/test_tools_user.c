@@ -173,6 +173,40 @@ TEST(tools_trace_passes_stop_at_the_budget_and_collapse_warns)
     free(out), free(err);
 }
 
+/* --dump-hits F.hits with several sets wrote F.hits.primary.hits: a
+ * trailing extension is taken off before the set's name (hits, rays, the
+ * heatmap's png), and --help says so and that the heatmap is the last
+ * --accel's. One set keeps the name as given. */
+TEST(tools_trace_per_set_files_drop_the_extension)
+{
+    system("rm -rf " DIR "/sets && mkdir -p " DIR "/sets");
+    char *out = NULL, *err = NULL;
+    int rc = run("bin/trace --quiet --scene sphere --size 16x12 --repeat 1 --rays primary,shadow "
+                 "--accel bvh --accel grid --dump-hits " DIR "/sets/eye.hits --dump-rays " DIR
+                 "/sets/eye.rays --heatmap steps " DIR "/sets/heat.png", &out, &err);
+    CHECKF(rc == 0, "exit %d: %s", rc, err ? err : "");
+    static const char *const made[] = {"eye.primary.hits", "eye.shadow.hits", "eye.primary.rays",
+                                       "eye.shadow.rays", "heat.primary.png", "heat.shadow.png"};
+    for (int i = 0; i < 6; i++) {
+        char path[256];
+        snprintf(path, sizeof path, DIR "/sets/%s", made[i]);
+        CHECKF(access(path, R_OK) == 0, "%s not written", path);
+    }
+    CHECKF(out && strstr(out, "wrote " DIR "/sets/eye.primary.hits: ") &&
+           !strstr(out, "eye.hits.primary"), "the names written: %.400s", out ? out : "");
+    CHECKF(access(DIR "/sets/eye.hits.primary.hits", F_OK) != 0, "eye.hits.primary.hits written");
+    free(out), free(err);
+    rc = run("bin/trace --quiet --scene sphere --size 16x12 --repeat 1 --dump-hits " DIR
+             "/sets/one.hits", &out, NULL);
+    CHECKF(rc == 0 && access(DIR "/sets/one.hits", R_OK) == 0, "one set: exit %d, no one.hits", rc);
+    free(out);
+    rc = run("bin/trace --help", &out, NULL);
+    CHECKF(rc == 0 && out && strstr(out, "eye.hits gives") && strstr(out, "eye.primary.hits") &&
+           strstr(out, "with several --accel it holds the last"),
+           "--help says nothing of the names or the heatmap's --accel");
+    free(out);
+}
+
 /* Brute force on a real mesh started without a word, its estimate of over
  * an hour per pass shown only after 20 s: a pass predicted over a minute
  * is a warning with the estimate before the work starts. trace is stopped

@@ -94,12 +94,15 @@ static const cli_option trace_options[] = {
      OPT(check), 0, 0},
     {"--image", "F.png", "shaded image of the primary hits (.png or .ppm)", cli_string, OPT(image),
      0, 0},
-    {"--heatmap", "steps|prims F.png", "cost per pixel with a colour scale (F.<set>.png if several)",
+    {"--heatmap", "steps|prims F.png", "cost per pixel of the last --accel with a colour scale\n"
+     "(F.<set>.png if several sets; one file: with several --accel it holds the last)",
      opt_heatmap, OPT(heatmap), 0, 0},
-    {"--dump-rays", "F", "write the ray set(s) as FORMATS.md .rays (F.<set>.rays if several)",
+    {"--dump-rays", "F", "write the ray set(s) as FORMATS.md .rays (F.<set>.rays if several;\n"
+     "a trailing .rays of F is taken off first: eye.rays gives eye.primary.rays)",
      cli_string, OPT(dump_rays), 0, 0},
     {"--dump-hits", "F", "write the hits of the last accelerator, a file per set (F.<set>.hits\n"
-     "if several); shadow, ao and --occluded rays as FORMATS.md any-hit answers",
+     "if several; a trailing .hits of F is taken off first: eye.hits gives\n"
+     "eye.primary.hits); shadow, ao and --occluded rays as FORMATS.md any-hit answers",
      cli_string, OPT(dump_hits), 0, 0},
     {"--export-obj", "F", "write the scene as OBJ (spheres tessellated) and continue", cli_string,
      OPT(export_obj), 0, 0},
@@ -321,8 +324,8 @@ static int make_rays(const options *o, run *r, accel_error *err)
     for (int s = 0; !rc && o->dump_rays && s < r->set_count; s++) {
         const rays_set *rs = r->from_file ? &r->file_rays : bench_sets_get(&r->sets, r->bits[s]);
         char path[1024];
-        snprintf(path, sizeof path, r->set_count > 1 ? "%s.%s.rays" : "%s", o->dump_rays,
-                 r->set_names[s]);
+        trace_set_path(path, sizeof path, o->dump_rays, r->set_count > 1, r->set_names[s], "rays",
+                       NULL);
         rc = rays_write(path, rs->rays, rs->count, err);
         FILE *info = trace_info(o);
         if (!rc && info)

@@ -116,6 +116,27 @@ void print_summary(const options *o, const run *r)
     }
 }
 
+void trace_set_path(char *buf, size_t n, const char *base, int several, const char *set,
+                    const char *ext, const char *alt)
+{
+    if (!several) {
+        snprintf(buf, n, "%s", base);
+        return;
+    }
+    size_t len = strlen(base);
+    const char *kept = ext;
+    for (int k = 0; k < 2; k++) {
+        const char *e = k ? alt : ext;
+        size_t el = e ? strlen(e) : 0;
+        if (e && len > el + 1 && base[len - el - 1] == '.' && !strcmp(base + len - el, e) &&
+            base[len - el - 2] != '/') {
+            len -= el + 1, kept = e;
+            break;
+        }
+    }
+    snprintf(buf, n, "%.*s.%s.%s", (int)len, base, set, kept);
+}
+
 static int write_heatmap(const options *o, run *r, const set_run *t, const accel_kind *kind,
                          const char *spec, accel_error *err)
 {
@@ -127,8 +148,8 @@ static int write_heatmap(const options *o, run *r, const set_run *t, const accel
     for (size_t i = 0; i < n; i++)
         if (rs->pixel[i] < (uint32_t)(rs->width * rs->height)) v[rs->pixel[i]] += src[i];
     char path[1024];
-    snprintf(path, sizeof path, r->set_count > 1 ? "%s.%s.png" : "%s", o->heatmap[1],
-             r->set_names[t->set]);
+    trace_set_path(path, sizeof path, o->heatmap[1], r->set_count > 1, r->set_names[t->set], "png",
+                   "ppm");
     image_rgb img;
     char title[256];
     image_heat_title(title, sizeof title, spec, kind, src == t->prims);
@@ -149,7 +170,7 @@ static void dump_hits(const options *o, run *r, const set_run *t, const accel_ki
     accel_error err = {0};
     const char *name = r->set_names[t->set];
     char path[1024];
-    snprintf(path, sizeof path, r->set_count > 1 ? "%s.%s.hits" : "%s", o->dump_hits, name);
+    trace_set_path(path, sizeof path, o->dump_hits, r->set_count > 1, name, "hits", NULL);
     size_t n = t->rays->count, lost = 0;
     if (t->occl) {
         lost = trace_anyhit_answers(kind, accel, &r->scene, t->rays->rays, t->occ, n, o->threads,
