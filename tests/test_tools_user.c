@@ -207,6 +207,38 @@ TEST(tools_trace_per_set_files_drop_the_extension)
     free(out);
 }
 
+/* The README's examples wrote about 36 MB into the checkout's top, neither
+ * ignored nor tidied: every output they name (--heatmap, --image,
+ * --dump-rays, --dump-hits, --out, --export-obj) is under ex/, which git
+ * ignores. */
+TEST(tools_readme_example_outputs_ignored)
+{
+    char *readme = test_read_file("README.md", NULL);
+    CHECKF(readme != NULL, "README.md not read");
+    if (!readme) return;
+    static const char *const opts[] = {"--heatmap prims ", "--heatmap steps ", "--image ",
+                                       "--dump-rays ", "--dump-hits ", "--out ", "--export-obj "};
+    int seen = 0;
+    for (const char *line = readme; line && *line; line = strchr(line, '\n') ? strchr(line, '\n') + 1 : NULL) {
+        size_t len = strcspn(line, "\n");
+        /* Example lines: commands of bin/ tools and their continuations. */
+        int cmd = !strncmp(line, "bin/", 4) || !strncmp(line, "          --", 12);
+        for (size_t k = 0; cmd && k < sizeof opts / sizeof opts[0]; k++) {
+            for (const char *p = line; (p = strstr(p, opts[k])) && p < line + len; p++) {
+                const char *v = p + strlen(opts[k]);
+                if (*v == '`' || *v == 'F' || *v == 'D' || *v == 'P') continue; /* prose */
+                seen++;
+                CHECKF(!strncmp(v, "ex/", 3), "a README example writes outside ex/: %.*s",
+                       (int)len, line);
+            }
+        }
+    }
+    free(readme);
+    CHECKF(seen >= 6, "only %d example outputs found in README.md", seen);
+    int rc = system("git check-ignore ex/grid.png ex/frames/f_0000.png ex/eye.primary.rays > /dev/null");
+    CHECKF(rc == 0, "git does not ignore ex/ (git check-ignore: %d)", rc);
+}
+
 /* Brute force on a real mesh started without a word, its estimate of over
  * an hour per pass shown only after 20 s: a pass predicted over a minute
  * is a warning with the estimate before the work starts. trace is stopped
