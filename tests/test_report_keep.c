@@ -19,6 +19,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "experiments/svg.h"
 #include "support.h"
 
 #define T "build/test-report-keep"
@@ -188,4 +189,62 @@ TEST(report_keep_check_limits)
                   "|| { echo \"$e: exit $?\" >&2; exit 1; }; done", NULL, &err);
     CHECKF(st == 0, "an experiment's --check did not answer: %s", err ? err : "");
     free(err);
+}
+
+/* Plot colours repeated beyond 10 series (a plot holds up to
+ * SVG_MAX_SERIES): each round of 10 takes another dash pattern and marker,
+ * and past 40 other hues, so no two series of a plot look alike. */
+TEST(report_svg_series_look_distinct)
+{
+    char look[80][64];
+    for (int dashed = 0; dashed < 2; dashed++) {
+        for (int i = 0; i < 80; i++) {
+            char c[8];
+            const char *dash;
+            int marker;
+            svg_series_look(i, dashed, c, &dash, &marker);
+            CHECKF(c[0] == '#' && strlen(c) == 7, "series %d: colour '%s'", i, c);
+            CHECKF(!dashed || dash, "dashed series %d drawn solid", i);
+            snprintf(look[i], sizeof look[i], "%s|%s|%d", c, dash ? dash : "-", marker);
+            for (int j = 0; j < i; j++)
+                CHECKF(strcmp(look[i], look[j]), "series %d and %d look alike (%s)", j, i, look[i]);
+        }
+    }
+    /* A plot of SVG_MAX_SERIES lines: as many distinct strokes. */
+    svg_plot pl;
+    svg_plot_init(&pl, "many", "x", "y");
+    double x[2] = {1, 2}, y[2] = {1, 2};
+    for (int i = 0; i < SVG_MAX_SERIES; i++) {
+        char name[16];
+        snprintf(name, sizeof name, "s%d", i);
+        svg_add(&pl, name, x, y, NULL, NULL, 2, SVG_LINE | SVG_POINTS);
+    }
+    CHECK(svg_write(&pl, "build/test_plot_many.svg") == 0);
+    svg_free(&pl);
+    char *s = test_read_file("build/test_plot_many.svg", NULL);
+    char seen[SVG_MAX_SERIES][96];
+    int n = 0;
+    for (const char *p = s; p && (p = strstr(p, "<polyline ")); p++) {
+        const char *end = strstr(p, " points=");
+        if (!end || n == SVG_MAX_SERIES) break;
+        snprintf(seen[n], sizeof seen[n], "%.*s", (int)(end - p), p);
+        for (int j = 0; j < n; j++)
+            CHECKF(strcmp(seen[n], seen[j]), "two lines drawn alike: %s", seen[n]);
+        n++;
+    }
+    CHECKF(n == SVG_MAX_SERIES, "%d lines drawn of %d", n, SVG_MAX_SERIES);
+    free(s);
+}
+
+/* REPORT.md spoke of "issue 11/13", which a reader of the report cannot
+ * follow: the report and its sections refer to their own sections. */
+TEST(report_quick_no_issue_numbers)
+{
+    if (!test_quick_report()) return;
+    char *err = NULL;
+    int st = test_run(T "-issues", "grep -n -i -E 'issue[s]? *[0-9]|the issue' "
+                      "build/quick-report/*.md", NULL, &err);
+    char *out = test_read_file(T "-issues/out.txt", NULL);
+    CHECKF(st == 1, "the quick report names issues (grep: %d): %.600s", st, out ? out : "");
+    free(out), free(err);
 }
