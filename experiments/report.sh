@@ -31,7 +31,7 @@ if [ "$quick" = 1 ]; then
 else
   out=report; report=REPORT.md; flag=""; budget="full"; links="report/"
 fi
-if [ -n "$dir" ]; then out="$dir"; report="$dir/REPORT.md"; links=""; fi
+if [ -n "$dir" ]; then dir="${dir%/}"; out="$dir"; report="$dir/REPORT.md"; links=""; fi
 extra=()
 [ -n "${KINDS:-}" ] && extra+=(--kinds "$KINDS")
 for spec in ${ACCEL:-}; do extra+=(--accel "$spec"); done
@@ -79,9 +79,10 @@ if [ -n "$only" ] && [ -d "$out" ]; then cp -pR "$out"/. "$stage_out"/; rm -f "$
 published=0
 unfinished() {
   [ "$published" = 1 ] && return
-  local prev="$out/"
-  [ "$report" = "$out/REPORT.md" ] || prev="$report and $out/"
-  echo "report.sh: the run did not finish: the previous report ($prev) is as it was; the partial output is in $stage_out/" >&2
+  local prev="the previous report ($out/) is as it was"
+  [ "$report" = "$out/REPORT.md" ] || prev="the previous report ($report and $out/) is as it was"
+  [ -e "$out" ] || [ -e "$report" ] || prev="there was no previous report"
+  echo "report.sh: the run did not finish: $prev; the partial output is in $stage_out/" >&2
 }
 trap unfinished EXIT
 trap 'exit 130' INT
