@@ -3,10 +3,31 @@
 #   make test       the test suite (T=word: tests whose name contains it, e.g.
 #                   T=conformance_grid; T=--list names them; KINDS=grid,bvh: only
 #                   these accelerator kinds; a T or KINDS matching nothing fails)
-#   make report     runs every experiment and rewrites REPORT.md (QUICK=1: smoke run;
-#                   KINDS=grid,bvh: only these kinds; ACCEL="bvh:width=4 ...": add specs)
+#   make report     runs every experiment and rewrites REPORT.md and report/ once
+#                   every experiment has finished (QUICK=1: smoke run into
+#                   build/quick-report/, QUICK=0 or unset: the full run;
+#                   KINDS=grid,bvh: only these kinds; ACCEL="bvh:width=4 ...": add
+#                   specs; SCENES="my.scene mesh.off": exactly these scenes)
 #   make sanitize   the test suite under AddressSanitizer + UBSan
 #   make fuzz       libFuzzer targets for the loaders (clang)
+#   make lab        the lab (LAB.md; STEP=n checks step n), make lab-report
+#   make embree     the optional Embree reference (EMBREE_CFLAGS, EMBREE_LIBS)
+# The variables a command line may set (any other, e.g. a typo such as QUIK=1
+# or SCENE=x, is an error before any work):
+#   build:  CC CXX ARCH ARCH512 OPT CFLAGS LDLIBS BUILD BIN EMBREE_CFLAGS EMBREE_LIBS
+#   runs:   T J KINDS QUICK ACCEL SCENES STEP LAB
+# Booleans (QUICK, LAB) take 1 (on) or 0 (off; the same as unset).
+KNOWN_VARS := CC CXX ARCH ARCH512 OPT CFLAGS LDLIBS BUILD BIN EMBREE_CFLAGS EMBREE_LIBS \
+              T J KINDS QUICK ACCEL SCENES STEP LAB
+BOOL_VARS  := QUICK LAB
+# make's own variables, which a command line or a recursive make may set.
+MAKE_VARS  := MAKEFLAGS MFLAGS MAKEOVERRIDES MAKELEVEL MAKE SHELL .SHELLFLAGS
+CMDLINE_VARS := $(foreach v,$(.VARIABLES),$(if $(filter command line,$(origin $(v))),$(v)))
+UNKNOWN_VARS := $(filter-out $(KNOWN_VARS) $(MAKE_VARS),$(CMDLINE_VARS))
+ifneq ($(UNKNOWN_VARS),)
+$(error unknown variable $(UNKNOWN_VARS) on the command line; known: $(KNOWN_VARS) (the header of Makefile says what each does))
+endif
+$(foreach v,$(BOOL_VARS),$(if $(filter-out 0 1,$($(v))),$(error $(v)=$($(v)): $(v) takes 1 (on) or 0 (off))))
 CC      ?= cc
 # The baseline instruction set of every unit is AVX2 (x86-64-v3), whatever
 # the build machine; the wide BVH's kernel units (SLOW_SRC) are compiled a
@@ -32,7 +53,7 @@ endif
 # The library's sources and the backend discovery rule (shared with tests/fuzz).
 ROOT :=
 include sources.mk
-ifdef LAB
+ifeq ($(LAB),1)
 LIB_SRC     += lab/student.c lab/student_grid.c
 BASE_CFLAGS += -DGRIDBVH_LAB
 endif
@@ -152,7 +173,7 @@ test: all
 
 report: all
 	GRIDBVH_CFLAGS="$(ALL_CFLAGS)" CC="$(CC)" KINDS="$(KINDS)" ACCEL="$(ACCEL)" \
-	  SCENES="$(SCENES)" ./experiments/report.sh $(if $(QUICK),--quick,)
+	  SCENES="$(SCENES)" ./experiments/report.sh $(if $(filter 1,$(QUICK)),--quick,)
 
 bench: all
 	./experiments/bench.sh
@@ -199,7 +220,7 @@ lab:
 # experiment's own list).
 lab-report: lab
 	BIN=bin-lab GRIDBVH_CFLAGS="$(ALL_CFLAGS) -DGRIDBVH_LAB" CC="$(CC)" KINDS="$(KINDS)" \
-	  ACCEL="$(if $(ACCEL),$(ACCEL),student)" ./experiments/report.sh --dir lab/out/report $(if $(QUICK),--quick,)
+	  ACCEL="$(if $(ACCEL),$(ACCEL),student)" ./experiments/report.sh --dir lab/out/report $(if $(filter 1,$(QUICK)),--quick,)
 
 clean:
 	rm -rf build build-san bin bin-san build-lab bin-lab

@@ -439,7 +439,7 @@ void exp_anim_fps(exp_ctx *x, exp_anim *a)
                L[best_ref].spec, L[best_ref].threads, exp_fmt_est(b[0], sizeof b[0], &re, 2));
         exp_text_add(a->findings, "- Two levels against one: a frame of `%s` on %d thread%s takes "
                      "%s times one of `%s` (refit) on %d thread%s (per-frame ratios, the same "
-                     "frames; 1.3 or less was issue 41's aim).\n",
+                     "frames; 1.3 or less is the study's aim for two levels).\n",
                      L[best_two].spec, L[best_two].threads, L[best_two].threads > 1 ? "s" : "",
                      exp_fmt_est(b[0], sizeof b[0], &re, 2), L[best_ref].spec, L[best_ref].threads,
                      L[best_ref].threads > 1 ? "s" : "");

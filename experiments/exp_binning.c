@@ -334,9 +334,7 @@ int main(int argc, char **argv)
     exp_init(&x, argc, argv, "exp_binning",
              "How many bins does binned SAH need, and how many triangles does it build at 30 Hz?",
              NULL);
-    exp_mesh_room(&x, 2);
-    const char *given[1];
-    exp_scene_list(&x, given, 0, 1); /* the bins study measures one scene: the --scene one */
+    exp_limits(&x, EXP_MAX_MESHES, 2); /* the bins study measures each --scene in turn */
     exp_header(&x, "Binned SAH construction", "binned SAH builds \"a high quality BVH in little "
                "time, up to 100k triangles @ 30 Hz\"",
                "how do build time, SAH cost and trace time of binned SAH depend on the number of "
@@ -351,11 +349,12 @@ int main(int argc, char **argv)
         exp_md(&x, "\nLeft out: no `bvh` kind in this run.\n");
         exp_verdict(&x, "binned-30hz", EXP_UNTESTABLE, "-", "no bvh kind in this run");
     } else {
-        /* Bins by axes on two scenes (issue 39): two meshes, or a mesh and
-         * teapot_stadium; the --scene one alone when given. */
-        const char *bs[2];
+        /* Bins by axes on two scenes: two meshes, or a mesh and
+         * teapot_stadium; the --scene ones, each in turn, when given. */
+        const char *bs[EXP_MAX_MESHES];
         int nb = 0;
-        if (x.scene_count) bs[nb++] = x.scenes[0];
+        if (x.scene_count)
+            for (int i = 0; i < x.scene_count; i++) bs[nb++] = x.scenes[i];
         else if (x.quick) bs[nb++] = "soup:tris=5000";
         else {
             bs[nb++] = x.mesh_count ? x.meshes[0] : "teapot_stadium";

@@ -344,6 +344,7 @@ int main(int argc, char **argv)
              "Which structure reaches the lowest image error in a fixed time, and what do "
              "naive kernels trade in holes for their speed?",
              NULL);
+    exp_limits(&x, 0, EXP_MAX_MESHES);
     exp_scenes_unused(&x, "its question needs sphereflake and a sphere");
     exp_header(&x, "Error against run time", "the user's request: \"error against run time\"",
                "(a) how does the error of an ambient occlusion image fall with samples per pixel "

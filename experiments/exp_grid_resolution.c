@@ -488,6 +488,7 @@ int main(int argc, char **argv)
              "What grid resolution is best, does the cost model find it, and is it the same "
              "for every scene and every region?",
              NULL);
+    exp_limits(&x, MAX_SCENES, EXP_MAX_MESHES);
     exp_header(&x, "Grid resolution",
                "\"The optimal resolution minimizes C_step \xc2\xb7 N_steps + C_intersect \xc2\xb7 "
                "N_intersect\" and \"is scene-dependent, even region-dependent\"",

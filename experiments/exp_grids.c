@@ -105,7 +105,7 @@ static void findings(exp_ctx *x, study *st, const exp_group *g, const accel_scen
     int irr = exp_group_find(g, "irregular_grid");
     int npk = exp_group_find(g, "nested_grid:traverse=packet");
     int bpk = exp_group_find(g, "bvh:traverse=packet");
-    exp_md(x, "\nIssue 13's targets on this scene (paired ratios of the rounds above):\n");
+    exp_md(x, "\nThis section's targets on this scene (paired ratios of the rounds above):\n");
     exp_md_table(x, "comparison|ray set|ratio [95% CI]|target|outcome");
     exp_text_add(&st->findings, "- **%s**:", s->name);
     /* 1. Coherent grid traversal against the single-ray grid, primary rays. */
@@ -264,7 +264,8 @@ int main(int argc, char **argv)
              "How close do the best grids (coherent traversal, skipping, nested, irregular) come "
              "to the BVH?",
              "Scenes (without --scene): the meshes, sphereflake, teapot_stadium:n=8, tetra.\n");
-    exp_header(&x, "Grids at their best", "(not a lecture claim: issue 13's targets) coherent "
+    exp_limits(&x, EXP_MAX_MESHES, EXP_MAX_MESHES);
+    exp_header(&x, "Grids at their best", "(not a lecture claim: the study's targets, in this section's findings) coherent "
                "grid traversal >= 5x the single-ray grid on primary rays; the best grid within "
                "1.3x of `bvh` on the scanned meshes (primary, diffuse), within 2x on "
                "teapot_stadium; the irregular grid ahead of the nested grid wherever the nested "
@@ -296,7 +297,7 @@ int main(int argc, char **argv)
     study st = {0};
     exp_tally_init(&st.t, 7 * n); /* at most 7 target comparisons per scene */
     for (int i = 0; i < n; i++) measure_scene(&x, &st, scenes[i], &list);
-    exp_md(&x, "\n**Findings** (issue 13's targets; \"best single-ray grid\": the grid kind with "
+    exp_md(&x, "\n**Findings** (this section's targets; \"best single-ray grid\": the grid kind with "
                "the lowest median time on that set, packets excluded; \"the faster grid "
                "packets\": `grid:traverse=packet` or `nested_grid:traverse=packet`, whichever has "
                "the lower median time):\n\n%s",

@@ -197,7 +197,7 @@ int main(int argc, char **argv)
              "Does a nested grid beat the best regular grid on non-uniform scenes, and does it "
              "still need hand-set parameters?",
              NULL);
-    exp_mesh_room(&x, 2);
+    exp_limits(&x, 8, 2);
     exp_header(&x, "Nested grids",
                "a nested grid \"adapts to local scene complexity, but resolutions still require "
                "manual tweaking\"",

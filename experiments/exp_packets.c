@@ -134,7 +134,7 @@ int main(int argc, char **argv)
     exp_ctx x;
     exp_init(&x, argc, argv, "exp_packets",
              "Do 64-ray packets beat single rays, on coherent and on incoherent rays?", NULL);
-    exp_mesh_room(&x, 1);
+    exp_limits(&x, 8, 1);
     exp_header(&x, "Ray packets", "\"Traverse a node if any ray of the packet hits its box\" "
                "(first active ray, early in, scan; optionally a frustum test); \"BVH + ray "
                "packets = real-time performance\"",

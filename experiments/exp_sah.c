@@ -411,8 +411,8 @@ static void spatial_splits(exp_ctx *x, study *st)
     exp_sets_tiles(x, &s, MASK, st->stride, &sets);
     exp_md(x, "\n### Spatial splits where they matter: %s (%u primitives)\n\n"
               "Long thin triangles crossing the scene among small ones: an object split cannot "
-              "separate them, so their boxes overlap every node's; spatial splits cut them. Issue "
-              "11 asks `build=sbvh` to make this scene several (here: %.0f or more) times faster "
+              "separate them, so their boxes overlap every node's; spatial splits cut them. The "
+              "study asks `build=sbvh` to make this scene several (here: %.0f or more) times faster "
               "and to cost nothing measurable on the scanned meshes (their tables above).\n",
            s.name, s.live_count, SEVERAL);
     exp_group g;
@@ -533,7 +533,7 @@ int main(int argc, char **argv)
              "How much faster do SAH trees trace than median-split trees, and what does their "
              "build cost?",
              NULL);
-    exp_mesh_room(&x, 2);
+    exp_limits(&x, 12, 2);
     exp_header(&x, "The Surface Area Heuristic", "\"SAH will double performance, but "
                "construction becomes much slower\"",
                "how much faster do SAH-built BVHs trace than the lecture's pure median split "

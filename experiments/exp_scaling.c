@@ -201,6 +201,7 @@ int main(int argc, char **argv)
              "How do build time, memory and trace time grow with the triangle count, per "
              "accelerator?",
              NULL);
+    exp_limits(&x, 0, EXP_MAX_MESHES);
     exp_scenes_unused(&x, "its question needs scenes of growing size (soup, teapot_stadium)");
     /* Builds of the 256k and 1M sizes take 0.1-1 s: 0.6 s of interleaved
      * builds per configuration gives them 1-6 samples (the growth fit

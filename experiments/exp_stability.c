@@ -326,6 +326,8 @@ int main(int argc, char **argv)
     exp_init(&x, argc, argv, "exp_stability",
              "How many rays do naive and watertight kernels lose on stiff and extreme cases?",
              NULL);
+    exp_limits(&x, 0, EXP_MAX_MESHES);
+    exp_scenes_unused(&x, "its question needs its own stiff and extreme cases");
     /* The timings here only show performance cliffs (ratios of 10x and
      * more) and decide no verdict: 3 rounds in this process give their
      * interval (no replicas: 23 cases of some 24 configurations each,

@@ -441,7 +441,7 @@ int main(int argc, char **argv)
              "What do a traversal step and a primitive test cost here, per kind and ray type, "
              "and does C_step*N_steps + C_intersect*N_intersect predict trace time?",
              NULL);
-    exp_mesh_room(&x, 1);
+    exp_limits(&x, 8, 1);
     const char *scenes[8];
     int scene_count = 0;
     scenes[scene_count++] = x.quick ? "soup:tris=4000" : "soup:tris=100000";

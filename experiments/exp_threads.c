@@ -327,7 +327,7 @@ int main(int argc, char **argv)
     exp_init(&x, argc, argv, "exp_threads",
              "How do build and trace times scale with threads, and is it real-time at 800x600?",
              NULL);
-    exp_mesh_room(&x, 2);
+    exp_limits(&x, EXP_MAX_MESHES, 2);
     exp_machine mach;
     exp_machine_read(&mach);
     int max_t = x.threads_given ? x.threads : mach.logical;

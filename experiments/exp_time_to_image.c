@@ -208,7 +208,7 @@ int main(int argc, char **argv)
              "At how many rays does a slower-to-build, faster-to-trace structure overtake a "
              "faster-to-build one?",
              NULL);
-    exp_mesh_room(&x, 4);
+    exp_limits(&x, 8, 4);
     exp_header(&x, "Time to image", "\"SAH will double performance, but construction becomes "
                "much slower\": when does a slower build pay?",
                "counting build time, how many rays must be traced before a structure that is "

@@ -362,7 +362,11 @@ int main(int argc, char **argv)
     char *rest[64];
     int rest_count = 0;
     for (int i = 0; i < argc && rest_count < 63; i++) {
-        if (i + 1 < argc && !strcmp(argv[i], "--scene") && scene_count < MAX_SCENES)
+        if (i + 1 < argc && !strcmp(argv[i], "--scene") && scene_count == MAX_SCENES) {
+            fprintf(stderr, "exp_twolevel: more than %d --scene given, this experiment measures "
+                    "at most %d: none is dropped silently; give fewer\n", MAX_SCENES, MAX_SCENES);
+            return CLI_EXIT_USAGE;
+        } else if (i + 1 < argc && !strcmp(argv[i], "--scene"))
             scenes[scene_count++] = argv[++i];
         else if (i + 1 < argc && !strcmp(argv[i], "--anim"))
             anim = argv[++i];
@@ -378,6 +382,7 @@ int main(int argc, char **argv)
              "                   scene at frame 0; a .scene file works too)\n"
              "  --anim SPEC      the animated scene of parts 2 and 3, without frame=\n"
              "                   (default animated:instances=48: 100,288 triangles)\n");
+    exp_limits(&x, 0, EXP_MAX_MESHES);
     exp_scenes_unused(&x, "its questions need scenes of many meshes and an animated one "
                       "(field, animated)");
     if (!anim) anim = x.quick ? "animated:instances=8,detail=3" : "animated:instances=48";

@@ -360,7 +360,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, int 
     /* The targets: best wide single kernel per set over bvh, the best
      * coherent one over the best single, 2 threads over 1; each a row of
      * the targets table, then quoted by the findings. */
-    exp_md(x, "\nIssue 11's targets on this scene (paired ratios of the rounds above):\n");
+    exp_md(x, "\nThis section's targets on this scene (paired ratios of the rounds above):\n");
     exp_md_table(x, "comparison|ray set|ratio [95% CI]|target|outcome");
     exp_text_add(&st->findings, "- **%s**:", s.name);
     st->scenes++;
@@ -448,6 +448,7 @@ int main(int argc, char **argv)
              "How much faster than the binary BVH are 4- and 8-wide BVHs, single and coherent?",
              "Scenes (without --scene): the meshes, soup:tris=1000000, teapot_stadium,\n"
              "sphereflake:spheres=0, slivers; heatmaps of the first --scene.\n");
+    exp_limits(&x, MAX_SCENES, EXP_MAX_MESHES);
     if (x.scene_count) {
         const char *given[MAX_SCENES];
         scene_count = exp_scene_list(&x, given, 0, MAX_SCENES);
@@ -468,7 +469,7 @@ int main(int argc, char **argv)
     /* 800x600 passes of 1.4M-triangle scenes: a measured budget per
      * configuration and set, so that big scenes get fewer rounds. */
     if (!x.quick) x.set_budget_ms = 350, x.build_budget_ms = 800;
-    exp_header(&x, "Wide BVHs", "(not a lecture claim: issue 11's targets) best wide single-ray "
+    exp_header(&x, "Wide BVHs", "(not a lecture claim: the study's targets, in this section's findings) best wide single-ray "
                "kernel >= 2.8x `bvh` on primary rays and >= 3.7x on shadow and diffuse rays; "
                "coherent mode >= 1.5x the best wide single-ray kernel on primary rays; 2 threads "
                ">= 1.9x 1 thread",
@@ -497,7 +498,7 @@ int main(int argc, char **argv)
                "the lowest median time on that set; coherent compared with it in the same rounds):\n\n%s",
            exp_text_str(&st.findings));
     if (st.scenes)
-        exp_md(&x, "\nIssue 11's single-ray targets over %d scene%s: primary 2.8x met on %d (a tie "
+        exp_md(&x, "\nThis section's single-ray targets over %d scene%s: primary 2.8x met on %d (a tie "
                    "on %d), shadow 3.7x met on %d (a tie on %d), diffuse 3.7x met on %d (a tie on "
                    "%d).\n",
                st.scenes, st.scenes > 1 ? "s" : "", st.met[0], st.tie[0], st.met[1], st.tie[1],
@@ -513,7 +514,7 @@ int main(int argc, char **argv)
                         : met + tie > 0 ? EXP_PARTLY : exp_slow_verdict(&x, EXP_REFUTED);
         if (st.embree) /* the industrial kernel measured here: the claim judged against it */
             exp_verdict_num(&x, "wide-bvh", exp_judge(&st.emb), &st.emb, st.emb_scene,
-                            "issue 11's targets stand for about 1.1x the industrial kernel; "
+                            "this section's targets stand for about 1.1x the industrial kernel; "
                             "measured beside it in this run");
         else
             exp_md(&x, "\nEmbree: not measured here (make embree needs libembree-dev); the "
@@ -524,8 +525,8 @@ int main(int argc, char **argv)
                     "%d), diffuse 3.7x met on %d (a tie on %d)",
                     st.met[0], st.scenes, st.tie[0], st.met[1], st.tie[1], st.met[2], st.tie[2]);
     }
-    exp_md(&x, "\nThe targets are ratios to `bvh` standing in for the industrial CPU kernels the issue "
-               "measured on another machine; this report runs no library (the project depends on "
+    exp_md(&x, "\nThe targets are ratios to `bvh` standing in for the industrial CPU kernels measured "
+               "on another machine when the targets were set; this report runs no library (the project depends on "
                "none), so the industrial kernel itself is measured by hand on the same triangles and "
                "rays: bvh/README.md, \"Against an industrial kernel on the same rays\".\n");
     exp_md(&x, "\nBuilds: each tree built in its own interleaved rounds (3 for builds that take "

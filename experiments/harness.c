@@ -112,6 +112,9 @@ static const cli_option exp_options[] = {
      opt_mesh, OPT(meshes), 0, 0},
     {"--no-meshes", NULL, "no default meshes (the --mesh ones stay)", cli_flag, OPT(no_meshes),
      0, 0},
+    {"--check", NULL, "check the options and this experiment's limits on --scene and --mesh,\n"
+     "then exit (0: it would run) without any work or output (make report runs\n"
+     "every experiment so before the first one starts)", cli_flag, OPT(check), 0, 0},
     CLI_COMMON_ROWS(exp_ctx),
 };
 #define OPTION_COUNT (sizeof exp_options / sizeof exp_options[0])
@@ -188,6 +191,7 @@ void exp_init(exp_ctx *x, int argc, char **argv, const char *name, const char *q
                 "meshes; --scene %s measures exactly it\n", name, x->meshes[0], x->meshes[0]);
         exit(CLI_EXIT_USAGE);
     }
+    if (x->check) return; /* exp_limits exits: no file is written */
     if (!x->no_meshes && !x->mesh_count && !x->quick) find_default_meshes(x);
     mkdir(x->out_dir, 0777);
     char path[1024];
@@ -514,6 +518,11 @@ void exp_md(exp_ctx *x, const char *fmt, ...)
 
 void exp_header(exp_ctx *x, const char *title, const char *words, const char *question_fmt, ...)
 {
+    if (x->check || !x->limits_checked) {
+        /* A programming error: --check would run the whole experiment. */
+        fprintf(stderr, "%s: internal: no exp_limits before the section's header\n", x->name);
+        exit(CLI_EXIT_INTERNAL);
+    }
     exp_md(x, "## %s (%s)\n\n**Question:** ", title, x->name);
     va_list ap;
     va_start(ap, question_fmt);
@@ -531,14 +540,26 @@ void exp_md_table(exp_ctx *x, const char *cols)
     exp_md(x, "\n");
 }
 
+static void scene_room(const exp_ctx *x, int max)
+{
+    if (x->scene_count <= max) return;
+    fprintf(stderr, "%s: %d --scene given, this experiment measures at most %d: none is "
+            "dropped silently; give fewer\n", x->name, x->scene_count, max);
+    exit(CLI_EXIT_USAGE);
+}
+
+void exp_limits(exp_ctx *x, int max_scenes, int max_meshes)
+{
+    if (max_scenes > 0) scene_room(x, max_scenes);
+    exp_mesh_room(x, max_meshes);
+    x->limits_checked = 1;
+    if (x->check) exit(CLI_EXIT_OK);
+}
+
 int exp_scene_list(exp_ctx *x, const char **list, int n, int max)
 {
     if (!x->scene_count) return n;
-    if (x->scene_count > max) {
-        fprintf(stderr, "%s: %d --scene given, this experiment measures at most %d: none is "
-                "dropped silently; give fewer\n", x->name, x->scene_count, max);
-        exit(CLI_EXIT_USAGE);
-    }
+    scene_room(x, max);
     for (int i = 0; i < x->scene_count; i++) list[i] = x->scenes[i];
     return x->scene_count;
 }

@@ -82,6 +82,8 @@ typedef struct {
     int mesh_count;
     int meshes_given;     /* the meshes came from --mesh (not the default folder) */
     int no_meshes, quiet, help;
+    int check;            /* --check: the options and limits only (exp_limits exits 0) */
+    int limits_checked;   /* exp_limits ran (exp_header refuses --check without it) */
     double progress_after; /* seconds */
     image_heat_scale heat_scale; /* --heat-scale: colours of exp_heatmap images */
     FILE *md;
@@ -126,6 +128,12 @@ void exp_md_table(exp_ctx *x, const char *cols);
  * `max` is the loop's room: more --scene than that is an error (exit 2)
  * naming the limit, never a silent drop. Returns the new count. */
 int exp_scene_list(exp_ctx *x, const char **list, int n, int max);
+/* The experiment's limits, declared right after exp_init and before any
+ * work: at most max_scenes --scene (0: the experiment does not measure
+ * --scene; exp_scenes_unused says so) and max_meshes --mesh; more is an
+ * error (exit 2) naming the limit. With --check, exits 0 here: make report
+ * checks every experiment so before the first one starts. */
+void exp_limits(exp_ctx *x, int max_scenes, int max_meshes);
 /* For an experiment whose question fixes its own scenes: with --scene, a
  * line on stderr and in the section says that they are not measured here. */
 void exp_scenes_unused(exp_ctx *x, const char *why);

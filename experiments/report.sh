@@ -31,36 +31,63 @@ if [ "$quick" = 1 ]; then
 else
   out=report; report=REPORT.md; flag=""; budget="full"; links="report/"
 fi
-if [ -n "$dir" ]; then out="$dir"; report="$dir/REPORT.md"; links=""; fi
+if [ -n "$dir" ]; then dir="${dir%/}"; out="$dir"; report="$dir/REPORT.md"; links=""; fi
 extra=()
 [ -n "${KINDS:-}" ] && extra+=(--kinds "$KINDS")
 for spec in ${ACCEL:-}; do extra+=(--accel "$spec"); done
 for scene in ${SCENES:-}; do extra+=(--scene "$scene"); done
-# The choices are checked before anything is removed or run: an unknown kind
-# in KINDS or a bad ACCEL spec is a usage error (exit 2), never a green
-# report without them. An experiment checks every option before --help.
-for e in exp_step_cost exp_sah; do
-  if [ -x "$bin/$e" ]; then
-    st=0
-    "$bin/$e" $flag "${extra[@]}" --help > /dev/null || st=$?
-    [ "$st" = 0 ] || exit "$st"
-    break
-  fi
-done
-mkdir -p "$out"
-# A whole run owns $out: it starts clean (no section of an earlier run
-# survives), and what the run did not write is removed at its end (an old
-# plot no section names); --only keeps the others. Never a source folder.
-owned=1
-[ -e "$out/Makefile" ] || [ -e "$out/.git" ] || [ -e "$out/sources.mk" ] && owned=0
-stamp="$out/.report-start"
-if [ -z "$only" ] && [ "$owned" = 1 ]; then
-  rm -f "$out"/*.md "$out"/*.csv "$out"/*.svg "$out"/*.gp
-  touch "$stamp"
-fi
-read -r load_start _ < /proc/loadavg || load_start="?"
 # Experiments in the order the report reads them.
 order="exp_step_cost exp_grid_resolution exp_sah exp_binning exp_grids exp_nested_grid exp_packets exp_wide exp_threads exp_twolevel exp_scaling exp_error_time exp_time_to_image exp_stability"
+if [ -n "$only" ] && ! printf ' %s ' $order | grep -q " $only "; then
+  echo "report.sh: --only $only: not an experiment; known: $order" >&2; exit 2
+fi
+# Every experiment checks the choices before any work (--check: its options
+# and its limits on --scene and --mesh, no output): an unknown kind in KINDS,
+# a bad ACCEL spec or more scenes than an experiment measures is a usage
+# error (exit 2) before the first experiment starts, never a failure twenty
+# minutes in nor a green report without them.
+for e in $order; do
+  [ -x "$bin/$e" ] || continue
+  if [ -n "$only" ] && [ "$only" != "$e" ]; then continue; fi
+  st=0
+  "$bin/$e" $flag --check "${extra[@]}" || st=$?
+  if [ "$st" != 0 ]; then
+    echo "report.sh: $e refuses these choices (above): nothing was run; the previous report is as it was" >&2
+    exit "$st"
+  fi
+done
+# The run writes into a fresh folder and replaces the previous report (the
+# sections folder $out and $report) only when every experiment has finished:
+# a failed or interrupted run leaves the previous one byte for byte as it was
+# and says where its partial output is. The folder is replaced whole, so no
+# file of an earlier run survives (an old plot no section names); --only
+# starts from a copy of the previous sections. Never a source folder.
+out="${out%/}"
+if [ -e "$out/Makefile" ] || [ -e "$out/.git" ] || [ -e "$out/sources.mk" ]; then
+  echo "report.sh: $out holds sources: the report replaces its folder whole; give a folder of its own" >&2
+  exit 2
+fi
+if [ "$report" = "$out/REPORT.md" ]; then
+  stage="$out.partial"; stage_out="$stage"; stage_report="$stage/REPORT.md"
+else
+  mkdir -p build
+  stage="build/$(basename "$out").partial"; stage_out="$stage/$(basename "$out")"; stage_report="$stage/$(basename "$report")"
+fi
+rm -rf "$stage"
+mkdir -p "$stage_out"
+if [ -n "$only" ] && [ -d "$out" ]; then cp -pR "$out"/. "$stage_out"/; rm -f "$stage_out/$only".*; fi
+published=0
+unfinished() {
+  [ "$published" = 1 ] && return
+  local prev="the previous report ($out/) is as it was"
+  [ "$report" = "$out/REPORT.md" ] || prev="the previous report ($report and $out/) is as it was"
+  [ -e "$out" ] || [ -e "$report" ] || prev="there was no previous report"
+  echo "report.sh: the run did not finish: $prev; the partial output is in $stage_out/" >&2
+}
+trap unfinished EXIT
+trap 'exit 130' INT
+trap 'exit 143' TERM
+read -r load_start _ < /proc/loadavg || load_start="?"
 start=$(date +%s)
 ran=()
 times=""   # each experiment's own wall time, for the run record
@@ -70,7 +97,7 @@ for e in $order; do
   if [ -n "$only" ] && [ "$only" != "$e" ]; then continue; fi
   echo "== $e" >&2
   t0=$(date +%s)
-  if ! "$bin/$e" $flag --out "$out" "${extra[@]}"; then
+  if ! "$bin/$e" $flag --out "$stage_out" "${extra[@]}"; then
     echo "report.sh: $e failed" >&2
     exit 1
   fi
@@ -86,7 +113,7 @@ if [ -n "$only" ]; then
   # One section rerun: the report is assembled from every section in $out,
   # the others as an earlier run left them (their verdicts still count).
   ran=()
-  for e in $order; do [ -f "$out/$e.md" ] && ran+=("$e"); done
+  for e in $order; do [ -f "$stage_out/$e.md" ] && ran+=("$e"); done
   note="; --only $only: the other sections are kept from an earlier run"
 fi
 commit=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
@@ -94,15 +121,19 @@ dirty=$(git status --porcelain --untracked-files=no 2>/dev/null | grep -v -e ' R
 [ -n "$dirty" ] && commit="$commit (with uncommitted changes)"
 commit="$commit, $(git log -1 --format='%cd' --date=format:'%Y-%m-%d %H:%M' 2>/dev/null || true)"
 cc_version=$(${CC:-cc} --version 2>/dev/null | head -1)
-"$bin/mkreport" --out "$out" --report "$report" --links "$links" --budget "$budget" \
+"$bin/mkreport" --out "$stage_out" --report "$stage_report" --links "$links" --budget "$budget" \
   --commit "$commit" --flags "${GRIDBVH_CFLAGS:-see Makefile} (driver: $cc_version)" \
   --run "$((end - start)) s; per experiment: $times (sum $sum s)$note${KINDS:+; KINDS=$KINDS}${ACCEL:+; ACCEL=$ACCEL}${SCENES:+; SCENES=$SCENES}" \
   --load "$load_start (1 minute) before the first experiment, $load_end after the last" \
   "${ran[@]}"
-if [ -f "$stamp" ]; then
-  # Files older than the run's start were not written by it.
-  find "$out" -maxdepth 1 -type f ! -newer "$stamp" ! -name .report-start -print |
-    while read -r f; do echo "report.sh: removed $f (not written by this run)" >&2; rm -f "$f"; done
-  rm -f "$stamp"
-fi
+# Every experiment finished and the report is assembled: the new report
+# replaces the previous one (renames; the previous folder goes last).
+old="$stage.previous"
+rm -rf "$old"
+[ -e "$out" ] && mv "$out" "$old"
+mkdir -p "$(dirname "$out")"
+mv "$stage_out" "$out"
+[ "$stage_report" = "$stage_out/REPORT.md" ] || mv "$stage_report" "$report"
+published=1
+rm -rf "$old" "$stage"
 echo "report.sh: wrote $report in $((end - start)) s" >&2

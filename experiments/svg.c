@@ -19,6 +19,38 @@
 static const char *const palette[] = {"#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd",
                                       "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf"};
 
+void svg_series_look(int i, int dashed, char colour[8], const char **dash, int *marker)
+{
+    static const char *const solid_dash[4] = {NULL, "2 3", "9 3 2 3", "1 4"};
+    static const char *const dashed_dash[4] = {"6 4", "6 3 2 3 2 3", "12 4", "3 6"};
+    int np = (int)(sizeof palette / sizeof palette[0]), round = i / np;
+    if (round < 4) {
+        snprintf(colour, 8, "%s", palette[i % np]);
+    } else { /* past 40 series: hues around the circle by the golden angle (HSV, s 0.65) */
+        double h = fmod(i * 137.508, 360.0) / 60.0, fr = h - floor(h);
+        double v = 200, p = v * 0.35, q = v * (1 - 0.65 * fr), t = v * (1 - 0.65 * (1 - fr));
+        double rgb[6][3] = {{v, t, p}, {q, v, p}, {p, v, t}, {p, q, v}, {t, p, v}, {v, p, q}};
+        const double *c = rgb[(int)h % 6];
+        snprintf(colour, 8, "#%02x%02x%02x", (int)c[0], (int)c[1], (int)c[2]);
+    }
+    *dash = (dashed ? dashed_dash : solid_dash)[round % 4];
+    *marker = round % 4;
+}
+
+/* A point's marker at (x, y) in colour c (svg_series_look's shapes). */
+static void marker_at(FILE *f, double x, double y, int marker, const char *c)
+{
+    if (marker == 1)
+        fprintf(f, "<rect x=\"%.1f\" y=\"%.1f\" width=\"6\" height=\"6\" fill=\"%s\"/>\n",
+                x - 3, y - 3, c);
+    else if (marker == 2)
+        fprintf(f, "<path d=\"M%.1f %.1fl4 4l-4 4l-4 -4z\" fill=\"%s\"/>\n", x, y - 4, c);
+    else if (marker == 3)
+        fprintf(f, "<path d=\"M%.1f %.1fl4 7h-8z\" fill=\"%s\"/>\n", x, y - 4, c);
+    else
+        fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"3\" fill=\"%s\"/>\n", x, y, c);
+}
+
 void svg_plot_init(svg_plot *p, const char *title, const char *xlabel, const char *ylabel)
 {
     memset(p, 0, sizeof *p);
@@ -231,10 +263,14 @@ int svg_write(const svg_plot *p, const char *path)
     fprintf(f, "%s</text>\n", ay.log ? " (log scale)" : "");
     for (int i = 0; i < p->count; i++) {
         const svg_series *s = &p->s[i];
-        const char *c = palette[i % (sizeof palette / sizeof palette[0])];
+        char c[8], dash_attr[48] = "";
+        const char *dash;
+        int marker;
+        svg_series_look(i, s->style & SVG_DASHED, c, &dash, &marker);
+        if (dash) snprintf(dash_attr, sizeof dash_attr, " stroke-dasharray=\"%s\"", dash);
         if (s->style & (SVG_LINE | SVG_DASHED)) {
             fprintf(f, "<polyline fill=\"none\" stroke=\"%s\" stroke-width=\"1.6\"%s points=\"", c,
-                    s->style & SVG_DASHED ? " stroke-dasharray=\"6 4\"" : "");
+                    dash_attr);
             for (int k = 0; k < s->n; k++)
                 if (shown(&ax, s->x[k]) && shown(&ay, s->y[k]))
                     fprintf(f, "%.1f,%.1f ", map(&ax, s->x[k]), map(&ay, s->y[k]));
@@ -248,16 +284,14 @@ int svg_write(const svg_plot *p, const char *path)
                 fprintf(f, "<path d=\"M%.1f %.1fV%.1fM%.1f %.1fh6M%.1f %.1fh6\" stroke=\"%s\"/>\n",
                         x, y0, y1, x - 3, y0, x - 3, y1, c);
             }
-            if (s->style & SVG_POINTS)
-                fprintf(f, "<circle cx=\"%.1f\" cy=\"%.1f\" r=\"3\" fill=\"%s\"/>\n", x, y, c);
+            if (s->style & SVG_POINTS) marker_at(f, x, y, marker, c);
         }
         int ly = TOP + 8 + 18 * i;
         if (s->style & (SVG_LINE | SVG_DASHED))
             fprintf(f, "<line x1=\"%d\" y1=\"%d\" x2=\"%d\" y2=\"%d\" stroke=\"%s\" "
                        "stroke-width=\"2\"%s/>\n", W - RIGHT + 12, ly, W - RIGHT + 36, ly, c,
-                    s->style & SVG_DASHED ? " stroke-dasharray=\"6 4\"" : "");
-        if (s->style & SVG_POINTS)
-            fprintf(f, "<circle cx=\"%d\" cy=\"%d\" r=\"3\" fill=\"%s\"/>\n", W - RIGHT + 24, ly, c);
+                    dash_attr);
+        if (s->style & SVG_POINTS) marker_at(f, W - RIGHT + 24, ly, marker, c);
         fprintf(f, "<text x=\"%d\" y=\"%d\" font-size=\"11\">", W - RIGHT + 42, ly + 4);
         char name[40];
         /* The legend has room for about 30 characters; the full name is in the section. */

@@ -63,6 +63,14 @@ static inline int svg_fit_drawable(int points, int collapsed)
 int svg_write(const svg_plot *p, const char *path);
 void svg_free(svg_plot *p);
 
+/* How series i is drawn: its colour ("#rrggbb"), its dash pattern (NULL:
+ * solid; dashed: the series has SVG_DASHED) and its marker (0 circle, 1
+ * square, 2 diamond, 3 triangle). The first 10 series take 10 colours,
+ * solid lines and circles; each later round of 10 the same colours with
+ * another dash pattern and marker, so that no two of SVG_MAX_SERIES (nor of
+ * the first 40) look alike. Exposed for the tests. */
+void svg_series_look(int i, int dashed, char colour[8], const char **dash, int *marker);
+
 /* The ticks of an axis from lo to hi: at 1-2-5 steps (linear) or decades
  * with 2 and 5 between them when the range is short (log). Returns the
  * count (at most max). Exposed for the tests. */

@@ -184,6 +184,28 @@ TEST(scene_file_from_disk)
     char want[900];
     snprintf(want, sizeof want, "%s:2: mesh gone: %s/meshes/missing.ply: cannot open", scene, dir);
     CHECKF(rc == ACCEL_ERR_IO && !strncmp(err.msg, want, strlen(want)), "got '%s'", err.msg);
+    /* A misspelt built-in scene: the file, the line and the unknown scene
+     * with the names it could be, not "unknown file format '.'". */
+    static const char *const typos[] = {"sofa:tris=300", "sopu", "cube:n=0.5x"};
+    for (int i = 0; i < 3; i++) {
+        char text[128];
+        snprintf(text, sizeof text, "mesh c cube:n=1\nmesh a %s\ninstance a\n", typos[i]);
+        test_write_file(scene, text);
+        rc = scene_create(scene, &s, &err);
+        if (i == 2) { /* a known scene with a bad value: the parameter's message */
+            CHECKF(rc != 0 && strstr(err.msg, ":2: mesh a: ") && !strstr(err.msg, "file format"),
+                   "got '%s'", err.msg);
+            continue;
+        }
+        snprintf(want, sizeof want, "%s:2: mesh a: unknown scene '%s': give a file", scene, typos[i]);
+        CHECKF(rc == ACCEL_ERR_SPEC && !strncmp(err.msg, want, strlen(want)) &&
+               strstr(err.msg, "soup"), "%s: got '%s'", typos[i], err.msg);
+    }
+    /* A file without an extension says so. */
+    test_write_file(scene, "mesh a meshes/quad\n");
+    rc = scene_create(scene, &s, &err);
+    CHECKF(rc == ACCEL_ERR_SPEC && strstr(err.msg, ":1: mesh a: ") &&
+           strstr(err.msg, "meshes/quad: no file extension (accepted: .obj"), "got '%s'", err.msg);
     test_remove_dir(dir);
 }
 

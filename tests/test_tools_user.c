@@ -173,6 +173,104 @@ TEST(tools_trace_passes_stop_at_the_budget_and_collapse_warns)
     free(out), free(err);
 }
 
+/* --dump-hits F.hits with several sets wrote F.hits.primary.hits: a
+ * trailing extension is taken off before the set's name (hits, rays, the
+ * heatmap's png), and --help says so and that the heatmap is the last
+ * --accel's. One set keeps the name as given. */
+TEST(tools_trace_per_set_files_drop_the_extension)
+{
+    system("rm -rf " DIR "/sets && mkdir -p " DIR "/sets");
+    char *out = NULL, *err = NULL;
+    int rc = run("bin/trace --quiet --scene sphere --size 16x12 --repeat 1 --rays primary,shadow "
+                 "--accel bvh --accel grid --dump-hits " DIR "/sets/eye.hits --dump-rays " DIR
+                 "/sets/eye.rays --heatmap steps " DIR "/sets/heat.png", &out, &err);
+    CHECKF(rc == 0, "exit %d: %s", rc, err ? err : "");
+    static const char *const made[] = {"eye.primary.hits", "eye.shadow.hits", "eye.primary.rays",
+                                       "eye.shadow.rays", "heat.primary.png", "heat.shadow.png"};
+    for (int i = 0; i < 6; i++) {
+        char path[256];
+        snprintf(path, sizeof path, DIR "/sets/%s", made[i]);
+        CHECKF(access(path, R_OK) == 0, "%s not written", path);
+    }
+    CHECKF(out && strstr(out, "wrote " DIR "/sets/eye.primary.hits: ") &&
+           !strstr(out, "eye.hits.primary"), "the names written: %.400s", out ? out : "");
+    CHECKF(access(DIR "/sets/eye.hits.primary.hits", F_OK) != 0, "eye.hits.primary.hits written");
+    free(out), free(err);
+    rc = run("bin/trace --quiet --scene sphere --size 16x12 --repeat 1 --dump-hits " DIR
+             "/sets/one.hits", &out, NULL);
+    CHECKF(rc == 0 && access(DIR "/sets/one.hits", R_OK) == 0, "one set: exit %d, no one.hits", rc);
+    free(out);
+    rc = run("bin/trace --help", &out, NULL);
+    CHECKF(rc == 0 && out && strstr(out, "eye.hits gives") && strstr(out, "eye.primary.hits") &&
+           strstr(out, "with several --accel it holds the last"),
+           "--help says nothing of the names or the heatmap's --accel");
+    free(out);
+}
+
+/* The README's examples wrote about 36 MB into the checkout's top, neither
+ * ignored nor tidied: every output they name (--heatmap, --image,
+ * --dump-rays, --dump-hits, --out, --export-obj) is under ex/, which git
+ * ignores. */
+TEST(tools_readme_example_outputs_ignored)
+{
+    char *readme = test_read_file("README.md", NULL);
+    CHECKF(readme != NULL, "README.md not read");
+    if (!readme) return;
+    static const char *const opts[] = {"--heatmap prims ", "--heatmap steps ", "--image ",
+                                       "--dump-rays ", "--dump-hits ", "--out ", "--export-obj "};
+    int seen = 0;
+    for (const char *line = readme; line && *line; line = strchr(line, '\n') ? strchr(line, '\n') + 1 : NULL) {
+        size_t len = strcspn(line, "\n");
+        /* Example lines: commands of bin/ tools and their continuations. */
+        int cmd = !strncmp(line, "bin/", 4) || !strncmp(line, "          --", 12);
+        for (size_t k = 0; cmd && k < sizeof opts / sizeof opts[0]; k++) {
+            for (const char *p = line; (p = strstr(p, opts[k])) && p < line + len; p++) {
+                const char *v = p + strlen(opts[k]);
+                if (*v == '`' || *v == 'F' || *v == 'D' || *v == 'P') continue; /* prose */
+                seen++;
+                CHECKF(!strncmp(v, "ex/", 3), "a README example writes outside ex/: %.*s",
+                       (int)len, line);
+            }
+        }
+    }
+    free(readme);
+    CHECKF(seen >= 6, "only %d example outputs found in README.md", seen);
+    int rc = system("git check-ignore ex/grid.png ex/frames/f_0000.png ex/eye.primary.rays > /dev/null");
+    CHECKF(rc == 0, "git does not ignore ex/ (git check-ignore: %d)", rc);
+}
+
+/* Brute force on a real mesh started without a word, its estimate of over
+ * an hour per pass shown only after 20 s: a pass predicted over a minute
+ * is a warning with the estimate before the work starts. trace is stopped
+ * as soon as the warning is out (its pass takes minutes). */
+TEST(tools_trace_warns_of_a_slow_pass_first)
+{
+    char *out = NULL, *err = NULL;
+    int rc = run("(bin/trace --quiet --scene soup:tris=200000 --accel brute --rays primary "
+                 "--size 512x512 2> " DIR "/slow.err & p=$!; for i in $(seq 300); do "
+                 "grep -q 'warning: brute' " DIR "/slow.err && break; sleep 0.1; done; "
+                 "kill $p; wait $p; cat " DIR "/slow.err >&2)", &out, &err);
+    (void)rc;
+    const char *w = err ? strstr(err, "trace: warning: brute on soup:tris=200000: about ") : NULL;
+    CHECKF(w != NULL, "no warning before the pass: %.400s", err ? err : "");
+    if (w) {
+        double v = 0;
+        char unit[8] = "";
+        sscanf(w + strlen("trace: warning: brute on soup:tris=200000: about "), "%lf %7s", &v, unit);
+        double s = v * (!strcmp(unit, "h") ? 3600 : !strcmp(unit, "min") ? 60 : 1);
+        CHECKF(s > 60, "the estimate %.1f %s is not over a minute", v, unit);
+        CHECKF(strstr(w, " per primary pass of 262144 rays (a probe of "),
+               "the warning names no pass: %.300s", w);
+    }
+    CHECKF(out && !strstr(out, "Mrays/s"), "the warning came after the pass: %.300s", out ? out : "");
+    free(out), free(err);
+    /* A fast structure on the same scene: no warning. */
+    rc = run("bin/trace --quiet --scene soup:tris=200000 --accel bvh --rays primary --size 64x64 "
+             "--repeat 1", &out, &err);
+    CHECKF(rc == 0 && err && !strstr(err, "warning"), "bvh: exit %d: %.300s", rc, err ? err : "");
+    free(out), free(err);
+}
+
 /* Defect 6: a user's own scene in the experiments: --scene measures exactly
  * the scenes given (.scene files too), and a scene given is never dropped
  * without an error that says so. */
@@ -203,8 +301,9 @@ TEST(tools_experiments_measure_the_scenes_given)
     expect_early_error("bin/exp_sah --out " DIR "/sah --mesh " DIR "/my.scene --mesh " DIR
                        "/my.scene --mesh " DIR "/my.scene", CLI_EXIT_USAGE,
                        "measures the first 2", 5000);
-    expect_early_error("bin/exp_binning --quick --out " DIR "/bin --scene sphere --scene tetra",
-                       CLI_EXIT_USAGE, "measures at most 1", 5000);
+    expect_early_error("bin/exp_step_cost --quick --out " DIR "/bin --scene sphere --scene tetra "
+                       "--scene sphere --scene tetra --scene sphere --scene tetra --scene sphere "
+                       "--scene tetra --scene sphere", CLI_EXIT_USAGE, "measures at most 8", 5000);
 }
 
 /* Defect 8: the smaller ones. A closing summary table, the light printed,

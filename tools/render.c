@@ -8,7 +8,8 @@
  *   render --accel instanced --update refit --out frames/f   (writes frames/f_0000.png ...)
  *
  * Per frame: make the frame's scene (a built-in with a `frame` parameter:
- * the tool appends frame=N), bring the structure to it (--update refit or
+ * the tool appends frame=N; a still, any other scene, is made once and
+ * kept), bring the structure to it (--update refit or
  * rebuild: the kind's own update when it has one, bottom levels refit or
  * rebuilt and the top level rebuilt; --update full or a kind without one:
  * a new build), trace the primary rays and the shadow rays of their hits,
@@ -46,7 +47,8 @@ static void usage(FILE *f)
             "Renders the frames of an animated scene; reports per-frame times and frames/s.\n\n"
             "  --scene SPEC      built-in scene (default animated), mesh or .scene file;\n"
             "                    a scene with a frame parameter is animated (frame=N is\n"
-            "                    appended per frame), any other renders as a still\n"
+            "                    appended per frame), any other renders as a still: made\n"
+            "                    once and kept, the structure updated each frame\n"
             "  --accel SPEC      accelerator (default instanced)\n"
             "  --update MODE     refit | rebuild | full (default refit): refit or rebuild the\n"
             "                    changed meshes and the top level through the kind's update, or\n"
@@ -137,32 +139,37 @@ static int parse(int argc, char **argv, options *o)
             return CLI_EXIT_USAGE;
         }
         i++;
-        int bad = 0;
+        /* A bad value names what the option takes, as trace's messages do. */
+        const char *expect = NULL;
         if (!strcmp(a, "--scene")) o->scene = v;
         else if (!strcmp(a, "--accel")) o->accel = v;
         else if (!strcmp(a, "--out")) o->out = v;
-        else if (!strcmp(a, "--frames")) bad = !whole(v, 1, 100000, &o->frames);
-        else if (!strcmp(a, "--first")) bad = !whole(v, 0, 100000000, &o->first);
-        else if (!strcmp(a, "--step")) bad = !whole(v, 1, 100000000, &o->step);
-        else if (!strcmp(a, "--threads")) bad = !whole(v, 1, 256, &o->threads);
-        else if (!strcmp(a, "--size")) {
+        else if (!strcmp(a, "--frames")) {
+            if (!whole(v, 1, 100000, &o->frames)) expect = "a whole number in 1..100000";
+        } else if (!strcmp(a, "--first")) {
+            if (!whole(v, 0, 100000000, &o->first)) expect = "a whole number in 0..100000000";
+        } else if (!strcmp(a, "--step")) {
+            if (!whole(v, 1, 100000000, &o->step)) expect = "a whole number in 1..100000000";
+        } else if (!strcmp(a, "--threads")) {
+            if (!whole(v, 1, 256, &o->threads)) expect = "a whole number in 1..256";
+        } else if (!strcmp(a, "--size")) {
             char w[32], *x = strchr(v, 'x');
             size_t wl = x ? (size_t)(x - v) : 0;
-            bad = !x || wl == 0 || wl >= sizeof w;
+            int bad = !x || wl == 0 || wl >= sizeof w;
             if (!bad) {
                 memcpy(w, v, wl), w[wl] = 0;
                 bad = !whole(w, 1, 16384, &o->width) || !whole(x + 1, 1, 16384, &o->height);
             }
-        }
-        else if (!strcmp(a, "--update")) {
+            if (bad) expect = "WxH with 1 <= W, H <= 16384";
+        } else if (!strcmp(a, "--update")) {
             o->mode = !strcmp(v, "refit") ? 0 : !strcmp(v, "rebuild") ? 1 : !strcmp(v, "full") ? 2 : -1;
-            bad = o->mode < 0;
+            if (o->mode < 0) expect = "refit, rebuild or full";
         } else {
             fprintf(stderr, "render: unknown option %s (see --help)\n", a);
             return CLI_EXIT_USAGE;
         }
-        if (bad) {
-            fprintf(stderr, "render: bad value for %s: %s\n", a, v);
+        if (expect) {
+            fprintf(stderr, "render: %s %s: expected %s\n", a, v, expect);
             return CLI_EXIT_USAGE;
         }
     }
@@ -238,7 +245,7 @@ int main(int argc, char **argv)
     double scene_ms = accel_now_ms() - t;
     /* The last frame is made once here, so that a range the scene refuses
      * fails before any work instead of after the frames before it. */
-    if (o.frames > 1) {
+    if (o.frames > 1 && !o.still) {
         if (make_frame(&o, o.last, &slot[1], &err)) {
             fprintf(stderr, "render: frame %d, the last one: %s\n", o.last, err.msg);
             scene_free(&slot[0]);
@@ -259,7 +266,8 @@ int main(int argc, char **argv)
            o.accel, o.width, o.height, o.threads, mode_name[mode], slot[0].tri_count,
            slot[0].instances ? slot[0].instances->instance_count : 0);
     if (o.still)
-        printf("%s has no frame parameter: a still, every frame the same scene\n", o.scene);
+        printf("%s has no frame parameter: a still, made once and kept (scene_ms 0 after frame "
+               "0); the structure is still brought to it each frame (--update)\n", o.scene);
     printf("frame 0 build %.2f ms, %zu bytes\n", st.ms, st.bytes);
     rays_set prim = {0};
     if (rays_primary(&slot[0].camera, o.width, o.height, &prim, &err)) {
@@ -282,11 +290,16 @@ int main(int argc, char **argv)
         int frame = o.first + f * o.step;
         double bottom_ms = 0, top_ms = 0;
         if (f > 0) {
-            t = accel_now_ms();
-            accel_scene *next = &slot[1 - cur];
-            rc = make_frame(&o, frame, next, &err);
-            if (rc) break;
-            scene_ms = accel_now_ms() - t;
+            /* A still is kept: nothing moves, so nothing is made (its frames
+             * per second with the scene making are those of the renderer). */
+            accel_scene *next = o.still ? &slot[cur] : &slot[1 - cur];
+            scene_ms = 0;
+            if (!o.still) {
+                t = accel_now_ms();
+                rc = make_frame(&o, frame, next, &err);
+                if (rc) break;
+                scene_ms = accel_now_ms() - t;
+            }
             if (mode < 2) {
                 accel_update_stats us;
                 rc = kind->update(accel, next, mode == 0, &us, &err);
@@ -296,8 +309,10 @@ int main(int argc, char **argv)
                 rc = accel_build_spec(o.accel, next, o.threads, &kind, &accel, &st, &err);
                 top_ms = st.ms;
             }
-            scene_free(&slot[cur]);
-            cur = 1 - cur;
+            if (!o.still) {
+                scene_free(&slot[cur]);
+                cur = 1 - cur;
+            }
             if (rc) break;
         }
         const accel_scene *s = &slot[cur];

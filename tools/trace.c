@@ -94,12 +94,15 @@ static const cli_option trace_options[] = {
      OPT(check), 0, 0},
     {"--image", "F.png", "shaded image of the primary hits (.png or .ppm)", cli_string, OPT(image),
      0, 0},
-    {"--heatmap", "steps|prims F.png", "cost per pixel with a colour scale (F.<set>.png if several)",
+    {"--heatmap", "steps|prims F.png", "cost per pixel of the last --accel with a colour scale\n"
+     "(F.<set>.png if several sets; one file: with several --accel it holds the last)",
      opt_heatmap, OPT(heatmap), 0, 0},
-    {"--dump-rays", "F", "write the ray set(s) as FORMATS.md .rays (F.<set>.rays if several)",
+    {"--dump-rays", "F", "write the ray set(s) as FORMATS.md .rays (F.<set>.rays if several;\n"
+     "a trailing .rays of F is taken off first: eye.rays gives eye.primary.rays)",
      cli_string, OPT(dump_rays), 0, 0},
     {"--dump-hits", "F", "write the hits of the last accelerator, a file per set (F.<set>.hits\n"
-     "if several); shadow, ao and --occluded rays as FORMATS.md any-hit answers",
+     "if several; a trailing .hits of F is taken off first: eye.hits gives\n"
+     "eye.primary.hits); shadow, ao and --occluded rays as FORMATS.md any-hit answers",
      cli_string, OPT(dump_hits), 0, 0},
     {"--export-obj", "F", "write the scene as OBJ (spheres tessellated) and continue", cli_string,
      OPT(export_obj), 0, 0},
@@ -321,8 +324,8 @@ static int make_rays(const options *o, run *r, accel_error *err)
     for (int s = 0; !rc && o->dump_rays && s < r->set_count; s++) {
         const rays_set *rs = r->from_file ? &r->file_rays : bench_sets_get(&r->sets, r->bits[s]);
         char path[1024];
-        snprintf(path, sizeof path, r->set_count > 1 ? "%s.%s.rays" : "%s", o->dump_rays,
-                 r->set_names[s]);
+        trace_set_path(path, sizeof path, o->dump_rays, r->set_count > 1, r->set_names[s], "rays",
+                       NULL);
         rc = rays_write(path, rs->rays, rs->count, err);
         FILE *info = trace_info(o);
         if (!rc && info)
@@ -376,6 +379,73 @@ static void warn_collapse(const run *r, const accel_kind *kind, const accel_para
                 prims, r->set_names[t->set], r->scene.live_count);
 }
 
+/* "12 s", "3.5 min", "1.2 h". */
+static const char *fmt_duration(char *buf, size_t n, double s)
+{
+    if (s < 120) snprintf(buf, n, "%.0f s", s);
+    else if (s < 7200) snprintf(buf, n, "%.1f min", s / 60);
+    else snprintf(buf, n, "%.1f h", s / 3600);
+    return buf;
+}
+
+/* Before a pass that may take minutes (brute force on a real mesh, a grid
+ * that collapses on the scene): a probe of PROBE_BLOCKS blocks of
+ * consecutive rays spread over the set (tiles stay coherent) is traced and
+ * timed, with blocks of 1, then 8, then 64 rays until the probe lasts
+ * PROBE_MS (a slow kind is found in a fraction of a second), and a
+ * predicted pass over SLOW_PASS_S is said before the work starts, with the
+ * estimate (warn_collapse says why after the pass). */
+#define PROBE_BLOCKS 8
+#define PROBE_MS 20.0
+#define SLOW_PASS_S 60.0
+static double probe_ms(const options *o, const accel_kind *kind, const void *accel,
+                       const set_run *t, size_t block)
+{
+    size_t n = PROBE_BLOCKS * block, blocks = t->rays->count / block;
+    accel_ray *rays = malloc(n * sizeof *rays);
+    accel_hit *hits = malloc(n * sizeof *hits);
+    uint8_t *occ = malloc(n);
+    accel_error err = {0};
+    bench_result br = {0};
+    int rc = !rays || !hits || !occ;
+    if (!rc) {
+        for (size_t b = 0; b < PROBE_BLOCKS; b++)
+            memcpy(rays + b * block, t->rays->rays + (b * blocks / PROBE_BLOCKS) * block,
+                   block * sizeof *rays);
+        rays_set probe = {rays, NULL, n, 0, 0};
+        bench_trace_opts to = {.threads = o->threads, .warmup = 0, .repeats = 1, .hits = hits,
+                               .occluded = occ};
+        rc = bench_trace(kind, accel, &probe, t->occl, &to, &br, &err);
+    }
+    free(rays), free(hits), free(occ);
+    return rc ? -1 : br.ms.median; /* the pass itself reports any error */
+}
+
+static void warn_slow_pass(const options *o, const run *r, const accel_kind *kind,
+                           const void *accel, const accel_params *canon, const set_run *t,
+                           int count_pass)
+{
+    size_t count = t->rays->count, n = 0;
+    double ms = -1;
+    for (size_t block = 1; block <= 64; block *= 8) {
+        if (4 * PROBE_BLOCKS * block > count) break; /* a probe is at most a quarter of the pass */
+        n = PROBE_BLOCKS * block;
+        ms = probe_ms(o, kind, accel, t, block);
+        if (ms < 0 || ms >= PROBE_MS) break;
+    }
+    if (ms <= 0) return;
+    double pass_s = ms * 1e-3 * (double)count / (double)n;
+    if (pass_s <= SLOW_PASS_S) return;
+    int passes = count_pass + o->warmup + 1;
+    char one[32], all[32];
+    fprintf(stderr, "trace: warning: %s on %s: about %s per %s pass of %zu rays (a probe of %zu "
+            "rays took %.0f ms on %d thread%s); at least %d passes follow (counted, warm-up, "
+            "timed), about %s; --size, --rays or another kind make it shorter\n",
+            canon->spec, r->scene.name, fmt_duration(one, sizeof one, pass_s),
+            r->set_names[t->set], count, n, ms, o->threads, o->threads > 1 ? "s" : "",
+            passes, fmt_duration(all, sizeof all, passes * pass_s));
+}
+
 /* Step 6: one ray set on one built accelerator. */
 static void trace_set(const options *o, run *r, int s, int last, const accel_kind *kind,
                       const void *accel, const accel_params *canon, const accel_build_stats *st,
@@ -402,6 +472,7 @@ static void trace_set(const options *o, run *r, int s, int last, const accel_kin
                            .count_pass = o->counters || heat, .hits = t.hits, .occluded = t.occ,
                            .ray_steps = t.steps, .ray_prims = t.prims,
                            .progress = r->progress, .progress_name = phase};
+    warn_slow_pass(o, r, kind, accel, canon, &t, to.count_pass);
     int rc = bench_trace(kind, accel, t.rays, t.occl, &to, &t.br, &err);
     /* A broken invariant of the counted pass leaves the timings valid: they
      * are printed, then the error is reported. */

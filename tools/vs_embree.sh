@@ -7,7 +7,7 @@
 #   MODE=occluded tools/vs_embree.sh ../shared/scenes/bunny.off
 #   MODE=packet ROUNDS=1 SIZE=64x48 tools/vs_embree.sh sphereflake:level=1
 #
-# SCENE is anything bin/trace --scene takes. Once per scene (in DIR), bin/trace
+# SCENE is anything bin/trace --scene takes. Once per scene content (in DIR), bin/trace
 # writes it as OBJ (--export-obj) and writes the ray sets (--dump-rays):
 # SIZE primary rays (default 1024x768, in bin/trace's order: 8x8 tiles) and one diffuse
 # and one shadow ray per primary hit. Both tracers then read that OBJ and
@@ -20,8 +20,8 @@
 #   stream    rtcIntersect1M vs bvh:width=8
 # Other settings: ROUNDS (6), SETS (primary,diffuse,shadow), PASSES (timed
 # passes per process, 5, after a warm-up pass), THREADS (1), QUALITY (Embree's
-# build quality, medium), DIR (build/vs_embree/<scene>-<size>), BIN (bin),
-# BUILD (build: its .flags name our compiler target), ORDER (the rays' order in
+# build quality, medium), DIR (build/vs_embree/<scene>-<hash>-<size>: the
+# scene's content hash), BIN (bin), ORDER (the rays' order in
 # the files both read: tiles8 as made, or scanline or shuffle: bin/trace's
 # --ray-order; DIR then ends in -ORDER),
 # FRESH=1 remakes the OBJ and rays, CHECK=0 skips the hit comparison,
@@ -43,7 +43,6 @@ usage() { sed -n '2,/^set -euo/p' "$0" | sed -e '$d' -e 's/^# \{0,1\}//'; exit "
 scene=$1; shift
 
 BIN=${BIN:-bin}
-BUILD=${BUILD:-build}
 MODE=${MODE:-single}
 ROUNDS=${ROUNDS:-6}
 SETS=${SETS:-primary,diffuse,shadow}
@@ -72,7 +71,26 @@ name=$(printf '%s' "$(basename -- "$scene")" | tr -c 'A-Za-z0-9_.=-' '_')
 ORDER=${ORDER:-}
 order_opt=()
 [ -n "$ORDER" ] && order_opt=(--ray-order "$ORDER")
-DIR=${DIR:-build/vs_embree/$name-$SIZE${ORDER:+-$ORDER}}
+# The cache's key: the scene's content, not its name: the spec as given and,
+# for a file, its bytes (for a .scene file also those of the mesh files it
+# names), so that another file of the same name or an edited mesh gets its
+# own OBJ and rays.
+hash() { if command -v sha256sum > /dev/null; then sha256sum | cut -c1-16; else cksum | tr ' ' -; fi; }
+scene_key() {
+    printf 'spec %s\n' "$scene"
+    [ -f "$scene" ] || return 0
+    cat -- "$scene"
+    case $scene in
+    *.scene)
+        local dir src
+        dir=$(dirname -- "$scene")
+        awk '$1 == "mesh" && NF >= 3 { print $3 }' "$scene" | while read -r src; do
+            [ -f "$dir/$src" ] && { printf '\nmesh %s\n' "$src"; cat -- "$dir/$src"; }
+        done ;;
+    esac
+}
+key=$(scene_key | hash)
+DIR=${DIR:-build/vs_embree/$name-$key-$SIZE${ORDER:+-$ORDER}}
 mkdir -p "$DIR"
 obj=$DIR/scene.obj
 if [ "${FRESH:-0}" = 1 ] || [ ! -s "$obj" ] || [ ! -s "$DIR/rays.shadow.rays" ]; then
@@ -103,28 +121,19 @@ csv_field() {
               if (col) print f[col] }'
 }
 
-# Our ISA: bin/trace's isa column if it has one, else what its build compiled for.
+# Our ISA: the one bin/trace picked at run time for the spec (its CSV's isa
+# column: avx512 or avx2 for the wide BVH, GRIDBVH_ISA=avx2 forcing the
+# baseline); empty for a kind with one set of kernels, the build's baseline.
 our_isa() {
     local isa
     isa=$(printf '%s\n' "$1" | csv_field isa | head -n 1)
-    if [ -z "$isa" ] && [ -s "$BUILD/.flags" ]; then
-        local macros
-        macros=$(eval "$(cat "$BUILD/.flags") -dM -E -x c /dev/null" 2>/dev/null || true)
-        case $macros in
-        *__AVX512F__*) isa=AVX512 ;;
-        *__AVX2__*) isa=AVX2 ;;
-        *__AVX__*) isa=AVX ;;
-        *) isa=SSE2 ;;
-        esac
-        isa="$isa (the compiler's target, from $BUILD/.flags: no isa column in trace --csv)"
-    fi
-    printf '%s' "${isa:-unknown}"
+    printf '%s' "${isa:-baseline (one set of kernels: no run-time choice)}"
 }
 
 res=$DIR/results.$MODE.txt
 : > "$res"
 IFS=, read -r -a sets <<< "$SETS"
-ours_isa=unknown embree_isa=unknown
+ours_isa=() embree_isa=unknown
 for ((r = 1; r <= ROUNDS; r++)); do
     for set in "${sets[@]}"; do
         rays=$DIR/rays.$set.rays
@@ -137,7 +146,7 @@ for ((r = 1; r <= ROUNDS; r++)); do
                 --csv --quiet "${dump[@]}" "${trace_opts[@]}")
             mr=$(printf '%s\n' "$out" | csv_field mrays_median | head -n 1)
             [ -n "$mr" ] || { echo "vs_embree: no Mrays/s from bin/trace:"; echo "$out"; exit 1; } >&2
-            [ "$r" = 1 ] && ours_isa=$(our_isa "$out")
+            [ "$r" = 1 ] && [ "$set" = "${sets[0]}" ] && ours_isa[$k]="${specs[$k]} $(our_isa "$out")"
             echo "$set $r ours$k $mr" >> "$res"
             hits=()
             [ "$r" = 1 ] && [ "$k" = 0 ] && [ "$CHECK" = 1 ] && hits=(--hits "$DIR/embree.$MODE.$set.hits")
@@ -152,7 +161,8 @@ for ((r = 1; r <= ROUNDS; r++)); do
 done
 
 echo "scene $scene, $MODE, $ROUNDS rounds of fresh processes, $THREADS thread(s), $PASSES passes each"
-echo "ISA: ours $ours_isa; Embree $embree_isa (quality $QUALITY)"
+isas=$(printf '%s, ' "${ours_isa[@]}")
+echo "ISA: ours ${isas%, } (what bin/trace picked); Embree $embree_isa (quality $QUALITY)"
 for k in "${!specs[@]}"; do
     printf '%-9s %12s %12s %8s %15s   %s\n' "ray set" "ours Mrays/s" "Embree" "ratio" "min-max/round" "ours = ${specs[$k]}"
     for set in "${sets[@]}"; do

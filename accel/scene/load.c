@@ -34,6 +34,9 @@ int scene_load_file(const char *path, accel_scene *s, accel_error *err)
         rc = scene_load_ply(path, &b, err);
     else if (!strcasecmp(ext, "off"))
         rc = scene_load_off(path, &b, err);
+    else if (!ext[0])
+        rc = accel_fail(err, ACCEL_ERR_SPEC,
+                        "%s: no file extension (accepted: .obj, .ply, .off, .scene)", path);
     else
         rc = accel_fail(err, ACCEL_ERR_SPEC,
                         "%s: unknown file format '.%s' (accepted: .obj, .ply, .off, .scene)",
@@ -147,6 +150,10 @@ static int default_load_mesh(void *ctx, const char *source, const char *dir, acc
     (void)ctx;
     const char *args;
     if (find_generator(source, &args)) return scene_create(source, mesh, err);
+    /* No '.' and no '/' before a ':' (or in the whole source): a built-in
+     * scene's name, misspelt ("sofa:tris=300"), not a file. */
+    size_t head = strcspn(source, ":");
+    if (!memchr(source, '.', head) && !memchr(source, '/', head)) return unknown_scene(source, err);
     const char *dot = strrchr(source, '.'), *slash = strrchr(source, '/');
     if (dot && (!slash || dot > slash) && !strcasecmp(dot, ".scene"))
         return accel_fail(err, ACCEL_ERR_SPEC,

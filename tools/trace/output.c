@@ -29,7 +29,7 @@ void print_csv_header(run *r)
             "build_ms_min,build_ms_max,bytes,nodes,refs,sah_cost,depth,grid_res,trace_ms,"
             "timed_passes,mrays_median,mrays_min,"
             "mrays_max,steps_per_ray,empty_per_ray,box_per_ray,prims_per_ray,"
-            "mailbox_skips_per_ray,holes,false_hits,disagreements\n");
+            "mailbox_skips_per_ray,holes,false_hits,disagreements,isa\n");
 }
 
 void print_row(const options *o, run *r, const accel_kind *kind, const accel_params *canon,
@@ -57,11 +57,12 @@ void print_row(const options *o, run *r, const accel_kind *kind, const accel_par
         /* cnt and chk are whole runs of numeric fields: spliced into the format. */
         char fmt[512];
         snprintf(fmt, sizeof fmt, "csv,%%s,%%s,%%s,%%u,%%s,%s,%%zu,%%zu,%%d,%%.4f,%%.4f,%%.4f,%%zu,"
-                 "%%llu,%%llu,%s,%%d,%s,%%.4f,%%d,%%.4f,%%.4f,%%.4f,%s,%s\n", wh, sah, res, cnt, chk);
+                 "%%llu,%%llu,%s,%%d,%s,%%.4f,%%d,%%.4f,%%.4f,%%.4f,%s,%s,%%s\n", wh, sah, res, cnt, chk);
         if (csv_row(&r->csv, fmt, kind->name, canon->spec, r->scene.name, r->scene.live_count, name,
                     t->rays->count, br->hits, o->threads, bt->median, bt->min, bt->max, st->bytes,
                     (unsigned long long)st->nodes, (unsigned long long)st->refs, st->depth,
-                    br->ms.median, br->ms.n, br->mrays.median, br->mrays.min, br->mrays.max))
+                    br->ms.median, br->ms.n, br->mrays.median, br->mrays.min, br->mrays.max,
+                    st->isa ? st->isa : ""))
             report(r, CLI_EXIT_INTERNAL, r->csv.first_bad);
         return;
     }
@@ -116,6 +117,27 @@ void print_summary(const options *o, const run *r)
     }
 }
 
+void trace_set_path(char *buf, size_t n, const char *base, int several, const char *set,
+                    const char *ext, const char *alt)
+{
+    if (!several) {
+        snprintf(buf, n, "%s", base);
+        return;
+    }
+    size_t len = strlen(base);
+    const char *kept = ext;
+    for (int k = 0; k < 2; k++) {
+        const char *e = k ? alt : ext;
+        size_t el = e ? strlen(e) : 0;
+        if (e && len > el + 1 && base[len - el - 1] == '.' && !strcmp(base + len - el, e) &&
+            base[len - el - 2] != '/') {
+            len -= el + 1, kept = e;
+            break;
+        }
+    }
+    snprintf(buf, n, "%.*s.%s.%s", (int)len, base, set, kept);
+}
+
 static int write_heatmap(const options *o, run *r, const set_run *t, const accel_kind *kind,
                          const char *spec, accel_error *err)
 {
@@ -127,8 +149,8 @@ static int write_heatmap(const options *o, run *r, const set_run *t, const accel
     for (size_t i = 0; i < n; i++)
         if (rs->pixel[i] < (uint32_t)(rs->width * rs->height)) v[rs->pixel[i]] += src[i];
     char path[1024];
-    snprintf(path, sizeof path, r->set_count > 1 ? "%s.%s.png" : "%s", o->heatmap[1],
-             r->set_names[t->set]);
+    trace_set_path(path, sizeof path, o->heatmap[1], r->set_count > 1, r->set_names[t->set], "png",
+                   "ppm");
     image_rgb img;
     char title[256];
     image_heat_title(title, sizeof title, spec, kind, src == t->prims);
@@ -149,7 +171,7 @@ static void dump_hits(const options *o, run *r, const set_run *t, const accel_ki
     accel_error err = {0};
     const char *name = r->set_names[t->set];
     char path[1024];
-    snprintf(path, sizeof path, r->set_count > 1 ? "%s.%s.hits" : "%s", o->dump_hits, name);
+    trace_set_path(path, sizeof path, o->dump_hits, r->set_count > 1, name, "hits", NULL);
     size_t n = t->rays->count, lost = 0;
     if (t->occl) {
         lost = trace_anyhit_answers(kind, accel, &r->scene, t->rays->rays, t->occ, n, o->threads,

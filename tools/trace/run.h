@@ -91,5 +91,11 @@ void print_row(const options *o, run *r, const accel_kind *kind, const accel_par
 void print_summary(const options *o, const run *r);
 void write_outputs(const options *o, run *r, const set_run *t, const accel_kind *kind,
                    const void *accel, const char *spec);
+/* The file of ray set `set` for an output option given `base`: base itself
+ * for one set; for several, base with a trailing .ext (or .alt) taken off,
+ * then .<set>.ext: --dump-hits eye.hits writes eye.primary.hits, never
+ * eye.hits.primary.hits (ext and alt without the dot; alt may be NULL). */
+void trace_set_path(char *buf, size_t n, const char *base, int several, const char *set,
+                    const char *ext, const char *alt);
 
 #endif
