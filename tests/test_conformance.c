@@ -160,14 +160,18 @@ static void check_build_invariants(test_scene *ts, const char *spec, const accel
     k2->destroy(a2);
 }
 
-/* Runs one kind variant on one prepared scene; returns the number of bad rays. */
-static size_t check_variant(test_scene *ts, const char *spec, int naive, int invariants)
+/* Runs one kind variant on one prepared scene; returns the number of bad
+ * rays. `given` (a kind outside the registry, built with its defaults)
+ * and `quiet` (count without failing) serve the mutant test below. */
+static size_t check_variant_of(test_scene *ts, const accel_kind *given, const char *spec, int naive,
+                               int invariants, int quiet)
 {
     accel_error err = {0};
-    const accel_kind *kind;
+    const accel_kind *kind = given;
     void *accel;
     accel_build_stats st;
-    if (accel_build_spec(spec, &ts->scene, 1, &kind, &accel, &st, &err)) {
+    if (given ? accel_build_kind(given, "", &ts->scene, 1, &accel, &st, &err)
+              : accel_build_spec(spec, &ts->scene, 1, &kind, &accel, &st, &err)) {
         test_fail(__FILE__, __LINE__, "%s on %s: build failed: %s", spec, ts->scene.name, err.msg);
         return 1;
     }
@@ -199,7 +203,7 @@ static size_t check_variant(test_scene *ts, const char *spec, int naive, int inv
                           "mismatches of %zu rays",
                           label, d.holes, d.false_hits, d.disagreements, d.occ_bad, n);
             CHECKF(stiff || bad * 100 <= n + 100, "%s: %zu bad rays of %zu", label, bad, n);
-        } else if (bad) {
+        } else if (bad && !quiet) {
             test_fail_diff(__FILE__, __LINE__, label, &d, t->rays.rays, t->ref, hits, occ);
         }
         bad_total += bad;
@@ -210,6 +214,11 @@ static size_t check_variant(test_scene *ts, const char *spec, int naive, int inv
     if (invariants) check_build_invariants(ts, spec, kind, accel, &st);
     kind->destroy(accel);
     return bad_total;
+}
+
+static size_t check_variant(test_scene *ts, const char *spec, int naive, int invariants)
+{
+    return check_variant_of(ts, NULL, spec, naive, invariants, 0);
 }
 
 enum { MAX_SPECS = 64 };
@@ -317,4 +326,87 @@ TEST_PER_KIND(conformance)
         test_scene *ts = scene_for(paths[i], 24);
         if (ts) run_kind(ts, kind, 0);
     }
+}
+
+/*
+ * A kernel of our own that names the wrong triangle at the right t, u, v:
+ * the 8-wide BVH with every hit's id moved to its neighbour in scene
+ * order (id ^ 1), as a padded SIMD lane or a student's "index into my own
+ * order" would. The old rule (the same t is enough) passed it; the
+ * conformance check must find it on every scene the rays hit.
+ */
+typedef struct {
+    const accel_kind *kind;
+    void *accel;
+    uint32_t prim_count;
+} mutant;
+
+static int mutant_build(const accel_scene *scene, const accel_params *params, int threads,
+                        void **out, accel_build_stats *stats, accel_error *err)
+{
+    (void)params;
+    mutant *m = calloc(1, sizeof *m);
+    if (!m) return accel_fail(err, ACCEL_ERR_NOMEM, "no memory");
+    m->prim_count = scene->prim_count;
+    if (accel_build_spec("bvh:width=8", scene, threads, &m->kind, &m->accel, stats, err)) {
+        free(m);
+        return err->code;
+    }
+    *out = m;
+    return 0;
+}
+
+static void mutant_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
+                             size_t count, accel_counters *c)
+{
+    const mutant *m = accel;
+    m->kind->intersect(m->accel, rays, hits, count, c);
+    for (size_t i = 0; i < count; i++)
+        if (hits[i].prim != ACCEL_MISS && (hits[i].prim ^ 1u) < m->prim_count) hits[i].prim ^= 1u;
+}
+
+static void mutant_occluded(const void *accel, const accel_ray *rays, uint8_t *occ, size_t count,
+                            accel_counters *c)
+{
+    const mutant *m = accel;
+    m->kind->occluded(m->accel, rays, occ, count, c);
+}
+
+static size_t mutant_memory(const void *accel)
+{
+    const mutant *m = accel;
+    return sizeof *m + m->kind->memory(m->accel);
+}
+
+static void mutant_destroy(void *accel)
+{
+    mutant *m = accel;
+    m->kind->destroy(m->accel);
+    free(m);
+}
+
+TEST(conformance_catches_a_wrong_triangle_at_the_right_t)
+{
+    static const accel_kind kind = {
+        .name = "mutant", .summary = "bvh:width=8 naming each hit's neighbour", .step_name = "nodes",
+        .build = mutant_build, .intersect = mutant_intersect, .occluded = mutant_occluded,
+        .memory = mutant_memory, .destroy = mutant_destroy};
+    int scenes = 0;
+    for (size_t g = 0; g < scene_generator_count; g++) {
+        const char *spec = scene_generators[g]->small_spec;
+        test_scene *ts = scene_for(spec ? spec : scene_generators[g]->name, 40);
+        if (!ts) continue;
+        size_t hits = 0;
+        for (int si = 0; si < ts->set_count; si++)
+            for (size_t i = 0; i < ts->sets[si].rays.count; i++)
+                hits += ts->sets[si].ref[i].prim != ACCEL_MISS;
+        size_t bad = check_variant_of(ts, &kind, "mutant", 0, 0, 1);
+        /* the unmutated kernel passes on the same rays */
+        size_t good = check_variant_of(ts, NULL, "bvh:width=8", 0, 0, 1);
+        CHECKF(good == 0, "bvh:width=8 on %s: %zu bad rays", ts->scene.name, good);
+        CHECKF(!hits || bad * 2 >= hits, "the mutant on %s: only %zu of %zu hits caught",
+               ts->scene.name, bad, hits);
+        scenes += hits > 0;
+    }
+    CHECKF(scenes >= 5, "only %d scenes with hits", scenes);
 }
