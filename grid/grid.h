@@ -36,6 +36,12 @@ extern "C" {
 
 /* Default cells per primitive, from the sweep reported in grid/README.md. */
 #define GRID_DEFAULT_LAMBDA 8
+/* The density when cells hold blocks (cells=blocks) and lambda is not
+ * given: a test of 8 triangles at once costs about what one scalar test
+ * did, so the cost model's optimum moves to coarser grids (at 256x192 on
+ * the bunny, soup:tris=100000 and the armadillo, lambda=1 gave 1.07-3.4
+ * Mrays/s against 0.78-2.2 at lambda=2 and 0.64-2.4 at lambda=4). */
+#define GRID_BLOCKS_LAMBDA 1
 
 extern const accel_kind accel_kind_grid;
 
@@ -45,7 +51,7 @@ extern const accel_kind accel_kind_grid;
 typedef struct {
     double lambda, max_mb;
     char res[ACCEL_PARAM_TEXT];
-    int overlap, mailbox, traverse, skip, skip_min, macro;
+    int overlap, mailbox, traverse, skip, skip_min, macro, cells;
 } grid_spec;
 
 /* Read-only view of a built grid (tests, tools, heatmaps). */

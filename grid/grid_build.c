@@ -18,7 +18,9 @@
 static const accel_param_def grid_params[] = {
     {.key = "lambda", .type = ACCEL_PARAM_FLOAT, .def = STR(GRID_DEFAULT_LAMBDA),
      .min = 0.001, .max = 1000.0,
-     .help = "cells per primitive: n_i = d_i*cbrt(lambda*N/V) (ignored when res is given)",
+     .help = "cells per primitive: n_i = d_i*cbrt(lambda*N/V) (ignored when res is given); "
+             "not given: " STR(GRID_DEFAULT_LAMBDA) ", or " STR(GRID_BLOCKS_LAMBDA)
+             " where the cells hold blocks",
      .offset = offsetof(grid_spec, lambda)},
     {.key = "res", .type = ACCEL_PARAM_STR, .def = "auto",
      .help = "cells per axis: auto (from lambda), N, or NxNyNz (each 1..65536)",
@@ -45,6 +47,11 @@ static const accel_param_def grid_params[] = {
     {.key = "macro", .type = ACCEL_PARAM_INT, .def = "4", .min = 2, .max = 64,
      .help = "skip=macro: cells per macro cell along each axis, a power of two",
      .offset = offsetof(grid_spec, macro)},
+    {.key = "cells", .type = ACCEL_PARAM_ENUM, .def = "blocks", .choices = "ids|blocks",
+     .help = "what a cell holds for single rays: blocks (its triangles copied 8 to a block, "
+             "tested 8 at a time by the block test the wide BVH uses) or ids (a list of "
+             "primitive ids, tested one by one); packets, spheres and tri=naive use ids",
+     .offset = offsetof(grid_spec, cells)},
 };
 
 static void grid_destroy(void *a)
@@ -52,6 +59,7 @@ static void grid_destroy(void *a)
     grid_accel *g = a;
     if (!g) return;
     grid_cells_free(&g->cells);
+    grid_cell_blocks_free(&g->blocks);
     free(g->skip_dist);
     free(g->macro_empty);
     free(g->planes);
@@ -102,6 +110,7 @@ static size_t grid_memory(const void *a)
            (size_t)(g->cells.cell_count + 1) * sizeof(uint32_t) +
            (size_t)g->cells.ref_count * sizeof(uint32_t) +
            grid_plane_count(g->frame.res) * sizeof(float) + accel_prim_store_bytes(&g->store) +
+           grid_cell_blocks_bytes(&g->blocks) +
            (g->macro ? (size_t)g->macro_res[0] * g->macro_res[1] * g->macro_res[2] : 0);
 }
 
@@ -110,7 +119,12 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
 {
     *out = NULL;
     const grid_spec *spec = ACCEL_SPEC(params, grid_spec);
-    double lambda = spec->lambda;
+    /* Blocks where the block test applies: single rays on triangles with
+     * the watertight test (packets, spheres and tri=naive test ids). */
+    int use_blocks = spec->cells == 1 && spec->traverse != 1 && !params->naive &&
+                     scene->sphere_count == 0;
+    double lambda = use_blocks && !ACCEL_GIVEN(params, grid_spec, lambda) ? GRID_BLOCKS_LAMBDA
+                                                                           : spec->lambda;
     double max_bytes = spec->max_mb * 1048576.0;
     int res[3];
     int rc = grid_parse_res(spec->res, res, err);
@@ -152,6 +166,8 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
     rc = grid_cells_build(&g->frame, &g->store.prims, NULL, g->store.prims.prim_count, mode, threads,
                           max_bytes, &g->cells, err);
     if (!rc) rc = build_skip(g, threads, max_bytes, err);
+    if (!rc && use_blocks)
+        rc = grid_cell_blocks_build(&g->cells, &g->store.prims, max_bytes, &g->blocks, err);
     if (rc) {
         grid_destroy(g);
         return rc;

@@ -42,6 +42,7 @@
 #include <stdint.h>
 
 #include "accel.h"
+#include "core/block.h"
 #include "core/prim.h"
 
 #ifdef __cplusplus
@@ -133,6 +134,26 @@ typedef struct {
     uint32_t *refs;     /* ref_count primitive ids */
     uint64_t cell_count, ref_count;
 } grid_cells;
+
+/* One grid's cells as primitive blocks (core/block.h): cell c's
+ * primitives, in the order of its references, copied 8 to a block into
+ * blocks[offsets[c] .. offsets[c+1]-1] (the last block of a cell repeats
+ * its last primitive), each lane with the reference's id. The cell visit
+ * then tests 8 triangles at once with the block test every structure
+ * shares (grid_blocks.h), as the wide BVH tests its leaves. Triangles
+ * only: a scene with spheres keeps its id lists. */
+typedef struct {
+    uint32_t *offsets;     /* cell_count + 1 */
+    accel_block8 *blocks;  /* block_count blocks, 32-byte aligned */
+    uint64_t block_count, cell_count;
+} grid_cell_blocks;
+
+/* Builds *out from cells over the triangle-only store scene s (cell ids
+ * are local ids of s); ACCEL_ERR_RANGE past max_bytes, ACCEL_ERR_NOMEM. */
+int grid_cell_blocks_build(const grid_cells *cells, const accel_scene *s, double max_bytes,
+                           grid_cell_blocks *out, accel_error *err);
+void grid_cell_blocks_free(grid_cell_blocks *b);
+size_t grid_cell_blocks_bytes(const grid_cell_blocks *b);
 
 /* In the passes below, prims lists the scene primitives to place (ids into
  * s); NULL stands for 0..prim_count-1. */

@@ -21,6 +21,9 @@ typedef struct {
     accel_prim_store store;
     grid_frame frame;
     grid_cells cells;
+    /* cells=blocks (single rays on triangles): the cells as primitive
+     * blocks for the shared block test; offsets NULL when not built. */
+    grid_cell_blocks blocks;
     float *planes;      /* storage behind frame.planes */
     int naive;          /* tri=naive */
     int mailbox;        /* mailbox=1 */

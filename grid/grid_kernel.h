@@ -17,6 +17,7 @@
 #define GRID_GRID_KERNEL_H
 
 #include "core/variant.h"
+#include "grid_blocks.h"
 #include "grid_impl.h"
 
 #ifdef __cplusplus
@@ -80,6 +81,9 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
     const uint32_t *offsets = g->cells.offsets;
     const uint32_t *refs = g->cells.refs;
     const uint64_t bound = (uint64_t)f->res[0] + f->res[1] + f->res[2] + 3;
+    /* cells=blocks: the shared block test (grid_blocks.h); built only for
+     * triangles with the watertight test, so these copies never see it. */
+    const grid_cell_blocks *blocks = !naive && !spheres && g->blocks.offsets ? &g->blocks : NULL;
     for (size_t i = 0; i < count; i++) {
         accel_ray_prep p;
         accel_hit h = accel_hit_miss();
@@ -89,7 +93,9 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
             grid_dda d;
             grid_dda_init(&d, f, &p, p.t_near);
             uint32_t mail[GRID_MAILBOX];
-            if (mailbox) grid_mailbox_clear(mail);
+            if (mailbox && !blocks) grid_mailbox_clear(mail);
+            wide_leaf_ray_8 lr; /* a few broadcasts: set always, used by blocks */
+            leaf_setup_8(&lr, &p);
             float t = p.t_far, u = 0.0f, v = 0.0f;
             /* Walk the ray through the cells. */
             for (;;) {
@@ -106,9 +112,15 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
                     if (moved) continue;
                 }
                 /* The cell's primitives, nearest hit kept (grid_core.h). */
-                if (grid_cell_hit(s, refs + k, end - k, &p, &h, &t, &u, &v, mail, &tests, &skips,
-                                  c, occ != NULL, naive, spheres, mailbox))
+                if (blocks) {
+                    if (c) tests += end - k;
+                    if (k != end && grid_cell_hit_blocks(blocks, d.cell, s->tri_count, &lr, &p,
+                                                         &h, &t, &u, &v, occ != NULL))
+                        goto done;
+                } else if (grid_cell_hit(s, refs + k, end - k, &p, &h, &t, &u, &v, mail, &tests,
+                                         &skips, c, occ != NULL, naive, spheres, mailbox)) {
                     goto done;
+                }
                 /* A hit (or the ray's end) before this cell's exit: nothing
                  * in a later cell can be nearer. */
                 if (grid_dda_exit(&d) >= t) break;

@@ -14,16 +14,16 @@
 #include "bvh/split_common.h"
 #include "bvh/bvh.h"
 #include "bvh/wide/node.h"
-#include "bvh/wide/simd.h"
+#include "core/simd.h"
 #include "scene/scene.h"
 #include "support.h"
 #include "test.h"
 
 #define WIDE_LB 4
-#include "bvh/wide/leaf.h"
+#include "core/block_test.h"
 #undef WIDE_LB
 #define WIDE_LB 8
-#include "bvh/wide/leaf.h"
+#include "core/block_test.h"
 #undef WIDE_LB
 
 static uint64_t rng = 0x9E3779B97F4A7C15ull;

@@ -348,7 +348,7 @@ static int by_class(const void *a, const void *b)
  * over its dominant one (the watertight test's shear, up to order and
  * sign): neighbours in this order are neighbours on the screen, so the
  * groups of 8 of a packet have small rectangles of shears, as a tile of
- * primary rays has, and the leaf cull (bvh/wide/leaf.h, aff_cull_rect; the
+ * primary rays has, and the leaf cull (core/block_test.h, aff_cull_rect; the
  * binary packets' aff_misses) is tried with its margins on rays through
  * vertices and edges. */
 static uint64_t shear_key(const accel_ray *r)

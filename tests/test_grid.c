@@ -253,7 +253,7 @@ TEST(grid_mailbox_counts)
         accel_error err = {0};
         h[mb] = malloc(n * sizeof *h[mb]);
         memset(&c[mb], 0, sizeof c[mb]);
-        if (accel_build_spec(mb ? "grid:res=64,mailbox=1" : "grid:res=64,mailbox=0", &s, 1, &kind,
+        if (accel_build_spec(mb ? "grid:res=64,cells=ids,mailbox=1" : "grid:res=64,cells=ids,mailbox=0", &s, 1, &kind,
                              &accel, &st, &err)) {
             test_fail(__FILE__, __LINE__, "%s", err.msg);
             return;

@@ -204,7 +204,7 @@ TEST(grid_packet_fewer_tests_than_single_rays)
     CHECK(scene_create("sphere:segments=48", &s, &err) == 0);
     rays_set r;
     CHECK(rays_primary(&s.camera, 128, 128, &r, &err) == 0);
-    const char *specs[2] = {"grid", "grid:traverse=packet"};
+    const char *specs[2] = {"grid:cells=ids", "grid:traverse=packet"}; /* packets test ids */
     accel_hit *h[2];
     accel_counters c[2];
     for (int i = 0; i < 2; i++) {
@@ -254,7 +254,7 @@ TEST(grid_packet_incoherent_packets_fall_back)
     }
     accel_hit *h[2];
     accel_counters cn[2];
-    const char *specs[2] = {"grid", "grid:traverse=packet"};
+    const char *specs[2] = {"grid:cells=ids", "grid:traverse=packet"}; /* packets test ids */
     /* the packets as given: sorted (core/coherence.h), these rays make
      * coherent packets that walk */
     const int order = accel_coherence_get();

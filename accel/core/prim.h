@@ -514,7 +514,7 @@ static inline int accel_tri_watertight_rel(const accel_ray_prep *p, const float 
  * from the double test's (its relative vertices and shear rounded once
  * each in float, about 10 roundings of 2^-24 in all, and underflow); a NaN
  * or infinity fails every comparison, so never culls. The 8-wide form is
- * bvh/wide/leaf.h's leaf_aff.
+ * core/block_test.h's leaf_aff.
  */
 #define ACCEL_AFF_REL 0x1p-16f
 #define ACCEL_AFF_ABS 0x1p-120f

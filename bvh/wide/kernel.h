@@ -6,7 +6,7 @@
  * of the interface a C++ program includes.
  *
  * A template: tables.h (for the k<width>_<row>.c units) includes
- * it once per (WIDE_NW, WIDE_LB) pair after leaf.h for WIDE_LB (4 and 4 when included alone). It defines
+ * it once per (WIDE_NW, WIDE_LB) pair after core/block_test.h for WIDE_LB (4 and 4 when included alone). It defines
  * the always-inline kernels wide_closest_<NW>_<LB> and wide_any_<NW>_<LB>
  * in the form core/variant.h's ACCEL_KERNEL_TABLE expects.
  *
@@ -37,11 +37,11 @@
 #endif
 #ifndef WIDE_LB
 #define WIDE_LB 4
-#include "leaf.h"
+#include "core/block_test.h"
 #endif
 #include "core/variant.h"
 #include "node.h"
-#include "simd.h"
+#include "core/simd.h"
 
 #define WK_CAT_(a, b, c) a##_##b##_##c
 #define WK_CAT(a, b, c) WK_CAT_(a, b, c)

@@ -1,7 +1,7 @@
 /*
  * node.h - the memory layout of the wide BVHs (`bvh:width=4|8`),
  * shared by the collapse (collapse.c) and the kernels (trace.c,
- * k*_*.c, tables.h, kernel.h, leaf.h), the walk and the refit. Internal
+ * k*_*.c, tables.h, kernel.h, core/block_test.h), the walk and the refit. Internal
  * to bvh/wide/ (the kind sees wide.h).
  *
  * A wide node holds the boxes of its up to W children in SoA form, one row
@@ -58,6 +58,7 @@
 #include <string.h>
 
 #include "bvh/bvh_node.h"
+#include "core/block.h"
 #include "core/variant.h"
 #include "wide.h"
 
@@ -77,15 +78,9 @@ typedef struct {
     uint32_t perm[4];
 } wide_node4;
 
-typedef struct {
-    float v[3][3][8];
-    uint32_t id[8];
-} wide_block8;
-
-typedef struct {
-    float v[3][3][4];
-    uint32_t id[4];
-} wide_block4;
+/* The leaf blocks are the shared primitive blocks (core/block.h). */
+typedef accel_block8 wide_block8;
+typedef accel_block4 wide_block4;
 
 /*
  * quant=1 (width 8, single rays): the node's child boxes as 8-bit offsets
@@ -132,10 +127,6 @@ static_assert(sizeof(wide_node8) == 256, "an 8-wide node is four cache lines");
 static_assert(offsetof(wide_node8, child) == 192, "child references follow the 6 box rows");
 static_assert(sizeof(wide_node4) == 128, "a 4-wide node is two cache lines");
 static_assert(offsetof(wide_node4, child) == 96, "child references follow the 6 box rows");
-static_assert(sizeof(wide_block8) == 320, "a block of 8 is 36 + 4 bytes per primitive");
-static_assert(sizeof(wide_block4) == 160, "a block of 4 is 36 + 4 bytes per primitive");
-static_assert(offsetof(wide_block8, id) == 288 && offsetof(wide_block4, id) == 144,
-               "ids follow the vertex rows");
 
 /* Child references. */
 #define WIDE_LEAF 0x80000000u
@@ -185,9 +176,7 @@ static inline void wide_block_rows(const bvh_wide *w, uint32_t k, float **v, uin
 /* One lane of a block's rows from a primitive slot (9 floats). */
 static inline void wide_put_lane(float *v, int block, int lane, const float *slot)
 {
-    for (int vtx = 0; vtx < 3; vtx++)
-        for (int axis = 0; axis < 3; axis++)
-            v[(3 * vtx + axis) * block + lane] = slot[3 * vtx + axis];
+    accel_block_put_lane(v, block, lane, slot);
 }
 
 /* The kernel tables' rows: single rays (order=octant or dist), packets,

@@ -30,7 +30,7 @@
  * Each entry also carries `last`, the last ray that hit its box (found by
  * scanning the groups from the back), and every scan stops there. At a
  * leaf, the rays `first` to `last` that hit the leaf's box (groups of 8
- * again) run the single-ray leaf test (leaf.h) on its blocks, block
+ * again) run the single-ray leaf test (core/block_test.h) on its blocks, block
  * by block (leaf_by_block: rays sharing their origin and axes share the
  * block's relative vertices). An
  * interior entry whose span last - first is below w->hybrid (spec key
@@ -52,7 +52,7 @@
 #include "kernel.h"
 #endif
 #include "node.h"
-#include "simd.h"
+#include "core/simd.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -243,7 +243,7 @@ WIDE_INLINE int PK(packet_load)(wide_packet *pk, const bvh_wide *w, const accel_
 
 /* With shared: each group's rectangle of shear constants as centre and
  * half sizes, rounded up so that it holds every valid ray's (sx, sy)
- * (aff_cull_rect, leaf.h). Made at the first leaf that culls. */
+ * (aff_cull_rect, core/block_test.h). Made at the first leaf that culls. */
 WIDE_INLINE void PK(packet_rects)(wide_packet *pk)
 {
     for (unsigned g = 0; g < WP_RAYS / 8; g++) {

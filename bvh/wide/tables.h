@@ -6,7 +6,7 @@
  * that a 2-core build spreads the forced inlining over seven units of
  * similar size instead of two large ones (trace.c dispatches).
  *
- * It instantiates the templates leaf.h (blocks of 4 and 8), kernel.h and,
+ * It instantiates the templates core/block_test.h (blocks of 4 and 8), kernel.h and,
  * for the packet row, packet.h (width WIDE_NW, blocks of 4 and 8) and
  * defines wide_row[any hit][block 8] for its row; the packet row, the
  * largest, is split once more by query (WIDE_ANY 0 or 1: one unit each)
@@ -17,10 +17,10 @@
 #include "node.h"
 
 #define WIDE_LB 4
-#include "leaf.h"
+#include "core/block_test.h"
 #undef WIDE_LB
 #define WIDE_LB 8
-#include "leaf.h"
+#include "core/block_test.h"
 #undef WIDE_LB
 
 #define WIDE_LB 4

@@ -1,7 +1,7 @@
 /*
  * trace.c - the wide BVH's batch entries: the kernel table (core/variant.h)
  * of the tree's width, row (single rays, packets, order=branchy, quant=1),
- * block size and query, each compiled from the templates leaf.h (the SIMD
+ * block size and query, each compiled from the templates core/block_test.h (the SIMD
  * watertight leaf test), kernel.h and packet.h (the traversals) by its own
  * unit k<width>_<row>.c (tables.h), once for AVX2 and once for AVX-512
  * (the tree's isa, chosen by the kind at build time: core/isa.h).

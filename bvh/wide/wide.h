@@ -3,7 +3,7 @@
  * the collapse that makes it from the binary tree, its batch entries, its
  * conservative walk and its refit. The one header of bvh/wide/ that the
  * binary tree's files include (bvh.c, the kind); the layouts (node.h) and
- * the kernel templates (kernel.h, packet.h, leaf.h, simd.h, tables.h) are
+ * the kernel templates (kernel.h, packet.h, tables.h; the block test core/block_test.h and core/simd.h) are
  * internal to bvh/wide/.
  */
 #ifndef BVH_WIDE_WIDE_H

@@ -1,5 +1,5 @@
 /*
- * simd.h - the few float-vector operations the wide BVH kernels use,
+ * simd.h - the few float-vector operations the block test and the wide BVH kernels use,
  * for 4 lanes (f4: SSE) and 8 lanes (f8: AVX2), each with a plain-C twin
  * (a struct of floats and a loop per operation) used when the compiler
  * does not target the instruction set, or with -DBVH_NO_SIMD. AVX-512
@@ -23,7 +23,7 @@
  * targets FMA, and a rounded product then a rounded sum elsewhere. Only
  * the leaf test uses them, where the error bounds of core/prim.h assume
  * the two roundings: the fused form errs less, so every bound still
- * holds (leaf.h). The slab test and everything else round every
+ * holds (block_test.h). The slab test and everything else round every
  * product before the sum, as the scalar tests do.
  */
 #ifndef BVH_WIDE_SIMD_H
@@ -233,7 +233,7 @@ WIDE_INLINE f8 f8_from_u8(const uint8_t *p)
 #endif
 
 /*
- * Lane masks of compares, for the leaf test's classes (leaf.h): kN holds
+ * Lane masks of compares, for the leaf test's classes (block_test.h): kN holds
  * one lane's truth per lane; fN_ltk / _gtk / _lek compare as fN_lt / _gt /
  * _le (ordered), kN_or / _and / _andnot (~a & b) combine, kN_bits gives
  * the bits fN_mask would, fN_blendk(a, b, m) takes b where m holds. In the

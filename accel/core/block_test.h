@@ -1,19 +1,21 @@
 /*
- * leaf.h - one ray against a leaf block of WIDE_LB (4 or 8) primitives:
+ * block_test.h - one ray against a block (core/block.h) of WIDE_LB (4 or 8)
+ * primitives, the one block test of every structure (the wide BVH's leaf
+ * blocks, the grids' cell blocks):
  * the watertight test of Woop, Benthin and Wald ("Watertight Ray/Triangle
  * Intersection", JCGT 2(1), 2013) on all lanes at once, with this project's
  * exact fallback.
  * A kernel body (C only): included by the .c files of its folder, not part
  * of the interface a C++ program includes.
  *
- * A template: tables.h includes it once per block width, with WIDE_LB
+ * A template: a kernel unit includes it once per block width, with WIDE_LB
  * defined (4 when included alone). It defines wide_leaf_ray_<LB>,
  * leaf_setup_<LB>() and leaf_block_<LB>().
  *
  * Every lane computes what accel_tri_watertight (core/prim.h) computes,
  * in the same order: the shear, the edge functions U, V, W, their error
  * bounds, the scaled distance T and its bound. Where the target has FMA,
- * each "a - b c" or "a b + c" of those is one fused operation (simd.h)
+ * each "a - b c" or "a b + c" of those is one fused operation (core/simd.h)
  * where the scalar test rounds twice: 21 vector operations fewer per
  * block. The bounds of ACCEL_EDGE_FILTER count a rounding for the product
  * and one for the sum; a fused step has only the second, so every bound
@@ -34,8 +36,8 @@
  * rule accepts).
  * Spheres (lanes with id >= tri_count) go through the scalar sphere test.
  */
-#include "node.h"
-#include "simd.h"
+#include "core/block.h"
+#include "core/simd.h"
 
 #ifndef WIDE_LB
 #define WIDE_LB 4
@@ -50,7 +52,7 @@
 #define KV(op) WIDE_K(WIDE_LB, op)
 #define WL_JOIN_(a, b) a##b
 #define WL_JOIN(a, b) WL_JOIN_(a, b)
-#define LBLOCK WL_JOIN(wide_block, WIDE_LB)
+#define LBLOCK WL_JOIN(accel_block, WIDE_LB)
 
 /* Per-ray constants of the leaf test (broadcast once per ray). */
 typedef struct {
@@ -273,7 +275,7 @@ WL(leaf_block_rel)(const LBLOCK *blk, const WL(wide_leaf_rel) *q, const WL(wide_
     LF eu = LV(fmadd)(filter, LV(fmadd)(mcx_, mby_, LV(mul)(mcy_, mbx_)), tiny);
     LF ev = LV(fmadd)(filter, LV(fmadd)(max_, mcy_, LV(mul)(may_, mcx_)), tiny);
     LF ew = LV(fmadd)(filter, LV(fmadd)(mbx_, may_, LV(mul)(mby_, max_)), tiny);
-    /* The classes as lane masks (simd.h's kN: mask registers in the
+    /* The classes as lane masks (core/simd.h's kN: mask registers in the
      * AVX-512 units, vector masks elsewhere) and as bits. */
     LK sure_neg, sure_pos, edge_ok;
     int miss, ok, unsure;
