@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "grid_core.h"
+#include "grid_blocks.h"
 
 int grid_cell_blocks_build(const grid_cells *cells, const accel_scene *s, double max_bytes,
                            grid_cell_blocks *out, accel_error *err)
@@ -60,4 +60,55 @@ size_t grid_cell_blocks_bytes(const grid_cell_blocks *b)
     if (!b->offsets) return 0;
     return (size_t)b->block_count * sizeof(accel_block8) +
            (size_t)(b->cell_count + 1) * sizeof(uint32_t);
+}
+
+int grid_list_blocks_build(const uint32_t *lists, uint64_t list_len, const accel_scene *s,
+                           double max_bytes, grid_list_blocks *out, accel_error *err)
+{
+    memset(out, 0, sizeof *out);
+    if (s->sphere_count)
+        return accel_fail(err, ACCEL_ERR_SPEC, "grid lists as blocks hold triangles only");
+    uint64_t count = 0;
+    for (uint64_t w = 1; w < list_len; w += lists[w] + 1) count += (lists[w] + 7u) / 8u;
+    double bytes = (double)count * sizeof(accel_block8) + (double)list_len * 4.0;
+    if (count >= UINT32_MAX || bytes > max_bytes)
+        return accel_fail(err, ACCEL_ERR_RANGE,
+                          "%llu list blocks (%.0f MiB) exceed the limit of %.0f MiB (max_mb, "
+                          "or cells=ids)",
+                          (unsigned long long)count, bytes / 1048576.0, max_bytes / 1048576.0);
+    out->first = calloc(list_len ? list_len : 1, sizeof *out->first);
+    out->blocks = accel_alloc_large(count ? count : 1, sizeof *out->blocks, 64);
+    if (!out->first || !out->blocks) {
+        grid_list_blocks_free(out);
+        return accel_fail(err, ACCEL_ERR_NOMEM, "out of memory for %llu list blocks",
+                          (unsigned long long)count);
+    }
+    uint32_t b = 0;
+    for (uint64_t w = 1; w < list_len; w += lists[w] + 1) {
+        out->first[w] = b;
+        const uint32_t *ids = lists + w + 1;
+        uint32_t n = lists[w];
+        for (uint32_t k = 0; k < n; k += 8, b++) {
+            const float *tris[8];
+            int lanes = n - k < 8 ? (int)(n - k) : 8;
+            for (int l = 0; l < lanes; l++) tris[l] = s->tris + 9 * (size_t)ids[k + (uint32_t)l];
+            accel_block_fill(out->blocks[b].v[0][0], out->blocks[b].id, 8, tris, ids + k, lanes);
+        }
+    }
+    out->block_count = b;
+    out->list_len = list_len;
+    return ACCEL_OK;
+}
+
+void grid_list_blocks_free(grid_list_blocks *b)
+{
+    free(b->first);
+    free(b->blocks);
+    memset(b, 0, sizeof *b);
+}
+
+size_t grid_list_blocks_bytes(const grid_list_blocks *b)
+{
+    if (!b->first) return 0;
+    return (size_t)b->block_count * sizeof(accel_block8) + (size_t)b->list_len * sizeof(uint32_t);
 }

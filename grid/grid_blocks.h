@@ -19,19 +19,20 @@
 #include "core/block_test.h"
 #undef WIDE_LB
 
-/* Cell `cell`'s blocks against the ray (lr: its leaf_setup_8); as
- * grid_cell_hit: returns 1 when an any-hit query found a hit. */
+/* Blocks [first, end) against the ray (lr: its leaf_setup_8): the running
+ * nearest hit kept as grid_cell_hit keeps it; returns 1 when an any-hit
+ * query found a hit. */
 static inline __attribute__((always_inline)) int
-grid_cell_hit_blocks(const grid_cell_blocks *b, uint32_t cell, uint32_t tri_count,
-                     const wide_leaf_ray_8 *lr, const accel_ray_prep *p, accel_hit *h, float *t,
-                     float *u, float *v, int any)
+grid_blocks_hit(const accel_block8 *blocks, uint32_t first, uint32_t end, uint32_t tri_count,
+                const wide_leaf_ray_8 *lr, const accel_ray_prep *p, accel_hit *h, float *t,
+                float *u, float *v, int any)
 {
     uint32_t id = ACCEL_MISS;
     int hit = 0;
-    for (uint32_t k = b->offsets[cell], end = b->offsets[cell + 1]; k < end; k++)
-        if (leaf_block_8(&b->blocks[k], lr, p, t, u, v, &id, tri_count, 0, 0, any)) {
+    for (uint32_t k = first; k < end; k++)
+        if (leaf_block_8(&blocks[k], lr, p, t, u, v, &id, tri_count, 0, 0, any)) {
             if (any) { /* the block test names no lane then: only "hit" counts */
-                h->prim = b->blocks[k].id[0];
+                h->prim = blocks[k].id[0];
                 return 1;
             }
             hit = 1;
@@ -39,5 +40,30 @@ grid_cell_hit_blocks(const grid_cell_blocks *b, uint32_t cell, uint32_t tri_coun
     if (hit) h->t = *t, h->u = *u, h->v = *v, h->prim = id;
     return 0;
 }
+
+/* A grid's cell `cell` (grid_cell_blocks). */
+static inline __attribute__((always_inline)) int
+grid_cell_hit_blocks(const grid_cell_blocks *b, uint32_t cell, uint32_t tri_count,
+                     const wide_leaf_ray_8 *lr, const accel_ray_prep *p, accel_hit *h, float *t,
+                     float *u, float *v, int any)
+{
+    return grid_blocks_hit(b->blocks, b->offsets[cell], b->offsets[cell + 1], tri_count, lr, p, h,
+                           t, u, v, any);
+}
+
+/* Count-prefixed id lists (lists[w] = n, then n ids: the nested grid's
+ * pool) as blocks: list w's blocks start at first[w] and number
+ * (n + 7) / 8; first[] has an entry per pool word (used at list heads
+ * only). Built by grid_list_blocks_build (grid_blocks.c). */
+typedef struct {
+    uint32_t *first;
+    accel_block8 *blocks;
+    uint64_t block_count, list_len;
+} grid_list_blocks;
+
+int grid_list_blocks_build(const uint32_t *lists, uint64_t list_len, const accel_scene *s,
+                           double max_bytes, grid_list_blocks *out, accel_error *err);
+void grid_list_blocks_free(grid_list_blocks *b);
+size_t grid_list_blocks_bytes(const grid_list_blocks *b);
 
 #endif

@@ -234,7 +234,8 @@ static const char *const grid_variants[] = {
     "lambda=0.05", "lambda=64", "overlap=bbox,mailbox=0", "reorder=0", "skip=cloud",
     "skip=cloud,res=7x1x13", "skip=cloud,lambda=64,mailbox=0", "skip=macro", "skip=macro,macro=2",
     "skip=macro,lambda=64,macro=8", "traverse=packet", "traverse=packet,mailbox=0",
-    "traverse=packet,res=128", "traverse=packet,res=7x1x13", "traverse=packet,tri=naive", NULL,
+    "traverse=packet,res=128", "traverse=packet,res=7x1x13", "traverse=packet,tri=naive",
+    "cells=ids", "cells=ids,lambda=1", NULL,
 };
 
 const accel_kind accel_kind_grid = {

@@ -42,7 +42,7 @@
 typedef struct {
     double lambda, sub_lambda, c_step, c_isect, max_mb;
     char res[ACCEL_PARAM_TEXT];
-    int sub_res, threshold, depth, is_auto, lookahead, overlap, mailbox, layout, traverse;
+    int sub_res, threshold, depth, is_auto, lookahead, overlap, mailbox, layout, traverse, cells;
 } ngrid_spec;
 
 static const accel_param_def ngrid_params[] = {
@@ -104,6 +104,12 @@ static const accel_param_def ngrid_params[] = {
      .help = "single rays (hierarchical 3D-DDA), or coherent grid traversal of 64 consecutive "
              "rays (8x8 tiles) slice by slice through every level, as grid:traverse=packet",
      .offset = offsetof(ngrid_spec, traverse)},
+    {.key = "cells", .type = ACCEL_PARAM_ENUM, .def = "ids", .choices = "ids|blocks",
+     .help = "what a leaf cell holds for single rays with layout=words: ids (tested one by one) "
+             "or blocks (its triangles copied 8 to a block, tested 8 at a time by the block "
+             "test the wide BVH uses; the levels' cost model is still priced for ids, so ids "
+             "stay the default); packets, layout=compact, spheres and tri=naive use ids",
+     .offset = offsetof(ngrid_spec, cells)},
 };
 
 /* ---- the flat structure ------------------------------------------------------------ */
@@ -115,6 +121,7 @@ static void ngrid_destroy(void *a)
     free(g->nodes);
     free(g->cells);
     free(g->lists);
+    grid_list_blocks_free(&g->blocks);
     free(g->planes);
     ngrid_compact_free(g->compact);
     accel_prim_store_free(&g->store);
@@ -127,7 +134,8 @@ static size_t ngrid_memory(const void *a)
     if (g->compact) return sizeof *g + ngrid_compact_bytes(g->compact) + accel_prim_store_bytes(&g->store);
     return sizeof *g + (size_t)g->node_count * sizeof *g->nodes +
            (size_t)g->cell_count * sizeof *g->cells + (size_t)g->list_len * sizeof *g->lists +
-           g->plane_count * sizeof *g->planes + accel_prim_store_bytes(&g->store);
+           g->plane_count * sizeof *g->planes + accel_prim_store_bytes(&g->store) +
+           grid_list_blocks_bytes(&g->blocks);
 }
 
 /* Is cell c of grid g one that holds a sub-grid? `next` walks g's children
@@ -347,6 +355,12 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
         rc = flatten(&b, g, err);
     }
     if (!rc && compact) rc = ngrid_compact_build(g, b.max_bytes, err);
+    /* cells=blocks where the block test applies (layout=words, single rays,
+     * triangles, the watertight test). */
+    if (!rc && !compact && spec->cells == 1 && g->traverse == NGRID_TRAVERSE_SINGLE && !g->naive &&
+        !g->has_spheres)
+        rc = grid_list_blocks_build(g->lists, g->list_len, scene, b.max_bytes,
+                                    &g->blocks, err);
     builder_free(&b);
     if (rc) {
         ngrid_destroy(g);
@@ -431,7 +445,8 @@ static const char *const ngrid_variants[] = {
     "layout=compact", "layout=compact,auto", "layout=compact,threshold=1,sub_res=6",
     "traverse=packet", "traverse=packet,threshold=1,depth=4,sub_res=3",
     "traverse=packet,mailbox=0", "traverse=packet,tri=naive", "traverse=packet,layout=compact",
-    "traverse=packet,threshold=2,sub_res=24", NULL,
+    "traverse=packet,threshold=2,sub_res=24", "cells=blocks", "cells=blocks,threshold=1,depth=4,sub_res=3",
+    NULL,
 };
 
 const accel_kind accel_kind_nested_grid = {

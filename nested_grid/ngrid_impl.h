@@ -7,6 +7,7 @@
 #define NESTED_GRID_NGRID_IMPL_H
 
 #include "core/variant.h"
+#include "grid/grid_blocks.h"
 #include "ngrid.h"
 
 #ifdef __cplusplus
@@ -60,6 +61,7 @@ typedef struct {
     int naive, mailbox, has_spheres;
     int traverse;           /* NGRID_TRAVERSE_SINGLE / NGRID_TRAVERSE_PACKET */
     ngrid_compact *compact; /* layout=compact: the only arrays kept (nodes etc. freed) */
+    grid_list_blocks blocks; /* cells=blocks: the lists as blocks (first NULL: not built) */
 } ngrid_accel;
 
 /*

@@ -39,6 +39,8 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
     const ngrid_node *nodes = g->nodes;
     const grid_frame *top = &nodes[0].frame;
     const uint32_t *lists = g->lists;
+    /* cells=blocks: the shared block test (grid/grid_blocks.h). */
+    const grid_list_blocks *blocks = !naive && !spheres && g->blocks.first ? &g->blocks : NULL;
     for (size_t i = 0; i < count; i++) {
         accel_ray_prep p;
         accel_hit h = accel_hit_miss();
@@ -56,6 +58,8 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
             double t_cell = grid_dda_init(&d, top, &p, p.t_near);
             const uint32_t *words = g->cells + nodes[0].cell_base;
             uint32_t box[GRID_MAILBOX];
+            wide_leaf_ray_8 lr; /* a few broadcasts: set always, used by blocks */
+            leaf_setup_8(&lr, &p);
             if (mailbox) grid_mailbox_clear(box);
             float t = p.t_far, u = 0.0f, v = 0.0f;
             /* Walk the ray through the cells, descending into sub-grids. */
@@ -79,9 +83,16 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
                 const uint32_t *list = lists + w;
                 uint32_t n = list[0];
                 if (c && n == 0) empty++;
-                if (grid_cell_hit(s, list + 1, n, &p, &h, &t, &u, &v, box, &tests, &skips, c,
-                                  occ != NULL, naive, spheres, mailbox))
+                if (blocks) {
+                    if (c) tests += n;
+                    uint32_t b0 = blocks->first[w];
+                    if (n && grid_blocks_hit(blocks->blocks, b0, b0 + (n + 7) / 8, s->tri_count,
+                                             &lr, &p, &h, &t, &u, &v, occ != NULL))
+                        goto done;
+                } else if (grid_cell_hit(s, list + 1, n, &p, &h, &t, &u, &v, box, &tests, &skips,
+                                         c, occ != NULL, naive, spheres, mailbox)) {
                     goto done;
+                }
                 /* A hit (or the ray's end) before this cell's exit: nothing
                  * in a later cell, at any level, can be nearer. */
                 double t_exit = grid_dda_exit(&d);

@@ -11,7 +11,8 @@
  *    folder's headers, and the documented cross-backend APIs,
  *    grid/grid_core.h (the grid walk and cell visit of the grid family:
  *    nested, irregular and instanced grids reuse it),
- *    grid/grid_packet_walk.h (the coherent packet walk its levels reuse)
+ *    grid/grid_packet_walk.h (the coherent packet walk its levels reuse),
+ *    grid/grid_blocks.h (the cell visit on primitive blocks)
  *    and, for instanced/ only, bvh/bvh.h (bvh_build_boxes builds its BVH
  *    levels over boxes);
  *  - sources.mk's ACCEL_LAYERS names these layers, and accel/ has no other
@@ -197,11 +198,13 @@ static void check_backend_include(const char *path, int line, const char *target
         for (int i = 0; sub_parent_headers[i]; i++)
             if (!strcmp(target, sub_parent_headers[i])) return;
     }
-    if (!strcmp(target, "grid/grid_core.h") || !strcmp(target, "grid/grid_packet_walk.h")) return;
+    if (!strcmp(target, "grid/grid_core.h") || !strcmp(target, "grid/grid_packet_walk.h") ||
+        !strcmp(target, "grid/grid_blocks.h"))
+        return;
     if (!strcmp(b->folder, "instanced") && !strcmp(target, "bvh/bvh.h")) return;
     test_fail(__FILE__, __LINE__,
               "%s:%d: includes \"%s\": a backend may include only accel.h, core/ headers, its "
-              "own folder, a subfolder's entry header (sub/sub.h), grid/grid_core.h, "
+              "own folder, a subfolder's entry header (sub/sub.h), grid/grid_core.h, grid/grid_blocks.h, "
               "grid/grid_packet_walk.h (instanced/ also bvh/bvh.h); a subfolder only its own files and the parent headers "
               "of sub_parent_headers",
               path, line, target);
