@@ -1,8 +1,11 @@
 # gridbvh - see README.md.
 #   make            optimized library, tools and experiments (bin/)
-#   make test       the test suite (T=word: tests whose name contains it, e.g.
-#                   T=conformance_grid; T=--list names them; KINDS=grid,bvh: only
-#                   these accelerator kinds; a T or KINDS matching nothing fails)
+#   make test       the test suite (T=grid: the grid family, test_grid*.c, whose
+#                   tests are named grid_*; T=conformance_grid: one test by its
+#                   exact name; T='*word*': every test whose name contains word;
+#                   T=a,b: several; T=--list names them; KINDS=grid,bvh: only
+#                   these accelerator kinds; a T or KINDS matching nothing fails;
+#                   tests/README.md). The last line: N passed, N failed, N skipped
 #   make report     runs every experiment and rewrites REPORT.md (QUICK=1: smoke run;
 #                   KINDS=grid,bvh: only these kinds; ACCEL="bvh:width=4 ...": add specs)
 #   make sanitize   the test suite under AddressSanitizer + UBSan
@@ -148,7 +151,7 @@ $(BIN)/run_tests: $(TEST_OBJ) $(LIB)
 -include $(shell find $(BUILD) -name '*.d' 2>/dev/null)
 
 test: all
-	./$(BIN)/run_tests $(if $(J),-j $(J)) $(T)
+	./$(BIN)/run_tests $(if $(J),-j $(J)) '$(T)'
 
 report: all
 	GRIDBVH_CFLAGS="$(ALL_CFLAGS)" CC="$(CC)" KINDS="$(KINDS)" ACCEL="$(ACCEL)" \
@@ -165,7 +168,7 @@ sanitize:
 	$(MAKE) BUILD=build-san BIN=bin-san OPT=-O1 \
 	  CFLAGS="-O1 -g $(ARCH) -DWIDE_NO_FORCE_INLINE -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined" \
 	  LDLIBS="-lm -pthread -fsanitize=address,undefined" bin-san/run_tests
-	ASAN_OPTIONS=detect_leaks=1 ./bin-san/run_tests $(T)
+	ASAN_OPTIONS=detect_leaks=1 ./bin-san/run_tests '$(T)'
 
 fuzz:
 	$(MAKE) -C tests/fuzz
