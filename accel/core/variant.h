@@ -16,9 +16,11 @@
  * both queries. accel_run_kernel() picks the copy for a batch. This is the C form of the
  * variant tables of Embree and madmann91/bvh (see ../shared/STYLE.md).
  *
- * Counters are switched off in exactly one place: accel_run_kernel applies
- * ACCEL_COUNTERS_ON, and with -DACCEL_COUNTERS=0 the counted copy is the
- * uncounted kernel too.
+ * Counters are switched off where a batch enters the code that counts, and
+ * nowhere else: accel_run_kernel applies ACCEL_COUNTERS_ON to every kernel
+ * table, and so do the packet layer's entries (accel_coherent_intersect and
+ * _occluded, core/coherence.c), which count too; no kind applies it itself.
+ * With -DACCEL_COUNTERS=0 the counted copy is the uncounted kernel too.
  *
  * The step bound (the guard that turns a traversal bug into a reported
  * error instead of an endless loop) follows one policy for every kind: it
