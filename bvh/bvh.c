@@ -532,7 +532,8 @@ static const char *const bvh_variants[] = {
 
 const accel_kind accel_kind_bvh = {
     .name = "bvh",
-    .summary = "binary BVH, 32-byte nodes: binned/sweep SAH or median builds; single rays or 64-ray packets",
+    .summary = "BVH, binary (32-byte nodes) or 4-/8-wide (width=4|8, AVX2/AVX-512 kernels): "
+               "binned/sweep SAH, median, mid or SBVH builds; single rays or 64-ray packets",
     .step_name = "nodes",
     .params = bvh_params,
     .param_count = BVH_PARAM_COUNT,
