@@ -163,8 +163,11 @@ bench: all
 # Tests under ASan + UBSan in a separate build tree, with the same
 # instruction set as the product (ARCH), so that the SIMD kernels it runs
 # are the ones checked; the wide kernels' helpers not forced inline
-# (bvh/wide/simd.h: minutes of compile time otherwise).
-sanitize:
+# (bvh/wide/simd.h: minutes of compile time otherwise). The tests that run
+# a tool, an experiment or the report (bin/trace, bin/exp_*, bin/mkreport)
+# run the product's binaries in bin/: they are built first, so that a fresh
+# clone's `make sanitize` needs no `make` before it.
+sanitize: $(TOOLS) $(EXP_BINS) $(BIN)/mkreport
 	$(MAKE) BUILD=build-san BIN=bin-san OPT=-O1 \
 	  CFLAGS="-O1 -g $(ARCH) -DWIDE_NO_FORCE_INLINE -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined" \
 	  LDLIBS="-lm -pthread -fsanitize=address,undefined" bin-san/run_tests
