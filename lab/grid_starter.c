@@ -184,7 +184,7 @@ lab_grid_kernel(const lab_grid *g, const accel_ray *rays, accel_hit *hits, uint8
     }
 }
 
-ACCEL_KERNEL_PAIR(lab_grid, lab_grid_kernel)
+ACCEL_KERNEL_PAIR_NO_OPT(lab_grid, lab_grid_kernel)
 
 static unsigned lab_grid_flags(const lab_grid *g)
 {
