@@ -1,8 +1,11 @@
 # gridbvh - see README.md.
 #   make            optimized library, tools and experiments (bin/)
-#   make test       the test suite (T=word: tests whose name contains it, e.g.
-#                   T=conformance_grid; T=--list names them; KINDS=grid,bvh: only
-#                   these accelerator kinds; a T or KINDS matching nothing fails)
+#   make test       the test suite (T=grid: the grid family, test_grid*.c, whose
+#                   tests are named grid_*; T=conformance_grid: one test by its
+#                   exact name; T='*word*': every test whose name contains word;
+#                   T=a,b: several; T=--list names them; KINDS=grid,bvh: only
+#                   these accelerator kinds; a T or KINDS matching nothing fails;
+#                   tests/README.md). The last line: N passed, N failed, N skipped
 #   make report     runs every experiment and rewrites REPORT.md and report/ once
 #                   every experiment has finished (QUICK=1: smoke run into
 #                   build/quick-report/, QUICK=0 or unset: the full run;
@@ -32,10 +35,17 @@ CC      ?= cc
 # The baseline instruction set of every unit is AVX2 (x86-64-v3), whatever
 # the build machine; the wide BVH's kernel units (SLOW_SRC) are compiled a
 # second time with ARCH512 and picked at run time where the CPU has it
-# (accel/core/isa.c; GRIDBVH_ISA=avx2 forces the baseline). ARCH512= (empty)
-# or a compiler that refuses it builds the AVX2 kernels only.
+# (accel/core/isa.c; GRIDBVH_ISA=avx2 forces the baseline). By default that
+# second copy is built only where it can run: when the build machine's CPU
+# has x86-64-v4's AVX-512 (avx512f, cd, bw, dq and vl in /proc/cpuinfo).
+# Elsewhere no run could select it, and it was half the kernels' compile
+# work (9 of the 18 slowest units). ARCH512=-march=x86-64-v4 builds it
+# anyway (a binary for another machine); ARCH512= (empty) or a compiler that
+# refuses it builds the AVX2 kernels only.
 ARCH    ?= -march=x86-64-v3
-ARCH512 ?= -march=x86-64-v4
+CPU_512 := $(shell awk '/^flags/ { n = 0; for (i = 1; i <= NF; i++) if ($$i ~ /^avx512(f|cd|bw|dq|vl)$$/) n++; \
+                  print n == 5 ? "-march=x86-64-v4" : ""; exit }' /proc/cpuinfo 2>/dev/null)
+ARCH512 ?= $(CPU_512)
 OPT     ?= -O3
 CFLAGS  ?= $(OPT) $(ARCH) -g
 # Flags every build needs, kept apart so that `make CFLAGS=...` cannot drop them.
@@ -74,6 +84,12 @@ LIB      := $(BUILD)/libgridbvh.a
 # k4_packet_hit.c: 12.0 s with -g, 7.5 s with -g1), and line tables are what
 # perf and a backtrace need. GCC's code does not depend on the debug level.
 $(SLOW_SRC:%.c=$(BUILD)/%.o) $(SLOW_512): ALL_CFLAGS += $(if $(filter -g,$(CFLAGS)),-g1)
+# The same for the other units that instantiate kernel tables (core/
+# variant.h: 5 to 9 forced-inline copies of a kernel per table): every
+# kind's trace units, brute, the lab's kinds and the tests' lab solution.
+KERNEL_SRC := $(shell grep -l -E 'ACCEL_KERNEL_(PAIR|TABLE)|GRID_KERNELS' \
+                $(filter-out $(SLOW_SRC),$(LIB_SRC)) lab/*.c tests/*.c 2>/dev/null)
+$(KERNEL_SRC:%.c=$(BUILD)/%.o): ALL_CFLAGS += $(if $(filter -g,$(CFLAGS)),-g1)
 # Header dependencies come from the compiler (-MMD -MP, the .d files); a
 # change of compiler or flags rebuilds everything through the flags stamp.
 DEPFLAGS  = -MMD -MP
@@ -169,7 +185,7 @@ $(BIN)/run_tests: $(TEST_OBJ) $(LIB)
 -include $(shell find $(BUILD) -name '*.d' 2>/dev/null)
 
 test: all
-	./$(BIN)/run_tests $(if $(J),-j $(J)) $(T)
+	./$(BIN)/run_tests $(if $(J),-j $(J)) '$(T)'
 
 report: all
 	GRIDBVH_CFLAGS="$(ALL_CFLAGS)" CC="$(CC)" KINDS="$(KINDS)" ACCEL="$(ACCEL)" \
@@ -181,12 +197,15 @@ bench: all
 # Tests under ASan + UBSan in a separate build tree, with the same
 # instruction set as the product (ARCH), so that the SIMD kernels it runs
 # are the ones checked; the wide kernels' helpers not forced inline
-# (bvh/wide/simd.h: minutes of compile time otherwise).
-sanitize:
+# (core/simd.h: minutes of compile time otherwise). The tests that run
+# a tool, an experiment or the report (bin/trace, bin/exp_*, bin/mkreport)
+# run the product's binaries in bin/: they are built first, so that a fresh
+# clone's `make sanitize` needs no `make` before it.
+sanitize: $(TOOLS) $(EXP_BINS) $(BIN)/mkreport
 	$(MAKE) BUILD=build-san BIN=bin-san OPT=-O1 \
 	  CFLAGS="-O1 -g $(ARCH) -DWIDE_NO_FORCE_INLINE -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined" \
 	  LDLIBS="-lm -pthread -fsanitize=address,undefined" bin-san/run_tests
-	ASAN_OPTIONS=detect_leaks=1 ./bin-san/run_tests $(T)
+	ASAN_OPTIONS=detect_leaks=1 ./bin-san/run_tests '$(T)'
 
 fuzz:
 	$(MAKE) -C tests/fuzz

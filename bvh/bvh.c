@@ -364,7 +364,9 @@ static int bvh_kind_build(const accel_scene *scene, const accel_params *params, 
 {
     bvh_build_opts opts;
     int traverse, frustum;
-    wide_opts wo = {2, 4, 1, 0, 0, 0, 0, {1, 1.5, 2, 0}, 0, ACCEL_ISA_AVX2};
+    wide_opts wo = {.width = 2, .block = 4, .order = WIDE_ORDER_OCTANT,
+                    .collapse = {.dp = 1, .leaf_cost = 1.5, .leaf_blocks = 2},
+                    .isa = ACCEL_ISA_AVX2}; /* the rest 0; options_from_params sets them */
     int rc = options_from_params(params, &opts, &traverse, &frustum, &wo, err);
     if (rc) return rc;
     bvh *b = calloc(1, sizeof *b);
@@ -451,14 +453,14 @@ static void bvh_intersect(const void *a, const accel_ray *rays, accel_hit *hits,
                           accel_counters *c)
 {
     const bvh *b = a;
-    b->path->intersect(b, rays, hits, count, ACCEL_COUNTERS_ON(c));
+    b->path->intersect(b, rays, hits, count, c);
 }
 
 static void bvh_occluded(const void *a, const accel_ray *rays, uint8_t *occ, size_t count,
                          accel_counters *c)
 {
     const bvh *b = a;
-    b->path->occluded(b, rays, occ, count, ACCEL_COUNTERS_ON(c));
+    b->path->occluded(b, rays, occ, count, c);
 }
 
 /* accel.h's conservative walk, which lets a bvh serve as instanced's bottom
@@ -530,7 +532,8 @@ static const char *const bvh_variants[] = {
 
 const accel_kind accel_kind_bvh = {
     .name = "bvh",
-    .summary = "binary BVH, 32-byte nodes: binned/sweep SAH or median builds; single rays or 64-ray packets",
+    .summary = "BVH, binary (32-byte nodes) or 4-/8-wide (width=4|8, AVX2/AVX-512 kernels): "
+               "binned/sweep SAH, median, mid or SBVH builds; single rays or 64-ray packets",
     .step_name = "nodes",
     .params = bvh_params,
     .param_count = BVH_PARAM_COUNT,

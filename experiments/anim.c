@@ -246,6 +246,11 @@ typedef struct {
     double ms[4][MAX_FRAMES]; /* update, primary, shadow (with its rays' making), frame */
 } loop;
 
+/* Long on purpose (216 lines): the animation loops: per frame the update,
+ * the primary and shadow passes and the frame time, then their table, in the
+ * order the report prints them; the steps share the group, its per-
+ * configuration arrays and the study's tallies, which separate functions
+ * would take as a dozen parameters each. */
 void exp_anim_fps(exp_ctx *x, exp_anim *a)
 {
     const char *anim = a->anim;

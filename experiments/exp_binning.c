@@ -87,6 +87,10 @@ static void quality_final(exp_ctx *x)
 }
 
 /* Part 1: bins and axes against the full sweep on one scene. */
+/* Long on purpose (110 lines): the bins against the full sweep: builds,
+ * traces, table and findings, in the order the report prints them; the steps
+ * share the group, its per-configuration arrays and the study's tallies,
+ * which separate functions would take as a dozen parameters each. */
 static void bins_against_quality(exp_ctx *x, exp_text *findings, const char *scene_spec)
 {
     accel_scene s;

@@ -117,6 +117,10 @@ static double image_rmse(const rays_set *ao, const uint8_t *occ, const double *r
     return m && se > 0 ? sqrt(se / m) : 0;
 }
 
+/* Long on purpose (129 lines): the error-against-time runs, table and
+ * findings, in the order the report prints them; the steps share the group,
+ * its per-configuration arrays and the study's tallies, which separate
+ * functions would take as a dozen parameters each. */
 static void error_against_time(exp_ctx *x, study *st)
 {
     accel_scene s;

@@ -66,6 +66,10 @@ static int vs(const exp_group *g, int c, int b, char *buf, size_t n)
     return exp_ratio_cmp(&r, g->floor);
 }
 
+/* Long on purpose (122 lines): one scene's nested-grid runs, tables and
+ * findings, in the order the report prints them; the steps share the group,
+ * its per-configuration arrays and the study's tallies, which separate
+ * functions would take as a dozen parameters each. */
 static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_list *ctx_specs)
 {
     static const double lambdas_full[] = {1, 2, 4, 8, 16, 32, 64, 128, 256};

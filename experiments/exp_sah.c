@@ -330,7 +330,8 @@ static void speedup_table(exp_ctx *x, study *st, const exp_group *g, const accel
     int pure = exp_group_find(g, PURE);
     if (pure < 0 || !g->cfg[pure].ok) return;
     exp_md(x, "\nSpeed-up over the pure median split (`%s`), paired per round, %dx%d rays (1 in %d "
-              "tiles), build time beside it:\n", PURE + 4, x->rt_size[0], x->rt_size[1], st->stride);
+              "tiles), build time beside it:\n",
+           strchr(PURE, ':') + 1, x->rt_size[0], x->rt_size[1], st->stride);
     exp_md_table(x, "builder|primary|shadow|diffuse|build ms [95% CI]|build time over pure median");
     for (int c = 0; c < g->count; c++) {
         const exp_cfg *cf = &g->cfg[c];

@@ -62,6 +62,10 @@ static exp_est slope_at(const double *xs, const double *ys, int n, double level)
     return k;
 }
 
+/* Long on purpose (130 lines): one scene family's sizes: runs, fits, table
+ * and findings, in the order the report prints them; the steps share the
+ * group, its per-configuration arrays and the study's tallies, which
+ * separate functions would take as a dozen parameters each. */
 static void family(exp_ctx *x, study *st, int f, const exp_list *list)
 {
     static const char *const names[2] = {"soup", "teapot_stadium"};

@@ -175,6 +175,10 @@ static void certify(exp_ctx *x, study *st, int ci, const exp_group *g, int m)
     stiff_case_free(&big);
 }
 
+/* Long on purpose (108 lines): one stiff case's runs against the reference,
+ * table and findings, in the order the report prints them; the steps share
+ * the group, its per-configuration arrays and the study's tallies, which
+ * separate functions would take as a dozen parameters each. */
 static void measure_case(exp_ctx *x, study *st, stiff_case *c, int ci, const exp_list *list)
 {
     size_t n = c->rays.count, leakable = n - c->leak_begin;
@@ -320,6 +324,9 @@ static void stiff_cases(exp_ctx *x, study *st, const exp_list *list)
     }
 }
 
+/* Long on purpose (140 lines): the options, then each case and scene in
+ * turn, then the verdicts, read top to bottom as the section they write;
+ * each step is a few lines of calls. */
 int main(int argc, char **argv)
 {
     exp_ctx x;

@@ -57,6 +57,10 @@ typedef struct {
     double probe_eff; /* the thread probe's efficiency, or -1 */
 } study;
 
+/* Long on purpose (105 lines): the thread-count runs, efficiency table and
+ * findings, in the order the report prints them; the steps share the group,
+ * its per-configuration arrays and the study's tallies, which separate
+ * functions would take as a dozen parameters each. */
 static void scaling(exp_ctx *x, study *st, int max_t, const exp_machine *mach)
 {
     const char *spec = x->scene_count ? x->scenes[0] : x->quick ? "soup:tris=20000"

@@ -65,6 +65,10 @@ static double crossing(const exp_est *ba, const exp_est *ra, const exp_est *bb, 
     return n < 0 ? 0 : n;
 }
 
+/* Long on purpose (134 lines): one scene's build and trace times, break-even
+ * table and findings, in the order the report prints them; the steps share
+ * the group, its per-configuration arrays and the study's tallies, which
+ * separate functions would take as a dozen parameters each. */
 static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_list *list)
 {
     accel_scene s;

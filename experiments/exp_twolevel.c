@@ -132,6 +132,11 @@ static int best_of(const exp_group *g, int mask, int two, int add_build, long lo
     return best;
 }
 
+/* Long on purpose (165 lines): one scene's two-level comparison: runs,
+ * disagreement checks, tables and findings, in the order the report prints
+ * them; the steps share the group, its per-configuration arrays and the
+ * study's tallies, which separate functions would take as a dozen parameters
+ * each. */
 static void compare_scene(exp_ctx *x, study *st, const char *spec, const exp_list *list, int control)
 {
     accel_scene s;

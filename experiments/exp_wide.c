@@ -280,6 +280,10 @@ static void heatmaps(exp_ctx *x, const accel_scene *s, int index)
     bench_sets_free(&sets);
 }
 
+/* Long on purpose (156 lines): one scene's widths: runs, tables, heat maps
+ * and findings, in the order the report prints them; the steps share the
+ * group, its per-configuration arrays and the study's tallies, which
+ * separate functions would take as a dozen parameters each. */
 static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, int heat,
                           const exp_list *list)
 {

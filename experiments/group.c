@@ -134,6 +134,9 @@ static int probe_collapsed(exp_group *g, exp_cfg *c, int bit, const rays_set *r)
     return 1;
 }
 
+/* Long on purpose (123 lines): the steps of adding one configuration
+ * (parse, build with its budget, the probe, the refusal messages) fill one
+ * exp_cfg in order; each refusal says why in its own words. */
 int exp_group_add(exp_group *g, const char *spec, int threads)
 {
     exp_ctx *x = g->x;

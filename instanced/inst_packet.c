@@ -249,8 +249,8 @@ INST_INLINE void ip_kernel(const void *acc, const accel_ray *rays, void *out, si
 
 #define IP_CLOSEST(a, r, o, n, c, f) ip_kernel(a, r, o, n, c, f, 0)
 #define IP_ANY(a, r, o, n, c, f) ip_kernel(a, r, o, n, c, f, 1)
-ACCEL_KERNEL_TABLE(ip_closest_table, IP_CLOSEST)
-ACCEL_KERNEL_TABLE(ip_any_table, IP_ANY)
+ACCEL_KERNEL_TABLE_NO_OPT(ip_closest_table, IP_CLOSEST)
+ACCEL_KERNEL_TABLE_NO_OPT(ip_any_table, IP_ANY)
 
 static unsigned ip_flags(const inst_accel *a)
 {

@@ -99,6 +99,9 @@ static int ip_object1(const inst_accel *a, const inst_item *it, const inst_botto
  * gets the scalar code's bits. A lane the scalar code would branch on (an
  * object-space direction component that is zero or has no finite
  * reciprocal) is left to ip_object1. Returns the mask of kept rays. */
+/* Long on purpose (104 lines): it mirrors ip_object1 operation by
+ * operation over four lanes (above), which is what keeps the bits equal;
+ * split, that line-by-line correspondence would be lost. */
 static uint64_t ip_object4(const inst_accel *a, const inst_item *it, const inst_bottom *b,
                            ip_packet *pk, ip_view *ov, const unsigned *rr, int n, int counted)
 {

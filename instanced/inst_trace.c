@@ -542,8 +542,8 @@ INLINE void kernel(const void *acc, const accel_ray *rays, void *out, size_t cou
 
 #define CLOSEST_KERNEL(a, r, o, n, c, f) kernel(a, r, o, n, c, f, 0)
 #define ANY_KERNEL(a, r, o, n, c, f) kernel(a, r, o, n, c, f, 1)
-ACCEL_KERNEL_TABLE(inst_closest_table, CLOSEST_KERNEL)
-ACCEL_KERNEL_TABLE(inst_any_table, ANY_KERNEL)
+ACCEL_KERNEL_TABLE_NO_OPT(inst_closest_table, CLOSEST_KERNEL)
+ACCEL_KERNEL_TABLE_NO_OPT(inst_any_table, ANY_KERNEL)
 
 static unsigned flags_of(const inst_accel *a)
 {

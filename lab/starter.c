@@ -357,7 +357,7 @@ lab_kernel(const lab_bvh *b, const accel_ray *rays, accel_hit *hits, uint8_t *oc
     }
 }
 
-ACCEL_KERNEL_PAIR(lab, lab_kernel)
+ACCEL_KERNEL_PAIR_NO_OPT(lab, lab_kernel)
 
 static unsigned lab_flags(const lab_bvh *b)
 {

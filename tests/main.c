@@ -1,9 +1,14 @@
 /*
  * main.c - runs the registered tests.
  *
- * Usage: run_tests [--list] [-j N] [FILTER]
- *   FILTER   run the tests whose name contains it (all without one);
- *   --list   print the names (those matching FILTER) and run nothing;
+ * Usage: run_tests [--list] [-j N] [SELECTION]
+ *   SELECTION  what to run (all without one): a comma-separated list whose
+ *            items are each a family (the first word of a test file's name
+ *            after "test_": `grid` is test_grid*.c, tests named grid_*), a
+ *            test's exact name, or a pattern with * or ? (fnmatch: '*word*'
+ *            is every test whose name contains word). The first line of the
+ *            output says what was selected;
+ *   --list   print the names (those selected) and run nothing;
  *   -j N     run them in N processes (default: one per online CPU, at most
  *            8). A unit of work is one family of test files (test_report*.c
  *            is one: its tests share build/quick-report) or one per-kind
@@ -11,10 +16,14 @@
  *            whole when it ends, so a crash fails its unit, not the run.
  * The environment variable KINDS (comma-separated kind names) limits the
  * suites that iterate over kinds, and the per-kind tests, to those kinds.
- * A FILTER matching no test and a KINDS naming an unknown kind are errors
+ * An item selecting no test and a KINDS naming an unknown kind are errors
  * (exit status 2) before anything runs; failed checks give exit status 1.
+ * The last line is "N passed, N failed, N skipped": a test that calls
+ * test_skip() (its subject absent, e.g. ../shared/scenes) counts as skipped
+ * and its line says why, unless a check of it failed first.
  */
 #include <fcntl.h>
+#include <fnmatch.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -26,7 +35,7 @@
 
 typedef struct {
     const char *name;
-    const char *file; /* source file (NULL for per-kind tests) */
+    const char *file; /* source file (for per-kind tests, the registering one) */
     void (*fn)(void);
     void (*kind_fn)(const accel_kind *kind); /* per-kind tests: fn is NULL */
     const accel_kind *kind;
@@ -37,11 +46,13 @@ enum { MAX_TESTS = 512, MAX_FAMILIES = 16 };
 static test_case tests[MAX_TESTS];
 static int test_count;
 static int current_failures;
+static char current_skip[256]; /* why the running test skipped ("" if it did not) */
 
 /* Per-kind test families, expanded by expand_families() once main runs
  * (the registry is not safe to read from a constructor). */
 static struct {
     const char *prefix;
+    const char *file;
     void (*fn)(const accel_kind *kind);
 } families[MAX_FAMILIES];
 static int family_count;
@@ -60,10 +71,12 @@ void test_register(const char *name, void (*fn)(void), const char *file)
     add_test((test_case){name, file, fn, NULL, NULL});
 }
 
-void test_register_per_kind(const char *prefix, void (*fn)(const accel_kind *kind))
+void test_register_per_kind(const char *prefix, void (*fn)(const accel_kind *kind),
+                            const char *file)
 {
     if (family_count < MAX_FAMILIES) {
         families[family_count].prefix = prefix;
+        families[family_count].file = file;
         families[family_count++].fn = fn;
     } else {
         dropped++;
@@ -79,6 +92,16 @@ void test_fail(const char *file, int line, const char *fmt, ...)
     fputc('\n', stdout);
     va_end(ap);
     current_failures++;
+}
+
+void test_skip(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(current_skip, sizeof current_skip, fmt, ap);
+    va_end(ap);
+    if (!current_skip[0]) snprintf(current_skip, sizeof current_skip, "no reason given");
+    printf("    skip: %s\n", current_skip);
 }
 
 void test_note(const char *fmt, ...)
@@ -163,7 +186,7 @@ static void expand_families(void)
                 continue;
             }
             snprintf(name, len, "%s_%s", families[f].prefix, kind->name);
-            add_test((test_case){name, NULL, NULL, families[f].fn, kind});
+            add_test((test_case){name, families[f].file, NULL, families[f].fn, kind});
         }
 }
 
@@ -172,10 +195,14 @@ static int by_name(const void *a, const void *b)
     return strcmp(((const test_case *)a)->name, ((const test_case *)b)->name);
 }
 
-/* Runs test i in this process; counts it in *passed or *failed. */
-static void run_one(int i, int *passed, int *failed)
+/* Counts of a run: passed, failed, skipped. */
+enum { PASSED, FAILED, SKIPPED, COUNTS };
+
+/* Runs test i in this process; counts it in counts[PASSED], [FAILED] or [SKIPPED]. */
+static void run_one(int i, int *counts)
 {
     current_failures = 0;
+    current_skip[0] = 0;
     test_seed(TEST_SEED);
     double t0 = accel_now_ms();
     printf("%s\n", tests[i].name);
@@ -186,27 +213,60 @@ static void run_one(int i, int *passed, int *failed)
     double ms = accel_now_ms() - t0;
     if (current_failures) {
         printf("  FAIL %s (%d failed checks, %.0f ms)\n", tests[i].name, current_failures, ms);
-        ++*failed;
+        counts[FAILED]++;
+    } else if (current_skip[0]) {
+        printf("  skip %s (%s)\n", tests[i].name, current_skip);
+        counts[SKIPPED]++;
     } else {
         printf("  ok   %s (%.0f ms)\n", tests[i].name, ms);
-        ++*passed;
+        counts[PASSED]++;
     }
 }
 
+/* The family of a test file: its name's first word after "test_", up to
+ * the next '_' or '.' (test_report_checks.c and test_report.c are both
+ * "report"); *len gets its length. Every test's name starts with its
+ * file's family and '_' (runner_names_start_with_their_family). */
+static const char *file_family(const char *file, size_t *len)
+{
+    const char *base = strrchr(file, '/');
+    base = base ? base + 1 : file;
+    if (!strncmp(base, "test_", 5)) base += 5;
+    *len = strcspn(base, "_.");
+    return base;
+}
+
+int test_each(void (*fn)(const char *name, const char *family, void *ctx), void *ctx)
+{
+    for (int i = 0; i < test_count; i++) {
+        size_t len;
+        const char *f = file_family(tests[i].file, &len);
+        char family[64];
+        snprintf(family, sizeof family, "%.*s", (int)len, f);
+        fn(tests[i].name, family, ctx);
+    }
+    return test_count;
+}
+
+/* Whether test i belongs to family (len characters of it). */
+static int in_family(int i, const char *family, size_t len)
+{
+    size_t n;
+    const char *f = file_family(tests[i].file, &n);
+    return n == len && !strncmp(f, family, len);
+}
+
 /* The unit test i belongs to: a per-kind test is its own; a file's tests
- * belong to its family, the file name up to the first '_' after "test_"
- * (test_report_checks.c and test_report.c are both "report"). */
+ * belong to its family (they may share temporary paths). */
 static void unit_key(int i, char *key, size_t size)
 {
-    if (!tests[i].file) {
+    if (tests[i].kind) {
         snprintf(key, size, "%s", tests[i].name);
         return;
     }
-    const char *base = strrchr(tests[i].file, '/');
-    base = base ? base + 1 : tests[i].file;
-    if (!strncmp(base, "test_", 5)) base += 5;
-    size_t n = strcspn(base, "_.");
-    snprintf(key, size, "file %.*s", (int)n, base);
+    size_t n;
+    const char *f = file_family(tests[i].file, &n);
+    snprintf(key, size, "file %.*s", (int)n, f);
 }
 
 typedef struct {
@@ -257,8 +317,8 @@ static int start_unit(unit *u, const int *order)
         int fd = open(u->out, O_WRONLY | O_CREAT | O_TRUNC, 0644);
         if (fd < 0 || dup2(fd, STDOUT_FILENO) < 0) _exit(3);
         close(fd);
-        int counts[2] = {0, 0};
-        for (int k = 0; k < u->count; k++) run_one(order[u->first + k], &counts[0], &counts[1]);
+        int counts[COUNTS] = {0};
+        for (int k = 0; k < u->count; k++) run_one(order[u->first + k], counts);
         fflush(stdout);
         free_parallel_blocks(); /* u and order point into them */
         /* exit, not _exit: a sanitizer build checks for leaks at exit. */
@@ -272,14 +332,14 @@ static int start_unit(unit *u, const int *order)
 
 /* Runs the selected tests (order[0..n-1], by name) in `jobs` processes,
  * unit by unit in the order of their first test; returns the counts. */
-static void run_parallel(const int *order, int n, int jobs, int *passed, int *failed)
+static void run_parallel(const int *order, int n, int jobs, int *totals)
 {
     unit *units = calloc((size_t)n, sizeof *units);
     int *sorted = malloc((size_t)n * sizeof *sorted);
     char (*keys)[128] = malloc((size_t)n * sizeof *keys);
     if (!units || !sorted || !keys) {
         fprintf(stderr, "run_tests: out of memory; running the tests in one process\n");
-        for (int k = 0; k < n; k++) run_one(order[k], passed, failed);
+        for (int k = 0; k < n; k++) run_one(order[k], totals);
         free(units), free(sorted), free(keys);
         return;
     }
@@ -306,7 +366,7 @@ static void run_parallel(const int *order, int n, int jobs, int *passed, int *fa
                 if (running > 0) break; /* wait for a child to end, then try again */
                 fprintf(stderr, "run_tests: cannot fork: running unit %d here\n", next + 1);
                 for (int k = 0; k < units[next].count; k++)
-                    run_one(sorted[units[next].first + k], passed, failed);
+                    run_one(sorted[units[next].first + k], totals);
             } else {
                 running++;
             }
@@ -322,13 +382,12 @@ static void run_parallel(const int *order, int n, int jobs, int *passed, int *fa
         if (!u) continue;
         running--;
         u->pid = 0;
-        int counts[2];
+        int counts[COUNTS];
         ssize_t got = read(u->result_fd, counts, sizeof counts);
         close(u->result_fd);
         print_output(u->out);
         if (got == (ssize_t)sizeof counts && WIFEXITED(status) && WEXITSTATUS(status) == 0) {
-            *passed += counts[0];
-            *failed += counts[1];
+            for (int c = 0; c < COUNTS; c++) totals[c] += counts[c];
         } else {
             /* Its last test, the one printed without an "ok" line, crashed. */
             printf("  FAIL the process running %s..%s died (%s %d): the whole unit counts as "
@@ -336,7 +395,7 @@ static void run_parallel(const int *order, int n, int jobs, int *passed, int *fa
                    tests[sorted[u->first]].name, tests[sorted[u->first + u->count - 1]].name,
                    WIFSIGNALED(status) ? "signal" : "exit status",
                    WIFSIGNALED(status) ? WTERMSIG(status) : WEXITSTATUS(status));
-            *failed += u->count;
+            totals[FAILED] += u->count;
         }
     }
     free_parallel_blocks(); /* units, sorted, keys */
@@ -348,10 +407,67 @@ static int default_jobs(void)
     return n < 1 ? 1 : n > 8 ? 8 : (int)n;
 }
 
+/* Whether test i is selected by item (len characters): its exact name, its
+ * family, or a pattern with * or ? matching its name. */
+static int selects(int i, const char *item, size_t len)
+{
+    char pat[256];
+    snprintf(pat, sizeof pat, "%.*s", (int)len, item);
+    if (strpbrk(pat, "*?[")) return fnmatch(pat, tests[i].name, 0) == 0;
+    return !strcmp(tests[i].name, pat) || in_family(i, item, len);
+}
+
+/* Fills order[] with the tests the comma-separated selection picks (all
+ * when it is empty), in name order; prints what it picked to `say`.
+ * Returns their count, or -1 when an item picks no test. */
+static int select_tests(const char *selection, int *order, FILE *say)
+{
+    int matched = 0;
+    if (!*selection) {
+        for (int i = 0; i < test_count; i++) order[matched++] = i;
+        if (say) fprintf(say, "selected: all %d tests\n", matched);
+        return matched;
+    }
+    static char taken[MAX_TESTS];
+    memset(taken, 0, sizeof taken);
+    for (const char *p = selection; *p;) {
+        size_t len = strcspn(p, ",");
+        int here = 0, exact = -1;
+        for (int i = 0; i < test_count; i++)
+            if (selects(i, p, len)) {
+                here++;
+                taken[i] = 1;
+                if (strlen(tests[i].name) == len && !strncmp(tests[i].name, p, len)) exact = i;
+            }
+        if (!here) {
+            fprintf(stderr,
+                    "run_tests: no family or test is named '%.*s' (T='*%.*s*' selects the names "
+                    "containing it; run_tests --list names them)\n",
+                    (int)len, p, (int)len, p);
+            return -1;
+        }
+        char pat[256];
+        snprintf(pat, sizeof pat, "%.*s", (int)len, p);
+        if (!say)
+            ;
+        else if (strpbrk(pat, "*?["))
+            fprintf(say, "selected: pattern '%s': %d tests\n", pat, here);
+        else if (exact >= 0 && here == 1)
+            fprintf(say, "selected: test %s\n", pat);
+        else
+            fprintf(say, "selected: family %s: %d tests (test_%s*.c)\n", pat, here, pat);
+        p += len;
+        if (*p == ',') p++;
+    }
+    for (int i = 0; i < test_count; i++)
+        if (taken[i]) order[matched++] = i;
+    return matched;
+}
+
 int main(int argc, char **argv)
 {
     int list = 0, jobs = default_jobs();
-    const char *filter = "";
+    const char *selection = "";
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--list")) {
             list = 1;
@@ -365,18 +481,21 @@ int main(int argc, char **argv)
             }
             jobs = (int)j;
         } else if (!strcmp(argv[i], "--help") || !strcmp(argv[i], "-h")) {
-            printf("usage: run_tests [--list] [-j N] [FILTER]\n"
-                   "  runs (or with --list, names) the tests whose name contains FILTER;\n"
+            printf("usage: run_tests [--list] [-j N] [SELECTION]\n"
+                   "  runs (or with --list, names) the selected tests: SELECTION is a\n"
+                   "  comma-separated list of families (grid: the tests of test_grid*.c,\n"
+                   "  named grid_*), exact test names, or patterns with * or ? ('*word*':\n"
+                   "  the names containing word); all tests without one;\n"
                    "  -j N runs them in N processes (default: one per CPU, at most 8);\n"
                    "  KINDS=a,b in the environment limits the kind suites to those kinds.\n"
                    "exit status: 0 all passed, 1 a check failed, 2 usage error (unknown\n"
-                   "option or kind, or no test matching FILTER)\n");
+                   "option or kind, or an item of SELECTION selecting no test)\n");
             return 0;
         } else if (argv[i][0] == '-' && argv[i][1]) {
             fprintf(stderr, "run_tests: unknown option '%s' (try --help)\n", argv[i]);
             return 2;
         } else {
-            filter = argv[i];
+            selection = argv[i];
         }
     }
     setvbuf(stdout, NULL, _IOLBF, 0);
@@ -389,23 +508,18 @@ int main(int argc, char **argv)
     }
     qsort(tests, (size_t)test_count, sizeof tests[0], by_name);
     static int order[MAX_TESTS];
-    int matched = 0;
-    for (int i = 0; i < test_count; i++)
-        if (strstr(tests[i].name, filter)) order[matched++] = i;
-    if (!matched) {
-        fprintf(stderr, "run_tests: no test name contains '%s' (run_tests --list names them)\n",
-                filter);
-        return 2;
-    }
+    /* --list prints the names only (scripts read them); a run says first what it runs. */
+    int matched = select_tests(selection, order, list ? NULL : stdout);
+    if (matched < 0) return 2;
     if (list) {
         for (int k = 0; k < matched; k++) printf("%s\n", tests[order[k]].name);
         return 0;
     }
-    int passed = 0, failed = 0;
+    int counts[COUNTS] = {0};
     if (jobs > 1)
-        run_parallel(order, matched, jobs, &passed, &failed);
+        run_parallel(order, matched, jobs, counts);
     else
-        for (int k = 0; k < matched; k++) run_one(order[k], &passed, &failed);
-    printf("%d passed, %d failed\n", passed, failed);
-    return failed ? 1 : 0;
+        for (int k = 0; k < matched; k++) run_one(order[k], counts);
+    printf("%d passed, %d failed, %d skipped\n", counts[PASSED], counts[FAILED], counts[SKIPPED]);
+    return counts[FAILED] ? 1 : 0;
 }

@@ -213,7 +213,7 @@ TEST(bvh_bunny)
 {
     const char *dir = test_shared_scenes();
     if (!dir) {
-        test_note("skipped: ../shared/scenes not found");
+        test_skip("../shared/scenes not found");
         return;
     }
     char path[512];

@@ -102,7 +102,7 @@ static int leaf_hit(int block, const void *blk, const accel_ray_prep *p, float *
  * then err by about (e_num + |value| e_det) / |det|, e_det = eu + ev + ew.
  * Computed in double from the exact coordinates, doubled for the
  * bounds' own looseness. Both float tests stay within it; a fused
- * multiply-add (bvh/wide/leaf.h) lands elsewhere in it than the scalar test.
+ * multiply-add (core/block_test.h) lands elsewhere in it than the scalar test.
  */
 typedef struct { double t, u, v; } value_bounds;
 
@@ -183,7 +183,7 @@ TEST(bvh_wide_leaf_lanes_match_scalar)
             trials++;
             /* The same decision always; t, u, v the scalar test's, or as
              * close to the double-precision answer (a fused multiply-add
-             * rounds differently: bvh/wide/leaf.h). */
+             * rounds differently: core/block_test.h). */
             int same = hw == hs;
             if (same && hs && !any) {
                 same = id == 7u && close_to(tw, tr, vb.t) && close_to(uw, ur, vb.u) && close_to(vw, vr, vb.v);

@@ -114,7 +114,7 @@ TEST(bvh_wide_shared_meshes_against_reference)
 {
     const char *dir = test_shared_scenes();
     if (!dir) {
-        test_note("skipped: ../shared/scenes not found");
+        test_skip("../shared/scenes not found");
         return;
     }
     static const char *const meshes[] = {"bunny.off", "armadillo.off"};

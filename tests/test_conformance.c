@@ -245,7 +245,7 @@ static int conformance_specs(const accel_kind *kind, char specs[][256], int max)
 }
 
 /* Every spec the conformance suite runs for a kind is run once. */
-TEST(naive_twin_and_variants_run_once)
+TEST(conformance_naive_twin_and_variants_run_once)
 {
     for (size_t k = 0; k < accel_kind_count; k++) {
         static char specs[MAX_SPECS][256];

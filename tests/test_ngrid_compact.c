@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "rays/stiff.h"
-#include "test_nested_grid.h"
+#include "test_ngrid.h"
 
 static const char *const compact_specs[][2] = {
     /* word layout, compact layout of the same structure */

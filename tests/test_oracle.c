@@ -242,7 +242,7 @@ TEST(oracle_mesh_file_matches_brute)
 {
     const char *dir = test_shared_scenes();
     if (!dir) {
-        test_note("skipped: ../shared/scenes absent");
+        test_skip("../shared/scenes absent");
         return;
     }
     char path[512];
@@ -250,7 +250,7 @@ TEST(oracle_mesh_file_matches_brute)
     accel_scene s;
     accel_error err = {0};
     if (scene_load_file(path, &s, &err)) {
-        test_note("skipped: %s", err.msg);
+        test_skip("%s", err.msg);
         return;
     }
     test_rays l = {0};

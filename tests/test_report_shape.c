@@ -130,7 +130,10 @@ TEST(report_shape_summary_numbers_in_sections)
 {
     if (!test_quick_report()) return;
     char *r = test_read_file(REPORT, NULL);
-    if (!r) return;
+    if (!r) {
+        test_fail(__FILE__, __LINE__, REPORT " missing after the quick report ran");
+        return;
+    }
     const char *sum = strstr(r, "## Summary"), *end = strstr(r, "## Contents");
     CHECK(sum && end && sum < end);
     int rows = 0;

@@ -21,21 +21,69 @@
 
 /* ---- builds, counts, determinism ----------------------------------------- */
 
+/* Each built-in scene's small spec, as it must build: its own primitive
+ * counts, its instances and meshes (the scenes of many meshes) and its
+ * bounds (to 1% of its extent). A scene without a row here fails: a new
+ * scene gets its row, a removed one loses it. */
+static const struct {
+    const char *name;
+    uint32_t tris, spheres, instances, meshes;
+    float lo[3], hi[3];
+} small_scenes[] = {
+    /* levels 0..3 of 9 spheres each: 1 + 9 + 81 + 729, on a 2-triangle floor */
+    {"sphereflake", 2, 820, 0, 0, {-12, -12, -0.5f}, {12, 12, 0.822f}},
+    {"tetra", 1024, 0, 0, 0, {-1, -1, -1}, {1, 1, 1}},
+    {"mount", 2048, 4, 0, 0, {-1.16f, -1, -0.703f}, {1, 1.16f, 1.38f}},
+    {"soup", 3000, 0, 0, 0, {-0.0319f, -0.0326f, -0.0332f}, {1.03f, 1.03f, 1.03f}},
+    {"teapot_stadium", 2800, 0, 0, 0, {-3160, -3160, -0.01f}, {3160, 3160, 200}},
+    {"slivers", 3100, 0, 0, 0, {-0.0336f, -0.0332f, -0.0345f}, {1.03f, 1.03f, 1.03f}},
+    {"cube", 6 * 16 * 16 * 2, 0, 0, 0, {-1, -1, -1}, {1, 1, 1}},
+    {"sphere", 3072, 0, 0, 0, {-1, -1, -1}, {1, 1, 1}},
+    {"field", 10192, 0, 41, 5, {-12.5f, -12.5f, -0.946f}, {12.5f, 12.5f, 6.48f}},
+    {"animated", 4508, 0, 10, 5, {-12, -12, -0.2f}, {12, 12, 4.71f}},
+};
+
 TEST(scenes_small_specs_build)
 {
-    CHECK(scene_generator_count == 10);
+    size_t rows = sizeof small_scenes / sizeof small_scenes[0];
     for (size_t i = 0; i < scene_generator_count; i++) {
         const scene_generator *g = scene_generators[i];
+        size_t r = 0;
+        while (r < rows && strcmp(small_scenes[r].name, g->name)) r++;
+        CHECKF(r < rows, "built-in scene %s has no row in small_scenes[]", g->name);
         accel_scene s;
         if (!test_make_scene(g->small_spec, &s)) continue;
-        CHECKF(s.prim_count >= 500 && s.prim_count <= 20000, "%s: %u primitives", g->small_spec,
-               s.prim_count);
+        if (r < rows) {
+            CHECKF(s.tri_count == small_scenes[r].tris && s.sphere_count == small_scenes[r].spheres,
+                   "%s: %u triangles, %u spheres (expected %u, %u)", g->small_spec, s.tri_count,
+                   s.sphere_count, small_scenes[r].tris, small_scenes[r].spheres);
+            uint32_t inst = s.instances ? s.instances->instance_count : 0;
+            uint32_t meshes = s.instances ? s.instances->mesh_count : 0;
+            CHECKF(inst == small_scenes[r].instances && meshes == small_scenes[r].meshes,
+                   "%s: %u instances of %u meshes (expected %u of %u)", g->small_spec, inst, meshes,
+                   small_scenes[r].instances, small_scenes[r].meshes);
+            const float lo[3] = {s.bounds.min.x, s.bounds.min.y, s.bounds.min.z};
+            const float hi[3] = {s.bounds.max.x, s.bounds.max.y, s.bounds.max.z};
+            for (int a = 0; a < 3; a++) {
+                float tol = 0.01f * (small_scenes[r].hi[a] - small_scenes[r].lo[a]);
+                CHECKF(fabsf(lo[a] - small_scenes[r].lo[a]) <= tol &&
+                           fabsf(hi[a] - small_scenes[r].hi[a]) <= tol,
+                       "%s: bounds on axis %d [%g, %g] (expected [%g, %g])", g->small_spec, a,
+                       lo[a], hi[a], small_scenes[r].lo[a], small_scenes[r].hi[a]);
+            }
+        }
         CHECKF(s.degenerate_count == 0, "%s: %u degenerate", g->small_spec, s.degenerate_count);
         CHECK(s.live_count == s.prim_count);
-        CHECK(!box3_is_empty(s.bounds));
         CHECK(s.camera.fov_deg > 10 && s.camera.fov_deg < 90);
         CHECK(v3_len(v3_sub(s.camera.look_at, s.camera.eye)) > 0);
         scene_free(&s);
+    }
+    for (size_t r = 0; r < rows; r++) {
+        size_t i = 0;
+        while (i < scene_generator_count && strcmp(scene_generators[i]->name, small_scenes[r].name))
+            i++;
+        CHECKF(i < scene_generator_count, "small_scenes[] names %s, no built-in scene",
+               small_scenes[r].name);
     }
 }
 

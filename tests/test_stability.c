@@ -115,7 +115,7 @@ TEST(stability_shared_meshes_vertex_rays)
 {
     const char *dir = test_shared_scenes();
     if (!dir) {
-        test_note("skipped: ../shared/scenes not found");
+        test_skip("../shared/scenes not found");
         return;
     }
     static const char *const meshes[] = {"bunny.off", "armadillo.off"};

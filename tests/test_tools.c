@@ -536,7 +536,7 @@ TEST(tools_trace_threads_bound_every_phase)
         int most = max_threads_of(pid, &status);
         CHECK(status == 0);
         if (most < 0) {
-            test_note("skipped: no /proc to count threads");
+            test_skip("no /proc to count threads");
             return;
         }
         /* Two threads may come and go between samples; one must never be exceeded. */

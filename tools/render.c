@@ -229,6 +229,9 @@ static int cmp_double(const void *a, const void *b)
     return x < y ? -1 : x > y;
 }
 
+/* Long on purpose (139 lines): the options and their checks, then the
+ * frames in order (build or update, trace, shade, write); each step is a
+ * few lines of calls and splitting them would pass the whole state. */
 int main(int argc, char **argv)
 {
     options o;

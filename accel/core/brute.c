@@ -88,7 +88,7 @@ brute_kernel(const brute_accel *b, const accel_ray *rays, accel_hit *hits, uint8
     }
 }
 
-ACCEL_KERNEL_PAIR(brute, brute_kernel)
+ACCEL_KERNEL_PAIR_NO_OPT(brute, brute_kernel)
 
 static unsigned brute_flags(const brute_accel *b)
 {

@@ -586,7 +586,7 @@ void accel_coherent_intersect(const void *accel, const accel_ray *rays, accel_hi
                               accel_hit_batch_fn single)
 {
     const job j = {accel, packet, single, NULL, NULL, sizeof(accel_hit)};
-    run(&j, rays, (char *)hits, count, c);
+    run(&j, rays, (char *)hits, count, ACCEL_COUNTERS_ON(c)); /* core/variant.h */
 }
 
 void accel_coherent_occluded(const void *accel, const accel_ray *rays, uint8_t *occ, size_t count,
@@ -594,5 +594,5 @@ void accel_coherent_occluded(const void *accel, const accel_ray *rays, uint8_t *
                              accel_occ_batch_fn single)
 {
     const job j = {accel, NULL, NULL, packet, single, 1};
-    run(&j, rays, (char *)occ, count, c);
+    run(&j, rays, (char *)occ, count, ACCEL_COUNTERS_ON(c)); /* core/variant.h */
 }

@@ -1,6 +1,6 @@
 /*
  * prim.h - ray preparation and ray/primitive intersection, shared by every
- * backend (and by the double-precision reference in reference.c).
+ * backend (and by the double-precision reference, the oracle: core/oracle.c).
  *
  * Triangles: the watertight test of Woop, Benthin and Wald, "Watertight
  * Ray/Triangle Intersection", JCGT 2(1), 2013, is the default: a ray that
@@ -88,7 +88,7 @@ static inline int accel_tri_is_degenerate(const float *t)
 static inline float v3_idx(vec3 a, int i) { return i == 0 ? a.x : (i == 1 ? a.y : a.z); }
 
 /* ---- double precision: the reference's arithmetic ------------------------
- * The oracle (reference.c) runs these on every primitive. The float kernels
+ * The oracle (core/oracle.c) runs these on every primitive. The float kernels
  * below fall back to them whenever their own rounding could change an
  * inside/outside decision, so that a float kernel and the reference decide
  * every ray through an edge, a vertex or a silhouette the same way. */

@@ -16,9 +16,11 @@
  * both queries. accel_run_kernel() picks the copy for a batch. This is the C form of the
  * variant tables of Embree and madmann91/bvh (see ../shared/STYLE.md).
  *
- * Counters are switched off in exactly one place: accel_run_kernel applies
- * ACCEL_COUNTERS_ON, and with -DACCEL_COUNTERS=0 the counted copy is the
- * uncounted kernel too.
+ * Counters are switched off where a batch enters the code that counts, and
+ * nowhere else: accel_run_kernel applies ACCEL_COUNTERS_ON to every kernel
+ * table, and so do the packet layer's entries (accel_coherent_intersect and
+ * _occluded, core/coherence.c), which count too; no kind applies it itself.
+ * With -DACCEL_COUNTERS=0 the counted copy is the uncounted kernel too.
  *
  * The step bound (the guard that turns a traversal bug into a reported
  * error instead of an endless loop) follows one policy for every kind: it
@@ -94,6 +96,22 @@ typedef struct {
         {NAME##_v0, NAME##_v1, NAME##_v2, NAME##_v3, NAME##_v4, NAME##_v5, NAME##_v6,       \
          NAME##_v7}};
 
+/* The copies a kind can select, nothing more: a kind whose flags never set
+ * ACCEL_V_OPT (no switch of its own: brute, instanced, the lab's kinds)
+ * compiles only the four copies with it clear; the entries with it set
+ * repeat them and are never selected (accel_variant_flags(.., 0)). Half the
+ * compile work of such a table. */
+#define ACCEL_KERNEL_TABLE_NO_OPT(NAME, KERNEL)                                             \
+    ACCEL_KERNEL_COUNTED_(NAME, KERNEL)                                                     \
+    ACCEL_KERNEL_COPY_(NAME, KERNEL, 0)                                                     \
+    ACCEL_KERNEL_COPY_(NAME, KERNEL, 1)                                                     \
+    ACCEL_KERNEL_COPY_(NAME, KERNEL, 2)                                                     \
+    ACCEL_KERNEL_COPY_(NAME, KERNEL, 3)                                                     \
+    static const accel_kernel_table NAME = {                                                \
+        NAME##_counted,                                                                     \
+        {NAME##_v0, NAME##_v1, NAME##_v2, NAME##_v3, NAME##_v0, NAME##_v1, NAME##_v2,       \
+         NAME##_v3}};
+
 /* The flags of a built structure's switches. */
 static inline unsigned accel_variant_flags(int naive, int spheres, int opt)
 {
@@ -109,7 +127,7 @@ static inline unsigned accel_variant_flags(int naive, int spheres, int opt)
  * copy one of hits and occ is a literal NULL, so a kernel tests `occ` for
  * the query; one that wants it as a literal argument uses two
  * ACCEL_KERNEL_TABLEs instead (bvh_single.c). */
-#define ACCEL_KERNEL_QUERY_(NAME, KERNEL, Q, HITS, OCC)                                     \
+#define ACCEL_KERNEL_QUERY_(NAME, KERNEL, Q, HITS, OCC, TABLE)                              \
     static inline __attribute__((always_inline)) void NAME##_##Q##_kernel_(                \
         const void *a, const accel_ray *r, void *o, size_t n, accel_counters *c, unsigned f) \
     {                                                                                       \
@@ -117,11 +135,17 @@ static inline unsigned accel_variant_flags(int naive, int spheres, int opt)
         KERNEL(a, r, HITS, OCC, n, c, (f & ACCEL_V_NAIVE) != 0, (f & ACCEL_V_SPHERES) != 0, \
                (f & ACCEL_V_OPT) != 0);                                                     \
     }                                                                                       \
-    ACCEL_KERNEL_TABLE(NAME##_##Q##_table, NAME##_##Q##_kernel_)
+    TABLE(NAME##_##Q##_table, NAME##_##Q##_kernel_)
 
 #define ACCEL_KERNEL_PAIR(NAME, KERNEL)                                                     \
-    ACCEL_KERNEL_QUERY_(NAME, KERNEL, hit, (accel_hit *)o, (uint8_t *)NULL)                 \
-    ACCEL_KERNEL_QUERY_(NAME, KERNEL, occ, (accel_hit *)NULL, (uint8_t *)o)
+    ACCEL_KERNEL_QUERY_(NAME, KERNEL, hit, (accel_hit *)o, (uint8_t *)NULL, ACCEL_KERNEL_TABLE) \
+    ACCEL_KERNEL_QUERY_(NAME, KERNEL, occ, (accel_hit *)NULL, (uint8_t *)o, ACCEL_KERNEL_TABLE)
+/* The same for a kind whose flags never set ACCEL_V_OPT (above). */
+#define ACCEL_KERNEL_PAIR_NO_OPT(NAME, KERNEL)                                              \
+    ACCEL_KERNEL_QUERY_(NAME, KERNEL, hit, (accel_hit *)o, (uint8_t *)NULL,                 \
+                        ACCEL_KERNEL_TABLE_NO_OPT)                                          \
+    ACCEL_KERNEL_QUERY_(NAME, KERNEL, occ, (accel_hit *)NULL, (uint8_t *)o,                 \
+                        ACCEL_KERNEL_TABLE_NO_OPT)
 
 /* Runs one batch with the copy for these flags: the counted copy when
  * counters are given (and compiled in), else the specialized one. */

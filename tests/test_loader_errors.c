@@ -1,5 +1,5 @@
 /*
- * test_loaders_errors.c - every malformed OBJ, PLY and OFF input rejected
+ * test_loader_errors.c - every malformed OBJ, PLY and OFF input rejected
  * with the file name and the right line in the message, leaving the
  * builder as it was; the prefix put before errors from the scene builder.
  */
@@ -7,7 +7,7 @@
 #include <string.h>
 
 #include "scene/load_common.h"
-#include "test_loaders.h"
+#include "test_loader.h"
 
 /* ---- malformed input: the message names the file and the line ----------- */
 

@@ -1,11 +1,11 @@
 /*
- * test_loaders.c - the OBJ, PLY and OFF loaders: the same mesh in every
+ * test_loader.c - the OBJ, PLY and OFF loaders: the same mesh in every
  * format (text and binary PLY in both byte orders) gives the same
  * triangles in the same (fan) order, OBJ relative indices, line endings and
  * syntax variants, and binary PLY errors at the right byte offset.
- * Malformed text input is in test_loaders_errors.c, number parsing in
- * test_loaders_numbers.c, the shared scenes and fuzz inputs in
- * test_loaders_files.c.
+ * Malformed text input is in test_loader_errors.c, number parsing in
+ * test_loader_numbers.c, the shared scenes and fuzz inputs in
+ * test_loader_files.c.
  */
 #include <math.h>
 #include <stdint.h>
@@ -14,7 +14,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "test_loaders.h"
+#include "test_loader.h"
 
 parse_fn test_loader_parser(const char *name)
 {
@@ -96,7 +96,7 @@ static void quads_ply_ascii(char *buf, size_t size)
 {
     size_t n = (size_t)snprintf(
         buf, size,
-        "ply\nformat ascii 1.0\ncomment made by test_loaders.c\nelement vertex 6\n"
+        "ply\nformat ascii 1.0\ncomment made by test_loader.c\nelement vertex 6\n"
         "property float x\nproperty uchar red\nproperty float y\nproperty double z\n"
         "property list uchar float extra\nelement edge 1\nproperty int a\nproperty int b\n"
         "element face 3\nproperty int flags\nproperty list uchar int vertex_indices\n"

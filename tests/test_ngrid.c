@@ -1,17 +1,17 @@
 /*
- * test_nested_grid.c - nested-grid tests: parameters and refusals, the
+ * test_ngrid.c - nested-grid tests: parameters and refusals, the
  * structure it builds (depth 1 is the regular grid; dense clusters get
  * sub-grids; useless sub-grids are not kept), and identical builds for any
  * thread count. The walk against the reference is in
- * test_nested_grid_walk.c, the cost model and auto mode in
- * test_nested_grid_cost.c; the cluster scene they share in
- * test_nested_grid.h.
+ * test_ngrid_walk.c, the cost model and auto mode in
+ * test_ngrid_cost.c; the cluster scene they share in
+ * test_ngrid.h.
  */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "test_nested_grid.h"
+#include "test_ngrid.h"
 
 /* A triangle with corners within `size` of c on every axis. */
 static void add_small_tri(scene_builder *b, vec3 c, float size)

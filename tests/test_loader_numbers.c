@@ -1,5 +1,5 @@
 /*
- * test_loaders_numbers.c - the loaders' number parsing: decimal text to
+ * test_loader_numbers.c - the loaders' number parsing: decimal text to
  * float exactly as strtof rounds it (ties to even, the double rounding
  * trap, subnormals, overflow, long digit strings, random decimals, every
  * float's shortest text), and 64-bit integers with their range.
@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "scene/load_common.h"
-#include "test_loaders.h"
+#include "test_loader.h"
 
 /* ---- exact decimal parsing ------------------------------------------------ */
 

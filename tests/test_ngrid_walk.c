@@ -1,5 +1,5 @@
 /*
- * test_nested_grid_walk.c - the nested grid's hierarchical walk against the
+ * test_ngrid_walk.c - the nested grid's hierarchical walk against the
  * oracle (a cluster, a lattice with sub-cells aligned to the rays, flat,
  * far, tiny and empty scenes, rays from inside, axis-parallel rays with
  * +0/-0 components), per-level counters and the cross-level mailbox.
@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "test_nested_grid.h"
+#include "test_ngrid.h"
 
 /* ---- the hierarchical walk against the reference --------------------------------------- */
 

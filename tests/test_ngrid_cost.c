@@ -1,5 +1,5 @@
 /*
- * test_nested_grid_cost.c - the nested grid's cost model against a Monte
+ * test_ngrid_cost.c - the nested grid's cost model against a Monte
  * Carlo estimate (isotropic random lines crossing a box), and auto mode's
  * response to its costs.
  */
@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "test_nested_grid.h"
+#include "test_ngrid.h"
 
 /* ---- the cost model ------------------------------------------------------------------ */
 

@@ -1,5 +1,5 @@
 /*
- * test_loaders_files.c - the loaders on files: the shared scenes checked
+ * test_loader_files.c - the loaders on files: the shared scenes checked
  * against an independent strtof-based reader, and the fuzz regression
  * inputs and seed corpora (each loads, or fails with a message naming the
  * file).
@@ -10,7 +10,7 @@
 #include <string.h>
 
 #include "scene/load_common.h"
-#include "test_loaders.h"
+#include "test_loader.h"
 
 /* ---- the shared scenes against an independent reader --------------------- */
 
@@ -148,7 +148,7 @@ TEST(loader_fuzz_regressions)
 {
     int n = run_inputs("tests/data/fuzz_regress", NULL, 0);
     if (n < 0) {
-        test_note("skipped: tests/data/fuzz_regress absent (run from the repository root)");
+        test_skip("tests/data/fuzz_regress absent (run from the repository root)");
         return;
     }
     CHECK(n > 0);

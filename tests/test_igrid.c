@@ -1,12 +1,14 @@
 /*
- * test_irregular_grid.c - the irregular grid: its structure's invariants
+ * test_igrid.c - the irregular grid: its structure's invariants
  * (every voxel maps to a cell whose exit box holds it; every voxel of an
  * exit box belongs to a cell whose primitives are a subset of the box's
  * cell; every primitive touching a voxel is in that voxel's cell), answers
  * against the reference for each build step on and off (clusters with
  * spheres, a lattice scene with rays through voxel corners and edges, flat
  * and far-from-origin scenes), what each step buys in the counters, memory
- * refusals and thread-count independence.
+ * refusals and thread-count independence. Two nested-grid tests are here
+ * too, named igrid_near_copies_ngrid_* (the family is the file's: igrid):
+ * they share this file's near-copies scene and check_small.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -524,7 +526,7 @@ static int near_copies(accel_scene *s)
  * before, 0.5 s now (with tracing and --check), with the same
  * structure; and the memory check no longer counts them, so a small max_mb
  * builds where it was refused ("16.9 MiB on top of 4.1 MiB"). */
-TEST(ngrid_near_copies_drop_subgrids_before_building)
+TEST(igrid_near_copies_ngrid_drops_subgrids_before_building)
 {
     accel_scene s;
     if (near_copies(&s)) {
@@ -539,7 +541,7 @@ TEST(ngrid_near_copies_drop_subgrids_before_building)
  * candidate with more than 128 references per primitive is not priced
  * (NGRID_AUTO_MAX_COPIES): 23 MB, a few seconds. Before, max_mb=64 refused
  * the build after 26 s ("level 1 sub-grids need 1388.0 MiB"). */
-TEST(ngrid_auto_near_copies_stay_bounded)
+TEST(igrid_near_copies_ngrid_auto_stays_bounded)
 {
     accel_scene s;
     if (near_copies(&s)) {

@@ -1,6 +1,6 @@
 /*
- * test_loaders.h - what the loader test files share, defined in
- * test_loaders.c.
+ * test_loader.h - what the loader test files share, defined in
+ * test_loader.c.
  */
 #ifndef TESTS_TEST_LOADERS_H
 #define TESTS_TEST_LOADERS_H

@@ -1,6 +1,6 @@
 /*
- * test_nested_grid.h - what the nested-grid test files share, defined in
- * test_nested_grid.c.
+ * test_ngrid.h - what the nested-grid test files share, defined in
+ * test_ngrid.c.
  */
 #ifndef TESTS_TEST_NESTED_GRID_H
 #define TESTS_TEST_NESTED_GRID_H

@@ -1,5 +1,5 @@
 /*
- * test_render.c - bin/render as a subprocess: its numbers are parsed
+ * test_tools_render.c - bin/render as a subprocess: its numbers are parsed
  * strictly, and a frame range is checked whole before the first frame.
  */
 #include <stdio.h>
