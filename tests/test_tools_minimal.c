@@ -49,7 +49,7 @@ static void check_minimal(const char *scene, const char *accel)
             CHECKF(!strcmp(what, "miss"), "%s: '%s' is neither prim nor miss", cmd, what);
         }
         accel_reference_trace(&s, &r, &ref, 1, 1);
-        CHECKF(ref.prim == got.prim && hits_agree(&ref, &got),
+        CHECKF(ref.prim == got.prim && hits_agree(&s, &r, &ref, &got),
                "%s, ray %d: prim %u t %.9g, the reference prim %u t %.9g", cmd, rays, got.prim,
                (double)got.t, ref.prim, (double)ref.t);
         rays++;
