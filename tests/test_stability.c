@@ -162,3 +162,41 @@ TEST(stability_shared_meshes_vertex_rays)
         stiff_case_free(&c);
     }
 }
+
+/*
+ * The tiny_huge fault of the report's 10^6-ray certification: rays that
+ * hit two huge, nearly coincident triangles (ids 0 and 2001) about 2e-4
+ * apart in t, where the float test's t of a huge triangle errs by more
+ * (its offsets cancel). The 8- and 4-wide BVHs took the farther triangle
+ * (the first ray: prim 2001 at t 0.557122 against the oracle's prim 0 at
+ * 0.556993), about once in a million rays. Such hits now take the double
+ * test (accel_tri_imprecise). Every kind's default must name the oracle's
+ * triangle on these rays (the first two rays found at 3.2M rays).
+ */
+TEST(stability_tiny_huge_near_coincident_huge_triangles)
+{
+    stiff_case c;
+    if (!test_stiff_case(stiff_case_index("tiny_huge"), &c)) return;
+    const accel_ray rays[2] = {
+        {-0x1.5a0be2p-1f, -0x1.04816ep-2f, 0x1.0f09a2p-4f, 0.0f, -0x1.c36c9p-1f, 0x1.d39776p-2f,
+         -0x1.e69bep-4f, INFINITY},
+        {-0x1.c5b18ap-2f, 0x1.88a694p-2f, 0x1.6e1b84p-1f, 0.0f, -0x1.9b43cep-1f, -0x1.20285p-2f,
+         -0x1.0cc984p-1f, INFINITY}};
+    accel_hit ref[2], h[2];
+    accel_reference_trace(&c.scene, rays, ref, 2, 1);
+    CHECKF(ref[0].prim == 0 && ref[1].prim == 0, "the oracle: prims %u, %u", ref[0].prim,
+           ref[1].prim);
+    const char *specs[] = {"bvh:width=8", "bvh:width=4", "bvh", "grid", "grid:cells=ids",
+                           "nested_grid", "brute"};
+    for (size_t k = 0; k < sizeof specs / sizeof *specs; k++) {
+        const accel_kind *kind;
+        void *a = test_build_kind(specs[k], &c.scene, 1, &kind, NULL);
+        if (!a) continue;
+        accel_trace(kind, a, rays, h, 2, 1, NULL);
+        hits_diff d = hits_compare(&c.scene, rays, ref, h, 2);
+        CHECKF(d.agree == 2, "%s: prim %u t %.9g and prim %u t %.9g (the oracle: prim %u t %.9g)",
+               specs[k], h[0].prim, h[0].t, h[1].prim, h[1].t, ref[0].prim, ref[0].t);
+        kind->destroy(a);
+    }
+    stiff_case_free(&c);
+}
