@@ -47,6 +47,13 @@ typedef struct {
  * mistakes of order (far child first, no near-first order, no t_max shrink,
  * a split that never sorts) 1.27-1.96x (issue 37). */
 #define LAB_SLOW_RATIO 1.25
+/* The counters' lower band: a correct walk visits every node on the way to
+ * every leaf it tests, so it counts at least this share of the reference's
+ * nodes and primitive tests (a count of leaves only: 0.13x). */
+#define LAB_COUNT_LOW 0.5
+/* Above this many times the reference's work, the order is not the cause:
+ * the hint points at the boxes and the depth view. */
+#define LAB_BOX_RATIO 3.0
 
 /* Seconds a scene's check may take before it counts as an endless loop. */
 #define LAB_SCENE_TIMEOUT 120
