@@ -696,6 +696,86 @@ out:
     scene_free(&sc);
 }
 
+/* Step 5, first: every variant of the kind (accel_kind.variants, which
+ * the conformance suite runs too: leaf=1, traverse=packet) on each scene,
+ * in its own child, so that a crash or a wrong answer names the variant
+ * and the scene, not only "died" in the suite's output. */
+static const char *variant_now = ""; /* set before each child starts */
+
+static void check_variant(const lab_subject *s, const char *spec, lab_result *r, accel_error *err)
+{
+    accel_scene sc;
+    if (scene_create(spec, &sc, err)) {
+        lab_fail(r, "scene %s: %s", spec, err->msg);
+        return;
+    }
+    rays_set rays = {0};
+    void *a = NULL;
+    accel_build_stats st;
+    accel_hit *ref = NULL, *hits = NULL;
+    lab_where(r, "scene %s, your build with %s", spec, variant_now);
+    if (build(s, variant_now, &sc, &a, &st, err)) {
+        lab_fail(r, "%s: your build with %s failed: %s", spec, variant_now, err->msg);
+        goto out;
+    }
+    if (rays_primary(&sc.camera, 32, 32, &rays, err) ||
+        !(ref = malloc(rays.count * sizeof *ref)) || !(hits = malloc(rays.count * sizeof *hits))) {
+        lab_fail(r, "%s: could not make the rays", spec);
+        goto out;
+    }
+    lab_where(r, "scene %s, variant %s, primary rays", spec, variant_now);
+    accel_reference_trace(&sc, rays.rays, ref, rays.count, 1);
+    accel_trace(s->kind, a, rays.rays, hits, rays.count, 1, NULL);
+    hits_diff d = hits_compare(&sc, rays.rays, ref, hits, rays.count);
+    if (d.first_bad != SIZE_MAX)
+        lab_fail(r, "%s with %s: %zu holes, %zu false hits, %zu other disagreements of %zu "
+                    "primary rays (first: ray %zu): the variant the conformance suite runs "
+                    "(bin-lab/lab --step 2 --accel student:%s shows the ray)",
+                 spec, variant_now, d.holes, d.false_hits, d.disagreements, rays.count,
+                 d.first_bad, variant_now);
+out:
+    if (a) s->kind->destroy(a);
+    rays_free(&rays);
+    free(ref);
+    free(hits);
+    scene_free(&sc);
+}
+
+/* Does kv set a key that variant sets too (bvh:build=median and
+ * build=mid)? Then the variant is not this subject's. */
+static int sets_a_key_of(const char *kv, const char *variant)
+{
+    for (const char *p = variant; *p;) {
+        const char *eq = strchr(p, '='), *comma = strchr(p, ',');
+        if (!eq || (comma && comma < eq)) break;
+        char key[64];
+        size_t len = (size_t)(eq - p) + 1; /* with the '=' */
+        if (len >= sizeof key) break;
+        memcpy(key, p, len);
+        key[len] = '\0';
+        for (const char *q = kv; (q = strstr(q, key)) != NULL; q++)
+            if (q == kv || q[-1] == ',') return 1;
+        if (!comma) break;
+        p = comma + 1;
+    }
+    return 0;
+}
+
+static void check_variants(const lab_subject *s, const char *const *scenes, size_t n,
+                           lab_result *r, accel_error *err)
+{
+    size_t ran = 0;
+    for (const char *const *v = s->kind->variants; v && *v && r->passed; v++) {
+        if (!**v || sets_a_key_of(s->kv, *v)) continue; /* the default: steps 1-4 */
+        variant_now = *v;
+        for (size_t i = 0; i < n && r->passed; i++, ran++)
+            lab_run_isolated(check_variant, s, scenes[i], r, err);
+    }
+    variant_now = "";
+    if (r->passed && ran)
+        lab_say(r, "  ok   your kind's variants (%zu builds) agree with the reference\n", ran);
+}
+
 /* ---- the steps ------------------------------------------------------------- */
 
 static const char *const step_scenes[] = {"soup:tris=3000,seed=7", "teapot_stadium:n=4",
@@ -732,7 +812,8 @@ int lab_check(int step, const lab_subject *s, lab_result *out, accel_error *err)
             lab_run_isolated(check_packets, s, step_scenes[i], out, err);
         break;
     case 5:
-        lab_run_isolated(check_real_time, s, "teapot_stadium:n=16", out, err);
+        check_variants(s, step_scenes, n, out, err);
+        if (out->passed) lab_run_isolated(check_real_time, s, "teapot_stadium:n=16", out, err);
         break;
     case 7:
         lab_check_top(s, out, err);

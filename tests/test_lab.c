@@ -11,9 +11,11 @@
  * LAB_MUTANT_TABLE=1 bin/run_tests lab_mutants prints the table of
  * mutants: step, outcome, the first line of the report's failure.
  */
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "lab/check.h"
 #include "tests/lab_solution.h"
@@ -232,4 +234,86 @@ TEST(lab_solution_keeps_the_starter)
     }
     free(st);
     free(sol);
+}
+
+/* Step 5 runs the kind's variants first, each scene in its own child: a
+ * leaf rule that recurses forever at leaf=1 (step 1 catches it too) is
+ * reported naming the variant and the scene, not as a bare "died". */
+TEST(lab_step5_names_the_variant)
+{
+    lab_subject sol = {&accel_kind_lab_solution, "", 2, NULL, 1, NULL};
+    accel_error err = {0};
+    lab_result r;
+    lab_solution_mutant = LM_LEAF_RECURSE;
+    int rc = lab_check(5, &sol, &r, &err);
+    lab_solution_mutant = LM_NONE;
+    CHECK(rc == 0);
+    CHECKF(!r.passed && r.outcome == LAB_CRASHED &&
+               strstr(r.report, "on scene soup:tris=3000,seed=7, your build with leaf=1"),
+           "step 5 does not name the variant and the scene of a crash:\n%s", r.report);
+}
+
+/* ---- the sanitized checks (Makefile: bin-lab/lab-safe) ------------------- */
+
+static void dies_of_a_signal(const lab_subject *s, const char *scene, lab_result *r,
+                             accel_error *err)
+{
+    (void)s, (void)scene, (void)err;
+    lab_where(r, "scene %s, ray set primary", scene);
+    raise(SIGSEGV);
+}
+
+static void stopped_by_a_sanitizer(const lab_subject *s, const char *scene, lab_result *r,
+                                   accel_error *err)
+{
+    (void)s, (void)scene, (void)err;
+    lab_where(r, "scene %s, ray set shadow", scene);
+    _exit(1); /* what AddressSanitizer and UBSan do after their report */
+}
+
+/* A crash in a run without the sanitizers points at the sanitized check;
+ * a child stopped by a sanitizer points at its report, which names the
+ * line; both name the scene and the ray set. */
+TEST(lab_crash_hints_name_the_sanitizers)
+{
+    lab_subject sol = {&accel_kind_lab_solution, "", 1, NULL, 1, NULL};
+    accel_error err = {0};
+    lab_result r;
+    memset(&r, 0, sizeof r);
+    r.passed = 1;
+    lab_run_isolated(dies_of_a_signal, &sol, "cube:n=2", &r, &err);
+    CHECKF(!r.passed && r.outcome == LAB_CRASHED && strstr(r.report, "ray set primary") &&
+               strstr(r.report, "`make lab STEP=n` runs the check under AddressSanitizer"),
+           "a crash's report does not point at the sanitized check:\n%s", r.report);
+    memset(&r, 0, sizeof r);
+    r.passed = 1;
+    lab_run_isolated(stopped_by_a_sanitizer, &sol, "cube:n=2", &r, &err);
+    CHECKF(!r.passed && r.outcome == LAB_CRASHED && strstr(r.report, "ray set shadow") &&
+               strstr(r.report, "AddressSanitizer or UBSan stopped your code") &&
+               strstr(r.report, "names the line"),
+           "a sanitizer's stop is not reported as one:\n%s", r.report);
+}
+
+/* make lab STEP=n runs bin-lab/lab-safe (the student's file compiled with
+ * -fsanitize=address,undefined) where the compiler links the sanitizers,
+ * except step 5, which times frames and runs the plain bin-lab/lab. */
+TEST(lab_make_runs_the_checks_sanitized)
+{
+    static const char *const cases[][2] = {{"2", "lab-safe"}, {"4", "lab-safe"}, {"5", "lab"}};
+    for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char cmd[512], *out = NULL, *err = NULL;
+        snprintf(cmd, sizeof cmd,
+                 "env -u MAKEFLAGS -u MFLAGS -u MAKELEVEL make -s --no-print-directory "
+                 "--eval 'LAB_HAVE_SAN := 1' --eval 'lab-print-checker: ; @echo "
+                 "\"$(LAB_SAN)|$(LAB_SAFE_OBJ)|$(LAB_CHECKER)\"' lab-print-checker STEP=%s",
+                 cases[i][0]);
+        int st = test_run("build/test-lab", cmd, &out, &err);
+        char want[64];
+        snprintf(want, sizeof want, "|%s\n", cases[i][1]);
+        CHECKF(st == 0 && out && strstr(out, "-fsanitize=address,undefined") &&
+                   strstr(out, "lab/student.safe.o") && strstr(out, want),
+               "STEP=%s: exit %d, not %s with the sanitizers: %.300s %.300s", cases[i][0], st,
+               cases[i][1], out ? out : "", err ? err : "");
+        free(out), free(err);
+    }
 }
