@@ -124,7 +124,7 @@ static const mutant_case mutants[] = {
     {LM_NO_PRIM_COUNT, 2, LAB_WRONG, "step 2: primitive tests never counted", "*prims"},
     {LM_LEAVES_ONLY, 2, LAB_WRONG, "step 2: node visits counted at leaves only", "*steps"},
     {LM_SMALL_STACK, 2, LAB_CRASHED, "step 2: a traversal stack of 8 entries (ASan only)",
-     "sanitizer"},
+     "AddressSanitizer or UBSan stopped"},
     {LM_ANY_HIT_ALL, 2, LAB_SLOW, "step 2: occluded() searches on for the closest hit",
      "occluded()"},
     {LM_FAR_FIRST, 2, LAB_SLOW, "step 2: the far child first", NULL},
@@ -260,7 +260,7 @@ static void dies_of_a_signal(const lab_subject *s, const char *scene, lab_result
 {
     (void)s, (void)scene, (void)err;
     lab_where(r, "scene %s, ray set primary", scene);
-    raise(SIGSEGV);
+    raise(SIGABRT); /* not SIGSEGV: AddressSanitizer (make sanitize) would catch that */
 }
 
 static void stopped_by_a_sanitizer(const lab_subject *s, const char *scene, lab_result *r,
