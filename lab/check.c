@@ -476,11 +476,17 @@ static void check_traversal(const lab_subject *s, const char *spec, lab_result *
                  mine_cl.steps, mine_cl.prims, yard->what, occ_theirs);
         goto out;
     }
+    char occ_note[160];
+    if (blocked.count >= 16)
+        snprintf(occ_note, sizeof occ_note, "any hit on the %zu rays that hit %.2fx the work of "
+                 "closest hit (%s: %.2fx)", blocked.count, occ_mine, yard->what, occ_theirs);
+    else
+        snprintf(occ_note, sizeof occ_note, "too few shadow and diffuse rays hit (%zu) to cost "
+                 "any hit", blocked.count);
     lab_say(r, "  ok   %s: %zu rays agree with the reference; per primary ray %.1f %s and %.1f "
-               "primitive tests (%s: %.1f and %.1f; %.2fx the %s); any hit on the shadow rays "
-               "%.2fx the work of closest hit (%s: %.2fx)\n",
+               "primitive tests (%s: %.1f and %.1f; %.2fx the %s); %s\n",
             spec, rays, mine.steps, yard->unit, mine.prims, yard->what, theirs.steps,
-            theirs.prims, steps_x, yard->unit, occ_mine, yard->what, occ_theirs);
+            theirs.prims, steps_x, yard->unit, occ_note);
 out:
     if (a) s->kind->destroy(a);
     if (ref_a) refk->destroy(ref_a);

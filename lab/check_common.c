@@ -130,8 +130,12 @@ void lab_run_isolated(lab_scene_check fn, const lab_subject *s, const char *scen
                    "push beyond LAB_MAX_DEPTH)%s",
                 strsignal(WTERMSIG(status)), r->where, lab_safe_hint);
     else if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-        crashed(r, "ended with status %d on %s: %s", WEXITSTATUS(status), r->where,
-                lab_sanitizer_note);
+        crashed(r, "ended with status %d on %s: %s%s", WEXITSTATUS(status), r->where,
+                lab_sanitizer_note,
+                strstr(r->where, "build") ? ". In a build, the usual cause is an endless "
+                                            "recursion in build_node() (a leaf rule that never "
+                                            "stops: `count < leaf` at leaf=1), which writes past "
+                                            "the node pool (2N nodes) first" : "");
 }
 
 /* Rays from the eye through triangle vertices (the cases that leak through
