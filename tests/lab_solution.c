@@ -123,6 +123,10 @@ static uint32_t middle_split(lab_bvh *b, uint32_t first, uint32_t count, const l
 
 static void node_box(lab_bvh *b, lab_node *nd, uint32_t first, uint32_t count)
 {
+    if (MUTANT(LM_ROOT_BOX) && nd != b->nodes) { /* the root's box, made first */
+        *nd = b->nodes[0];
+        return;
+    }
     box3 box = box3_empty();
     for (uint32_t i = 0; i < count; i++) {
         uint32_t prim = b->order[first + i];

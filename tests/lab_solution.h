@@ -20,6 +20,7 @@ typedef enum {
     LM_LOST_PRIM,      /* the right child gets count/2 primitives: odd counts lose one */
     LM_NO_LEAF_COUNT,  /* leaves never counted (the statistics say: no tree) */
     LM_LEAF_SWAP,      /* a leaf's left_first and count swapped */
+    LM_ROOT_BOX,       /* every node's box is the root's: valid, and useless (step 2's rule) */
     LM_LEAF_RECURSE,   /* a leaf when count < leaf, no depth guard: leaf=1 recurses forever */
     /* step 2: single rays */
     LM_CULL_LT,     /* a popped node culled with entry < t */

@@ -131,6 +131,8 @@ static const mutant_case mutants[] = {
     {LM_NO_ORDER, 2, LAB_SLOW, "step 2: no near-first order", NULL},
     {LM_NO_SHRINK, 2, LAB_SLOW, "step 2: t_max never shrunk", NULL},
     {LM_NO_SORT, 2, LAB_SLOW, "step 1's split never sorts (step 2's rule)", NULL},
+    {LM_ROOT_BOX, 2, LAB_SLOW, "step 1's node boxes all the root's (step 2's rule)",
+     "look at the boxes and the depth view"},
     {LM_WALK_ALL, 3, LAB_SLOW, "step 3: every primitive to the visitor", NULL},
     {LM_WALK_NO_PAD, 3, LAB_WRONG, "step 3: boxes not padded", NULL},
     {LM_WALK_PRIM_HIT, 3, LAB_WRONG, "step 3: filters with its own triangle test", NULL},
