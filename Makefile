@@ -86,6 +86,7 @@ EXP_BINS := $(patsubst experiments/%.c,$(BIN)/%,$(wildcard experiments/exp_*.c))
 # The lab's checks and its untouched starter kind are part of the tests
 # (tests/test_lab.c: every check passes on the project and fails on the starter).
 TEST_SRC := $(wildcard tests/*.c) lab/check.c lab/check_common.c lab/check_step3.c lab/starter.c \
+            lab/check_step5.c \
             lab/check_top.c \
             lab/grid_starter.c \
             experiments/claims.c experiments/stats.c experiments/svg.c experiments/mdcut.c
@@ -151,7 +152,7 @@ $(BIN)/mkreport: $(BUILD)/experiments/mkreport.o $(BUILD)/experiments/mdcut.o $(
 	$(CC) $(ALL_CFLAGS) $^ -o $@ $(LDLIBS)
 
 $(BIN)/lab: $(BUILD)/lab/lab.o $(BUILD)/lab/check.o $(BUILD)/lab/check_common.o $(BUILD)/lab/check_step3.o \
-            $(BUILD)/lab/check_top.o $(LIB)
+            $(BUILD)/lab/check_step5.o $(BUILD)/lab/check_top.o $(LIB)
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $^ -o $@ $(LDLIBS)
 
@@ -167,7 +168,7 @@ $(LAB_SAFE_OBJ): $(BUILD)/lab/%.safe.o: lab/%.c $(FLAGS_STAMP)
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) $(LAB_SAN) $(DEPFLAGS) -c $< -o $@
 $(BIN)/lab-safe: $(LAB_SAFE_OBJ) $(BUILD)/lab/lab.o $(BUILD)/lab/check.o $(BUILD)/lab/check_common.o \
-                 $(BUILD)/lab/check_step3.o $(BUILD)/lab/check_top.o $(LIB)
+                 $(BUILD)/lab/check_step3.o $(BUILD)/lab/check_step5.o $(BUILD)/lab/check_top.o $(LIB)
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $(LAB_SAN) $^ -o $@ $(LDLIBS)
 

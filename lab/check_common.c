@@ -63,6 +63,15 @@ static void crashed(lab_result *r, const char *fmt, ...)
     va_end(ap);
 }
 
+/* Builds the subject with extra parameters appended to its own. */
+int lab_build_subject(const lab_subject *s, const char *extra, const accel_scene *scene, void **a,
+                      accel_build_stats *st, accel_error *err)
+{
+    char kv[256];
+    snprintf(kv, sizeof kv, "%s%s%s", s->kv, *s->kv && *extra ? "," : "", extra);
+    return accel_build_kind(s->kind, kv, scene, 1, a, st, err);
+}
+
 void lab_where(lab_result *r, const char *fmt, ...)
 {
     va_list ap;

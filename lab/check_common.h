@@ -76,6 +76,12 @@ void lab_run_isolated(lab_scene_check fn, const lab_subject *s, const char *scen
 /* Rays from the camera through triangle vertices, and axis-parallel rays
  * with +-0 components from the faces of the scene's box. */
 int lab_make_stiff_rays(const accel_scene *sc, rays_set *out, accel_error *err);
+/* Builds the subject with extra parameters (e.g. "leaf=1") after its own. */
+int lab_build_subject(const lab_subject *s, const char *extra, const accel_scene *scene, void **a,
+                      accel_build_stats *st, accel_error *err);
+/* Step 5 (check_step5.c): the kind's variants on scenes[0, n), then frames. */
+void lab_check_step5(const lab_subject *s, const char *const *scenes, size_t n, lab_result *r,
+                     accel_error *err);
 /* Step 3 (check_step3.c), run by lab_check (check.h). */
 void lab_check_step3(const lab_subject *s, lab_result *r, accel_error *err);
 /* Step 7, the optional top level (check_top.c). */
