@@ -102,6 +102,7 @@ EXP_BINS := $(patsubst experiments/%.c,$(BIN)/%,$(wildcard experiments/exp_*.c))
 # The lab's checks and its untouched starter kind are part of the tests
 # (tests/test_lab.c: every check passes on the project and fails on the starter).
 TEST_SRC := $(wildcard tests/*.c) lab/check.c lab/check_common.c lab/check_step3.c lab/starter.c \
+            lab/check_step5.c \
             lab/check_top.c \
             lab/grid_starter.c \
             experiments/claims.c experiments/stats.c experiments/svg.c experiments/mdcut.c
@@ -167,9 +168,25 @@ $(BIN)/mkreport: $(BUILD)/experiments/mkreport.o $(BUILD)/experiments/mdcut.o $(
 	$(CC) $(ALL_CFLAGS) $^ -o $@ $(LDLIBS)
 
 $(BIN)/lab: $(BUILD)/lab/lab.o $(BUILD)/lab/check.o $(BUILD)/lab/check_common.o $(BUILD)/lab/check_step3.o \
-            $(BUILD)/lab/check_top.o $(LIB)
+            $(BUILD)/lab/check_step5.o $(BUILD)/lab/check_top.o $(LIB)
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $^ -o $@ $(LDLIBS)
+
+# The lab's checks run the student's code under AddressSanitizer and UBSan
+# where the compiler has them (LAB.md): bin-lab/lab-safe is bin-lab/lab with
+# lab/student*.c compiled instrumented and linked before the library, whose
+# plain copies it then never pulls in; the rest stays uninstrumented (one
+# file to compile, seconds). A read past an array or a traversal stack
+# smaller than the tree is deep then stops the check with the line.
+LAB_SAN := -O1 -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
+LAB_SAFE_OBJ := $(BUILD)/lab/student.safe.o $(BUILD)/lab/student_grid.safe.o
+$(LAB_SAFE_OBJ): $(BUILD)/lab/%.safe.o: lab/%.c $(FLAGS_STAMP)
+	@mkdir -p $(dir $@)
+	$(CC) $(ALL_CFLAGS) $(LAB_SAN) $(DEPFLAGS) -c $< -o $@
+$(BIN)/lab-safe: $(LAB_SAFE_OBJ) $(BUILD)/lab/lab.o $(BUILD)/lab/check.o $(BUILD)/lab/check_common.o \
+                 $(BUILD)/lab/check_step3.o $(BUILD)/lab/check_step5.o $(BUILD)/lab/check_top.o $(LIB)
+	@mkdir -p $(BIN)
+	$(CC) $(ALL_CFLAGS) $(LAB_SAN) $^ -o $@ $(LDLIBS)
 
 # The header test compiles every header as C and C++ and links a C++
 # program against this build's library, with this build's link flags.
@@ -210,6 +227,13 @@ sanitize: $(TOOLS) $(EXP_BINS) $(BIN)/mkreport
 fuzz:
 	$(MAKE) -C tests/fuzz
 
+# The checks of steps other than 5 (which times frames) run bin-lab/lab-safe
+# where the compiler can link the sanitizers (asked only by these targets).
+ifneq ($(filter lab lab-report,$(MAKECMDGOALS)),)
+LAB_HAVE_SAN := $(shell printf 'int main(void){return 0;}\n' | $(CC) $(LAB_SAN) -x c - -o /dev/null 2>/dev/null && echo 1)
+endif
+LAB_CHECKER = $(if $(and $(LAB_HAVE_SAN),$(filter-out 5,$(STEP))),lab-safe,lab)
+
 # The lab (LAB.md): the student's kind, lab/student.c, made from the starter
 # on first use and registered only in this build (build-lab/, bin-lab/).
 # make lab STEP=n runs step n's check on it, writing its images to lab/out/.
@@ -226,8 +250,9 @@ lab:
 	@mkdir -p lab/out
 	@test -x bin-lab/lab || echo "lab: building bin-lab/ (the first time takes minutes: make -j2 lab uses 2 cores)"
 	@$(MAKE) -s --no-print-directory BUILD=build-lab BIN=bin-lab LAB=1 bin-lab/lab bin-lab/trace \
-	  bin-lab/run_tests bin-lab/mkreport $(patsubst $(BIN)/%,bin-lab/%,$(EXP_BINS))
-	@if [ -n "$(STEP)" ]; then ./bin-lab/lab --step $(STEP) --out lab/out $(if $(filter 5,$(STEP)),&& \
+	  bin-lab/run_tests bin-lab/mkreport $(patsubst $(BIN)/%,bin-lab/%,$(EXP_BINS)) \
+	  $(if $(LAB_HAVE_SAN),bin-lab/lab-safe)
+	@if [ -n "$(STEP)" ]; then ASAN_OPTIONS=detect_leaks=0 ./bin-lab/$(LAB_CHECKER) --step $(STEP) --out lab/out $(if $(filter 5,$(STEP)),&& \
 	   { echo "step 5 (last): your kind through the conformance suite (bin-lab/run_tests conformance_student)"; \
 	     KINDS=student ./bin-lab/run_tests conformance_student > lab/out/conformance.txt 2>&1 && tail -n 1 lab/out/conformance.txt || \
 	     { grep -v '^ *ok ' lab/out/conformance.txt | head -n 40; echo "step 5: not yet (lab/out/conformance.txt)"; exit 1; }; }); \

@@ -34,18 +34,6 @@ const char *lab_step_title(int step)
     return step >= 1 && step <= LAB_STEPS ? titles[step] : "no such step";
 }
 
-/* Builds the subject with extra parameters appended to its own. */
-static int build(const lab_subject *s, const char *extra, const accel_scene *scene, void **a,
-                 accel_build_stats *st, accel_error *err)
-{
-    char kv[256];
-    snprintf(kv, sizeof kv, "%s%s%s", s->kv, *s->kv && *extra ? "," : "", extra);
-    return accel_build_kind(s->kind, kv, scene, 1, a, st, err);
-}
-
-/* The project's median-split BVH, the yardstick of costs (NULL when bvh is
- * not registered, e.g. in a trimmed lab build). */
-static const accel_kind *reference_kind(void) { return accel_find_kind("bvh"); }
 
 /* The yardstick of step 2's cost rule (step 6: the project's grid in its
  * plain form, with the subject's parameters, e.g. lambda). */
@@ -63,9 +51,23 @@ static const yardstick grid_yard = {
     "step only through the cells the ray crosses, in its order (3D DDA), start at the cell where "
     "it enters the grid's box, and stop once the closest hit lies before the current cell's "
     "exit"};
+/* Far above every mistake of order (1.3-1.9x): the boxes themselves. */
+static const char *const lab_box_hint =
+    "this is far more than any traversal order costs (1.3-1.9x): look at the boxes and the depth "
+    "view (lab/out/step2_depth_*.png beside the reference's). Boxes much larger than their "
+    "primitives (a box from the parent's range, or not shrunk to the node's own primitives), "
+    "or a split that leaves most primitives on one side, light up the whole view";
 static const yardstick *yard = &bvh_yard; /* set by lab_check before the children start */
 
 /* ---- step 1 -------------------------------------------------------------- */
+
+/* Does the kind take parameter `key`? */
+static int has_param(const accel_kind *k, const char *key)
+{
+    for (size_t i = 0; i < k->param_count; i++)
+        if (!strcmp(k->params[i].key, key)) return 1;
+    return 0;
+}
 
 static void check_build(const lab_subject *s, const char *spec, lab_result *r, accel_error *err)
 {
@@ -78,7 +80,7 @@ static void check_build(const lab_subject *s, const char *spec, lab_result *r, a
     accel_build_stats st;
     uint32_t n = scene.live_count;
     lab_where(r, "scene %s, your build", spec);
-    if (build(s, "", &scene, &a, &st, err)) {
+    if (lab_build_subject(s, "", &scene, &a, &st, err)) {
         lab_fail(r, "%s: your build failed: %s", spec, err->msg);
     } else if (st.nodes == 0 || st.leaves == 0) {
         lab_fail(r, "%s: your build made no nodes (stats: %llu nodes, %llu leaves) for %u "
@@ -106,6 +108,22 @@ static void check_build(const lab_subject *s, const char *spec, lab_result *r, a
                 st.ms, (double)st.bytes / (n ? n : 1));
     }
     if (a) s->kind->destroy(a);
+    a = NULL;
+    /* leaf=1, the conformance suite's variant (step 5): one primitive per
+     * leaf, where a leaf rule `count < leaf` never stops splitting. */
+    if (r->passed && has_param(s->kind, "leaf")) {
+        lab_where(r, "scene %s, your build with leaf=1", spec);
+        if (lab_build_subject(s, "leaf=1", &scene, &a, &st, err))
+            lab_fail(r, "%s: your build with leaf=1 failed: %s", spec, err->msg);
+        else if (st.leaves != n || st.refs != n ||
+                 (st.nodes != 2 * st.leaves - 1 && st.nodes != 2 * st.leaves))
+            lab_fail(r, "%s: with leaf=1, %llu leaves holding %llu primitives in %llu nodes, for "
+                        "%u primitives: a leaf holds at most `leaf` primitives, so at leaf=1 "
+                        "every primitive has its own leaf (a leaf when count <= leaf)",
+                     spec, (unsigned long long)st.leaves, (unsigned long long)st.refs,
+                     (unsigned long long)st.nodes, n);
+        if (a) s->kind->destroy(a);
+    }
     scene_free(&scene);
 }
 
@@ -167,9 +185,32 @@ static int compare_group(const accel_kind *k, const void *a, const accel_scene *
         size_t mine = 0;
         for (size_t j = 0; j < n; j++) mine += hits[j].prim != ACCEL_MISS;
         int ending = strstr(g->name, "ending") != NULL;
+        const accel_ray *ray = &g->rays.rays[i];
+        /* Causes the answer itself tells: a triangle the ray does not hit
+         * where the reference misses (a lane or a hit never written), or
+         * another triangle at the reference's very distance (an id that
+         * is not the triangle's). */
+        int unreal = hits[i].prim != ACCEL_MISS && !hits_verify(sc, ray, &hits[i]);
+        int same_t = hits[i].prim != ACCEL_MISS && ref[i].prim != ACCEL_MISS &&
+                     hits[i].prim != ref[i].prim &&
+                     fabsf(hits[i].t - ref[i].t) <= 1e-4f * fmaxf(1.0f, fabsf(ref[i].t));
         lab_say(r, "         hint: %s\n",
             mine == 0 ? "you report no hit on any ray: is the traversal written (trace_ray, "
                         "step 2; trace_packet, step 4) and does it return the local id it hit?"
+            : same_t && unreal
+                ? "the reference's distance, but another triangle, which this ray does not hit "
+                  "there: report the triangle's id, b->store.scene_id[prim] with prim = "
+                  "b->order[left_first + i], not its position in your order (left_first + i) "
+                  "or in the leaf"
+            : unreal && ref[i].prim == ACCEL_MISS
+                ? g->packets
+                    ? "a hit on a triangle this ray does not hit, where the reference misses: "
+                      "an uninitialized lane (its hit, t or id never written: set every lane's "
+                      "hit to ACCEL_MISS before the walk, not only the lanes that hit; the "
+                      "lanes of a packet's last rows too)"
+                    : "a hit on a triangle this ray does not hit, where the reference misses: "
+                      "an uninitialized hit (set the hit to ACCEL_MISS before the walk and "
+                      "write it only where accel_prim_hit says so)"
             : ending && g->packets && hits[i].prim == ACCEL_MISS
                 ? "these rays end exactly at their hit (t_far = the hit's t): a lane enters a "
                   "box when box3_slab(..., p->t_near, t[lane], &entry) says so, with the lane's "
@@ -217,6 +258,48 @@ static double steps_per_ray(const accel_kind *k, const void *a, const rays_set *
     accel_trace(k, a, rays->rays, h, rays->count, 1, &c);
     free(h);
     return rays->count ? (double)c.steps / (double)rays->count : 0.0;
+}
+
+/* Nodes visited and primitives tested per ray by a counted run: closest
+ * hits, or any hits (occluded) when occluded != 0. */
+typedef struct {
+    double steps, prims;
+} ray_work;
+
+static ray_work work_per_ray(const accel_kind *k, const void *a, const rays_set *rays, int occluded)
+{
+    ray_work w = {NAN, NAN};
+    accel_counters c = {0};
+    size_t n = rays->count ? rays->count : 1;
+    void *out = malloc(n * (occluded ? sizeof(uint8_t) : sizeof(accel_hit)));
+    if (!out) return w;
+    if (occluded) accel_trace_occluded(k, a, rays->rays, out, rays->count, 1, &c);
+    else accel_trace(k, a, rays->rays, out, rays->count, 1, &c);
+    free(out);
+    w.steps = (double)c.steps / (double)n;
+    w.prims = (double)c.prim_tests / (double)n;
+    return w;
+}
+
+/* The rays of a and b that hit something (the kind's occluded(), checked
+ * against the oracle before): where an any-hit query can stop early. */
+static int occluded_subset(const accel_kind *k, const void *acc, const rays_set *a,
+                           const rays_set *b, rays_set *out)
+{
+    size_t n = a->count + b->count;
+    uint8_t *occ = malloc(n ? n : 1);
+    out->rays = malloc((n ? n : 1) * sizeof *out->rays);
+    out->count = 0;
+    if (!occ || !out->rays) {
+        free(occ);
+        return -1;
+    }
+    accel_trace_occluded(k, acc, a->rays, occ, a->count, 1, NULL);
+    accel_trace_occluded(k, acc, b->rays, occ + a->count, b->count, 1, NULL);
+    for (size_t i = 0; i < n; i++)
+        if (occ[i]) out->rays[out->count++] = i < a->count ? a->rays[i] : b->rays[i - a->count];
+    free(occ);
+    return 0;
 }
 
 /* The depth view: nodes visited per pixel, at 256x256 (the check's own
@@ -280,6 +363,7 @@ static void check_traversal(const lab_subject *s, const char *spec, lab_result *
     accel_hit *ph = NULL;
     void *a = NULL, *ref_a = NULL;
     accel_build_stats st;
+    rays_set blocked = {0}; /* the shadow and diffuse rays that hit: any hit's cost */
     const accel_kind *refk = accel_find_kind(yard->kind);
     int ok = rays_primary(&sc.camera, size, size, &g[0].rays, err) == 0;
     if (ok) ph = malloc(g[0].rays.count * sizeof *ph);
@@ -294,44 +378,108 @@ static void check_traversal(const lab_subject *s, const char *spec, lab_result *
         goto out;
     }
     lab_where(r, "scene %s, your build", spec);
-    if (build(s, "", &sc, &a, &st, err)) {
+    if (lab_build_subject(s, "", &sc, &a, &st, err)) {
         lab_fail(r, "%s: your build failed: %s", spec, err->msg);
         goto out;
     }
     for (int i = 0; i < GROUPS; i++)
         if (!compare_group(s->kind, a, &sc, &g[i], s->threads, r)) goto out;
-    double mine = steps_per_ray(s->kind, a, &g[0].rays, NULL);
-    if (!(mine > 0.0)) {
+    int grid = yard == &grid_yard;
+    ray_work mine = work_per_ray(s->kind, a, &g[0].rays, 0);
+    if (!(mine.steps > 0.0)) {
         lab_fail(r, "%s: your traversal counts no %s (*steps stays 0): the depth view and the "
                 "cost comparison need them",
-             spec, yard == &grid_yard ? "cells stepped" : "node visits");
+             spec, grid ? "cells stepped" : "node visits");
+        goto out;
+    }
+    if (!(mine.prims > 0.0)) {
+        lab_fail(r, "%s: your traversal counts no primitive tests (*prims stays 0): count every "
+                    "accel_prim_hit() call, %s",
+                 spec, grid ? "in every cell" : "in every leaf the ray reaches");
         goto out;
     }
     write_depth_view(s, s->kind, "", spec, &sc, a, r);
-    double theirs = NAN;
+    ray_work theirs = {NAN, NAN}, theirs_occ = {NAN, NAN}, mine_occ = {NAN, NAN};
     char ykv[256];
-    snprintf(ykv, sizeof ykv, "%s%s%s", yard->kv, yard == &grid_yard && *s->kv ? "," : "",
-             yard == &grid_yard ? s->kv : "");
-    if (refk && accel_build_kind(refk, ykv, &sc, 1, &ref_a, &st, err) == 0)
-        theirs = steps_per_ray(refk, ref_a, &g[0].rays, NULL);
+    snprintf(ykv, sizeof ykv, "%s%s%s", yard->kv, grid && *s->kv ? "," : "", grid ? s->kv : "");
+    if (refk && accel_build_kind(refk, ykv, &sc, 1, &ref_a, &st, err) == 0) {
+        theirs = work_per_ray(refk, ref_a, &g[0].rays, 0);
+        if (occluded_subset(s->kind, a, &g[1].rays, &g[2].rays, &blocked) == 0) {
+            theirs_occ = work_per_ray(refk, ref_a, &blocked, 1);
+            mine_occ = work_per_ray(s->kind, a, &blocked, 1);
+        }
+    }
     if (ref_a) write_depth_view(s, refk, "_reference", spec, &sc, ref_a, r);
     size_t rays = 0;
     for (int i = 0; i < GROUPS; i++) rays += g[i].rays.count;
-    if (theirs > 0.0 && mine > LAB_SLOW_RATIO * theirs) {
+    if (!(theirs.steps > 0.0 && theirs.prims > 0.0)) { /* no yardstick: answers only */
+        lab_say(r, "  ok   %s: %zu rays agree with the reference (no cost yardstick)\n", spec,
+                rays);
+        goto out;
+    }
+    double steps_x = mine.steps / theirs.steps, prims_x = mine.prims / theirs.prims;
+    /* The counters, both ways: a correct walk visits every node on the way
+     * to every leaf it tests, so it cannot count far fewer than the
+     * reference (correct solutions: 0.86-1.06x). */
+    if (steps_x < LAB_COUNT_LOW || prims_x < LAB_COUNT_LOW) {
+        int st_low = steps_x < LAB_COUNT_LOW;
+        lab_fail(r, "%s: your counter %s says %.2fx the %s of %s (%.1f against %.1f per primary "
+                    "ray), below what any correct walk counts (at least %.2fx): %s",
+                 spec, st_low ? "*steps" : "*prims",
+                 st_low ? steps_x : prims_x, st_low ? yard->unit : "primitive tests", yard->what,
+                 st_low ? mine.steps : mine.prims, st_low ? theirs.steps : theirs.prims,
+                 LAB_COUNT_LOW,
+                 st_low ? (grid ? "count every cell the ray steps through, empty ones too"
+                                : "count every node the walk visits, interior nodes too, not "
+                                  "only the leaves")
+                        : "count every accel_prim_hit() call, hit or not");
+        goto out;
+    }
+    /* The work rule: nodes visited (primitive tests depend on the leaf size,
+     * which the reference chooses its own way). */
+    if (steps_x > LAB_SLOW_RATIO) {
         lab_slow(r, "%s: all %zu rays agree with the reference, but your traversal visits %.2fx "
                 "the %s of %s (%.1f against %.1f per primary ray; a good solution: at most "
                 "%.2fx). Hint: %s",
-             spec, rays, mine / theirs, yard->unit, yard->what, mine, theirs, LAB_SLOW_RATIO,
-             yard->hint);
+             spec, rays, steps_x, yard->unit, yard->what, mine.steps, theirs.steps,
+             LAB_SLOW_RATIO, steps_x > LAB_BOX_RATIO && !grid ? lab_box_hint : yard->hint);
         goto out;
     }
-    lab_say(r, "  ok   %s: %zu rays agree with the reference; %.1f %s per primary ray (%s: %.1f, "
-           "%.2fx)\n",
-        spec, rays, mine, yard->unit, yard->what, theirs, mine / theirs);
+    /* Any hit (occluded(), shadow rays): the first hit found ends the ray,
+     * so on the shadow rays it does less than a closest-hit query does;
+     * measured against the same saving of the reference. */
+    ray_work mine_cl = work_per_ray(s->kind, a, &blocked, 0);
+    ray_work theirs_cl = work_per_ray(refk, ref_a, &blocked, 0);
+    double occ_mine = (mine_occ.steps + mine_occ.prims) / (mine_cl.steps + mine_cl.prims);
+    double occ_theirs =
+        (theirs_occ.steps + theirs_occ.prims) / (theirs_cl.steps + theirs_cl.prims);
+    if (blocked.count >= 16 && occ_theirs < 0.95 && occ_mine > 1.0 - 0.5 * (1.0 - occ_theirs)) {
+        lab_slow(r, "%s: on the %zu shadow and diffuse rays that hit something, your "
+                    "occluded() does %.2fx the work of your closest-hit trace of the same rays "
+                    "(%.1f %s and %.1f primitive tests per ray against %.1f and %.1f); %s's "
+                    "any-hit query does %.2fx of its own: an any-hit query (any_hit, "
+                    "occluded()) ends at the first hit it finds, it does not search on for the "
+                    "closest",
+                 spec, blocked.count, occ_mine, mine_occ.steps, yard->unit, mine_occ.prims,
+                 mine_cl.steps, mine_cl.prims, yard->what, occ_theirs);
+        goto out;
+    }
+    char occ_note[160];
+    if (blocked.count >= 16)
+        snprintf(occ_note, sizeof occ_note, "any hit on the %zu rays that hit %.2fx the work of "
+                 "closest hit (%s: %.2fx)", blocked.count, occ_mine, yard->what, occ_theirs);
+    else
+        snprintf(occ_note, sizeof occ_note, "too few shadow and diffuse rays hit (%zu) to cost "
+                 "any hit", blocked.count);
+    lab_say(r, "  ok   %s: %zu rays agree with the reference; per primary ray %.1f %s and %.1f "
+               "primitive tests (%s: %.1f and %.1f; %.2fx the %s); %s\n",
+            spec, rays, mine.steps, yard->unit, mine.prims, yard->what, theirs.steps,
+            theirs.prims, steps_x, yard->unit, occ_note);
 out:
     if (a) s->kind->destroy(a);
     if (ref_a) refk->destroy(ref_a);
     for (int i = 0; i < GROUPS; i++) rays_free(&g[i].rays);
+    free(blocked.rays);
     free(ph);
     scene_free(&sc);
 }
@@ -367,13 +515,13 @@ static void check_packets(const lab_subject *s, const char *spec, lab_result *r,
         goto out;
     }
     lab_where(r, "scene %s, your build with traverse=packet", spec);
-    if (build(s, "traverse=packet", &sc, &packet, &st, err)) {
+    if (lab_build_subject(s, "traverse=packet", &sc, &packet, &st, err)) {
         lab_fail(r, "%s: your kind does not build with traverse=packet: %s", spec, err->msg);
         goto out;
     }
     for (int i = 0; i < 3; i++)
         if (!compare_group(s->kind, packet, &sc, &g[i], s->threads, r)) goto out;
-    if (build(s, "", &sc, &single, &st, err)) {
+    if (lab_build_subject(s, "", &sc, &single, &st, err)) {
         lab_fail(r, "%s: your build failed: %s", spec, err->msg);
         goto out;
     }
@@ -404,6 +552,16 @@ static void check_packets(const lab_subject *s, const char *spec, lab_result *r,
              spec, packets, (unsigned long long)cp.packet_steps, fetched, per_ray, per_ray);
         goto out;
     }
+    /* A packet enters a node once, for all its lanes: more fetches per ray
+     * than a single ray's visits is a count per lane, not a slow walk. */
+    if (fetched > per_ray) {
+        lab_fail(r, "%s: your packets fetch %.2f nodes per ray, more than a single ray visits "
+                    "(%.2f): *packet_steps counts a node once per lane, not once per packet. "
+                    "Count each node the packet's one walk enters once, whatever the number "
+                    "of lanes that enter it",
+                 spec, fetched, per_ray);
+        goto out;
+    }
     if (fetched > 0.25 * per_ray) {
         lab_slow(r, "%s: your packets fetch %.2f nodes per ray, single rays visit %.2f: a packet of "
                 "64 coherent rays should share most nodes (at most a quarter of a single ray's "
@@ -420,115 +578,6 @@ out:
     if (packet) s->kind->destroy(packet);
     for (int i = 0; i < 3; i++) rays_free(&g[i].rays);
     free(ph);
-    scene_free(&sc);
-}
-
-/* ---- step 5 -------------------------------------------------------------- */
-
-typedef struct {
-    double ms_primary, ms_shadow;
-    accel_hit *hits;
-    uint8_t *occ;
-} frame_time;
-
-/* Median of 3 timed frames (primary then shadow rays) after one warm-up. */
-static int time_frames(const accel_kind *k, const void *a, const rays_set *prim,
-                       const rays_set *shadow, int threads, frame_time *out, accel_error *err)
-{
-    bench_trace_opts o = {0};
-    o.threads = threads;
-    o.warmup = 1;
-    o.repeats = 3;
-    o.hits = out->hits;
-    bench_result res;
-    int rc = bench_trace(k, a, prim, 0, &o, &res, err);
-    if (rc) return rc;
-    out->ms_primary = res.ms.median;
-    o.hits = NULL;
-    o.occluded = out->occ;
-    rc = bench_trace(k, a, shadow, 1, &o, &res, err);
-    out->ms_shadow = res.ms.median;
-    return rc;
-}
-
-static void check_real_time(const lab_subject *s, const char *spec, lab_result *r,
-                            accel_error *err)
-{
-    int w = s->quick ? 200 : 800, h = s->quick ? 150 : 600;
-    accel_scene sc;
-    if (scene_create(spec, &sc, err)) {
-        lab_fail(r, "scene %s: %s", spec, err->msg);
-        return;
-    }
-    const accel_kind *refk = reference_kind();
-    rays_set prim = {0}, shadow = {0};
-    void *mine = NULL, *theirs = NULL;
-    accel_build_stats st_mine, st_theirs;
-    frame_time fm = {0}, ft = {0};
-    int ran = 0;
-    int threads = s->threads > 0 ? s->threads : 1;
-    if (rays_primary(&sc.camera, w, h, &prim, err)) goto out;
-    fm.hits = malloc(prim.count * sizeof *fm.hits);
-    ft.hits = malloc(prim.count * sizeof *ft.hits);
-    if (!fm.hits || !ft.hits || !refk) {
-        lab_fail(r, "step 5 needs the project's bvh kind and memory for %zu rays", prim.count);
-        goto out;
-    }
-    if (accel_build_kind(refk, "traverse=packet", &sc, threads, &theirs, &st_theirs, err)) goto out;
-    accel_trace(refk, theirs, prim.rays, ft.hits, prim.count, threads, NULL);
-    if (rays_shadow(&sc, &prim, ft.hits, &shadow, err)) goto out;
-    fm.occ = malloc(shadow.count + 1);
-    ft.occ = malloc(shadow.count + 1);
-    if (!fm.occ || !ft.occ) goto out;
-    /* The student's fastest mode: packets when the kind has them. */
-    const char *mode = "traverse=packet";
-    if (build(s, mode, &sc, &mine, &st_mine, err)) {
-        mode = "";
-        if (build(s, mode, &sc, &mine, &st_mine, err)) {
-            lab_fail(r, "%s: your build failed: %s", spec, err->msg);
-            goto out;
-        }
-    }
-    if (time_frames(s->kind, mine, &prim, &shadow, threads, &fm, err) ||
-        time_frames(refk, theirs, &prim, &shadow, threads, &ft, err))
-        goto out;
-    hits_diff d = hits_compare(&sc, prim.rays, ft.hits, fm.hits, prim.count);
-    size_t occ_bad = 0;
-    for (size_t i = 0; i < shadow.count; i++) occ_bad += fm.occ[i] != ft.occ[i];
-    if (d.first_bad != SIZE_MAX || occ_bad) {
-        lab_fail(r, "%s at %dx%d: %zu primary rays and %zu shadow rays differ from the project's "
-                "BVH: fix steps 2 and 4 first",
-             spec, w, h, prim.count - d.agree, occ_bad);
-        goto out;
-    }
-    double f_mine = 1000.0 / (fm.ms_primary + fm.ms_shadow);
-    double f_theirs = 1000.0 / (ft.ms_primary + ft.ms_shadow);
-    lab_say(r, "  ok   %s (%u triangles) at %dx%d, %d thread(s), primary + shadow rays:\n", spec,
-        sc.live_count, w, h, threads);
-    char kv[256]; /* the spec timed: the subject's parameters and the mode */
-    snprintf(kv, sizeof kv, "%s%s%s", s->kv, *s->kv && *mode ? "," : "", mode);
-    lab_say(r, "       yours (%s%s%s): build %.1f ms, primary %.1f ms, shadow %.1f ms: %.1f frames/s\n",
-        s->kind->name, *kv ? ":" : "", kv, st_mine.ms, fm.ms_primary, fm.ms_shadow, f_mine);
-    lab_say(r, "       project's bvh:traverse=packet: build %.1f ms, primary %.1f ms, shadow %.1f ms: "
-           "%.1f frames/s\n",
-        st_theirs.ms, ft.ms_primary, ft.ms_shadow, f_theirs);
-    if (w == 800 && h == 600)
-        lab_say(r, "       the lecture's target is 20 frames/s at 800x600: %s\n",
-            f_mine >= 20.0 ? "reached. Be proud."
-                           : "not yet (LAB.md, step 5, says what helps most)");
-    else
-        lab_say(r, "       (a reduced size: the lecture's 20 frames/s target is for 800x600)\n");
-    ran = 1;
-out:
-    if (!ran && r->passed) lab_fail(r, "step 5 could not run: %s", err->msg);
-    if (mine) s->kind->destroy(mine);
-    if (theirs) refk->destroy(theirs);
-    rays_free(&prim);
-    rays_free(&shadow);
-    free(fm.hits);
-    free(ft.hits);
-    free(fm.occ);
-    free(ft.occ);
     scene_free(&sc);
 }
 
@@ -568,7 +617,7 @@ int lab_check(int step, const lab_subject *s, lab_result *out, accel_error *err)
             lab_run_isolated(check_packets, s, step_scenes[i], out, err);
         break;
     case 5:
-        lab_run_isolated(check_real_time, s, "teapot_stadium:n=16", out, err);
+        lab_check_step5(s, step_scenes, n, out, err);
         break;
     case 7:
         lab_check_top(s, out, err);

@@ -63,6 +63,15 @@ static void crashed(lab_result *r, const char *fmt, ...)
     va_end(ap);
 }
 
+/* Builds the subject with extra parameters appended to its own. */
+int lab_build_subject(const lab_subject *s, const char *extra, const accel_scene *scene, void **a,
+                      accel_build_stats *st, accel_error *err)
+{
+    char kv[256];
+    snprintf(kv, sizeof kv, "%s%s%s", s->kv, *s->kv && *extra ? "," : "", extra);
+    return accel_build_kind(s->kind, kv, scene, 1, a, st, err);
+}
+
 void lab_where(lab_result *r, const char *fmt, ...)
 {
     va_list ap;
@@ -70,6 +79,19 @@ void lab_where(lab_result *r, const char *fmt, ...)
     vsnprintf(r->where, sizeof r->where, fmt, ap);
     va_end(ap);
 }
+
+/* What a crash report adds: make lab runs the checks under the sanitizers
+ * where the compiler has them (bin-lab/lab-safe, Makefile), which stop the
+ * child with status 1 and a report naming the line; a signal means a run
+ * without them (bin-lab/lab, the tests), so the report points there. */
+const char *const lab_sanitizer_note =
+    "AddressSanitizer or UBSan stopped your code: the report above (its first \"#0 ... "
+    "lab/student.c:LINE\" line) names the line (a read or write past an array: a traversal "
+    "stack smaller than the tree is deep, an index past node_count or order[]; or undefined "
+    "behaviour)";
+static const char *const lab_safe_hint =
+    " (`make lab STEP=n` runs the check under AddressSanitizer and UBSan where the compiler has "
+    "them, bin-lab/lab-safe: their report names the line)";
 
 /* The child runs the check on a copy of the result in shared memory, so
  * that what it found before dying, and where it was, reach the parent. */
@@ -106,13 +128,23 @@ void lab_run_isolated(lab_scene_check fn, const lab_subject *s, const char *scen
         crashed(r, "no answer within %d s on %s: an endless loop (a node that is its own "
                    "child, a pop that never empties the stack)?",
                 LAB_SCENE_TIMEOUT, r->where);
+    else if (WIFSIGNALED(status) && strstr(r->where, "build"))
+        crashed(r, "crashed (%s) on %s: an endless recursion in build_node() (a leaf rule "
+                   "that never stops: `count < leaf` at leaf=1, a split that leaves every "
+                   "primitive on one side) or a write past the node pool (2N nodes)%s",
+                strsignal(WTERMSIG(status)), r->where, lab_safe_hint);
     else if (WIFSIGNALED(status))
         crashed(r, "crashed (%s) on %s: a node index out of range or a traversal stack "
                    "overflow? (a child index past b->node_count, a pop from an empty stack, a "
-                   "push beyond LAB_MAX_DEPTH)",
-                strsignal(WTERMSIG(status)), r->where);
+                   "push beyond LAB_MAX_DEPTH)%s",
+                strsignal(WTERMSIG(status)), r->where, lab_safe_hint);
     else if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-        crashed(r, "ended with status %d on %s", WEXITSTATUS(status), r->where);
+        crashed(r, "ended with status %d on %s: %s%s", WEXITSTATUS(status), r->where,
+                lab_sanitizer_note,
+                strstr(r->where, "build") ? ". In a build, the usual cause is an endless "
+                                            "recursion in build_node() (a leaf rule that never "
+                                            "stops: `count < leaf` at leaf=1), which writes past "
+                                            "the node pool (2N nodes) first" : "");
 }
 
 /* Rays from the eye through triangle vertices (the cases that leak through

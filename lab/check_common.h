@@ -47,6 +47,13 @@ typedef struct {
  * mistakes of order (far child first, no near-first order, no t_max shrink,
  * a split that never sorts) 1.27-1.96x (issue 37). */
 #define LAB_SLOW_RATIO 1.25
+/* The counters' lower band: a correct walk visits every node on the way to
+ * every leaf it tests, so it counts at least this share of the reference's
+ * nodes and primitive tests (a count of leaves only: 0.13x). */
+#define LAB_COUNT_LOW 0.5
+/* Above this many times the reference's work, the order is not the cause:
+ * the hint points at the boxes and the depth view. */
+#define LAB_BOX_RATIO 3.0
 
 /* Seconds a scene's check may take before it counts as an endless loop. */
 #define LAB_SCENE_TIMEOUT 120
@@ -69,6 +76,12 @@ void lab_run_isolated(lab_scene_check fn, const lab_subject *s, const char *scen
 /* Rays from the camera through triangle vertices, and axis-parallel rays
  * with +-0 components from the faces of the scene's box. */
 int lab_make_stiff_rays(const accel_scene *sc, rays_set *out, accel_error *err);
+/* Builds the subject with extra parameters (e.g. "leaf=1") after its own. */
+int lab_build_subject(const lab_subject *s, const char *extra, const accel_scene *scene, void **a,
+                      accel_build_stats *st, accel_error *err);
+/* Step 5 (check_step5.c): the kind's variants on scenes[0, n), then frames. */
+void lab_check_step5(const lab_subject *s, const char *const *scenes, size_t n, lab_result *r,
+                     accel_error *err);
 /* Step 3 (check_step3.c), run by lab_check (check.h). */
 void lab_check_step3(const lab_subject *s, lab_result *r, accel_error *err);
 /* Step 7, the optional top level (check_top.c). */

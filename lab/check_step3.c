@@ -129,11 +129,11 @@ out:
  * level and triangles handed over), against the same with the project's
  * median-split BVH as the bottom level: a walk that hands over every
  * primitive is correct and does no real work. 1 when within the rule. */
-/* The walk's rule is looser than step 2's (LAB_SLOW_RATIO): instanced's
- * own work per instance dilutes the bottom level's, and the reference
- * solution measures 0.9-1.1x of bvh:build=median there; a walk that ignores
- * the tree measures 10-40x. Step 2 already holds the order to 1.25x. */
-#define LAB_WALK_RATIO 2.0
+/* The walk's rule: a correct walk measures 1.00-1.09x the work of
+ * bvh:build=median as the bottom level (instanced's own work per instance
+ * is the same in both), one whose t_max never shrinks 1.4-1.8x, one that
+ * ignores the tree 10-40x. */
+#define LAB_WALK_RATIO 1.25
 
 static int compare_work(const accel_scene *sc, const void *a, const rays_set *rays, lab_result *r,
                         accel_error *err)
@@ -156,15 +156,31 @@ static int compare_work(const accel_scene *sc, const void *a, const rays_set *ra
         double t_nodes = (double)theirs.level_steps[1] / n;
         double m_tris = (double)mine.prim_tests / n, t_tris = (double)theirs.prim_tests / n;
         double m = m_nodes + m_tris, t = t_nodes + t_tris;
-        if (t > 0.0 && m > LAB_WALK_RATIO * t) {
+        if (!(m_nodes > 0.0)) {
+            lab_fail(r, "%s: your walk counts no node visits (*steps stays 0; per primary ray "
+                        "0.0 nodes, the reference %.1f): count every node walk_ray() visits in "
+                        "*steps, as trace_ray() does",
+                     sc->name, t_nodes);
+            ok = 0;
+        } else if (t > 0.0 && m > LAB_WALK_RATIO * t) {
             lab_slow(r, "%s: your walk is right, but per primary ray it visits %.1f nodes and "
                         "hands over %.1f triangles; with the project's median-split BVH as the "
                         "bottom level (instanced:bottom=bvh:build=median) %.1f and %.1f (%.2fx "
-                        "the work; at most %.1fx passes). Hint: walk the tree as in "
-                        "step 2: hand over only the primitives of leaves whose padded box the "
-                        "ray reaches, nearer child first, popped nodes culled with the t_max "
-                        "visit() returns",
-                     sc->name, m_nodes, m_tris, t_nodes, t_tris, m / t, LAB_WALK_RATIO);
+                        "the work; at most %.2fx passes). Hint: %s",
+                     sc->name, m_nodes, m_tris, t_nodes, t_tris, m / t, LAB_WALK_RATIO,
+                     m > LAB_BOX_RATIO * t
+                         ? "walk the tree as in step 2: hand over only the primitives of leaves "
+                           "whose padded box the ray reaches, not every primitive"
+                         : "test boxes against [p->t_near, t_max] with the t_max visit() "
+                           "returns (it shrinks with every hit), and drop a popped node with "
+                           "!box3_entry_before(entry, t_max): a walk whose t_max never shrinks "
+                           "measures 1.4-1.8x; nearer child first");
+            ok = 0;
+        } else if (t_nodes > 0.0 && m_nodes < LAB_COUNT_LOW * t_nodes) {
+            lab_fail(r, "%s: your walk's counter *steps says %.1f nodes per primary ray, %.2fx "
+                        "the reference's %.1f, below what any correct walk counts (at least "
+                        "%.2fx): count every node visited, interior nodes too, not only leaves",
+                     sc->name, m_nodes, m_nodes / t_nodes, t_nodes, LAB_COUNT_LOW);
             ok = 0;
         } else {
             lab_say(r, "       %s: %.1f nodes and %.1f triangles per primary ray "

@@ -90,6 +90,43 @@ static inline int lab_check_leaf(const lab_tree_node *nd, uint32_t idx, const ui
     return ACCEL_OK;
 }
 
+/* 1 when the node's box holds the boxes of order[first, first + count). */
+static inline int lab_box_holds_range(const lab_tree_node *nd, const uint32_t *order,
+                                      uint32_t first, uint32_t count, const accel_scene *prims)
+{
+    uint32_t n = prims->prim_count;
+    if (count == 0 || first > n || count > n - first) return 0;
+    for (uint32_t i = 0; i < count; i++) {
+        if (order[first + i] >= n) return 0;
+        box3 pb = accel_prim_bounds(prims, order[first + i]);
+        const float lo[3] = {pb.min.x, pb.min.y, pb.min.z}, hi[3] = {pb.max.x, pb.max.y, pb.max.z};
+        if (!lab_box_holds(nd->bmin, nd->bmax, lo, hi)) return 0;
+    }
+    return 1;
+}
+
+/* After a failed check: is some leaf's left_first and count the other way
+ * round (its box holds order[count, count + left_first), not its own
+ * range)? Then that, not a box, is the mistake to report. */
+static inline int lab_swapped_leaf(const lab_tree_node *nodes, uint32_t node_count,
+                                   const uint32_t *order, const accel_scene *prims,
+                                   accel_error *err)
+{
+    for (uint32_t i = 0; i < node_count; i++) {
+        const lab_tree_node *nd = &nodes[i];
+        if (nd->count == 0 || nd->left_first == 0 ||
+            lab_box_holds_range(nd, order, nd->left_first, nd->count, prims) ||
+            !lab_box_holds_range(nd, order, nd->count, nd->left_first, prims))
+            continue;
+        return accel_fail(err, ACCEL_ERR_INTERNAL,
+                          "node %u: a leaf with left_first %u and count %u, whose box holds "
+                          "order[%u, %u), the range read the other way round: left_first and "
+                          "count swapped? (a leaf's left_first = first, count = count)",
+                          i, nd->left_first, nd->count, nd->count, nd->count + nd->left_first);
+    }
+    return ACCEL_OK;
+}
+
 /* Checks the tree of node_count nodes (root 0) over prims->prim_count
  * primitives listed in order[]; 0 or ACCEL_ERR_INTERNAL with the message. */
 static inline int lab_validate_tree(const lab_tree_node *nodes, uint32_t node_count,
@@ -149,6 +186,10 @@ static inline int lab_validate_tree(const lab_tree_node *nodes, uint32_t node_co
                             "primitive %u is in no leaf: the leaves' ranges order[left_first, "
                             "left_first + count) must cover order[] exactly once", p);
     free(seen);
+    if (rc == ACCEL_ERR_INTERNAL && err) {
+        accel_error swapped = {0};
+        if (lab_swapped_leaf(nodes, node_count, order, prims, &swapped)) *err = swapped;
+    }
     return rc;
 }
 

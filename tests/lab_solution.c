@@ -123,6 +123,10 @@ static uint32_t middle_split(lab_bvh *b, uint32_t first, uint32_t count, const l
 
 static void node_box(lab_bvh *b, lab_node *nd, uint32_t first, uint32_t count)
 {
+    if (MUTANT(LM_ROOT_BOX) && nd != b->nodes) { /* the root's box, made first */
+        *nd = b->nodes[0];
+        return;
+    }
     box3 box = box3_empty();
     for (uint32_t i = 0; i < count; i++) {
         uint32_t prim = b->order[first + i];
@@ -141,13 +145,13 @@ static int build_node(lab_bvh *b, uint32_t idx, uint32_t first, uint32_t count, 
     lab_node *nd = &b->nodes[idx];
     node_box(b, nd, first, count);
     if (level > b->depth) b->depth = level;
-    if (count <= (uint32_t)b->max_leaf) {
-        nd->left_first = MUTANT(LM_LEAF_START) ? idx : first;
-        nd->count = count;
+    if (MUTANT(LM_LEAF_RECURSE) ? count < (uint32_t)b->max_leaf : count <= (uint32_t)b->max_leaf) {
+        nd->left_first = MUTANT(LM_LEAF_START) ? idx : MUTANT(LM_LEAF_SWAP) ? count : first;
+        nd->count = MUTANT(LM_LEAF_SWAP) ? first : count;
         if (!MUTANT(LM_NO_LEAF_COUNT)) b->leaf_count++;
         return ACCEL_OK;
     }
-    if (level >= LAB_MAX_DEPTH)
+    if (level >= LAB_MAX_DEPTH && !MUTANT(LM_LEAF_RECURSE))
         return accel_fail(err, ACCEL_ERR_INTERNAL, "lab: deeper than %d levels", LAB_MAX_DEPTH);
     uint32_t half = count / 2;
     if (MUTANT(LM_EMPTY_LEAF)) {
@@ -170,7 +174,8 @@ static int build_node(lab_bvh *b, uint32_t idx, uint32_t first, uint32_t count, 
         box3 cb = box3_empty();
         for (uint32_t i = 0; i < count; i++)
             cb = box3_grow(cb, accel_prim_centroid(&b->store.prims, b->order[first + i]));
-        select_kth(b, b->order + first, count, half, v3_max_axis(box3_extent(cb)));
+        int axis = MUTANT(LM_SPLIT_DEPTH) ? (level - 1) % 3 : v3_max_axis(box3_extent(cb));
+        select_kth(b, b->order + first, count, half, axis);
     }
     uint32_t c = b->node_count;
     b->node_count += 2;
@@ -292,25 +297,27 @@ trace_ray(const lab_bvh *b, const accel_ray_prep *p, int any_hit, int naive, int
           float *t_out, float *u_out, float *v_out, uint32_t *steps, uint32_t *boxes,
           uint32_t *prims)
 {
-    uint32_t stack[LAB_MAX_DEPTH], hit = ACCEL_MISS, sp = 0, node = 0;
-    float entry[LAB_MAX_DEPTH], t = p->t_far, u = 0.0f, v = 0.0f, e0;
+    uint32_t big_stack[LAB_MAX_DEPTH], small_stack[8], hit = ACCEL_MISS, sp = 0, node = 0;
+    float big_entry[LAB_MAX_DEPTH], small_entry[8], t = p->t_far, u = 0.0f, v = 0.0f, e0;
+    uint32_t *stack = MUTANT(LM_SMALL_STACK) ? small_stack : big_stack;
+    float *entry = MUTANT(LM_SMALL_STACK) ? small_entry : big_entry;
     (*boxes)++;
     if (!box3_slab(b->nodes[0].bmin, b->nodes[0].bmax, p->org, p->inv_dir, p->neg, p->t_near, t,
                    &e0))
         return ACCEL_MISS;
     for (;;) {
         const lab_node *nd = &b->nodes[node];
-        if (!MUTANT(LM_NO_STEPS)) (*steps)++;
+        if (!MUTANT(LM_NO_STEPS) && !(MUTANT(LM_LEAVES_ONLY) && nd->count == 0)) (*steps)++;
         uint32_t c[2];
         float e[2];
         int enter = 0;
         if (nd->count > 0) {
             for (uint32_t i = 0; i < nd->count; i++) {
                 uint32_t prim = b->order[nd->left_first + i];
-                (*prims)++;
+                if (!MUTANT(LM_NO_PRIM_COUNT)) (*prims)++;
                 if (accel_prim_hit(&b->store.prims, prim, p, &t, &u, &v, naive, spheres)) {
-                    hit = prim;
-                    if (any_hit) goto done;
+                    hit = MUTANT(LM_OWN_ORDER_ID) ? nd->left_first + i : prim;
+                    if (any_hit && !MUTANT(LM_ANY_HIT_ALL)) goto done;
                 }
             }
             if (MUTANT(LM_FIRST_HIT) && hit != ACCEL_MISS) goto done;
@@ -363,7 +370,7 @@ static int walk_ray(const lab_bvh *b, const accel_ray_prep *p, float pad, accel_
     if (!slab_padded(&b->nodes[0], p, pad, t_max, &e0)) return ACCEL_OK;
     for (;;) {
         const lab_node *nd = &b->nodes[node];
-        (*steps)++;
+        if (!MUTANT(LM_WALK_NO_STEPS)) (*steps)++;
         if (nd->count > 0) {
             for (uint32_t i = 0; i < nd->count; i++) {
                 uint32_t prim = b->order[nd->left_first + i];
@@ -377,8 +384,9 @@ static int walk_ray(const lab_bvh *b, const accel_ray_prep *p, float pad, accel_
             }
         } else {
             uint32_t l = nd->left_first, r = l + 1;
-            int hl = slab_padded(&b->nodes[l], p, pad, t_max, &e0);
-            int hr = slab_padded(&b->nodes[r], p, pad, t_max, &e1);
+            float t_box = MUTANT(LM_WALK_NO_SHRINK) ? p->t_far : t_max;
+            int hl = slab_padded(&b->nodes[l], p, pad, t_box, &e0);
+            int hr = slab_padded(&b->nodes[r], p, pad, t_box, &e1);
             if (hl && hr) {
                 int swap = e1 < e0;
                 stack[sp] = swap ? l : r, entry[sp++] = swap ? e0 : e1;
@@ -390,7 +398,8 @@ static int walk_ray(const lab_bvh *b, const accel_ray_prep *p, float pad, accel_
                 continue;
             }
         }
-        while (sp > 0 && !box3_entry_before(entry[sp - 1], t_max)) sp--;
+        while (sp > 0 && !MUTANT(LM_WALK_NO_SHRINK) && !box3_entry_before(entry[sp - 1], t_max))
+            sp--;
         if (sp == 0) return ACCEL_OK;
         node = stack[--sp];
     }
@@ -472,7 +481,14 @@ trace_packet(const lab_bvh *b, const accel_ray_prep *p, const int *valid, uint32
     }
     int active[64];
     uint32_t live = 0;
-    for (uint32_t i = 0; i < n; i++) hit_local[i] = ACCEL_MISS, live += active[i] = valid[i];
+    /* Mutant LM_PACKET_UNINIT: the lanes' hits never set to a miss; what an
+     * uninitialized array holds is, typically, the previous packet's (here
+     * kept on purpose, so that the mistake is deterministic). */
+    static _Thread_local uint32_t stale[64];
+    for (uint32_t i = 0; i < n; i++) {
+        hit_local[i] = MUTANT(LM_PACKET_UNINIT) ? stale[i] : ACCEL_MISS;
+        live += active[i] = valid[i];
+    }
     uint32_t stack[LAB_MAX_DEPTH], first_stack[LAB_MAX_DEPTH], sp = 0, node = 0, first = 0;
     for (;;) {
         const lab_node *nd = &b->nodes[node];
@@ -482,7 +498,11 @@ trace_packet(const lab_bvh *b, const accel_ray_prep *p, const int *valid, uint32
             else f++;
         }
         if (f < n) {
-            if (!MUTANT(LM_PACKET_NO_COUNT)) (*packet_steps)++;
+            if (MUTANT(LM_PACKET_PER_LANE)) {
+                for (uint32_t i = f; i < n; i++) *packet_steps += (uint32_t)active[i];
+            } else if (!MUTANT(LM_PACKET_NO_COUNT)) {
+                (*packet_steps)++;
+            }
             steps[f]++;
             if (nd->count == 0) {
                 const lab_node *l = &b->nodes[nd->left_first], *r = l + 1;
@@ -508,11 +528,12 @@ trace_packet(const lab_bvh *b, const accel_ray_prep *p, const int *valid, uint32
                 }
                 if (any_hit && hit_local[i] != ACCEL_MISS) active[i] = 0, live--;
             }
-            if (live == 0) return; /* every shadow ray found its occluder */
+            if (live == 0) break; /* every shadow ray found its occluder */
         }
-        if (sp == 0) return;
+        if (sp == 0) break;
         node = stack[--sp], first = first_stack[sp];
     }
+    if (MUTANT(LM_PACKET_UNINIT)) memcpy(stale, hit_local, n * sizeof *hit_local);
 }
 
 /* ---- batch entries (nothing to do here) ----------------------------------- */
