@@ -138,7 +138,9 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
     grid_accel *g = calloc(1, sizeof *g);
     if (!g) return accel_fail(err, ACCEL_ERR_NOMEM, "grid: out of memory");
     g->naive = params->naive;
-    g->mailbox = spec->mailbox != 0;
+    /* Blocks have no mailbox (grid_blocks.h): their copies are the
+     * mailbox=0 ones, so the block test is compiled into half the copies. */
+    g->mailbox = spec->mailbox != 0 && !use_blocks;
     g->traverse = spec->traverse == 1 ? GRID_TRAVERSE_PACKET : GRID_TRAVERSE_SINGLE;
     g->has_spheres = scene->sphere_count > 0;
     g->skip = (grid_skip_mode)spec->skip;

@@ -82,8 +82,10 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
     const uint32_t *refs = g->cells.refs;
     const uint64_t bound = (uint64_t)f->res[0] + f->res[1] + f->res[2] + 3;
     /* cells=blocks: the shared block test (grid_blocks.h); built only for
-     * triangles with the watertight test, so these copies never see it. */
-    const grid_cell_blocks *blocks = !naive && !spheres && g->blocks.offsets ? &g->blocks : NULL;
+     * triangles with the watertight test and traced by the mailbox=0
+     * copies (grid_build.c), so the other copies never compile it. */
+    const grid_cell_blocks *blocks =
+        !naive && !spheres && !mailbox && g->blocks.offsets ? &g->blocks : NULL;
     for (size_t i = 0; i < count; i++) {
         accel_ray_prep p;
         accel_hit h = accel_hit_miss();

@@ -349,7 +349,9 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
     }
     if (!rc) {
         g->naive = params->naive;
-        g->mailbox = spec->mailbox != 0;
+        /* lists as blocks have no mailbox: traced by the mailbox=0 copies */
+        g->mailbox = spec->mailbox != 0 && !(spec->cells == 1 && !compact && spec->traverse != 1 &&
+                                             !params->naive && scene->sphere_count == 0);
         g->traverse = spec->traverse == 1 ? NGRID_TRAVERSE_PACKET : NGRID_TRAVERSE_SINGLE;
         g->has_spheres = scene->sphere_count > 0;
         rc = flatten(&b, g, err);

@@ -40,7 +40,8 @@ ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
     const grid_frame *top = &nodes[0].frame;
     const uint32_t *lists = g->lists;
     /* cells=blocks: the shared block test (grid/grid_blocks.h). */
-    const grid_list_blocks *blocks = !naive && !spheres && g->blocks.first ? &g->blocks : NULL;
+    const grid_list_blocks *blocks =
+        !naive && !spheres && !mailbox && g->blocks.first ? &g->blocks : NULL;
     for (size_t i = 0; i < count; i++) {
         accel_ray_prep p;
         accel_hit h = accel_hit_miss();
