@@ -8,6 +8,20 @@
 
 #include "grid_blocks.h"
 
+/* The n primitives ids[] of one cell or list into blocks[b ...], 8 to a
+ * block; returns the next free block. */
+static uint32_t fill_blocks(const accel_scene *s, const uint32_t *ids, uint32_t n,
+                            accel_block8 *blocks, uint32_t b)
+{
+    for (uint32_t k = 0; k < n; k += 8, b++) {
+        const float *tris[8];
+        int lanes = n - k < 8 ? (int)(n - k) : 8;
+        for (int l = 0; l < lanes; l++) tris[l] = s->tris + 9 * (size_t)ids[k + (uint32_t)l];
+        accel_block_fill(blocks[b].v[0][0], blocks[b].id, 8, tris, ids + k, lanes);
+    }
+    return b;
+}
+
 int grid_cell_blocks_build(const grid_cells *cells, const accel_scene *s, double max_bytes,
                            grid_cell_blocks *out, accel_error *err)
 {
@@ -33,14 +47,8 @@ int grid_cell_blocks_build(const grid_cells *cells, const accel_scene *s, double
     uint32_t b = 0;
     for (uint64_t c = 0; c < cells->cell_count; c++) {
         out->offsets[c] = b;
-        const uint32_t *ids = cells->refs + cells->offsets[c];
-        uint32_t n = cells->offsets[c + 1] - cells->offsets[c];
-        for (uint32_t k = 0; k < n; k += 8, b++) {
-            const float *tris[8];
-            int lanes = n - k < 8 ? (int)(n - k) : 8;
-            for (int l = 0; l < lanes; l++) tris[l] = s->tris + 9 * (size_t)ids[k + (uint32_t)l];
-            accel_block_fill(out->blocks[b].v[0][0], out->blocks[b].id, 8, tris, ids + k, lanes);
-        }
+        b = fill_blocks(s, cells->refs + cells->offsets[c],
+                        cells->offsets[c + 1] - cells->offsets[c], out->blocks, b);
     }
     out->offsets[cells->cell_count] = b;
     out->block_count = b;
@@ -86,14 +94,7 @@ int grid_list_blocks_build(const uint32_t *lists, uint64_t list_len, const accel
     uint32_t b = 0;
     for (uint64_t w = 1; w < list_len; w += lists[w] + 1) {
         out->first[w] = b;
-        const uint32_t *ids = lists + w + 1;
-        uint32_t n = lists[w];
-        for (uint32_t k = 0; k < n; k += 8, b++) {
-            const float *tris[8];
-            int lanes = n - k < 8 ? (int)(n - k) : 8;
-            for (int l = 0; l < lanes; l++) tris[l] = s->tris + 9 * (size_t)ids[k + (uint32_t)l];
-            accel_block_fill(out->blocks[b].v[0][0], out->blocks[b].id, 8, tris, ids + k, lanes);
-        }
+        b = fill_blocks(s, lists + w + 1, lists[w], out->blocks, b);
     }
     out->block_count = b;
     out->list_len = list_len;
