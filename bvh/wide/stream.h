@@ -75,12 +75,14 @@
 #ifndef BVH_WIDE_STREAM_TYPES
 #define BVH_WIDE_STREAM_TYPES
 /* One stream ray as the node test reads it: kernel.h's node_ray scalars
- * (the far reciprocals with the padding folded in) and its running t. */
+ * (the far reciprocals with the padding folded in) and its running t; one
+ * cache line (the buffers are 64-byte aligned). */
 typedef struct {
     float ox, oy, oz, ix, iy, iz, fix, fiy, fiz, tn;
     float t; /* the closest hit so far; -inf once occluded (any hit) */
-    float pad_;
+    float pad_[5];
 } wide_sray;
+static_assert(sizeof(wide_sray) == 64, "a stream ray is one cache line");
 
 /* A ray in an entry's list: its index in the stream and its entry distance
  * into the entry's box (-inf: passes every pop test). */
@@ -128,7 +130,7 @@ static inline int wide_stream_alloc(wide_stream_ws *ws, size_t count, int stream
                         ws->items_cap * sizeof(wide_sitem), (size_t)width * s * sizeof(wide_sitem), 0};
     size_t total = 0;
     for (int i = 0; i < 12; i++) total += wide_stream_round(sizes[i]);
-    char *m = malloc(total);
+    char *m = aligned_alloc(64, total); /* total: a multiple of 64 */
     ws->mem = m;
     if (!m) return 1;
     ws->order = (uint32_t *)m, m += wide_stream_round(sizes[0]);
@@ -358,7 +360,7 @@ WIDE_INLINE void SK(stream_batch)(const void *a, const accel_ray *rays, void *ou
                 s->ox = p->org.x, s->oy = p->org.y, s->oz = p->org.z;
                 s->ix = p->inv_dir.x, s->iy = p->inv_dir.y, s->iz = p->inv_dir.z;
                 s->fix = p->inv_dir.x * pf, s->fiy = p->inv_dir.y * pf, s->fiz = p->inv_dir.z * pf;
-                s->tn = p->t_near, s->t = p->t_far, s->pad_ = 0.0f;
+                s->tn = p->t_near, s->t = p->t_far;
                 ws.u[n] = ws.v[n] = 0.0f;
                 ws.id[n] = ACCEL_MISS, ws.steps[n] = ws.boxes[n] = ws.prims[n] = 0;
                 ws.gidx[n] = (uint32_t)gi;
