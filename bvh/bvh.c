@@ -57,8 +57,10 @@ static const accel_param_def bvh_params[] = {
      .help = "leaf rule: sah (a leaf once splitting does not pay, at most `leaf` primitives) or "
              "none (split every node over `leaf`, as the lecture's lab does)",
      .offset = offsetof(bvh_spec, term)},
-    {.key = "traverse", .type = ACCEL_PARAM_ENUM, .def = "single", .choices = "single|packet",
-     .help = "single rays, or packets of 64 consecutive rays (8x8 tiles)",
+    {.key = "traverse", .type = ACCEL_PARAM_ENUM, .def = "single", .choices = "single|packet|stream",
+     .help = "single rays, packets of 64 consecutive rays (8x8 tiles), or ray streams "
+             "(width=4|8: the tree walked once for a stream of rays in any order, each node "
+             "tested by every ray still in it; the single rays' answers, bit for bit)",
      .offset = offsetof(bvh_spec, traverse)},
     {.key = "frustum", .type = ACCEL_PARAM_BOOL, .def = "0", .min = 0, .max = 1,
      .help = "traverse=packet: interval-arithmetic early-out per node (0/1)",
@@ -95,8 +97,13 @@ static const accel_param_def bvh_params[] = {
      .offset = offsetof(bvh_spec, leaf_below)},
     {.key = "hybrid", .type = ACCEL_PARAM_INT, .def = "16", .min = 0, .max = 64,
      .help = "width=4|8, traverse=packet: a subtree whose hitting rays span at most this many of "
-             "the packet's 64 (first to last) is traced ray by ray from there (0: never)",
+             "the packet's 64 (first to last) is traced ray by ray from there (0: never); "
+             "traverse=stream: a subtree entered by at most this many of the stream's rays",
      .offset = offsetof(bvh_spec, hybrid)},
+    {.key = "stream", .type = ACCEL_PARAM_INT, .def = "1024", .min = 8, .max = 8192,
+     .help = "traverse=stream: rays per stream (count; a batch's rays are grouped by direction "
+             "octant, then cut into streams of this many)",
+     .offset = offsetof(bvh_spec, stream)},
     {.key = "quant", .type = ACCEL_PARAM_BOOL, .def = "0", .min = 0, .max = 1,
      .help = "width=8, single rays: child boxes as 8-bit steps from the node's corner, rounded "
              "outward (128-byte nodes instead of 256; the octant order pushed by branches, as "
@@ -124,7 +131,8 @@ typedef struct {
     int width, block, order; /* width 2: the binary tree */
     int first_left, split_pairs; /* width 2: first=left, pairs (0 line, 1 split, 2 fresh) */
     int quant;                   /* width 8: quantized nodes */
-    int hybrid;                  /* wide packets: hand-over span (wide/packet.h) */
+    int hybrid;                  /* wide packets: hand-over span (wide/packet.h); streams: count */
+    int stream;                  /* traverse=stream: rays per stream (wide/stream.h) */
     bvh_wide_collapse collapse;  /* wide: greedy or dp */
     int leaf_below;              /* wide: the binary build's leaf_below (0: block) */
     int isa;                     /* wide: ACCEL_ISA_AVX2 or _AVX512, resolved (core/isa.h) */
@@ -188,8 +196,15 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: collapse and leaf_below apply to width=4|8, "
                                                "leaf_cost and leaf_blocks to collapse=dp");
     wo->hybrid = s->hybrid;
-    if (GIVEN(hybrid) && (wo->width == 2 || *traverse != BVH_TRAVERSE_PACKET))
-        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: hybrid applies to width=4|8 with traverse=packet");
+    if (GIVEN(hybrid) && (wo->width == 2 || *traverse == BVH_TRAVERSE_SINGLE))
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: hybrid applies to width=4|8 with traverse=packet|stream");
+    wo->stream = s->stream;
+    if (*traverse == BVH_TRAVERSE_STREAM && wo->width == 2)
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: traverse=stream applies to width=4|8");
+    if (GIVEN(stream) && *traverse != BVH_TRAVERSE_STREAM)
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: stream applies to traverse=stream");
+    if (*traverse == BVH_TRAVERSE_STREAM && GIVEN(order) && wo->order != WIDE_ORDER_OCTANT)
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: traverse=stream walks in the octant order (order=octant)");
     if (wo->order == WIDE_ORDER_BRANCHY && *traverse != BVH_TRAVERSE_SINGLE)
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: order=branchy applies to traverse=single only");
     if (wo->width > 2 && *frustum)
@@ -352,6 +367,7 @@ static int build_tree(const accel_scene *scene, const bvh_build_opts *opts, cons
         rc = bvh_wide_build(out, &out->wide, wo->width, block, wo->order, wo->quant, &cc,
                             threads < 1 ? 1 : threads, o.ct, o.ci, stats, err);
         if (rc == 0) out->wide->packets = traverse == BVH_TRAVERSE_PACKET, out->wide->hybrid = wo->hybrid;
+        if (rc == 0) out->wide->stream = traverse == BVH_TRAVERSE_STREAM ? wo->stream : 0;
         if (rc == 0) out->wide->isa = wo->isa, stats->isa = accel_isa_label(wo->isa);
         if (rc == 0) stats->test_lanes = block;
         if (rc == 0) out->path = out->wide->quant ? &bvh_path_wide_quant : &bvh_path_wide;
@@ -523,6 +539,10 @@ static const char *const bvh_variants[] = {
     "width=8,isa=avx2",
     "width=4,block=4,isa=avx2",
     "width=8,traverse=packet,isa=avx2",
+    /* ray streams: the single rays' answers (tests/test_bvh_wide_stream.c: bit for bit) */
+    "width=8,traverse=stream",
+    "width=4,block=4,traverse=stream,stream=64,hybrid=0",
+    "width=8,block=4,traverse=stream,stream=8,hybrid=2,build=sbvh",
     "first=left",
     "pairs=split",
     "first=left,pairs=split,traverse=single",
@@ -534,7 +554,8 @@ static const char *const bvh_variants[] = {
 const accel_kind accel_kind_bvh = {
     .name = "bvh",
     .summary = "BVH, binary (32-byte nodes) or 4-/8-wide (width=4|8, AVX2/AVX-512 kernels): "
-               "binned/sweep SAH, median, mid or SBVH builds; single rays or 64-ray packets",
+               "binned/sweep SAH, median, mid or SBVH builds; single rays, 64-ray packets or ray "
+               "streams",
     .step_name = "nodes",
     .params = bvh_params,
     .param_count = BVH_PARAM_COUNT,

@@ -13,6 +13,8 @@
  *   bvh:build=median,term=none,leaf=4 the lecture's pure median split: no SAH
  *                                     termination, leaves of at most 4
  *   bvh:traverse=packet,frustum=1     64-ray packets with an interval early-out
+ *   bvh:width=8,traverse=stream       ray streams (wide trees only): the tree
+ *                                     walked once per stream of rays
  *
  * `bin/trace --help` lists every parameter with its unit and range;
  * bvh/README.md explains how each part works and what it costs.
@@ -86,14 +88,14 @@ static_assert(offsetof(bvh_node, count) == 28, "count closes the node");
 /* The kind's parameters as parsed, one field per key (bvh.c's table:
  * ACCEL_SPEC(params, bvh_spec)). Choices hold their position in the
  * table's list (build: binned 0, sah, mid, median, sbvh 4; traverse:
- * single 0, packet 1; ...), those written as numbers their number (width
+ * single 0, packet 1, stream 2; ...), those written as numbers their number (width
  * 2, 4 or 8; axes 1 or 3; block 4 or 8, 0 for auto). */
 typedef struct {
     int build, bins, axes, leaf;
     double split_budget, alpha, max_mb, ct, ci;
     int term, traverse, frustum, width, block, order, collapse;
     double leaf_cost;
-    int leaf_blocks, leaf_below, hybrid, quant, first, pairs, isa;
+    int leaf_blocks, leaf_below, hybrid, quant, first, pairs, isa, stream;
 } bvh_spec;
 
 /* The node pool of a built bvh (node 0 is the root; node 1 is padding) and

@@ -24,7 +24,7 @@ extern "C" {
 #define BVH_BMAX_OFS 4
 
 /* Traversal modes (parameter traverse=). */
-enum { BVH_TRAVERSE_SINGLE = 0, BVH_TRAVERSE_PACKET = 1 };
+enum { BVH_TRAVERSE_SINGLE = 0, BVH_TRAVERSE_PACKET = 1, BVH_TRAVERSE_STREAM = 2 };
 
 /* Rays per packet: the 8x8 screen tiles the primary ray sets emit. */
 #define BVH_PACKET_SIZE 64

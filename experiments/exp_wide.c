@@ -10,7 +10,8 @@
  * (group.h): one exp_group per scene holds bvh, bvh:width=4|8 single and
  * coherent, the 8-wide single-ray kernel with order=branchy and on
  * quantized nodes (quant=1), the 8-wide trees with blocks of 4, collapsed
- * greedily, and from binary leaves of at most 4 (leaf_below=4), and the
+ * greedily, and from binary leaves of at most 4 (leaf_below=4), the
+ * 8-wide tree's ray streams (traverse=stream), and the
  * 8-wide kernels again on 2 threads, so every ratio is a
  * paired per-round ratio with its bootstrap interval. Builds are timed
  * apart, in their own interleaved rounds, once per tree (the coherent
@@ -59,6 +60,13 @@
  * binary build. */
 #define GREEDY "bvh:width=8,collapse=greedy"
 #define LEAF4 "bvh:width=8,leaf_below=4"
+/* Ray streams over the same 8-wide tree (traverse=stream, bvh/wide/
+ * stream.h): a batch's rays by octant, the tree walked once per stream of
+ * 1024, each node fetched once for every ray still in it. Their answers are
+ * order=branchy's (BRANCHY above), bit for bit; measured against the
+ * default single-ray kernel on every set, the incoherent ones (diffuse,
+ * shadow) being what they are for. */
+#define STREAM8 "bvh:width=8,traverse=stream"
 
 static const char *const configs[] = {"bvh",
                                       "bvh:width=4",
@@ -72,10 +80,11 @@ static const char *const configs[] = {"bvh",
                                       "bvh:traverse=packet",
                                       "bvh:width=4,traverse=packet",
                                       PACKET8,
-                                      HYBRID0};
+                                      HYBRID0,
+                                      STREAM8};
 /* Traversals of a tree another config already builds, measured anyway
  * (exp_group would otherwise call them "the same structure"). */
-static const char *const same_tree[] = {BRANCHY, QUANT, BRANCHY4, HYBRID0};
+static const char *const same_tree[] = {BRANCHY, QUANT, BRANCHY4, HYBRID0, STREAM8};
 /* Kernels measured again on 2 threads: the 8-wide tree's default single
  * kernel and its packets. A scene's 2-thread rows appear where one of them
  * is the best kernel of a ray set (the octant kernel mostly on diffuse
@@ -87,6 +96,8 @@ static const int set_bits[3] = {BENCH_PRIMARY, BENCH_SHADOW, BENCH_DIFFUSE};
 static const double target[3] = {2.8, 3.7, 3.7};
 
 static int is_coherent(const char *spec) { return strstr(spec, "traverse=packet") != NULL; }
+/* Streams are neither single rays nor packets: rows of their own. */
+static int is_stream(const char *spec) { return strstr(spec, "traverse=stream") != NULL; }
 static int is_wide(const char *spec) { return strstr(spec, "width=4") || strstr(spec, "width=8"); }
 
 typedef struct {
@@ -153,7 +164,7 @@ static void embree_row(exp_ctx *x, study *st, const accel_scene *s, const bench_
     exp_md(x, "| Embree 3 | %.2f | %.2f | %.2f |\n", em[0], em[1], em[2]);
     int bw = -1; /* the best wide single-ray kernel on primary rays */
     for (int c = 0; c < first_twin; c++)
-        if (g->cfg[c].ok && is_wide(g->cfg[c].spec) && !is_coherent(g->cfg[c].spec) &&
+        if (g->cfg[c].ok && is_wide(g->cfg[c].spec) && !is_coherent(g->cfg[c].spec) && !is_stream(g->cfg[c].spec) &&
             (bw < 0 || exp_group_mrays(g, c, BENCH_PRIMARY).median > exp_group_mrays(g, bw, BENCH_PRIMARY).median))
             bw = c;
     if (bw < 0) return;
@@ -182,12 +193,12 @@ static void target_row(exp_ctx *x, exp_text *f, const char *what, int bit, const
 }
 
 /* The tree a spec builds: the spec without its traversal choices
- * (traverse=packet, order=branchy, hybrid=0). */
+ * (traverse=packet|stream, order=branchy, hybrid=0). */
 static void tree_of(const char *spec, char *out, size_t n)
 {
     snprintf(out, n, "%s", spec);
-    static const char *const drop[] = {"traverse=packet", "order=branchy", "hybrid=0"};
-    for (int d = 0; d < 3; d++) {
+    static const char *const drop[] = {"traverse=packet", "traverse=stream", "order=branchy", "hybrid=0"};
+    for (int d = 0; d < 4; d++) {
         char *p = strstr(out, drop[d]);
         if (!p) continue;
         size_t len = strlen(drop[d]);
@@ -372,11 +383,13 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, int 
     int hand_over = hy >= 0 && h0 >= 0 && g.cfg[hy].ok && g.cfg[h0].ok && g.cfg[hy].threads == 1;
     int dp = exp_group_find(&g, "bvh:width=8"), gr = exp_group_find(&g, GREEDY);
     int dp_pair = dp >= 0 && gr >= 0 && g.cfg[dp].ok && g.cfg[gr].ok && g.cfg[dp].threads == 1;
+    int sm = exp_group_find(&g, STREAM8);
+    int stream_pair = dp >= 0 && sm >= 0 && g.cfg[dp].ok && g.cfg[sm].ok && g.cfg[sm].threads == 1;
     for (int k = 0; k < 3; k++) {
         int bit = set_bits[k], best = -1, bestc = -1;
         for (int c = 0; c < first_twin; c++) {
             const exp_cfg *cf = &g.cfg[c];
-            if (!cf->ok || !is_wide(cf->spec)) continue;
+            if (!cf->ok || !is_wide(cf->spec) || is_stream(cf->spec)) continue;
             int *b = is_coherent(cf->spec) ? &bestc : &best;
             if (*b < 0 || exp_group_ns(&g, c, bit).median < exp_group_ns(&g, *b, bit).median) *b = c;
         }
@@ -409,6 +422,12 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, int 
             exp_est rd = exp_group_speedup(&g, gr, dp, bit);
             snprintf(what, sizeof what, "DP collapse: `bvh:width=8` (collapse=dp) over `%s`", GREEDY);
             target_row(x, &st->findings, what, bit, &rd, 0, "-");
+        }
+        /* Ray streams against single rays on the same tree (issue 50). */
+        if (stream_pair) {
+            exp_est rs = exp_group_speedup(&g, dp, sm, bit);
+            snprintf(what, sizeof what, "ray streams: `%s` over `bvh:width=8` (single rays)", STREAM8);
+            target_row(x, &st->findings, what, bit, &rs, 0, "-");
         }
         for (int t = first_twin; t < g.count; t++) {
             if (!g.cfg[t].ok) continue;
@@ -479,6 +498,7 @@ int main(int argc, char **argv)
                ">= 1.9x 1 thread",
                "how much faster than the binary BVH (`bvh`, single rays) are the 4- and 8-wide "
                "BVHs with SIMD kernels, single-ray and coherent (`traverse=packet`, 8x8 tiles), "
+               "and the 8-wide tree's ray streams (`traverse=stream`, rows of their own), "
                "on primary, shadow and diffuse rays at %dx%d, and what do they cost to build and "
                "to store? Every kernel of a scene runs in the same interleaved rounds, one "
                "thread, and the 8-wide kernels once more on 2 threads; ratios are paired per "

@@ -4,7 +4,7 @@
  * (isa=, GRIDBVH_ISA) choose what they say and refuse what cannot run, and
  * the AVX-512 tables answer bit for bit what the AVX2 tables answer (t, u,
  * v, prim, the any-hit answers and every counter) for every row: single
- * rays in both orders, branchy, quantized, packets, widths 4 and 8, blocks
+ * rays in both orders, branchy, quantized, packets, streams, widths 4 and 8, blocks
  * of 4 and 8, on built-in scenes with primary, shadow and diffuse rays and
  * on the stability study's stiff cases. Where the CPU or the build has no
  * AVX-512 the comparison is skipped (a note says why) and the AVX2 tables
@@ -20,13 +20,14 @@
 #include "support.h"
 #include "test.h"
 
-/* Every row of the tables (bvh/wide/trace.c): width, block, order, packets, quant. */
+/* Every row of the tables (bvh/wide/trace.c): width, block, order, packets, quant, streams. */
 static const char *const isa_specs[] = {
     "width=8",          "width=4",           "width=8,block=4",
     "width=4,block=8",  "width=8,order=dist", "width=4,block=4,order=dist",
     "width=8,order=branchy", "width=4,order=branchy", "width=8,quant=1",
     "width=8,quant=1,block=4", "width=8,traverse=packet", "width=4,traverse=packet",
     "width=8,block=4,traverse=packet", "width=4,block=4,traverse=packet,hybrid=0",
+    "width=8,traverse=stream", "width=4,block=4,traverse=stream,stream=64,hybrid=0",
 };
 #define ISA_SPEC_COUNT (sizeof isa_specs / sizeof *isa_specs)
 

@@ -17,7 +17,7 @@
 #   single    rtcIntersect1  vs bvh:width=8                  (default)
 #   occluded  rtcOccluded1   vs bvh:width=8 --occluded       (any-hit queries)
 #   packet    rtcIntersect16 vs bvh:width=8,traverse=packet  (16 consecutive rays)
-#   stream    rtcIntersect1M vs bvh:width=8
+#   stream    rtcIntersect1M vs bvh:width=8,traverse=stream (ray streams)
 # Other settings: ROUNDS (6), SETS (primary,diffuse,shadow), PASSES (timed
 # passes per process, 5, after a warm-up pass), THREADS (1), QUALITY (Embree's
 # build quality, medium), DIR (build/vs_embree/<scene>-<hash>-<size>: the
@@ -58,7 +58,7 @@ case $MODE in
 single) emode=single; defspec=bvh:width=8 ;;
 occluded) emode=occluded; defspec=bvh:width=8; occl=(--occluded) ;;
 packet) emode=packet16; defspec=bvh:width=8,traverse=packet ;;
-stream) emode=stream; defspec=bvh:width=8 ;;
+stream) emode=stream; defspec=bvh:width=8,traverse=stream ;;
 *) echo "vs_embree: MODE=$MODE: expected single, occluded, packet or stream" >&2; exit 2 ;;
 esac
 specs=("$@")

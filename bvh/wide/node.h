@@ -180,11 +180,12 @@ static inline void wide_put_lane(float *v, int block, int lane, const float *slo
 }
 
 /* The kernel tables' rows: single rays (order=octant or dist), packets,
- * order=branchy, quant=1 (width 8 only). */
+ * order=branchy, quant=1 (width 8 only), streams (traverse=stream). */
 #define WIDE_ROW_SINGLE 0
 #define WIDE_ROW_PACKET 1
 #define WIDE_ROW_BRANCHY 2
 #define WIDE_ROW_QUANT 3
+#define WIDE_ROW_STREAM 4
 
 /* One row's kernel table of one width, for a query and a block size: each
  * defined by its own unit, k<width>_<row>.c (tables.h; the packet row one
@@ -207,7 +208,11 @@ typedef const accel_kernel_table *(*wide_row_fn)(int any_hit, int block8);
     const accel_kernel_table *bvh_wide_k8_packet_hit##sfx(int block8);                             \
     const accel_kernel_table *bvh_wide_k8_packet_any##sfx(int block8);                             \
     const accel_kernel_table *bvh_wide_k8_branchy##sfx(int any_hit, int block8);                   \
-    const accel_kernel_table *bvh_wide_k8_quant##sfx(int any_hit, int block8);
+    const accel_kernel_table *bvh_wide_k8_quant##sfx(int any_hit, int block8);                     \
+    const accel_kernel_table *bvh_wide_k4_stream_hit##sfx(int block8);                             \
+    const accel_kernel_table *bvh_wide_k4_stream_any##sfx(int block8);                             \
+    const accel_kernel_table *bvh_wide_k8_stream_hit##sfx(int block8);                             \
+    const accel_kernel_table *bvh_wide_k8_stream_any##sfx(int block8);
 WIDE_UNITS_DECLARE()
 WIDE_UNITS_DECLARE(_avx512)
 

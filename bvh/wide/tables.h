@@ -2,15 +2,15 @@
  * tables.h - one row of one width's kernel tables (core/variant.h).
  * A kernel body (C only), included once per translation unit with WIDE_NW
  * (4 or 8) and WIDE_ROW (the row: WIDE_ROW_SINGLE, _PACKET, _BRANCHY,
- * _QUANT) defined: by the k<width>_<row>.c files, one unit per row so
+ * _QUANT, _STREAM) defined: by the k<width>_<row>.c files, one unit per row so
  * that a 2-core build spreads the forced inlining over seven units of
  * similar size instead of two large ones (trace.c dispatches).
  *
  * It instantiates the templates core/block_test.h (blocks of 4 and 8), kernel.h and,
- * for the packet row, packet.h (width WIDE_NW, blocks of 4 and 8) and
- * defines wide_row[any hit][block 8] for its row; the packet row, the
- * largest, is split once more by query (WIDE_ANY 0 or 1: one unit each)
- * and defines wide_query[block 8]. The single-ray row
+ * for the packet row, packet.h (for the stream row, stream.h; width
+ * WIDE_NW, blocks of 4 and 8) and defines wide_row[any hit][block 8] for
+ * its row; the packet and stream rows, the largest, are split once more
+ * by query (WIDE_ANY 0 or 1: one unit each) and define wide_query[block 8]. The single-ray row
  * compiles all eight flag copies (ACCEL_V_OPT: order=octant or dist); the
  * three octant rows only the four with ACCEL_V_OPT set (WT_TABLE_OCT).
  */
@@ -27,12 +27,16 @@
 #include "kernel.h"
 #if WIDE_ROW == WIDE_ROW_PACKET
 #include "packet.h"
+#elif WIDE_ROW == WIDE_ROW_STREAM
+#include "stream.h"
 #endif
 #undef WIDE_LB
 #define WIDE_LB 8
 #include "kernel.h"
 #if WIDE_ROW == WIDE_ROW_PACKET
 #include "packet.h"
+#elif WIDE_ROW == WIDE_ROW_STREAM
+#include "stream.h"
 #endif
 #undef WIDE_LB
 
@@ -77,6 +81,14 @@ static const accel_kernel_table *const wide_query[2] = {&WT_CAT(pclosest, WIDE_N
 WT_BOTH_OCT(pany, wide_pany)
 static const accel_kernel_table *const wide_query[2] = {&WT_CAT(pany, WIDE_NW, 4),
                                                         &WT_CAT(pany, WIDE_NW, 8)};
+#elif WIDE_ROW == WIDE_ROW_STREAM && !WIDE_ANY
+WT_BOTH_OCT(sclosest, wide_sclosest)
+static const accel_kernel_table *const wide_query[2] = {&WT_CAT(sclosest, WIDE_NW, 4),
+                                                        &WT_CAT(sclosest, WIDE_NW, 8)};
+#elif WIDE_ROW == WIDE_ROW_STREAM
+WT_BOTH_OCT(sany, wide_sany)
+static const accel_kernel_table *const wide_query[2] = {&WT_CAT(sany, WIDE_NW, 4),
+                                                        &WT_CAT(sany, WIDE_NW, 8)};
 #elif WIDE_ROW == WIDE_ROW_BRANCHY
 WT_BOTH_OCT(bclosest, wide_closest_br)
 WT_BOTH_OCT(bany, wide_any_br)

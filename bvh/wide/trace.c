@@ -1,8 +1,9 @@
 /*
  * trace.c - the wide BVH's batch entries: the kernel table (core/variant.h)
- * of the tree's width, row (single rays, packets, order=branchy, quant=1),
+ * of the tree's width, row (single rays, packets, order=branchy, quant=1,
+ * streams),
  * block size and query, each compiled from the templates core/block_test.h (the SIMD
- * watertight leaf test), kernel.h and packet.h (the traversals) by its own
+ * watertight leaf test), kernel.h, packet.h and stream.h (the traversals) by its own
  * unit k<width>_<row>.c (tables.h), once for AVX2 and once for AVX-512
  * (the tree's isa, chosen by the kind at build time: core/isa.h).
  */
@@ -17,14 +18,22 @@
     static const accel_kernel_table *bvh_wide_k8_packet##sfx(int any_hit, int block8)                \
     {                                                                                              \
         return any_hit ? bvh_wide_k8_packet_any##sfx(block8) : bvh_wide_k8_packet_hit##sfx(block8); \
+    }                                                                                              \
+    static const accel_kernel_table *bvh_wide_k4_stream##sfx(int any_hit, int block8)                \
+    {                                                                                              \
+        return any_hit ? bvh_wide_k4_stream_any##sfx(block8) : bvh_wide_k4_stream_hit##sfx(block8); \
+    }                                                                                              \
+    static const accel_kernel_table *bvh_wide_k8_stream##sfx(int any_hit, int block8)                \
+    {                                                                                              \
+        return any_hit ? bvh_wide_k8_stream_any##sfx(block8) : bvh_wide_k8_stream_hit##sfx(block8); \
     }
 /* [width 8][row]: width 4 has no quantized row (quant=1 is width 8 only;
  * the build refuses it), so its slot repeats the branchy one. */
 #define WIDE_ROWS(sfx)                                                                              \
     {{bvh_wide_k4_single##sfx, bvh_wide_k4_packet##sfx, bvh_wide_k4_branchy##sfx,                 \
-      bvh_wide_k4_branchy##sfx},                                                                  \
+      bvh_wide_k4_branchy##sfx, bvh_wide_k4_stream##sfx},                                         \
      {bvh_wide_k8_single##sfx, bvh_wide_k8_packet##sfx, bvh_wide_k8_branchy##sfx,                 \
-      bvh_wide_k8_quant##sfx}}
+      bvh_wide_k8_quant##sfx, bvh_wide_k8_stream##sfx}}
 
 WIDE_PACKET_ROWS()
 #ifdef GRIDBVH_AVX512
@@ -34,7 +43,7 @@ WIDE_PACKET_ROWS(_avx512)
 /* [AVX-512][width 8][row]: the units compiled for each ISA (Makefile,
  * node.h); a build without the AVX-512 units repeats the AVX2 ones, which
  * accel_isa_resolve never lets a tree choose then. */
-static const wide_row_fn wide_rows[2][2][4] = {
+static const wide_row_fn wide_rows[2][2][5] = {
     WIDE_ROWS(),
 #ifdef GRIDBVH_AVX512
     WIDE_ROWS(_avx512),
@@ -48,11 +57,13 @@ static const accel_kernel_table *table_of(const bvh_wide *w, int row, int any_hi
     return wide_rows[w->isa == ACCEL_ISA_AVX512][w->width == 8][row](any_hit, w->block == 8);
 }
 
-/* Packets keep their own order (octant); order=branchy selects the third
- * single-ray table, quant=1 the fourth (quantized nodes, branchy push). */
+/* Packets and streams keep their own order (octant); order=branchy
+ * selects the third single-ray table, quant=1 the fourth (quantized nodes,
+ * branchy push). */
 static int table_row(const bvh_wide *w)
 {
-    return w->packets ? WIDE_ROW_PACKET
+    return w->packets  ? WIDE_ROW_PACKET
+           : w->stream ? WIDE_ROW_STREAM
            : w->quant ? WIDE_ROW_QUANT
            : w->order == WIDE_ORDER_BRANCHY ? WIDE_ROW_BRANCHY
                                             : WIDE_ROW_SINGLE;

@@ -32,7 +32,9 @@ typedef struct bvh_wide {
     int block;            /* primitives per leaf block: 4 or 8 */
     int order;            /* WIDE_ORDER_*: how hit children are ordered */
     int packets;          /* traverse=packet: 64-ray packets (packet.h) */
-    int hybrid;           /* packets: entries spanning at most this many rays go ray by ray */
+    int hybrid;           /* packets: entries spanning at most this many rays go ray by ray;
+                           * streams: entries of at most this many rays */
+    int stream;           /* traverse=stream: rays per stream (stream.h); 0: not a stream tree */
     int quant;            /* quant=1: nodes are wide_qnode8 (width 8 only) */
     int isa;              /* ACCEL_ISA_AVX2 or _AVX512 (core/isa.h): whose kernel units run */
     uint32_t root;        /* reference of the root, WIDE_EMPTY for an empty scene */
@@ -76,7 +78,7 @@ void bvh_wide_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hit
                         accel_counters *c, int naive, int has_spheres);
 void bvh_wide_occluded(const bvh_wide *w, const accel_ray *rays, uint8_t *occ, size_t count,
                        accel_counters *c, int naive, int has_spheres);
-/* The same with the single-ray table whatever w->packets: where the packet
+/* The same with the single-ray table whatever w->packets (and w->stream): where the packet
  * layer (core/coherence.h) sends the rays of an incoherent group. */
 void bvh_wide_single_intersect(const bvh_wide *w, const accel_ray *rays, accel_hit *hits,
                                size_t count, accel_counters *c, int naive, int has_spheres);

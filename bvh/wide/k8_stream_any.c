@@ -1,0 +1,14 @@
+/*
+ * k8_stream_any.c - the 8-wide ray stream kernels (traverse=stream)
+ * for any hits (occlusion): tables.h for one width, row and query, a unit of its own
+ * (tables.h says why).
+ */
+#define WIDE_NW 8
+#define WIDE_ROW WIDE_ROW_STREAM
+#define WIDE_ANY 1
+#include "tables.h"
+
+const accel_kernel_table *WIDE_UNIT(bvh_wide_k8_stream_any)(int block8)
+{
+    return wide_query[block8];
+}
