@@ -3,6 +3,7 @@
  */
 #include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/wait.h>
@@ -241,22 +242,10 @@ int exp_group_add(exp_group *g, const char *spec, int threads)
             leave_out(g, c, EXP_LEFT_IDENTICAL);
             return idx;
         }
-    double round_ms = 0;
-    int nsets = 0;
-    for (int i = 0; i < 4; i++)
-        if (c->set[i].have) round_ms += c->set[i].batch * c->set[i].pass_ms, nsets++;
-    double budget = x->set_budget_ms * (nsets ? nsets : 1);
-    c->want = round_ms > 0 ? (int)(budget / round_ms) : x->repeats;
-    if (c->want > x->repeats) c->want = x->repeats;
-    if (c->want < g->min_rounds) {
-        /* min_rounds, but within 4 budgets: a configuration of seconds per
-         * pass keeps fewer rounds (its n says so) rather than minutes. */
-        int most = round_ms > 0 ? (int)(4 * budget / round_ms) : g->min_rounds;
-        int want = g->min_rounds < x->repeats ? g->min_rounds : x->repeats;
-        if (want > most) want = most > 3 ? most : 3 < want ? 3 : want;
-        if (want > c->want) c->want = want;
-    }
-    if (c->want < 1) c->want = 1;
+    /* Every configuration gets procs x proc_rounds rounds (group.h); the
+     * batch is set in exp_group_run, when the timed share of each set is
+     * known. */
+    c->want = (x->procs < 1 ? 1 : x->procs) * (x->proc_rounds < 1 ? 1 : x->proc_rounds);
     if (c->want > EXP_MAX_SAMPLES) c->want = EXP_MAX_SAMPLES;
     c->ok = 1;
     return idx;
@@ -297,13 +286,28 @@ static void build_rounds(exp_group *g)
     bench_progress_end(x->progress);
 }
 
+/* The rays a sample traces: the set's timed share (group.h), else the set. */
+static const rays_set *timed_set(const exp_group *g, int bit)
+{
+    const rays_set *sub = &g->sub[exp_set_index(bit)];
+    return sub->count ? sub : bench_sets_get(g->sets, bit);
+}
+
+/* Rays of the whole set over rays timed (1 without a share). */
+static double share_scale(const exp_group *g, int bit)
+{
+    const rays_set *sub = &g->sub[exp_set_index(bit)];
+    return sub->count ? (double)bench_sets_get(g->sets, bit)->count / (double)sub->count : 1.0;
+}
+
+/* ms of one pass over the whole set, from a batch over the timed rays. */
 static double time_sample(const exp_cfg *c, int bit, const exp_group *g, scratch *sc)
 {
     const exp_trace *t = &c->set[exp_set_index(bit)];
-    const rays_set *r = bench_sets_get(g->sets, bit);
+    const rays_set *r = timed_set(g, bit);
     double t0 = accel_now_ms();
     for (int b = 0; b < t->batch; b++) one_pass(c, bit, r, sc->hits, sc->occ, NULL);
-    return (accel_now_ms() - t0) / t->batch;
+    return (accel_now_ms() - t0) / t->batch * share_scale(g, bit);
 }
 
 /* The thread probe (group.h): PROBE_ITEMS items of `iters` steps each, a
@@ -353,47 +357,47 @@ static long probe_size(const exp_ctx *x)
     return ms > 0 ? (long)fmax(1.0, (double)j.iters * want / ms) : j.iters;
 }
 
-/* Times the rounds r of [0, most) with r % procs == part (group.h: the
- * replicas). progress: report to the progress line (never in a forked
- * replica: the progress thread did not survive the fork). */
-static void run_rounds(exp_group *g, int most, int procs, int part, probe_job *probe, int aa,
-                       int progress)
+/* Round k of process p (sample index p * rounds + k): every slot once, the
+ * configurations, the A/A control, the thread probe and the reference
+ * kernel, rotated by p and reversed in odd rounds (A B C, then C B A). */
+static void run_round(exp_group *g, int p, int k, int rounds, probe_job *probe, int aa, scratch *sc)
 {
-    exp_ctx *x = g->x;
-    int slots = g->count + aa + (g->probe_threads > 1);
-    scratch sc = scratch_make(g);
-    for (int r = part; r < most; r += procs)
-        for (int k = 0; k < slots; k++) {
-            int slot = (k + r) % slots;
-            if (slot == g->count + aa) { /* the probe's slot: 1 thread, then all */
-                g->probe_samples[0][r] = probe_ms(probe, 1);
-                g->probe_samples[1][r] = probe_ms(probe, g->probe_threads);
-                continue;
-            }
-            int c = slot == g->count ? 0 : slot; /* slot count: the A/A control */
-            exp_cfg *cf = &g->cfg[c];
-            if (!cf->ok || r >= cf->want) continue;
-            for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
-                exp_trace *t = &cf->set[exp_set_index(bit)];
-                if (!t->have) continue;
-                double ms = time_sample(cf, bit, g, &sc);
-                if (slot == g->count)
-                    g->aa_samples[exp_set_index(bit)][r] = ms;
-                else
-                    t->samples[r] = ms;
-                if (progress) bench_progress_add(x->progress, ms * t->batch);
-            }
+    int r = p * rounds + k, has_probe = g->probe_threads > 1;
+    int slots = g->count + aa + has_probe + 1;
+    for (int i = 0; i < slots; i++) {
+        int slot = ((k % 2 ? slots - 1 - i : i) + p) % slots;
+        if (slot == slots - 1) { /* the reference kernel */
+            g->ref_samples[r] = exp_ref_time(g->x);
+            continue;
         }
-    free(sc.hits), free(sc.occ);
+        if (has_probe && slot == g->count + aa) { /* the probe: 1 thread, then all */
+            g->probe_samples[0][r] = probe_ms(probe, 1);
+            g->probe_samples[1][r] = probe_ms(probe, g->probe_threads);
+            continue;
+        }
+        int c = slot == g->count ? 0 : slot; /* slot count: the A/A control */
+        exp_cfg *cf = &g->cfg[c];
+        if (!cf->ok || r >= cf->want) continue;
+        for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
+            exp_trace *t = &cf->set[exp_set_index(bit)];
+            if (!t->have) continue;
+            double ms = time_sample(cf, bit, g, sc);
+            if (slot == g->count)
+                g->aa_samples[exp_set_index(bit)][r] = ms;
+            else
+                t->samples[r] = ms;
+        }
+    }
 }
 
-/* The numbers a replica sends back, in this order, for its rounds: every
- * configuration's four sets, the A/A control's four, the probe's two. With
- * v NULL only counts them. */
-static int replica_values(exp_group *g, int most, int procs, int part, double **v)
+/* The numbers a replica sends back, in this order, for each of its rounds:
+ * every configuration's four sets, the A/A control's four, the probe's
+ * two, the reference. With v NULL only counts them. */
+static int replica_values(exp_group *g, int p, int rounds, double **v)
 {
     int n = 0;
-    for (int r = part; r < most; r += procs) {
+    for (int k = 0; k < rounds; k++) {
+        int r = p * rounds + k;
         for (int c = 0; c < g->count; c++)
             for (int i = 0; i < 4; i++, n++)
                 if (v) v[n] = &g->cfg[c].set[i].samples[r];
@@ -401,6 +405,8 @@ static int replica_values(exp_group *g, int most, int procs, int part, double **
             if (v) v[n] = &g->aa_samples[i][r];
         for (int i = 0; i < 2; i++, n++)
             if (v) v[n] = &g->probe_samples[i][r];
+        if (v) v[n] = &g->ref_samples[r];
+        n++;
     }
     return n;
 }
@@ -412,155 +418,289 @@ static void copy_set(rays_set *r)
     if (!rays) _exit(1);
     memcpy(rays, r->rays, r->count * sizeof *rays);
     r->rays = rays;
+    r->pixel = NULL;
 }
 
-#define REPLICA_WARM_MS 200.0 /* passes longer than this are not warmed in a replica */
-
-/* Replica `part` in a forked process: every configuration built again and
- * the rays copied, so that the structures and rays lie in the replica's
- * own fresh memory (the page placement a fresh process gets), then its
- * share of the rounds, sent to the parent through the pipe. 0 when its
- * values arrived. */
-static int run_replica(exp_group *g, int most, int procs, int part, probe_job *probe, int aa)
+static int write_all(int fd, const void *buf, size_t n)
 {
-    int fd[2];
-    if (pipe(fd)) return -1;
+    const char *p = buf;
+    while (n) {
+        ssize_t w = write(fd, p, n);
+        if (w < 0 && errno == EINTR) continue;
+        if (w <= 0) return -1;
+        p += w, n -= (size_t)w;
+    }
+    return 0;
+}
+
+static int read_all(int fd, void *buf, size_t n)
+{
+    char *p = buf;
+    while (n) {
+        ssize_t rd = read(fd, p, n);
+        if (rd < 0 && errno == EINTR) continue;
+        if (rd <= 0) return -1;
+        p += rd, n -= (size_t)rd;
+    }
+    return 0;
+}
+
+#define REPLICA_WARM_MS 200.0 /* timed passes longer than this are not warmed in a replica */
+
+/* A replica: processes in turn with this one (group.h). */
+typedef struct {
+    pid_t pid;
+    int cmd, rep; /* the parent's ends: commands to it, its answers */
+    int alive;
+} replica;
+
+/* Replica p in the forked process: the rays copied and the structures
+ * rebuilt into its own fresh memory, one warm pass each, then the rounds
+ * the parent sends (a round index; -1: done, send the values). Never
+ * returns. */
+static void replica_main(exp_group *g, int p, int rounds, int cmd, int rep, probe_job *probe, int aa)
+{
+    bench_sets fresh = *g->sets;
+    rays_set *all[4] = {&fresh.primary, &fresh.shadow, &fresh.diffuse, &fresh.ao};
+    for (int i = 0; i < 4; i++) {
+        if (g->sub[i].count) copy_set(&g->sub[i]);
+        else if (all[i]->count) copy_set(all[i]);
+    }
+    g->sets = &fresh;
+    for (int c = 0; c < g->count; c++) {
+        exp_cfg *cf = &g->cfg[c];
+        /* A slow build is not repeated (group.h: EXP_REPLICA_REBUILD_MS):
+         * the replica times the parent's structure, inherited by fork. */
+        if (!cf->ok || cf->build.ms > EXP_REPLICA_REBUILD_MS) continue;
+        accel_build_stats st;
+        accel_error err = {0};
+        /* The parent's copy stays where it is (never freed here). */
+        if (accel_build_spec(cf->spec, g->s, cf->threads, &cf->kind, &cf->accel, &st, &err))
+            _exit(2);
+    }
+    scratch sc = scratch_make(g);
+    for (int c = 0; c < g->count; c++)
+        for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
+            const exp_trace *t = &g->cfg[c].set[exp_set_index(bit)];
+            if (g->cfg[c].ok && t->have && t->pass_ms / share_scale(g, bit) <= REPLICA_WARM_MS)
+                one_pass(&g->cfg[c], bit, timed_set(g, bit), sc.hits, sc.occ, NULL);
+        }
+    char ready = 'r';
+    if (write_all(rep, &ready, 1)) _exit(1);
+    for (;;) {
+        int k;
+        if (read_all(cmd, &k, sizeof k)) _exit(1);
+        if (k < 0) break;
+        run_round(g, p, k, rounds, probe, aa, &sc);
+        char done = 'd';
+        if (write_all(rep, &done, 1)) _exit(1);
+    }
+    int n = replica_values(g, p, rounds, NULL);
+    double **where = malloc((size_t)(n ? n : 1) * sizeof *where);
+    double *buf = malloc((size_t)(n ? n : 1) * sizeof *buf);
+    if (!where || !buf) _exit(1);
+    replica_values(g, p, rounds, where);
+    for (int i = 0; i < n; i++) buf[i] = *where[i];
+    _exit(write_all(rep, buf, (size_t)n * sizeof *buf) ? 1 : 0);
+}
+
+/* Forks replica p; its `alive` says whether it is ready. */
+static void replica_start(exp_group *g, replica *rp, int p, int rounds, probe_job *probe, int aa,
+                          const replica *earlier, int earlier_n)
+{
+    int c2r[2], r2c[2];
+    rp->alive = 0;
+    if (pipe(c2r)) return;
+    if (pipe(r2c)) {
+        close(c2r[0]), close(c2r[1]);
+        return;
+    }
     fflush(NULL); /* nothing buffered is written twice */
     pid_t pid = fork();
     if (pid < 0) {
-        close(fd[0]), close(fd[1]);
-        return -1;
+        close(c2r[0]), close(c2r[1]), close(r2c[0]), close(r2c[1]);
+        return;
     }
-    int n = replica_values(g, most, procs, part, NULL);
-    double **where = malloc((size_t)(n ? n : 1) * sizeof *where);
-    if (!where) {
-        if (pid == 0) _exit(1);
-        return -1;
-    }
-    replica_values(g, most, procs, part, where);
     if (pid == 0) {
-        close(fd[0]);
-        bench_sets fresh = *g->sets;
-        rays_set *all[4] = {&fresh.primary, &fresh.shadow, &fresh.diffuse, &fresh.ao};
-        for (int i = 0; i < 4; i++)
-            if (all[i]->count) copy_set(all[i]);
-        g->sets = &fresh;
-        for (int c = 0; c < g->count; c++) {
-            exp_cfg *cf = &g->cfg[c];
-            /* A slow build is not repeated (group.h: EXP_REPLICA_REBUILD_MS):
-             * the replica times the parent's structure, inherited by fork. */
-            if (!cf->ok || cf->build.ms > EXP_REPLICA_REBUILD_MS) continue;
-            accel_build_stats st;
-            accel_error err = {0};
-            /* The parent's copy stays where it is (never freed here). */
-            if (accel_build_spec(cf->spec, g->s, cf->threads, &cf->kind, &cf->accel, &st, &err))
-                _exit(2);
-        }
-        /* One warm pass each, as the parent's warm-up before its rounds;
-         * not for passes over REPLICA_WARM_MS, whose first sample the
-         * refill of the caches cannot move by more than a few tenths of
-         * a percent (a cache of megabytes refills in about a millisecond),
-         * and whose warm pass was a third of a slow replica's time. */
-        scratch sc = scratch_make(g);
-        for (int c = 0; c < g->count; c++)
-            for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
-                const exp_trace *t = &g->cfg[c].set[exp_set_index(bit)];
-                if (g->cfg[c].ok && t->have && t->pass_ms <= REPLICA_WARM_MS)
-                    one_pass(&g->cfg[c], bit, bench_sets_get(g->sets, bit), sc.hits, sc.occ, NULL);
-            }
-        free(sc.hits), free(sc.occ);
-        run_rounds(g, most, procs, part, probe, aa, 0);
-        double *buf = malloc((size_t)(n ? n : 1) * sizeof *buf);
-        if (!buf) _exit(1);
-        for (int i = 0; i < n; i++) buf[i] = *where[i];
-        size_t left = (size_t)n * sizeof *buf;
-        const char *p = (const char *)buf;
-        while (left) {
-            ssize_t w = write(fd[1], p, left);
-            if (w < 0 && errno == EINTR) continue;
-            if (w <= 0) _exit(1);
-            p += w, left -= (size_t)w;
-        }
-        _exit(0);
+        /* The parent's ends of the earlier replicas' pipes: closed here, so
+         * that each sees the end of its pipe when the parent's end closes. */
+        for (int q = 0; q < earlier_n; q++)
+            if (earlier[q].alive) close(earlier[q].cmd), close(earlier[q].rep);
+        close(c2r[1]), close(r2c[0]);
+        replica_main(g, p, rounds, c2r[0], r2c[1], probe, aa);
     }
-    close(fd[1]);
-    double *buf = malloc((size_t)(n ? n : 1) * sizeof *buf);
-    size_t got = 0, want = (size_t)n * sizeof *buf;
-    while (buf && got < want) {
-        ssize_t rd = read(fd[0], (char *)buf + got, want - got);
-        if (rd < 0 && errno == EINTR) continue;
-        if (rd <= 0) break;
-        got += (size_t)rd;
-    }
-    close(fd[0]);
-    int status = 0;
-    while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {}
-    int ok = buf && got == want && WIFEXITED(status) && WEXITSTATUS(status) == 0;
-    if (ok)
-        for (int i = 0; i < n; i++) *where[i] = buf[i];
-    free(buf), free(where);
-    return ok ? 0 : -1;
+    close(c2r[0]), close(r2c[1]);
+    rp->pid = pid, rp->cmd = c2r[1], rp->rep = r2c[0];
+    char ready;
+    rp->alive = read_all(rp->rep, &ready, 1) == 0 && ready == 'r';
 }
 
+static void replica_stop(replica *rp)
+{
+    if (!rp->pid) return;
+    close(rp->cmd), close(rp->rep);
+    int status;
+    while (waitpid(rp->pid, &status, 0) < 0 && errno == EINTR) {}
+    rp->pid = 0, rp->alive = 0;
+}
+
+/* The timed share of each set and every configuration's batch (group.h). */
+static void plan_samples(exp_group *g, int samples)
+{
+    exp_ctx *x = g->x;
+    double cap = x->set_budget_ms / (samples > 0 ? samples : 1);
+    for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
+        if (!(g->mask & bit)) continue;
+        int i = exp_set_index(bit);
+        double slowest = 0;
+        for (int c = 0; c < g->count; c++)
+            if (g->cfg[c].ok && g->cfg[c].set[i].have) slowest = fmax(slowest, g->cfg[c].set[i].pass_ms);
+        const rays_set *r = bench_sets_get(g->sets, bit);
+        size_t blocks = r->count / 64, keep = blocks;
+        if (slowest > cap && blocks >= 32) {
+            keep = (size_t)ceil((double)blocks * cap / slowest);
+            if (keep < 16) keep = 16;
+        }
+        if (keep < blocks) {
+            accel_ray *rays = malloc(keep * 64 * sizeof *rays);
+            if (rays) {
+                for (size_t b = 0; b < keep; b++)
+                    memcpy(rays + b * 64, r->rays + (b * blocks / keep) * 64, 64 * sizeof *rays);
+                g->sub[i] = (rays_set){rays, NULL, keep * 64, r->width, r->height};
+            }
+        }
+        double scale = share_scale(g, bit);
+        for (int c = 0; c < g->count; c++) {
+            exp_trace *t = &g->cfg[c].set[i];
+            if (!g->cfg[c].ok || !t->have) continue;
+            double pass = t->pass_ms / scale;
+            t->batch = pass > 0 ? (int)ceil(x->sample_ms / pass) : 1;
+            if (t->batch < 1) t->batch = 1;
+            if (t->batch > 1000) t->batch = 1000;
+        }
+    }
+}
+
+/* The processes' means of the logs of v (0 where <= 0): max / min - 1. */
+static double stray_of(const double *v, const int *proc, int n)
+{
+    double lo = INFINITY, hi = -INFINITY;
+    for (int id = 0; id < EXP_MAX_SAMPLES; id++) {
+        double sum = 0;
+        int m = 0;
+        for (int i = 0; i < n; i++)
+            if (proc[i] == id && v[i] > 0) sum += log(v[i]), m++;
+        if (!m) continue;
+        lo = fmin(lo, sum / m), hi = fmax(hi, sum / m);
+    }
+    return hi >= lo ? exp(hi - lo) - 1 : NAN;
+}
+
+/* Long on purpose (about 100 lines): the plan, the replicas' start, the
+ * interleaved turns, the values' return and the estimates, in order. */
 void exp_group_run(exp_group *g)
 {
     exp_ctx *x = g->x;
     if (g->time_builds) build_rounds(g);
+    exp_ref_ready(x);
     g->probe_threads = 1;
     for (int c = 0; g->thread_probe && c < g->count; c++)
         if (g->cfg[c].ok && g->cfg[c].threads > g->probe_threads) g->probe_threads = g->cfg[c].threads;
     probe_job probe = {.iters = g->probe_threads > 1 ? probe_size(x) : 0};
     int aa = g->control && g->count && g->cfg[0].ok;
-    int most = 0;
-    double total_ms = 0;
-    for (int c = 0; c < g->count; c++) {
-        if (!g->cfg[c].ok) continue;
-        if (g->cfg[c].want > most) most = g->cfg[c].want;
-        for (int i = 0; i < 4; i++)
-            total_ms += g->cfg[c].want * g->cfg[c].set[i].batch * g->cfg[c].set[i].pass_ms;
-    }
-    /* Round r runs in process r % procs: the parent, then each replica in
-     * turn (one at a time: they never compete for the cores). */
-    int procs = x->procs < 1 ? 1 : x->procs > most ? (most > 0 ? most : 1) : x->procs;
-    bench_progress_begin(x->progress, "interleaved timed rounds", total_ms, 0);
-    run_rounds(g, most, procs, 0, &probe, aa, 1);
+    int procs = x->procs < 1 ? 1 : x->procs > 16 ? 16 : x->procs;
+    int rounds = procs == 1 ? x->repeats : x->proc_rounds;
+    if (rounds < 1) rounds = 1;
+    if (procs * rounds > EXP_MAX_SAMPLES) rounds = EXP_MAX_SAMPLES / procs;
+    int total = procs * rounds;
+    for (int c = 0; c < g->count; c++) g->cfg[c].want = total;
+    plan_samples(g, total);
+    void (*old_pipe)(int) = signal(SIGPIPE, SIG_IGN); /* a dead replica is a failed write */
+    replica rep[16] = {{0}};
+    bench_progress_begin(x->progress, "start the replica processes", 0, 0);
+    for (int p = 1; p < procs; p++) replica_start(g, &rep[p], p, rounds, &probe, aa, rep, p);
+    bench_progress_end(x->progress);
+    for (int r = 0; r < total; r++) g->round_proc[r] = r / rounds;
+    scratch sc = scratch_make(g);
+    double steal = 0, cpu = 0;
+    char phase[96];
+    snprintf(phase, sizeof phase, "interleaved rounds in %d processes", procs);
+    bench_progress_begin(x->progress, phase, total, 0);
+    for (int k = 0; k < rounds; k++)
+        for (int i = 0; i < procs; i++) {
+            int p = k % 2 ? procs - 1 - i : i;
+            double s0, c0, s1, c1;
+            int ticks = exp_cpu_ticks(&s0, &c0) == 0;
+            char done = 0;
+            if (p > 0 && rep[p].alive &&
+                (write_all(rep[p].cmd, &k, sizeof k) || read_all(rep[p].rep, &done, 1) || done != 'd'))
+                rep[p].alive = 0;
+            if (p == 0 || !rep[p].alive) { /* this process (also for a replica that failed) */
+                run_round(g, p, k, rounds, &probe, aa, &sc);
+                if (p > 0) g->round_proc[p * rounds + k] = 0;
+            }
+            if (ticks && exp_cpu_ticks(&s1, &c1) == 0) steal += s1 - s0, cpu += c1 - c0;
+            bench_progress_add(x->progress, 1);
+        }
     bench_progress_end(x->progress);
     g->procs = 1;
-    for (int r = 0; r < most; r++) g->round_proc[r] = 0;
     for (int p = 1; p < procs; p++) {
-        char phase[80];
-        snprintf(phase, sizeof phase, "replica %d of %d (a forked process)", p + 1, procs);
-        bench_progress_begin(x->progress, phase, 0, 0);
-        int ok = run_replica(g, most, procs, p, &probe, aa) == 0;
-        bench_progress_end(x->progress);
-        if (!ok) { /* the replica failed: its rounds run here (and count as the parent's) */
-            fprintf(stderr, "%s: replica %d failed; its rounds run in this process\n", x->name, p + 1);
-            run_rounds(g, most, procs, p, &probe, aa, 0);
+        if (!rep[p].alive) {
+            replica_stop(&rep[p]);
             continue;
         }
-        g->procs++;
-        for (int r = p; r < most; r += procs) g->round_proc[r] = p;
+        int stop = -1, n = replica_values(g, p, rounds, NULL);
+        double **where = malloc((size_t)(n ? n : 1) * sizeof *where);
+        double *buf = malloc((size_t)(n ? n : 1) * sizeof *buf);
+        int ok = where && buf && !write_all(rep[p].cmd, &stop, sizeof stop) &&
+                 !read_all(rep[p].rep, buf, (size_t)n * sizeof *buf);
+        if (ok) {
+            replica_values(g, p, rounds, where);
+            for (int i = 0; i < n; i++) *where[i] = buf[i];
+            g->procs++;
+        }
+        free(where), free(buf);
+        replica_stop(&rep[p]);
+        if (!ok) { /* its values are lost: its rounds run again here */
+            fprintf(stderr, "%s: replica %d failed; its rounds run in this process\n", x->name, p + 1);
+            for (int k = 0; k < rounds; k++) {
+                run_round(g, p, k, rounds, &probe, aa, &sc);
+                g->round_proc[p * rounds + k] = 0;
+            }
+        }
     }
+    signal(SIGPIPE, old_pipe);
+    free(sc.hits), free(sc.occ);
+    g->steal = cpu > 0 ? steal / cpu : 0;
+    x->steal_ticks += steal, x->cpu_ticks += cpu;
     x->procs_used = g->procs > x->procs_used ? g->procs : x->procs_used;
     for (int c = 0; c < g->count; c++)
         for (int i = 0; i < 4; i++)
-            if (g->cfg[c].ok && g->cfg[c].set[i].have) g->cfg[c].set[i].n = g->cfg[c].want;
-    g->rounds = most;
+            if (g->cfg[c].ok && g->cfg[c].set[i].have) g->cfg[c].set[i].n = total;
+    g->rounds = total;
     for (int c = 0; c < g->count; c++) {
         if (!g->cfg[c].ok) continue;
-        if (!x->rounds_hi || g->cfg[c].want < x->rounds_lo) x->rounds_lo = g->cfg[c].want;
-        if (g->cfg[c].want > x->rounds_hi) x->rounds_hi = g->cfg[c].want;
+        if (!x->rounds_hi || total < x->rounds_lo) x->rounds_lo = total;
+        if (total > x->rounds_hi) x->rounds_hi = total;
     }
     for (int c = 0; c < g->count; c++)
         for (int i = 0; i < 4; i++)
             if (g->cfg[c].ok && g->cfg[c].set[i].have)
-                exp_est_of_procs(g->cfg[c].set[i].samples, g->round_proc, g->cfg[c].set[i].n,
-                                 &g->cfg[c].set[i].ms);
-    if (g->probe_threads > 1 && most >= 3)
-        exp_est_ratio_procs(g->probe_samples[0], g->probe_samples[1], g->round_proc, most, &g->probe);
-    /* The floor: how far configuration 0 strays from itself. */
+                exp_est_of_procs(g->cfg[c].set[i].samples, g->round_proc, total, &g->cfg[c].set[i].ms);
+    if (g->probe_threads > 1)
+        exp_est_ratio_procs(g->probe_samples[0], g->probe_samples[1], g->round_proc, total, &g->probe);
+    if (x->ref_state == 1) {
+        exp_est_of_procs(g->ref_samples, g->round_proc, total, &g->ref);
+        g->ref_stray = stray_of(g->ref_samples, g->round_proc, total);
+        exp_ref_note(x, g->ref_samples, total);
+    }
+    /* The floor: configuration 0's systematic offset from itself, the A/A
+     * ratio's estimate (issue 52: the A/A interval's width is the noise
+     * every comparison's interval already holds, measured the same way; a
+     * floor from its ends made ties of differences whose intervals exclude
+     * 1). */
     g->floor = 0.05;
-    if (aa && g->cfg[0].want >= 3) {
+    if (aa && total >= 3) {
         double a[EXP_MAX_SAMPLES], b[EXP_MAX_SAMPLES];
         int n = exp_group_round_ms(g, 0, g->mask, a);
         for (int r = 0; r < n; r++) {
@@ -569,8 +709,8 @@ void exp_group_run(exp_group *g)
                 if (g->cfg[0].set[i].have) b[r] += g->aa_samples[i][r];
         }
         exp_est_ratio_procs(a, b, g->round_proc, n, &g->aa);
-        g->floor = fmax(fabs(g->aa.median - 1), fmax(fabs(g->aa.hi - 1), fabs(1 - g->aa.lo)));
-        if (g->floor < EXP_MIN_FLOOR) g->floor = EXP_MIN_FLOOR;
+        g->floor = fmax(fabs(g->aa.median - 1), fabs(1 / g->aa.median - 1));
+        if (!(g->floor >= EXP_MIN_FLOOR)) g->floor = EXP_MIN_FLOOR;
     }
     exp_note_floor(x, g->floor, g->aa.n >= 3);
 }
@@ -593,6 +733,7 @@ void exp_group_free(exp_group *g)
         if (cf->accel) cf->kind->destroy(cf->accel);
         for (int i = 0; i < 4; i++) free(cf->set[i].ray_steps), free(cf->set[i].ray_prims);
     }
+    for (int i = 0; i < 4; i++) free(g->sub[i].rays);
     free(g->cfg);
     memset(g, 0, sizeof *g);
 }
