@@ -222,12 +222,15 @@ void exp_tally_add(exp_tally *t, const exp_decider *d)
     t->worst.what = t->what;
 }
 
+void exp_tally_untestable(exp_tally *t) { t->untestable++; }
+
 const char *exp_tally_verdict(const exp_tally *t)
 {
-    if (!t->added) return NULL;
-    const char *words[EXP_TALLY_MAX];
+    if (!t->added && !t->untestable) return NULL;
+    const char *words[EXP_TALLY_MAX + 1];
     for (int k = 0; k < t->added; k++) words[k] = exp_judge(&t->all[k]);
-    return exp_combine(words, t->added, EXP_EVERY);
+    words[t->added] = t->untestable ? EXP_UNTESTABLE : NULL;
+    return exp_combine(words, t->added + 1, EXP_EVERY);
 }
 
 const char *exp_compound(exp_tally *const *parts, int n, const exp_decider **dec)

@@ -96,6 +96,7 @@ int exp_decisive(const char *word, const char *const *words, const double *margi
 typedef struct {
     int m;                      /* comparisons announced (for the level) */
     int added, confirmed, refuted, online, degenerate;
+    int untestable;             /* comparisons that could not be judged here (exp_tally_untestable) */
     exp_decider worst;          /* the deciding comparison so far */
     char what[256];             /* worst.what's text */
     exp_decider all[EXP_TALLY_MAX]; /* the comparisons (what points into whats) */
@@ -107,7 +108,11 @@ void exp_tally_init(exp_tally *t, int m);
 double exp_tally_level(const exp_tally *t);
 /* Adds one comparison (its interval at exp_tally_level). */
 void exp_tally_add(exp_tally *t, const exp_decider *d);
-/* The word; NULL when nothing was added. */
+/* Counts a comparison that could not be judged here (e.g. an absolute
+ * threshold while the reference kernel strayed): on every scene, it stops
+ * "confirmed". */
+void exp_tally_untestable(exp_tally *t);
+/* The word; NULL when nothing was added (nor counted untestable). */
 const char *exp_tally_verdict(const exp_tally *t);
 /* A compound claim from its parts (tallies with nothing added: parts not
  * measured): exp_combine(EXP_PARTS) of their words. *dec: the deciding
