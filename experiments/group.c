@@ -258,7 +258,7 @@ static void build_rounds(exp_group *g)
     exp_ctx *x = g->x;
     int reps[256] = {0}, most = 0, n = g->count < 256 ? g->count : 256;
     for (int c = 0; c < n; c++) {
-        if (!g->cfg[c].ok) continue;
+        if (!g->cfg[c].ok || g->cfg[c].build_procs) continue; /* built in the processes */
         double first = g->cfg[c].build.ms;
         int r = x->quick ? 3 : 10; /* 10 rounds for verdicts on build time (issue 38) */
         if (first > 0 && first * r > x->build_budget_ms) r = (int)(x->build_budget_ms / first);
@@ -388,6 +388,19 @@ static void run_round(exp_group *g, int p, int k, int rounds, probe_job *probe, 
                 t->samples[r] = ms;
         }
     }
+    if (k != rounds - 1) return;
+    /* The process's builds (group.h), after its traces, rotated by p. */
+    for (int i = 0; i < g->count; i++) {
+        exp_cfg *cf = &g->cfg[(i + p) % g->count];
+        if (!cf->ok || !cf->build_procs) continue;
+        const accel_kind *kind;
+        void *a;
+        accel_build_stats st;
+        accel_error err = {0};
+        if (accel_build_spec(cf->spec, g->s, cf->threads, &kind, &a, &st, &err)) continue;
+        kind->destroy(a);
+        cf->build_samples[p] = st.ms;
+    }
 }
 
 /* The numbers a replica sends back, in this order, for each of its rounds:
@@ -408,6 +421,8 @@ static int replica_values(exp_group *g, int p, int rounds, double **v)
         if (v) v[n] = &g->ref_samples[r];
         n++;
     }
+    for (int c = 0; c < g->count; c++, n++)
+        if (v) v[n] = &g->cfg[c].build_samples[p];
     return n;
 }
 
@@ -601,6 +616,10 @@ static double stray_of(const double *v, const int *proc, int n)
 void exp_group_run(exp_group *g)
 {
     exp_ctx *x = g->x;
+    int procs = x->procs < 1 ? 1 : x->procs > 16 ? 16 : x->procs;
+    for (int c = 0; c < g->count; c++)
+        g->cfg[c].build_procs = g->time_builds && procs > 1 && g->cfg[c].ok &&
+                                g->cfg[c].build.ms * procs <= x->build_budget_ms;
     if (g->time_builds) build_rounds(g);
     exp_ref_ready(x);
     g->probe_threads = 1;
@@ -608,7 +627,6 @@ void exp_group_run(exp_group *g)
         if (g->cfg[c].ok && g->cfg[c].threads > g->probe_threads) g->probe_threads = g->cfg[c].threads;
     probe_job probe = {.iters = g->probe_threads > 1 ? probe_size(x) : 0};
     int aa = g->control && g->count && g->cfg[0].ok;
-    int procs = x->procs < 1 ? 1 : x->procs > 16 ? 16 : x->procs;
     int rounds = procs == 1 ? x->repeats : x->proc_rounds;
     if (rounds < 1) rounds = 1;
     if (procs * rounds > EXP_MAX_SAMPLES) rounds = EXP_MAX_SAMPLES / procs;
@@ -689,6 +707,11 @@ void exp_group_run(exp_group *g)
                 exp_est_of_procs(g->cfg[c].set[i].samples, g->round_proc, total, &g->cfg[c].set[i].ms);
     if (g->probe_threads > 1)
         exp_est_ratio_procs(g->probe_samples[0], g->probe_samples[1], g->round_proc, total, &g->probe);
+    int ids[16];
+    for (int p = 0; p < 16; p++) ids[p] = p;
+    for (int c = 0; c < g->count; c++)
+        if (g->cfg[c].ok && g->cfg[c].build_procs)
+            exp_est_of_procs(g->cfg[c].build_samples, ids, procs, &g->cfg[c].build_ms);
     if (x->ref_state == 1) {
         exp_est_of_procs(g->ref_samples, g->round_proc, total, &g->ref);
         g->ref_stray = stray_of(g->ref_samples, g->round_proc, total);

@@ -115,12 +115,26 @@ int exp_group_compare(exp_group *g, int c, int base, int mask, char *buf, size_t
     return cmp;
 }
 
+exp_est exp_group_build_ratio_level(const exp_group *g, int a, int b, double level)
+{
+    const exp_cfg *ca = &g->cfg[a], *cb = &g->cfg[b];
+    exp_est r;
+    if (ca->build_procs && cb->build_procs) { /* one build per process: paired by process */
+        int ids[16];
+        for (int p = 0; p < 16; p++) ids[p] = p;
+        int m = ca->build_ms.n < cb->build_ms.n ? ca->build_ms.n : cb->build_ms.n;
+        exp_est_ratio_level(ca->build_samples, cb->build_samples, ids, m, level, &r);
+        return r;
+    }
+    int m = ca->build_ms.n < cb->build_ms.n ? ca->build_ms.n : cb->build_ms.n;
+    exp_est_ratio_level(ca->build_samples, cb->build_samples, NULL, m, level, &r);
+    return r;
+}
+
 int exp_group_compare_build(exp_group *g, int c, int base, char *buf, size_t n)
 {
     const exp_cfg *a = &g->cfg[c], *b = &g->cfg[base];
-    exp_est r, sp;
-    int m = a->build_ms.n < b->build_ms.n ? a->build_ms.n : b->build_ms.n;
-    exp_est_ratio(a->build_samples, b->build_samples, m, &r);
+    exp_est r = exp_group_build_ratio_level(g, c, base, 0.95), sp;
     sp = exp_est_inv(&r, 1.0);
     exp_fmt_pct(buf, n, &r);
     int cmp = exp_ratio_cmp(&r, g->floor);

@@ -167,8 +167,12 @@ static void deciding_cell(char *dst, size_t n, const verdict *v)
 {
     char a[32], b[32], c[32], d[32], what[CELL_CHARS + 8];
     md_cell(what, sizeof what, v->what, CELL_CHARS - 60);
-    snprintf(dst, n, "%s%s%s [%s, %s] (claim %s %s)", what, what[0] ? ": " : "",
-             num(a, sizeof a, v->value), num(b, sizeof b, v->lo), num(c, sizeof c, v->hi),
+    /* Issue 52: an interval on fewer than 6 units is never shown as 95%;
+     * one of zero width from 2 or more is no interval. */
+    const char *note = v->n >= 2 && !(v->hi != v->lo) ? " (zero width: not an interval)"
+                       : v->n >= 2 && v->n < 6 ? " (n < 6: not a 95% interval)" : "";
+    snprintf(dst, n, "%s%s%s [%s, %s]%s (claim %s %s)", what, what[0] ? ": " : "",
+             num(a, sizeof a, v->value), num(b, sizeof b, v->lo), num(c, sizeof c, v->hi), note,
              v->sense > 0 ? ">=" : v->sense < 0 ? "<=" : "vs", num(d, sizeof d, v->threshold));
 }
 
