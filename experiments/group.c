@@ -563,7 +563,11 @@ static void replica_stop(replica *rp)
 static void plan_samples(exp_group *g, int samples)
 {
     exp_ctx *x = g->x;
-    double cap = x->set_budget_ms / (samples > 0 ? samples : 1);
+    /* A sample lasts at most 2 x sample_ms (10 ms at the full budget), and
+     * never more than the set budget over the samples: 16 samples of a
+     * slow configuration cost 160 ms per set where issue 38's rounds cost
+     * 400 ms, or up to 1600 ms with min_rounds 10. */
+    double cap = fmin(x->set_budget_ms / (samples > 0 ? samples : 1), 2 * x->sample_ms);
     for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
         if (!(g->mask & bit)) continue;
         int i = exp_set_index(bit);

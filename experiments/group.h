@@ -32,9 +32,9 @@
  * parent's copy, which fork hands it.
  *
  * Shorter processes, not more time (issue 52): a sample lasts
- * x->sample_ms (passes batched) but never more than the set budget over
- * the samples (x->set_budget_ms / (procs x proc_rounds), 25 ms at the full
- * budget): a set whose slowest configuration passes slower than that is
+ * x->sample_ms (passes batched) but never more than 2 x sample_ms nor
+ * the set budget over the samples (10 ms at the full budget, 2 ms at the
+ * quick one): a set whose slowest configuration passes slower than that is
  * timed on a fixed share of its rays for every configuration of the group
  * (blocks of 64 consecutive rays, 8x8 tiles, spread evenly over the set;
  * at least 16 blocks), and the samples are scaled to a full pass (the
