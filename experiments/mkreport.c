@@ -204,11 +204,11 @@ static void summary(FILE *f)
 {
     fprintf(f, "## Summary\n\nOne line per claim of the lecture (../shared/LECTURE.md), request of "
                "the user and question of the study: the verdict, the number that decides it with "
-               "its interval, the processes (n) behind it and the margin (the distance from the "
+               "its interval, the processes (n) behind it and the margin\n(the distance from the "
                "claim's threshold to the interval's near end, in percent of the threshold: "
-               "positive confirms, negative refutes, 0 straddles), the scene. A claim of several "
+               "positive confirms, negative refutes, 0 straddles), the scene.\nA claim of several "
                "rows is refuted by one decisive refutation and confirmed only when every row "
-               "confirms (claims.h: the study's one tally rule). Rows without a deciding number "
+               "confirms (claims.h: the study's one tally rule).\nRows without a deciding number "
                "quote their evidence.\n\n"
                "| # | claim | verdict | deciding number [95%% interval] | n | margin | scene |\n"
                "|---|---|---|---|---|---|---|\n");
