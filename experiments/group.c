@@ -640,7 +640,9 @@ void exp_group_run(exp_group *g)
     void (*old_pipe)(int) = signal(SIGPIPE, SIG_IGN); /* a dead replica is a failed write */
     replica rep[16] = {{0}};
     bench_progress_begin(x->progress, "start the replica processes", 0, 0);
-    for (int p = 1; p < procs; p++) replica_start(g, &rep[p], p, rounds, &probe, aa, rep, p);
+    int live = 0; /* no replica for a group with nothing to measure */
+    for (int c = 0; c < g->count; c++) live += g->cfg[c].ok;
+    for (int p = 1; p < procs && live; p++) replica_start(g, &rep[p], p, rounds, &probe, aa, rep, p);
     bench_progress_end(x->progress);
     for (int r = 0; r < total; r++) g->round_proc[r] = r / rounds;
     scratch sc = scratch_make(g);
