@@ -202,6 +202,16 @@ int exp_group_best(const exp_group *g, int mask, int lo, int hi, const char *pre
  * reference strayed by more than EXP_REF_STRAY over the group's processes
  * or was not measured. why always gets a note of the factor. */
 const char *exp_group_absolute(const exp_group *g, exp_decider *d, int rate, char *why, size_t n);
+/* Internal to group.c and group_run.c: one pass of c over the rays r of
+ * set bit (counted when cnt is given), and scratch results for the
+ * largest set of g (exits on no memory). */
+void exp_group_pass(const exp_cfg *c, int bit, const rays_set *r, accel_hit *hits, uint8_t *occ,
+                    accel_counters *cnt);
+typedef struct {
+    accel_hit *hits;
+    uint8_t *occ;
+} exp_scratch;
+exp_scratch exp_group_scratch(const exp_group *g);
 /* Index of the configuration named spec, or -1. */
 int exp_group_find(const exp_group *g, const char *spec);
 
