@@ -263,6 +263,13 @@ int exp_cpu_ticks(double *steal, double *total);
 /* The footer line: the reference's spread over the section and the steal
  * time of its rounds (nothing when no round ran). */
 void exp_ref_footer(exp_ctx *x);
+/* exp_group_absolute (group.h) for timings of one process (n reference
+ * times, ns per ray, taken beside the timed work): the decider normalized
+ * by median / EXP_REF_NS_PER_RAY (rate = 1: multiplied; 0: divided);
+ * "not testable here" when the reference's 10th and 90th percentiles
+ * differ by more than EXP_REF_STRAY, or no reference was timed. */
+const char *exp_ref_absolute(exp_ctx *x, const double *ns, int n, exp_decider *d, int rate,
+                             char *why, size_t why_n);
 /* Frees the reference kernel and the section's record. */
 void exp_ref_free(exp_ctx *x);
 

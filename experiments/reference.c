@@ -105,6 +105,33 @@ void exp_ref_footer(exp_ctx *x)
     free(v);
 }
 
+const char *exp_ref_absolute(exp_ctx *x, const double *ns, int n, exp_decider *d, int rate,
+                             char *why, size_t why_n)
+{
+    double v[EXP_MAX_SAMPLES];
+    int m = 0;
+    for (int i = 0; i < n && m < EXP_MAX_SAMPLES; i++)
+        if (ns[i] > 0) v[m++] = ns[i];
+    exp_ref_note(x, v, m);
+    if (m < 2) {
+        snprintf(why, why_n, "the reference kernel was not timed beside these rounds: an absolute "
+                 "threshold cannot be judged here");
+        return EXP_UNTESTABLE;
+    }
+    qsort(v, (size_t)m, sizeof *v, cmp_d);
+    double med = m % 2 ? v[m / 2] : 0.5 * (v[m / 2 - 1] + v[m / 2]);
+    double stray = v[m - 1 - m / 10] / v[m / 10] - 1, f = med / EXP_REF_NS_PER_RAY;
+    double k = rate ? f : 1 / f;
+    d->value *= k, d->lo *= k, d->hi *= k;
+    int off = !(stray <= EXP_REF_STRAY);
+    snprintf(why, why_n, "normalized to the stated reference rate (%.0f ns per ray of the "
+             "reference kernel; %.0f ns beside these %d rounds, so the numbers are x %.2f), the "
+             "reference's 10th to 90th percentile %s %.1f%%%s", EXP_REF_NS_PER_RAY, med, m, k,
+             off ? "strayed by" : "within", 100 * stray,
+             off ? " (more than 10%: not testable here)" : "");
+    return off ? EXP_UNTESTABLE : exp_judge(d);
+}
+
 void exp_ref_free(exp_ctx *x)
 {
     if (x->ref_state == 1) {
