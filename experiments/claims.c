@@ -115,6 +115,7 @@ const char *exp_judge(const exp_decider *d)
     double lo = d->lo * d->sense, hi = d->hi * d->sense, th = d->threshold * d->sense;
     if (d->sense == 0 || lo != lo || hi != hi || th != th) return EXP_ON_LINE;
     if (lo > hi) { double t = lo; lo = hi; hi = t; }
+    if (d->n >= 2 && !(hi > lo)) return EXP_ON_LINE; /* not an interval */
     if (lo >= th) return EXP_CONFIRMED;
     if (hi < th) return EXP_REFUTED;
     return EXP_ON_LINE;
@@ -122,10 +123,69 @@ const char *exp_judge(const exp_decider *d)
 
 double exp_margin(const exp_decider *d)
 {
-    double half = fabs(d->hi - d->lo) / 2;
-    if (half < 1e-12) half = 1e-12;
-    double m = (d->value - d->threshold) * d->sense / half;
-    return d->sense ? m : NAN;
+    double lo = d->lo * d->sense, hi = d->hi * d->sense, th = d->threshold * d->sense;
+    if (d->sense == 0 || lo != lo || hi != hi || th != th || d->value != d->value) return NAN;
+    if (lo > hi) { double t = lo; lo = hi; hi = t; }
+    double scale = fabs(d->threshold) > 0 ? fabs(d->threshold) : 1;
+    const char *v = exp_judge(d);
+    if (!strcmp(v, EXP_CONFIRMED)) return (lo - th) / scale;
+    if (!strcmp(v, EXP_REFUTED)) return (hi - th) / scale;
+    return 0;
+}
+
+const char *exp_combine(const char *const *w, int n, int mode)
+{
+    int m = 0, conf = 0, ref = 0, part = 0, line = 0, unt = 0, ans = 0;
+    for (int i = 0; i < n; i++) {
+        if (!w[i]) continue;
+        m++;
+        conf += !strcmp(w[i], EXP_CONFIRMED), ref += !strcmp(w[i], EXP_REFUTED);
+        part += !strcmp(w[i], EXP_PARTLY), line += !strcmp(w[i], EXP_ON_LINE);
+        unt += !strcmp(w[i], EXP_UNTESTABLE), ans += !strcmp(w[i], EXP_ANSWERED);
+    }
+    if (!m) return NULL;
+    if (ans == m) return EXP_ANSWERED;
+    int judged = conf + ref + part + line;
+    if (!judged) return unt ? EXP_UNTESTABLE : EXP_ANSWERED;
+    if (mode == EXP_EVERY) {
+        if (ref) return EXP_REFUTED;
+        if (part) return EXP_PARTLY;
+        if (conf == m - ans) return EXP_CONFIRMED;
+        return line ? EXP_ON_LINE : EXP_UNTESTABLE; /* confirmed, but a scene not testable */
+    }
+    if (conf == judged) return EXP_CONFIRMED;
+    if (ref == judged) return EXP_REFUTED;
+    if (part || (conf && ref)) return EXP_PARTLY;
+    return ref ? EXP_REFUTED : EXP_ON_LINE;
+}
+
+const char *exp_combine_counts(int confirmed, int refuted, int online, int mode)
+{
+    const char *w[3] = {confirmed > 0 ? EXP_CONFIRMED : NULL, refuted > 0 ? EXP_REFUTED : NULL,
+                        online > 0 ? EXP_ON_LINE : NULL};
+    return exp_combine(w, 3, mode);
+}
+
+int exp_decisive(const char *word, const char *const *w, const double *margins, int n)
+{
+    if (!word) return -1;
+    int pick = -1;
+    int partly = !strcmp(word, EXP_PARTLY);
+    const char *want = partly ? EXP_REFUTED : word;
+    for (int i = 0; i < n; i++) {
+        if (!w[i] || strcmp(w[i], want)) continue;
+        double m = margins ? margins[i] : NAN;
+        if (pick < 0) { pick = i; continue; }
+        double mp = margins[pick];
+        if (!strcmp(want, EXP_REFUTED) && (mp != mp || m < mp)) pick = i;
+        else if (!strcmp(want, EXP_CONFIRMED) && (mp != mp || m < mp)) pick = i;
+    }
+    if (pick < 0 && partly) /* a part itself partly */
+        for (int i = 0; i < n && pick < 0; i++)
+            if (w[i] && !strcmp(w[i], EXP_PARTLY)) pick = i;
+    for (int i = 0; i < n && pick < 0; i++)
+        if (w[i] && !strcmp(w[i], word)) pick = i;
+    return pick;
 }
 
 void exp_tally_init(exp_tally *t, int m)
@@ -136,71 +196,55 @@ void exp_tally_init(exp_tally *t, int m)
 
 double exp_tally_level(const exp_tally *t) { return t->m > 1 ? 1 - 0.05 / t->m : 0.95; }
 
-/* Whether d decides t's word better than the current worst: the tally's
- * word after d is added, and d's margin against it. */
 void exp_tally_add(exp_tally *t, const exp_decider *d)
 {
+    double lo = fmin(d->lo, d->hi), hi = fmax(d->lo, d->hi);
+    if (d->n >= 2 && lo == hi) { /* a self-ratio: no interval, no comparison */
+        t->degenerate++;
+        return;
+    }
+    if (t->added >= EXP_TALLY_MAX) return;
     const char *v = exp_judge(d);
-    t->added++;
+    int i = t->added++;
     t->confirmed += !strcmp(v, EXP_CONFIRMED);
     t->refuted += !strcmp(v, EXP_REFUTED);
     t->online += !strcmp(v, EXP_ON_LINE);
-    /* The decider: the comparison nearest to the threshold (smallest
-     * |margin|), except that a straddling one is preferred while the word
-     * is "on the line", and a refuting one while it is "partly" or
-     * "refuted": the number quoted is the one that makes the word. */
-    double m = fabs(exp_margin(d)), mw = fabs(exp_margin(&t->worst));
-    int first = t->added == 1, take;
-    const char *word = exp_tally_verdict(t), *wv = first ? "" : exp_judge(&t->worst);
-    if (first)
-        take = 1;
-    else if (!strcmp(word, EXP_ON_LINE))
-        take = !strcmp(v, EXP_ON_LINE) && (strcmp(wv, EXP_ON_LINE) || m < mw);
-    else if (!strcmp(word, EXP_CONFIRMED))
-        take = m < mw;
-    else /* partly or refuted: the miss nearest the line */
-        take = !strcmp(v, EXP_REFUTED) && (strcmp(wv, EXP_REFUTED) || m < mw);
-    if (take || m != m) {
-        t->worst = *d;
-        snprintf(t->what, sizeof t->what, "%s", d->what ? d->what : "");
-        t->worst.what = t->what;
-    }
+    t->all[i] = *d;
+    snprintf(t->whats[i], sizeof t->whats[i], "%s", d->what ? d->what : "");
+    t->all[i].what = t->whats[i];
+    const char *words[EXP_TALLY_MAX];
+    double margins[EXP_TALLY_MAX];
+    for (int k = 0; k < t->added; k++) words[k] = exp_judge(&t->all[k]), margins[k] = exp_margin(&t->all[k]);
+    int pick = exp_decisive(exp_tally_verdict(t), words, margins, t->added);
+    if (pick < 0) pick = i;
+    t->worst = t->all[pick];
+    snprintf(t->what, sizeof t->what, "%s", t->all[pick].what);
+    t->worst.what = t->what;
 }
+
+void exp_tally_untestable(exp_tally *t) { t->untestable++; }
 
 const char *exp_tally_verdict(const exp_tally *t)
 {
-    if (!t->added) return NULL;
-    if (t->confirmed == t->added) return EXP_CONFIRMED;
-    if (t->refuted == t->added) return EXP_REFUTED;
-    if (t->confirmed && t->refuted) return EXP_PARTLY;
-    return EXP_ON_LINE;
+    if (!t->added && !t->untestable) return NULL;
+    const char *words[EXP_TALLY_MAX + 1];
+    for (int k = 0; k < t->added; k++) words[k] = exp_judge(&t->all[k]);
+    words[t->added] = t->untestable ? EXP_UNTESTABLE : NULL;
+    return exp_combine(words, t->added + 1, EXP_EVERY);
 }
 
-/* A compound claim from its parts' words (NULL: a part not measured):
- * the same word everywhere is the word; parts that confirm and parts that
- * miss (or a part itself "partly") make it partly; else on the line. The
- * decider is the first part whose word is the compound's (for partly: a
- * part that misses). */
 const char *exp_compound(exp_tally *const *parts, int n, const exp_decider **dec)
 {
-    int measured = 0, conf = 0, ref = 0, part = 0, line = 0;
+    const char *words[16];
+    double margins[16];
+    if (n > 16) n = 16;
     for (int i = 0; i < n; i++) {
-        const char *v = exp_tally_verdict(parts[i]);
-        if (!v) continue;
-        measured++;
-        conf += !strcmp(v, EXP_CONFIRMED), ref += !strcmp(v, EXP_REFUTED);
-        part += !strcmp(v, EXP_PARTLY), line += !strcmp(v, EXP_ON_LINE);
+        words[i] = exp_tally_verdict(parts[i]);
+        margins[i] = words[i] ? exp_margin(&parts[i]->worst) : NAN;
     }
-    if (!measured) return NULL;
-    const char *word = conf == measured ? EXP_CONFIRMED : ref == measured ? EXP_REFUTED
-                       : part || (conf && ref) ? EXP_PARTLY : EXP_ON_LINE;
-    const char *want = !strcmp(word, EXP_PARTLY) ? EXP_REFUTED : word;
+    const char *word = exp_combine(words, n, EXP_PARTS);
     *dec = NULL;
-    for (int i = 0; i < n && !*dec; i++) {
-        const char *v = exp_tally_verdict(parts[i]);
-        if (v && (!strcmp(v, want) || (!strcmp(word, EXP_PARTLY) && !strcmp(v, EXP_PARTLY))))
-            *dec = &parts[i]->worst;
-    }
+    int pick = exp_decisive(word, words, margins, n);
+    if (pick >= 0) *dec = &parts[pick]->worst;
     return word;
 }
-

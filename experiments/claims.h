@@ -47,27 +47,60 @@ typedef struct {
 } exp_decider;
 /* Issue 38's rule: EXP_CONFIRMED when the whole interval lies on the
  * claim's side of the threshold, EXP_REFUTED when the whole interval
- * misses it, EXP_ON_LINE when it straddles (or any number is NaN). */
+ * misses it, EXP_ON_LINE when it straddles (or any number is NaN). A
+ * zero-width interval from 2 or more samples (a self-ratio: 1 [1, 1]) is
+ * not an interval (issue 52): on the line. n <= 1 is an exact number
+ * (counts), judged as a point. */
 const char *exp_judge(const exp_decider *d);
-/* The distance from value to threshold in units of the interval's
- * half-width, positive on the claim's side (|margin| > 1: the interval
- * does not reach the threshold). A zero-width interval counts as 1e-12
- * wide. NaN when a number is missing. */
+/* Issue 52: the distance from the threshold to the interval's NEAR end,
+ * relative to the threshold (|threshold|; 1 when it is 0), positive on the
+ * claim's side: > 0 exactly when confirmed (the near end is lo for "at
+ * least"), < 0 exactly when refuted (the near end is hi), 0 when the
+ * interval straddles or is not an interval. +0.05: the whole interval
+ * clears the threshold by 5% of it. NaN when a number is missing. */
 double exp_margin(const exp_decider *d);
 
-/* A verdict over m comparisons ("on k of m scenes"): each comparison's
+/* THE tally rule of the study (issue 52), one place for every experiment
+ * and for mkreport. Words of comparisons of one claim "on every scene"
+ * (EXP_EVERY: scenes, ray sets, the rows of one claim in the summary): one
+ * decisive refutation refutes, whatever else (a counterexample is
+ * enough); a part "partly" makes it partly; confirmed only when every one
+ * confirms; else on the line. Words of the parts of a compound claim
+ * (EXP_PARTS: "A and B"): one word everywhere is the word; parts that
+ * confirm and parts that refute (or a part "partly") make it partly; {on
+ * the line, refuted} is refuted; {on the line, confirmed} on the line.
+ * "Not testable here" words: on every scene, a scene not testable stops
+ * "confirmed" (the word is then on the line if one straddles, else not
+ * testable here); among parts they are left out (all of them: not
+ * testable). "answered" only answers when every word is. NULL when n is 0
+ * or every word NULL. */
+enum { EXP_EVERY, EXP_PARTS };
+const char *exp_combine(const char *const *words, int n, int mode);
+/* exp_combine of counted words: `confirmed` comparisons that confirm,
+ * `refuted` that refute, `online` that straddle. */
+const char *exp_combine_counts(int confirmed, int refuted, int online, int mode);
+/* Which of n comparisons (words[i], margins[i] from exp_margin) is the
+ * number that makes `word`: for refuted the most decisive refutation (the
+ * most negative margin), for confirmed the nearest confirmation (the
+ * smallest margin), for partly the most decisive refutation, for on the
+ * line the first that straddles; else the first with the word. -1: none. */
+int exp_decisive(const char *word, const char *const *words, const double *margins, int n);
+
+/* A verdict over m comparisons ("on every scene"): each comparison's
  * interval is taken at the Bonferroni level 1 - 0.05 / m (stats.h:
- * exp_bonferroni_level), so that all m hold together with 95%. Confirmed
- * when every comparison confirms, refuted when every one misses, partly
- * when some confirm and some miss (the evidence says which), on the line
- * otherwise (some straddle and none contradicts the rest). The decider is
- * the comparison with the smallest |margin| among those that decide the
- * word (the one nearest to flipping it). */
+ * exp_bonferroni_level), so that all m hold together with 95%. The word
+ * is exp_combine(EXP_EVERY) of the comparisons' exp_judge; the decider
+ * (worst) is exp_decisive's. Zero-width intervals (self-ratios) are
+ * counted in `degenerate` and left out of the word. */
+#define EXP_TALLY_MAX 128
 typedef struct {
     int m;                      /* comparisons announced (for the level) */
-    int added, confirmed, refuted, online;
+    int added, confirmed, refuted, online, degenerate;
+    int untestable;             /* comparisons that could not be judged here (exp_tally_untestable) */
     exp_decider worst;          /* the deciding comparison so far */
     char what[256];             /* worst.what's text */
+    exp_decider all[EXP_TALLY_MAX]; /* the comparisons (what points into whats) */
+    char whats[EXP_TALLY_MAX][160];
 } exp_tally;
 /* Starts a tally of m comparisons. */
 void exp_tally_init(exp_tally *t, int m);
@@ -75,13 +108,16 @@ void exp_tally_init(exp_tally *t, int m);
 double exp_tally_level(const exp_tally *t);
 /* Adds one comparison (its interval at exp_tally_level). */
 void exp_tally_add(exp_tally *t, const exp_decider *d);
-/* The word; NULL when nothing was added. */
+/* Counts a comparison that could not be judged here (e.g. an absolute
+ * threshold while the reference kernel strayed): on every scene, it stops
+ * "confirmed". */
+void exp_tally_untestable(exp_tally *t);
+/* The word; NULL when nothing was added (nor counted untestable). */
 const char *exp_tally_verdict(const exp_tally *t);
 /* A compound claim from its parts (tallies with nothing added: parts not
- * measured): one word everywhere is the word; parts that confirm and parts
- * that miss (or a part "partly") make it partly; else on the line. *dec:
- * the deciding part's decider (for partly, a part that misses). NULL when
- * no part was measured. */
+ * measured): exp_combine(EXP_PARTS) of their words. *dec: the deciding
+ * part's decider (for partly and refuted: a refuting part's; for on the
+ * line: a part on the line). NULL when no part was measured. */
 const char *exp_compound(exp_tally *const *parts, int n, const exp_decider **dec);
 
 #endif

@@ -202,11 +202,7 @@ static void claim(exp_group *g, study *st, const char *scene)
     exp_text_free(&spread);
     char b[128];
     exp_group_compare_build(g, sah, pure, b, sizeof b);
-    exp_est r;
-    int m = g->cfg[sah].build_ms.n < g->cfg[pure].build_ms.n ? g->cfg[sah].build_ms.n
-                                                                : g->cfg[pure].build_ms.n;
-    exp_est_ratio_level(g->cfg[sah].build_samples, g->cfg[pure].build_samples, NULL, m,
-                        exp_tally_level(&st->build), &r);
+    exp_est r = exp_group_build_ratio_level(g, sah, pure, exp_tally_level(&st->build));
     st->build_scenes++;
     char rb[96], what[256];
     snprintf(what, sizeof what, "SAH / pure median build time, %s", tag);
@@ -504,8 +500,8 @@ static void verdicts(exp_ctx *x, study *st)
         exp_verdict_num(x, "sah-build-slower", exp_tally_verdict(&st->build), &st->build.worst,
                         exp_text_str(&st->names),
                         "\"much slower\" read as at least 2x the pure median split's build time, "
-                        "on each of %d scenes (intervals at %.2f%%, Bonferroni; builds interleaved "
-                        "in this process): %d confirm, %d miss, %d on the line (%s)",
+                        "on each of %d scenes (intervals at %.2f%%, Bonferroni; builds once per "
+                        "process when they fit the budget): %d confirm, %d miss, %d on the line (%s)",
                         st->build.added, 100 * exp_tally_level(&st->build), st->build.confirmed,
                         st->build.refuted, st->build.online, exp_text_str(&st->build_ev));
     exp_tally *parts[5] = {&st->order[0], &st->order[1], &st->order[2], &st->pairs, &st->size};

@@ -247,9 +247,10 @@ int main(int argc, char **argv)
         /* Scenes where the sweep never joins the envelope miss; where it
          * joins, its n* against PAYOFF_MAX decides (exp_tally). */
         int off = st.sweep_scenes - st.sweep_on;
-        const char *v = st.pay.added ? exp_tally_verdict(&st.pay) : EXP_REFUTED;
-        if (off && st.pay.added) v = st.pay.confirmed ? EXP_PARTLY : st.pay.refuted == st.pay.added
-                                                                         ? EXP_REFUTED : EXP_ON_LINE;
+        /* claims.h's one rule: a scene where it never joins is a miss */
+        const char *words[2] = {st.pay.added ? exp_tally_verdict(&st.pay) : NULL,
+                                off ? EXP_REFUTED : NULL};
+        const char *v = exp_combine(words, 2, EXP_EVERY);
         const char *fmt = "the full sweep (`%s`), the slowest BVH build, joins the lower envelope "
                           "of build + n / rate on %d of %d scenes, at n* <= %.3g rays (100 1080p "
                           "frames) on %d (%s; every envelope: %s)";

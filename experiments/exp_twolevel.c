@@ -349,10 +349,8 @@ static void verdicts(exp_ctx *x, study *st, const exp_anim *an)
                         100 * BOX_MOVED, vs, an->update_ev, REFIT_MUCH, an->refit, an->loss_ev);
         return;
     }
-    const char *v = !strcmp(vs, vl) ? vs
-                    : (!strcmp(vs, EXP_CONFIRMED) || !strcmp(vl, EXP_CONFIRMED)) &&
-                              (!strcmp(vs, EXP_REFUTED) || !strcmp(vl, EXP_REFUTED))
-                          ? EXP_PARTLY : EXP_ON_LINE;
+    const char *parts[2] = {vs, vl}; /* claims.h's one rule for compound claims */
+    const char *v = exp_combine(parts, 2, EXP_PARTS);
     const exp_decider *d = strcmp(vl, EXP_CONFIRMED) ? &dl : &ds;
     exp_verdict_num(x, "refit", v, d, an->anim, "cheaper per frame (rebuild/refit update time >= "
                     "%.1fx): %s, %s; slower traces after k frames (refit/fresh trace time > 1.0, "

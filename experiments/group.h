@@ -13,21 +13,43 @@
  * x->sample_ms; a configuration gets x->repeats rounds, fewer when its
  * passes are slow (x->set_budget_ms of timed work per ray set, at least one).
  *
- * Replication (issue 38): the same kernel on the same rays varies by up to a
- * third between fresh processes, which rounds inside one process cannot
- * see. Round r runs in process r % x->procs: this one, then each replica
- * in turn, a forked process that builds every configuration again and
- * copies the rays, so that structures and rays lie in its own fresh
- * memory (the code is the parent's: its placement is not varied), times
- * its rounds and sends them back through a pipe. One replica at a time:
- * they never compete for the cores. A structure whose build took more than
- * EXP_REPLICA_REBUILD_MS is not built again (irregular grids and spatial
- * splits take seconds, and rebuilt in two replicas they made a section
- * three to five times slower: issue 38's 20-minute budget): the replica
- * times the parent's copy, which fork hands it, so its rounds there vary
- * the process but not the structure's placement. Every estimate of the group takes the
- * wider of the pooled interval and the t-interval on the processes'
- * medians (stats.h), and keeps both spreads.
+ * Replication (issue 52): the process is the unit. Every group runs in
+ * x->procs processes (8: this one and 7 replicas, forked processes that
+ * build every configuration again and copy the rays, so that structures
+ * and rays lie in their own fresh memory; the code is the parent's).
+ * The replicas are forked together after the configurations are added and
+ * take turns with this process, one process-round at a time (never two at
+ * once: they never compete for the cores): round k of processes 0..7,
+ * then round k + 1 of processes 7..0, ..., so that the processes are
+ * interleaved in time and a drift of the machine falls on all of them.
+ * Each process times x->proc_rounds (2) paired rounds of every
+ * configuration, the order of the slots rotated per process and reversed
+ * in its second round (A B C, then C B A). Sample r belongs to process
+ * round_proc[r]; every estimate is the mean over processes of each
+ * process's mean log time (or log ratio) with the t-interval over
+ * processes (stats.h). A structure whose build took more than
+ * EXP_REPLICA_REBUILD_MS is not built again: the replica times the
+ * parent's copy, which fork hands it.
+ *
+ * Shorter processes, not more time (issue 52): a sample lasts
+ * x->sample_ms (passes batched) but never more than 2 x sample_ms nor
+ * the set budget over the samples (10 ms at the full budget, 2 ms at the
+ * quick one): a set whose slowest configuration passes slower than that is
+ * timed on a fixed share of its rays for every configuration of the group
+ * (blocks of 64 consecutive rays, 8x8 tiles, spread evenly over the set;
+ * at least 16 blocks), and the samples are scaled to a full pass (the
+ * counts are always the full pass's).
+ *
+ * Builds (time_builds): a configuration whose build fits the build budget
+ * x procs is built once in every process, after its last round
+ * (build_samples[p], build_procs = 1: the build time's interval is over
+ * processes too); a slower one is built in interleaved rounds in this
+ * process before the replicas start, as many as the budget allows.
+ *
+ * The reference kernel (harness.h) is one more slot of every round: its
+ * times give the group's machine factor (ref) and its stray (the process
+ * means' max / min - 1); steal time is read from /proc/stat around every
+ * round.
  *
  * The A/A control: configuration 0 is timed twice per round, in two slots;
  * the paired ratio of the two is what an identical configuration differs
@@ -80,6 +102,7 @@ typedef struct {
     int same_as;   /* the configuration with the same structure, or -1 */
     int want;      /* timed rounds */
     double counted_ms; /* the longest counted pass (a collapsed configuration's only time) */
+    int build_procs;   /* build_samples[p] is process p's build (one per process), else rounds here */
     exp_trace set[4]; /* indexed by exp_set_index */
 } exp_cfg;
 
@@ -98,8 +121,8 @@ typedef struct {
     int keep_same;      /* measure configurations of the same structure too (a control whose
                            difference the counts cannot show, e.g. instanced:world=flat) */
     int add_mask;       /* sets of the next exp_group_add (0: every set of mask) */
-    int min_rounds;     /* timed rounds even for slow passes, up to 4x the set budget (then at
-                           least 3; default 1; an interval needs 3; a verdict 10) */
+    int min_rounds;     /* unused since issue 52: every configuration gets procs x proc_rounds
+                           rounds (slow passes on a share of their rays) */
     int thread_probe;   /* time the thread probe in the rounds (default 0) */
     /* Results of exp_group_run. */
     double aa_samples[4][EXP_MAX_SAMPLES];
@@ -111,6 +134,11 @@ typedef struct {
     int rounds;
     int procs;          /* processes the rounds ran in (the replicas that returned, plus this one) */
     int round_proc[EXP_MAX_SAMPLES]; /* the process of each round (0: this one) */
+    rays_set sub[4];    /* the timed share of each set (count 0: the whole set) */
+    double ref_samples[EXP_MAX_SAMPLES]; /* the reference kernel, ns per ray, per round */
+    exp_est ref;        /* the reference over the processes (n 0: none) */
+    double ref_stray;   /* max / min - 1 of the reference's process means */
+    double steal;       /* steal time over the rounds, a fraction of the CPU time */
 } exp_group;
 
 /* The smallest noise floor the study uses: differences under 1% are never findings. */
@@ -154,6 +182,9 @@ double exp_group_boxes(const exp_group *g, int c, int mask);
  * the time ratio (0: a tie). */
 void exp_group_compare_head(exp_group *g);
 int exp_group_compare(exp_group *g, int c, int base, int mask, char *buf, size_t n);
+/* The build time ratio a / b at `level`: over processes when both were
+ * built once per process, else over this process's build rounds. */
+exp_est exp_group_build_ratio_level(const exp_group *g, int a, int b, double level);
 /* The same for build times (paired interleaved build rounds). */
 int exp_group_compare_build(exp_group *g, int c, int base, char *buf, size_t n);
 /* The fastest configuration over mask among those of [lo, hi) whose spec
@@ -161,6 +192,26 @@ int exp_group_compare_build(exp_group *g, int c, int base, char *buf, size_t n);
  * with the lowest paired ratio against it, so that "the best" never loses a
  * paired comparison to another candidate. -1 when none was measured. */
 int exp_group_best(const exp_group *g, int mask, int lo, int hi, const char *prefix);
+/* A decider with an absolute threshold (fps, Mrays/s, Hz: rate = 1; ms:
+ * rate = 0) judged on the number normalized to the stated reference rate
+ * (harness.h, EXP_REF_NS_PER_RAY): the value and its interval times the
+ * group's reference factor (ref / stated) for a rate, divided by it for a
+ * time, so that a machine running the reference 1.8x slower does not move
+ * the verdict. Returns exp_judge of the normalized decider (*d is
+ * normalized in place), or EXP_UNTESTABLE with the reason in why when the
+ * reference strayed by more than EXP_REF_STRAY over the group's processes
+ * or was not measured. why always gets a note of the factor. */
+const char *exp_group_absolute(const exp_group *g, exp_decider *d, int rate, char *why, size_t n);
+/* Internal to group.c and group_run.c: one pass of c over the rays r of
+ * set bit (counted when cnt is given), and scratch results for the
+ * largest set of g (exits on no memory). */
+void exp_group_pass(const exp_cfg *c, int bit, const rays_set *r, accel_hit *hits, uint8_t *occ,
+                    accel_counters *cnt);
+typedef struct {
+    accel_hit *hits;
+    uint8_t *occ;
+} exp_scratch;
+exp_scratch exp_group_scratch(const exp_group *g);
 /* Index of the configuration named spec, or -1. */
 int exp_group_find(const exp_group *g, const char *spec);
 

@@ -115,12 +115,26 @@ int exp_group_compare(exp_group *g, int c, int base, int mask, char *buf, size_t
     return cmp;
 }
 
+exp_est exp_group_build_ratio_level(const exp_group *g, int a, int b, double level)
+{
+    const exp_cfg *ca = &g->cfg[a], *cb = &g->cfg[b];
+    exp_est r;
+    if (ca->build_procs && cb->build_procs) { /* one build per process: paired by process */
+        int ids[16];
+        for (int p = 0; p < 16; p++) ids[p] = p;
+        int m = ca->build_ms.n < cb->build_ms.n ? ca->build_ms.n : cb->build_ms.n;
+        exp_est_ratio_level(ca->build_samples, cb->build_samples, ids, m, level, &r);
+        return r;
+    }
+    int m = ca->build_ms.n < cb->build_ms.n ? ca->build_ms.n : cb->build_ms.n;
+    exp_est_ratio_level(ca->build_samples, cb->build_samples, NULL, m, level, &r);
+    return r;
+}
+
 int exp_group_compare_build(exp_group *g, int c, int base, char *buf, size_t n)
 {
     const exp_cfg *a = &g->cfg[c], *b = &g->cfg[base];
-    exp_est r, sp;
-    int m = a->build_ms.n < b->build_ms.n ? a->build_ms.n : b->build_ms.n;
-    exp_est_ratio(a->build_samples, b->build_samples, m, &r);
+    exp_est r = exp_group_build_ratio_level(g, c, base, 0.95), sp;
     sp = exp_est_inv(&r, 1.0);
     exp_fmt_pct(buf, n, &r);
     int cmp = exp_ratio_cmp(&r, g->floor);
@@ -155,4 +169,22 @@ int exp_group_find(const exp_group *g, const char *spec)
     for (int c = 0; c < g->count; c++)
         if (!strcmp(g->cfg[c].spec, spec)) return c;
     return -1;
+}
+
+const char *exp_group_absolute(const exp_group *g, exp_decider *d, int rate, char *why, size_t n)
+{
+    if (g->ref.n < 2 || !(g->ref.median > 0)) {
+        snprintf(why, n, "the reference kernel was not measured in these rounds: an absolute "
+                 "threshold cannot be judged here");
+        return EXP_UNTESTABLE;
+    }
+    double f = g->ref.median / EXP_REF_NS_PER_RAY, k = rate ? f : 1 / f;
+    d->value *= k, d->lo *= k, d->hi *= k;
+    int off = !(g->ref_stray <= EXP_REF_STRAY);
+    snprintf(why, n, "normalized to the stated reference rate (%.0f ns per ray of the reference "
+             "kernel; %.0f ns in these rounds, so the numbers are x %.2f), the reference's "
+             "process means %s by %.1f%%%s", EXP_REF_NS_PER_RAY, g->ref.median, k,
+             off ? "strayed" : "stayed within", 100 * g->ref_stray,
+             off ? " (more than 10%: not testable here)" : "");
+    return off ? EXP_UNTESTABLE : exp_judge(d);
 }

@@ -55,8 +55,14 @@ enum {
     EXP_LEFT_KINDS
 };
 
-/* Builds longer than this are not repeated in the replicas (group.h). */
-#define EXP_REPLICA_REBUILD_MS 100.0
+/* Builds longer than this are not repeated in the replicas (group.h): 7
+ * replicas rebuild at most 7 x 25 ms per configuration, less than the 2 x
+ * 100 ms of the 3 processes before issue 52. */
+#define EXP_REPLICA_REBUILD_MS 25.0
+/* Processes and rounds per process of every group (issue 52: the process
+ * is the unit of replication; 8 processes give df = 7). */
+#define EXP_PROCS 8
+#define EXP_PROC_ROUNDS 2
 
 typedef struct {
     const char *name;     /* e.g. "exp_sah" */
@@ -65,7 +71,8 @@ typedef struct {
     int threads;          /* threads of every build, trace and reference (default 1) */
     int threads_given;    /* --threads was on the command line */
     int repeats;          /* timed passes per measurement */
-    int procs;            /* processes the timed rounds are spread over (group.h; default 3) */
+    int procs;            /* processes the timed rounds run in, interleaved (group.h; default 8) */
+    int proc_rounds;      /* rounds of every configuration in each process (default 2) */
     int procs_used;       /* the most that returned rounds in one group of this section */
     int size;             /* primary image size (square) */
     int rt_size[2];       /* the lecture's real-time image (default 800x600) */
@@ -101,6 +108,15 @@ typedef struct {
     double *floors;       /* noise floors of the section's groups */
     int floor_count, floors_measured;
     int images[4][2], image_count; /* ray-set sizes exp_sets_wh made (the footer names them) */
+    /* The reference kernel (reference.c), timed in every round of every group. */
+    int ref_state;        /* 0 not made yet, 1 ready, -1 could not be made */
+    const void *ref_kind; /* const accel_kind * */
+    void *ref_accel;
+    accel_scene ref_scene;
+    bench_sets ref_sets;
+    double *ref_ms;       /* every round's reference time in this section */
+    int ref_n, ref_cap;
+    double steal_ticks, cpu_ticks; /* /proc/stat over the section's timed rounds */
 } exp_ctx;
 
 /* Parses the common options; `extra_help` is printed under --help. Exits on
@@ -225,6 +241,38 @@ double exp_section_floor(const exp_ctx *x);
 /* The double-precision reference with x->threads, shown as a progress phase. */
 void exp_reference(exp_ctx *x, const accel_scene *s, const accel_ray *rays, accel_hit *hits,
                    size_t count);
+/* The reference kernel (reference.c, issue 52): brute force over the 250
+ * triangles of soup:tris=250, 1024 primary rays of a 32x32 image, one
+ * thread, a few ms: a fixed piece of work timed beside the configurations
+ * in every round, so that each section says what the machine gave it. The
+ * stated rate is EXP_REF_NS_PER_RAY: the same kernel on the same scene in
+ * the quiet run of the committed report of 123ab8c (report/exp_scaling.csv,
+ * soup,brute,250: 2,223 ns per ray [2,160, 2,308], 8.9 ns per triangle
+ * test). exp_ref_ready makes it once per section (0 when ready). */
+#define EXP_REF_NS_PER_RAY 2222.6
+/* Absolute verdicts are "not testable here" when the reference's process
+ * means differ by more than this (max / min - 1). */
+#define EXP_REF_STRAY 0.10
+int exp_ref_ready(exp_ctx *x);
+/* One timed trace of the reference rays: ns per ray (0 when not ready). */
+double exp_ref_time(const exp_ctx *x);
+/* Records reference times (ns per ray) of the section's rounds. */
+void exp_ref_note(exp_ctx *x, const double *ns, int n);
+/* Cumulative steal and total CPU ticks of /proc/stat (0 when unreadable). */
+int exp_cpu_ticks(double *steal, double *total);
+/* The footer line: the reference's spread over the section and the steal
+ * time of its rounds (nothing when no round ran). */
+void exp_ref_footer(exp_ctx *x);
+/* exp_group_absolute (group.h) for timings of one process (n reference
+ * times, ns per ray, taken beside the timed work): the decider normalized
+ * by median / EXP_REF_NS_PER_RAY (rate = 1: multiplied; 0: divided);
+ * "not testable here" when the reference's 10th and 90th percentiles
+ * differ by more than EXP_REF_STRAY, or no reference was timed. */
+const char *exp_ref_absolute(exp_ctx *x, const double *ns, int n, exp_decider *d, int rate,
+                             char *why, size_t why_n);
+/* Frees the reference kernel and the section's record. */
+void exp_ref_free(exp_ctx *x);
+
 /* Records an internal error (printed; exp_finish returns 4). */
 void exp_internal(exp_ctx *x, const char *what, const accel_error *err);
 

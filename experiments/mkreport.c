@@ -150,13 +150,14 @@ static const char *num(char *b, size_t n, double v)
     return b;
 }
 
-/* A margin in half-widths; beyond 99 (a zero-width interval: one round
- * or equal numbers) it says so instead of a huge number. */
+/* A margin (exp_margin): the distance from the threshold to the
+ * interval's near end, in percent of the threshold; 0 when the interval
+ * straddles it. */
 static const char *fmt_margin(char *b, size_t n, double m)
 {
     if (!isfinite(m)) snprintf(b, n, "n/a");
-    else if (fabs(m) > 99) snprintf(b, n, "%s99 (no interval width)", m > 0 ? ">+" : "<-");
-    else snprintf(b, n, "%+.1f", m);
+    else if (m == 0) snprintf(b, n, "0 (straddles)");
+    else snprintf(b, n, "%+.1f%%", 100 * m);
     return b;
 }
 
@@ -166,30 +167,36 @@ static void deciding_cell(char *dst, size_t n, const verdict *v)
 {
     char a[32], b[32], c[32], d[32], what[CELL_CHARS + 8];
     md_cell(what, sizeof what, v->what, CELL_CHARS - 60);
-    snprintf(dst, n, "%s%s%s [%s, %s] (claim %s %s)", what, what[0] ? ": " : "",
-             num(a, sizeof a, v->value), num(b, sizeof b, v->lo), num(c, sizeof c, v->hi),
+    /* Issue 52: an interval on fewer than 6 units is never shown as 95%;
+     * one of zero width from 2 or more is no interval. */
+    const char *note = v->n >= 2 && !(v->hi != v->lo) ? " (zero width: not an interval)"
+                       : v->n >= 2 && v->n < 6 ? " (n < 6: not a 95% interval)" : "";
+    snprintf(dst, n, "%s%s%s [%s, %s]%s (claim %s %s)", what, what[0] ? ": " : "",
+             num(a, sizeof a, v->value), num(b, sizeof b, v->lo), num(c, sizeof c, v->hi), note,
              v->sense > 0 ? ">=" : v->sense < 0 ? "<=" : "vs", num(d, sizeof d, v->threshold));
 }
 
-/* A claim's verdict over its lines: the same label everywhere, or partly;
- * *pick: the row that decides it (the deciding number nearest its
- * threshold, else the first row). */
+/* A claim's verdict over its lines: the study's one tally rule
+ * (claims.h: exp_combine, EXP_EVERY: a claim's rows are its scenes; one
+ * decisive refutation refutes); *pick: the row that makes the word
+ * (exp_decisive), else the first row. */
 static const char *combined(const char *claim, int *lines, int *pick)
 {
-    const char *v = NULL;
-    double best = INFINITY;
+    const char *words[MAX_ROWS];
+    double margins[MAX_ROWS];
+    int rows[MAX_ROWS];
     *lines = 0, *pick = -1;
     for (int i = 0; i < verdict_count; i++) {
         if (strcmp(verdicts[i].claim, claim)) continue;
+        rows[*lines] = i;
+        words[*lines] = verdicts[i].verdict;
+        margins[*lines] = verdicts[i].num ? verdicts[i].margin : NAN;
         (*lines)++;
-        if (*pick < 0) *pick = i;
-        if (verdicts[i].num) {
-            double m = isfinite(verdicts[i].margin) ? fabs(verdicts[i].margin) : 0;
-            if (m < best || !verdicts[*pick].num) best = m, *pick = i;
-        }
-        if (!v) v = verdicts[i].verdict;
-        else if (strcmp(v, verdicts[i].verdict)) v = EXP_PARTLY;
     }
+    if (!*lines) return NULL;
+    const char *v = exp_combine(words, *lines, EXP_EVERY);
+    int k = exp_decisive(v, words, margins, *lines);
+    *pick = rows[k >= 0 ? k : 0];
     return v;
 }
 
@@ -197,9 +204,12 @@ static void summary(FILE *f)
 {
     fprintf(f, "## Summary\n\nOne line per claim of the lecture (../shared/LECTURE.md), request of "
                "the user and question of the study: the verdict, the number that decides it with "
-               "its 95%% interval, the rounds (n) behind it and the margin (its distance to the "
-               "claim's threshold in half-widths of the interval; beyond 1 the interval does not "
-               "reach it), the scene. Rows without a deciding number quote their evidence.\n\n"
+               "its interval, the processes (n) behind it and the margin\n(the distance from the "
+               "claim's threshold to the interval's near end, in percent of the threshold: "
+               "positive confirms, negative refutes, 0 straddles), the scene.\nA claim of several "
+               "rows is refuted by one decisive refutation and confirmed only when every row "
+               "confirms (claims.h: the study's one tally rule).\nRows without a deciding number "
+               "quote their evidence.\n\n"
                "| # | claim | verdict | deciding number [95%% interval] | n | margin | scene |\n"
                "|---|---|---|---|---|---|---|\n");
     for (int c = 0; c < exp_claim_count; c++) {

@@ -128,9 +128,13 @@ double exp_t_quantile(double level, int df)
     return t;
 }
 
-/* The order-statistic interval at `level` of n pooled samples; with
- * samples from two or more processes, also the t-interval on the
- * processes' medians (df = processes - 1), and the wider of the two. */
+/* The order-statistic interval at `level` of n pooled samples (one
+ * process, or fewer than 2 processes). With samples from 2 or more
+ * processes the process is the unit of replication (issue 52): each
+ * process's samples are averaged, the estimate is the mean of those
+ * process means and the interval the t-interval on them (df = processes -
+ * 1); n is then the number of processes. The
+ * order-statistic half-width stays in `within` for the footers. */
 static void est_core(const double *samples, const int *proc, int n, double level, exp_est *out)
 {
     memset(out, 0, sizeof *out);
@@ -149,35 +153,34 @@ static void est_core(const double *samples, const int *proc, int n, double level
     out->lo = v[k - 1], out->hi = v[n - k];
     out->within = (out->hi - out->lo) / 2; /* absolute here; callers scale */
     if (!proc) return;
-    /* The processes' medians. */
-    double meds[EXP_MAX_SAMPLES], one[EXP_MAX_SAMPLES];
+    double means[EXP_MAX_SAMPLES];
     int p = 0;
     for (int id = 0; id < EXP_MAX_SAMPLES; id++) {
         int m = 0;
+        double sum = 0;
         for (int i = 0; i < n; i++)
-            if (proc[i] == id) one[m++] = samples[i];
-        if (!m) continue;
-        qsort(one, (size_t)m, sizeof *one, cmp_double);
-        meds[p++] = median_sorted(one, m);
+            if (proc[i] == id) sum += samples[i], m++;
+        if (m) means[p++] = sum / m;
     }
     out->procs = p;
     if (p < 2) return;
     double mean = 0, ss = 0;
-    for (int i = 0; i < p; i++) mean += meds[i];
+    for (int i = 0; i < p; i++) mean += means[i];
     mean /= p;
-    for (int i = 0; i < p; i++) ss += (meds[i] - mean) * (meds[i] - mean);
+    for (int i = 0; i < p; i++) ss += (means[i] - mean) * (means[i] - mean);
     double half = exp_t_quantile(level, p - 1) * sqrt(ss / (p - 1) / p);
     out->between = half;
-    if (out->between > out->within) {
-        out->lo = fmin(mean - half, out->median);
-        out->hi = fmax(mean + half, out->median);
-    }
+    out->n = p;
+    out->level = level;
+    out->median = mean;
+    out->lo = mean - half;
+    out->hi = mean + half;
 }
 
-/* Positive samples (times) from several processes: the between-process
- * t-interval is taken on the logs of the processes' medians, so that it
+/* Positive samples (times) from several processes: the process means are
+ * taken on the logs (a geometric mean per process), so that the interval
  * stays positive and treats a process 1.3x slower and one 1.3x faster
- * alike; the order statistics are the same in either scale. */
+ * alike; min and max stay the samples'. */
 void exp_est_of_level(const double *samples, const int *proc, int n, double level, exp_est *out)
 {
     int positive = n > 0;
@@ -191,15 +194,10 @@ void exp_est_of_level(const double *samples, const int *proc, int n, double leve
     double lg[EXP_MAX_SAMPLES];
     int m = n < EXP_MAX_SAMPLES ? n : EXP_MAX_SAMPLES;
     for (int i = 0; i < m; i++) lg[i] = log(samples[i]);
-    exp_est l;
-    est_core(lg, proc, m, level, &l);
-    est_core(samples, NULL, m, level, out);
-    out->within /= out->median > 0 ? out->median : 1;
-    out->procs = l.procs, out->between = l.between;
-    if (l.procs > 1 && l.between > l.within) { /* l: widened to the log t-interval */
-        out->lo = fmin(exp(l.lo), out->median);
-        out->hi = fmax(exp(l.hi), out->median);
-    }
+    est_core(lg, proc, m, level, out);
+    out->median = exp(out->median), out->lo = exp(out->lo), out->hi = exp(out->hi);
+    out->min = exp(out->min), out->max = exp(out->max);
+    /* Half-widths in log space are relative spreads already. */
 }
 
 void exp_est_of_procs(const double *samples, const int *proc, int n, exp_est *out)
@@ -274,11 +272,18 @@ exp_est exp_est_div(const exp_est *a, const exp_est *b)
     return o;
 }
 
+/* The floor widens each interval by the factor sqrt(1 + floor), so that
+ * two points tie when they differ by less than the floor (issue 52: a
+ * floor may widen an interval, never overrule one). */
 int exp_tie(const exp_est *a, const exp_est *b, double floor)
 {
-    if (a->lo <= b->hi && b->lo <= a->hi) return 1;
-    double small = fmin(fabs(a->median), fabs(b->median));
-    return fabs(a->median - b->median) <= floor * small;
+    double w = sqrt(1 + (floor > 0 ? floor : 0));
+    double alo = a->lo / w, ahi = a->hi * w, blo = b->lo / w, bhi = b->hi * w;
+    if (!(a->median > 0) || !(b->median > 0)) { /* not positive: widen by the floor additively */
+        double s = floor * fmin(fabs(a->median), fabs(b->median));
+        alo = a->lo - s, ahi = a->hi + s, blo = b->lo, bhi = b->hi;
+    }
+    return alo <= bhi && blo <= ahi;
 }
 
 int exp_cmp(const exp_est *a, const exp_est *b, double floor)
@@ -289,19 +294,40 @@ int exp_cmp(const exp_est *a, const exp_est *b, double floor)
 
 int exp_ratio_cmp(const exp_est *r, double floor)
 {
-    /* Symmetric in the ratio: 1.25 and 0.8 are the same distance from 1. */
-    if ((r->lo <= 1.0 && r->hi >= 1.0) || (r->median <= 1.0 + floor && r->median * (1.0 + floor) >= 1.0))
-        return 0;
+    /* The interval widened by the factor 1 + floor at both ends (symmetric
+     * in the ratio: 1.25 and 0.8 are the same distance from 1); a tie when
+     * it holds 1. The floor widens, it never overrules: a floor of any size
+     * moves each end by the same factor. */
+    double w = 1 + (floor > 0 ? floor : 0);
+    if (r->lo / w <= 1.0 && r->hi * w >= 1.0) return 0;
     return r->median < 1.0 ? -1 : 1;
+}
+
+int exp_est_is_95(const exp_est *e)
+{
+    return e->n >= 6 && e->level >= 0.95 - 1e-9 && e->hi > e->lo;
+}
+
+/* " n=8", or " n=4, not a 95% interval" (exp_est_is_95). */
+static const char *n_tail(char *b, size_t n, const exp_est *e)
+{
+    if (exp_est_is_95(e) || !(e->level > 0))
+        snprintf(b, n, " n=%d", e->n);
+    else if (e->procs >= 2)
+        snprintf(b, n, " n=%d, t with df %d: not a 95%% interval", e->n, e->n - 1);
+    else
+        snprintf(b, n, " n=%d, covers %.0f%%: not a 95%% interval", e->n, 100 * e->level);
+    return b;
 }
 
 const char *exp_fmt_est(char *buf, size_t n, const exp_est *e, int decimals)
 {
+    char t[64];
     if (e->n < 2 || !(e->hi > e->lo))
         snprintf(buf, n, "%.*f", decimals, e->median);
     else
-        snprintf(buf, n, "%.*f [%.*f, %.*f] n=%d", decimals, e->median, decimals, e->lo, decimals,
-                 e->hi, e->n);
+        snprintf(buf, n, "%.*f [%.*f, %.*f]%s", decimals, e->median, decimals, e->lo, decimals,
+                 e->hi, n_tail(t, sizeof t, e));
     return buf;
 }
 
@@ -317,20 +343,22 @@ const char *exp_fmt_spreads(char *buf, size_t n, const exp_est *e)
 
 const char *exp_fmt_pct(char *buf, size_t n, const exp_est *r)
 {
+    char t[64];
     if (r->n < 2 || !(r->hi > r->lo))
         snprintf(buf, n, "%+.1f%%", 100 * (r->median - 1));
     else
-        snprintf(buf, n, "%+.1f%% [%+.1f%%, %+.1f%%] n=%d", 100 * (r->median - 1),
-                 100 * (r->lo - 1), 100 * (r->hi - 1), r->n);
+        snprintf(buf, n, "%+.1f%% [%+.1f%%, %+.1f%%]%s", 100 * (r->median - 1),
+                 100 * (r->lo - 1), 100 * (r->hi - 1), n_tail(t, sizeof t, r));
     return buf;
 }
 
 const char *exp_fmt_x(char *buf, size_t n, const exp_est *e)
 {
+    char t[64];
     if (e->n < 2 || !(e->hi > e->lo))
         snprintf(buf, n, "%.2fx", e->median);
     else
-        snprintf(buf, n, "%.2fx [%.2f, %.2f] n=%d", e->median, e->lo, e->hi, e->n);
+        snprintf(buf, n, "%.2fx [%.2f, %.2f]%s", e->median, e->lo, e->hi, n_tail(t, sizeof t, e));
     return buf;
 }
 

@@ -7,10 +7,13 @@
  *   replaces covered the true median 49% of the time at n = 2 and 93% at
  *   n = 5), plus min and max. Below 6 samples no pair of order statistics
  *   reaches 95%: the interval is min-max and `level` says what it covers.
- * - Samples from several processes (group.h replicates rounds in fresh
- *   processes): the interval is the wider of the pooled order-statistic
- *   interval and a t-interval on the per-process medians (the
- *   between-process spread); both half-widths are kept.
+ * - Samples from several processes (group.h runs every group's rounds in
+ *   8 interleaved processes): the process is the unit of replication
+ *   (issue 52). The estimate is the mean over processes of each process's
+ *   mean (of logs, for times and ratios), the interval the t-interval on
+ *   those means (df = processes - 1); n counts the processes. An interval
+ *   on fewer than 6 units, below 95% or of zero width is never printed as
+ *   a 95% interval (exp_est_is_95).
  * - Two estimates tie when their intervals overlap or they differ by less
  *   than the noise floor; a tie is never a win (exp_cmp).
  * - Configurations measured in interleaved rounds (A B A B ...) give paired
@@ -30,13 +33,15 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* A median with its interval [lo, hi] (at least 95% from n >= 6), min,
+/* A median (or, from processes, the mean of the process means) with its
+ * interval [lo, hi] (at least 95% from n >= 6), min,
  * max and the sample count (n == 0: nothing measured; n == 1: lo == hi ==
  * median). The rest is 0 when an estimate is written by hand: level, the
  * interval's coverage (exact for continuous data, exp_median_rank); procs,
  * the processes the samples came from; within and between, the relative
  * half-widths (log space for ratios) of the pooled interval and of the
- * t-interval on the processes' medians (0 with fewer than 2 processes). */
+ * t-interval on the processes' means (0 with fewer than 2 processes). With
+ * 2 or more processes n counts the processes, not the samples. */
 typedef struct {
     double median, lo, hi, min, max;
     int n;
@@ -44,6 +49,11 @@ typedef struct {
     int procs;
     double within, between;
 } exp_est;
+/* 1 when e's interval may be printed as a 95% interval: its level reaches
+ * 95%, it rests on 6 or more units (processes, or samples from one
+ * process; a t-interval with df >= 5) and it has a width (issue 52: a
+ * zero-width self-ratio is not an interval). */
+int exp_est_is_95(const exp_est *e);
 
 /* The most samples one estimate holds. */
 #define EXP_MAX_SAMPLES 64
@@ -73,13 +83,15 @@ exp_est exp_est_inv(const exp_est *e, double k);
  * (a.lo / b.hi, a.hi / b.lo), conservative. */
 exp_est exp_est_div(const exp_est *a, const exp_est *b);
 
-/* 1 when a and b cannot be told apart: their intervals overlap, or their
- * medians differ by less than floor (relative, of the smaller). */
+/* 1 when a and b cannot be told apart: their intervals, each widened by
+ * the factor sqrt(1 + floor), overlap (two points tie when they differ by
+ * less than the floor). The floor widens intervals, never overrules them. */
 int exp_tie(const exp_est *a, const exp_est *b, double floor);
 /* -1 when a is below b, 1 above, 0 a tie (exp_tie). */
 int exp_cmp(const exp_est *a, const exp_est *b, double floor);
-/* A ratio against 1: 0 when its interval holds 1 or its median lies in
- * [1 / (1 + floor), 1 + floor], else -1 (below) or 1 (above). */
+/* A ratio against 1: 0 when its interval widened by the factor 1 + floor
+ * ([lo / (1 + floor), hi (1 + floor)]) holds 1, else -1 (below) or 1
+ * (above). */
 int exp_ratio_cmp(const exp_est *r, double floor);
 
 /* "12.3 [12.1, 12.6] n=10": the median, its interval and the sample
