@@ -33,16 +33,8 @@
 
 #include "core/prim.h"
 #include "group.h"
+#include "step_micro.h"
 #include "svg.h"
-
-/* The shared block test (the wide BVH's leaves, the grids' cell blocks),
- * compiled here for the baseline instruction set, for its micro-benchmark. */
-#define WIDE_LB 8
-#include "core/block_test.h"
-#undef WIDE_LB
-#define WIDE_LB 4
-#include "core/block_test.h"
-#undef WIDE_LB
 
 /* The families: a spec belongs to the family of its kind, width and
  * traversal; --accel specs join theirs (a new one starts a family). */
@@ -107,30 +99,26 @@ typedef struct {
 } fit_row;
 
 typedef struct {
-    exp_est tri, block8, block4, node, step;
-} micro;
-
-typedef struct {
     fit_row f[MAX_FITS];
     int count, unfit;
     exp_text scenes, findings;
-    const micro *m;
+    const step_micro *m;
 } study;
 
 /* ns per primitive test of a kind that tests `lanes` at once (0: one by
  * one): the scalar test, or a full block's time over its lanes. */
-static double micro_per_prim(const micro *m, int lanes)
+static double micro_per_prim(const step_micro *m, int lanes)
 {
     return lanes == 8 ? m->block8.median / 8 : lanes == 4 ? m->block4.median / 4 : m->tri.median;
 }
 
 /* C_step and C_ray by non-negative least squares on y - ci * prims, with
  * the held-out errors (each point predicted by the fit on the others). */
-static int fit_fixed(const double *st, const double *pr, const double *ns, int n, double ci,
+static int fit_fixed(const double *st, const double *pr, const double *ns, int n, const double *ci,
                      double *coef, double *pred)
 {
     double r[MAXP], one[MAXP];
-    for (int i = 0; i < n; i++) r[i] = ns[i] - ci * pr[i], one[i] = 1;
+    for (int i = 0; i < n; i++) r[i] = ns[i] - ci[i] * pr[i], one[i] = 1;
     const double *cols[2] = {st, one};
     exp_fit f;
     if (exp_nnls(cols, 2, r, n, &f)) return -1;
@@ -143,7 +131,7 @@ static int fit_fixed(const double *st, const double *pr, const double *ns, int n
         const double *c2[2] = {s, o};
         exp_fit g;
         if (exp_nnls(c2, 2, y, m, &g)) return -1;
-        pred[k] = g.coef[0] * st[k] + ci * pr[k] + g.coef[1];
+        pred[k] = g.coef[0] * st[k] + ci[k] * pr[k] + g.coef[1];
     }
     return 0;
 }
@@ -176,7 +164,7 @@ static int cmp_double(const void *a, const void *b)
 static void fit_family(exp_ctx *x, const exp_group *g, const char *family, int set, study *sd,
                        const char *scene)
 {
-    double st[MAXP], pr[MAXP], ns[MAXP], one[MAXP];
+    double st[MAXP], pr[MAXP], ns[MAXP], one[MAXP], ci[MAXP];
     int cfg_of[MAXP], n = 0, lanes = -1;
     for (int c = 0; c < g->count && n < MAXP; c++) {
         const exp_cfg *cf = &g->cfg[c];
@@ -187,7 +175,8 @@ static void fit_family(exp_ctx *x, const exp_group *g, const char *family, int s
         st[n] = (double)tr->counters.steps / (double)tr->rays;
         pr[n] = (double)tr->counters.prim_tests / (double)tr->rays;
         ns[n] = exp_est_scale(&tr->ms, 1e6 / (double)tr->rays).median;
-        /* one test kind per family: a mixed family gets no fixed fit */
+        /* each configuration's own test (a family may mix blocks of 4 and 8) */
+        ci[n] = micro_per_prim(sd->m, cf->build.test_lanes);
         lanes = lanes == -1 || lanes == cf->build.test_lanes ? cf->build.test_lanes : -2;
         one[n] = 1, cfg_of[n++] = c;
     }
@@ -216,9 +205,11 @@ static void fit_family(exp_ctx *x, const exp_group *g, const char *family, int s
     fr->held_max = err[n - 1];
     double fpred[MAXP];
     fr->lanes = lanes;
-    if (lanes >= 0) {
-        fr->fixed_ci = micro_per_prim(sd->m, lanes);
-        if (!fit_fixed(st, pr, ns, n, fr->fixed_ci, fr->fixed_c, fpred)) {
+    {
+        double lo = ci[0], hi = ci[0];
+        for (int i = 1; i < n; i++) lo = fmin(lo, ci[i]), hi = fmax(hi, ci[i]);
+        fr->fixed_ci = lanes >= 0 ? ci[0] : 0.5 * (lo + hi); /* mixed: the table says so */
+        if (!fit_fixed(st, pr, ns, n, ci, fr->fixed_c, fpred)) {
             fr->fixed_ok = 1;
             for (int i = 0; i < n; i++) err[i] = fabs(fpred[i] - ns[i]) / ns[i];
             qsort(err, (size_t)n, sizeof err[0], cmp_double);
@@ -241,9 +232,8 @@ static void fit_family(exp_ctx *x, const exp_group *g, const char *family, int s
                ns[i], in, fr->pred[i], 100 * (fr->pred[i] - ns[i]) / ns[i]);
         exp_csv(x, "%s,%s,%s,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.4f,%d,%.4f,%.4f,%.4f\n", scene,
                 family, cf->spec, set_names[set], ns[i], st[i], pr[i], in, fr->pred[i],
-                fit.coef[0], fit.coef[1], fit.coef[2], lanes,
-                fr->fixed_ok ? fr->fixed_ci : NAN, fr->fixed_ok ? fr->fixed_c[0] : NAN,
-                fr->fixed_ok ? fr->fixed_c[1] : NAN);
+                fit.coef[0], fit.coef[1], fit.coef[2], cf->build.test_lanes, ci[i],
+                fr->fixed_ok ? fr->fixed_c[0] : -1, fr->fixed_ok ? fr->fixed_c[1] : -1);
     }
 }
 
@@ -297,170 +287,6 @@ static void heatmaps(exp_ctx *x)
     scene_free(&s);
 }
 
-/* ---- micro-benchmarks, hot in L1 ------------------------------------------------- */
-
-static volatile double micro_sink;
-/* Each repetition rereads its inputs: without this barrier the compiler
- * may hoist the loop-invariant work out of the repetitions. */
-#define MICRO_FRESH() __asm__ __volatile__("" ::: "memory")
-
-/* ns per operation of `ops` operations done by fn, as the median of 15
- * samples with its interval. */
-static exp_est micro_time(double (*fn)(long reps), long reps, double ops_per_rep)
-{
-    double samples[15];
-    fn(reps / 8 + 1); /* warm up */
-    for (int i = 0; i < 15; i++) {
-        double t0 = accel_now_ms();
-        micro_sink += fn(reps);
-        samples[i] = (accel_now_ms() - t0) * 1e6 / ((double)reps * ops_per_rep);
-    }
-    exp_est e;
-    exp_est_of(samples, 15, &e);
-    return e;
-}
-
-/* 8 triangles around the ray's path (half hit, half miss), 8 tests per rep. */
-static float micro_tris[8][9];
-static accel_ray_prep micro_ray;
-
-static double micro_tri(long reps)
-{
-    double acc = 0;
-    for (long r = 0; r < reps; r++) {
-        MICRO_FRESH();
-        for (int k = 0; k < 8; k++) {
-            float t = 1e30f, u, v;
-            acc += accel_tri_watertight(&micro_ray, micro_tris[k], &t, &u, &v);
-        }
-    }
-    return acc;
-}
-
-/* The shared block test on one block of 8 (4) triangles, half of its
- * lanes hit: 4 blocks per rep, ns per block. */
-static accel_block8 micro_b8[4] __attribute__((aligned(32)));
-static accel_block4 micro_b4[4] __attribute__((aligned(32)));
-
-static double micro_block8(long reps)
-{
-    wide_leaf_ray_8 lr;
-    leaf_setup_8(&lr, &micro_ray);
-    double acc = 0;
-    for (long r = 0; r < reps; r++) {
-        MICRO_FRESH();
-        for (int k = 0; k < 4; k++) {
-            float t = 1e30f, u, v;
-            uint32_t id = ACCEL_MISS;
-            acc += leaf_block_8(&micro_b8[k], &lr, &micro_ray, &t, &u, &v, &id, 1u << 30, 0, 0, 0);
-        }
-    }
-    return acc;
-}
-
-static double micro_block4(long reps)
-{
-    wide_leaf_ray_4 lr;
-    leaf_setup_4(&lr, &micro_ray);
-    double acc = 0;
-    for (long r = 0; r < reps; r++) {
-        MICRO_FRESH();
-        for (int k = 0; k < 4; k++) {
-            float t = 1e30f, u, v;
-            uint32_t id = ACCEL_MISS;
-            acc += leaf_block_4(&micro_b4[k], &lr, &micro_ray, &t, &u, &v, &id, 1u << 30, 0, 0, 0);
-        }
-    }
-    return acc;
-}
-
-/* A binary node's visit: the slab test of its two child boxes (Kay and
- * Kajiya 1986, with the precomputed inverse direction); 8 nodes per rep. */
-static float micro_boxes[16][6];
-
-static double micro_node(long reps)
-{
-    const accel_ray_prep *p = &micro_ray;
-    double acc = 0;
-    for (long r = 0; r < reps; r++) {
-        MICRO_FRESH();
-        for (int k = 0; k < 16; k++) {
-            const float *b = micro_boxes[k];
-            float tx0 = (b[0] - p->org.x) * p->inv_dir.x, tx1 = (b[3] - p->org.x) * p->inv_dir.x;
-            float ty0 = (b[1] - p->org.y) * p->inv_dir.y, ty1 = (b[4] - p->org.y) * p->inv_dir.y;
-            float tz0 = (b[2] - p->org.z) * p->inv_dir.z, tz1 = (b[5] - p->org.z) * p->inv_dir.z;
-            float tn = maxf(maxf(minf(tx0, tx1), minf(ty0, ty1)), maxf(minf(tz0, tz1), p->t_near));
-            float tf = minf(minf(maxf(tx0, tx1), maxf(ty0, ty1)), minf(maxf(tz0, tz1), p->t_far));
-            acc += tn <= tf;
-        }
-    }
-    return acc;
-}
-
-/* 3D-DDA through a 16^3 grid of cell counts (16 KB, in L1): one step =
- * the axis of the nearest boundary, its t advanced, the index moved, the
- * cell read. A ray that leaves restarts at its entry cell. */
-#define DDA_N 16
-static uint32_t micro_cells[DDA_N * DDA_N * DDA_N];
-
-static double micro_step(long reps)
-{
-    const float d[3] = {0.57f, 0.61f, 0.55f}; /* the diagonal-ish ray crosses ~3N cells */
-    double acc = 0;
-    long done = 0;
-    while (done < reps) {
-        MICRO_FRESH();
-        int c[3] = {0, 0, 0}, step = 0;
-        float tmax[3], dt[3];
-        for (int a = 0; a < 3; a++) dt[a] = 1.0f / d[a], tmax[a] = 0.5f * dt[a] * (1 + 0.1f * (float)a);
-        for (;;) {
-            int a = tmax[0] < tmax[1] ? (tmax[0] < tmax[2] ? 0 : 2) : (tmax[1] < tmax[2] ? 1 : 2);
-            if (++c[a] >= DDA_N) break;
-            tmax[a] += dt[a];
-            acc += micro_cells[(c[2] * DDA_N + c[1]) * DDA_N + c[0]];
-            step++;
-        }
-        done += step;
-    }
-    return acc;
-}
-
-static void micro_run(exp_ctx *x, micro *m)
-{
-    accel_ray ray = {0};
-    ray.oz = -5, ray.dz = 1, ray.dx = 0.01f, ray.dy = 0.02f, ray.t_near = 0, ray.t_far = 1e30f;
-    accel_prep_ray(&ray, &micro_ray);
-    for (int k = 0; k < 8; k++) { /* even k: around the ray's path; odd: beside it */
-        float off = k % 2 ? 3.0f : 0.0f, z = (float)k;
-        float v[9] = {-1 + off, -1, z, 1 + off, -1, z, 0 + off, 1, z};
-        memcpy(micro_tris[k], v, sizeof v);
-    }
-    for (int k = 0; k < 4; k++) { /* the 8 triangles above in every block, shifted in z */
-        const float *tris[8];
-        float shifted[8][9];
-        uint32_t ids[8];
-        for (int j = 0; j < 8; j++) {
-            memcpy(shifted[j], micro_tris[j], sizeof shifted[j]);
-            for (int q = 2; q < 9; q += 3) shifted[j][q] += (float)k;
-            tris[j] = shifted[j], ids[j] = (uint32_t)(8 * k + j);
-        }
-        accel_block_fill(&micro_b8[k].v[0][0][0], micro_b8[k].id, 8, tris, ids, 8);
-        accel_block_fill(&micro_b4[k].v[0][0][0], micro_b4[k].id, 4, tris, ids, 4);
-    }
-    for (int k = 0; k < 16; k++) {
-        float off = k % 4 == 3 ? 5.0f : 0.0f, z = (float)k;
-        float b[6] = {-1 + off, -1, z, 1 + off, 1, z + 0.5f};
-        memcpy(micro_boxes[k], b, sizeof b);
-    }
-    for (int i = 0; i < DDA_N * DDA_N * DDA_N; i++) micro_cells[i] = (uint32_t)(i * 2654435761u) >> 29;
-    long reps = x->quick ? 20000 : 200000;
-    m->tri = micro_time(micro_tri, reps, 8);
-    m->block8 = micro_time(micro_block8, reps, 4);
-    m->block4 = micro_time(micro_block4, reps, 4);
-    m->node = micro_time(micro_node, reps, 8); /* 16 boxes: 8 binary nodes */
-    m->step = micro_time(micro_step, reps * 8, 1);
-}
-
 /* ---- the answer: one table, one plot, the verdict -------------------------------- */
 
 /* The 95% distribution-free interval of the median of n sorted values:
@@ -494,7 +320,7 @@ static const char *step_of(const char *family)
 static const char *test_of(int lanes)
 {
     return lanes == 8 ? "a lane of a block of 8" : lanes == 4 ? "a lane of a block of 4"
-           : lanes == 0 ? "one triangle (scalar)" : "mixed";
+           : lanes == 0 ? "one triangle (scalar)" : "a block lane of 4 or 8 (mixed; C_intersect: their mean)";
 }
 
 /* The table on equal terms: every family's C_intersect fixed at the
@@ -526,7 +352,7 @@ static void answer_fixed(exp_ctx *x, const study *sd)
     }
 }
 
-static void answer(exp_ctx *x, study *sd, const micro *m)
+static void answer(exp_ctx *x, study *sd, const step_micro *m)
 {
     char a[64], b[64], c[64], d[64], e[64];
     exp_md(x, "\n### The answer: cost per step and per test, per kind and ray type\n\nFitted on %s "
@@ -575,7 +401,7 @@ static void answer(exp_ctx *x, study *sd, const micro *m)
             "against the prediction of the fit that did not see it");
 }
 
-static void verdict(exp_ctx *x, study *sd, const micro *m)
+static void verdict(exp_ctx *x, study *sd, const step_micro *m)
 {
     double med[MAX_FITS];
     for (int i = 0; i < sd->count; i++) med[i] = sd->f[i].held_med;
@@ -631,14 +457,14 @@ int main(int argc, char **argv)
                x.size, x.size, x.threads, x.threads > 1 ? "s" : "");
     exp_csv(&x, "scene,family,spec,rayset,ns_per_ray,steps_per_ray,prims_per_ray,fitted_ns,"
                 "heldout_ns,c_step_ns,c_intersect_ns,c_ray_ns,test_lanes,fixed_c_intersect_ns,"
-                "fixed_c_step_ns,fixed_c_ray_ns\n");
+                "fixed_c_step_ns,fixed_c_ray_ns\n"); /* fixed_*: -1 where that fit failed */
     exp_list specs;
     exp_list_make(&x, default_specs, (int)(sizeof default_specs / sizeof default_specs[0]), NULL,
                   &specs);
     study *sd = calloc(1, sizeof *sd);
     if (!sd) return 4;
-    micro m;
-    micro_run(&x, &m);
+    step_micro m;
+    step_micro_run(&x, &m);
     sd->m = &m;
     exp_md(&x, "\n<!-- appendix -->\n");
     for (int si = 0; si < scene_count; si++) measure_scene(&x, scenes[si], &specs, sd);
