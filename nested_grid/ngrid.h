@@ -33,6 +33,10 @@
  *               one reference array; ngrid_compact.c)
  *   traverse    single | packet (64-ray coherent grid traversal through every
  *               level, ngrid_packet.c)
+ *   cells       ids | blocks: a leaf cell's list tested id by id, or its
+ *               triangles copied 8 to a block for the shared block test
+ *               (layout=words; single rays without the mailbox, packets
+ *               with theirs)
  *   tri         watertight | naive (common to all kinds)
  */
 #ifndef NESTED_GRID_NGRID_H

@@ -105,10 +105,10 @@ static const accel_param_def ngrid_params[] = {
              "rays (8x8 tiles) slice by slice through every level, as grid:traverse=packet",
      .offset = offsetof(ngrid_spec, traverse)},
     {.key = "cells", .type = ACCEL_PARAM_ENUM, .def = "ids", .choices = "ids|blocks",
-     .help = "what a leaf cell holds for single rays with layout=words: ids (tested one by one) "
-             "or blocks (its triangles copied 8 to a block, tested 8 at a time by the block "
-             "test the wide BVH uses; the levels' cost model is still priced for ids, so ids "
-             "stay the default); packets, layout=compact, spheres and tri=naive use ids",
+     .help = "what a leaf cell holds with layout=words, single rays and packets: ids (tested "
+             "one by one) or blocks (its triangles copied 8 to a block, tested 8 at a time by "
+             "the block test the wide BVH uses; the levels' cost model is still priced for ids, "
+             "so ids stay the default); layout=compact, spheres and tri=naive use ids",
      .offset = offsetof(ngrid_spec, cells)},
 };
 
@@ -349,18 +349,19 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
     }
     if (!rc) {
         g->naive = params->naive;
-        /* lists as blocks have no mailbox: traced by the mailbox=0 copies */
-        g->mailbox = spec->mailbox != 0 && !(spec->cells == 1 && !compact && spec->traverse != 1 &&
-                                             !params->naive && scene->sphere_count == 0);
+        /* lists as blocks have no mailbox in single rays: traced by the
+         * mailbox=0 copies; a packet's mailbox pays with blocks too */
+        g->mailbox = spec->mailbox != 0 &&
+                     !(spec->cells == 1 && !compact && !params->naive && scene->sphere_count == 0);
+        g->packet_mailbox = spec->mailbox != 0;
         g->traverse = spec->traverse == 1 ? NGRID_TRAVERSE_PACKET : NGRID_TRAVERSE_SINGLE;
         g->has_spheres = scene->sphere_count > 0;
         rc = flatten(&b, g, err);
     }
     if (!rc && compact) rc = ngrid_compact_build(g, b.max_bytes, err);
-    /* cells=blocks where the block test applies (layout=words, single rays,
-     * triangles, the watertight test). */
-    if (!rc && !compact && spec->cells == 1 && g->traverse == NGRID_TRAVERSE_SINGLE && !g->naive &&
-        !g->has_spheres)
+    /* cells=blocks where the block test applies (layout=words, single rays
+     * and packets, triangles, the watertight test). */
+    if (!rc && !compact && spec->cells == 1 && !g->naive && !g->has_spheres)
         rc = grid_list_blocks_build(g->lists, g->list_len, scene, b.max_bytes,
                                     &g->blocks, err);
     builder_free(&b);
@@ -448,7 +449,8 @@ static const char *const ngrid_variants[] = {
     "traverse=packet", "traverse=packet,threshold=1,depth=4,sub_res=3",
     "traverse=packet,mailbox=0", "traverse=packet,tri=naive", "traverse=packet,layout=compact",
     "traverse=packet,threshold=2,sub_res=24", "cells=blocks", "cells=blocks,threshold=1,depth=4,sub_res=3",
-    NULL,
+    "traverse=packet,cells=blocks", "traverse=packet,cells=blocks,threshold=1,depth=4,sub_res=3",
+    "traverse=packet,cells=blocks,mailbox=0", NULL,
 };
 
 const accel_kind accel_kind_nested_grid = {
