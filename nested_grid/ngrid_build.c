@@ -82,7 +82,8 @@ static const accel_param_def ngrid_params[] = {
      .offset = offsetof(ngrid_spec, c_step)},
     {.key = "c_isect", .type = ACCEL_PARAM_FLOAT, .def = STR(NGRID_DEFAULT_C_ISECT),
      .min = 1e-3, .max = 1e6,
-     .help = "auto: cost of one primitive test, ns",
+     .help = "auto: cost of one primitive test, ns (not given: " STR(NGRID_DEFAULT_C_ISECT)
+             ", or " STR(NGRID_BLOCKS_C_ISECT) " per triangle where leaf cells hold blocks)",
      .offset = offsetof(ngrid_spec, c_isect)},
     {.key = "overlap", .type = ACCEL_PARAM_ENUM, .def = "exact", .choices = "exact|bbox",
      .help = "cell membership: exact primitive/box overlap, or bounding box only",
@@ -308,6 +309,12 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
     b.threshold = (uint32_t)spec->threshold;
     b.costs.c_step = spec->c_step;
     b.costs.c_isect = spec->c_isect;
+    /* cells=blocks where the block test applies: auto mode prices a test
+     * at the block test's cost per triangle unless c_isect is given
+     * (NGRID_BLOCKS_C_ISECT, ngrid.h: not fitted on this kernel). */
+    const int blocks = spec->cells == 1 && spec->layout != 1 && !params->naive &&
+                       scene->sphere_count == 0;
+    if (blocks && !ACCEL_GIVEN(params, ngrid_spec, c_isect)) b.costs.c_isect = NGRID_BLOCKS_C_ISECT;
     b.max_bytes = spec->max_mb * 1048576.0;
     const int compact = spec->layout == 1;
     if (compact) {
