@@ -295,7 +295,8 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
             else snprintf(rb, sizeof rb, "-");
             exp_md(x, " %s | %s | %.1f, %.1f |", exp_fmt_est(a, sizeof a, &m, 2), rb,
                    exp_group_steps(&g, c, bit), exp_group_prims(&g, c, bit));
-            exp_csv(x, "%s,%s,%s,%zu,%.3f,%.3f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.3f,%.3f,%s,%.1f,%.3f\n",
+            exp_csv(x,
+                    "%s,%s,%s,%zu,%.3f,%.3f,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f,%.3f,%.3f,%s,%.1f,%.3f\n",
                     s.name, cf->spec, bench_set_name(bit), exp_group_rays(&g, c, bit),
                     cf->build_ms.median, cf->build.bytes / 1048576.0, m.median, m.lo, m.hi,
                     c == bvh ? 1.0 : r.median, c == bvh ? 1.0 : r.lo, c == bvh ? 1.0 : r.hi,
@@ -333,8 +334,8 @@ int main(int argc, char **argv)
                "A target counts as met when the whole 95%% interval of the paired ratio clears "
                "it, not met when it misses it entirely, else a tie. `nested_grid:layout=compact` is "
                "the compact two-level layout (Kalojanov et al. 2011; exactly two levels, where "
-               "the default nests up to three). Every grid kind runs on both triangle kernels "
-               "(issue 49): `cells=ids` tests a cell's triangles one by one, `cells=blocks` 8 at "
+               "the default nests up to three). Every grid kind runs on both triangle kernels: "
+               "`cells=ids` tests a cell's triangles one by one, `cells=blocks` 8 at "
                "a time with the 8-wide BVH's block test (`grid`'s default; the nested and "
                "irregular grids default to ids).",
                x.rt_size[0], x.rt_size[1]);
@@ -358,9 +359,9 @@ int main(int argc, char **argv)
     study st = {0};
     exp_tally_init(&st.t, 9 * n); /* at most 9 target comparisons per scene */
     for (int i = 0; i < n; i++) measure_scene(&x, &st, scenes[i], &list);
-    exp_md(&x, "\n**Findings** (this section's targets; \"best single-ray per-id (block) grid\": the "
-               "grid configuration on that kernel with the lowest median time on that set, "
-               "packets excluded, against the BVH on the same kernel; \"the faster grid "
+    exp_md(&x, "\n**Findings** (this section's targets; \"best single-ray per-id (block) "
+               "grid\": the grid configuration on that kernel with the lowest median time on "
+               "that set, packets excluded, against the BVH on the same kernel; \"the faster grid "
                "packets\": `grid:traverse=packet` or `nested_grid:traverse=packet`, whichever has "
                "the lower median time):\n\n%s",
            exp_text_str(&st.findings));
@@ -372,7 +373,8 @@ int main(int argc, char **argv)
                         "miss, %d on the line; by target: packets 5x over their single-ray grid "
                         "met %d of %d (%d of them on the collapse probe's estimate, with no "
                         "interval, outside the tally); best single-ray grid within the target of "
-                        "the BVH on its kernel met %d of %d; irregular ahead of nested where nested beats regular: "
+                        "the BVH on its kernel met %d of %d; irregular ahead of nested where "
+                        "nested beats regular: "
                         "%d of %d", st.t.added, 100 * exp_tally_level(&st.t), st.t.confirmed,
                         st.t.refuted, st.t.online, st.met[0], st.n[0], st.met_est, st.met[1],
                         st.n[1], st.met[2], st.n[2]);

@@ -40,7 +40,8 @@ extern "C" {
 /* Default cells per primitive, from the sweep reported in grid/README.md. */
 #define GRID_DEFAULT_LAMBDA 8
 /* The density when cells hold blocks (cells=blocks) and lambda is not
- * given (single rays and packets; measured on single rays only): a test of 8 triangles at once costs about what one scalar test
+ * given, single rays (packets keep GRID_DEFAULT_LAMBDA: unmeasured with
+ * blocks): a test of 8 triangles at once costs about what one scalar test
  * did, so the cost model's optimum moves to coarser grids (at 256x192 on
  * the bunny, soup:tris=100000 and the armadillo, lambda=1 gave 1.07-3.4
  * Mrays/s against 0.78-2.2 at lambda=2 and 0.64-2.4 at lambda=4). */

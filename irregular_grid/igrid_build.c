@@ -560,8 +560,8 @@ static int igrid_build(const accel_scene *scene, const accel_params *params, int
     if (!rc && use_blocks) rc = build_blocks(g, max_bytes, err);
     if (!rc && (double)igrid_memory(g) - accel_prim_store_bytes(&g->store) > max_bytes)
         rc = accel_fail(err, ACCEL_ERR_RANGE,
-                        "irregular_grid: %.1f MiB of cells, references%s and map, above the limit of "
-                        "%.1f MiB (lower sub_lambda or max_depth, or raise max_mb%s)",
+                        "irregular_grid: %.1f MiB of cells, references%s and map, above the "
+                        "limit of %.1f MiB (lower sub_lambda or max_depth, or raise max_mb%s)",
                         ((double)igrid_memory(g) - accel_prim_store_bytes(&g->store)) / 1048576.0,
                         use_blocks ? ", blocks" : "", max_bytes / 1048576.0,
                         use_blocks ? ", or cells=ids" : "");

@@ -208,7 +208,7 @@ TEST(grid_packet_fewer_tests_than_single_rays)
     rays_set r;
     CHECK(rays_primary(&s.camera, 128, 128, &r, &err) == 0);
     static const char *const pairs[2][2] = {{"grid:cells=ids", "grid:traverse=packet,cells=ids"},
-                                            {"grid", "grid:traverse=packet"}};
+                                            {"grid:lambda=8", "grid:traverse=packet"}};
     static const int factor[2] = {4, 2};
     for (int p = 0; p < 2; p++) {
         accel_hit *h[2];
@@ -244,8 +244,8 @@ TEST(grid_packet_fewer_tests_than_single_rays)
 
 /* Packets with mixed direction signs (diffuse-like) go to the single-ray
  * kernel: byte-identical hits, no filter evaluated; on blocks the
- * single-ray kernel is the block grid's (no mailbox, lambda 1), on ids
- * the per-id grid's. */
+ * single-ray kernel is the block grid's (no mailbox, at the packets'
+ * lambda 8), on ids the per-id grid's. */
 TEST(grid_packet_incoherent_packets_fall_back)
 {
     accel_scene s;
@@ -263,7 +263,7 @@ TEST(grid_packet_incoherent_packets_fall_back)
         rays[i] = r;
     }
     static const char *const pairs[2][2] = {{"grid:cells=ids", "grid:traverse=packet,cells=ids"},
-                                            {"grid", "grid:traverse=packet"}};
+                                            {"grid:lambda=8", "grid:traverse=packet"}};
     /* the packets as given: sorted (core/coherence.h), these rays make
      * coherent packets that walk */
     const int order = accel_coherence_get();

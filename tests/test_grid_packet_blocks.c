@@ -55,7 +55,7 @@ TEST(grid_packet_blocks_same_walk_as_ids)
     static const char *const scenes[] = {"sphere:segments=16", "teapot_stadium:n=4,stadium=32",
                                          "soup:tris=4000,seed=2", NULL};
     static const char *const pairs[][2] = {
-        {"grid:traverse=packet,cells=ids,lambda=1", "grid:traverse=packet"},
+        {"grid:traverse=packet,cells=ids", "grid:traverse=packet"},
         {"grid:traverse=packet,cells=ids,mailbox=0,res=48",
          "grid:traverse=packet,mailbox=0,res=48"},
         {"nested_grid:traverse=packet", "nested_grid:traverse=packet,cells=blocks"},
