@@ -353,6 +353,8 @@ typedef struct {
     int depth;         /* tree depth / grid nesting depth */
     int res[3];        /* grids: top-level resolution */
     const char *isa;   /* kernels of several ISAs (wide BVH): the one built for; else NULL */
+    int test_lanes;    /* how single rays test primitives: 0 one at a time (accel_prim_hit),
+                        * 4 or 8 in blocks of that many lanes (core/block_test.h) */
 } accel_build_stats;
 
 /* What a per-frame update (accel_kind.update) did, and how long it took. */

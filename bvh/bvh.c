@@ -353,6 +353,7 @@ static int build_tree(const accel_scene *scene, const bvh_build_opts *opts, cons
                             threads < 1 ? 1 : threads, o.ct, o.ci, stats, err);
         if (rc == 0) out->wide->packets = traverse == BVH_TRAVERSE_PACKET, out->wide->hybrid = wo->hybrid;
         if (rc == 0) out->wide->isa = wo->isa, stats->isa = accel_isa_label(wo->isa);
+        if (rc == 0) stats->test_lanes = block;
         if (rc == 0) out->path = out->wide->quant ? &bvh_path_wide_quant : &bvh_path_wide;
         if (rc) bvh_release(out);
     }

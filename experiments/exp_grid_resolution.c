@@ -53,6 +53,10 @@ typedef struct {
     double pl[MAX_LAMBDAS + 2], pt[MAX_LAMBDAS + 2], pp[MAX_LAMBDAS + 2];
     int np;
     double best_l, pick_l;
+    /* The per-id cells (cells=ids, the scalar test) swept apart: their
+     * best lambda and time, the pick of their own fit; ids_ok when run. */
+    int ids_ok;
+    double ids_best_l, ids_best_ns, ids_pick_l, own_pick_l;
 } scene_result;
 
 typedef struct {
@@ -252,6 +256,56 @@ static void judge_pick(exp_ctx *x, study *st, const exp_group *g, scene_result *
                      100 * (ex.median - 1), hit ? "a hit: tied or within 5%" : "a miss");
 }
 
+/* lambda of "grid:cells=ids,lambda=L" (0 otherwise). */
+static double ids_lambda_of(const char *spec)
+{
+    const char *l = strstr(spec, "lambda=");
+    return strstr(spec, "cells=ids") && l ? atof(l + 7) : 0;
+}
+
+/* Where the optimum lay with the old kernel: the per-id cells (the scalar
+ * triangle test, one reference at a time) swept over fewer lambdas, in
+ * their own interleaved rounds; its best and the pick of a cost model
+ * fitted on it, beside the block cells' best and pick. */
+static void ids_sweep(exp_ctx *x, const accel_scene *s, const bench_sets *sets, scene_result *r)
+{
+    static const double full_l[] = {1, 2, 4, 8, 16, 32};
+    static const double quick_l[] = {2, 8};
+    const double *ls = x->quick ? quick_l : full_l;
+    int nl = x->quick ? 2 : 6;
+    exp_group g;
+    exp_group_init(&g, x, s, sets, MASK);
+    g.per_ray = 1;
+    g.collapse_ms = x->quick ? 1000 : 4000;
+    g.time_builds = 0;
+    for (int i = 0; i < nl; i++) {
+        char spec[64];
+        snprintf(spec, sizeof spec, "grid:cells=ids,lambda=%g", ls[i]);
+        exp_group_add(&g, spec, 0);
+    }
+    exp_group_run(&g);
+    int best = -1;
+    for (int c = 0; c < g.count; c++)
+        if (g.cfg[c].ok && (best < 0 || exp_group_ns(&g, c, MASK).median < exp_group_ns(&g, best, MASK).median))
+            best = c;
+    if (best >= 0) {
+        exp_fit own;
+        int pick = own_fit(&g, &own) ? model_pick(&g, own.coef) : -1;
+        r->ids_ok = 1;
+        r->ids_best_l = ids_lambda_of(g.cfg[best].spec);
+        r->ids_best_ns = exp_group_ns(&g, best, MASK).median;
+        r->ids_pick_l = pick >= 0 ? ids_lambda_of(g.cfg[pick].spec) : 0;
+        r->own_pick_l = lambda_of(r->own_pick);
+        exp_md(x, "\nThe per-id cells (`cells=ids`, the scalar test) on the same rays, lambda %g "
+                  "to %g: best lambda=%g at %.0f ns per ray, %.2fx the block cells' best (%.0f ns, "
+                  "lambda=%g); a model fitted on them picks %s.\n",
+               ls[0], ls[nl - 1], r->ids_best_l, r->ids_best_ns, r->ids_best_ns / r->best_ns,
+               r->best_ns, r->best_l, pick >= 0 ? g.cfg[pick].spec : "nothing (too few points)");
+    }
+    exp_group_note(&g);
+    exp_group_free(&g);
+}
+
 static void measure_scene(exp_ctx *x, study *st, int si, const char *spec, const exp_list *extra)
 {
     static const double full_l[] = {0.0625, 0.25, 0.5, 1, 2, 4, 8, 16, 32, 64, 128, 256};
@@ -314,6 +368,7 @@ static void measure_scene(exp_ctx *x, study *st, int si, const char *spec, const
                rr.chosen, rr.chosen == 1 ? "" : "s");
     }
     sweep_plot(x, st, &g, si, s.name, r);
+    if (r->have_pick) ids_sweep(x, &s, &sets, r);
     if (si == 1 || (x->quick && si == 0)) {
         const char *const heat[] = {"grid:lambda=0.5", "grid:lambda=32"};
         exp_md(x, "\nCells stepped per pixel on %s, `%s` and `%s`, one colour scale:\n", s.name,
@@ -444,6 +499,27 @@ static void answer(exp_ctx *x, const study *st)
         exp_md(x, "| %s | %ld | `%s` | %.0f | `%s` | %.3f [%.3f, %.3f] | %.2fx | `%s` | %.3f |\n",
                r->name, r->tris, r->best, r->best_ns, r->pick, r->regret, r->regret_lo,
                r->regret_hi, r->ratio_at_pick, r->own_pick, r->own_regret);
+    }
+    exp_md(x, "\nWhere the optimum moved with the kernel: the block cells (the shared block "
+              "test, 8 triangles at once) against the per-id cells (one scalar test per "
+              "reference) on the same rays. A model fitted on each kernel's own sweep picks its "
+              "lambda; \"predicted\" when the picks move as the measured bests do.\n");
+    exp_md_table(x, "scene|per-id best lambda|block best lambda|moved|per-id / block time at "
+                    "their bests|model pick: per-id, blocks|predicted");
+    for (int si = 0; si < st->scenes; si++) {
+        const scene_result *r = &st->sc[si];
+        if (!r->have_pick || !r->ids_ok) continue;
+        int pred = r->ids_pick_l > 0 && r->own_pick_l > 0 &&
+                   (r->own_pick_l < r->ids_pick_l) == (r->best_l < r->ids_best_l) &&
+                   (r->own_pick_l == r->ids_pick_l) == (r->best_l == r->ids_best_l);
+        char pk[64];
+        if (r->ids_pick_l > 0 && r->own_pick_l > 0)
+            snprintf(pk, sizeof pk, "%g, %g", r->ids_pick_l, r->own_pick_l);
+        else
+            snprintf(pk, sizeof pk, "no fit (too few points)");
+        exp_md(x, "| %s | %g | %g | %.3gx | %.2f | %s | %s |\n", r->name, r->ids_best_l, r->best_l,
+               r->best_l / r->ids_best_l, r->ids_best_ns / r->best_ns, pk,
+               pk[0] == 'n' ? "n/a" : pred ? "yes" : "no");
     }
     svg_plot p, q;
     svg_plot_init(&p, "Grid resolution: time over each scene's best against lambda",

@@ -225,6 +225,10 @@ int main(int argc, char **argv)
     const char *kinds[MAX_SPECS];
     int nk = 0;
     for (size_t k = 0; k < accel_kind_count && nk < MAX_SPECS; k++) kinds[nk++] = accel_kinds[k]->name;
+    /* beside the defaults: the fastest kind, and the grid on its old per-id
+     * cells (the kernel's share of the grid's speed, issue 49) */
+    kinds[nk++] = "bvh:width=8";
+    kinds[nk++] = "grid:cells=ids";
     exp_list list;
     exp_list_make(&x, kinds, nk, NULL, &list);
     study st = {0};

@@ -35,10 +35,22 @@
 #include "group.h"
 #include "svg.h"
 
+/* The shared block test (the wide BVH's leaves, the grids' cell blocks),
+ * compiled here for the baseline instruction set, for its micro-benchmark. */
+#define WIDE_LB 8
+#include "core/block_test.h"
+#undef WIDE_LB
+#define WIDE_LB 4
+#include "core/block_test.h"
+#undef WIDE_LB
+
 /* The families: a spec belongs to the family of its kind, width and
  * traversal; --accel specs join theirs (a new one starts a family). */
 static const char *const default_specs[] = {
     "grid:lambda=0.25", "grid:lambda=1", "grid:lambda=4", "grid:lambda=16", "grid:lambda=64",
+    /* the per-id cells: the kernel's share of the grid's cost */
+    "grid:cells=ids,lambda=0.25", "grid:cells=ids,lambda=1", "grid:cells=ids,lambda=4",
+    "grid:cells=ids,lambda=16", "grid:cells=ids,lambda=64",
     "nested_grid:lambda=0.25", "nested_grid:lambda=1", "nested_grid", "nested_grid:lambda=16",
     "nested_grid:lambda=64",
     "irregular_grid:top_lambda=0.25", "irregular_grid:top_lambda=1", "irregular_grid:top_lambda=4",
@@ -66,15 +78,20 @@ static const char *const default_specs[] = {
 
 static const char *const set_names[3] = {"primary", "shadow", "diffuse"};
 
-/* The family of a spec: kind[:width=N][,traverse=packet]. */
+/* The family of a spec: kind[:width=N][,traverse=packet][,cells=ids|blocks]
+ * (cells only where the spec names it). */
 static void family_of(const char *spec, char *out, size_t n)
 {
     size_t k = strcspn(spec, ":");
     const char *w = strstr(spec, "width="), *p = strstr(spec, "traverse=packet");
-    char wb[32] = "";
-    if (w) snprintf(wb, sizeof wb, "width=%d", atoi(w + 6));
-    snprintf(out, n, "%.*s%s%s%s%s", (int)k, spec, w || p ? ":" : "", wb, w && p ? "," : "",
-             p ? "traverse=packet" : "");
+    const char *c = strstr(spec, "cells=");
+    char parts[48] = "";
+    if (w) snprintf(parts + strlen(parts), sizeof parts - strlen(parts), ",width=%d", atoi(w + 6));
+    if (p) snprintf(parts + strlen(parts), sizeof parts - strlen(parts), ",traverse=packet");
+    if (c)
+        snprintf(parts + strlen(parts), sizeof parts - strlen(parts), ",cells=%.*s",
+                 (int)strcspn(c + 6, ",;"), c + 6);
+    snprintf(out, n, "%.*s%s%s", (int)k, spec, parts[0] ? ":" : "", parts[0] ? parts + 1 : "");
 }
 
 typedef struct {
@@ -82,13 +99,54 @@ typedef struct {
     int set, n, fitted;
     double c[3], held_med, held_max;
     double meas[MAXP], pred[MAXP]; /* held-out predictions */
+    /* The fit on equal terms: C_intersect fixed at the micro-benchmark's
+     * cost per primitive of the family's own test (lanes: 0 one at a time,
+     * 4 or 8 a block lane), C_step and C_ray fitted (non-negative). */
+    int lanes, fixed_ok;
+    double fixed_ci, fixed_c[2], fixed_med, fixed_max;
 } fit_row;
+
+typedef struct {
+    exp_est tri, block8, block4, node, step;
+} micro;
 
 typedef struct {
     fit_row f[MAX_FITS];
     int count, unfit;
     exp_text scenes, findings;
+    const micro *m;
 } study;
+
+/* ns per primitive test of a kind that tests `lanes` at once (0: one by
+ * one): the scalar test, or a full block's time over its lanes. */
+static double micro_per_prim(const micro *m, int lanes)
+{
+    return lanes == 8 ? m->block8.median / 8 : lanes == 4 ? m->block4.median / 4 : m->tri.median;
+}
+
+/* C_step and C_ray by non-negative least squares on y - ci * prims, with
+ * the held-out errors (each point predicted by the fit on the others). */
+static int fit_fixed(const double *st, const double *pr, const double *ns, int n, double ci,
+                     double *coef, double *pred)
+{
+    double r[MAXP], one[MAXP];
+    for (int i = 0; i < n; i++) r[i] = ns[i] - ci * pr[i], one[i] = 1;
+    const double *cols[2] = {st, one};
+    exp_fit f;
+    if (exp_nnls(cols, 2, r, n, &f)) return -1;
+    coef[0] = f.coef[0], coef[1] = f.coef[1];
+    for (int k = 0; k < n; k++) {
+        double s[MAXP], y[MAXP], o[MAXP];
+        int m = 0;
+        for (int i = 0; i < n; i++)
+            if (i != k) s[m] = st[i], y[m] = r[i], o[m++] = 1;
+        const double *c2[2] = {s, o};
+        exp_fit g;
+        if (exp_nnls(c2, 2, y, m, &g)) return -1;
+        pred[k] = g.coef[0] * st[k] + ci * pr[k] + g.coef[1];
+    }
+    return 0;
+}
 
 /* The held-out error of each point: the fit on the others predicts it.
  * 0, or -1 when a fit on n-1 points fails. */
@@ -119,7 +177,7 @@ static void fit_family(exp_ctx *x, const exp_group *g, const char *family, int s
                        const char *scene)
 {
     double st[MAXP], pr[MAXP], ns[MAXP], one[MAXP];
-    int cfg_of[MAXP], n = 0;
+    int cfg_of[MAXP], n = 0, lanes = -1;
     for (int c = 0; c < g->count && n < MAXP; c++) {
         const exp_cfg *cf = &g->cfg[c];
         char fam[64];
@@ -129,6 +187,8 @@ static void fit_family(exp_ctx *x, const exp_group *g, const char *family, int s
         st[n] = (double)tr->counters.steps / (double)tr->rays;
         pr[n] = (double)tr->counters.prim_tests / (double)tr->rays;
         ns[n] = exp_est_scale(&tr->ms, 1e6 / (double)tr->rays).median;
+        /* one test kind per family: a mixed family gets no fixed fit */
+        lanes = lanes == -1 || lanes == cf->build.test_lanes ? cf->build.test_lanes : -2;
         one[n] = 1, cfg_of[n++] = c;
     }
     if (!n || sd->count >= MAX_FITS) return;
@@ -154,6 +214,18 @@ static void fit_family(exp_ctx *x, const exp_group *g, const char *family, int s
     qsort(err, (size_t)n, sizeof err[0], cmp_double);
     fr->held_med = n % 2 ? err[n / 2] : 0.5 * (err[n / 2 - 1] + err[n / 2]);
     fr->held_max = err[n - 1];
+    double fpred[MAXP];
+    fr->lanes = lanes;
+    if (lanes >= 0) {
+        fr->fixed_ci = micro_per_prim(sd->m, lanes);
+        if (!fit_fixed(st, pr, ns, n, fr->fixed_ci, fr->fixed_c, fpred)) {
+            fr->fixed_ok = 1;
+            for (int i = 0; i < n; i++) err[i] = fabs(fpred[i] - ns[i]) / ns[i];
+            qsort(err, (size_t)n, sizeof err[0], cmp_double);
+            fr->fixed_med = n % 2 ? err[n / 2] : 0.5 * (err[n / 2 - 1] + err[n / 2]);
+            fr->fixed_max = err[n - 1];
+        }
+    }
     sd->count++;
     exp_md(x, "\n**%s**, %s rays: C_step = %.2f ns, C_intersect = %.2f ns, C_ray = %.1f ns "
               "(non-negative least squares, %d points%s); held-out error %.0f%% median, %.0f%% "
@@ -167,9 +239,11 @@ static void fit_family(exp_ctx *x, const exp_group *g, const char *family, int s
         double in = fit.coef[0] * st[i] + fit.coef[1] * pr[i] + fit.coef[2];
         exp_md(x, "| `%s` | %.1f | %.1f | %.0f | %.0f | %.0f | %+.0f%% |\n", cf->spec, st[i], pr[i],
                ns[i], in, fr->pred[i], 100 * (fr->pred[i] - ns[i]) / ns[i]);
-        exp_csv(x, "%s,%s,%s,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.4f\n", scene, family, cf->spec,
-                set_names[set], ns[i], st[i], pr[i], in, fr->pred[i], fit.coef[0], fit.coef[1],
-                fit.coef[2]);
+        exp_csv(x, "%s,%s,%s,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.4f,%d,%.4f,%.4f,%.4f\n", scene,
+                family, cf->spec, set_names[set], ns[i], st[i], pr[i], in, fr->pred[i],
+                fit.coef[0], fit.coef[1], fit.coef[2], lanes,
+                fr->fixed_ok ? fr->fixed_ci : NAN, fr->fixed_ok ? fr->fixed_c[0] : NAN,
+                fr->fixed_ok ? fr->fixed_c[1] : NAN);
     }
 }
 
@@ -263,6 +337,43 @@ static double micro_tri(long reps)
     return acc;
 }
 
+/* The shared block test on one block of 8 (4) triangles, half of its
+ * lanes hit: 4 blocks per rep, ns per block. */
+static accel_block8 micro_b8[4] __attribute__((aligned(32)));
+static accel_block4 micro_b4[4] __attribute__((aligned(32)));
+
+static double micro_block8(long reps)
+{
+    wide_leaf_ray_8 lr;
+    leaf_setup_8(&lr, &micro_ray);
+    double acc = 0;
+    for (long r = 0; r < reps; r++) {
+        MICRO_FRESH();
+        for (int k = 0; k < 4; k++) {
+            float t = 1e30f, u, v;
+            uint32_t id = ACCEL_MISS;
+            acc += leaf_block_8(&micro_b8[k], &lr, &micro_ray, &t, &u, &v, &id, 1u << 30, 0, 0, 0);
+        }
+    }
+    return acc;
+}
+
+static double micro_block4(long reps)
+{
+    wide_leaf_ray_4 lr;
+    leaf_setup_4(&lr, &micro_ray);
+    double acc = 0;
+    for (long r = 0; r < reps; r++) {
+        MICRO_FRESH();
+        for (int k = 0; k < 4; k++) {
+            float t = 1e30f, u, v;
+            uint32_t id = ACCEL_MISS;
+            acc += leaf_block_4(&micro_b4[k], &lr, &micro_ray, &t, &u, &v, &id, 1u << 30, 0, 0, 0);
+        }
+    }
+    return acc;
+}
+
 /* A binary node's visit: the slab test of its two child boxes (Kay and
  * Kajiya 1986, with the precomputed inverse direction); 8 nodes per rep. */
 static float micro_boxes[16][6];
@@ -314,10 +425,6 @@ static double micro_step(long reps)
     return acc;
 }
 
-typedef struct {
-    exp_est tri, node, step;
-} micro;
-
 static void micro_run(exp_ctx *x, micro *m)
 {
     accel_ray ray = {0};
@@ -328,6 +435,18 @@ static void micro_run(exp_ctx *x, micro *m)
         float v[9] = {-1 + off, -1, z, 1 + off, -1, z, 0 + off, 1, z};
         memcpy(micro_tris[k], v, sizeof v);
     }
+    for (int k = 0; k < 4; k++) { /* the 8 triangles above in every block, shifted in z */
+        const float *tris[8];
+        float shifted[8][9];
+        uint32_t ids[8];
+        for (int j = 0; j < 8; j++) {
+            memcpy(shifted[j], micro_tris[j], sizeof shifted[j]);
+            for (int q = 2; q < 9; q += 3) shifted[j][q] += (float)k;
+            tris[j] = shifted[j], ids[j] = (uint32_t)(8 * k + j);
+        }
+        accel_block_fill(&micro_b8[k].v[0][0][0], micro_b8[k].id, 8, tris, ids, 8);
+        accel_block_fill(&micro_b4[k].v[0][0][0], micro_b4[k].id, 4, tris, ids, 4);
+    }
     for (int k = 0; k < 16; k++) {
         float off = k % 4 == 3 ? 5.0f : 0.0f, z = (float)k;
         float b[6] = {-1 + off, -1, z, 1 + off, 1, z + 0.5f};
@@ -336,6 +455,8 @@ static void micro_run(exp_ctx *x, micro *m)
     for (int i = 0; i < DDA_N * DDA_N * DDA_N; i++) micro_cells[i] = (uint32_t)(i * 2654435761u) >> 29;
     long reps = x->quick ? 20000 : 200000;
     m->tri = micro_time(micro_tri, reps, 8);
+    m->block8 = micro_time(micro_block8, reps, 4);
+    m->block4 = micro_time(micro_block4, reps, 4);
     m->node = micro_time(micro_node, reps, 8); /* 16 boxes: 8 binary nodes */
     m->step = micro_time(micro_step, reps * 8, 1);
 }
@@ -356,9 +477,58 @@ static void median_interval(const double *v, int n, double *lo, double *hi)
     *lo = v[j], *hi = v[n - 1 - j];
 }
 
+/* What one counted step and one counted test are for a family. */
+static const char *step_of(const char *family)
+{
+    if (!strncmp(family, "grid", 4)) return "a cell";
+    if (!strncmp(family, "nested_grid", 11)) return "a cell of any level";
+    if (!strncmp(family, "irregular_grid", 14)) return "a cell (top or leaf)";
+    if (!strncmp(family, "instanced", 9)) return "a node or cell of either level";
+    if (strstr(family, "width=8")) return "a node of 8 children";
+    if (strstr(family, "width=4")) return "a node of 4 children";
+    if (strstr(family, "traverse=packet")) return "a node of 2, per packet";
+    if (!strncmp(family, "bvh", 3)) return "a node of 2 children";
+    return "-";
+}
+
+static const char *test_of(int lanes)
+{
+    return lanes == 8 ? "a lane of a block of 8" : lanes == 4 ? "a lane of a block of 4"
+           : lanes == 0 ? "one triangle (scalar)" : "mixed";
+}
+
+/* The table on equal terms: every family's C_intersect fixed at the
+ * micro-benchmark of its own test, C_step fitted beside it. */
+static void answer_fixed(exp_ctx *x, const study *sd)
+{
+    exp_md(x, "\n### Step cost on equal terms: C_intersect fixed by the micro-benchmark\n\nThe "
+              "free fit above may trade one count for the other. Here every family's C_intersect "
+              "is the micro-benchmark's cost per primitive of the test it runs (a block test's "
+              "time over its lanes, or the scalar test), the same number for every kind with the "
+              "same test, and C_step and C_ray are fitted beside it (non-negative least "
+              "squares, held-out error as above). A partly filled block costs a whole block: "
+              "that shows in C_step. Primary and diffuse rays on %s.\n",
+           sd->count ? sd->f[0].scene : "-");
+    exp_md_table(x, "family|rays|a step is|a test is|C_intersect ns (fixed)|C_step ns|C_ray ns|"
+                    "held-out median (worst)|free fit: C_step, C_intersect ns");
+    for (int i = 0; i < sd->count; i++) {
+        const fit_row *f = &sd->f[i];
+        if (strcmp(f->scene, sd->f[0].scene) || f->set == 1) continue;
+        if (!f->fixed_ok) {
+            exp_md(x, "| `%s` | %s | %s | %s | - | - | - | no fit | %.2f, %.2f |\n", f->family,
+                   set_names[f->set], step_of(f->family), test_of(f->lanes), f->c[0], f->c[1]);
+            continue;
+        }
+        exp_md(x, "| `%s` | %s | %s | %s | %.2f | %.2f | %.0f | %.0f%% (%.0f%%) | %.2f, %.2f |\n",
+               f->family, set_names[f->set], step_of(f->family), test_of(f->lanes), f->fixed_ci,
+               f->fixed_c[0], f->fixed_c[1], 100 * f->fixed_med, 100 * f->fixed_max, f->c[0],
+               f->c[1]);
+    }
+}
+
 static void answer(exp_ctx *x, study *sd, const micro *m)
 {
-    char a[64], b[64], c[64];
+    char a[64], b[64], c[64], d[64], e[64];
     exp_md(x, "\n### The answer: cost per step and per test, per kind and ray type\n\nFitted on %s "
               "(the first scene; the others in the appendix). Held-out error: each configuration "
               "predicted by the fit on the others (median and worst over the family).\n",
@@ -371,11 +541,15 @@ static void answer(exp_ctx *x, study *sd, const micro *m)
                set_names[f->set], f->c[0], f->c[1], f->c[2], 100 * f->held_med, 100 * f->held_max, f->n);
     }
     exp_md(x, "\nOn this machine, hot in L1 (median of 15 samples [95%% interval], ns per "
-              "operation): one watertight triangle test %s, one binary node visit (two slab "
-              "tests) %s, one 3D-DDA cell step with its cell read %s. A fitted constant below "
-              "these is the fit trading one count for the other, not the machine.\n",
-           exp_fmt_est(a, sizeof a, &m->tri, 2), exp_fmt_est(b, sizeof b, &m->node, 2),
+              "operation): one watertight triangle test %s, one block test of 8 triangles %s "
+              "and of 4 %s (the shared block test of the wide BVH and the block grids, %s "
+              "path), one binary node visit (two slab tests) %s, one 3D-DDA cell step with its "
+              "cell read %s. A fitted constant below these is the fit trading one count for the "
+              "other, not the machine.\n",
+           exp_fmt_est(a, sizeof a, &m->tri, 2), exp_fmt_est(d, sizeof d, &m->block8, 2),
+           exp_fmt_est(e, sizeof e, &m->block4, 2), "AVX2", exp_fmt_est(b, sizeof b, &m->node, 2),
            exp_fmt_est(c, sizeof c, &m->step, 2));
+    answer_fixed(x, sd);
     svg_plot p;
     svg_plot_init(&p, "Held-out prediction against measurement", "measured ns per ray",
                   "predicted ns per ray (fit without that configuration)");
@@ -456,7 +630,8 @@ int main(int argc, char **argv)
                "per-ray C_ray are fitted per kind, scene and ray type (ns per ray, %d thread%s).",
                x.size, x.size, x.threads, x.threads > 1 ? "s" : "");
     exp_csv(&x, "scene,family,spec,rayset,ns_per_ray,steps_per_ray,prims_per_ray,fitted_ns,"
-                "heldout_ns,c_step_ns,c_intersect_ns,c_ray_ns\n");
+                "heldout_ns,c_step_ns,c_intersect_ns,c_ray_ns,test_lanes,fixed_c_intersect_ns,"
+                "fixed_c_step_ns,fixed_c_ray_ns\n");
     exp_list specs;
     exp_list_make(&x, default_specs, (int)(sizeof default_specs / sizeof default_specs[0]), NULL,
                   &specs);
@@ -464,6 +639,7 @@ int main(int argc, char **argv)
     if (!sd) return 4;
     micro m;
     micro_run(&x, &m);
+    sd->m = &m;
     exp_md(&x, "\n<!-- appendix -->\n");
     for (int si = 0; si < scene_count; si++) measure_scene(&x, scenes[si], &specs, sd);
     heatmaps(&x);

@@ -59,6 +59,7 @@ static int same_structure(const exp_cfg *a, const exp_cfg *b, int mask)
 {
     const accel_build_stats *p = &a->build, *q = &b->build;
     if (a->kind != b->kind || a->threads != b->threads || p->bytes != q->bytes ||
+        p->test_lanes != q->test_lanes ||
         p->nodes != q->nodes || p->leaves != q->leaves || p->refs != q->refs ||
         p->depth != q->depth || memcmp(p->res, q->res, sizeof p->res) ||
         !((isnan(p->sah_cost) && isnan(q->sah_cost)) || p->sah_cost == q->sah_cost))

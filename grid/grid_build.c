@@ -194,6 +194,7 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
     stats->refs = g->cells.ref_count;
     stats->sah_cost = NAN;
     stats->depth = 1;
+    stats->test_lanes = g->blocks.blocks ? 8 : 0;
     for (int a = 0; a < 3; a++) stats->res[a] = g->frame.res[a];
     *out = g;
     return ACCEL_OK;

@@ -384,6 +384,7 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
     stats->refs = g->ref_count;
     stats->sah_cost = NAN;
     stats->depth = g->levels;
+    stats->test_lanes = g->blocks.first ? 8 : 0;
     for (int a = 0; a < 3; a++) stats->res[a] = res[a];
     *out = g;
     return ACCEL_OK;
