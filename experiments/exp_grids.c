@@ -44,15 +44,13 @@ static const char *const configs[] = {
     "irregular_grid", "irregular_grid:cells=blocks", "irregular_grid:subdivide=0",
     "irregular_grid:merge=0", "irregular_grid:expand=0"};
 
-/* 1 when spec tests its triangles with the shared block test (8-wide or
- * 4-wide BVH leaves, block grid cells), 0 when one by one through ids:
- * `grid` holds blocks unless told cells=ids, the nested and irregular
- * grids only when told cells=blocks, the binary BVH never. */
-static int block_kernel(const char *spec)
+/* 1 when a built configuration tests its triangles with the shared block
+ * test (the 8- or 4-wide BVH's leaves, block grid cells), 0 when one by
+ * one through ids (the binary BVH; a grid on ids, or on a scene with
+ * spheres, where no blocks are built): its build statistics say so. */
+static int block_kernel(const exp_cfg *cf)
 {
-    if (!strncmp(spec, "bvh", 3)) return strstr(spec, "width=8") || strstr(spec, "width=4");
-    if (!strncmp(spec, "grid", 4)) return strstr(spec, "cells=ids") == NULL;
-    return strstr(spec, "cells=blocks") != NULL;
+    return cf->build.test_lanes > 0;
 }
 
 static const int set_bits[3] = {BENCH_PRIMARY, BENCH_SHADOW, BENCH_DIFFUSE};
@@ -113,7 +111,7 @@ static int fastest(const exp_group *g, int bit, int packets, int kernel)
         const exp_cfg *cf = &g->cfg[c];
         if (!cf->ok || !strncmp(cf->spec, "bvh", 3) ||
             (strstr(cf->spec, "traverse=packet") != NULL) != packets ||
-            (kernel >= 0 && block_kernel(cf->spec) != kernel) || !cf->set[exp_set_index(bit)].have)
+            (kernel >= 0 && block_kernel(cf) != kernel) || !cf->set[exp_set_index(bit)].have)
             continue;
         if (best < 0 || exp_group_ns(g, c, bit).median < exp_group_ns(g, best, bit).median) best = c;
     }
@@ -279,7 +277,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
         const double prims = s.live_count ? (double)s.live_count : 1.0;
         const double bpp = (double)cf->build.bytes / prims, rpp = (double)cf->build.refs / prims;
         exp_md(x, "| `%s` | %s | %s | %.1f | %.0f | %.2f |", cf->spec,
-               block_kernel(cf->spec) ? "blocks" : "ids",
+               block_kernel(cf) ? "blocks" : "ids",
                exp_fmt_est(b, sizeof b, &cf->build_ms, 1), cf->build.bytes / 1048576.0, bpp, rpp);
         for (int k = 0; k < 3; k++) {
             int bit = set_bits[k];
@@ -301,7 +299,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
                     cf->build_ms.median, cf->build.bytes / 1048576.0, m.median, m.lo, m.hi,
                     c == bvh ? 1.0 : r.median, c == bvh ? 1.0 : r.lo, c == bvh ? 1.0 : r.hi,
                     exp_group_steps(&g, c, bit), exp_group_prims(&g, c, bit),
-                    block_kernel(cf->spec) ? "blocks" : "ids", bpp, rpp);
+                    block_kernel(cf) ? "blocks" : "ids", bpp, rpp);
         }
         exp_md(x, "\n");
     }

@@ -577,6 +577,7 @@ static int igrid_build(const accel_scene *scene, const accel_params *params, int
     stats->refs = g->ref_count;
     stats->sah_cost = NAN;
     stats->depth = g->shift + 1;
+    stats->test_lanes = g->blocks.blocks ? 8 : 0;
     for (int a = 0; a < 3; a++) stats->res[a] = g->top_res[a];
     *out = g;
     return ACCEL_OK;

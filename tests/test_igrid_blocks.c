@@ -24,6 +24,9 @@ static int run_spec(const accel_scene *s, const char *spec, const test_rays *r,
     if (!a) return 0;
     CHECKF(st.bytes == kind->memory(a), "%s on %s: stats %zu bytes, memory %zu", spec, s->name,
            (size_t)st.bytes, kind->memory(a));
+    const int lanes = strstr(spec, "cells=blocks") && s->sphere_count == 0 ? 8 : 0;
+    CHECKF(st.test_lanes == lanes, "%s on %s: test_lanes %d, expected %d", spec, s->name,
+           st.test_lanes, lanes);
     igrid_view v;
     igrid_get_view(a, &v);
     *bytes = st.bytes;
