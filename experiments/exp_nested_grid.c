@@ -101,7 +101,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     exp_group_run(&g);
     int all = best_of(&g, "", 0, g.count);
     exp_md_table(x, "configuration|ns/ray [95% CI]|vs the scene's best|cells or nodes/ray|"
-                    "prims/ray|build ms|MB");
+                    "prims/ray|build ms|MB|B/prim");
     for (int c = 0; c < g.count && all >= 0; c++) {
         const exp_cfg *cf = &g.cfg[c];
         if (!cf->ok) continue;
@@ -112,12 +112,15 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
             snprintf(v, sizeof v, "best");
         else if (vs(&g, c, all, v, sizeof v) == 0)
             strcat(v, " (tie)");
-        exp_md(x, "| `%s` | %s | %s | %.1f | %.1f | %.1f | %.1f |\n", cf->spec, m, v,
+        /* Bytes per primitive: the whole structure, duplicated references
+         * (and a block grid's blocks) included. */
+        const double bpp = (double)cf->build.bytes / (s.live_count ? (double)s.live_count : 1.0);
+        exp_md(x, "| `%s` | %s | %s | %.1f | %.1f | %.1f | %.1f | %.0f |\n", cf->spec, m, v,
                exp_group_steps(&g, c, MASK), exp_group_prims(&g, c, MASK), cf->build_ms.median,
-               cf->build.bytes / 1048576.0);
-        exp_csv(x, "%s,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f\n", s.name, cf->spec, e.median,
+               cf->build.bytes / 1048576.0, bpp);
+        exp_csv(x, "%s,%s,%.3f,%.3f,%.3f,%.3f,%.3f,%.4f,%.4f,%.1f\n", s.name, cf->spec, e.median,
                 e.lo, e.hi, exp_group_steps(&g, c, MASK), exp_group_prims(&g, c, MASK),
-                cf->build_ms.median, cf->build.bytes / 1048576.0);
+                cf->build_ms.median, cf->build.bytes / 1048576.0, bpp);
     }
     exp_group_note(&g);
     exp_text_add(&st->scenes, "%s%s", st->scenes.len ? ", " : "", s.name);
@@ -227,7 +230,8 @@ int main(int argc, char **argv)
         for (int i = 0; i < x.mesh_count && scene_count < 5; i++) scenes[scene_count++] = x.meshes[i];
     }
     scene_count = exp_scene_list(&x, scenes, scene_count, 8);
-    exp_csv(&x, "scene,spec,ns_per_ray,ns_lo,ns_hi,steps_per_ray,prims_per_ray,build_ms,mb\n");
+    exp_csv(&x, "scene,spec,ns_per_ray,ns_lo,ns_hi,steps_per_ray,prims_per_ray,build_ms,mb,"
+                "bytes_per_prim\n");
     exp_list ctx;
     exp_list_make(&x, others, (int)(sizeof others / sizeof others[0]), NULL, &ctx);
     study st = {0};

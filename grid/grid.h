@@ -22,6 +22,9 @@
  *   traverse single | packet: the 3D-DDA per ray, or coherent grid traversal
  *            of 64-ray packets slice by slice (grid_packet_trace.c; the mailbox
  *            is then per packet)
+ *   cells    blocks | ids: a cell's triangles copied 8 to a block for the
+ *            shared block test (single rays and packets; no mailbox for
+ *            single rays), or its primitive ids tested one by one
  *   tri      watertight | naive (common to all kinds)
  */
 #ifndef GRID_GRID_H
@@ -37,7 +40,8 @@ extern "C" {
 /* Default cells per primitive, from the sweep reported in grid/README.md. */
 #define GRID_DEFAULT_LAMBDA 8
 /* The density when cells hold blocks (cells=blocks) and lambda is not
- * given: a test of 8 triangles at once costs about what one scalar test
+ * given, single rays (packets keep GRID_DEFAULT_LAMBDA: unmeasured with
+ * blocks): a test of 8 triangles at once costs about what one scalar test
  * did, so the cost model's optimum moves to coarser grids (at 256x192 on
  * the bunny, soup:tris=100000 and the armadillo, lambda=1 gave 1.07-3.4
  * Mrays/s against 0.78-2.2 at lambda=2 and 0.64-2.4 at lambda=4). */

@@ -26,7 +26,8 @@ typedef struct {
     grid_cell_blocks blocks;
     float *planes;      /* storage behind frame.planes */
     int naive;          /* tri=naive */
-    int mailbox;        /* mailbox=1 */
+    int mailbox;        /* the single-ray kernels' mailbox (off with blocks) */
+    int packet_mailbox; /* traverse=packet: the packets' mailbox (mailbox=1) */
     int has_spheres;
     int traverse;       /* GRID_TRAVERSE_SINGLE / GRID_TRAVERSE_PACKET */
     uint8_t *macro;     /* traverse=packet: occupancy of GRID_MACRO^3 blocks of cells */
@@ -61,6 +62,13 @@ int grid_macro_any(const grid_accel *g, int K, int a1, int a2, int layer, const 
 static inline unsigned grid_variant_flags(const grid_accel *g)
 {
     return accel_variant_flags(g->naive, g->has_spheres, g->mailbox);
+}
+
+/* The packet kernels' flags: their own mailbox switch (a packet's
+ * mailbox pays with blocks too; the single-ray fallback's does not). */
+static inline unsigned grid_packet_variant_flags(const grid_accel *g)
+{
+    return accel_variant_flags(g->naive, g->has_spheres, g->packet_mailbox);
 }
 
 /* Single-ray traversal (grid_trace.c). */

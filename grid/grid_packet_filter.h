@@ -95,6 +95,21 @@ static inline int grid_packet_sphere_outside(const grid_packet *pk, const float 
     return 0;
 }
 
+/* 1 when no active ray can meet the triangle (9 floats) within the
+ * current slice: its bounding box misses the slice's hull on a1 or a2. */
+static inline int grid_packet_tri_slice_outside(const grid_packet *pk, const float *tri,
+                                                const double hull[2][2])
+{
+    for (int j = 0; j < 2; j++) {
+        const int a = pk->axis[1 + j];
+        const float u0 = tri[a], u1 = tri[3 + a], u2 = tri[6 + a];
+        const float lo = u0 < u1 ? (u0 < u2 ? u0 : u2) : (u1 < u2 ? u1 : u2);
+        const float hi = u0 > u1 ? (u0 > u2 ? u0 : u2) : (u1 > u2 ? u1 : u2);
+        if (hi < hull[j][0] || lo > hull[j][1]) return 1;
+    }
+    return 0;
+}
+
 /* 1 when no active ray can meet the primitive within the current slice:
  * its bounding box misses the slice's hull on a1 or a2 (spheres widened as
  * in grid_packet_sphere_outside). */
@@ -111,15 +126,7 @@ static inline int grid_packet_slice_outside(const grid_packet *pk, const accel_s
         }
         return 0;
     }
-    const float *tri = s->tris + 9 * (size_t)prim;
-    for (int j = 0; j < 2; j++) {
-        const int a = pk->axis[1 + j];
-        const float u0 = tri[a], u1 = tri[3 + a], u2 = tri[6 + a];
-        const float lo = u0 < u1 ? (u0 < u2 ? u0 : u2) : (u1 < u2 ? u1 : u2);
-        const float hi = u0 > u1 ? (u0 > u2 ? u0 : u2) : (u1 > u2 ? u1 : u2);
-        if (hi < hull[j][0] || lo > hull[j][1]) return 1;
-    }
-    return 0;
+    return grid_packet_tri_slice_outside(pk, s->tris + 9 * (size_t)prim, hull);
 }
 
 /* 1 when no ray of `bounded` can hit the triangle: interval bounds of the

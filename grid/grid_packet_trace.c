@@ -26,7 +26,11 @@
  *      the edge products puts it outside every line; else the 4-ray AVX2
  *      filter in double keeps the rays that may hit it, and each of those
  *      gets the exact test accel_prim_hit (core/prim.h), keeping the
- *      nearest hit (any hit: the ray stops at its first).
+ *      nearest hit (any hit: the ray stops at its first). With
+ *      cells=blocks the cell's triangles come 8 to a block: the same
+ *      mailbox, culls and filter per triangle, then each ray some
+ *      triangle of the block kept gets the shared block test on the
+ *      whole block (grid_packet_test_blocks, grid_packet_walk.h).
  *   4. Stop. After a slice a ray stops once its nearest hit lies at or
  *      before the plane where it leaves the slice, or its box exit or t_far
  *      does (all three widened by their rounding); the packet ends when no
@@ -98,13 +102,18 @@ walk_slice(const grid_accel *g, grid_packet *pk, grid_packet_count *cn, accel_co
     const grid_frame *f = &g->frame;
     const uint32_t *offsets = g->cells.offsets, *refs = g->cells.refs;
     const uint32_t st1 = f->stride[pk->axis[1]], st2 = f->stride[pk->axis[2]];
+    /* cells=blocks: built for triangles with the watertight test only. */
+    const grid_cell_blocks *blocks = !naive && !spheres && g->blocks.offsets ? &g->blocks : NULL;
     for (int j = lo[1]; j <= hi[1]; j++) {
         const uint32_t row = (uint32_t)k * f->stride[pk->axis[0]] + (uint32_t)j * st2;
         for (int i = lo[0]; i <= hi[0]; i++) {
             const uint32_t cell = row + (uint32_t)i * st1, r = offsets[cell];
-            if (!grid_packet_test_list(&g->store.prims, pk, cn, c, mail, refs + r,
-                                       offsets[cell + 1] - r, hull, naive, spheres, mailbox,
-                                       any_hit))
+            if (blocks ? !grid_packet_test_blocks(pk, cn, c, mail, blocks->blocks,
+                                                  blocks->offsets[cell], offsets[cell + 1] - r,
+                                                  g->store.prims.tri_count, hull, mailbox, any_hit)
+                       : !grid_packet_test_list(&g->store.prims, pk, cn, c, mail, refs + r,
+                                                offsets[cell + 1] - r, hull, naive, spheres,
+                                                mailbox, any_hit))
                 return 0;
         }
     }
@@ -180,5 +189,5 @@ ACCEL_KERNEL_PAIR(grid_packet, packet_batch)
 /* Packets in any ray order (core/coherence.h); incoherent packets fall
  * back to the single-ray grid in packet_batch, on the walk's criterion. */
 ACCEL_COHERENT_ENTRIES(grid_packet_intersect, grid_packet_occluded, const void,
-                       grid_packet_hit_table, grid_packet_occ_table, grid_variant_flags,
+                       grid_packet_hit_table, grid_packet_occ_table, grid_packet_variant_flags,
                        (accel_hit_batch_fn)NULL, (accel_occ_batch_fn)NULL)

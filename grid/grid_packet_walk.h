@@ -6,7 +6,9 @@
  * of the interface a C++ program includes.
  *
  * Testing a primitive against the packet (the culls, the 4-ray filter and
- * the exact test of each remaining ray), retiring the rays that need
+ * the exact test of each remaining ray), or a cell's blocks (cells=blocks:
+ * the same culls and filter per triangle, then the shared block test for
+ * each ray a triangle of the block kept), retiring the rays that need
  * nothing past a slice, the per-ray counter shares, tracing a packet that
  * does not qualify with a single-ray kernel, and writing the answers. The
  * correctness argument of the walk is in grid_packet_trace.c's header.
@@ -16,6 +18,7 @@
 
 #include <string.h>
 
+#include "grid_blocks.h"
 #include "grid_packet_filter.h"
 
 #ifdef __cplusplus
@@ -105,6 +108,80 @@ grid_packet_test_list(const accel_scene *s, grid_packet *pk, grid_packet_count *
         if (!naive && grid_packet_slice_outside(pk, s, prim, spheres, hull)) continue;
         if (mailbox) *slot = prim;
         grid_packet_test_prim(s, pk, cn, c, prim, naive, spheres, any_hit);
+        if (any_hit && !pk->active) return 0;
+    }
+    return 1;
+}
+
+/*
+ * The cell visit on blocks (cells=blocks, grid_blocks.h): the cell's n
+ * triangles in blocks[first ..], 8 to a block. Per block, each real lane
+ * goes through what grid_packet_test_list does to an id (the packet's
+ * mailbox, the slice cull, which leaves a lane out of the mailbox, the
+ * envelope and edge culls, the 4-ray filter), read from the block's own
+ * rows; the rays some lane kept then get the shared block test
+ * (core/block_test.h, 8 lanes), which keeps their nearest hit as the exact
+ * test does. A ray kept by one lane is tested against all 8: a lane its
+ * filter dropped is a miss or, with a block test's rounding, the same
+ * answer (a hit counts whichever cell tests it: grid_packet_trace.c's
+ * argument needs only that the lane the ray hits is tested, which the
+ * filter's conservativeness gives). A lane in the mailbox was tested, or
+ * shown out of reach, for every ray active then, as with ids. Counted
+ * runs count a block's real lanes as tests, per ray tested. Triangles and
+ * the watertight test only (the caller's choice). Returns 0 when an
+ * any-hit packet has no active ray left.
+ */
+static inline __attribute__((always_inline)) int
+grid_packet_test_blocks(grid_packet *pk, grid_packet_count *cn, accel_counters *c, uint32_t *mail,
+                        const accel_block8 *blocks, uint32_t first, uint32_t n, uint32_t tri_count,
+                        const double hull[2][2], int mailbox, int any_hit)
+{
+    if (c) {
+        cn->visits++;
+        cn->empty += n == 0;
+    }
+    for (uint32_t k = 0; k < n; k += 8) {
+        const accel_block8 *blk = &blocks[first + k / 8];
+        const int lanes = n - k < 8 ? (int)(n - k) : 8;
+        uint64_t cand = 0;
+        for (int lane = 0; lane < lanes; lane++) {
+            const uint32_t prim = blk->id[lane];
+            uint32_t *slot = &mail[prim & (GRID_PACKET_MAIL - 1)];
+            if (mailbox && *slot == prim) {
+                if (c) cn->skips++;
+                continue;
+            }
+            float tri[9];
+            lane_gather_8(blk, lane, tri);
+            if (grid_packet_tri_slice_outside(pk, tri, hull)) continue;
+            if (mailbox) *slot = prim;
+            if (grid_packet_tri_outside(pk, tri)) continue;
+            grid_packet_tri t;
+            grid_packet_tri_prepare(pk, tri, &t);
+            if (grid_packet_tri_culled(pk, &t)) continue;
+            cand |= grid_packet_tri_filter(pk, &t, &cn->evals);
+        }
+        for (cand &= pk->active; cand; cand &= cand - 1) {
+            const int l = __builtin_ctzll(cand);
+            if (c) cn->r_tests[l] += (uint32_t)lanes;
+            if (!(pk->prepped >> l & 1)) {
+                accel_prep_ray(&pk->rays[l], &pk->prep[l]); /* live: accepted */
+                pk->prepped |= (uint64_t)1 << l;
+            }
+            wide_leaf_ray_8 lr;
+            leaf_setup_8(&lr, &pk->prep[l]);
+            uint32_t id = ACCEL_MISS;
+            if (!leaf_block_8(blk, &lr, &pk->prep[l], &pk->t[l], &pk->u[l], &pk->v[l], &id,
+                              tri_count, 0, 0, any_hit))
+                continue;
+            if (any_hit) { /* the block test names no lane then: only "hit" counts */
+                pk->prim[l] = blk->id[0];
+                grid_packet_retire(pk, cn, l, c);
+            } else {
+                pk->prim[l] = id;
+                grid_packet_hit_end(pk, l);
+            }
+        }
         if (any_hit && !pk->active) return 0;
     }
     return 1;

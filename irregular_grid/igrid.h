@@ -37,6 +37,10 @@
  *   expand      step 3: expansion passes over the six faces (0: off)
  *   mailbox     0/1: test a primitive spanning several cells once per ray
  *   max_mb      memory limit for the whole structure, MiB
+ *   cells       ids | blocks: a cell's references as ids tested one by one
+ *               (through the mailbox), or its triangles copied 8 to a block
+ *               and tested with the shared block test (grid/grid_blocks.h,
+ *               no mailbox; triangles with the watertight test only)
  *   tri         watertight | naive (common to all kinds)
  */
 #ifndef IRREGULAR_GRID_IGRID_H

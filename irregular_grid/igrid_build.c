@@ -494,6 +494,7 @@ static void igrid_destroy(void *a)
     free(g->cells);
     free(g->refs);
     free(g->planes);
+    grid_cell_blocks_free(&g->blocks);
     accel_prim_store_free(&g->store);
     free(g);
 }
@@ -503,7 +504,31 @@ static size_t igrid_memory(const void *a)
     const igrid_accel *g = a;
     return sizeof *g + (size_t)g->map_len * sizeof *g->map +
            (size_t)g->cell_count * sizeof *g->cells + (size_t)g->ref_count * sizeof *g->refs +
-           grid_plane_count(g->frame.res) * sizeof(float) + accel_prim_store_bytes(&g->store);
+           grid_plane_count(g->frame.res) * sizeof(float) + accel_prim_store_bytes(&g->store) +
+           grid_cell_blocks_bytes(&g->blocks);
+}
+
+/* cells=blocks: the cells' reference lists (contiguous, in cell order:
+ * flatten) as blocks of 8 triangles, through the regular grid's builder. */
+static int build_blocks(igrid_accel *g, double max_bytes, accel_error *err)
+{
+    grid_cells view = {0};
+    view.offsets = malloc(((size_t)g->cell_count + 1) * sizeof *view.offsets);
+    if (!view.offsets)
+        return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory for the blocks");
+    for (uint32_t c = 0; c < g->cell_count; c++) view.offsets[c] = g->cells[c].begin;
+    view.offsets[g->cell_count] = (uint32_t)g->ref_count;
+    view.refs = g->refs;
+    view.cell_count = g->cell_count;
+    view.ref_count = g->ref_count;
+    int rc = grid_cell_blocks_build(&view, &g->store.prims, max_bytes, &g->blocks, err);
+    free(view.offsets);
+    if (rc && err && !strncmp(err->msg, "grid: ", 6)) {
+        char inner[sizeof err->msg];
+        snprintf(inner, sizeof inner, "%s", err->msg + 6);
+        accel_fail(err, rc, "irregular_grid: %s", inner);
+    }
+    return rc;
 }
 
 static int igrid_build(const accel_scene *scene, const accel_params *params, int threads,
@@ -515,8 +540,12 @@ static int igrid_build(const accel_scene *scene, const accel_params *params, int
     igrid_accel *g = calloc(1, sizeof *g);
     if (!g) return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory");
     g->naive = params->naive;
-    g->mailbox = spec->mailbox != 0;
     g->has_spheres = scene->sphere_count > 0;
+    /* Blocks where the block test applies (triangles, the watertight
+     * test); a block is tested whole, so they have no mailbox and are
+     * traced by the mailbox=0 kernel copies only (igrid_trace.c). */
+    const int use_blocks = spec->cells == 1 && !g->naive && !g->has_spheres;
+    g->mailbox = spec->mailbox != 0 && !use_blocks;
     igrid_bcells b;
     memset(&b, 0, sizeof b);
     int rc = accel_prim_store_build(scene, params->reorder, &g->store, err);
@@ -528,12 +557,14 @@ static int igrid_build(const accel_scene *scene, const accel_params *params, int
         if (!rc) rc = flatten(g, &b, err);
     }
     igrid_bcells_free(&b);
+    if (!rc && use_blocks) rc = build_blocks(g, max_bytes, err);
     if (!rc && (double)igrid_memory(g) - accel_prim_store_bytes(&g->store) > max_bytes)
         rc = accel_fail(err, ACCEL_ERR_RANGE,
-                        "irregular_grid: %.1f MiB of cells, references and map, above the limit of "
-                        "%.1f MiB (lower sub_lambda or max_depth, or raise max_mb)",
+                        "irregular_grid: %.1f MiB of cells, references%s and map, above the "
+                        "limit of %.1f MiB (lower sub_lambda or max_depth, or raise max_mb%s)",
                         ((double)igrid_memory(g) - accel_prim_store_bytes(&g->store)) / 1048576.0,
-                        max_bytes / 1048576.0);
+                        use_blocks ? ", blocks" : "", max_bytes / 1048576.0,
+                        use_blocks ? ", or cells=ids" : "");
     if (rc) {
         igrid_destroy(g);
         return rc;
@@ -546,6 +577,7 @@ static int igrid_build(const accel_scene *scene, const accel_params *params, int
     stats->refs = g->ref_count;
     stats->sah_cost = NAN;
     stats->depth = g->shift + 1;
+    stats->test_lanes = g->blocks.blocks ? 8 : 0;
     for (int a = 0; a < 3; a++) stats->res[a] = g->top_res[a];
     *out = g;
     return ACCEL_OK;
@@ -568,7 +600,9 @@ void igrid_get_view(const void *accel, igrid_view *v)
 }
 
 /* The suites run each: defaults, each step alone and each left out, a
- * single top cell, a fine top grid, deep octrees, no mailbox. */
+ * single top cell, a fine top grid, deep octrees, no mailbox; and the
+ * cells as blocks on the default, the octree's own cells (unmerged,
+ * unexpanded) and a fine top grid. */
 static const char *const igrid_variants[] = {
     "",
     "subdivide=0,merge=0,expand=0",
@@ -581,6 +615,9 @@ static const char *const igrid_variants[] = {
     "top_lambda=2,max_depth=2",
     "sub_lambda=20,max_depth=8,expand=1",
     "mailbox=0",
+    "cells=blocks",
+    "cells=blocks,merge=0,expand=0",
+    "cells=blocks,top_lambda=2,max_depth=2",
     NULL,
 };
 

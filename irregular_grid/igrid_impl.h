@@ -17,10 +17,10 @@ extern "C" {
  * the table's list (split: adaptive 0, cell 1). */
 typedef struct {
     double top_lambda, sub_lambda, split_ratio, alpha, ct, max_mb;
-    int max_depth, split, subdivide, split_min, merge, expand, mailbox;
+    int max_depth, split, subdivide, split_min, merge, expand, mailbox, cells;
 } igrid_spec;
 
-#define IGRID_PARAM_COUNT 13
+#define IGRID_PARAM_COUNT 14
 extern const accel_param_def igrid_params[IGRID_PARAM_COUNT];
 
 typedef struct {
@@ -35,6 +35,11 @@ typedef struct {
     uint32_t cell_count;
     uint32_t *refs;
     uint64_t ref_count;
+    /* cells=blocks (triangles, the watertight test): cell c's references
+     * copied 8 to a block into blocks.blocks[blocks.offsets[c] ..
+     * blocks.offsets[c + 1]) for the shared block test (grid/grid_blocks.h);
+     * offsets NULL when not built. */
+    grid_cell_blocks blocks;
     uint64_t step_bound; /* most cells one ray can visit: voxels per axis summed, + 3 */
     int naive, mailbox, has_spheres;
 } igrid_accel;

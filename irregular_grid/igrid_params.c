@@ -72,4 +72,9 @@ const accel_param_def igrid_params[IGRID_PARAM_COUNT] = {
     {.key = "max_mb", .type = ACCEL_PARAM_FLOAT, .def = "4096", .min = 1.0, .max = 1048576.0,
      .help = "memory limit for cells, references and voxel map, MiB: larger builds are refused",
      .offset = offsetof(igrid_spec, max_mb)},
+    {.key = "cells", .type = ACCEL_PARAM_ENUM, .def = "ids", .choices = "ids|blocks",
+     .help = "what a cell holds: ids (a list of primitive ids, tested one by one through the "
+             "mailbox) or blocks (its triangles copied 8 to a block, tested 8 at a time by the "
+             "block test the wide BVH and the grid use; no mailbox); spheres and tri=naive use ids",
+     .offset = offsetof(igrid_spec, cells)},
 };

@@ -32,9 +32,16 @@
  * visits at most nx+ny+nz+3 cells of the lattice (the counted runs' bound).
  *
  * Step 2 is grid_core.h's cell visit, the regular grid's: the same per-ray
- * mailbox, on the stack.
+ * mailbox, on the stack. With cells=blocks it is the regular grid's block
+ * visit (grid/grid_blocks.h): the cell's triangles 8 at a time with the
+ * shared block test, no mailbox (a triangle met again in a later cell is
+ * tested again and gives the same hit), the nearest hit kept as above, so
+ * the stopping rule and its argument stand unchanged. Blocks are traced by
+ * the mailbox=0 copies only (igrid_build.c), the other copies never
+ * compile the block test.
  */
 #include "core/variant.h"
+#include "grid/grid_blocks.h"
 #include "igrid_impl.h"
 
 /* Distance at which the ray leaves box [lo, hi) on axis a (+inf on an axis
@@ -88,6 +95,8 @@ igrid_kernel(const igrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
     const igrid_cell *cells = g->cells;
     const uint32_t *refs = g->refs, *map = g->map;
     const int shift = g->shift;
+    const grid_cell_blocks *blocks =
+        !naive && !spheres && !mailbox && g->blocks.offsets ? &g->blocks : NULL;
     for (size_t i = 0; i < count; i++) {
         accel_ray_prep p;
         accel_hit h = accel_hit_miss();
@@ -97,6 +106,8 @@ igrid_kernel(const igrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
             grid_dda_init(&d, f, &p, p.t_near);
             uint32_t mail[GRID_MAILBOX];
             if (mailbox) grid_mailbox_clear(mail);
+            wide_leaf_ray_8 lr; /* a few broadcasts: set always, used by blocks */
+            leaf_setup_8(&lr, &p);
             float t = p.t_far, u = 0.0f, v = 0.0f;
             for (;;) {
                 if (c) steps++;
@@ -107,9 +118,18 @@ igrid_kernel(const igrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8
                 /* 2. Its primitives. */
                 uint32_t k = cell->begin, end = cell->end;
                 if (c && k == end) empty++;
-                if (grid_cell_hit(s, refs + k, end - k, &p, &h, &t, &u, &v, mail, &tests, &skips,
-                                  c, occ != NULL, naive, spheres, mailbox))
+                if (blocks) {
+                    /* Cell ids index the blocks' offsets (cells are
+                     * numbered as their lists lie in refs). */
+                    const uint32_t cid = (uint32_t)(cell - cells);
+                    if (c) tests += end - k;
+                    if (k != end && grid_cell_hit_blocks(blocks, cid, s->tri_count, &lr, &p, &h,
+                                                         &t, &u, &v, occ != NULL))
+                        goto done;
+                } else if (grid_cell_hit(s, refs + k, end - k, &p, &h, &t, &u, &v, mail, &tests,
+                                         &skips, c, occ != NULL, naive, spheres, mailbox)) {
                     goto done;
+                }
                 /* 3. Where the ray leaves the exit box. */
                 double t0 = exit_t(&d, f, 0, cell), t1 = exit_t(&d, f, 1, cell);
                 double t2 = exit_t(&d, f, 2, cell);

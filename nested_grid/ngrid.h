@@ -33,6 +33,10 @@
  *               one reference array; ngrid_compact.c)
  *   traverse    single | packet (64-ray coherent grid traversal through every
  *               level, ngrid_packet.c)
+ *   cells       ids | blocks: a leaf cell's list tested id by id, or its
+ *               triangles copied 8 to a block for the shared block test
+ *               (layout=words; single rays without the mailbox, packets
+ *               with theirs)
  *   tri         watertight | naive (common to all kinds)
  */
 #ifndef NESTED_GRID_NGRID_H
@@ -58,6 +62,19 @@ extern "C" {
  * against its counters on this machine (calibration in README.md). */
 #define NGRID_DEFAULT_C_STEP 7
 #define NGRID_DEFAULT_C_ISECT 13
+/* The cost of one triangle test when leaf cells hold blocks
+ * (cells=blocks: 8 triangles per block test), ns per triangle: what auto
+ * mode prices a test at there when c_isect is not given. Not fitted on
+ * this kernel: taken from the report's step-cost table, where the 8-wide
+ * BVH's leaf blocks (the same block test) cost 1.2-1.7 ns per triangle,
+ * rounded up for the padded lanes of a cell's last block. A block cell
+ * is priced per triangle, linear in n (a cell of 1..8 triangles really
+ * costs one block); refit with the step-cost experiment before trusting
+ * its choices. The non-auto densities (lambda, sub_lambda, threshold)
+ * stay the per-id defaults with blocks: by this price a leaf of blocks
+ * breaks even with a sub-grid at about 13/2 times the triangles, so
+ * threshold would rise towards 64 (8 blocks); unmeasured, not changed. */
+#define NGRID_BLOCKS_C_ISECT 2
 
 extern const accel_kind accel_kind_nested_grid;
 

@@ -82,7 +82,8 @@ static const accel_param_def ngrid_params[] = {
      .offset = offsetof(ngrid_spec, c_step)},
     {.key = "c_isect", .type = ACCEL_PARAM_FLOAT, .def = STR(NGRID_DEFAULT_C_ISECT),
      .min = 1e-3, .max = 1e6,
-     .help = "auto: cost of one primitive test, ns",
+     .help = "auto: cost of one primitive test, ns (not given: " STR(NGRID_DEFAULT_C_ISECT)
+             ", or " STR(NGRID_BLOCKS_C_ISECT) " per triangle where leaf cells hold blocks)",
      .offset = offsetof(ngrid_spec, c_isect)},
     {.key = "overlap", .type = ACCEL_PARAM_ENUM, .def = "exact", .choices = "exact|bbox",
      .help = "cell membership: exact primitive/box overlap, or bounding box only",
@@ -105,10 +106,10 @@ static const accel_param_def ngrid_params[] = {
              "rays (8x8 tiles) slice by slice through every level, as grid:traverse=packet",
      .offset = offsetof(ngrid_spec, traverse)},
     {.key = "cells", .type = ACCEL_PARAM_ENUM, .def = "ids", .choices = "ids|blocks",
-     .help = "what a leaf cell holds for single rays with layout=words: ids (tested one by one) "
-             "or blocks (its triangles copied 8 to a block, tested 8 at a time by the block "
-             "test the wide BVH uses; the levels' cost model is still priced for ids, so ids "
-             "stay the default); packets, layout=compact, spheres and tri=naive use ids",
+     .help = "what a leaf cell holds with layout=words, single rays and packets: ids (tested "
+             "one by one) or blocks (its triangles copied 8 to a block, tested 8 at a time by "
+             "the block test the wide BVH uses; the levels' cost model is still priced for ids, "
+             "so ids stay the default); layout=compact, spheres and tri=naive use ids",
      .offset = offsetof(ngrid_spec, cells)},
 };
 
@@ -308,6 +309,12 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
     b.threshold = (uint32_t)spec->threshold;
     b.costs.c_step = spec->c_step;
     b.costs.c_isect = spec->c_isect;
+    /* cells=blocks where the block test applies: auto mode prices a test
+     * at the block test's cost per triangle unless c_isect is given
+     * (NGRID_BLOCKS_C_ISECT, ngrid.h: not fitted on this kernel). */
+    const int blocks = spec->cells == 1 && spec->layout != 1 && !params->naive &&
+                       scene->sphere_count == 0;
+    if (blocks && !ACCEL_GIVEN(params, ngrid_spec, c_isect)) b.costs.c_isect = NGRID_BLOCKS_C_ISECT;
     b.max_bytes = spec->max_mb * 1048576.0;
     const int compact = spec->layout == 1;
     if (compact) {
@@ -349,18 +356,19 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
     }
     if (!rc) {
         g->naive = params->naive;
-        /* lists as blocks have no mailbox: traced by the mailbox=0 copies */
-        g->mailbox = spec->mailbox != 0 && !(spec->cells == 1 && !compact && spec->traverse != 1 &&
-                                             !params->naive && scene->sphere_count == 0);
+        /* lists as blocks have no mailbox in single rays: traced by the
+         * mailbox=0 copies; a packet's mailbox pays with blocks too */
+        g->mailbox = spec->mailbox != 0 &&
+                     !(spec->cells == 1 && !compact && !params->naive && scene->sphere_count == 0);
+        g->packet_mailbox = spec->mailbox != 0;
         g->traverse = spec->traverse == 1 ? NGRID_TRAVERSE_PACKET : NGRID_TRAVERSE_SINGLE;
         g->has_spheres = scene->sphere_count > 0;
         rc = flatten(&b, g, err);
     }
     if (!rc && compact) rc = ngrid_compact_build(g, b.max_bytes, err);
-    /* cells=blocks where the block test applies (layout=words, single rays,
-     * triangles, the watertight test). */
-    if (!rc && !compact && spec->cells == 1 && g->traverse == NGRID_TRAVERSE_SINGLE && !g->naive &&
-        !g->has_spheres)
+    /* cells=blocks where the block test applies (layout=words, single rays
+     * and packets, triangles, the watertight test). */
+    if (!rc && !compact && spec->cells == 1 && !g->naive && !g->has_spheres)
         rc = grid_list_blocks_build(g->lists, g->list_len, scene, b.max_bytes,
                                     &g->blocks, err);
     builder_free(&b);
@@ -449,7 +457,8 @@ static const char *const ngrid_variants[] = {
     "traverse=packet", "traverse=packet,threshold=1,depth=4,sub_res=3",
     "traverse=packet,mailbox=0", "traverse=packet,tri=naive", "traverse=packet,layout=compact",
     "traverse=packet,threshold=2,sub_res=24", "cells=blocks", "cells=blocks,threshold=1,depth=4,sub_res=3",
-    NULL,
+    "traverse=packet,cells=blocks", "traverse=packet,cells=blocks,threshold=1,depth=4,sub_res=3",
+    "traverse=packet,cells=blocks,mailbox=0", NULL,
 };
 
 const accel_kind accel_kind_nested_grid = {

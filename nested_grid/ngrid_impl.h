@@ -58,7 +58,8 @@ typedef struct {
     uint64_t leaf_count; /* cells holding a non-empty primitive list */
     uint64_t step_bound; /* most cells (all levels) one ray can visit */
     int levels;
-    int naive, mailbox, has_spheres;
+    int naive, mailbox, has_spheres; /* mailbox: the single-ray walks' (off with blocks) */
+    int packet_mailbox;     /* traverse=packet: the packets' mailbox (mailbox=1) */
     int traverse;           /* NGRID_TRAVERSE_SINGLE / NGRID_TRAVERSE_PACKET */
     ngrid_compact *compact; /* layout=compact: the only arrays kept (nodes etc. freed) */
     grid_list_blocks blocks; /* cells=blocks: the lists as blocks (first NULL: not built) */
@@ -185,6 +186,13 @@ enum { NGRID_TRAVERSE_SINGLE = 0, NGRID_TRAVERSE_PACKET = 1 };
 static inline unsigned ngrid_flags(const ngrid_accel *g)
 {
     return accel_variant_flags(g->naive, g->has_spheres, g->mailbox);
+}
+
+/* The packet walk's flags: its own mailbox switch (a packet's mailbox
+ * pays with blocks too; the single-ray walk's does not). */
+static inline unsigned ngrid_packet_flags(const ngrid_accel *g)
+{
+    return accel_variant_flags(g->naive, g->has_spheres, g->packet_mailbox);
 }
 
 /* The single-ray walks of either layout (ngrid_trace.c; the compact

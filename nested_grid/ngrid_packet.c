@@ -7,7 +7,9 @@
  * The packet (grid_packet_setup over the top grid) walks the top grid slice
  * by slice along its axis K. In each top slice, the cells of the slice's
  * range are visited: a cell holding a list has it tested against the packet
- * as in the regular grid (mailbox, slice cull, 4-ray filter, exact tests);
+ * as in the regular grid (mailbox, slice cull, 4-ray filter, exact tests;
+ * with cells=blocks the list's blocks, grid_packet_test_blocks, the
+ * block test for the rays a triangle of a block kept);
  * a cell holding a sub-grid has the sub-grid walked slice by slice along the
  * same axis and direction (its slices subdivide the top slice: its box is
  * the top cell's, bounded by the top grid's own planes), each sub-slice with
@@ -59,6 +61,7 @@ typedef struct {
     grid_packet_count *cn;
     accel_counters *c;
     uint32_t *mail;
+    const grid_list_blocks *blocks; /* cells=blocks: the lists as blocks, else NULL */
     double w_max; /* at least every active ray's w_end */
     uint64_t visits, budget; /* cells visited by this packet, and the most it may visit */
     int aborted;             /* the budget ran out: the active rays go to the single-ray walk */
@@ -161,7 +164,12 @@ static int visit_cells(nwalk *w, const grid_frame *f, const ngrid_node *node, co
                 continue;
             }
             const uint32_t *list = w->g->lists + word;
-            if (!test_list(w, list + 1, list[0], hull)) return 0;
+            if (w->blocks ? !grid_packet_test_blocks(w->pk, w->cn, w->c, w->mail,
+                                                     w->blocks->blocks, w->blocks->first[word],
+                                                     list[0], w->s->tri_count, hull, w->mailbox,
+                                                     w->any_hit)
+                          : !test_list(w, list + 1, list[0], hull))
+                return 0;
         }
     }
     return 1;
@@ -313,8 +321,11 @@ npacket_batch(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint
     grid_packet_count cn;
     uint32_t mail[GRID_PACKET_MAIL];
     const grid_frame *top = g->compact ? &g->compact->top : &g->nodes[0].frame;
-    nwalk w = {g, &g->store.prims, &pk, &cn, c, mail, 0.0, 0, 0, 0, naive, spheres, mailbox,
-               occ != NULL};
+    /* cells=blocks (layout=words): built for triangles with the watertight
+     * test only. */
+    const grid_list_blocks *blocks = !naive && !spheres && g->blocks.first ? &g->blocks : NULL;
+    nwalk w = {g, &g->store.prims, &pk, &cn, c, mail, blocks, 0.0, 0, 0, 0, naive, spheres,
+               mailbox, occ != NULL};
     for (size_t base = 0; base < count; base += P) {
         const uint32_t n = (uint32_t)(count - base < P ? count - base : P);
         for (size_t i = base + P; i < base + 2 * P && i < count; i += 2)
@@ -352,5 +363,5 @@ ACCEL_KERNEL_PAIR(npacket, npacket_batch)
  * back to the single-ray nested grid in npacket_batch, on the walk's
  * criterion. */
 ACCEL_COHERENT_ENTRIES(ngrid_packet_intersect, ngrid_packet_occluded, const ngrid_accel,
-                       npacket_hit_table, npacket_occ_table, ngrid_flags,
+                       npacket_hit_table, npacket_occ_table, ngrid_packet_flags,
                        (accel_hit_batch_fn)NULL, (accel_occ_batch_fn)NULL)

@@ -196,7 +196,10 @@ TEST(grid_packet_far_from_origin)
 }
 
 /* Primary rays of a closed mesh: the same hits as the single-ray grid with
- * far fewer exact primitive tests per ray. */
+ * far fewer exact primitive tests per ray: with ids (a test per ray and
+ * triangle the filter keeps) a quarter; with blocks (a block test of 8
+ * lanes per ray some triangle of the block kept, counted as its real
+ * lanes) a half. */
 TEST(grid_packet_fewer_tests_than_single_rays)
 {
     accel_scene s;
@@ -204,38 +207,45 @@ TEST(grid_packet_fewer_tests_than_single_rays)
     CHECK(scene_create("sphere:segments=48", &s, &err) == 0);
     rays_set r;
     CHECK(rays_primary(&s.camera, 128, 128, &r, &err) == 0);
-    const char *specs[2] = {"grid:cells=ids", "grid:traverse=packet"}; /* packets test ids */
-    accel_hit *h[2];
-    accel_counters c[2];
-    for (int i = 0; i < 2; i++) {
-        const accel_kind *k;
-        void *a;
-        accel_build_stats st;
-        CHECK(accel_build_spec(specs[i], &s, 1, &k, &a, &st, &err) == 0);
-        h[i] = malloc(r.count * sizeof *h[i]);
-        memset(&c[i], 0, sizeof c[i]);
-        accel_trace(k, a, r.rays, h[i], r.count, 1, &c[i]);
-        k->destroy(a);
+    static const char *const pairs[2][2] = {{"grid:cells=ids", "grid:traverse=packet,cells=ids"},
+                                            {"grid:lambda=8", "grid:traverse=packet"}};
+    static const int factor[2] = {4, 2};
+    for (int p = 0; p < 2; p++) {
+        accel_hit *h[2];
+        accel_counters c[2];
+        for (int i = 0; i < 2; i++) {
+            const accel_kind *k;
+            void *a;
+            accel_build_stats st;
+            CHECK(accel_build_spec(pairs[p][i], &s, 1, &k, &a, &st, &err) == 0);
+            h[i] = malloc(r.count * sizeof *h[i]);
+            memset(&c[i], 0, sizeof c[i]);
+            accel_trace(k, a, r.rays, h[i], r.count, 1, &c[i]);
+            k->destroy(a);
+        }
+        size_t agree = 0, hit = 0;
+        for (size_t i = 0; i < r.count; i++) {
+            agree += hits_agree(&s, &r.rays[i], &h[0][i], &h[1][i]);
+            hit += h[0][i].prim != ACCEL_MISS;
+        }
+        CHECKF(agree == r.count, "%s: %zu of %zu primary hits differ", pairs[p][1],
+               r.count - agree, r.count);
+        CHECK(hit > r.count / 10);
+        CHECKF(c[1].prim_tests * (uint64_t)factor[p] < c[0].prim_tests && c[1].prim_tests >= hit,
+               "%s: exact tests: packet %llu, single %llu, hits %zu", pairs[p][1],
+               (unsigned long long)c[1].prim_tests, (unsigned long long)c[0].prim_tests, hit);
+        CHECK(c[0].packet_box_tests == 0 && c[1].packet_box_tests > 0);
+        CHECK(c[1].steps > 0 && c[1].box_tests == r.count);
+        for (int i = 0; i < 2; i++) free(h[i]);
     }
-    size_t agree = 0, hit = 0;
-    for (size_t i = 0; i < r.count; i++) {
-        agree += hits_agree(&s, &r.rays[i], &h[0][i], &h[1][i]);
-        hit += h[0][i].prim != ACCEL_MISS;
-    }
-    CHECKF(agree == r.count, "%zu of %zu primary hits differ", r.count - agree, r.count);
-    CHECK(hit > r.count / 10);
-    CHECKF(c[1].prim_tests * 4 < c[0].prim_tests && c[1].prim_tests >= hit,
-           "exact tests: packet %llu, single %llu, hits %zu", (unsigned long long)c[1].prim_tests,
-           (unsigned long long)c[0].prim_tests, hit);
-    CHECK(c[0].packet_box_tests == 0 && c[1].packet_box_tests > 0);
-    CHECK(c[1].steps > 0 && c[1].box_tests == r.count);
-    for (int i = 0; i < 2; i++) free(h[i]);
     rays_free(&r);
     scene_free(&s);
 }
 
 /* Packets with mixed direction signs (diffuse-like) go to the single-ray
- * kernel: byte-identical hits, no filter evaluated. */
+ * kernel: byte-identical hits, no filter evaluated; on blocks the
+ * single-ray kernel is the block grid's (no mailbox, at the packets'
+ * lambda 8), on ids the per-id grid's. */
 TEST(grid_packet_incoherent_packets_fall_back)
 {
     accel_scene s;
@@ -252,28 +262,36 @@ TEST(grid_packet_incoherent_packets_fall_back)
         accel_ray r = {c.x, c.y, c.z, 0.0f, d[0], d[1], d[2], INFINITY};
         rays[i] = r;
     }
-    accel_hit *h[2];
-    accel_counters cn[2];
-    const char *specs[2] = {"grid:cells=ids", "grid:traverse=packet"}; /* packets test ids */
+    static const char *const pairs[2][2] = {{"grid:cells=ids", "grid:traverse=packet,cells=ids"},
+                                            {"grid:lambda=8", "grid:traverse=packet"}};
     /* the packets as given: sorted (core/coherence.h), these rays make
      * coherent packets that walk */
     const int order = accel_coherence_get();
     accel_coherence_set(ACCEL_ORDER_KEEP);
-    for (int i = 0; i < 2; i++) {
-        const accel_kind *k;
-        void *a;
-        accel_build_stats st;
-        CHECK(accel_build_spec(specs[i], &s, 1, &k, &a, &st, &err) == 0);
-        h[i] = malloc(n * sizeof *h[i]);
-        memset(&cn[i], 0, sizeof cn[i]);
-        accel_trace(k, a, rays, h[i], n, 1, &cn[i]);
-        k->destroy(a);
+    for (int p = 0; p < 2; p++) {
+        accel_hit *h[2];
+        accel_counters cn[2];
+        const char *const *specs = pairs[p];
+        for (int i = 0; i < 2; i++) {
+            const accel_kind *k;
+            void *a;
+            accel_build_stats st;
+            CHECK(accel_build_spec(specs[i], &s, 1, &k, &a, &st, &err) == 0);
+            h[i] = malloc(n * sizeof *h[i]);
+            memset(&cn[i], 0, sizeof cn[i]);
+            accel_trace(k, a, rays, h[i], n, 1, &cn[i]);
+            k->destroy(a);
+        }
+        CHECKF(memcmp(h[0], h[1], n * sizeof *h[0]) == 0, "%s: hits differ", specs[1]);
+        CHECKF(cn[1].packet_box_tests == 0, "%s: a packet walked", specs[1]);
+        CHECKF(cn[0].steps == cn[1].steps && cn[0].prim_tests == cn[1].prim_tests && cn[1].rays == n &&
+                   cn[1].mailbox_skips == cn[0].mailbox_skips,
+               "%s: steps %llu/%llu, tests %llu/%llu", specs[1], (unsigned long long)cn[0].steps,
+               (unsigned long long)cn[1].steps, (unsigned long long)cn[0].prim_tests,
+               (unsigned long long)cn[1].prim_tests);
+        for (int i = 0; i < 2; i++) free(h[i]);
     }
     accel_coherence_set(order);
-    CHECK(memcmp(h[0], h[1], n * sizeof *h[0]) == 0);
-    CHECK(cn[1].packet_box_tests == 0);
-    CHECK(cn[0].steps == cn[1].steps && cn[0].prim_tests == cn[1].prim_tests && cn[1].rays == n);
-    for (int i = 0; i < 2; i++) free(h[i]);
     free(rays);
     scene_free(&s);
 }

@@ -467,6 +467,7 @@ TEST(igrid_paper_thin_against_reference)
             accel_reference_trace(&s, sets[k]->rays, r, sets[k]->count, 1);
             check_answers(&s, "irregular_grid", sets[k]->rays, sets[k]->count, r);
             check_answers(&s, "irregular_grid:merge=0,expand=0", sets[k]->rays, sets[k]->count, r);
+            check_answers(&s, "irregular_grid:cells=blocks", sets[k]->rays, sets[k]->count, r);
             free(r);
         }
         free(ref);

@@ -135,3 +135,50 @@ TEST(ngrid_auto_follows_costs)
     test_rays_free(&r);
     scene_free(&s);
 }
+
+/* cells=blocks prices a test at NGRID_BLOCKS_C_ISECT unless c_isect is
+ * given: with c_isect=13 written out the block build has the per-id
+ * build's structure exactly; without it, cheaper tests make no finer a
+ * structure (no more cells, no more levels) than the per-id default; a
+ * scene with spheres (no blocks) keeps the per-id price. */
+TEST(ngrid_auto_blocks_price_their_test)
+{
+    accel_scene s;
+    if (!test_ngrid_cluster_scene(&s, 4000, 0)) return;
+    static const char *const specs[3] = {"nested_grid:auto", "nested_grid:auto,cells=blocks,c_isect=13",
+                                         "nested_grid:auto,cells=blocks"};
+    accel_build_stats st[3];
+    accel_error err = {0};
+    for (int i = 0; i < 3; i++) {
+        void *a;
+        int ok = test_ngrid_build(specs[i], &s, 1, &a, &st[i], &err) == 0;
+        CHECKF(ok, "%s: %s", specs[i], err.msg);
+        if (!ok) {
+            scene_free(&s);
+            return;
+        }
+        accel_kind_nested_grid.destroy(a);
+    }
+    CHECKF(st[1].nodes == st[0].nodes && st[1].refs == st[0].refs && st[1].depth == st[0].depth &&
+               !memcmp(st[1].res, st[0].res, sizeof st[0].res),
+           "c_isect=13 on blocks: %llu cells, %llu refs, depth %d; ids %llu, %llu, %d",
+           (unsigned long long)st[1].nodes, (unsigned long long)st[1].refs, st[1].depth,
+           (unsigned long long)st[0].nodes, (unsigned long long)st[0].refs, st[0].depth);
+    CHECKF(st[2].nodes < st[0].nodes && st[2].depth <= st[0].depth,
+           "blocks' price: %llu cells, depth %d; ids %llu cells, depth %d",
+           (unsigned long long)st[2].nodes, st[2].depth, (unsigned long long)st[0].nodes,
+           st[0].depth);
+    scene_free(&s);
+    /* Spheres: no blocks, so the per-id price and the per-id structure. */
+    if (!test_ngrid_cluster_scene(&s, 2000, 50)) return;
+    for (int i = 0; i < 3; i += 2) {
+        void *a;
+        int ok = test_ngrid_build(specs[i], &s, 1, &a, &st[i], &err) == 0;
+        CHECKF(ok, "%s with spheres: %s", specs[i], err.msg);
+        if (ok) accel_kind_nested_grid.destroy(a);
+    }
+    CHECKF(st[2].nodes == st[0].nodes && st[2].refs == st[0].refs,
+           "with spheres: blocks %llu cells, ids %llu", (unsigned long long)st[2].nodes,
+           (unsigned long long)st[0].nodes);
+    scene_free(&s);
+}
