@@ -6,7 +6,7 @@
  * node, the entry cull at a pop, the affine triangle cull of rays that
  * share their origin, and the watertight test's float path on 8 rays.
  * Each computes, lane by lane, the very float operations of
- * the single-ray code it stands for (inst_wide.h, core/prim.h), so the
+ * the single-ray code it stands for (inst_ray.h, core/prim.h), so the
  * packets' answers are the single-ray walk's, bit for bit.
  */
 #ifndef INSTANCED_INST_PACKET_H
@@ -17,7 +17,7 @@
 #include "core/prim.h"
 #include "inst_impl.h"
 #include "inst_ray.h"
-#include "inst_wide.h"
+#include "bvh/wide/node.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -99,14 +99,14 @@ INST_INLINE __m256 ip_lanes(unsigned m)
 
 /* Rays of group g (candidates m) whose range meets child c's box grown by
  * their pads; *entry lowered to the smallest entry among them (lane-wise:
- * the caller reduces it). Lane by lane inst_wide_hits (inst_wide.h) on
- * that ray. */
+ * the caller reduces it). Lane by lane the single-ray walk's box3_slab on the box grown
+ * by that ray's pad (a conservative test, as the single walk's). */
 #if INST_WIDE_AVX
 typedef __m256 ip_entries;
 #else
 typedef float ip_entries;
 #endif
-INST_INLINE unsigned ip_group(const ip_view *v, const inst_wnode *n, unsigned c, unsigned g,
+INST_INLINE unsigned ip_group(const ip_view *v, const wide_node8 *n, unsigned c, unsigned g,
                               unsigned m, ip_entries *entry)
 {
     const unsigned r = 8 * g;
@@ -166,21 +166,21 @@ INST_INLINE float ip_entry_min(ip_entries e)
 }
 
 /* Slots of node n that hold a child. */
-INST_INLINE unsigned ip_children(const inst_wnode *n)
+INST_INLINE unsigned ip_children(const wide_node8 *n)
 {
 #if INST_WIDE_AVX
     __m256i none = _mm256_cmpeq_epi32(_mm256_load_si256((const __m256i *)n->child),
-                                      _mm256_set1_epi32((int)INST_WIDE_NONE));
+                                      _mm256_set1_epi32((int)WIDE_EMPTY));
     return ~(unsigned)_mm256_movemask_ps(_mm256_castsi256_ps(none)) & 0xFFu;
 #else
     unsigned cand = 0;
-    for (unsigned c = 0; c < INST_WIDE; c++) cand |= (unsigned)(n->child[c] != INST_WIDE_NONE) << c;
+    for (unsigned c = 0; c < INST_WIDE; c++) cand |= (unsigned)(n->child[c] != WIDE_EMPTY) << c;
     return cand;
 #endif
 }
 
 /* Children some ray of the view may hit (the frustum test, see above). */
-INST_INLINE unsigned ip_frustum(const ip_view *v, const inst_wnode *n)
+INST_INLINE unsigned ip_frustum(const ip_view *v, const wide_node8 *n)
 {
 #if INST_WIDE_AVX
     __m256 t0 = _mm256_set1_ps(v->t_lo), t1 = _mm256_set1_ps(v->t_hi);
