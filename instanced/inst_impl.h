@@ -128,6 +128,7 @@ typedef struct {
     int leaf;                 /* bottom=bvh: largest leaf */
     int width;                /* BVH levels walked as the binary tree (2) or 8-wide (8) */
     int packets;              /* traverse=packet (inst_packet.c) */
+    int isa;                  /* ACCEL_ISA_AVX2 or _AVX512 (core/isa.h): the single-ray unit that runs */
     double lambda, top_lambda;
     uint32_t bottom_count, item_count;
     inst_bottom *bottoms;
@@ -156,7 +157,15 @@ int inst_update(void *a, const accel_scene *scene, int refit, accel_update_stats
                 accel_error *err);
 
 /* The kind's entries (inst_packet.c): packets with traverse=packet, else
- * ray by ray (inst_trace.c). */
+ * ray by ray (kernels/k8_trace.c, in the structure's ISA: inst_single_*
+ * dispatch to its AVX2 or AVX-512 unit, inst_trace_*[_avx512]). */
+#define INST_TRACE_ENTRIES(sfx)                                                                     \
+    void inst_trace_intersect##sfx(const void *a, const accel_ray *rays, accel_hit *hits, size_t n,  \
+                                   accel_counters *c);                                             \
+    void inst_trace_occluded##sfx(const void *a, const accel_ray *rays, uint8_t *occ, size_t n,      \
+                                  accel_counters *c);
+INST_TRACE_ENTRIES()
+INST_TRACE_ENTRIES(_avx512)
 void inst_intersect(const void *a, const accel_ray *rays, accel_hit *hits, size_t n,
                     accel_counters *c);
 void inst_occluded(const void *a, const accel_ray *rays, uint8_t *occ, size_t n,

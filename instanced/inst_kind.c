@@ -14,13 +14,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/isa.h"
 #include "inst_impl.h"
 #include "instanced.h"
 
 /* The kind's parameters as parsed, one field per key; choices hold their
  * position in the table's list (top: bvh 0, grid 1; world: compute 0, flat 1). */
 typedef struct {
-    int top, leaf, world, pad, width, traverse;
+    int top, leaf, world, pad, width, traverse, isa;
     double lambda, top_lambda;
     char bottom[ACCEL_PARAM_TEXT];
 } inst_spec;
@@ -61,6 +62,10 @@ static const accel_param_def inst_params[] = {
      .help = "grow bottom-level boxes by the flattening's rounding (0: exact object-space boxes, "
              "which miss world hits near edges: kept to show why the pad is needed)",
      .offset = offsetof(inst_spec, pad)},
+    {.key = "isa", .type = ACCEL_PARAM_ENUM, .def = "auto", .choices = ACCEL_ISA_CHOICES,
+     .help = "instruction set of the single-ray traversal (its wide node test is bvh/wide's): "
+             "auto (AVX-512 where the CPU and the build have it, or GRIDBVH_ISA), avx2, avx512",
+     .offset = offsetof(inst_spec, isa)},
 };
 #define INST_PARAM_COUNT (sizeof inst_params / sizeof inst_params[0])
 
@@ -405,6 +410,10 @@ int inst_build_with(const accel_scene *scene, const accel_params *params, int th
         return accel_fail(err, ACCEL_ERR_SPEC,
                           "instanced: traverse=packet needs top=bvh, bottom=bvh and width=8");
     }
+    if (accel_isa_resolve(spec->isa, &a->isa, err)) {
+        free(a);
+        return ACCEL_ERR_SPEC;
+    }
     a->lambda = spec->lambda;
     a->top_lambda = spec->top_lambda;
     const accel_instances *set = scene->instances;
@@ -427,6 +436,7 @@ int inst_build_with(const accel_scene *scene, const accel_params *params, int th
         return rc;
     }
     inst_fill_stats(a, stats);
+    stats->isa = accel_isa_label(a->isa);
     *out = a;
     return 0;
 }
@@ -453,7 +463,7 @@ int instanced_build_with_bottom(const accel_scene *scene, const char *kv, const 
 static const char *const inst_variants[] = {
     "", "top=grid", "bottom=grid", "top=grid,bottom=grid", "world=flat,leaf=1", "width=2",
     "bottom=bvh:width=8", "top=grid,bottom=nested_grid", "bottom=grid:", "traverse=packet",
-    "traverse=packet,world=flat,leaf=1", NULL,
+    "traverse=packet,world=flat,leaf=1", "isa=avx2", NULL,
 };
 
 const accel_kind accel_kind_instanced = {

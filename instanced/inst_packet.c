@@ -37,6 +37,7 @@
 #include <string.h>
 
 #include "core/coherence.h"
+#include "core/isa.h"
 #include "core/variant.h"
 #include "inst_packet.h"
 
@@ -263,6 +264,31 @@ static unsigned ip_flags(const inst_accel *a)
 
 ACCEL_COHERENT_ENTRIES(inst_packet_intersect, inst_packet_occluded, const void, ip_closest_table,
                        ip_any_table, ip_flags, inst_single_intersect, inst_single_occluded)
+
+/* The single-ray traversal in the structure's ISA (kernels/k8_trace.c). */
+void inst_single_intersect(const void *acc, const accel_ray *rays, accel_hit *hits, size_t n,
+                           accel_counters *c)
+{
+#ifdef GRIDBVH_AVX512
+    if (((const inst_accel *)acc)->isa == ACCEL_ISA_AVX512) {
+        inst_trace_intersect_avx512(acc, rays, hits, n, c);
+        return;
+    }
+#endif
+    inst_trace_intersect(acc, rays, hits, n, c);
+}
+
+void inst_single_occluded(const void *acc, const accel_ray *rays, uint8_t *occ, size_t n,
+                          accel_counters *c)
+{
+#ifdef GRIDBVH_AVX512
+    if (((const inst_accel *)acc)->isa == ACCEL_ISA_AVX512) {
+        inst_trace_occluded_avx512(acc, rays, occ, n, c);
+        return;
+    }
+#endif
+    inst_trace_occluded(acc, rays, occ, n, c);
+}
 
 void inst_intersect(const void *acc, const accel_ray *rays, accel_hit *hits, size_t n,
                     accel_counters *c)

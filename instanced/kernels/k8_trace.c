@@ -1,5 +1,11 @@
 /*
- * inst_trace.c - traversal of the `instanced` kind (see README.md).
+ * k8_trace.c - the single-ray traversal of the `instanced` kind (see
+ * README.md). A kernel unit (sources.mk's SLOW_SRC): compiled once for
+ * AVX2 and, where the build has ARCH512, once more for AVX-512 with
+ * WIDE_AVX512_UNIT (its entries then end in _avx512, bvh/wide/node.h's
+ * WIDE_UNIT), so that the wide node test and child order it shares with
+ * bvh/wide/ run in the ISA the structure was built for (inst_packet.c
+ * dispatches on inst_accel.isa).
  *
  * Per ray: the top level (BVH or grid over the instances' world bounds) is
  * walked in world space, nearest first. For each instance it reaches, the
@@ -25,8 +31,8 @@
 
 #include "core/prim.h"
 #include "core/variant.h"
-#include "inst_impl.h"
-#include "inst_ray.h"
+#include "instanced/inst_impl.h"
+#include "instanced/inst_ray.h"
 
 /* The wide BVH's node test and child order (bvh/wide/kernel.h, 8 wide;
  * its leaf test, core/block_test.h, comes with it but the leaves here are
@@ -568,5 +574,6 @@ static unsigned flags_of(const inst_accel *a)
     return accel_variant_flags(a->naive, a->spheres, 0);
 }
 
-ACCEL_KERNEL_ENTRIES(inst_single_intersect, inst_single_occluded, const void, inst_closest_table, inst_any_table,
-                     flags_of)
+#define INST_TRACE_HIT WIDE_UNIT(inst_trace_intersect)
+#define INST_TRACE_OCC WIDE_UNIT(inst_trace_occluded)
+ACCEL_KERNEL_ENTRIES(INST_TRACE_HIT, INST_TRACE_OCC, const void, inst_closest_table, inst_any_table, flags_of)
