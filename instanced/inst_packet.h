@@ -17,7 +17,12 @@
 #include "core/prim.h"
 #include "inst_impl.h"
 #include "inst_ray.h"
-#include "bvh/wide/node.h"
+/* bvh/wide/'s packet pieces (8 wide; its blocks of 8 come along unused). */
+#define WIDE_NW 8
+#define WIDE_LB 8
+#include "core/block_test.h"
+#include "bvh/wide/kernel.h"
+#include "bvh/wide/packet.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -179,31 +184,13 @@ INST_INLINE unsigned ip_children(const wide_node8 *n)
 #endif
 }
 
-/* Children some ray of the view may hit (the frustum test, see above). */
+/* Children some ray of the view may hit (the frustum test, see above):
+ * bvh/wide/packet.h's, with every box grown by the view's largest pad. */
 INST_INLINE unsigned ip_frustum(const ip_view *v, const wide_node8 *n)
 {
 #if INST_WIDE_AVX
-    __m256 t0 = _mm256_set1_ps(v->t_lo), t1 = _mm256_set1_ps(v->t_hi);
-    __m256 p = _mm256_set1_ps(v->pad_max);
-    for (int a = 0; a < 3; a++) {
-        __m256 lo = _mm256_sub_ps(_mm256_load_ps(n->box[2 * a]), p);
-        __m256 hi = _mm256_add_ps(_mm256_load_ps(n->box[2 * a + 1]), p);
-        int neg = v->octant >> a & 1;
-        __m256 nr = neg ? hi : lo, fr = neg ? lo : hi;
-        __m256 olo = _mm256_set1_ps(v->o_lo[a]), ohi = _mm256_set1_ps(v->o_hi[a]);
-        __m256 ilo = _mm256_set1_ps(v->i_lo[a]), ihi = _mm256_set1_ps(v->i_hi[a]);
-        __m256 d0 = _mm256_sub_ps(nr, ohi), d1 = _mm256_sub_ps(nr, olo);
-        __m256 e0 = _mm256_sub_ps(fr, ohi), e1 = _mm256_sub_ps(fr, olo);
-        __m256 l = _mm256_min_ps(_mm256_min_ps(_mm256_mul_ps(d0, ilo), _mm256_mul_ps(d0, ihi)),
-                                 _mm256_min_ps(_mm256_mul_ps(d1, ilo), _mm256_mul_ps(d1, ihi)));
-        __m256 h = _mm256_max_ps(_mm256_max_ps(_mm256_mul_ps(e0, ilo), _mm256_mul_ps(e0, ihi)),
-                                 _mm256_max_ps(_mm256_mul_ps(e1, ilo), _mm256_mul_ps(e1, ihi)));
-        t0 = _mm256_max_ps(l, t0);
-        t1 = _mm256_min_ps(h, t1);
-    }
-    __m256 abs1 = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), t1);
-    __m256 lim = _mm256_add_ps(t1, _mm256_mul_ps(abs1, _mm256_set1_ps(ACCEL_SLAB_PAD)));
-    return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(t0, lim, _CMP_LE_OQ));
+    return frustum_rows_8_8(v->octant, v->o_lo, v->o_hi, v->i_lo, v->i_hi, v->t_lo, v->t_hi, n->box[0],
+                            v->pad_max, 1);
 #else
     (void)v, (void)n;
     return 0xFFu;

@@ -181,15 +181,27 @@ WIDE_INLINE unsigned PK(last_hit)(const wide_packet *pk, unsigned first, unsigne
 }
 
 /* Children that some ray may hit, by interval arithmetic (see above). */
-WIDE_INLINE unsigned PK(frustum)(const wide_packet *pk, const float *rows)
+/* The same for any set of rays of one octant o: origins within [o_lo,
+ * o_hi], reciprocals within [i_lo, i_hi], ranges within [tn_min, t_max]
+ * (per axis), every box grown by pad on every side when padded (the near
+ * plane moved by -pad where the octant's direction is positive, +pad where
+ * negative, the far plane the other way: lo - pad and hi + pad in float).
+ * bvh/wide's own packets pass padded = 0, a constant: nothing is added to
+ * their loop; instanced/'s packets pass their largest pad. */
+WIDE_INLINE unsigned PK(frustum_rows)(int o, const float *o_lo, const float *o_hi, const float *i_lo,
+                                      const float *i_hi, float tn_min, float t_max, const float *rows,
+                                      float pad, int padded)
 {
-    const int o = pk->octant;
-    PF t0 = PV(set1)(pk->tn_min), t1 = PV(set1)(pk->t_max);
+    PF t0 = PV(set1)(tn_min), t1 = PV(set1)(t_max);
     for (int a = 0; a < 3; a++) {
         int neg = o >> a & 1;
         PF nr = PV(load)(rows + (2 * a + neg) * WIDE_NW), fr = PV(load)(rows + (2 * a + 1 - neg) * WIDE_NW);
-        PF olo = PV(set1)(pk->o_lo[a]), ohi = PV(set1)(pk->o_hi[a]);
-        PF ilo = PV(set1)(pk->i_lo[a]), ihi = PV(set1)(pk->i_hi[a]);
+        if (padded) {
+            PF q = PV(set1)(neg ? pad : -pad);
+            nr = PV(add)(nr, q), fr = PV(sub)(fr, q);
+        }
+        PF olo = PV(set1)(o_lo[a]), ohi = PV(set1)(o_hi[a]);
+        PF ilo = PV(set1)(i_lo[a]), ihi = PV(set1)(i_hi[a]);
         PF d0 = PV(sub)(nr, ohi), d1 = PV(sub)(nr, olo), e0 = PV(sub)(fr, ohi), e1 = PV(sub)(fr, olo);
         PF lo = PV(min)(PV(min)(PV(mul)(d0, ilo), PV(mul)(d0, ihi)), PV(min)(PV(mul)(d1, ilo), PV(mul)(d1, ihi)));
         PF hi = PV(max)(PV(max)(PV(mul)(e0, ilo), PV(mul)(e0, ihi)), PV(max)(PV(mul)(e1, ilo), PV(mul)(e1, ihi)));
@@ -198,6 +210,12 @@ WIDE_INLINE unsigned PK(frustum)(const wide_packet *pk, const float *rows)
     }
     PF far = PV(add)(t1, PV(mul)(PV(abs)(t1), PV(set1)(ACCEL_SLAB_PAD)));
     return (unsigned)PV(mask)(PV(le)(t0, far));
+}
+
+WIDE_INLINE unsigned PK(frustum)(const wide_packet *pk, const float *rows)
+{
+    return PK(frustum_rows)(pk->octant, pk->o_lo, pk->o_hi, pk->i_lo, pk->i_hi, pk->tn_min, pk->t_max, rows,
+                            0.0f, 0);
 }
 
 /* Loads rays [0, n) into the packet; returns 0 when the packet cannot be
