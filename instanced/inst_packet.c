@@ -181,11 +181,7 @@ INST_INLINE void ip_walk(const inst_accel *a, ip_packet *pk, ip_view *v, const i
         for (; cand; cand &= cand - 1) {
             unsigned c = (unsigned)__builtin_ctz(cand);
             uint64_t cm = 0;
-#if INST_WIDE_AVX
-            ip_entries es = _mm256_set1_ps(INFINITY);
-#else
-            ip_entries es = INFINITY;
-#endif
+            ip_entries es = f8_set1(INFINITY);
             for (unsigned g = 0; g < IP_RAYS / 8; g++) {
                 unsigned gm = (unsigned)(em >> (8 * g)) & 0xFFu;
                 if (gm) cm |= (uint64_t)ip_group(v, nd, c, g, gm, &es) << (8 * g);

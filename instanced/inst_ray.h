@@ -14,7 +14,10 @@
 #include "core/prim.h"
 #include "inst_impl.h"
 
-#if defined(__AVX2__) && !defined(INST_NO_SIMD)
+#include "core/simd.h"
+
+/* AVX2 where bvh/wide's vectors are (core/simd.h: not with BVH_NO_SIMD). */
+#if WIDE_AVX
 #include <immintrin.h>
 #define INST_WIDE_AVX 1
 #else

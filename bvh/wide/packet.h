@@ -148,6 +148,39 @@ WIDE_INLINE unsigned PK(group_hits)(const wide_packet *pk, unsigned g, unsigned 
     return (unsigned)f8_mask(f8_le(t0, far)) & m;
 }
 
+/*
+ * The same test for rays of several octants, each lane's box grown by its
+ * own ray's pad: group_hits's operations lane by lane, the near plane of
+ * each lane picked by the sign of its reciprocal (hi where negative) and
+ * the box grown first (lo - pad, hi + pad). The rays' origins, reciprocals
+ * and ranges are 8 floats each at ox..iz, tn (near), tf (far); pad 8
+ * floats or NULL. Returns the hit lanes as a mask vector, their entry
+ * distances in *t0_out. For instanced/'s packets (a walk in each
+ * instance's object space, per-ray pads); group_hits stays as it was, so
+ * bvh/wide's own packets compile as before.
+ */
+WIDE_INLINE f8 PK(group_slab_mixed)(const float *ox_, const float *oy_, const float *oz_, const float *ix_,
+                                    const float *iy_, const float *iz_, const float *tn, const float *tf,
+                                    const float *pad, const float *rows, unsigned lane, f8 *t0_out)
+{
+    const float *o3[3] = {ox_, oy_, oz_}, *i3[3] = {ix_, iy_, iz_};
+    f8 t0 = f8_load(tn), t1 = f8_load(tf);
+    for (int a = 0; a < 3; a++) {
+        f8 lo = f8_set1(rows[(2 * a) * WIDE_NW + lane]), hi = f8_set1(rows[(2 * a + 1) * WIDE_NW + lane]);
+        if (pad) {
+            f8 p = f8_load(pad);
+            lo = f8_sub(lo, p), hi = f8_add(hi, p);
+        }
+        f8 iv = f8_load(i3[a]), ov = f8_load(o3[a]);
+        f8 nr = f8_blend(lo, hi, iv), fr = f8_blend(hi, lo, iv);
+        t0 = f8_max(f8_mul(f8_sub(nr, ov), iv), t0);
+        t1 = f8_min(f8_mul(f8_sub(fr, ov), iv), t1);
+    }
+    f8 far = f8_add(t1, f8_mul(f8_abs(t1), f8_set1(ACCEL_SLAB_PAD)));
+    *t0_out = t0;
+    return f8_le(t0, far);
+}
+
 /* The first ray of `first`..`last` that hits the child, or WP_RAYS. */
 WIDE_INLINE unsigned PK(first_hit)(const wide_packet *pk, unsigned first, unsigned last, const float *rows,
                                    unsigned lane, uint32_t *tests, unsigned *group_mask)
