@@ -105,7 +105,7 @@ typedef struct {
 /* One per instance: what the traversal reads, packed together. */
 typedef struct {
     /* xform's columns (x, y, z, translation), each padded to 4 doubles:
-     * the world vertex as 3 four-lane fused multiply-adds (inst_trace.c),
+     * the world vertex as 3 four-lane fused multiply-adds (inst_ray.h),
      * the same operations as accel_xform_vertex's rows. */
     double cols[16];
     double inverse[12];   /* world -> object */
@@ -157,7 +157,7 @@ int inst_update(void *a, const accel_scene *scene, int refit, accel_update_stats
                 accel_error *err);
 
 /* The kind's entries (inst_packet.c): packets with traverse=packet, else
- * ray by ray (kernels/k8_trace.c, in the structure's ISA: inst_single_*
+ * ray by ray (k8_trace.c, in the structure's ISA: inst_single_*
  * dispatch to its AVX2 or AVX-512 unit, inst_trace_*[_avx512]). */
 #define INST_TRACE_ENTRIES(sfx)                                                                     \
     void inst_trace_intersect##sfx(const void *a, const accel_ray *rays, accel_hit *hits, size_t n,  \

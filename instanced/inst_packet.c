@@ -261,7 +261,7 @@ static unsigned ip_flags(const inst_accel *a)
 ACCEL_COHERENT_ENTRIES(inst_packet_intersect, inst_packet_occluded, const void, ip_closest_table,
                        ip_any_table, ip_flags, inst_single_intersect, inst_single_occluded)
 
-/* The single-ray traversal in the structure's ISA (kernels/k8_trace.c). */
+/* The single-ray traversal in the structure's ISA (k8_trace.c). */
 void inst_single_intersect(const void *acc, const accel_ray *rays, accel_hit *hits, size_t n,
                            accel_counters *c)
 {

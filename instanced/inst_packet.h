@@ -2,12 +2,15 @@
  * inst_packet.h - the packets of the `instanced` kind (traverse=packet),
  * internal to instanced/: the packet and its views (inst_packet.c walks
  * them, inst_packet_rays.c fills them), and the 8-ray pieces both use:
- * the slab test of 8 rays against one child box, the frustum test of a
- * node, the entry cull at a pop, the affine triangle cull of rays that
- * share their origin, and the watertight test's float path on 8 rays.
- * Each computes, lane by lane, the very float operations of
- * the single-ray code it stands for (inst_ray.h, core/prim.h), so the
- * packets' answers are the single-ray walk's, bit for bit.
+ * the slab test of 8 rays against one child box and the frustum test of
+ * a node (bvh/wide/packet.h's, with the pads), the entry cull at a pop,
+ * the affine triangle cull of rays that share their origin, and the
+ * watertight test's float path on 8 rays. The triangle pieces compute,
+ * lane by lane, the very float operations of the single-ray code they
+ * stand for (inst_ray.h, core/prim.h), so the packets' answers are the
+ * single-ray walk's, bit for bit. A kernel body (C only): it instantiates
+ * bvh/wide/'s templates, and is not part of an interface a C++ program
+ * includes.
  */
 #ifndef INSTANCED_INST_PACKET_H
 #define INSTANCED_INST_PACKET_H

@@ -1,6 +1,6 @@
 /*
  * inst_ray.h - the two per-ray steps every walk of the `instanced` kind
- * shares (inst_trace.c ray by ray, inst_packet.c in packets), so that both
+ * shares (k8_trace.c ray by ray, inst_packet.c in packets), so that both
  * compute them with the very same operations: a world ray taken to an
  * instance's object space with the pad that keeps the bottom walk
  * conservative, and the world-space decision of a triangle. README.md

@@ -31,8 +31,8 @@
 
 #include "core/prim.h"
 #include "core/variant.h"
-#include "instanced/inst_impl.h"
-#include "instanced/inst_ray.h"
+#include "inst_impl.h"
+#include "inst_ray.h"
 
 /* The wide BVH's node test and child order (bvh/wide/kernel.h, 8 wide;
  * its leaf test, core/block_test.h, comes with it but the leaves here are
