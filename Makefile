@@ -75,7 +75,7 @@ HAVE_512 := $(if $(strip $(ARCH512)),$(shell $(CC) $(ARCH512) -x c -c /dev/null 
 ifeq ($(HAVE_512),1)
 SLOW_512 := $(SLOW_SRC:%.c=$(BUILD)/%.avx512.o)
 LIB_OBJ  := $(SLOW_512) $(LIB_OBJ)
-$(BUILD)/accel/core/isa.o $(BUILD)/bvh/wide/trace.o: ALL_CFLAGS += -DGRIDBVH_AVX512
+$(BUILD)/accel/core/isa.o $(BUILD)/bvh/wide/trace.o $(BUILD)/instanced/inst_packet.o: ALL_CFLAGS += -DGRIDBVH_AVX512
 endif
 LIB      := $(BUILD)/libgridbvh.a
 # The kernel units first compiled (SLOW_SRC, sources.mk) keep line tables

@@ -14,7 +14,9 @@ CORE_SRC     := $(foreach l,$(ACCEL_LAYERS),$(wildcard $(ROOT)accel/$(l)/*.c))
 BACKEND_SRC  := $(foreach d,$(BACKENDS),$(wildcard $(ROOT)$(d)/*.c $(ROOT)$(d)/*/*.c))
 # The slowest units to compile (bvh/wide/'s kernel tables, 4-15 s of CPU each) come
 # first, so that a parallel build overlaps them with the many small ones
-# instead of finishing on them.
-SLOW_SRC     := $(foreach d,$(BACKENDS),$(wildcard $(ROOT)$(d)/*/k[0-9]_*.c))
+# instead of finishing on them. They are also the units the Makefile
+# compiles a second time for AVX-512: k<digit>_*.c in a backend's
+# subfolder (bvh/wide/) or in the backend's own folder (instanced/k8_trace.c).
+SLOW_SRC     := $(foreach d,$(BACKENDS),$(wildcard $(ROOT)$(d)/*/k[0-9]_*.c $(ROOT)$(d)/k[0-9]_*.c))
 LIB_SRC      := $(SLOW_SRC) $(CORE_SRC) $(filter-out $(SLOW_SRC),$(BACKEND_SRC))
 LOADER_SRC   := $(wildcard $(ROOT)accel/scene/load_*.c)

@@ -10,6 +10,7 @@
 #include <assert.h>
 #include "accel.h"
 #include "bvh/bvh.h"
+#include "core/block.h"
 #include "grid/grid_core.h"
 
 #ifdef __cplusplus
@@ -47,33 +48,35 @@ int inst_grid_build(const box3 *boxes, uint32_t n, double lambda, double pad, in
 void inst_grid_free(inst_grid *g);
 
 /* The 8-wide form of a bvh_box_tree (inst_wide.c): the binary tree
- * collapsed (each wide node opens, greedily, its largest interior
- * descendant until it has 8 children), children's boxes in SoA rows so that
- * one ray meets all 8 in one sequence of 8-lane instructions (the layout of
- * Embree's BVH8: Wald et al., SIGGRAPH 2014). Every slot's box is the very
- * box of a binary node (src), so a walk of it reaches what a walk of the
- * binary tree reaches, and a refit of the binary tree is a copy. */
+ * collapsed by bvh/wide/'s greedy collapse into its 8-wide nodes
+ * (bvh/wide/node.h's wide_node8: children's boxes in SoA rows, octant
+ * orders, leaf references), walked with its node test (bvh/wide/kernel.h,
+ * grown by the pad where the walk needs one). Every slot's box is the very
+ * box of a binary node, so a walk of it reaches what a walk of the binary
+ * tree reaches. The top level's leaves name instances (ids, one per block
+ * of one); the bottom level's leaves are blocks of 8 of the mesh's
+ * primitives (core/block.h, object space, in leaf order, lanes past a
+ * leaf's end repeating its last primitive), shared by the mesh's instances
+ * and copied again at every refit. */
 enum { INST_WIDE = 8 };
-#define INST_WIDE_LEAF 0x80000000u /* child: | binary leaf node index */
-#define INST_WIDE_NONE 0xffffffffu /* child: empty slot (box lo +inf, hi -inf) */
 typedef struct {
-    float box[6][INST_WIDE]; /* rows lo_x, hi_x, lo_y, hi_y, lo_z, hi_z */
-    uint32_t child[INST_WIDE]; /* wide node index, INST_WIDE_LEAF | leaf, or INST_WIDE_NONE */
-    uint32_t src[INST_WIDE];   /* the binary node the slot copies */
-} inst_wnode;
-static_assert(sizeof(inst_wnode) == 256, "four cache lines");
-
-typedef struct {
-    inst_wnode *nodes; /* 64-byte aligned */
+    void *nodes;          /* wide_node8, 64-byte aligned */
     uint32_t node_count;
-    uint32_t root;     /* wide node 0, INST_WIDE_LEAF | 0 (a lone leaf), INST_WIDE_NONE */
+    uint32_t root;        /* a node, a leaf reference or WIDE_EMPTY (bvh/wide/node.h) */
+    uint32_t *ids;        /* top level: item ids in leaf order */
+    accel_block8 *blocks; /* bottom level: the mesh's primitives */
+    uint32_t block_count;
 } inst_wide;
 
-/* Collapses h (built, not freed: the leaves stay its nodes) into *out. */
-int inst_wide_build(const bvh_box_tree *h, inst_wide *out, accel_error *err);
-/* After the binary tree's boxes changed (a refit): copies them again. */
-void inst_wide_refit(const bvh_box_tree *h, inst_wide *w);
+/* Collapses h (built, kept: the binary tree is what a refit updates) into
+ * *out; mesh NULL for the top level (leaves of item ids), else the mesh
+ * whose primitives h->order names (leaves of blocks of 8). */
+int inst_wide_build(const bvh_box_tree *h, const accel_scene *mesh, inst_wide *out, accel_error *err);
+/* After the binary tree's boxes (and the mesh's vertices) changed: the
+ * collapse and the blocks made again. */
+int inst_wide_refit(const bvh_box_tree *h, const accel_scene *mesh, inst_wide *w, accel_error *err);
 void inst_wide_free(inst_wide *w);
+size_t inst_wide_memory(const inst_wide *w);
 
 /* ---- the kind ------------------------------------------------------------- */
 
@@ -88,9 +91,7 @@ typedef struct {
     double vert_abs_max;     /* largest |coordinate| of any vertex (dead triangles too) */
     double grid_pad;         /* bottom=grid: how far its boxes were grown */
     bvh_box_tree bvh;
-    inst_wide wide;          /* bottom=bvh, width=8: bvh collapsed */
-    float *leaf_tris;        /* traverse=packet: the triangles in leaf order (bvh.order[k]'s
-                              * 9 floats at 9 k; a sphere's slot unused), object space */
+    inst_wide wide;          /* bottom=bvh, width=8: bvh collapsed, its blocks */
     inst_grid grid;
     /* bottom=<kind spec>: the kind's structure over the mesh, walked
      * (accel.h's walk); and the mesh's triangles with no area in object
@@ -104,7 +105,7 @@ typedef struct {
 /* One per instance: what the traversal reads, packed together. */
 typedef struct {
     /* xform's columns (x, y, z, translation), each padded to 4 doubles:
-     * the world vertex as 3 four-lane fused multiply-adds (inst_trace.c),
+     * the world vertex as 3 four-lane fused multiply-adds (inst_ray.h),
      * the same operations as accel_xform_vertex's rows. */
     double cols[16];
     double inverse[12];   /* world -> object */
@@ -127,6 +128,7 @@ typedef struct {
     int leaf;                 /* bottom=bvh: largest leaf */
     int width;                /* BVH levels walked as the binary tree (2) or 8-wide (8) */
     int packets;              /* traverse=packet (inst_packet.c) */
+    int isa;                  /* ACCEL_ISA_AVX2 or _AVX512 (core/isa.h): the single-ray unit that runs */
     double lambda, top_lambda;
     uint32_t bottom_count, item_count;
     inst_bottom *bottoms;
@@ -141,9 +143,6 @@ typedef struct {
 int inst_set_items(inst_accel *a, const accel_scene *scene, double *grid_pad, accel_error *err);
 int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *err);
 int inst_build_top(inst_accel *a, accel_error *err);
-/* traverse=packet: (re)copies bottom b's triangles in leaf order (after a
- * build or a refit). */
-int inst_leaf_tris(inst_bottom *b, accel_error *err);
 void inst_fill_stats(const inst_accel *a, accel_build_stats *stats);
 size_t inst_memory(const void *a);
 void inst_destroy(void *a);
@@ -158,7 +157,15 @@ int inst_update(void *a, const accel_scene *scene, int refit, accel_update_stats
                 accel_error *err);
 
 /* The kind's entries (inst_packet.c): packets with traverse=packet, else
- * ray by ray (inst_trace.c). */
+ * ray by ray (k8_trace.c, in the structure's ISA: inst_single_*
+ * dispatch to its AVX2 or AVX-512 unit, inst_trace_*[_avx512]). */
+#define INST_TRACE_ENTRIES(sfx)                                                                     \
+    void inst_trace_intersect##sfx(const void *a, const accel_ray *rays, accel_hit *hits, size_t n,  \
+                                   accel_counters *c);                                             \
+    void inst_trace_occluded##sfx(const void *a, const accel_ray *rays, uint8_t *occ, size_t n,      \
+                                  accel_counters *c);
+INST_TRACE_ENTRIES()
+INST_TRACE_ENTRIES(_avx512)
 void inst_intersect(const void *a, const accel_ray *rays, accel_hit *hits, size_t n,
                     accel_counters *c);
 void inst_occluded(const void *a, const accel_ray *rays, uint8_t *occ, size_t n,

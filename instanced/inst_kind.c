@@ -14,13 +14,14 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/isa.h"
 #include "inst_impl.h"
 #include "instanced.h"
 
 /* The kind's parameters as parsed, one field per key; choices hold their
  * position in the table's list (top: bvh 0, grid 1; world: compute 0, flat 1). */
 typedef struct {
-    int top, leaf, world, pad, width, traverse;
+    int top, leaf, world, pad, width, traverse, isa;
     double lambda, top_lambda;
     char bottom[ACCEL_PARAM_TEXT];
 } inst_spec;
@@ -61,6 +62,10 @@ static const accel_param_def inst_params[] = {
      .help = "grow bottom-level boxes by the flattening's rounding (0: exact object-space boxes, "
              "which miss world hits near edges: kept to show why the pad is needed)",
      .offset = offsetof(inst_spec, pad)},
+    {.key = "isa", .type = ACCEL_PARAM_ENUM, .def = "auto", .choices = ACCEL_ISA_CHOICES,
+     .help = "instruction set of the single-ray traversal (its wide node test is bvh/wide's): "
+             "auto (AVX-512 where the CPU and the build have it, or GRIDBVH_ISA), avx2, avx512",
+     .offset = offsetof(inst_spec, isa)},
 };
 #define INST_PARAM_COUNT (sizeof inst_params / sizeof inst_params[0])
 
@@ -98,7 +103,6 @@ void inst_destroy(void *p)
         bvh_box_tree_free(&a->bottoms[i].bvh);
         inst_wide_free(&a->bottoms[i].wide);
         inst_grid_free(&a->bottoms[i].grid);
-        free(a->bottoms[i].leaf_tris);
         if (a->bottoms[i].walk) a->walk_kind->destroy(a->bottoms[i].walk);
         free(a->bottoms[i].dead);
     }
@@ -116,11 +120,6 @@ static size_t bvh_bytes(const bvh_box_tree *b)
     return (size_t)b->node_count * sizeof(bvh_node) + (size_t)b->count * sizeof(uint32_t);
 }
 
-static size_t wide_bytes(const inst_wide *w)
-{
-    return (size_t)w->node_count * sizeof(inst_wnode);
-}
-
 static size_t grid_bytes(const inst_grid *g)
 {
     return g->cells.offsets ? ((size_t)g->cells.cell_count + 1 + (size_t)g->cells.ref_count) *
@@ -134,11 +133,10 @@ size_t inst_memory(const void *p)
     const inst_accel *a = p;
     size_t bytes = sizeof *a + a->item_count * (sizeof(inst_item) + sizeof(box3)) +
                    a->bottom_count * sizeof(inst_bottom) + bvh_bytes(&a->top_bvh) +
-                   wide_bytes(&a->top_wide) + grid_bytes(&a->top_grid);
+                   inst_wide_memory(&a->top_wide) + grid_bytes(&a->top_grid);
     for (uint32_t i = 0; i < a->bottom_count; i++) {
         const inst_bottom *b = &a->bottoms[i];
-        bytes += bvh_bytes(&b->bvh) + wide_bytes(&b->wide) + grid_bytes(&b->grid) + b->dead_count * sizeof(uint32_t);
-        if (b->leaf_tris) bytes += 9 * sizeof(float) * (size_t)b->bvh.count;
+        bytes += bvh_bytes(&b->bvh) + inst_wide_memory(&b->wide) + grid_bytes(&b->grid) + b->dead_count * sizeof(uint32_t);
         if (b->walk) bytes += a->walk_kind->memory(b->walk);
     }
     return bytes;
@@ -176,29 +174,12 @@ static int build_walk_bottom(inst_accel *a, inst_bottom *b, accel_error *err)
 
 /* The bottom level of mesh i over its primitives (a plain scene: the live
  * ones), boxes grown by grid_pad in a grid. */
-int inst_leaf_tris(inst_bottom *b, accel_error *err)
-{
-    const bvh_box_tree *h = &b->bvh;
-    const accel_scene *m = b->mesh;
-    if (!b->leaf_tris) {
-        b->leaf_tris = malloc(9 * sizeof(float) * (h->count ? h->count : 1));
-        if (!b->leaf_tris) return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
-    }
-    for (uint32_t k = 0; k < h->count; k++) {
-        uint32_t id = h->order[k];
-        if (id < m->tri_count) memcpy(b->leaf_tris + 9 * (size_t)k, m->tris + 9 * (size_t)id, 9 * sizeof(float));
-    }
-    return 0;
-}
-
 int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *err)
 {
     inst_bottom *b = &a->bottoms[i];
     bvh_box_tree_free(&b->bvh);
     inst_wide_free(&b->wide);
     inst_grid_free(&b->grid);
-    free(b->leaf_tris);
-    b->leaf_tris = NULL;
     if (b->walk) a->walk_kind->destroy(b->walk);
     b->walk = NULL;
     free(b->dead);
@@ -241,8 +222,7 @@ int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *e
                  : inst_grid_build(boxes, n, a->lambda, b->grid_pad, &b->grid, err);
     free(boxes);
     if (rc == 0 && a->bottom_kind == INST_BVH && a->width == INST_WIDE)
-        rc = inst_wide_build(&b->bvh, &b->wide, err);
-    if (rc == 0 && a->packets) rc = inst_leaf_tris(b, err);
+        rc = inst_wide_build(&b->bvh, b->mesh, &b->wide, err);
     if (rc || !ids || a->bottom_kind == INST_BVH) return rc;
     for (uint64_t k = 0; k < b->grid.cells.ref_count; k++)
         b->grid.cells.refs[k] = ids[b->grid.cells.refs[k]];
@@ -320,7 +300,7 @@ int inst_build_top(inst_accel *a, accel_error *err)
         for (uint32_t k = 0; k < a->item_count; k++) grown[k] = box3_hit_pad(a->item_boxes[k], delta);
         int rc = inst_bvh_build(grown, a->item_count, 1, a->threads, NULL, &a->top_bvh, err);
         free(grown);
-        if (rc == 0 && a->width == INST_WIDE) rc = inst_wide_build(&a->top_bvh, &a->top_wide, err);
+        if (rc == 0 && a->width == INST_WIDE) rc = inst_wide_build(&a->top_bvh, NULL, &a->top_wide, err);
         return rc;
     }
     double top_pad = 0.0;
@@ -430,6 +410,10 @@ int inst_build_with(const accel_scene *scene, const accel_params *params, int th
         return accel_fail(err, ACCEL_ERR_SPEC,
                           "instanced: traverse=packet needs top=bvh, bottom=bvh and width=8");
     }
+    if (accel_isa_resolve(spec->isa, &a->isa, err)) {
+        free(a);
+        return ACCEL_ERR_SPEC;
+    }
     a->lambda = spec->lambda;
     a->top_lambda = spec->top_lambda;
     const accel_instances *set = scene->instances;
@@ -452,6 +436,7 @@ int inst_build_with(const accel_scene *scene, const accel_params *params, int th
         return rc;
     }
     inst_fill_stats(a, stats);
+    stats->isa = accel_isa_label(a->isa);
     *out = a;
     return 0;
 }
@@ -478,7 +463,7 @@ int instanced_build_with_bottom(const accel_scene *scene, const char *kv, const 
 static const char *const inst_variants[] = {
     "", "top=grid", "bottom=grid", "top=grid,bottom=grid", "world=flat,leaf=1", "width=2",
     "bottom=bvh:width=8", "top=grid,bottom=nested_grid", "bottom=grid:", "traverse=packet",
-    "traverse=packet,world=flat,leaf=1", NULL,
+    "traverse=packet,world=flat,leaf=1", "isa=avx2", NULL,
 };
 
 const accel_kind accel_kind_instanced = {

@@ -4,7 +4,7 @@
  *
  * The packet walks the top level's wide nodes together: one child box is
  * tested against 8 rays per AVX sequence, lane by lane the very float
- * operations of the single-ray walk's inst_wide_hits (the near and far
+ * operations of the single-ray walk's box3_slab (the near and far
  * planes picked per lane by the sign of the reciprocal direction, so rays
  * of several octants may share a packet). At an instance, every ray of the
  * packet that reached it goes to object space as the single-ray walk takes
@@ -37,28 +37,36 @@
 #include <string.h>
 
 #include "core/coherence.h"
+#include "core/isa.h"
 #include "core/variant.h"
 #include "inst_packet.h"
 
 /* A bottom leaf: its triangles (mesh ids qs) decided in world space for
  * the rays m, each world triangle computed once for all of them. */
 INST_INLINE void ip_leaf(const inst_accel *a, ip_packet *pk, ip_view *v, const inst_item *it,
-                         const uint32_t *qs, const float *lt, uint32_t count, uint64_t m,
+                         const accel_block8 *blk, uint32_t count, uint64_t m,
                          int naive, int spheres, int counted)
 {
     const accel_scene *s = a->scene;
     for (uint32_t i = 0; i < count && (m &= pk->live); i++) {
-        uint32_t q = qs[i], id = it->base + q;
-        float w[12];
+        const accel_block8 *bk = blk + i / 8;
+        int lane = (int)(i % 8);
+        if (lane && bk->id[lane] == bk->id[lane - 1]) { /* the padding of the leaf's last block */
+            i |= 7;
+            continue;
+        }
+        uint32_t q = bk->id[lane], id = it->base + q;
+        float w[12], lt[9];
+        inst_block_lane(bk, lane, lt);
         const float *tri = NULL, *sphere = NULL;
         if (spheres && id >= s->tri_count) { /* only plain scenes hold spheres */
             sphere = s->spheres + 4 * (size_t)(id - s->tri_count);
         } else if (a->world_flat || (it->identity && s->instances)) {
             tri = s->tris + 9 * (size_t)id;
         } else if (it->identity) { /* a plain scene: its own triangles */
-            tri = lt + 9 * (size_t)i;
+            tri = lt;
         } else {
-            inst_xform_tri(it, lt + 9 * (size_t)i, w);
+            inst_xform_tri(it, lt, w);
             tri = w;
         }
         /* Rays that share their origin and axes (a pinhole camera's)
@@ -134,11 +142,10 @@ static void ip_instance(const inst_accel *a, ip_packet *pk, uint32_t k, uint64_t
 /* The packet's rays m through the wide tree (h, w): the top level (it ==
  * NULL, view pk->top, leaves are instances) or instance it's bottom level
  * (view v; lt its leaf-ordered triangles). */
-INST_INLINE void ip_walk(const inst_accel *a, ip_packet *pk, ip_view *v, const bvh_box_tree *h,
-                         const inst_wide *w, const inst_item *it, const float *lt,
-                         uint64_t m, int naive, int spheres, int counted)
+INST_INLINE void ip_walk(const inst_accel *a, ip_packet *pk, ip_view *v, const inst_wide *w,
+                         const inst_item *it, uint64_t m, int naive, int spheres, int counted)
 {
-    if (w->root == INST_WIDE_NONE || !m) return;
+    if (w->root == WIDE_EMPTY || !m) return;
     const int top = it == NULL;
     ip_entry stack[IP_STACK];
     int sp = 0;
@@ -148,18 +155,17 @@ INST_INLINE void ip_walk(const inst_accel *a, ip_packet *pk, ip_view *v, const b
         uint64_t em = e.mask & pk->live;
         if (em && e.entry > -INFINITY) em = ip_still(v, em, e.entry);
         if (!em) continue;
-        if (e.ref & INST_WIDE_LEAF) {
-            const bvh_node *n = &h->nodes[e.ref & ~INST_WIDE_LEAF];
+        if (e.ref & WIDE_LEAF) {
+            uint32_t first = wide_leaf_first(e.ref), nb = wide_leaf_blocks(e.ref);
             if (top) {
-                for (uint32_t i = 0; i < n->count && (em &= pk->live); i++)
-                    ip_instance(a, pk, h->order[n->left_first + i], em, naive, spheres, counted);
+                for (uint32_t i = 0; i < nb && (em &= pk->live); i++)
+                    ip_instance(a, pk, w->ids[first + i], em, naive, spheres, counted);
             } else {
-                ip_leaf(a, pk, v, it, h->order + n->left_first, lt + 9 * (size_t)n->left_first,
-                        n->count, em, naive, spheres, counted);
+                ip_leaf(a, pk, v, it, w->blocks + first, 8 * nb, em, naive, spheres, counted);
             }
             continue;
         }
-        const inst_wnode *nd = &w->nodes[e.ref];
+        const wide_node8 *nd = (const wide_node8 *)w->nodes + e.ref;
         if (counted)
             for (uint64_t k = em; k; k &= k - 1) {
                 unsigned r = (unsigned)__builtin_ctzll(k);
@@ -175,11 +181,7 @@ INST_INLINE void ip_walk(const inst_accel *a, ip_packet *pk, ip_view *v, const b
         for (; cand; cand &= cand - 1) {
             unsigned c = (unsigned)__builtin_ctz(cand);
             uint64_t cm = 0;
-#if INST_WIDE_AVX
-            ip_entries es = _mm256_set1_ps(INFINITY);
-#else
-            ip_entries es = INFINITY;
-#endif
+            ip_entries es = f8_set1(INFINITY);
             for (unsigned g = 0; g < IP_RAYS / 8; g++) {
                 unsigned gm = (unsigned)(em >> (8 * g)) & 0xFFu;
                 if (gm) cm |= (uint64_t)ip_group(v, nd, c, g, gm, &es) << (8 * g);
@@ -204,13 +206,13 @@ static __attribute__((noinline)) void ip_instance(const inst_accel *a, ip_packet
     const inst_item *it = &a->items[k];
     const inst_bottom *b = &a->bottoms[it->bottom];
     if (it->identity) { /* the world rays themselves, no pad */
-        ip_walk(a, pk, &pk->top, &b->bvh, &b->wide, it, b->leaf_tris, m, naive, spheres, counted);
+        ip_walk(a, pk, &pk->top, &b->wide, it, m, naive, spheres, counted);
         return;
     }
     ip_view ov;
     uint64_t keep = ip_objects(a, it, b, pk, &ov, m, counted);
     if (!keep) return;
-    ip_walk(a, pk, &ov, &b->bvh, &b->wide, it, b->leaf_tris, keep, naive, spheres, counted);
+    ip_walk(a, pk, &ov, &b->wide, it, keep, naive, spheres, counted);
 }
 
 /* ---- the batch kernel --------------------------------------------------------------- */
@@ -225,8 +227,7 @@ INST_INLINE void ip_kernel(const void *acc, const accel_ray *rays, void *out, si
     for (size_t base = 0; base < count; base += IP_RAYS) {
         unsigned n = count - base < IP_RAYS ? (unsigned)(count - base) : IP_RAYS;
         ip_load(&pk, rays + base, n, any, c != NULL);
-        ip_walk(a, &pk, &pk.top, &a->top_bvh, &a->top_wide, NULL, NULL, pk.live, naive, spheres,
-                c != NULL);
+        ip_walk(a, &pk, &pk.top, &a->top_wide, NULL, pk.live, naive, spheres, c != NULL);
         for (unsigned r = 0; r < n; r++) {
             size_t i = base + r;
             if (any) {
@@ -259,6 +260,31 @@ static unsigned ip_flags(const inst_accel *a)
 
 ACCEL_COHERENT_ENTRIES(inst_packet_intersect, inst_packet_occluded, const void, ip_closest_table,
                        ip_any_table, ip_flags, inst_single_intersect, inst_single_occluded)
+
+/* The single-ray traversal in the structure's ISA (k8_trace.c). */
+void inst_single_intersect(const void *acc, const accel_ray *rays, accel_hit *hits, size_t n,
+                           accel_counters *c)
+{
+#ifdef GRIDBVH_AVX512
+    if (((const inst_accel *)acc)->isa == ACCEL_ISA_AVX512) {
+        inst_trace_intersect_avx512(acc, rays, hits, n, c);
+        return;
+    }
+#endif
+    inst_trace_intersect(acc, rays, hits, n, c);
+}
+
+void inst_single_occluded(const void *acc, const accel_ray *rays, uint8_t *occ, size_t n,
+                          accel_counters *c)
+{
+#ifdef GRIDBVH_AVX512
+    if (((const inst_accel *)acc)->isa == ACCEL_ISA_AVX512) {
+        inst_trace_occluded_avx512(acc, rays, occ, n, c);
+        return;
+    }
+#endif
+    inst_trace_occluded(acc, rays, occ, n, c);
+}
 
 void inst_intersect(const void *acc, const accel_ray *rays, accel_hit *hits, size_t n,
                     accel_counters *c)

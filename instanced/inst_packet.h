@@ -2,12 +2,15 @@
  * inst_packet.h - the packets of the `instanced` kind (traverse=packet),
  * internal to instanced/: the packet and its views (inst_packet.c walks
  * them, inst_packet_rays.c fills them), and the 8-ray pieces both use:
- * the slab test of 8 rays against one child box, the frustum test of a
- * node, the entry cull at a pop, the affine triangle cull of rays that
- * share their origin, and the watertight test's float path on 8 rays.
- * Each computes, lane by lane, the very float operations of
- * the single-ray code it stands for (inst_wide.h, core/prim.h), so the
- * packets' answers are the single-ray walk's, bit for bit.
+ * the slab test of 8 rays against one child box and the frustum test of
+ * a node (bvh/wide/packet.h's, with the pads), the entry cull at a pop,
+ * the affine triangle cull of rays that share their origin, and the
+ * watertight test's float path on 8 rays. The triangle pieces compute,
+ * lane by lane, the very float operations of the single-ray code they
+ * stand for (inst_ray.h, core/prim.h), so the packets' answers are the
+ * single-ray walk's, bit for bit. A kernel body (C only): it instantiates
+ * bvh/wide/'s templates, and is not part of an interface a C++ program
+ * includes.
  */
 #ifndef INSTANCED_INST_PACKET_H
 #define INSTANCED_INST_PACKET_H
@@ -17,7 +20,12 @@
 #include "core/prim.h"
 #include "inst_impl.h"
 #include "inst_ray.h"
-#include "inst_wide.h"
+/* bvh/wide/'s packet pieces (8 wide; its blocks of 8 come along unused). */
+#define WIDE_NW 8
+#define WIDE_LB 8
+#include "core/block_test.h"
+#include "bvh/wide/kernel.h"
+#include "bvh/wide/packet.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -95,61 +103,29 @@ INST_INLINE __m256 ip_lanes(unsigned m)
         _mm256_and_si256(_mm256_set1_epi32((int)m), _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128)),
         _mm256_setzero_si256()));
 }
+#else
+INST_INLINE f8 ip_lanes(unsigned m)
+{
+    f8 r;
+    for (int i = 0; i < 8; i++) r.v[i] = f8_float_(m >> i & 1 ? 0xFFFFFFFFu : 0u);
+    return r;
+}
 #endif
 
 /* Rays of group g (candidates m) whose range meets child c's box grown by
  * their pads; *entry lowered to the smallest entry among them (lane-wise:
- * the caller reduces it). Lane by lane inst_wide_hits (inst_wide.h) on
- * that ray. */
-#if INST_WIDE_AVX
-typedef __m256 ip_entries;
-#else
-typedef float ip_entries;
-#endif
-INST_INLINE unsigned ip_group(const ip_view *v, const inst_wnode *n, unsigned c, unsigned g,
+ * the caller reduces it). bvh/wide/packet.h's 8-ray slab test, each lane
+ * with its own octant and pad. */
+typedef f8 ip_entries;
+INST_INLINE unsigned ip_group(const ip_view *v, const wide_node8 *n, unsigned c, unsigned g,
                               unsigned m, ip_entries *entry)
 {
     const unsigned r = 8 * g;
-#if INST_WIDE_AVX
-    const float *org[3] = {v->ox + r, v->oy + r, v->oz + r};
-    const float *inv[3] = {v->ix + r, v->iy + r, v->iz + r};
-    __m256 t0 = _mm256_load_ps(v->lo + r), t1 = _mm256_load_ps(v->hi + r);
-    __m256 p = _mm256_load_ps(v->pad + r);
-    for (int a = 0; a < 3; a++) {
-        __m256 lo = _mm256_set1_ps(n->box[2 * a][c]), hi = _mm256_set1_ps(n->box[2 * a + 1][c]);
-        if (v->padded) lo = _mm256_sub_ps(lo, p), hi = _mm256_add_ps(hi, p);
-        __m256 iv = _mm256_load_ps(inv[a]), ov = _mm256_load_ps(org[a]);
-        /* The near plane is hi where the direction is negative. */
-        __m256 nr = _mm256_blendv_ps(lo, hi, iv), fr = _mm256_blendv_ps(hi, lo, iv);
-        t0 = _mm256_max_ps(_mm256_mul_ps(_mm256_sub_ps(nr, ov), iv), t0);
-        t1 = _mm256_min_ps(_mm256_mul_ps(_mm256_sub_ps(fr, ov), iv), t1);
-    }
-    __m256 abs1 = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), t1);
-    __m256 lim = _mm256_add_ps(t1, _mm256_mul_ps(abs1, _mm256_set1_ps(ACCEL_SLAB_PAD)));
-    __m256 in = _mm256_cmp_ps(t0, lim, _CMP_LE_OQ);
-    unsigned h = (unsigned)_mm256_movemask_ps(in) & m;
-    if (h) {
-        *entry = _mm256_min_ps(*entry, _mm256_blendv_ps(_mm256_set1_ps(INFINITY), t0, ip_lanes(h)));
-    }
+    f8 t0, in = group_slab_mixed_8_8(v->ox + r, v->oy + r, v->oz + r, v->ix + r, v->iy + r, v->iz + r,
+                                     v->lo + r, v->hi + r, v->padded ? v->pad + r : NULL, n->box[0], c, &t0);
+    unsigned h = (unsigned)f8_mask(in) & m;
+    if (h) *entry = f8_min(*entry, f8_blend(f8_set1(INFINITY), t0, ip_lanes(h)));
     return h;
-#else
-    unsigned h = 0;
-    for (unsigned k = m; k; k &= k - 1) {
-        unsigned l = (unsigned)__builtin_ctz(k), q = r + l;
-        float lo[3] = {n->box[0][c], n->box[2][c], n->box[4][c]};
-        float hi[3] = {n->box[1][c], n->box[3][c], n->box[5][c]};
-        if (v->padded)
-            for (int a = 0; a < 3; a++) lo[a] -= v->pad[q], hi[a] += v->pad[q];
-        vec3 o = v3(v->ox[q], v->oy[q], v->oz[q]), iv = v3(v->ix[q], v->iy[q], v->iz[q]);
-        int neg[3] = {signbit(iv.x) != 0, signbit(iv.y) != 0, signbit(iv.z) != 0};
-        float e;
-        if (box3_slab(lo, hi, o, iv, neg, v->lo[q], v->hi[q], &e)) {
-            h |= 1u << l;
-            if (e < *entry) *entry = e;
-        }
-    }
-    return h;
-#endif
 }
 
 /* The smallest of the lanes ip_group lowered. */
@@ -161,49 +137,31 @@ INST_INLINE float ip_entry_min(ip_entries e)
     x = _mm_min_ss(x, _mm_shuffle_ps(x, x, 1));
     return _mm_cvtss_f32(x);
 #else
-    return e;
+    return f8_hmin(e);
 #endif
 }
 
 /* Slots of node n that hold a child. */
-INST_INLINE unsigned ip_children(const inst_wnode *n)
+INST_INLINE unsigned ip_children(const wide_node8 *n)
 {
 #if INST_WIDE_AVX
     __m256i none = _mm256_cmpeq_epi32(_mm256_load_si256((const __m256i *)n->child),
-                                      _mm256_set1_epi32((int)INST_WIDE_NONE));
+                                      _mm256_set1_epi32((int)WIDE_EMPTY));
     return ~(unsigned)_mm256_movemask_ps(_mm256_castsi256_ps(none)) & 0xFFu;
 #else
     unsigned cand = 0;
-    for (unsigned c = 0; c < INST_WIDE; c++) cand |= (unsigned)(n->child[c] != INST_WIDE_NONE) << c;
+    for (unsigned c = 0; c < INST_WIDE; c++) cand |= (unsigned)(n->child[c] != WIDE_EMPTY) << c;
     return cand;
 #endif
 }
 
-/* Children some ray of the view may hit (the frustum test, see above). */
-INST_INLINE unsigned ip_frustum(const ip_view *v, const inst_wnode *n)
+/* Children some ray of the view may hit (the frustum test, see above):
+ * bvh/wide/packet.h's, with every box grown by the view's largest pad. */
+INST_INLINE unsigned ip_frustum(const ip_view *v, const wide_node8 *n)
 {
 #if INST_WIDE_AVX
-    __m256 t0 = _mm256_set1_ps(v->t_lo), t1 = _mm256_set1_ps(v->t_hi);
-    __m256 p = _mm256_set1_ps(v->pad_max);
-    for (int a = 0; a < 3; a++) {
-        __m256 lo = _mm256_sub_ps(_mm256_load_ps(n->box[2 * a]), p);
-        __m256 hi = _mm256_add_ps(_mm256_load_ps(n->box[2 * a + 1]), p);
-        int neg = v->octant >> a & 1;
-        __m256 nr = neg ? hi : lo, fr = neg ? lo : hi;
-        __m256 olo = _mm256_set1_ps(v->o_lo[a]), ohi = _mm256_set1_ps(v->o_hi[a]);
-        __m256 ilo = _mm256_set1_ps(v->i_lo[a]), ihi = _mm256_set1_ps(v->i_hi[a]);
-        __m256 d0 = _mm256_sub_ps(nr, ohi), d1 = _mm256_sub_ps(nr, olo);
-        __m256 e0 = _mm256_sub_ps(fr, ohi), e1 = _mm256_sub_ps(fr, olo);
-        __m256 l = _mm256_min_ps(_mm256_min_ps(_mm256_mul_ps(d0, ilo), _mm256_mul_ps(d0, ihi)),
-                                 _mm256_min_ps(_mm256_mul_ps(d1, ilo), _mm256_mul_ps(d1, ihi)));
-        __m256 h = _mm256_max_ps(_mm256_max_ps(_mm256_mul_ps(e0, ilo), _mm256_mul_ps(e0, ihi)),
-                                 _mm256_max_ps(_mm256_mul_ps(e1, ilo), _mm256_mul_ps(e1, ihi)));
-        t0 = _mm256_max_ps(l, t0);
-        t1 = _mm256_min_ps(h, t1);
-    }
-    __m256 abs1 = _mm256_andnot_ps(_mm256_set1_ps(-0.0f), t1);
-    __m256 lim = _mm256_add_ps(t1, _mm256_mul_ps(abs1, _mm256_set1_ps(ACCEL_SLAB_PAD)));
-    return (unsigned)_mm256_movemask_ps(_mm256_cmp_ps(t0, lim, _CMP_LE_OQ));
+    return frustum_rows_8_8(v->octant, v->o_lo, v->o_hi, v->i_lo, v->i_hi, v->t_lo, v->t_hi, n->box[0],
+                            v->pad_max, 1);
 #else
     (void)v, (void)n;
     return 0xFFu;

@@ -1,6 +1,6 @@
 /*
  * inst_ray.h - the two per-ray steps every walk of the `instanced` kind
- * shares (inst_trace.c ray by ray, inst_packet.c in packets), so that both
+ * shares (k8_trace.c ray by ray, inst_packet.c in packets), so that both
  * compute them with the very same operations: a world ray taken to an
  * instance's object space with the pad that keeps the bottom walk
  * conservative, and the world-space decision of a triangle. README.md
@@ -14,11 +14,49 @@
 #include "core/prim.h"
 #include "inst_impl.h"
 
+#include "core/simd.h"
+
+/* AVX2 where bvh/wide's vectors are (core/simd.h: not with BVH_NO_SIMD). */
+#if WIDE_AVX
+#include <immintrin.h>
+#define INST_WIDE_AVX 1
+#else
+#define INST_WIDE_AVX 0
+#endif
+
 #ifdef __cplusplus
 extern "C" {
 #endif
 
 #define INST_INLINE static inline __attribute__((always_inline))
+
+/* The world triangle of mesh triangle m: accel_xform_vertex, the
+ * flattener's expression, bit for bit (per row fma(r0, x, fma(r1, y,
+ * fma(r2, z, r3))) rounded once to float), with the three rows as the
+ * lanes of one 4-double vector. w gets 12 floats (the last unused). */
+INST_INLINE void inst_xform_tri(const inst_item *it, const float *m, float *w)
+{
+#if INST_WIDE_AVX && defined(__FMA__)
+    __m256d c0 = _mm256_loadu_pd(it->cols), c1 = _mm256_loadu_pd(it->cols + 4);
+    __m256d c2 = _mm256_loadu_pd(it->cols + 8), c3 = _mm256_loadu_pd(it->cols + 12);
+    for (int k = 0; k < 3; k++) {
+        const float *p = m + 3 * k;
+        __m256d acc = _mm256_fmadd_pd(c2, _mm256_set1_pd((double)p[2]), c3);
+        acc = _mm256_fmadd_pd(c1, _mm256_set1_pd((double)p[1]), acc);
+        acc = _mm256_fmadd_pd(c0, _mm256_set1_pd((double)p[0]), acc);
+        _mm_storeu_ps(w + 3 * k, _mm256_cvtpd_ps(acc));
+    }
+#else
+    for (int k = 0; k < 3; k++) accel_xform_vertex(it->xform, m + 3 * k, w + 3 * k);
+#endif
+}
+
+/* Lane `lane` of a block of 8 (core/block.h) as a primitive's 9 floats. */
+INST_INLINE void inst_block_lane(const accel_block8 *b, int lane, float *tri)
+{
+    const float *rows = b->v[0][0];
+    for (int k = 0; k < 9; k++) tri[k] = rows[8 * k + lane];
+}
 
 /* Compare-and-select (libm's fmax is a call: it must order NaNs). */
 INST_INLINE double inst_dmax(double a, double b) { return a > b ? a : b; }

@@ -109,8 +109,7 @@ int inst_update(void *acc, const accel_scene *scene, int refit, accel_update_sta
             if (!changed[i]) continue;
             if (refit) {
                 refit_bvh(b);
-                if (a->width == INST_WIDE) inst_wide_refit(&b->bvh, &b->wide);
-                if (a->packets) rc = inst_leaf_tris(b, err);
+                if (a->width == INST_WIDE) rc = inst_wide_refit(&b->bvh, b->mesh, &b->wide, err);
                 st->meshes_refit++;
                 continue;
             }

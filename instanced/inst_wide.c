@@ -1,112 +1,88 @@
 /*
  * inst_wide.c - the 8-wide form of the `instanced` kind's BVHs (both
- * levels; inst_impl.h's inst_wide): a bvh_box_tree collapsed so that a
- * ray tests 8 child boxes per node in one sequence of 8-lane instructions
- * (inst_wide.h) instead of 2 per binary node.
+ * levels; inst_impl.h's inst_wide): a bvh_box_tree collapsed by the wide
+ * BVH's own greedy collapse (bvh/wide/collapse.c, bvh_wide_collapse_pool)
+ * into its 8-wide nodes, which the traversal tests with the wide BVH's
+ * node test (bvh/wide/kernel.h). This file only fills the leaves: the top
+ * level's with item ids (blocks of one), the bottom level's with the
+ * mesh's primitives in blocks of 8 (core/block.h), object space.
  *
- * The collapse is the greedy one of the wide-BVH literature (Wald et al.,
- * "Getting Rid of Packets", RT 2008; Embree's BVH8): a wide node starts
- * with its binary node's two children and opens, while it has fewer than
- * 8, the interior child of largest surface area into its own two children.
- * Each slot keeps its binary node's box exactly (src) and a leaf slot names
- * the binary leaf, so the wide tree holds the same boxes over the same
- * leaves: a walk of it with the same slab test reaches every leaf a walk of
- * the binary tree reaches (a slot whose ancestors the binary walk would
- * have tested first can only add leaves), which is all the exactness
- * argument of README.md asks of the bottom level. Refit copies the boxes
- * of the refit binary tree into the slots again.
+ * Each slot keeps its binary node's box exactly, so the wide tree holds the
+ * same boxes over the same leaves: a walk of it with a conservative slab
+ * test reaches every leaf a walk of the binary tree reaches, which is all
+ * the exactness argument of README.md asks of the bottom level. A refit
+ * refits the binary tree and collapses it again (the collapse and the
+ * copy are linear in the tree, as the refit is).
  */
-#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "bvh/wide/node.h"
 #include "inst_impl.h"
 
-static double half_area(const bvh_node *n)
-{
-    double x = (double)n->bmax[0] - n->bmin[0], y = (double)n->bmax[1] - n->bmin[1],
-           z = (double)n->bmax[2] - n->bmin[2];
-    return x * y + y * z + z * x;
-}
-
-static void set_slot(inst_wnode *w, int c, const bvh_node *n, uint32_t src)
-{
-    w->box[0][c] = n->bmin[0], w->box[1][c] = n->bmax[0];
-    w->box[2][c] = n->bmin[1], w->box[3][c] = n->bmax[1];
-    w->box[4][c] = n->bmin[2], w->box[5][c] = n->bmax[2];
-    w->src[c] = src;
-}
-
-/* Wide node `at` over binary interior node b; returns the next free wide
- * node. Recursion depth is the binary tree's (at most BVH_MAX_DEPTH). */
-static uint32_t collapse(const bvh_box_tree *h, inst_wide *w, uint32_t at, uint32_t b)
-{
-    uint32_t slot[INST_WIDE];
-    int n = 2;
-    slot[0] = h->nodes[b].left_first, slot[1] = slot[0] + 1;
-    while (n < INST_WIDE) {
-        int best = -1;
-        double area = -1.0;
-        for (int c = 0; c < n; c++) {
-            const bvh_node *s = &h->nodes[slot[c]];
-            if (s->count == 0 && half_area(s) > area) area = half_area(s), best = c;
-        }
-        if (best < 0) break;
-        uint32_t open = h->nodes[slot[best]].left_first;
-        slot[best] = open;
-        slot[n++] = open + 1;
-    }
-    inst_wnode *node = &w->nodes[at];
-    uint32_t next = at + 1;
-    for (int c = 0; c < INST_WIDE; c++) {
-        for (int k = 0; k < 6; k++) node->box[k][c] = k & 1 ? -INFINITY : INFINITY;
-        node->child[c] = INST_WIDE_NONE;
-        node->src[c] = INST_WIDE_NONE;
-    }
-    for (int c = 0; c < n; c++) {
-        const bvh_node *s = &h->nodes[slot[c]];
-        set_slot(node, c, s, slot[c]);
-        if (s->count) {
-            node->child[c] = INST_WIDE_LEAF | slot[c];
-        } else {
-            node->child[c] = next;
-            next = collapse(h, w, next, slot[c]);
-        }
-    }
-    return next;
-}
-
-int inst_wide_build(const bvh_box_tree *h, inst_wide *out, accel_error *err)
+int inst_wide_build(const bvh_box_tree *h, const accel_scene *mesh, inst_wide *out, accel_error *err)
 {
     memset(out, 0, sizeof *out);
-    out->root = INST_WIDE_NONE;
+    out->root = WIDE_EMPTY;
     if (!h->node_count) return 0;
-    if (h->nodes[0].count) {
-        out->root = INST_WIDE_LEAF | 0u;
-        return 0;
+    const int block = mesh ? 8 : 1;
+    bvh_wide_pool pool;
+    int rc = bvh_wide_collapse_pool(h->nodes, h->node_count, INST_WIDE, block, &pool, err);
+    if (rc) return rc;
+    out->nodes = pool.nodes;
+    out->node_count = pool.node_count;
+    out->root = pool.root;
+    out->block_count = pool.block_count;
+    size_t n = pool.block_count ? pool.block_count : 1;
+    if (mesh)
+        out->blocks = aligned_alloc(64, n * sizeof *out->blocks);
+    else
+        out->ids = malloc(n * sizeof *out->ids);
+    if (!out->blocks && !out->ids) {
+        free(pool.leaves);
+        inst_wide_free(out);
+        return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory for a wide BVH's leaves");
     }
-    /* At most one wide node per binary interior node (each opens >= 1). */
-    size_t cap = h->node_count / 2 + 1;
-    out->nodes = aligned_alloc(64, cap * sizeof *out->nodes);
-    if (!out->nodes)
-        return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory for a wide BVH");
-    out->node_count = collapse(h, out, 0, 0);
-    out->root = 0;
+    static const float none[9] = {0}; /* a sphere's lane (plain scenes): decided by its id */
+    for (uint32_t l = 0; l < pool.leaf_count; l++) {
+        const bvh_wide_pool_leaf *leaf = &pool.leaves[l];
+        const uint32_t *order = h->order + leaf->first_slot;
+        if (!mesh) {
+            memcpy(out->ids + leaf->first_block, order, leaf->count * sizeof *order);
+            continue;
+        }
+        for (uint32_t k = 0; 8 * k < leaf->count; k++) {
+            int count = leaf->count - 8 * k < 8 ? (int)(leaf->count - 8 * k) : 8;
+            const float *tris[8];
+            for (int i = 0; i < count; i++) {
+                uint32_t q = order[8 * k + (uint32_t)i];
+                tris[i] = q < mesh->tri_count ? mesh->tris + 9 * (size_t)q : none;
+            }
+            accel_block8 *blk = &out->blocks[leaf->first_block + k];
+            accel_block_fill(blk->v[0][0], blk->id, 8, tris, order + 8 * k, count);
+        }
+    }
+    free(pool.leaves);
     return 0;
 }
 
-void inst_wide_refit(const bvh_box_tree *h, inst_wide *w)
+int inst_wide_refit(const bvh_box_tree *h, const accel_scene *mesh, inst_wide *w, accel_error *err)
 {
-    for (uint32_t i = 0; i < w->node_count; i++) {
-        inst_wnode *n = &w->nodes[i];
-        for (int c = 0; c < INST_WIDE; c++)
-            if (n->src[c] != INST_WIDE_NONE) set_slot(n, c, &h->nodes[n->src[c]], n->src[c]);
-    }
+    inst_wide_free(w);
+    return inst_wide_build(h, mesh, w, err);
 }
 
 void inst_wide_free(inst_wide *w)
 {
     free(w->nodes);
+    free(w->ids);
+    free(w->blocks);
     memset(w, 0, sizeof *w);
-    w->root = INST_WIDE_NONE;
+    w->root = WIDE_EMPTY;
+}
+
+size_t inst_wide_memory(const inst_wide *w)
+{
+    return (size_t)w->node_count * sizeof(wide_node8) +
+           (size_t)w->block_count * (w->blocks ? sizeof(accel_block8) : sizeof(uint32_t));
 }

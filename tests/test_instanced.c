@@ -342,7 +342,7 @@ TEST(instanced_update_frames)
 
 /* The same answers, bit for bit, from every walk: the world-space decision
  * of a triangle does not depend on the order the walk meets the triangles,
- * nor on how often (inst_trace.c's test_prim), so the 8-wide and binary
+ * nor on how often (k8_trace.c's test_prim), so the 8-wide and binary
  * BVH levels, the grids, a walked bottom kind and the packets name the same triangle
  * with the same t, u and v. The one latitude: two triangles whose hits
  * round to the same float t (coincident instances, a ray through a vertex

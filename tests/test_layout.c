@@ -201,11 +201,16 @@ static void check_backend_include(const char *path, int line, const char *target
     if (!strcmp(target, "grid/grid_core.h") || !strcmp(target, "grid/grid_packet_walk.h") ||
         !strcmp(target, "grid/grid_blocks.h"))
         return;
-    if (!strcmp(b->folder, "instanced") && !strcmp(target, "bvh/bvh.h")) return;
+    /* instanced/ walks its BVH levels on the wide BVH's nodes, collapse
+     * and node tests (its README): the layouts and the two templates. */
+    if (!strcmp(b->folder, "instanced") &&
+        (!strcmp(target, "bvh/bvh.h") || !strcmp(target, "bvh/wide/node.h") ||
+         !strcmp(target, "bvh/wide/kernel.h") || !strcmp(target, "bvh/wide/packet.h")))
+        return;
     test_fail(__FILE__, __LINE__,
               "%s:%d: includes \"%s\": a backend may include only accel.h, core/ headers, its "
               "own folder, a subfolder's entry header (sub/sub.h), grid/grid_core.h, grid/grid_blocks.h, "
-              "grid/grid_packet_walk.h (instanced/ also bvh/bvh.h); a subfolder only its own files and the parent headers "
+              "grid/grid_packet_walk.h (instanced/ also bvh/bvh.h and bvh/wide/'s node.h, kernel.h, packet.h); a subfolder only its own files and the parent headers "
               "of sub_parent_headers",
               path, line, target);
 }

@@ -43,9 +43,7 @@
 #endif
 
 /* A leaf to pack: its primitive slots in the binary tree's leaf order. */
-typedef struct {
-    uint32_t first_slot, count, first_block;
-} leaf_job;
+typedef bvh_wide_pool_leaf leaf_job; /* node.h */
 
 typedef struct {
     const bvh_node *bin;
@@ -552,6 +550,57 @@ static int collapse_tree(const bvh *b, bvh_wide *w, const bvh_wide_collapse *cc,
     free(dp_dec);
     free(sub);
     return rc;
+}
+
+/* ---- a node pool collapsed for another structure ------------------------------ */
+
+/* The greedy collapse of any pool laid out as bvh's (node 0 the root, node
+ * 1 padding, children after their parent, each subtree's leaves one run of
+ * slots): node.h's bvh_wide_pool. */
+int bvh_wide_collapse_pool(const bvh_node *bin, uint32_t nc, int width, int block, bvh_wide_pool *out,
+                           accel_error *err)
+{
+    memset(out, 0, sizeof *out);
+    out->root = WIDE_EMPTY;
+    if (!nc) return 0;
+    uint32_t *sub = bvh_alloc_array(nc, 3 * sizeof(uint32_t));
+    if (!sub) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for the collapse");
+    uint32_t *sub_first = sub, *sub_count = sub + nc;
+    float *area = (float *)(sub + 2 * (size_t)nc);
+    uint32_t interior = 0, leaves = 0;
+    subtree_table(bin, nc, sub_first, sub_count, area, &interior, &leaves);
+    collapse_ctx x;
+    memset(&x, 0, sizeof x);
+    x.bin = bin, x.sub_first = sub_first, x.sub_count = sub_count, x.area = area;
+    x.width = width, x.block = block;
+    x.node_floats = node_size(width) / sizeof(float);
+    x.node_cap = interior > 0 ? interior : 1;
+    x.leaf_cap = leaves > 0 ? leaves : 1;
+    x.node_box = alloc_aligned(x.node_cap, node_size(width));
+    x.leaves = bvh_alloc_array(x.leaf_cap, sizeof(leaf_job));
+    int rc = 0;
+    if (!x.node_box || !x.leaves) {
+        rc = accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for %u wide nodes", x.node_cap);
+    } else {
+        uint32_t root = collapse(&x, 0, 1);
+        if (x.failure)
+            rc = accel_fail(err, ACCEL_ERR_RANGE, "bvh: width=%d,block=%d: %s", width, block, x.failure);
+        else
+            out->root = root;
+    }
+    free(sub);
+    if (rc) {
+        free(x.node_box);
+        free(x.leaves);
+        return rc;
+    }
+    out->nodes = x.node_box;
+    out->node_count = x.node_count;
+    out->leaves = x.leaves;
+    out->leaf_count = x.leaf_count;
+    out->block_count = x.block_count;
+    out->depth = x.depth;
+    return 0;
 }
 
 int bvh_wide_build(bvh *b, bvh_wide **out, int width, int block, int order, int quant,

@@ -107,6 +107,36 @@ WIDE_INLINE NF WK(slab_rows)(const float *b, const WK(node_ray) *r, float t, NF 
 }
 
 /*
+ * The same with every child box grown by a pad on every side (lo - pad,
+ * hi + pad, in float): the conservative walk of a structure whose boxes
+ * must also cover a rounding margin known per ray (instanced/README.md,
+ * "the pad"). The near plane moves by -pad where the ray's direction is
+ * positive and by +pad where it is negative, the far plane the other way.
+ * A variant, not a parameter of slab_rows: bvh/wide's own kernels call
+ * slab_rows, so nothing is added to their loops.
+ */
+typedef struct {
+    NF nx, fx, ny, fy, nz, fz;
+} WK(node_pad);
+
+WIDE_INLINE void WK(pad_setup)(WK(node_pad) *q, const accel_ray_prep *p, float pad)
+{
+    NF up = NV(set1)(pad), down = NV(set1)(-pad);
+    q->nx = p->neg[0] ? up : down, q->fx = p->neg[0] ? down : up;
+    q->ny = p->neg[1] ? up : down, q->fy = p->neg[1] ? down : up;
+    q->nz = p->neg[2] ? up : down, q->fz = p->neg[2] ? down : up;
+}
+
+WIDE_INLINE NF WK(slab_rows_pad)(const float *b, const WK(node_ray) *r, const WK(node_pad) *q, float t,
+                                 NF *t0)
+{
+    return WK(slab_planes)(NV(add)(NV(load)(b + r->nx), q->nx), NV(add)(NV(load)(b + r->fx), q->fx),
+                           NV(add)(NV(load)(b + r->ny), q->ny), NV(add)(NV(load)(b + r->fy), q->fy),
+                           NV(add)(NV(load)(b + r->nz), q->nz), NV(add)(NV(load)(b + r->fz), q->fz), r, t,
+                           t0);
+}
+
+/*
  * One interior node: all children's boxes at once, then the hit children
  * near to far. Sets *ref to the child to visit next and returns 1, or
  * returns 0 when no child is hit (the caller pops).
@@ -363,6 +393,16 @@ WIDE_INLINE int WK(visit_node_oct)(const KNODE *n, const WK(node_ray) *r, float 
     NF t0, hit = WK(slab_rows)(n->box[0], r, t, &t0);
     return WK(push_octant)(n->child, n->perm, hit, t0, (unsigned)NV(mask)(hit), ref, sref, st, sp_io, shift,
                            branchy);
+}
+
+/* order=octant on boxes grown by the pad q (slab_rows_pad): for walks
+ * that must be conservative (instanced/). */
+WIDE_INLINE int WK(visit_node_oct_pad)(const KNODE *n, const WK(node_ray) *r, const WK(node_pad) *q, float t,
+                                       uint32_t *ref, uint32_t *sref, float *st, int *sp_io, int shift)
+{
+    NF t0, hit = WK(slab_rows_pad)(n->box[0], r, q, t, &t0);
+    return WK(push_octant)(n->child, n->perm, hit, t0, (unsigned)NV(mask)(hit), ref, sref, st, sp_io, shift,
+                           0);
 }
 
 #if WIDE_NW == 8

@@ -155,6 +155,32 @@ typedef struct {
     float t_entry;
 } wide_stack_entry;
 
+/*
+ * The greedy collapse (collapse.c) of a node pool laid out as bvh's (node
+ * 0 the root, node 1 padding, children after their parent, each subtree's
+ * leaves one run of slots) into nodes of `width` children, for a structure
+ * other than the kind (instanced/: both of its BVH levels). A subtree of at
+ * most `block` slots, and every binary leaf, becomes one leaf; each leaf's
+ * slots take ceil(count / block) consecutive blocks of the caller's pool,
+ * which the caller fills (leaves[k]: slots first_slot.. of the pool's leaf
+ * order, count of them, from block first_block). nodes is 64-byte aligned,
+ * each node's boxes the very boxes of its binary children, with the octant
+ * orders (perm) set; freed with free(), as leaves.
+ */
+typedef struct {
+    uint32_t first_slot, count, first_block;
+} bvh_wide_pool_leaf;
+typedef struct {
+    void *nodes;          /* wide_node4 or wide_node8 */
+    uint32_t node_count;
+    uint32_t root;        /* node, leaf reference or WIDE_EMPTY (no nodes) */
+    bvh_wide_pool_leaf *leaves;
+    uint32_t leaf_count, block_count;
+    int depth;
+} bvh_wide_pool;
+int bvh_wide_collapse_pool(const bvh_node *bin, uint32_t nc, int width, int block, bvh_wide_pool *out,
+                           accel_error *err);
+
 /* Recomputes a node's octant orders (perm) from its box rows; its first k
  * child slots are used (collapse.c; bvh_refit.c calls it after a refit). */
 void bvh_wide_set_perm(float *rows, int width, int k);

@@ -148,6 +148,39 @@ WIDE_INLINE unsigned PK(group_hits)(const wide_packet *pk, unsigned g, unsigned 
     return (unsigned)f8_mask(f8_le(t0, far)) & m;
 }
 
+/*
+ * The same test for rays of several octants, each lane's box grown by its
+ * own ray's pad: group_hits's operations lane by lane, the near plane of
+ * each lane picked by the sign of its reciprocal (hi where negative) and
+ * the box grown first (lo - pad, hi + pad). The rays' origins, reciprocals
+ * and ranges are 8 floats each at ox..iz, tn (near), tf (far); pad 8
+ * floats or NULL. Returns the hit lanes as a mask vector, their entry
+ * distances in *t0_out. For instanced/'s packets (a walk in each
+ * instance's object space, per-ray pads); group_hits stays as it was, so
+ * bvh/wide's own packets compile as before.
+ */
+WIDE_INLINE f8 PK(group_slab_mixed)(const float *ox_, const float *oy_, const float *oz_, const float *ix_,
+                                    const float *iy_, const float *iz_, const float *tn, const float *tf,
+                                    const float *pad, const float *rows, unsigned lane, f8 *t0_out)
+{
+    const float *o3[3] = {ox_, oy_, oz_}, *i3[3] = {ix_, iy_, iz_};
+    f8 t0 = f8_load(tn), t1 = f8_load(tf);
+    for (int a = 0; a < 3; a++) {
+        f8 lo = f8_set1(rows[(2 * a) * WIDE_NW + lane]), hi = f8_set1(rows[(2 * a + 1) * WIDE_NW + lane]);
+        if (pad) {
+            f8 p = f8_load(pad);
+            lo = f8_sub(lo, p), hi = f8_add(hi, p);
+        }
+        f8 iv = f8_load(i3[a]), ov = f8_load(o3[a]);
+        f8 nr = f8_blend(lo, hi, iv), fr = f8_blend(hi, lo, iv);
+        t0 = f8_max(f8_mul(f8_sub(nr, ov), iv), t0);
+        t1 = f8_min(f8_mul(f8_sub(fr, ov), iv), t1);
+    }
+    f8 far = f8_add(t1, f8_mul(f8_abs(t1), f8_set1(ACCEL_SLAB_PAD)));
+    *t0_out = t0;
+    return f8_le(t0, far);
+}
+
 /* The first ray of `first`..`last` that hits the child, or WP_RAYS. */
 WIDE_INLINE unsigned PK(first_hit)(const wide_packet *pk, unsigned first, unsigned last, const float *rows,
                                    unsigned lane, uint32_t *tests, unsigned *group_mask)
@@ -181,15 +214,27 @@ WIDE_INLINE unsigned PK(last_hit)(const wide_packet *pk, unsigned first, unsigne
 }
 
 /* Children that some ray may hit, by interval arithmetic (see above). */
-WIDE_INLINE unsigned PK(frustum)(const wide_packet *pk, const float *rows)
+/* The same for any set of rays of one octant o: origins within [o_lo,
+ * o_hi], reciprocals within [i_lo, i_hi], ranges within [tn_min, t_max]
+ * (per axis), every box grown by pad on every side when padded (the near
+ * plane moved by -pad where the octant's direction is positive, +pad where
+ * negative, the far plane the other way: lo - pad and hi + pad in float).
+ * bvh/wide's own packets pass padded = 0, a constant: nothing is added to
+ * their loop; instanced/'s packets pass their largest pad. */
+WIDE_INLINE unsigned PK(frustum_rows)(int o, const float *o_lo, const float *o_hi, const float *i_lo,
+                                      const float *i_hi, float tn_min, float t_max, const float *rows,
+                                      float pad, int padded)
 {
-    const int o = pk->octant;
-    PF t0 = PV(set1)(pk->tn_min), t1 = PV(set1)(pk->t_max);
+    PF t0 = PV(set1)(tn_min), t1 = PV(set1)(t_max);
     for (int a = 0; a < 3; a++) {
         int neg = o >> a & 1;
         PF nr = PV(load)(rows + (2 * a + neg) * WIDE_NW), fr = PV(load)(rows + (2 * a + 1 - neg) * WIDE_NW);
-        PF olo = PV(set1)(pk->o_lo[a]), ohi = PV(set1)(pk->o_hi[a]);
-        PF ilo = PV(set1)(pk->i_lo[a]), ihi = PV(set1)(pk->i_hi[a]);
+        if (padded) {
+            PF q = PV(set1)(neg ? pad : -pad);
+            nr = PV(add)(nr, q), fr = PV(sub)(fr, q);
+        }
+        PF olo = PV(set1)(o_lo[a]), ohi = PV(set1)(o_hi[a]);
+        PF ilo = PV(set1)(i_lo[a]), ihi = PV(set1)(i_hi[a]);
         PF d0 = PV(sub)(nr, ohi), d1 = PV(sub)(nr, olo), e0 = PV(sub)(fr, ohi), e1 = PV(sub)(fr, olo);
         PF lo = PV(min)(PV(min)(PV(mul)(d0, ilo), PV(mul)(d0, ihi)), PV(min)(PV(mul)(d1, ilo), PV(mul)(d1, ihi)));
         PF hi = PV(max)(PV(max)(PV(mul)(e0, ilo), PV(mul)(e0, ihi)), PV(max)(PV(mul)(e1, ilo), PV(mul)(e1, ihi)));
@@ -198,6 +243,12 @@ WIDE_INLINE unsigned PK(frustum)(const wide_packet *pk, const float *rows)
     }
     PF far = PV(add)(t1, PV(mul)(PV(abs)(t1), PV(set1)(ACCEL_SLAB_PAD)));
     return (unsigned)PV(mask)(PV(le)(t0, far));
+}
+
+WIDE_INLINE unsigned PK(frustum)(const wide_packet *pk, const float *rows)
+{
+    return PK(frustum_rows)(pk->octant, pk->o_lo, pk->o_hi, pk->i_lo, pk->i_hi, pk->tn_min, pk->t_max, rows,
+                            0.0f, 0);
 }
 
 /* Loads rays [0, n) into the packet; returns 0 when the packet cannot be

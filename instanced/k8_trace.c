@@ -1,5 +1,11 @@
 /*
- * inst_trace.c - traversal of the `instanced` kind (see README.md).
+ * k8_trace.c - the single-ray traversal of the `instanced` kind (see
+ * README.md). A kernel unit (sources.mk's SLOW_SRC): compiled once for
+ * AVX2 and, where the build has ARCH512, once more for AVX-512 with
+ * WIDE_AVX512_UNIT (its entries then end in _avx512, bvh/wide/node.h's
+ * WIDE_UNIT), so that the wide node test and child order it shares with
+ * bvh/wide/ run in the ISA the structure was built for (inst_packet.c
+ * dispatches on inst_accel.isa).
  *
  * Per ray: the top level (BVH or grid over the instances' world bounds) is
  * walked in world space, nearest first. For each instance it reaches, the
@@ -27,7 +33,14 @@
 #include "core/variant.h"
 #include "inst_impl.h"
 #include "inst_ray.h"
-#include "inst_wide.h"
+
+/* The wide BVH's node test and child order (bvh/wide/kernel.h, 8 wide;
+ * its leaf test, core/block_test.h, comes with it but the leaves here are
+ * decided in world space: test_prim). */
+#define WIDE_NW 8
+#define WIDE_LB 8
+#include "core/block_test.h"
+#include "bvh/wide/kernel.h"
 
 #define INST_STACK BVH_MAX_DEPTH /* bvh_build_boxes builds no deeper tree (bvh.h) */
 
@@ -44,8 +57,19 @@ typedef struct {
 
 /* ---- the world-space decision ------------------------------------------------ */
 
+INLINE void test_prim_obj(const inst_accel *a, const inst_item *it, const float *obj, uint32_t q,
+                          ray_state *r, int naive, int spheres);
+
 INLINE void test_prim(const inst_accel *a, const inst_item *it, const accel_scene *mesh,
                       uint32_t q, ray_state *r, int naive, int spheres)
+{
+    test_prim_obj(a, it, mesh->tris + 9 * (size_t)q, q, r, naive, spheres);
+}
+
+/* The same with mesh triangle q's object-space floats at obj (read only
+ * for a transformed triangle). */
+INLINE void test_prim_obj(const inst_accel *a, const inst_item *it, const float *obj, uint32_t q,
+                          ray_state *r, int naive, int spheres)
 {
     const accel_scene *s = a->scene;
     uint32_t id = it->base + q;
@@ -59,7 +83,7 @@ INLINE void test_prim(const inst_accel *a, const inst_item *it, const accel_scen
     } else if (it->identity || a->world_flat) {
         tri = s->tris + 9 * (size_t)id;
     } else {
-        inst_xform_tri(it, mesh->tris + 9 * (size_t)q, w);
+        inst_xform_tri(it, obj, w);
         tri = w;
     }
     if (inst_decide(&r->p, tri, NULL, sphere, id, naive, &r->t, &r->u, &r->v, &r->prim) && r->any)
@@ -140,68 +164,70 @@ static void visit_instance_flat(const inst_accel *a, uint32_t k, ray_state *r, i
 /* The walk of an inst_wide: the bottom level of instance `it` (as walk_bvh:
  * the ray shifted by `shift`, t range widened by the slack, boxes grown by
  * pad), or the top level (it == NULL: the world ray, no pad, no slack;
- * leaves are instances). Hit children are ordered by entry distance, the
- * nearest taken next, the others pushed far to near; a pushed child is
- * skipped when it starts beyond the closest hit found since. */
-INLINE void walk_wide(const inst_accel *a, const inst_item *it, const bvh_box_tree *h,
-                      const inst_wide *w, const accel_scene *mesh, ray_state *r, vec3 org,
-                      vec3 dir, float pad, double shift, int naive, int spheres)
+ * leaves are instances). A node is the wide BVH's (bvh/wide/kernel.h: the
+ * slab test of its 8 boxes, grown by the pad where there is one, and the
+ * hit children pushed in the node's octant order, the nearest first); a
+ * pushed child is skipped when it starts beyond the closest hit found since. */
+INLINE void walk_wide(const inst_accel *a, const inst_item *it, const inst_wide *w, ray_state *r,
+                      vec3 org, vec3 dir, float pad, double shift, int naive, int spheres)
 {
-    if (w->root == INST_WIDE_NONE) return;
+    if (w->root == WIDE_EMPTY) return;
     const int top = it == NULL;
-    vec3 inv = top ? r->p.inv_dir : v3(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
-    int neg[3] = {signbit(dir.x) != 0, signbit(dir.y) != 0, signbit(dir.z) != 0};
     float slack = top || it->identity ? 0.0f : 0x1p-20f;
-    float lo_t = inst_walk_lo(r->p.t_near, shift, slack); /* top: shift 0, slack 0 */
+    /* The node test reads the prep's origin, reciprocals, signs and t_near. */
+    accel_ray_prep p;
+    p.org = org;
+    p.inv_dir = top ? r->p.inv_dir : v3(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
+    p.neg[0] = signbit(dir.x) != 0, p.neg[1] = signbit(dir.y) != 0, p.neg[2] = signbit(dir.z) != 0;
+    p.t_near = inst_walk_lo(r->p.t_near, shift, slack); /* top: shift 0, slack 0 */
+    node_ray_8_8 nr;
+    node_setup_8_8(&nr, &p);
     const int padded = pad != 0.0f;
-    struct { uint32_t ref; float entry; } stack[(INST_WIDE - 1) * INST_STACK + 1], hit[INST_WIDE];
+    node_pad_8_8 np;
+    pad_setup_8_8(&np, &p, pad);
+    const int oct = 3 * (p.neg[0] | p.neg[1] << 1 | p.neg[2] << 2);
+    uint32_t sref[WIDE_STACK(INST_WIDE) + INST_WIDE]; /* a node stores 8 lanes at the top */
+    float st[WIDE_STACK(INST_WIDE) + INST_WIDE];
     int sp = 0;
     uint32_t ref = w->root;
+    const wide_node8 *nodes = w->nodes;
     /* The end of the range in the walk's parameter: changes only at leaves. */
     float hi_t = inst_walk_hi(r->t, shift, slack);
     for (;;) {
-        if (ref & INST_WIDE_LEAF) {
-            const bvh_node *n = &h->nodes[ref & ~INST_WIDE_LEAF];
-            for (uint32_t i = 0; i < n->count; i++) {
-                uint32_t q = h->order[n->left_first + i];
-                if (top)
-                    visit_instance_flat(a, q, r, naive, spheres);
-                else
-                    test_prim(a, it, mesh, q, r, naive, spheres);
-                if (r->done) return;
+        if (ref & WIDE_LEAF) {
+            uint32_t first = wide_leaf_first(ref), nb = wide_leaf_blocks(ref);
+            if (top) {
+                for (uint32_t i = 0; i < nb; i++) {
+                    visit_instance_flat(a, w->ids[first + i], r, naive, spheres);
+                    if (r->done) return;
+                }
+            } else {
+                for (const accel_block8 *blk = w->blocks + first; nb--; blk++)
+                    for (int lane = 0; lane < 8; lane++) {
+                        if (lane && blk->id[lane] == blk->id[lane - 1]) break; /* the padding */
+                        float obj[9];
+                        inst_block_lane(blk, lane, obj);
+                        test_prim_obj(a, it, obj, blk->id[lane], r, naive, spheres);
+                        if (r->done) return;
+                    }
             }
             hi_t = inst_walk_hi(r->t, shift, slack);
         } else {
-            const inst_wnode *nd = &w->nodes[ref];
-            float e[INST_WIDE];
-            unsigned m = inst_wide_hits(nd, org, inv, neg, pad, lo_t, hi_t, padded, e);
             if (top)
                 r->top_steps++;
             else
                 r->bottom_steps++;
             r->boxes += INST_WIDE;
-            if (m && !(m & (m - 1))) {
-                ref = nd->child[__builtin_ctz(m)];
+            if (padded ? visit_node_oct_pad_8_8(&nodes[ref], &nr, &np, hi_t, &ref, sref, st, &sp, oct)
+                       : visit_node_oct_8_8(&nodes[ref], &nr, hi_t, &ref, sref, st, &sp, oct, 0))
                 continue;
-            }
-            if (m) {
-                int k = 0;
-                for (; m; m &= m - 1) { /* insertion, farthest first */
-                    int c = __builtin_ctz(m), j = k++;
-                    while (j > 0 && hit[j - 1].entry < e[c]) hit[j] = hit[j - 1], j--;
-                    hit[j].ref = nd->child[c], hit[j].entry = e[c];
-                }
-                for (int j = 0; j < k - 1; j++) stack[sp++] = hit[j];
-                ref = hit[k - 1].ref;
-                continue;
-            }
         }
         for (;;) {
             if (sp == 0) return;
             --sp;
-            if (box3_entry_before(stack[sp].entry, hi_t)) break;
+            if (box3_entry_before(st[sp], hi_t)) break;
         }
-        ref = stack[sp].ref;
+        ref = sref[sp];
     }
 }
 
@@ -285,14 +311,13 @@ static __attribute__((flatten, noinline)) void
 walk_wide_flat(const inst_accel *a, const inst_item *it, const inst_bottom *b, ray_state *r,
                vec3 org, vec3 dir, float pad, double shift, int naive, int spheres)
 {
-    const bvh_box_tree *h = &b->bvh;
     const inst_wide *w = &b->wide;
     if (naive)
-        walk_wide(a, it, h, w, b->mesh, r, org, dir, pad, shift, 1, spheres);
+        walk_wide(a, it, w, r, org, dir, pad, shift, 1, spheres);
     else if (spheres)
-        walk_wide(a, it, h, w, b->mesh, r, org, dir, pad, shift, 0, 1);
+        walk_wide(a, it, w, r, org, dir, pad, shift, 0, 1);
     else
-        walk_wide(a, it, h, w, b->mesh, r, org, dir, pad, shift, 0, 0);
+        walk_wide(a, it, w, r, org, dir, pad, shift, 0, 0);
 }
 
 static __attribute__((flatten, noinline)) void
@@ -517,8 +542,7 @@ INLINE void kernel(const void *acc, const accel_ray *rays, void *out, size_t cou
             r.o[0] = r.p.org.x, r.o[1] = r.p.org.y, r.o[2] = r.p.org.z;
             r.d[0] = r.p.dir.x, r.d[1] = r.p.dir.y, r.d[2] = r.p.dir.z;
             if (a->top == INST_BVH && a->width == INST_WIDE)
-                walk_wide(a, NULL, &a->top_bvh, &a->top_wide, NULL, &r, r.p.org, r.p.dir, 0.0f,
-                          0.0, naive, spheres);
+                walk_wide(a, NULL, &a->top_wide, &r, r.p.org, r.p.dir, 0.0f, 0.0, naive, spheres);
             else if (a->top == INST_BVH)
                 top_bvh(a, &r, naive, spheres);
             else
@@ -550,5 +574,6 @@ static unsigned flags_of(const inst_accel *a)
     return accel_variant_flags(a->naive, a->spheres, 0);
 }
 
-ACCEL_KERNEL_ENTRIES(inst_single_intersect, inst_single_occluded, const void, inst_closest_table, inst_any_table,
-                     flags_of)
+#define INST_TRACE_HIT WIDE_UNIT(inst_trace_intersect)
+#define INST_TRACE_OCC WIDE_UNIT(inst_trace_occluded)
+ACCEL_KERNEL_ENTRIES(INST_TRACE_HIT, INST_TRACE_OCC, const void, inst_closest_table, inst_any_table, flags_of)
