@@ -70,11 +70,18 @@ extern "C" {
  * rounded up for the padded lanes of a cell's last block. A block cell
  * is priced per triangle, linear in n (a cell of 1..8 triangles really
  * costs one block); refit with the step-cost experiment before trusting
- * its choices. The non-auto densities (lambda, sub_lambda, threshold)
- * stay the per-id defaults with blocks: by this price a leaf of blocks
- * breaks even with a sub-grid at about 13/2 times the triangles, so
- * threshold would rise towards 64 (8 blocks); unmeasured, not changed. */
+ * its choices. The non-auto densities lambda and sub_lambda stay the
+ * per-id defaults with blocks; by this price a leaf of blocks breaks even
+ * with a sub-grid at about 13/2 times the triangles, so the threshold
+ * rises (NGRID_BLOCKS_THRESHOLD). */
 #define NGRID_BLOCKS_C_ISECT 2
+/* The threshold with cells=blocks when none is given. Measured on the
+ * diffuse rays of the scanned meshes (1024x768 primaries' bounces, one
+ * process each, 2026-12-07, AVX2): threshold 12 (the per-id default),
+ * 24, 32, 48 gave 1.00, 1.27, 1.86, 1.67 Mrays/s on armadillo and (24, 32,
+ * 48) 2.23, 2.25, 1.93 on bunny; the per-id cells' best of 6, 12, 32 was 6 (1.00 and
+ * 1.19 Mrays/s). */
+#define NGRID_BLOCKS_THRESHOLD 32
 
 extern const accel_kind accel_kind_nested_grid;
 
