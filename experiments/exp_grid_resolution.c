@@ -55,12 +55,12 @@ typedef struct {
     double best_l, pick_l;
     /* The per-id cells (cells=ids, the scalar test) swept apart: their
      * best lambda and time, the pick of their own fit; ids_ok when run. */
-    int ids_ok;
-    double ids_best_l, ids_best_ns, ids_pick_l, own_pick_l;
+    int ids_ok, blocks_apply;
+    double ids_best_l, ids_best_ns, ids_pick_l, own_pick_l, ids_ratio;
 } scene_result;
 
 typedef struct {
-    int calibrated;
+    int calibrated, cal_lanes; /* cal_lanes: the calibration scene's test_lanes */
     exp_fit fit;                     /* C_step, C_intersect, C_ray */
     double default_lambda;
     scene_result sc[MAX_SCENES];
@@ -94,6 +94,7 @@ static void calibrate(exp_ctx *x, study *st, const exp_group *g)
     }
     const double *cols[3] = {s, p, one};
     st->calibrated = n >= 4 && exp_nnls(cols, 3, y, n, &st->fit) == 0;
+    st->cal_lanes = g->count ? g->cfg[0].build.test_lanes : 0;
     if (st->calibrated)
         exp_md(x, "\nCalibration on this scene (non-negative least squares over its %d "
                   "configurations): C_step = %.2f ns, C_intersect = %.2f ns, C_ray = %.1f ns%s.\n",
@@ -221,6 +222,17 @@ static void judge_pick(exp_ctx *x, study *st, const exp_group *g, scene_result *
 {
     int pick = st->calibrated ? model_pick(g, st->fit.coef) : -1;
     if (best < 0 || pick < 0) return;
+    /* The calibration's constants are those of its scene's triangle test:
+     * a scene whose grid tests with the other kernel (spheres keep id
+     * lists where the calibration scene's cells hold blocks) is not a test
+     * of the model. */
+    if (g->cfg[best].build.test_lanes != st->cal_lanes) {
+        exp_md(x, "\nNo model pick here: the calibration scene's grid tests %s, this scene's %s "
+                  "(a scene with spheres keeps id lists), so its constants do not apply.\n",
+               st->cal_lanes ? "blocks of 8" : "triangles one by one",
+               g->cfg[best].build.test_lanes ? "blocks of 8" : "primitives one by one");
+        return;
+    }
     exp_est ex = exp_group_speedup(g, pick, best, MASK);
     if (pick == best) ex = (exp_est){.median = 1, .lo = 1, .hi = 1, .min = 1, .max = 1, .n = ex.n, .level = 1};
     int hit = pick == best || exp_ratio_cmp(&ex, g->floor) == 0 || ex.median - 1 <= WITHIN;
@@ -283,24 +295,51 @@ static void ids_sweep(exp_ctx *x, const accel_scene *s, const bench_sets *sets, 
         snprintf(spec, sizeof spec, "grid:cells=ids,lambda=%g", ls[i]);
         exp_group_add(&g, spec, 0);
     }
+    /* The block cells' best again, in these rounds: times of two groups
+     * are not comparable (each times its own share of the rays), so the
+     * ratio of the two bests is taken here. */
+    exp_group_add(&g, r->best, 0);
     exp_group_run(&g);
-    int best = -1;
+    int best = -1, blocks = exp_group_find(&g, r->best);
     for (int c = 0; c < g.count; c++)
-        if (g.cfg[c].ok && (best < 0 || exp_group_ns(&g, c, MASK).median < exp_group_ns(&g, best, MASK).median))
+        if (g.cfg[c].ok && c != blocks && ids_lambda_of(g.cfg[c].spec) > 0 &&
+            (best < 0 || exp_group_ns(&g, c, MASK).median < exp_group_ns(&g, best, MASK).median))
             best = c;
     if (best >= 0) {
+        /* the per-id configurations' own fit and pick (the block row left out) */
+        double sv[MAX_LAMBDAS], pv[MAX_LAMBDAS], yv[MAX_LAMBDAS], one[MAX_LAMBDAS];
+        int idx[MAX_LAMBDAS], m = 0, pick = -1;
+        for (int c = 0; c < g.count && m < MAX_LAMBDAS; c++)
+            if (g.cfg[c].ok && ids_lambda_of(g.cfg[c].spec) > 0) {
+                sv[m] = exp_group_steps(&g, c, MASK), pv[m] = exp_group_prims(&g, c, MASK);
+                yv[m] = exp_group_ns(&g, c, MASK).median, one[m] = 1, idx[m++] = c;
+            }
+        const double *cols[3] = {sv, pv, one};
         exp_fit own;
-        int pick = own_fit(&g, &own) ? model_pick(&g, own.coef) : -1;
+        if (m >= 4 && exp_nnls(cols, 3, yv, m, &own) == 0) {
+            double v = INFINITY;
+            for (int i = 0; i < m; i++) {
+                double e = own.coef[0] * sv[i] + own.coef[1] * pv[i] + own.coef[2];
+                if (e < v) v = e, pick = idx[i];
+            }
+        }
+        int both = blocks >= 0 && g.cfg[blocks].ok;
         r->ids_ok = 1;
         r->ids_best_l = ids_lambda_of(g.cfg[best].spec);
         r->ids_best_ns = exp_group_ns(&g, best, MASK).median;
+        /* time(ids) / time(blocks); a block row left out as the same
+         * structure (a scene with spheres keeps id lists) has no blocks */
+        r->ids_ratio = both ? exp_group_speedup(&g, best, blocks, MASK).median : 1;
+        r->blocks_apply = both && g.cfg[blocks].build.test_lanes != 0;
         r->ids_pick_l = pick >= 0 ? ids_lambda_of(g.cfg[pick].spec) : 0;
         r->own_pick_l = lambda_of(r->own_pick);
         exp_md(x, "\nThe per-id cells (`cells=ids`, the scalar test) on the same rays, lambda %g "
-                  "to %g: best lambda=%g at %.0f ns per ray, %.2fx the block cells' best (%.0f ns, "
-                  "lambda=%g); a model fitted on them picks %s.\n",
-               ls[0], ls[nl - 1], r->ids_best_l, r->ids_best_ns, r->ids_best_ns / r->best_ns,
-               r->best_ns, r->best_l, pick >= 0 ? g.cfg[pick].spec : "nothing (too few points)");
+                  "to %g, in rounds of their own with the block cells' best (`%s`)%s: best "
+                  "lambda=%g, %.2fx the time of the block cells' best; a model fitted on them "
+                  "picks %s.\n",
+               ls[0], ls[nl - 1], r->best,
+               r->blocks_apply ? "" : " (no blocks here: the scene has spheres, so both are id lists)",
+               r->ids_best_l, r->ids_ratio, pick >= 0 ? g.cfg[pick].spec : "nothing (too few points)");
     }
     exp_group_note(&g);
     exp_group_free(&g);
@@ -505,7 +544,7 @@ static void answer(exp_ctx *x, const study *st)
               "reference) on the same rays. A model fitted on each kernel's own sweep picks its "
               "lambda; \"predicted\" when the picks move as the measured bests do.\n");
     exp_md_table(x, "scene|per-id best lambda|block best lambda|moved|per-id / block time at "
-                    "their bests|model pick: per-id, blocks|predicted");
+                    "their bests (same rounds)|model pick: per-id, blocks|predicted");
     for (int si = 0; si < st->scenes; si++) {
         const scene_result *r = &st->sc[si];
         if (!r->have_pick || !r->ids_ok) continue;
@@ -517,9 +556,21 @@ static void answer(exp_ctx *x, const study *st)
             snprintf(pk, sizeof pk, "%g, %g", r->ids_pick_l, r->own_pick_l);
         else
             snprintf(pk, sizeof pk, "no fit (too few points)");
-        exp_md(x, "| %s | %g | %g | %.3gx | %.2f | %s | %s |\n", r->name, r->ids_best_l, r->best_l,
-               r->best_l / r->ids_best_l, r->ids_best_ns / r->best_ns, pk,
-               pk[0] == 'n' ? "n/a" : pred ? "yes" : "no");
+        if (!r->blocks_apply) {
+            exp_md(x, "| %s | %g | - | - | - | %s | n/a: spheres, no blocks |\n", r->name,
+                   r->ids_best_l, pk);
+            continue;
+        }
+        char bl[64], mv[32];
+        if (r->best_l > 0) {
+            snprintf(bl, sizeof bl, "%g", r->best_l);
+            snprintf(mv, sizeof mv, "%.3gx", r->best_l / r->ids_best_l);
+        } else {
+            snprintf(bl, sizeof bl, "`%s`", r->best);
+            snprintf(mv, sizeof mv, "-");
+        }
+        exp_md(x, "| %s | %g | %s | %s | %.2f | %s | %s |\n", r->name, r->ids_best_l, bl, mv,
+               r->ids_ratio, pk, pk[0] == 'n' || r->best_l <= 0 ? "n/a" : pred ? "yes" : "no");
     }
     svg_plot p, q;
     svg_plot_init(&p, "Grid resolution: time over each scene's best against lambda",

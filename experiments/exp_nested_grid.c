@@ -93,7 +93,9 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     if (exp_kind_wanted(x, "grid"))
         for (int i = 0; i < nl; i++) {
             char sp[64];
-            snprintf(sp, sizeof sp, "grid:lambda=%g", ls[i]);
+            /* the nested grid's own kernel (its default cells=ids): the
+             * comparison is of structures, not of triangle tests */
+            snprintf(sp, sizeof sp, "grid:cells=ids,lambda=%g", ls[i]);
             exp_group_add(&g, sp, 0);
         }
     int grid_hi = g.count;
@@ -124,7 +126,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     }
     exp_group_note(&g);
     exp_text_add(&st->scenes, "%s%s", st->scenes.len ? ", " : "", s.name);
-    int bg = best_of(&g, "grid:lambda=", hand_hi, grid_hi), bh = best_of(&g, "", hand_lo, hand_hi);
+    int bg = best_of(&g, "grid:cells=ids,lambda=", hand_hi, grid_hi), bh = best_of(&g, "", hand_lo, hand_hi);
     int au = exp_group_find(&g, "nested_grid:auto"), df = hand_hi > hand_lo ? hand_lo : -1;
     if (au >= 0 && !g.cfg[au].ok) au = -1;
     if (df >= 0 && !g.cfg[df].ok) df = -1;
