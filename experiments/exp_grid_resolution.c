@@ -22,6 +22,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "grid_res_ids.h"
 #include "group.h"
 #include "region.h"
 #include "svg.h"
@@ -56,7 +57,7 @@ typedef struct {
     /* The per-id cells (cells=ids, the scalar test) swept apart: their
      * best lambda and time, the pick of their own fit; ids_ok when run. */
     int ids_ok, blocks_apply;
-    double ids_best_l, ids_best_ns, ids_pick_l, own_pick_l, ids_ratio;
+    double ids_best_l, ids_pick_l, own_pick_l, ids_ratio;
 } scene_result;
 
 typedef struct {
@@ -268,83 +269,6 @@ static void judge_pick(exp_ctx *x, study *st, const exp_group *g, scene_result *
                      100 * (ex.median - 1), hit ? "a hit: tied or within 5%" : "a miss");
 }
 
-/* lambda of "grid:cells=ids,lambda=L" (0 otherwise). */
-static double ids_lambda_of(const char *spec)
-{
-    const char *l = strstr(spec, "lambda=");
-    return strstr(spec, "cells=ids") && l ? atof(l + 7) : 0;
-}
-
-/* Where the optimum lay with the old kernel: the per-id cells (the scalar
- * triangle test, one reference at a time) swept over fewer lambdas, in
- * their own interleaved rounds; its best and the pick of a cost model
- * fitted on it, beside the block cells' best and pick. */
-static void ids_sweep(exp_ctx *x, const accel_scene *s, const bench_sets *sets, scene_result *r)
-{
-    static const double full_l[] = {1, 2, 4, 8, 16, 32};
-    static const double quick_l[] = {2, 8};
-    const double *ls = x->quick ? quick_l : full_l;
-    int nl = x->quick ? 2 : 6;
-    exp_group g;
-    exp_group_init(&g, x, s, sets, MASK);
-    g.per_ray = 1;
-    g.collapse_ms = x->quick ? 1000 : 4000;
-    g.time_builds = 0;
-    for (int i = 0; i < nl; i++) {
-        char spec[64];
-        snprintf(spec, sizeof spec, "grid:cells=ids,lambda=%g", ls[i]);
-        exp_group_add(&g, spec, 0);
-    }
-    /* The block cells' best again, in these rounds: times of two groups
-     * are not comparable (each times its own share of the rays), so the
-     * ratio of the two bests is taken here. */
-    exp_group_add(&g, r->best, 0);
-    exp_group_run(&g);
-    int best = -1, blocks = exp_group_find(&g, r->best);
-    for (int c = 0; c < g.count; c++)
-        if (g.cfg[c].ok && c != blocks && ids_lambda_of(g.cfg[c].spec) > 0 &&
-            (best < 0 || exp_group_ns(&g, c, MASK).median < exp_group_ns(&g, best, MASK).median))
-            best = c;
-    if (best >= 0) {
-        /* the per-id configurations' own fit and pick (the block row left out) */
-        double sv[MAX_LAMBDAS], pv[MAX_LAMBDAS], yv[MAX_LAMBDAS], one[MAX_LAMBDAS];
-        int idx[MAX_LAMBDAS], m = 0, pick = -1;
-        for (int c = 0; c < g.count && m < MAX_LAMBDAS; c++)
-            if (g.cfg[c].ok && ids_lambda_of(g.cfg[c].spec) > 0) {
-                sv[m] = exp_group_steps(&g, c, MASK), pv[m] = exp_group_prims(&g, c, MASK);
-                yv[m] = exp_group_ns(&g, c, MASK).median, one[m] = 1, idx[m++] = c;
-            }
-        const double *cols[3] = {sv, pv, one};
-        exp_fit own;
-        if (m >= 4 && exp_nnls(cols, 3, yv, m, &own) == 0) {
-            double v = INFINITY;
-            for (int i = 0; i < m; i++) {
-                double e = own.coef[0] * sv[i] + own.coef[1] * pv[i] + own.coef[2];
-                if (e < v) v = e, pick = idx[i];
-            }
-        }
-        int both = blocks >= 0 && g.cfg[blocks].ok;
-        r->ids_ok = 1;
-        r->ids_best_l = ids_lambda_of(g.cfg[best].spec);
-        r->ids_best_ns = exp_group_ns(&g, best, MASK).median;
-        /* time(ids) / time(blocks); a block row left out as the same
-         * structure (a scene with spheres keeps id lists) has no blocks */
-        r->ids_ratio = both ? exp_group_speedup(&g, best, blocks, MASK).median : 1;
-        r->blocks_apply = both && g.cfg[blocks].build.test_lanes != 0;
-        r->ids_pick_l = pick >= 0 ? ids_lambda_of(g.cfg[pick].spec) : 0;
-        r->own_pick_l = lambda_of(r->own_pick);
-        exp_md(x, "\nThe per-id cells (`cells=ids`, the scalar test) on the same rays, lambda %g "
-                  "to %g, in rounds of their own with the block cells' best (`%s`)%s: best "
-                  "lambda=%g, %.2fx the time of the block cells' best; a model fitted on them "
-                  "picks %s.\n",
-               ls[0], ls[nl - 1], r->best,
-               r->blocks_apply ? "" : " (no blocks here: the scene has spheres, so both are id lists)",
-               r->ids_best_l, r->ids_ratio, pick >= 0 ? g.cfg[pick].spec : "nothing (too few points)");
-    }
-    exp_group_note(&g);
-    exp_group_free(&g);
-}
-
 static void measure_scene(exp_ctx *x, study *st, int si, const char *spec, const exp_list *extra)
 {
     static const double full_l[] = {0.0625, 0.25, 0.5, 1, 2, 4, 8, 16, 32, 64, 128, 256};
@@ -407,7 +331,12 @@ static void measure_scene(exp_ctx *x, study *st, int si, const char *spec, const
                rr.chosen, rr.chosen == 1 ? "" : "s");
     }
     sweep_plot(x, st, &g, si, s.name, r);
-    if (r->have_pick) ids_sweep(x, &s, &sets, r);
+    if (r->have_pick) {
+        grid_res_ids o;
+        grid_res_ids_sweep(x, &s, &sets, MASK, r->best, &o);
+        r->ids_ok = o.ok, r->blocks_apply = o.blocks_apply, r->ids_best_l = o.best_l;
+        r->ids_ratio = o.ratio, r->ids_pick_l = o.pick_l, r->own_pick_l = lambda_of(r->own_pick);
+    }
     if (si == 1 || (x->quick && si == 0)) {
         const char *const heat[] = {"grid:lambda=0.5", "grid:lambda=32"};
         exp_md(x, "\nCells stepped per pixel on %s, `%s` and `%s`, one colour scale:\n", s.name,

@@ -75,7 +75,8 @@ extern "C" {
  * with a sub-grid at about 13/2 times the triangles, so the threshold
  * rises (NGRID_BLOCKS_THRESHOLD). */
 #define NGRID_BLOCKS_C_ISECT 2
-/* The threshold with cells=blocks when none is given. Measured on the
+/* The threshold with cells=blocks for single rays when none is given
+ * (packets keep the per-id densities, as the grid's do). Measured on the
  * diffuse rays of the scanned meshes (1024x768 primaries' bounces, one
  * process each, 2026-12-07, AVX2): threshold 12 (the per-id default),
  * 24, 32, 48 gave 1.00, 1.27, 1.86, 1.67 Mrays/s on armadillo and (24, 32,

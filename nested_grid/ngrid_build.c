@@ -63,7 +63,7 @@ static const accel_param_def ngrid_params[] = {
     {.key = "threshold", .type = ACCEL_PARAM_INT, .def = STR(NGRID_DEFAULT_THRESHOLD),
      .min = 0, .max = 1e9,
      .help = "a cell holding more than this many primitives gets a sub-grid (primitives; "
-             "not given with cells=blocks: " STR(NGRID_BLOCKS_THRESHOLD) ")",
+             "not given with cells=blocks and single rays: " STR(NGRID_BLOCKS_THRESHOLD) ")",
      .offset = offsetof(ngrid_spec, threshold)},
     {.key = "depth", .type = ACCEL_PARAM_INT, .def = STR(NGRID_DEFAULT_DEPTH),
      .min = 1, .max = NGRID_MAX_LEVELS,
@@ -316,7 +316,10 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
     const int blocks = spec->cells == 1 && spec->layout != 1 && !params->naive &&
                        scene->sphere_count == 0;
     if (blocks && !ACCEL_GIVEN(params, ngrid_spec, c_isect)) b.costs.c_isect = NGRID_BLOCKS_C_ISECT;
-    if (blocks && !ACCEL_GIVEN(params, ngrid_spec, threshold)) b.threshold = NGRID_BLOCKS_THRESHOLD;
+    /* single rays only, as the grid's coarser lambda for blocks: it was
+     * measured on them; packets keep the per-id densities */
+    if (blocks && spec->traverse != 1 && !ACCEL_GIVEN(params, ngrid_spec, threshold))
+        b.threshold = NGRID_BLOCKS_THRESHOLD;
     b.max_bytes = spec->max_mb * 1048576.0;
     const int compact = spec->layout == 1;
     if (compact) {
