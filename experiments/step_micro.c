@@ -60,37 +60,27 @@ static double micro_tri(long reps)
 static accel_block8 micro_b8[4] __attribute__((aligned(32)));
 static accel_block4 micro_b4[4] __attribute__((aligned(32)));
 
-static double micro_block8(long reps)
-{
-    wide_leaf_ray_8 lr;
-    leaf_setup_8(&lr, &micro_ray);
-    double acc = 0;
-    for (long r = 0; r < reps; r++) {
-        MICRO_FRESH();
-        for (int k = 0; k < 4; k++) {
-            float t = 1e30f, u, v;
-            uint32_t id = ACCEL_MISS;
-            acc += leaf_block_8(&micro_b8[k], &lr, &micro_ray, &t, &u, &v, &id, 1u << 30, 0, 0, 0);
-        }
+/* One micro-benchmark per block width LB: the LB-lane block test on the
+ * four blocks micro_b<LB>. */
+#define MICRO_BLOCK(LB)                                                                     \
+    static double micro_block##LB(long reps)                                                \
+    {                                                                                       \
+        wide_leaf_ray_##LB lr;                                                              \
+        leaf_setup_##LB(&lr, &micro_ray);                                                   \
+        double acc = 0;                                                                     \
+        for (long r = 0; r < reps; r++) {                                                   \
+            MICRO_FRESH();                                                                  \
+            for (int k = 0; k < 4; k++) {                                                   \
+                float t = 1e30f, u, v;                                                      \
+                uint32_t id = ACCEL_MISS;                                                   \
+                acc += leaf_block_##LB(&micro_b##LB[k], &lr, &micro_ray, &t, &u, &v, &id,   \
+                                       1u << 30, 0, 0, 0);                                  \
+            }                                                                               \
+        }                                                                                   \
+        return acc;                                                                         \
     }
-    return acc;
-}
-
-static double micro_block4(long reps)
-{
-    wide_leaf_ray_4 lr;
-    leaf_setup_4(&lr, &micro_ray);
-    double acc = 0;
-    for (long r = 0; r < reps; r++) {
-        MICRO_FRESH();
-        for (int k = 0; k < 4; k++) {
-            float t = 1e30f, u, v;
-            uint32_t id = ACCEL_MISS;
-            acc += leaf_block_4(&micro_b4[k], &lr, &micro_ray, &t, &u, &v, &id, 1u << 30, 0, 0, 0);
-        }
-    }
-    return acc;
-}
+MICRO_BLOCK(8)
+MICRO_BLOCK(4)
 
 /* A binary node's visit: the slab test of its two child boxes (Kay and
  * Kajiya 1986, with the precomputed inverse direction); 8 nodes per rep. */
