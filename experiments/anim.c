@@ -461,12 +461,14 @@ void exp_anim_fps(exp_ctx *x, exp_anim *a)
     const char *v = exp_ref_absolute(x, ref_ns, frames, &dec, 1, norm, sizeof norm);
     (void)yes;
     v = x->quick ? EXP_UNTESTABLE : strcmp(v, EXP_REFUTED) ? v : exp_slow_verdict(x, v);
+    char gate[300];
+    v = exp_thread_gate(x, bl->threads, v, gate, sizeof gate);
     exp_verdict_num(x, "realtime-animated", v, &dec, anim, "%s at %dx%d, primary plus shadow rays, the "
                 "update included, %u triangles (20 fps needs the lower end of the interval at 20 "
-                "or more); %s%s", exp_text_str(&ev), x->rt_size[0], x->rt_size[1], slot[cur].tri_count, norm,
+                "or more); %s%s%s%s", exp_text_str(&ev), x->rt_size[0], x->rt_size[1], slot[cur].tri_count, norm,
                 x->quick ? "; quick budget: not the lecture's image size or scene"
                 : exp_busy(x) ? "; the machine was busy (other runnable threads at the start): these "
-                "rates are lower bounds" : "");
+                "rates are lower bounds" : "", gate[0] ? "; " : "", gate);
     exp_text_free(&ev);
     for (int l = 0; l < nl; l++) L[l].b.kind->destroy(L[l].b.accel), free(L[l].hits), free(L[l].occ), free(L[l].shade);
     rays_free(&prim);

@@ -319,12 +319,15 @@ static void triangles_at_30hz(exp_ctx *x, exp_text *findings)
         char why[400]; /* issue 52: judged on the time normalized to the reference rate */
         const char *v = exp_group_absolute(&g, &d, 0, why, sizeof why);
         v = x->quick ? EXP_UNTESTABLE : exp_slow_verdict(x, v);
+        char gate[300];
+        v = exp_thread_gate(x, dc->threads, v, gate, sizeof gate);
         exp_verdict_num(x, "binned-30hz", v, &d, sc,
                         "%s`%s` (the fastest longest-axis builder here) builds %d triangles in %s "
                         "ms on 1 thread, against a 33.3 ms frame (threshold: build ms <= 33.3); on "
-                        "%d threads %s ms%s; builds timed once per process in 8 processes when they fit the build budget; %s",
+                        "%d threads %s ms%s; builds timed once per process in 8 processes when they "
+                        "fit the build budget; %s%s%s",
                         x->quick ? "(quick budget: 20k triangles, not the claim's size) " : "",
-                        g.cfg[best].spec, tris, b1, maxt, bm, mt, why);
+                        g.cfg[best].spec, tris, b1, maxt, bm, mt, why, gate[0] ? "; " : "", gate);
     }
     exp_text_free(&ev);
     exp_group_free(&g);

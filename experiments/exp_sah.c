@@ -60,6 +60,8 @@ static const char *const builders[] = {
  * target in the report (exp_target_cmp); an interval holding 2 is a
  * tie with the claim. */
 #define DOUBLE 2.0
+/* Tree costs this close (relative) are the same tree cost (issue 52). */
+#define SAME_COST 0.01
 
 typedef struct {
     int stride; /* 1 in stride of the 800x600 image's 8x8 tiles (exp_sets_tiles) */
@@ -70,6 +72,9 @@ typedef struct {
      * node size). */
     exp_tally sah, build, order[3], pairs, size;
     exp_text ev, build_ev, findings, names;
+    exp_text same_cost; /* scenes left out of the SAH claims: both trees cost the same */
+    exp_tally sah_counts; /* the count co-verdict of sah-2x */
+    exp_text count_ev;
     /* spatial splits on the scanned meshes: scenes, and those where they
      * trace slower outside the noise; evidence */
     int sb_meshes, sb_mesh_slower;
@@ -175,6 +180,15 @@ static void claim(exp_group *g, study *st, const char *scene)
 {
     int pure = exp_group_find(g, PURE), sah = exp_group_find(g, SAH);
     if (pure < 0 || sah < 0 || !g->cfg[pure].ok || !g->cfg[sah].ok) return;
+    /* Issue 52: a scene where both builders reach the same tree cost (a
+     * symmetric scene whose median split is the SAH's) says nothing of the
+     * SAH: left out of both claims, with the reason. */
+    double c_sah = g->cfg[sah].build.sah_cost, c_pure = g->cfg[pure].build.sah_cost;
+    if (c_sah > 0 && c_pure > 0 && fabs(c_pure / c_sah - 1) < SAME_COST) {
+        exp_text_add(&st->same_cost, "%s%s (SAH cost %.3f against the median split's %.3f)",
+                     st->same_cost.len ? ", " : "", scene, c_sah, c_pure);
+        return;
+    }
     exp_text line = {0}, spread = {0}; /* for the findings; for the verdict, with both spreads */
     char tag[200];
     scene_tag(tag, sizeof tag, g, scene);
@@ -194,6 +208,15 @@ static void claim(exp_group *g, study *st, const char *scene)
         exp_text_add(&spread, "%s%s %s (%s%s%s)", spread.len ? ", " : "", bench_set_name(bit),
                      exp_fmt_x(sp, sizeof sp, &e95), exp_judge(&d), e.procs > 1 ? "; " : "",
                      exp_fmt_spreads(sd, sizeof sd, &e95));
+    }
+    /* The count co-verdict (issue 52): node visits plus triangle tests
+     * per ray, pure median over SAH, exact, against the same 2x. */
+    double wp = exp_group_steps(g, pure, g->mask) + exp_group_prims(g, pure, g->mask),
+           ws = exp_group_steps(g, sah, g->mask) + exp_group_prims(g, sah, g->mask);
+    if (wp > 0 && ws > 0) {
+        exp_decider dc = {"", wp / ws, wp / ws, wp / ws, DOUBLE, +1, 1};
+        exp_tally_add(&st->sah_counts, &dc);
+        exp_text_add(&st->count_ev, "%s%s %.2fx", st->count_ev.len ? ", " : "", scene, wp / ws);
     }
     st->scenes++;
     exp_text_add(&st->findings, "- %s: `sah` over the pure median split (95%% intervals; the "
@@ -485,15 +508,25 @@ static const char *part_word(const exp_tally *t)
 /* The section's verdicts, each on the claim's number (issue 38). */
 static void verdicts(exp_ctx *x, study *st)
 {
+    const char *tw = exp_tally_verdict(&st->sah), *cw = exp_tally_verdict(&st->sah_counts);
+    const char *counts_word = cw ? cw : "not measured";
+    const char *counts_agree = !tw || !cw ? "nothing to compare"
+                               : !strcmp(tw, cw) ? "it agrees with the timing"
+                                                 : "it DISAGREES with the timing: the work a ray does "
+                                                   "and the time it takes part here";
     if (st->sah.added)
         exp_verdict_num(x, "sah-2x", exp_tally_verdict(&st->sah), &st->sah.worst,
                         exp_text_str(&st->names),
                         "full-sweep SAH over the pure median split, threshold 2x on each of %d "
                         "comparisons (scene x ray set; intervals at %.2f%%, Bonferroni): %d "
-                        "confirm, %d miss, %d on the line; deciding %s %s (%s)", st->sah.added,
+                        "confirm, %d miss, %d on the line; deciding %s %s (%s)%s%s; the count "
+                        "co-verdict (node visits plus tests per ray, median over SAH, exact, "
+                        "the same 2x): %s (%s), %s", st->sah.added,
                         100 * exp_tally_level(&st->sah), st->sah.confirmed, st->sah.refuted,
                         st->sah.online, st->sah.worst.what, exp_judge(&st->sah.worst),
-                        exp_text_str(&st->ev));
+                        exp_text_str(&st->ev), st->same_cost.len ? "; left out, both trees "
+                        "at the same SAH cost: " : "", exp_text_str(&st->same_cost),
+                        counts_word, exp_text_str(&st->count_ev), counts_agree);
     else
         exp_verdict(x, "sah-2x", EXP_UNTESTABLE, "-", "the SAH or the pure median tree was not built");
     if (st->build.added)
@@ -501,9 +534,11 @@ static void verdicts(exp_ctx *x, study *st)
                         exp_text_str(&st->names),
                         "\"much slower\" read as at least 2x the pure median split's build time, "
                         "on each of %d scenes (intervals at %.2f%%, Bonferroni; builds once per "
-                        "process when they fit the budget): %d confirm, %d miss, %d on the line (%s)",
+                        "process when they fit the budget): %d confirm, %d miss, %d on the line (%s)%s%s",
                         st->build.added, 100 * exp_tally_level(&st->build), st->build.confirmed,
-                        st->build.refuted, st->build.online, exp_text_str(&st->build_ev));
+                        st->build.refuted, st->build.online, exp_text_str(&st->build_ev),
+                        st->same_cost.len ? "; left out, both trees at the same SAH cost: " : "",
+                        exp_text_str(&st->same_cost));
     exp_tally *parts[5] = {&st->order[0], &st->order[1], &st->order[2], &st->pairs, &st->size};
     const exp_decider *dec = NULL;
     const char *word = exp_compound(parts, 5, &dec);
@@ -579,6 +614,7 @@ int main(int argc, char **argv)
     study st = {0};
     exp_tally_init(&st.sah, 3 * scene_count);
     exp_tally_init(&st.build, scene_count);
+    exp_tally_init(&st.sah_counts, scene_count);
     for (int i = 0; i < 3; i++) exp_tally_init(&st.order[i], scene_count);
     exp_tally_init(&st.pairs, scene_count);
     exp_tally_init(&st.size, scene_count);
@@ -604,6 +640,8 @@ int main(int argc, char **argv)
     exp_text_free(&st.ev);
     exp_text_free(&st.build_ev);
     exp_text_free(&st.names);
+    exp_text_free(&st.same_cost);
+    exp_text_free(&st.count_ev);
     exp_text_free(&st.sb_ev);
     exp_text_free(&st.lay_ev);
     exp_list_free(&list);

@@ -216,7 +216,9 @@ static void compare_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     }
     exp_group_note(&g);
     /* Findings: the fastest combination and flattened structure, the control, the answers. */
+    g.half = 1; /* issue 52: the fastest chosen on half the rounds, judged on the other */
     int two = exp_group_best(&g, SETS, 0, g.count, "instanced:top="), flat = best_of(&g, SETS, 0, 0, dis);
+    g.half = 0;
     if (two >= 0 && base->ok) {
         const exp_cfg *tc = &g.cfg[two];
         exp_est sp[3], br;
@@ -245,7 +247,9 @@ static void compare_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
                      tc->spec, s.name);
             snprintf(w[2], sizeof w[2], "two-level / flattened trace speed, `%s`, %s %u tris, "
                      "primary+shadow+diffuse", tc->spec, s.name, s.tri_count);
+            g.half = 2;
             exp_est b = br, t = exp_group_speedup_level(&g, 0, two, SETS, exp_tally_level(&st->tt));
+            g.half = 0;
             exp_est mem = {tr / fr, tr / fr, tr / fr, tr / fr, tr / fr, 1, 1, 1, 0, 0};
             exp_decider d0 = exp_decider_of(w[0], &b, 1.0, +1), d1 = exp_decider_of(w[1], &mem, 1.0, -1),
                         d2 = exp_decider_of(w[2], &t, 1.0, -1);
@@ -342,11 +346,16 @@ static void verdicts(exp_ctx *x, study *st, const exp_anim *an)
     const char *vs = exp_judge(&ds), *vl = exp_judge(&dl);
     double moved = fabs(an->box_ratio - 1);
     if (moved <= BOX_MOVED) {
-        exp_verdict_num(x, "refit", EXP_UNTESTABLE, &dl, an->anim, "the deformation moves box "
-                        "tests per ray by %.1f%% after the last k (at most %.0f%%: a refit tree "
-                        "that visits the same boxes cannot trace more slowly); the cost part: %s "
-                        "(%s; threshold %.1fx); `%s`: trace time change %s", 100 * moved,
-                        100 * BOX_MOVED, vs, an->update_ev, REFIT_MUCH, an->refit, an->loss_ev);
+        /* claims.h's rule for compound claims: a part not testable is left
+         * out, and the text says so. */
+        const char *parts[2] = {vs, EXP_UNTESTABLE};
+        exp_verdict_num(x, "refit", exp_combine(parts, 2, EXP_PARTS), &ds, an->anim, "cheaper "
+                        "per frame (rebuild/refit update time >= %.1fx): %s, %s; the trace part "
+                        "is not testable here: the deformation moves box tests per ray by %.1f%% "
+                        "after the last k (at most %.0f%%: a refit tree that visits the same boxes "
+                        "cannot trace more slowly), so the word is the cost part's alone; `%s`: "
+                        "trace time change %s", REFIT_MUCH, vs, an->update_ev, 100 * moved,
+                        100 * BOX_MOVED, an->refit, an->loss_ev);
         return;
     }
     const char *parts[2] = {vs, vl}; /* claims.h's one rule for compound claims */

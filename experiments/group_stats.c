@@ -8,7 +8,24 @@
 
 #include "group.h"
 
-int exp_group_round_ms(const exp_group *g, int c, int mask, double *out)
+/* Whether round r is in the group's half (group.h). */
+static int in_half(const exp_group *g, int r)
+{
+    if (!g->half || g->per_proc < 2) return 1;
+    return (r % g->per_proc) % 2 == g->half - 1;
+}
+
+const int *exp_group_procs(const exp_group *g, int *buf)
+{
+    if (!g->half || g->per_proc < 2) return g->round_proc;
+    int m = 0;
+    for (int r = 0; r < g->rounds; r++)
+        if (in_half(g, r)) buf[m++] = g->round_proc[r];
+    return buf;
+}
+
+/* exp_group_round_ms over every round, the half left aside. */
+static int all_round_ms(const exp_group *g, int c, int mask, double *out)
 {
     const exp_cfg *cf = &g->cfg[c];
     int n = EXP_MAX_SAMPLES;
@@ -27,6 +44,14 @@ int exp_group_round_ms(const exp_group *g, int c, int mask, double *out)
     return n;
 }
 
+int exp_group_round_ms(const exp_group *g, int c, int mask, double *out)
+{
+    int n = all_round_ms(g, c, mask, out), m = 0;
+    for (int r = 0; r < n; r++)
+        if (in_half(g, r)) out[m++] = out[r];
+    return m;
+}
+
 size_t exp_group_rays(const exp_group *g, int c, int mask)
 {
     size_t n = 0;
@@ -41,7 +66,8 @@ exp_est exp_group_ns(const exp_group *g, int c, int mask)
     double v[EXP_MAX_SAMPLES];
     int n = exp_group_round_ms(g, c, mask, v);
     exp_est e;
-    exp_est_of_procs(v, g->round_proc, n, &e);
+    int pb[EXP_MAX_SAMPLES];
+    exp_est_of_procs(v, exp_group_procs(g, pb), n, &e);
     size_t rays = exp_group_rays(g, c, mask);
     return exp_est_scale(&e, rays ? 1e6 / (double)rays : 0);
 }
@@ -57,7 +83,8 @@ exp_est exp_group_speedup_level(const exp_group *g, int base, int c, int mask, d
     double a[EXP_MAX_SAMPLES], b[EXP_MAX_SAMPLES];
     int na = exp_group_round_ms(g, base, mask, a), nb = exp_group_round_ms(g, c, mask, b);
     exp_est e;
-    exp_est_ratio_level(a, b, g->round_proc, na < nb ? na : nb, level, &e);
+    int pb[EXP_MAX_SAMPLES];
+    exp_est_ratio_level(a, b, exp_group_procs(g, pb), na < nb ? na : nb, level, &e);
     return e;
 }
 
@@ -71,7 +98,8 @@ exp_est exp_group_ns_level(const exp_group *g, int c, int mask, double level)
     double v[EXP_MAX_SAMPLES];
     int n = exp_group_round_ms(g, c, mask, v);
     exp_est e;
-    exp_est_of_level(v, g->round_proc, n, level, &e);
+    int pb[EXP_MAX_SAMPLES];
+    exp_est_of_level(v, exp_group_procs(g, pb), n, level, &e);
     size_t rays = exp_group_rays(g, c, mask);
     return exp_est_scale(&e, rays ? 1e6 / (double)rays : 0);
 }

@@ -110,6 +110,8 @@ typedef struct {
     int images[4][2], image_count; /* ray-set sizes exp_sets_wh made (the footer names them) */
     /* The reference kernel (reference.c), timed in every round of every group. */
     int ref_state;        /* 0 not made yet, 1 ready, -1 could not be made */
+    double thread_eff;    /* exp_thread_gate's probe efficiency (0: not measured yet) */
+    int thread_eff_n;     /* the threads it was measured on */
     const void *ref_kind; /* const accel_kind * */
     void *ref_accel;
     accel_scene ref_scene;
@@ -225,6 +227,16 @@ exp_decider exp_decider_of(const char *what, const exp_est *e, double threshold,
  * refutation is not testable here, since the measured times are upper
  * bounds of a quiet machine's. */
 const char *exp_slow_verdict(const exp_ctx *x, const char *verdict);
+/* Issue 52: every verdict on more than one thread is gated by the thread
+ * probe as the threads row is. The probe (group_run.c: work that touches
+ * no memory) is timed on 1 and on `threads` threads, paired, 9 times, once
+ * per section; below EXP_PROBE_LINEAR efficiency the machine held the
+ * threads down, so a verdict on `threads` threads may confirm a claim it
+ * meets anyway but not refute one: a word other than confirmed becomes
+ * not testable here. why gets the probe's number (empty on 1 thread).
+ * Returns the gated word. */
+#define EXP_PROBE_LINEAR 0.90
+const char *exp_thread_gate(exp_ctx *x, int threads, const char *verdict, char *why, size_t n);
 /* 1 when other threads competed for the cores at the start (on average half
  * a runnable thread or more besides this experiment, or unknown): a
  * 2-thread measurement has no free core, a "too slow" verdict is an upper
@@ -254,7 +266,7 @@ void exp_reference(exp_ctx *x, const accel_scene *s, const accel_ray *rays, acce
  * means differ by more than this (max / min - 1). */
 #define EXP_REF_STRAY 0.10
 int exp_ref_ready(exp_ctx *x);
-/* One timed trace of the reference rays: ns per ray (0 when not ready). */
+/* The reference rays traced 3 times: the median ns per ray (0 when not ready). */
 double exp_ref_time(const exp_ctx *x);
 /* Records reference times (ns per ray) of the section's rounds. */
 void exp_ref_note(exp_ctx *x, const double *ns, int n);

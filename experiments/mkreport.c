@@ -171,9 +171,15 @@ static void deciding_cell(char *dst, size_t n, const verdict *v)
      * one of zero width from 2 or more is no interval. */
     const char *note = v->n >= 2 && !(v->hi != v->lo) ? " (zero width: not an interval)"
                        : v->n >= 2 && v->n < 6 ? " (n < 6: not a 95% interval)" : "";
-    snprintf(dst, n, "%s%s%s [%s, %s]%s (claim %s %s)", what, what[0] ? ": " : "",
-             num(a, sizeof a, v->value), num(b, sizeof b, v->lo), num(c, sizeof c, v->hi), note,
-             v->sense > 0 ? ">=" : v->sense < 0 ? "<=" : "vs", num(d, sizeof d, v->threshold));
+    if (v->n <= 1 && v->lo == v->hi) /* an exact number (counts): no interval to show */
+        snprintf(dst, n, "%s%s%s (exact) (claim %s %s)", what, what[0] ? ": " : "",
+                 num(a, sizeof a, v->value), v->sense > 0 ? ">=" : v->sense < 0 ? "<=" : "vs",
+                 num(d, sizeof d, v->threshold));
+    else
+        snprintf(dst, n, "%s%s%s [%s, %s]%s (claim %s %s)", what, what[0] ? ": " : "",
+                 num(a, sizeof a, v->value), num(b, sizeof b, v->lo), num(c, sizeof c, v->hi),
+                 note, v->sense > 0 ? ">=" : v->sense < 0 ? "<=" : "vs",
+                 num(d, sizeof d, v->threshold));
 }
 
 /* A claim's verdict over its lines: the study's one tally rule
