@@ -97,7 +97,10 @@ FLAGS_STAMP := $(BUILD)/.flags
 
 # tools/embree_ref.c is optional (libembree-dev): only `make embree` builds it.
 TOOLS    := $(patsubst tools/%.c,$(BIN)/%,$(filter-out tools/embree_ref.c,$(wildcard tools/*.c)))
-EXP_LIB  := $(filter-out experiments/exp_%.c experiments/mkreport.c,$(wildcard experiments/*.c))
+# experiments/engine/: the measurement, statistics, tally and report
+# assembly shared by every experiment (its README); experiments/*.c beside
+# it: each experiment's own question and the helpers only it uses.
+EXP_LIB  := $(filter-out experiments/exp_%.c experiments/engine/mkreport.c,$(wildcard experiments/*.c experiments/engine/*.c))
 EXP_BINS := $(patsubst experiments/%.c,$(BIN)/%,$(wildcard experiments/exp_*.c))
 # The lab's checks and its untouched starter kind are part of the tests
 # (tests/test_lab.c: every check passes on the project and fails on the starter).
@@ -105,7 +108,8 @@ TEST_SRC := $(wildcard tests/*.c) lab/check.c lab/check_common.c lab/check_step3
             lab/check_step5.c \
             lab/check_top.c \
             lab/grid_starter.c \
-            experiments/claims.c experiments/stats.c experiments/svg.c experiments/mdcut.c
+            experiments/engine/claims.c experiments/engine/stats.c experiments/engine/svg.c \
+            experiments/engine/mdcut.c
 
 .PHONY: all test report sanitize fuzz clean bench lab lab-report embree embree-header FORCE
 all: $(TOOLS) $(EXP_BINS) $(BIN)/mkreport $(BIN)/run_tests
@@ -174,7 +178,8 @@ $(BIN)/exp_%: $(BUILD)/experiments/exp_%.o $(EXP_OBJ) $(LIB)
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $< $(EXP_OBJ) $(LIB) -o $@ $(LDLIBS)
 
-$(BIN)/mkreport: $(BUILD)/experiments/mkreport.o $(BUILD)/experiments/mdcut.o $(BUILD)/experiments/claims.o
+$(BIN)/mkreport: $(BUILD)/experiments/engine/mkreport.o $(BUILD)/experiments/engine/mdcut.o \
+                 $(BUILD)/experiments/engine/claims.o
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $^ -o $@ $(LDLIBS)
 

@@ -17,7 +17,7 @@
 #ifndef EXP_ANIM_H
 #define EXP_ANIM_H
 
-#include "harness.h"
+#include "engine/harness.h"
 
 typedef struct {
     const char *anim;        /* the animated scene's spec, without frame= */

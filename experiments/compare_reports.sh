@@ -43,7 +43,7 @@ done
 # Each run as lines "key<TAB>verdict<TAB>near" (near: 1 when lo or hi is
 # within 2% of the threshold). RFC 4180 fields (quotes, doubled quotes,
 # commas inside quotes) parsed character by character: one record per
-# line, as experiments/harness.c writes them.
+# line, as experiments/engine/harness.c writes them.
 rows() {
   for f in "$1"/*.verdicts.csv; do
     awk -v file="$(basename "$f")" '

@@ -23,8 +23,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "group.h"
-#include "svg.h"
+#include "engine/group.h"
+#include "engine/svg.h"
 #include "cli/cli.h"
 #include "rays/stiff.h"
 

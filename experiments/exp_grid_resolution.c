@@ -23,9 +23,9 @@
 #include <string.h>
 
 #include "grid_res_ids.h"
-#include "group.h"
+#include "engine/group.h"
 #include "region.h"
-#include "svg.h"
+#include "engine/svg.h"
 
 #define MASK (BENCH_PRIMARY | BENCH_DIFFUSE)
 #define MAX_SCENES 12

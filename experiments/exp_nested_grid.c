@@ -16,7 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "group.h"
+#include "engine/group.h"
 
 #define MASK (BENCH_PRIMARY | BENCH_DIFFUSE)
 

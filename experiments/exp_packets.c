@@ -14,7 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "group.h"
+#include "engine/group.h"
 
 #define MASK (BENCH_PRIMARY | BENCH_SHADOW | BENCH_DIFFUSE | BENCH_AO)
 #define COHERENT (BENCH_PRIMARY | BENCH_SHADOW)

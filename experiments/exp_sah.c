@@ -26,8 +26,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "group.h"
-#include "svg.h"
+#include "engine/group.h"
+#include "engine/svg.h"
 
 #define MASK (BENCH_PRIMARY | BENCH_SHADOW | BENCH_DIFFUSE)
 #define PURE "bvh:build=median,term=none,leaf=4"

@@ -14,8 +14,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "group.h"
-#include "svg.h"
+#include "engine/group.h"
+#include "engine/svg.h"
 
 #define MASK (BENCH_PRIMARY | BENCH_DIFFUSE)
 #define MAX_SPECS 24

@@ -19,7 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "group.h"
+#include "engine/group.h"
 #include "cli/cli.h"
 #include "rays/stiff.h"
 #include "stab_offsets.h"

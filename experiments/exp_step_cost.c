@@ -32,9 +32,9 @@
 #include <string.h>
 
 #include "core/prim.h"
-#include "group.h"
+#include "engine/group.h"
 #include "step_micro.h"
-#include "svg.h"
+#include "engine/svg.h"
 
 /* The families: a spec belongs to the family of its kind, width and
  * traversal; --accel specs join theirs (a new one starts a family). */

@@ -19,8 +19,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "group.h"
-#include "machine.h"
+#include "engine/group.h"
+#include "engine/machine.h"
 
 #define SCALE_MASK (BENCH_PRIMARY | BENCH_DIFFUSE)
 #define FRAME_MASK (BENCH_PRIMARY | BENCH_SHADOW)

@@ -17,8 +17,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "group.h"
-#include "svg.h"
+#include "engine/group.h"
+#include "engine/svg.h"
 
 #define MASK (BENCH_PRIMARY | BENCH_DIFFUSE)
 #define FRAME_1080P 2073600.0

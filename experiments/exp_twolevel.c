@@ -32,7 +32,7 @@
 #include <string.h>
 
 #include "anim.h"
-#include "group.h"
+#include "engine/group.h"
 #include "cli/cli.h"
 #include "rays/rays.h"
 

@@ -28,7 +28,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "group.h"
+#include "engine/group.h"
 
 #define MASK (BENCH_PRIMARY | BENCH_SHADOW | BENCH_DIFFUSE)
 #define MAX_SCENES 16

@@ -10,7 +10,7 @@
 #ifndef EXPERIMENTS_GRID_RES_IDS_H
 #define EXPERIMENTS_GRID_RES_IDS_H
 
-#include "group.h"
+#include "engine/group.h"
 
 typedef struct {
     int ok;           /* the sweep ran and found a best */

@@ -9,7 +9,7 @@
 #include <string.h>
 
 #include "image/image.h"
-#include "harness.h"
+#include "engine/harness.h"
 
 #define HEAT_MIN_WIDTH 320
 

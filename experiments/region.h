@@ -12,7 +12,7 @@
 #ifndef EXP_REGION_H
 #define EXP_REGION_H
 
-#include "group.h"
+#include "engine/group.h"
 
 typedef struct {
     exp_est gain;    /* time(best single) / time(a configuration per tile), per evaluation round */

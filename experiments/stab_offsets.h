@@ -5,7 +5,7 @@
 #ifndef EXP_STAB_OFFSETS_H
 #define EXP_STAB_OFFSETS_H
 
-#include "harness.h"
+#include "engine/harness.h"
 
 #define STAB_OFFSET_RULES 5
 #define STAB_OFFSET_ROBUST 4

@@ -10,7 +10,7 @@
 #ifndef EXPERIMENTS_STEP_MICRO_H
 #define EXPERIMENTS_STEP_MICRO_H
 
-#include "harness.h"
+#include "engine/harness.h"
 
 typedef struct {
     exp_est tri, block8, block4, node, step;

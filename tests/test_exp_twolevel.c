@@ -16,7 +16,7 @@
 
 #include "support.h"
 #include "test.h"
-#include "experiments/claims.h"
+#include "experiments/engine/claims.h"
 
 #define COLS 11
 #define MAX_RECORDS 2000

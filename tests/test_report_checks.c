@@ -19,9 +19,9 @@
 
 #include "support.h"
 #include "test.h"
-#include "experiments/claims.h"
-#include "experiments/stats.h"
-#include "experiments/svg.h"
+#include "experiments/engine/claims.h"
+#include "experiments/engine/stats.h"
+#include "experiments/engine/svg.h"
 
 #ifndef DIR_OUT
 #define DIR_OUT "build/quick-report"

@@ -19,7 +19,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "experiments/svg.h"
+#include "experiments/engine/svg.h"
 #include "support.h"
 
 #define T "build/test-report-keep"

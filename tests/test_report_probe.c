@@ -1,5 +1,5 @@
 /*
- * test_report_probe.c - the experiments' collapse probe (experiments/group.c):
+ * test_report_probe.c - the experiments' collapse probe (experiments/engine/group.c):
  * a configuration whose counted pass would take seconds (the regular grid
  * on teapot_stadium, one cell holding the teapot) is left out on a
  * 2048-ray probe, with the probe's prediction as its reason, instead of

@@ -15,8 +15,8 @@
 
 #include "support.h"
 #include "test.h"
-#include "experiments/claims.h"
-#include "experiments/mdcut.h"
+#include "experiments/engine/claims.h"
+#include "experiments/engine/mdcut.h"
 
 #define REPORT "build/quick-report/REPORT.md"
 

@@ -1,6 +1,6 @@
 /*
  * test_stats_coverage.c - the intervals the verdicts rest on
- * (experiments/stats.c) cover the true median as often as they say
+ * (experiments/engine/stats.c) cover the true median as often as they say
  * (issue 38, issue 52). Each test simulates the estimator: many synthetic
  * experiments of paired ratios with a known median, counting how often the
  * interval holds it. The simulation's own error is binomial: with E
@@ -10,7 +10,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "experiments/stats.h"
+#include "experiments/engine/stats.h"
 #include "test.h"
 
 /* splitmix64, then Box-Muller for normals: the test's own fixed stream. */
@@ -86,7 +86,7 @@ TEST(stats_coverage_order_statistic)
     CHECKF(boot < 0.90, "bootstrap at n=3 covers %.3f, expected well under 95%%", boot);
 }
 
-/* The estimator as the harness uses it (experiments/group.h, issue 52):
+/* The estimator as the harness uses it (experiments/engine/group.h, issue 52):
  * 8 processes interleaved in time, 2 paired rounds of every configuration
  * per process (16 samples), a process effect (each fresh process places
  * structures and rays anew: log sd 0.06, larger than the rounds' noise,

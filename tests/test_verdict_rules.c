@@ -1,5 +1,5 @@
 /*
- * test_verdict_rules.c - the study's verdict rules (experiments/claims.c,
+ * test_verdict_rules.c - the study's verdict rules (experiments/engine/claims.c,
  * issue 38 and issue 52): confirmed only when the whole interval is on the
  * claim's side, refuted when the whole interval misses, on the line when
  * it straddles; a zero-width interval is not an interval; the margin is
@@ -11,8 +11,8 @@
 #include <math.h>
 #include <string.h>
 
-#include "experiments/claims.h"
-#include "experiments/stats.h"
+#include "experiments/engine/claims.h"
+#include "experiments/engine/stats.h"
 #include "test.h"
 
 #define WORD(got, want) CHECKF((got) && !strcmp((got), (want)), "word %s, want %s", (got) ? (got) : "(null)", (want))

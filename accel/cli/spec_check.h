@@ -1,6 +1,6 @@
 /*
  * spec_check.h - an accelerator spec checked in full before any work, for
- * bin/trace, bin/render and the experiments (experiments/harness.c): a typo
+ * bin/trace, bin/render and the experiments (experiments/engine/harness.c): a typo
  * in the last --accel must cost nothing, not a build and a trace of the
  * ones before it.
  *
