@@ -281,7 +281,15 @@ static void sbvh_notes(exp_group *g, study *st, const accel_scene *s, int is_mes
         exp_est e = exp_group_speedup_level(g, sb, b16, g->mask, exp_tally_level(&st->sb_mesh));
         exp_decider d = exp_decider_of(what, &e, NOTHING_LOST, -1);
         exp_tally_add(&st->sb_mesh, &d);
-        exp_text_add(&st->sb_ev, "%s%s: trace time %s", st->sb_ev.len ? "; " : "", s->name, t);
+        /* the count co-verdict (issue 52): node visits plus tests per ray */
+        double wb = exp_group_steps(g, b16, g->mask) + exp_group_prims(g, b16, g->mask),
+               wsb = exp_group_steps(g, sb, g->mask) + exp_group_prims(g, sb, g->mask);
+        const char *tw = exp_judge(&d), *cw = wb > 0 && wsb / wb <= NOTHING_LOST ? EXP_CONFIRMED
+                                                                                 : EXP_REFUTED;
+        exp_text_add(&st->sb_ev, "%s%s: trace time %s; counts (node visits plus tests per ray) "
+                     "%.3fx, a count co-verdict %s%s", st->sb_ev.len ? "; " : "", s->name, t,
+                     wb > 0 ? wsb / wb : 0.0, cw,
+                     !strcmp(tw, EXP_ON_LINE) || !strcmp(tw, cw) ? "" : " (it disagrees with the timing)");
     }
     exp_group_compare_build(g, sb, b16, b, sizeof b);
     exp_text_add(&st->findings, "- %s: spatial splits (`build=sbvh`) against binned SAH: SAH cost "
