@@ -68,6 +68,19 @@ static double end_slope(const double *xs, const double *ys, int n)
     return log(ys[b] / ys[a]) / log(xs[b] / xs[a]);
 }
 
+/* An exponent as "0.12 +- 0.08 (7 sizes, 95%)": on the log scale already,
+ * its interval is a difference, not a ratio (a [lo, hi] around a value
+ * near 0 would read as a factor). A fit's t-interval has n - 2 degrees of
+ * freedom: under 5 (7 sizes) it is not printed (issue 52). */
+static const char *fmt_exponent(char *buf, size_t n, const exp_est *k)
+{
+    if (k->n >= 7 && k->hi > k->lo)
+        snprintf(buf, n, "%.2f +- %.2f (%d sizes, 95%%)", k->median, (k->hi - k->lo) / 2, k->n);
+    else
+        snprintf(buf, n, "%.2f (%d sizes: too few for an interval)", k->median, k->n);
+    return buf;
+}
+
 /* An exact number as a decider (n 1: judged as a point, exp_judge). */
 static exp_decider exact_decider(const char *what, double k, double threshold, int sense)
 {
@@ -178,7 +191,8 @@ static void family(exp_ctx *x, study *st, int f, const exp_list *list)
     snprintf(name, sizeof name, "scaling_%s", names[f]);
     exp_svg(x, &pl, name, "Time per ray against the triangle count (medians with 95% intervals; "
             "dashed: the least-squares power law)");
-    exp_md(x, "\nGrowth exponents (least squares on the log-log points, 95%% t-interval):\n");
+    exp_md(x, "\nGrowth exponents (least squares on the log-log points, +- the half-width of "
+              "the 95%% t-interval):\n");
     exp_md_table(x, "configuration|triangles|build time ~ N^k|trace time per ray ~ N^k");
     for (int k = 0; k < ns; k++) {
         series *q = &se[k];
@@ -188,7 +202,7 @@ static void family(exp_ctx *x, study *st, int f, const exp_list *list)
         exp_loglog_slope(q->n, q->ns, q->pts, &kt, NULL);
         char a[96], b[96];
         exp_md(x, "| `%s` | %.0f to %.0f | %s | %s |\n", q->spec, q->n[0], q->n[q->pts - 1],
-               exp_fmt_est(a, sizeof a, &kb, 2), exp_fmt_est(b, sizeof b, &kt, 2));
+               fmt_exponent(a, sizeof a, &kb), fmt_exponent(b, sizeof b, &kt));
         exp_text_add(&st->findings, "- `%s` on %s: build time grows as N^%s, trace time per ray as "
                      "N^%s.\n", q->spec, names[f], a, b);
         if (!strcmp(q->spec, "brute")) {
@@ -266,7 +280,7 @@ int main(int argc, char **argv)
                         "brute force tests N^%.3f triangles per ray (threshold: k >= %.2f); its "
                         "time per ray grows as N^%s over the same sizes (the co-evidence: the "
                         "fixed per-ray cost weighs at small N)", st.brute_k, BRUTE_MIN,
-                        exp_fmt_est(b, sizeof b, &st.brute_slope, 2));
+                        fmt_exponent(b, sizeof b, &st.brute_slope));
     } else
         exp_verdict(&x, "brute-cost", EXP_UNTESTABLE, "-", "brute force was not measured at two sizes");
     if (st.sub.added)
