@@ -206,7 +206,7 @@ static void answer_block(exp_ctx *x, study *st)
             lo = fmin(lo, x0), hi = fmax(hi, x0);
         }
     }
-    svg_add(&p, "full-sweep SAH (ringed: the scene)", sx, sy, slo, shi, ns, SVG_POINTS);
+    svg_add(&p, "full-sweep SAH (ringed)", sx, sy, slo, shi, ns, SVG_POINTS);
     svg_add(&p, "binned SAH, 16 bins", bx, by, blo, bhi, nb, SVG_POINTS);
     double lx[2] = {lo, hi}, ly[2] = {2, 2};
     if (hi > 0) svg_add(&p, "the lecture's 2x", lx, ly, NULL, NULL, 2, SVG_DASHED);
