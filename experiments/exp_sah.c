@@ -27,6 +27,7 @@
 #include <string.h>
 
 #include "group.h"
+#include "sah_answer.h"
 #include "svg.h"
 
 #define MASK (BENCH_PRIMARY | BENCH_SHADOW | BENCH_DIFFUSE)
@@ -61,13 +62,6 @@ static const char *const builders[] = {
  * tie with the claim. */
 #define DOUBLE 2.0
 
-typedef struct {
-    char name[128];
-    unsigned tris;
-    double cost_pure, cost_sah;
-    exp_est sah, sah_build, bin, bin_build, bin_sp; /* bin_sp: binned over the pure median */
-    int have_bin;
-} answer_t;
 
 typedef struct {
     int stride; /* 1 in stride of the 800x600 image's 8x8 tiles (exp_sets_tiles) */
@@ -97,10 +91,7 @@ typedef struct {
     double px[SVG_MAX_SERIES][12], py[SVG_MAX_SERIES][12], plo[SVG_MAX_SERIES][12],
         phi[SVG_MAX_SERIES][12];
     int pn[SVG_MAX_SERIES], np;
-    /* The answer at the top of the report (issue 52): per scene, SAH against
-     * the pure median split and binned SAH against the full sweep. */
-    answer_t ans[12];
-    int nans;
+    sah_answer ans; /* the answer at the top of the report (sah_answer.h) */
 } study;
 
 /* A point of the answer's plot, under the builder's series. */
@@ -138,82 +129,6 @@ static void answer_plot(exp_ctx *x, study *st)
     exp_svg(x, &p, "sah_speedup", "Every builder on every scene (one point per scene, 95% "
             "intervals): primary speed-up over the pure median split against its build time "
             "over the split's; dashed: the lecture's 2x");
-}
-
-/* One scene's row of the answer: SAH over the pure median split (speed-up
- * over every ray set, build time ratio, SAH costs), binned SAH (16 bins,
- * 3 axes) over the full sweep (trace and build time ratios); 95%. */
-static void answer_row(study *st, const exp_group *g, const accel_scene *s)
-{
-    int pure = exp_group_find(g, PURE), sah = exp_group_find(g, SAH),
-        b16 = exp_group_find(g, "bvh:build=binned");
-    if (st->nans >= 12 || pure < 0 || sah < 0 || !g->cfg[pure].ok || !g->cfg[sah].ok) return;
-    int i = st->nans++;
-    snprintf(st->ans[i].name, sizeof st->ans[i].name, "%s", s->name);
-    st->ans[i].tris = s->live_count;
-    st->ans[i].cost_pure = g->cfg[pure].build.sah_cost;
-    st->ans[i].cost_sah = g->cfg[sah].build.sah_cost;
-    st->ans[i].sah = exp_group_speedup(g, pure, sah, g->mask);
-    st->ans[i].sah_build = exp_group_build_ratio_level(g, sah, pure, 0.95);
-    st->ans[i].have_bin = b16 >= 0 && g->cfg[b16].ok;
-    if (st->ans[i].have_bin) {
-        exp_est sp = exp_group_speedup(g, sah, b16, g->mask); /* time(sah) / time(binned) */
-        st->ans[i].bin = exp_est_inv(&sp, 1.0);
-        st->ans[i].bin_build = exp_group_build_ratio_level(g, b16, sah, 0.95);
-        st->ans[i].bin_sp = exp_group_speedup(g, pure, b16, g->mask);
-    }
-}
-
-/* The third answer (issue 52): one table of every scene, one plot, between
- * the markers mkreport lifts to the top of REPORT.md. */
-static void answer_block(exp_ctx *x, study *st)
-{
-    if (!st->nans) return;
-    exp_md(x, "\n<!-- answer -->\n\n### What SAH and binning buy, on every scene\n\nPaired "
-              "ratios [95%% interval], primary+shadow+diffuse rays (%dx%d, 1 in %d tiles). SAH: "
-              "`build=sah` over the pure median split (the lecture: \"SAH will double "
-              "performance\"); binned: `build=binned` (16 bins, 3 axes) over `build=sah`, below 1 "
-              "faster. SAH cost: the tree's expected cost, pure median -> SAH.\n",
-           x->rt_size[0], x->rt_size[1], st->stride);
-    exp_md_table(x, "scene|tris|SAH cost|SAH speed-up over pure median|SAH build time / pure "
-                    "median's|binned / full-sweep trace time|binned / full-sweep build time");
-    svg_plot p;
-    svg_plot_init(&p, "SAH and binned SAH: speed-up against build time, both over the pure "
-                      "median split", "build time / the pure median split's",
-                  "speed-up over the pure median split (all rays)");
-    p.log_x = 1;
-    double sx[12], sy[12], slo[12], shi[12], bx[12], by[12], blo[12], bhi[12];
-    int ns = 0, nb = 0;
-    double lo = INFINITY, hi = 0;
-    for (int i = 0; i < st->nans; i++) {
-        char a[96], b[96], c[96], d[96];
-        const answer_t *r = &st->ans[i];
-        exp_md(x, "| %s | %u | %.2f -> %.2f | %s | %s | %s | %s |\n", r->name, r->tris,
-               r->cost_pure, r->cost_sah, exp_fmt_x(a, sizeof a, &r->sah),
-               exp_fmt_x(b, sizeof b, &r->sah_build),
-               r->have_bin ? exp_fmt_x(c, sizeof c, &r->bin) : "-",
-               r->have_bin ? exp_fmt_x(d, sizeof d, &r->bin_build) : "-");
-        if (r->sah_build.median > 0) {
-            sx[ns] = r->sah_build.median, sy[ns] = r->sah.median, slo[ns] = r->sah.lo,
-            shi[ns++] = r->sah.hi;
-            lo = fmin(lo, r->sah_build.median), hi = fmax(hi, r->sah_build.median);
-            svg_mark(&p, r->sah_build.median, r->sah.median, r->name);
-        }
-        if (r->have_bin && r->bin_build.median > 0 && r->sah_build.median > 0) {
-            /* binned over pure median: (binned / sah) x (sah / pure) */
-            double x0 = r->bin_build.median * r->sah_build.median;
-            bx[nb] = x0, by[nb] = r->bin_sp.median, blo[nb] = r->bin_sp.lo, bhi[nb++] = r->bin_sp.hi;
-            lo = fmin(lo, x0), hi = fmax(hi, x0);
-        }
-    }
-    svg_add(&p, "full-sweep SAH (ringed)", sx, sy, slo, shi, ns, SVG_POINTS);
-    svg_add(&p, "binned SAH, 16 bins", bx, by, blo, bhi, nb, SVG_POINTS);
-    double lx[2] = {lo, hi}, ly[2] = {2, 2};
-    if (hi > 0) svg_add(&p, "the lecture's 2x", lx, ly, NULL, NULL, 2, SVG_DASHED);
-    exp_svg(x, &p, "sah_answer", "Every scene: what SAH and binned SAH buy (speed-up over the pure "
-            "median split, 95% intervals) for their build time (over the split's); dashed: the "
-            "lecture's 2x");
-    exp_md(x, "\n<!-- /answer -->\n");
 }
 
 /* "Several times faster": a paired speed-up of spatial splits on the
@@ -467,7 +382,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     exp_group_run(&g);
     table(x, &g, &s);
     exp_group_note(&g);
-    answer_row(st, &g, &s);
+    sah_answer_add(&st->ans, &g, &s, PURE, SAH, "bvh:build=binned");
     speedup_table(x, st, &g, &s);
     exp_group_compare_head(&g);
     claim(&g, st, s.name);
@@ -685,7 +600,7 @@ int main(int argc, char **argv)
     exp_tally_init(&st.sb_mesh, mesh_scenes);
     for (int si = 0; si < scene_count; si++) measure_scene(&x, &st, scenes[si], &list, si < mesh_scenes);
     spatial_splits(&x, &st);
-    answer_block(&x, &st);
+    sah_answer_write(&x, &st.ans, st.stride);
     answer_plot(&x, &st);
     exp_md(&x, "\n**Findings** (speed-ups are paired ratios of interleaved rounds, with their 95%% "
                "intervals):\n\n%s", exp_text_str(&st.findings));
