@@ -9,7 +9,9 @@
  * - REPORT.md: the first screen is the whole summary (one line per claim:
  *   verdict, ONE deciding number with its interval, n and margin, the scene
  *   with its triangle count, a link), the machine in one line, the three
- *   answers, then every section cut to its share of REPORT_MAX_LINES:
+ *   answers (issue 52: each answering section's <!-- answer --> block, one
+ *   table and one plot), the contents, then every section cut to its share
+ *   of REPORT_MAX_LINES:
  *   its head, verdicts, first table, plots, findings and footer stay;
  *   blocks inside <!-- appendix --> ... <!-- /appendix --> and, from the
  *   end backwards, the other blocks that do not fit go;
