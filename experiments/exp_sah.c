@@ -28,6 +28,7 @@
 
 #include "engine/group.h"
 #include "engine/svg.h"
+#include "sah_answer.h"
 
 #define MASK (BENCH_PRIMARY | BENCH_SHADOW | BENCH_DIFFUSE)
 #define PURE "bvh:build=median,term=none,leaf=4"
@@ -94,6 +95,7 @@ typedef struct {
     double px[SVG_MAX_SERIES][12], py[SVG_MAX_SERIES][12], plo[SVG_MAX_SERIES][12],
         phi[SVG_MAX_SERIES][12];
     int pn[SVG_MAX_SERIES], np;
+    sah_answer ans; /* the answer at the top of the report (sah_answer.h) */
 } study;
 
 /* A point of the answer's plot, under the builder's series. */
@@ -410,6 +412,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     exp_group_run(&g);
     table(x, &g, &s);
     exp_group_note(&g);
+    sah_answer_add(&st->ans, &g, &s, PURE, SAH, "bvh:build=binned");
     speedup_table(x, st, &g, &s);
     exp_group_compare_head(&g);
     claim(&g, st, s.name);
@@ -640,6 +643,7 @@ int main(int argc, char **argv)
     exp_tally_init(&st.sb_mesh, mesh_scenes);
     for (int si = 0; si < scene_count; si++) measure_scene(&x, &st, scenes[si], &list, si < mesh_scenes);
     spatial_splits(&x, &st);
+    sah_answer_write(&x, &st.ans, st.stride);
     answer_plot(&x, &st);
     exp_md(&x, "\n**Findings** (speed-ups are paired ratios of interleaved rounds, with their 95%% "
                "intervals):\n\n%s", exp_text_str(&st.findings));

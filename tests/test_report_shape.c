@@ -1,9 +1,9 @@
 /*
  * test_report_shape.c - issue 39's limits on the report a reader gets:
  * REPORT.md at most 800 lines, no line over 400 characters, the whole
- * summary within the first 60 lines, each of the user's three questions
- * (step cost, grid resolution, SAH and binning) with a table and a plot in
- * its section, and every number of a summary row present in the section
+ * summary within the first 60 lines, the user's three questions (step
+ * cost, grid resolution, SAH and binning) answered right under it, each by
+ * one table and one plot (issue 52), and every number of a summary row present in the section
  * it links to. Checked on the quick report (build/quick-report, made once
  * for all the report tests), and mkreport's cutting (mdcut.h) on a
  * section made up here, where the answer is known.
@@ -54,8 +54,11 @@ TEST(report_shape_limits)
         size_t c = line_chars(p);
         if (c > MD_MAX_CHARS && long_lines++ < 3)
             CHECKF(0, "line %d has %zu characters: %.120s", lines, c, p);
-        if (!strncmp(p, "| ", 2) && lines < 100 && strstr(p, "](#")) summary_end = lines;
         char *nl = strchr(p, '\n');
+        /* a summary row: a table row that links to its section (on this
+         * line: the tables under the summary link nowhere) */
+        const char *link = strstr(p, "](#");
+        if (!strncmp(p, "| ", 2) && lines < 100 && link && (!nl || link < nl)) summary_end = lines;
         p = nl ? nl + 1 : p + strlen(p);
     }
     CHECKF(lines <= 800, "REPORT.md has %d lines (at most 800)", lines);
@@ -69,20 +72,72 @@ TEST(report_shape_limits)
         const char *row = strstr(r, tag);
         CHECKF(row && (!contents || row < contents), "no summary row for %s", exp_claims[c].id);
     }
-    /* The three questions: each with a table and a plot in the report (the
-     * third, SAH and binning, over its two sections). */
-    static const char *const answers[3][2] = {{"exp_step_cost", NULL},
-                                              {"exp_grid_resolution", NULL},
-                                              {"exp_sah", "exp_binning"}};
-    for (int i = 0; i < 3; i++) {
-        int table = 0, plot = 0;
-        for (int k = 0; k < 2 && answers[i][k]; k++) {
-            char *s = section_of(r, answers[i][k]);
-            table |= s && strstr(s, "\n|---");
-            plot |= s && strstr(s, ".svg)");
-            free(s);
+    /* The three questions (issue 52): answered right under the summary, in
+     * "## The three answers", each by one table and one plot and a link to
+     * its section: step cost on equal terms (C_intersect fixed), grid
+     * resolution, SAH and binning on every scene exp_sah measured. */
+    const char *top = strstr(r, "\n## The three answers\n");
+    CHECKF(top != NULL, "no \"## The three answers\" section in the report");
+    CHECKF(top && contents && top < contents, "the three answers are not before the contents");
+    int top_line = 1;
+    for (const char *p = r; top && p < top; p++) top_line += *p == '\n';
+    CHECKF(top && top_line <= 70, "the three answers start on line %d (at most 70)", top_line);
+    static const char *const answers[3] = {"exp_step_cost", "exp_grid_resolution", "exp_sah"};
+    const char *from = top;
+    for (int i = 0; i < 3 && from; i++) {
+        char link[96];
+        snprintf(link, sizeof link, "The full section: [");
+        const char *end = strstr(from, link);
+        CHECKF(end != NULL, "answer %d (%s): no link to its section", i + 1, answers[i]);
+        if (!end) break;
+        const char *eol = strchr(end, '\n');
+        size_t n = (size_t)(end - from);
+        char *blk = malloc(n + 1);
+        if (!blk) break;
+        memcpy(blk, from, n), blk[n] = 0;
+        snprintf(link, sizeof link, "(#%s)", answers[i]);
+        CHECKF(eol && strstr(end, link) && strstr(end, link) < eol,
+               "answer %d links elsewhere than %s: %.100s", i + 1, answers[i], end);
+        int tables = 0;
+        for (const char *p = blk; (p = strstr(p, "\n|---")); p++) tables++;
+        CHECKF(tables == 1, "%s's answer has %d tables (one)", answers[i], tables);
+        CHECKF(strstr(blk, ".svg)") != NULL, "%s's answer has no plot", answers[i]);
+        if (i == 0)
+            CHECKF(strstr(blk, "C_intersect ns (fixed)") != NULL,
+                   "the step-cost answer is not the equal-terms table (C_intersect fixed)");
+        if (i == 2) { /* one row per scene of exp_sah's speed-up table */
+            char *csv = test_read_file("build/quick-report/exp_sah_speedup.csv", NULL);
+            int scenes = 0, rows = 0;
+            char seen[16][128];
+            for (char *p = csv ? strchr(csv, '\n') : NULL; p && p[1]; p = strchr(p + 1, '\n')) {
+                char sc[128];
+                if (sscanf(p + 1, "%127[^,]", sc) != 1) continue;
+                int k = 0;
+                while (k < scenes && strcmp(seen[k], sc)) k++;
+                if (k == scenes && scenes < 16) snprintf(seen[scenes++], sizeof seen[0], "%s", sc);
+            }
+            const char *t = strstr(blk, "\n|---");
+            for (const char *p = t ? strchr(t + 1, '\n') : NULL; p && p[1] == '|'; p = strchr(p + 1, '\n'))
+                rows++;
+            CHECKF(csv && scenes > 0 && rows == scenes, "the SAH answer has %d rows for %d scenes",
+                   rows, scenes);
+            free(csv);
         }
-        CHECKF(table && plot, "%s: no table (%d) or no plot (%d) in the report", answers[i][0], table, plot);
+        free(blk);
+        from = eol;
+    }
+    /* Each answering section still has a table and a plot of its own, and
+     * points to its answer at the top. */
+    static const char *const sections[4] = {"exp_step_cost", "exp_grid_resolution", "exp_sah",
+                                            "exp_binning"};
+    for (int i = 0; i < 4; i++) {
+        char *s = section_of(r, sections[i]);
+        CHECKF(s && strstr(s, "\n|---") && strstr(s, ".svg)"), "%s: no table or no plot",
+               sections[i]);
+        if (i < 3)
+            CHECKF(s && strstr(s, "(#the-three-answers)"), "%s does not point to its answer",
+                   sections[i]);
+        free(s);
     }
     free(r);
 }

@@ -9,7 +9,9 @@
  * - REPORT.md: the first screen is the whole summary (one line per claim:
  *   verdict, ONE deciding number with its interval, n and margin, the scene
  *   with its triangle count, a link), the machine in one line, the three
- *   answers, then every section cut to its share of REPORT_MAX_LINES:
+ *   answers (issue 52: each answering section's <!-- answer --> block, one
+ *   table and one plot), the contents, then every section cut to its share
+ *   of REPORT_MAX_LINES:
  *   its head, verdicts, first table, plots, findings and footer stay;
  *   blocks inside <!-- appendix --> ... <!-- /appendix --> and, from the
  *   end backwards, the other blocks that do not fit go;
@@ -308,6 +310,45 @@ static int expand(const char *dir, const char *name, const char *links, md_lines
     return 0;
 }
 
+/* Issue 52: a section's answer (a table and a plot between <!-- answer -->
+ * and <!-- /answer -->) goes to the top of REPORT.md. take_answer moves
+ * those lines from l into a (when not NULL) and leaves, in l, one line that
+ * points there: a quote line after the verdicts (the head, which is never
+ * cut), or where the block was when there are none. Returns the blocks. */
+#define ANSWERS_ANCHOR "the-three-answers"
+#define ANSWER_POINTER "> _This section's answer, one table and one plot, is at the top: " \
+                       "[the three answers](#" ANSWERS_ANCHOR ")._"
+static int take_answer(md_lines *l, md_lines *a)
+{
+    md_lines keep = {0};
+    int in = 0, blocks = 0, at = -1;
+    for (int i = 0; i < l->n; i++) {
+        if (!strcmp(l->s[i], "<!-- answer -->")) {
+            in = 1, blocks++;
+            if (at < 0) at = keep.n;
+            continue;
+        }
+        if (!strcmp(l->s[i], "<!-- /answer -->")) {
+            in = 0;
+            continue;
+        }
+        if (in && a) md_lines_push(a, l->s[i]);
+        else if (!in) md_lines_push(&keep, l->s[i]);
+    }
+    md_lines_free(l);
+    *l = (md_lines){0};
+    int q = 0; /* after the first run of quote lines (the verdicts) */
+    while (q < keep.n && keep.s[q][0] != '>') q++;
+    while (q < keep.n && keep.s[q][0] == '>') q++;
+    if (q < keep.n || (keep.n && keep.s[keep.n - 1][0] == '>')) at = q;
+    for (int i = 0; i <= keep.n; i++) {
+        if (blocks && i == at) md_lines_push(l, ANSWER_POINTER);
+        if (i < keep.n) md_lines_push(l, keep.s[i]);
+    }
+    md_lines_free(&keep);
+    return blocks;
+}
+
 /* A section cut to `budget` md_lines into o; the full one into the appendix. */
 static void section(md_out *o, FILE *app, const char *dir, const char *name, int budget)
 {
@@ -316,9 +357,11 @@ static void section(md_out *o, FILE *app, const char *dir, const char *name, int
         md_lines_free(&full);
         return;
     }
+    take_answer(&l, NULL); /* shown at the top (answers) */
     fprintf(app, "\n<a id=\"%s\"></a>\n\n", name);
     for (int i = 0; i < full.n; i++)
-        if (strcmp(full.s[i], "<!-- appendix -->") && strcmp(full.s[i], "<!-- /appendix -->"))
+        if (strcmp(full.s[i], "<!-- appendix -->") && strcmp(full.s[i], "<!-- /appendix -->") &&
+            strcmp(full.s[i], "<!-- answer -->") && strcmp(full.s[i], "<!-- /answer -->"))
             fprintf(app, "%s\n", full.s[i]);
     int *kind = calloc((size_t)l.n + 1, sizeof *kind);
     char *keep = calloc((size_t)l.n + 1, 1);
@@ -384,7 +427,7 @@ static void section_link(const char *dir, const char *name, char *dst, size_t n)
 static void contents(FILE *f, const char *dir, char **names, int count, int answers_)
 {
     char link[512];
-    int col = fprintf(f, "%s", answers_ ? "**The three answers:**" : "**Then:**");
+    int col = fprintf(f, "%s", answers_ ? "**The three answers in full:**" : "**Then:**");
     for (int e = 0, k = 0; e < count; e++) {
         if (is_answer(names[e]) != answers_) continue;
         section_link(dir, names[e], link, sizeof link);
@@ -397,6 +440,44 @@ static void contents(FILE *f, const char *dir, char **names, int count, int answ
 typedef struct {
     const char *dir, *out, *links, *budget, *commit, *flags, *run, *load;
 } opts;
+
+/* The study's three answers (issue 52), right under the summary: each
+ * answering section's table and plot, in the order of the sections, with a
+ * link to the section. Nothing when no section has an answer block. */
+static void top_answers(md_out *o, const opts *op, char **names, int count)
+{
+    int head = 0;
+    for (int e = 0; e < count; e++) {
+        md_lines l = {0}, a = {0};
+        if (!is_answer(names[e]) || expand(op->dir, names[e], op->links, &l) ||
+            !take_answer(&l, &a) || !a.n) {
+            md_lines_free(&l), md_lines_free(&a);
+            continue;
+        }
+        if (!head++) {
+            md_put(o, "", ANSWERS_ANCHOR);
+            md_put(o, "<a id=\"" ANSWERS_ANCHOR "\"></a>", ANSWERS_ANCHOR);
+            md_put(o, "", ANSWERS_ANCHOR);
+            md_put(o, "## The three answers", ANSWERS_ANCHOR);
+            md_put(o, "", ANSWERS_ANCHOR);
+            md_put(o, "The study's three questions, each answered by one table and one plot; "
+                      "the verdicts are in the summary above, the sections below hold the rest.",
+                   ANSWERS_ANCHOR);
+        }
+        int blank = 0;
+        for (int i = 0; i < a.n; i++) {
+            if (!a.s[i][0] && blank) continue; /* blank runs collapsed */
+            blank = !a.s[i][0];
+            md_put(o, a.s[i], names[e]);
+        }
+        char link[512], line[700];
+        section_link(op->dir, names[e], link, sizeof link);
+        snprintf(line, sizeof line, "The full section: %s.", link);
+        if (!blank) md_put(o, "", names[e]);
+        md_put(o, line, names[e]);
+        md_lines_free(&l), md_lines_free(&a);
+    }
+}
 
 /* The head, the summary, the machine line, the contents and the short
  * machine table: everything before the sections. */
@@ -416,6 +497,7 @@ static void front(md_out *o, FILE *app, const opts *op, char **names, int count)
     cores[strcspn(cores, ":")] = 0;
     fprintf(f, "\n**Machine:** %s, %s; kernels: %s. Commit %s.\n", cpu[0] ? cpu : "unknown",
             cores[0] ? cores : "unknown CPUs", isa[0] ? isa : "not recorded", op->commit);
+    top_answers(o, op, names, count);
     fprintf(f, "\n## Contents\n\n");
     contents(f, op->dir, names, count, 1);
     contents(f, op->dir, names, count, 0);
