@@ -146,6 +146,19 @@ static void offset_rows(exp_ctx *x, const char *name, double distance, size_t n,
         res->leaks[m] += cnt[m].leaks + cnt[m].shadow_leaks;
         res->self[m] += cnt[m].self;
     }
+    if (distance >= STAB_FAR_DISTANCE && n && inside) {
+        for (int m = 0; m < M_COUNT; m++) {
+            double lk = (double)cnt[m].leaks / (double)inside, sf = (double)cnt[m].self / (double)n;
+            int first = res->far_cases == 0;
+            res->far_leak_lo[m] = first ? lk : fmin(res->far_leak_lo[m], lk);
+            res->far_leak_hi[m] = first ? lk : fmax(res->far_leak_hi[m], lk);
+            res->far_self_lo[m] = first ? sf : fmin(res->far_self_lo[m], sf);
+            res->far_self_hi[m] = first ? sf : fmax(res->far_self_hi[m], sf);
+        }
+        res->far_d_lo = res->far_cases ? fmin(res->far_d_lo, distance) : distance;
+        res->far_d_hi = res->far_cases ? fmax(res->far_d_hi, distance) : distance;
+        res->far_cases++;
+    }
     res->rays += n;
     res->inside += inside;
     res->min_n = res->min_n && res->min_n < n ? res->min_n : n;
