@@ -136,7 +136,7 @@ static void offset_rows(exp_ctx *x, const char *name, double distance, size_t n,
         }
         exp_md(x, "| %s | %zu (%zu) | %s | %s | %s | %s | %s | %s |\n", m ? "" : name, n,
                inside, method_name[m], sb, hb, fb, lb, sl);
-        exp_csv(x, "offset,%s,%s,%zu,%zu,%zu,%zu,%zu,,%zu,%zu,%zu,,%g\n", name, method_name[m],
+        exp_csv(x, "offset,%s,%s,%zu,%zu,%zu,%zu,%zu,,%zu,%zu,%zu,,%g,\n", name, method_name[m],
                 n, inside, inside, cnt[m].holes, cnt[m].false_hits, cnt[m].leaks,
                 cnt[m].shadow_leaks, cnt[m].self, distance);
         if (n) {
