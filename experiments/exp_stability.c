@@ -1,8 +1,8 @@
 /*
  * exp_stability - holes per million rays on the stiff and extreme cases.
  *
- * Every kind (and the traversals and kinds this build adds: packets, wide
- * BVHs, grid packets and skipping, the irregular grid), with the
+ * Every kind (and the traversals and kinds this build adds: every packet
+ * and stream mode, wide BVHs, grid skipping, the irregular grid), with the
  * watertight (default) and the naive (Moller-Trumbore) triangle test, on
  * every case of rays/stiff.c and on the shared meshes: holes (the
  * reference hits, the tracer misses), false hits and disagreements per
@@ -11,9 +11,11 @@
  * upper bound (Clopper-Pearson; 1 - 0.05^(1/n), about 3/n): zero in 2,400
  * rays means "below 1,250 per million", not "never". Rows that are all
  * zero are folded; so are rows equal for every kind. Speeds (interleaved
- * rounds) show the performance cliffs. Then self-intersection of secondary
- * rays: a fixed epsilon offset against the robust offset of Waechter and
- * Binder (Ray Tracing Gems, 2019), on a closed mesh moved from the origin.
+ * rounds) show the performance cliffs. Then the certification of every
+ * watertight configuration on a million rays per case (stab_cert.c), and
+ * self-intersection of secondary rays: a fixed epsilon offset against the
+ * robust offset of Waechter and Binder (Ray Tracing Gems, 2019), on a
+ * closed mesh moved from the origin (stab_offsets.c).
  */
 #include <math.h>
 #include <stdlib.h>
@@ -22,16 +24,12 @@
 #include "group.h"
 #include "cli/cli.h"
 #include "rays/stiff.h"
+#include "stab_cert.h"
 #include "stab_offsets.h"
 #include "core/coherence.h"
 
 #define MAX_CFG 64
 #define CLIFF 10.0
-/* Rays per built-in case in the certification: a fixed count, never a time
- * limit (issue 52: what is certified must not move with the machine). */
-#define CERT_RAYS 1000000
-#define CERT_RAYS_QUICK 20000
-
 /* Every packet and stream mode and the wide kernels, beside the kinds:
  * packets and streams have numerics of their own (a packet's slab tests,
  * a stream's node tests per ray, the wide nodes' SIMD lanes), so none is
@@ -41,18 +39,6 @@ static const char *const extras[] = {
     "bvh:width=4,traverse=packet", "bvh:width=8,traverse=packet", "bvh:width=4,traverse=stream",
     "bvh:width=8,traverse=stream", "grid:traverse=packet", "grid:skip=macro", "irregular_grid",
     "nested_grid:traverse=packet", "instanced:traverse=packet"};
-
-/* The only (case, configuration) pairs certified on fewer rays than the
- * case's, each a fixed count: single-ray walks that the case defeats
- * (the counts per ray of the base rays quoted beside them in the report).
- * A packet or stream mode and the wide kernels are never here. */
-static const struct {
-    const char *case_name, *spec;
-    size_t rays;
-} cert_fewer[] = {
-    {"tiny_huge", "grid", 100000},         {"tiny_huge", "grid:skip=macro", 100000},
-    {"tiny_huge", "nested_grid", 100000},  {"same_centroid", "bvh", 250000},
-    {"same_centroid", "instanced", 250000}};
 
 typedef struct {
     double value;
@@ -66,13 +52,7 @@ typedef struct {
     uint64_t distinct_rays;
     worst holes, leaks;
     exp_text clean, cliffs, speeds, left;
-    /* the certification: every built-in case again with >= 10^6 rays */
-    uint64_t cert_cases, cert_bad, cert_rays, cert_min_n, cert_leak_min, cert_traces;
-    uint64_t cert_leaks, cert_leak_rays, contact_leak_rays, contact_leaks;
-    /* pairs (case, configuration) listed, certified on the case's rays,
-     * on a fixed fewer (cert_fewer), not at all (with the reason) */
-    uint64_t cert_listed, cert_full, cert_fewer_n, cert_none, cert_fewer_min;
-    int cert_configs_min, cert_configs_max; /* configurations listed per case */
+    stab_cert cert; /* the certification (stab_cert.c) */
     /* each packet mode in the default (sorted) order on the base rays: the
      * rays its packet kernel traced, of all its rays */
     struct {
@@ -80,7 +60,6 @@ typedef struct {
         uint64_t packet, rays;
     } share[MAX_CFG];
     int shares;
-    exp_text cert_rows, cert_notes;
 } study;
 
 typedef struct {
@@ -124,189 +103,7 @@ static void note_worst(worst *w, const exp_group *g, const counts *cnt, int m, s
     exp_text_add(&w->what, " on %s", name);
 }
 
-static int cert_threads(const exp_ctx *x)
-{
-    return x->threads_given ? x->threads : accel_cpu_count();
-}
-
-/* The certification's rays for `spec` on case `name`: the case's own n,
- * or the fixed count of cert_fewer. */
-static size_t cert_rays_for(const char *name, const char *spec, size_t n)
-{
-    for (size_t i = 0; i < sizeof cert_fewer / sizeof cert_fewer[0]; i++)
-        if (!strcmp(cert_fewer[i].case_name, name) && !strcmp(cert_fewer[i].spec, spec))
-            return cert_fewer[i].rays < n ? cert_fewer[i].rays : n;
-    return n;
-}
-
-static int is_packet_mode(const char *spec) { return strstr(spec, "traverse=packet") != NULL; }
-
-/* Rays [0, n) taken every `step`-th from src into a new array (step 1: src
- * itself, not copied). */
-static const accel_ray *spread(const accel_ray *src, size_t n, size_t step, accel_ray **owned)
-{
-    *owned = NULL;
-    if (step <= 1) return src;
-    size_t m = (n + step - 1) / step;
-    *owned = malloc((m ? m : 1) * sizeof **owned);
-    if (!*owned) exit(CLI_EXIT_INTERNAL);
-    for (size_t i = 0; i < m; i++) (*owned)[i] = src[i * step];
-    return *owned;
-}
-
-typedef struct {
-    size_t n, nl, ns; /* rays, leak rays, shadow rays traced */
-    hits_diff d;
-    size_t leaks, sleaks;
-} cert_counts;
-
-/* One configuration on the case: every ray (step 1) or every step-th ray,
- * against the reference; packet modes with every 64 consecutive rays a
- * packet (ACCEL_ORDER_KEEP), so that their packet kernels trace every ray. */
-static cert_counts cert_one(const stiff_case *big, const accel_hit *ref, const accel_kind *kind,
-                            const void *accel, int packet, size_t step, int T, accel_hit *h,
-                            uint8_t *occ)
-{
-    cert_counts r = {0};
-    size_t n = big->rays.count, ns = big->shadow.count;
-    accel_ray *own = NULL, *sown = NULL;
-    const accel_ray *rays = spread(big->rays.rays, n, step, &own);
-    const accel_ray *srays = spread(big->shadow.rays, ns, step, &sown);
-    r.n = (n + step - 1) / step;
-    r.ns = (ns + step - 1) / step;
-    int order = accel_coherence_get();
-    if (packet) accel_coherence_set(ACCEL_ORDER_KEEP);
-    accel_trace(kind, accel, rays, h, r.n, T, NULL);
-    if (r.ns) accel_trace_occluded(kind, accel, srays, occ, r.ns, T, NULL);
-    accel_coherence_set(order);
-    if (step <= 1) {
-        r.d = hits_compare(&big->scene, rays, ref, h, r.n);
-    } else { /* the reference of the rays taken */
-        accel_hit *sub = malloc((r.n ? r.n : 1) * sizeof *sub);
-        if (!sub) exit(CLI_EXIT_INTERNAL);
-        for (size_t i = 0; i < r.n; i++) sub[i] = ref[i * step];
-        r.d = hits_compare(&big->scene, rays, sub, h, r.n);
-        free(sub);
-    }
-    for (size_t i = 0; i < r.n; i++)
-        if (i * step >= big->leak_begin) r.nl++, r.leaks += h[i].prim == ACCEL_MISS;
-    for (size_t i = 0; i < r.ns; i++) r.sleaks += !occ[i];
-    free(own), free(sown);
-    return r;
-}
-
-/* Case ci again with at least CERT_RAYS distinct rays, traced by every
- * watertight configuration of g but brute force (the reference's own
- * loop), on every core: holes, false hits and disagreements against the
- * exact reference, leaks of the rays from inside, and of the shadow rays.
- * A configuration the group left out (collapsed on the base rays) is built
- * here; one that cannot be built is named with the reason. Long on purpose
- * (84 lines): the configurations in turn, then the case's row, sharing the
- * reference and the tallies. */
-static void certify(exp_ctx *x, study *st, int ci, const exp_group *g, int m)
-{
-    stiff_case big;
-    accel_error err = {0};
-    if (stiff_case_make_n(ci, x->quick ? CERT_RAYS_QUICK : CERT_RAYS, &big, &err)) {
-        exp_internal(x, "stiff case", &err);
-        return;
-    }
-    int T = cert_threads(x);
-    size_t n = big.rays.count, nl = n - big.leak_begin, ns = big.shadow.count, ref_leaks = 0;
-    accel_hit *ref = malloc(n * sizeof *ref), *h = malloc(n * sizeof *h);
-    uint8_t *occ = malloc(ns ? ns : 1);
-    if (!ref || !h || !occ) exit(CLI_EXIT_INTERNAL);
-    char phase[160];
-    snprintf(phase, sizeof phase, "certification of %s (%zu rays)", big.name, n);
-    bench_progress_begin(x->progress, phase, 0, 1);
-    stiff_reference(&big.scene, big.rays.rays, ref, n, T);
-    for (size_t i = big.leak_begin; i < n; i++) ref_leaks += ref[i].prim == ACCEL_MISS;
-    exp_text faults = {0};
-    int done = 0, listed = 0, fewer = 0;
-    for (int k = 0; k < m; k++) {
-        const exp_cfg *f = &g->cfg[k];
-        if (strstr(f->spec, "tri=naive") || !strncmp(f->spec, "brute", 5)) continue;
-        listed++;
-        const accel_kind *kind = f->kind;
-        void *accel = f->ok ? f->accel : NULL, *own = NULL;
-        if (!accel && f->left != EXP_LEFT_UNPARSED) {
-            accel_build_stats bs;
-            if (accel_build_spec(f->spec, &big.scene, T, &kind, &own, &bs, &err) == 0) accel = own;
-        }
-        if (!accel) {
-            exp_text_add(&st->cert_notes, "- %s: `%s` not certified (%s).\n", big.name, f->spec,
-                         f->why[0] ? f->why : err.msg);
-            exp_csv(x, "cert,%s,%s,0,0,0,,,,,,,,,not certified: %s\n", big.name, f->spec,
-                    f->why[0] ? f->why : err.msg);
-            st->cert_none++;
-            continue;
-        }
-        size_t want = cert_rays_for(big.name, f->spec, n), step = want ? n / want : 1;
-        if (step < 1) step = 1;
-        cert_counts r = cert_one(&big, ref, kind, accel, is_packet_mode(f->spec), step, T, h, occ);
-        if (own) kind->destroy(own);
-        char note[200] = "";
-        if (step > 1) {
-            if (f->ok)
-                snprintf(note, sizeof note, "a fixed %zu of %zu rays (every %zu-th): %.0f steps "
-                         "and %.0f primitive tests per ray on the base rays", r.n, n, step,
-                         exp_group_steps(g, k, BENCH_PRIMARY), exp_group_prims(g, k, BENCH_PRIMARY));
-            else
-                snprintf(note, sizeof note, "a fixed %zu of %zu rays (every %zu-th)", r.n, n, step);
-            exp_text_add(&st->cert_notes, "- %s: `%s` on %s (below %.0f per million).\n", big.name,
-                         f->spec, note, 3e6 / (double)r.n);
-            fewer++;
-            st->cert_fewer_n++;
-            st->cert_fewer_min = st->cert_fewer_min && st->cert_fewer_min < r.n ? st->cert_fewer_min : r.n;
-        } else {
-            st->cert_full++;
-        }
-        exp_csv(x, "cert,%s,%s,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,,,,%s\n", big.name, f->spec, r.n,
-                r.nl, r.ns, r.d.holes, r.d.false_hits, r.d.disagreements, r.leaks, r.sleaks, note);
-        if (r.d.holes || r.d.false_hits || r.d.disagreements || r.leaks || r.sleaks) {
-            exp_text_add(&faults, "%s`%s` %zu/%zu/%zu/%zu/%zu", faults.len ? ", " : "", f->spec,
-                         r.d.holes, r.d.false_hits, r.d.disagreements, r.leaks, r.sleaks);
-            if (r.d.first_bad != SIZE_MAX) {
-                const accel_ray *q = &big.rays.rays[r.d.first_bad * step];
-                exp_text_add(&faults, " (first: ray %zu, o = (%.9g, %.9g, %.9g), d = (%.9g, %.9g, "
-                             "%.9g))", r.d.first_bad * step, q->ox, q->oy, q->oz, q->dx, q->dy, q->dz);
-            }
-        }
-        st->cert_traces += r.n + r.ns;
-        st->cert_leaks += r.leaks + r.sleaks;
-        if (strstr(big.name, "touching") || strstr(big.name, "interpenetrating"))
-            st->contact_leaks += r.leaks + r.sleaks;
-        done++;
-    }
-    bench_progress_end(x->progress);
-    if (ref_leaks) exp_text_add(&faults, "%sthe reference itself misses %zu leak rays (the case "
-                                "is wrong)", faults.len ? "; " : "", ref_leaks);
-    char lb[48] = "-", sb[48] = "-", cb[80];
-    if (nl) snprintf(lb, sizeof lb, "%zu (< %.1f)", nl, 3e6 / (double)nl);
-    if (ns) snprintf(sb, sizeof sb, "%zu (< %.1f)", ns, 3e6 / (double)ns);
-    if (fewer) snprintf(cb, sizeof cb, "%d of %d (%d on fewer rays)", done, listed, fewer);
-    else snprintf(cb, sizeof cb, "%d of %d", done, listed);
-    exp_text_add(&st->cert_rows, "| %s | %zu (< %.1f) | %s | %s | %s | %s |\n", big.name, n,
-                 3e6 / (double)n, lb, sb, cb, faults.len ? exp_text_str(&faults) : "none");
-    st->cert_cases++;
-    st->cert_listed += (uint64_t)listed;
-    if (!st->cert_configs_min || listed < st->cert_configs_min) st->cert_configs_min = listed;
-    if (listed > st->cert_configs_max) st->cert_configs_max = listed;
-    st->cert_bad += faults.len > 0;
-    st->cert_rays += n;
-    st->cert_min_n = st->cert_min_n && st->cert_min_n < n ? st->cert_min_n : n;
-    if (nl) {
-        st->cert_leak_min = st->cert_leak_min && st->cert_leak_min < nl ? st->cert_leak_min : nl;
-        st->cert_leak_rays += nl + ns;
-        if (strstr(big.name, "touching") || strstr(big.name, "interpenetrating"))
-            st->contact_leak_rays += nl + ns;
-    }
-    exp_text_free(&faults);
-    free(ref), free(h), free(occ);
-    stiff_case_free(&big);
-}
-
-/* Long on purpose (108 lines): one stiff case's runs against the reference,
+/* Long on purpose (127 lines): one stiff case's runs against the reference,
  * table and findings, in the order the report prints them; the steps share
  * the group, its per-configuration arrays and the study's tallies, which
  * separate functions would take as a dozen parameters each. */
@@ -340,7 +137,7 @@ static void measure_case(exp_ctx *x, study *st, stiff_case *c, int ci, const exp
     int m = g.count < MAX_CFG ? g.count : MAX_CFG, all_zero = 1, wt_zero = 1, any_wt = 0;
     for (int k = 0; k < m; k++) {
         if (!g.cfg[k].ok) continue;
-        int packet = is_packet_mode(g.cfg[k].spec), naive = strstr(g.cfg[k].spec, "tri=naive") != NULL;
+        int packet = stab_cert_is_packet(g.cfg[k].spec), naive = strstr(g.cfg[k].spec, "tri=naive") != NULL;
         if (packet && !naive) { /* the share the default order gives the packet kernel */
             accel_coherence_stats s0, s1;
             accel_coherence_stats_get(&s0);
@@ -426,7 +223,7 @@ static void measure_case(exp_ctx *x, study *st, stiff_case *c, int ci, const exp
                          "`%s`.\n", c->name, g.cfg[slow].spec, ratio, g.cfg[fast].spec);
     }
     exp_text_add(&st->speeds, " | %.1f |\n", ratio);
-    if (ci >= 0) certify(x, st, ci, &g, m);
+    if (ci >= 0) stab_cert_case(x, &st->cert, ci, &g, m);
     for (int k = 0; k < g.count; k++)
         if (g.cfg[k].left && (g.cfg[k].left != EXP_LEFT_UNPARSED ||
                               (st->cases == 1 && !strstr(g.cfg[k].spec, "tri=naive"))))
@@ -473,60 +270,7 @@ static void stiff_cases(exp_ctx *x, study *st, const exp_list *list)
     }
 }
 
-/* A percentage short enough for the summary: 0, 0.006, 68. */
-static void pct(char *b, size_t n, double f)
-{
-    double p = 100 * f;
-    if (p == 0) snprintf(b, n, "0");
-    else if (p < 1) snprintf(b, n, "%.1g", p);
-    else snprintf(b, n, "%.0f", p);
-}
-
-/* "lo-hi%" of fractions, or "v%" when they print alike. */
-static void pct_range(char *b, size_t n, double lo, double hi)
-{
-    char l[12], h[12];
-    pct(l, sizeof l, lo), pct(h, sizeof h, hi);
-    if (!strcmp(l, h)) snprintf(b, n, "%s%%", l);
-    else snprintf(b, n, "%s-%s%%", l, h);
-}
-
-/* 1e5 for a power of ten, else %g. */
-static void dist_text(char *b, size_t n, double d)
-{
-    double e = round(log10(d));
-    if (d > 0 && pow(10, e) == d) snprintf(b, n, "1e%.0f", e);
-    else snprintf(b, n, "%g", d);
-}
-
-/* The far-geometry leak of each origin rule, for the findings and (brief)
- * the summary: "leak at distance 1e5-1e6: robust offset 68-100%, 32 ulps
- * 0-90%, epsilons 0-0.006% (self-hits 49%)": the fractions of the inside
- * rays that leak, over the far cases, least to most. */
-static void far_leak_text(const stab_offsets_result *o, int brief, char *buf, size_t n)
-{
-    if (!o->far_cases) {
-        snprintf(buf, n, "leak at distance >= 1e5: not measured in this budget");
-        return;
-    }
-    double elo = 1, ehi = 0, slo = 1, shi = 0; /* the three epsilon rules together */
-    for (int m = 0; m < STAB_OFFSET_ULPS; m++) {
-        elo = fmin(elo, o->far_leak_lo[m]), ehi = fmax(ehi, o->far_leak_hi[m]);
-        slo = fmin(slo, o->far_self_lo[m]), shi = fmax(shi, o->far_self_hi[m]);
-    }
-    char d0[16], d1[16], rb[32], ub[32], eb[32], sb[32], dist[40];
-    dist_text(d0, sizeof d0, o->far_d_lo), dist_text(d1, sizeof d1, o->far_d_hi);
-    if (strcmp(d0, d1)) snprintf(dist, sizeof dist, "%s-%s", d0, d1);
-    else snprintf(dist, sizeof dist, "%s", d0);
-    pct_range(rb, sizeof rb, o->far_leak_lo[STAB_OFFSET_ROBUST], o->far_leak_hi[STAB_OFFSET_ROBUST]);
-    pct_range(ub, sizeof ub, o->far_leak_lo[STAB_OFFSET_ULPS], o->far_leak_hi[STAB_OFFSET_ULPS]);
-    pct_range(eb, sizeof eb, elo, ehi), pct_range(sb, sizeof sb, slo, shi);
-    snprintf(buf, n, "leak%s at distance %s: robust offset %s, 32 ulps %s, epsilons %s (%s"
-             "self-hits %s)", brief ? "" : " of the secondary rays from inside (a sphere at (d,d,d))",
-             dist, rb, ub, eb, brief ? "" : "their ", sb);
-}
-
-/* Long on purpose (140 lines): the options, then each case and scene in
+/* Long on purpose (185 lines): the options, then each case and scene in
  * turn, then the verdicts, read top to bottom as the section they write;
  * each step is a few lines of calls. */
 int main(int argc, char **argv)
@@ -612,21 +356,21 @@ int main(int argc, char **argv)
                "Bounds are per configuration and case, rule of three (95%%): 3/n per million "
                "rays. Faults: holes/false hits/disagreements/leaks/shadow leaks, with the first "
                "faulty ray.\n",
-           x.quick ? CERT_RAYS_QUICK : CERT_RAYS, cert_threads(&x), cert_threads(&x) > 1 ? "s" : "",
+           x.quick ? STAB_CERT_RAYS_QUICK : STAB_CERT_RAYS, stab_cert_threads(&x), stab_cert_threads(&x) > 1 ? "s" : "",
            exp_text_str(&shares));
     exp_md_table(&x, "case|rays (bound per million)|leak rays (bound)|shadow rays (bound)|"
                      "configurations certified|faults");
-    exp_md(&x, "%s", exp_text_str(&st.cert_rows));
+    exp_md(&x, "%s", exp_text_str(&st.cert.rows));
     exp_text_free(&shares);
-    if (st.cert_notes.len)
-        exp_md(&x, "\nOn fewer rays or not certified:\n\n%s", exp_text_str(&st.cert_notes));
+    if (st.cert.notes.len)
+        exp_md(&x, "\nOn fewer rays or not certified:\n\n%s", exp_text_str(&st.cert.notes));
     exp_md(&x, "\n### Speed on the stiff cases (watertight, Mrays/s, interleaved rounds)\n");
     exp_md_table(&x, "case|Mrays/s per configuration|fastest / slowest (brute aside)");
     exp_md(&x, "%s", exp_text_str(&st.speeds));
     stab_offsets_result off;
-    stab_offsets(&x, cert_threads(&x), &off);
-    double cb = st.cert_min_n ? 3e6 / (double)st.cert_min_n : 0;
-    double lb = st.cert_leak_min ? 3e6 / (double)st.cert_leak_min : 0;
+    stab_offsets(&x, stab_cert_threads(&x), &off);
+    double cb = st.cert.min_n ? 3e6 / (double)st.cert.min_n : 0;
+    double lb = st.cert.leak_min ? 3e6 / (double)st.cert.leak_min : 0;
     exp_text findings = {0};
     exp_text_add(&findings, "- The watertight kernels, base rays: %s over %llu distinct rays in "
                  "%llu cases (each configuration: fewer than %.1f per million at 95%%).\n",
@@ -634,29 +378,29 @@ int main(int argc, char **argv)
                  : "no hole, false hit, disagreement or leak", (unsigned long long)st.distinct_rays,
                  (unsigned long long)st.cases, bound);
     char fewer_txt[160] = "";
-    if (st.cert_fewer_n)
+    if (st.cert.fewer)
         snprintf(fewer_txt, sizeof fewer_txt, "; %llu pair%s on a fixed fewer, at least %llu "
-                 "rays: below %.0f", (unsigned long long)st.cert_fewer_n,
-                 st.cert_fewer_n == 1 ? "" : "s", (unsigned long long)st.cert_fewer_min,
-                 3e6 / (double)st.cert_fewer_min);
+                 "rays: below %.0f", (unsigned long long)st.cert.fewer,
+                 st.cert.fewer == 1 ? "" : "s", (unsigned long long)st.cert.fewer_min,
+                 3e6 / (double)st.cert.fewer_min);
     char per_case[32];
-    if (st.cert_configs_min == st.cert_configs_max) snprintf(per_case, sizeof per_case, "%d", st.cert_configs_max);
-    else snprintf(per_case, sizeof per_case, "%d to %d", st.cert_configs_min, st.cert_configs_max);
+    if (st.cert.configs_min == st.cert.configs_max) snprintf(per_case, sizeof per_case, "%d", st.cert.configs_max);
+    else snprintf(per_case, sizeof per_case, "%d to %d", st.cert.configs_min, st.cert.configs_max);
     exp_text_add(&findings, "- Certification: %llu of %llu cases with any fault; %s "
                  "configurations listed per case, %llu (case, configuration) pairs: %llu on the "
                  "case's rays, %llu on fewer, %llu not certified; %llu rays in all (at least %llu "
                  "per case: each configuration's rate per case below %.1f per million by the rule "
                  "of three%s; leak rays at least %llu per case: below %.1f), %llu ray traces.\n",
-                 (unsigned long long)st.cert_bad, (unsigned long long)st.cert_cases,
-                 per_case, (unsigned long long)st.cert_listed,
-                 (unsigned long long)st.cert_full, (unsigned long long)st.cert_fewer_n,
-                 (unsigned long long)st.cert_none, (unsigned long long)st.cert_rays,
-                 (unsigned long long)st.cert_min_n, cb, fewer_txt,
-                 (unsigned long long)st.cert_leak_min, lb, (unsigned long long)st.cert_traces);
+                 (unsigned long long)st.cert.bad, (unsigned long long)st.cert.cases,
+                 per_case, (unsigned long long)st.cert.listed,
+                 (unsigned long long)st.cert.full, (unsigned long long)st.cert.fewer,
+                 (unsigned long long)st.cert.none, (unsigned long long)st.cert.rays,
+                 (unsigned long long)st.cert.min_n, cb, fewer_txt,
+                 (unsigned long long)st.cert.leak_min, lb, (unsigned long long)st.cert.traces);
     exp_text_add(&findings, "- Light leaking at contacts of closed meshes (touching, "
                  "interpenetrating): %llu leaks in %llu leak and shadow rays, each configuration "
                  "(the certification rows of the contact cases).\n",
-                 (unsigned long long)st.contact_leaks, (unsigned long long)st.contact_leak_rays);
+                 (unsigned long long)st.cert.contact_leaks, (unsigned long long)st.cert.contact_leak_rays);
     exp_text_add(&findings, "- The naive kernels: up to %.0f holes per million rays (%s) and %.0f "
                  "leaks per million leak rays (%s).\n", st.holes.value,
                  st.holes.what.len ? exp_text_str(&st.holes.what) : "none", st.leaks.value,
@@ -675,32 +419,32 @@ int main(int argc, char **argv)
     }
     exp_text_add(&findings, ".%s\n", off.planted ? " PLANTED broken robust offset." : "");
     char far[400];
-    far_leak_text(&off, 0, far, sizeof far);
+    stab_offsets_far_text(&off, 0, far, sizeof far);
     exp_text_add(&findings, "- Far geometry, %s.\n", far);
-    far_leak_text(&off, 1, far, sizeof far);
+    stab_offsets_far_text(&off, 1, far, sizeof far);
     exp_md(&x, "\n**Findings:**\n\n%s", exp_text_str(&findings));
     size_t rob_bad = off.self[STAB_OFFSET_ROBUST] + off.leaks[STAB_OFFSET_ROBUST];
     /* A request is answered with its numbers (issue 38); the certification
      * and the far-geometry leak of each origin rule lead the evidence, the
      * part the summary shows (issue 52). */
     char fewer_pairs[96] = "";
-    if (st.cert_fewer_n || st.cert_none)
+    if (st.cert.fewer || st.cert.none)
         snprintf(fewer_pairs, sizeof fewer_pairs, " (%llu pairs fewer%s)",
-                 (unsigned long long)st.cert_fewer_n, st.cert_none ? ", some not certified" : "");
+                 (unsigned long long)st.cert.fewer, st.cert.none ? ", some not certified" : "");
     exp_verdict(&x, "stability", EXP_ANSWERED, "every stiff case",
                 "%llu of %llu cases faulty, %d configurations each (packets, streams, wide) at "
                 ">= %llu rays%s; %s; contacts: %llu leaks in %llu leak and shadow rays; robust "
                 "offset: %zu self-hits and leaks in %zu secondary rays (epsilon rules: up to %.0f "
                 "self-hits per million in a case); naive kernels up to %.0f holes per million "
                 "rays and %.0f leaks per million leak rays; base rays: %llu of %llu cases "
-                "faulty%s%s", (unsigned long long)st.cert_bad, (unsigned long long)st.cert_cases,
-                st.cert_configs_max, (unsigned long long)st.cert_min_n,
+                "faulty%s%s", (unsigned long long)st.cert.bad, (unsigned long long)st.cert.cases,
+                st.cert.configs_max, (unsigned long long)st.cert.min_n,
                 fewer_pairs, far,
-                (unsigned long long)st.contact_leaks, (unsigned long long)st.contact_leak_rays,
+                (unsigned long long)st.cert.contact_leaks, (unsigned long long)st.cert.contact_leak_rays,
                 rob_bad, off.rays,
                 fmax(fmax(off.worst_self[0], off.worst_self[1]), fmax(off.worst_self[2], off.worst_self[3])),
                 st.holes.value, st.leaks.value, (unsigned long long)st.robust_bad_cases,
-                (unsigned long long)st.cases, st.cert_configs_min != st.cert_configs_max
+                (unsigned long long)st.cases, st.cert.configs_min != st.cert.configs_max
                 ? "; configurations per case differ: see the section" : "",
                 st.cliffs.len ? "; performance cliffs: see the findings" : "");
     exp_text_free(&findings);
@@ -708,8 +452,7 @@ int main(int argc, char **argv)
     exp_text_free(&st.cliffs);
     exp_text_free(&st.speeds);
     exp_text_free(&st.left);
-    exp_text_free(&st.cert_rows);
-    exp_text_free(&st.cert_notes);
+    stab_cert_free(&st.cert);
     exp_text_free(&st.holes.what);
     exp_text_free(&st.leaks.what);
     exp_list_free(&base);

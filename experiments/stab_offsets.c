@@ -217,3 +217,52 @@ void stab_offsets(exp_ctx *x, int threads, stab_offsets_result *res)
 }
 
 const char *stab_offsets_name(int m) { return m >= 0 && m < M_COUNT ? method_name[m] : "?"; }
+
+/* A percentage short enough for the summary: 0, 0.006, 68. */
+static void pct(char *b, size_t n, double f)
+{
+    double p = 100 * f;
+    if (p == 0) snprintf(b, n, "0");
+    else if (p < 1) snprintf(b, n, "%.1g", p);
+    else snprintf(b, n, "%.0f", p);
+}
+
+/* "lo-hi%" of fractions, or "v%" when they print alike. */
+static void pct_range(char *b, size_t n, double lo, double hi)
+{
+    char l[12], h[12];
+    pct(l, sizeof l, lo), pct(h, sizeof h, hi);
+    if (!strcmp(l, h)) snprintf(b, n, "%s%%", l);
+    else snprintf(b, n, "%s-%s%%", l, h);
+}
+
+/* 1e5 for a power of ten, else %g. */
+static void dist_text(char *b, size_t n, double d)
+{
+    double e = round(log10(d));
+    if (d > 0 && pow(10, e) == d) snprintf(b, n, "1e%.0f", e);
+    else snprintf(b, n, "%g", d);
+}
+
+void stab_offsets_far_text(const stab_offsets_result *o, int brief, char *buf, size_t n)
+{
+    if (!o->far_cases) {
+        snprintf(buf, n, "leak at distance >= 1e5: not measured in this budget");
+        return;
+    }
+    double elo = 1, ehi = 0, slo = 1, shi = 0; /* the three epsilon rules together */
+    for (int m = 0; m < STAB_OFFSET_ULPS; m++) {
+        elo = fmin(elo, o->far_leak_lo[m]), ehi = fmax(ehi, o->far_leak_hi[m]);
+        slo = fmin(slo, o->far_self_lo[m]), shi = fmax(shi, o->far_self_hi[m]);
+    }
+    char d0[16], d1[16], rb[32], ub[32], eb[32], sb[32], dist[40];
+    dist_text(d0, sizeof d0, o->far_d_lo), dist_text(d1, sizeof d1, o->far_d_hi);
+    if (strcmp(d0, d1)) snprintf(dist, sizeof dist, "%s-%s", d0, d1);
+    else snprintf(dist, sizeof dist, "%s", d0);
+    pct_range(rb, sizeof rb, o->far_leak_lo[STAB_OFFSET_ROBUST], o->far_leak_hi[STAB_OFFSET_ROBUST]);
+    pct_range(ub, sizeof ub, o->far_leak_lo[STAB_OFFSET_ULPS], o->far_leak_hi[STAB_OFFSET_ULPS]);
+    pct_range(eb, sizeof eb, elo, ehi), pct_range(sb, sizeof sb, slo, shi);
+    snprintf(buf, n, "leak%s at distance %s: robust offset %s, 32 ulps %s, epsilons %s (%s"
+             "self-hits %s)", brief ? "" : " of the secondary rays from inside (a sphere at (d,d,d))",
+             dist, rb, ub, eb, brief ? "" : "their ", sb);
+}

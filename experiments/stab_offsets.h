@@ -30,6 +30,13 @@ typedef struct {
 
 /* Writes the study's table and CSV rows (part "offset"). */
 void stab_offsets(exp_ctx *x, int threads, stab_offsets_result *res);
+/* The far-geometry leak of each origin rule, for the findings and (brief)
+ * the summary: "leak at distance 1e5-1e6: robust offset 68-100%, 32 ulps
+ * 0-90%, epsilons 0-0.006% (self-hits 49%)": the fractions of the inside
+ * rays that leak over the far cases, least to most (the epsilon rules
+ * together), and the epsilon rules' self-hits; "not measured" without a
+ * far case (the quick budget). */
+void stab_offsets_far_text(const stab_offsets_result *o, int brief, char *buf, size_t n);
 /* The rule's name (0 .. STAB_OFFSET_RULES-1). */
 const char *stab_offsets_name(int m);
 
