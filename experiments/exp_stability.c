@@ -1,8 +1,8 @@
 /*
  * exp_stability - holes per million rays on the stiff and extreme cases.
  *
- * Every kind (and the traversals and kinds this build adds: packets, wide
- * BVHs, grid packets and skipping, the irregular grid), with the
+ * Every kind (and the traversals and kinds this build adds: every packet
+ * and stream mode, wide BVHs, grid skipping, the irregular grid), with the
  * watertight (default) and the naive (Moller-Trumbore) triangle test, on
  * every case of rays/stiff.c and on the shared meshes: holes (the
  * reference hits, the tracer misses), false hits and disagreements per
@@ -11,9 +11,11 @@
  * upper bound (Clopper-Pearson; 1 - 0.05^(1/n), about 3/n): zero in 2,400
  * rays means "below 1,250 per million", not "never". Rows that are all
  * zero are folded; so are rows equal for every kind. Speeds (interleaved
- * rounds) show the performance cliffs. Then self-intersection of secondary
- * rays: a fixed epsilon offset against the robust offset of Waechter and
- * Binder (Ray Tracing Gems, 2019), on a closed mesh moved from the origin.
+ * rounds) show the performance cliffs. Then the certification of every
+ * watertight configuration on a million rays per case (stab_cert.c), and
+ * self-intersection of secondary rays: a fixed epsilon offset against the
+ * robust offset of Waechter and Binder (Ray Tracing Gems, 2019), on a
+ * closed mesh moved from the origin (stab_offsets.c).
  */
 #include <math.h>
 #include <stdlib.h>
@@ -22,20 +24,21 @@
 #include "engine/group.h"
 #include "cli/cli.h"
 #include "rays/stiff.h"
+#include "stab_cert.h"
 #include "stab_offsets.h"
+#include "core/coherence.h"
 
-#define MAX_CFG 32
+#define MAX_CFG 64
 #define CLIFF 10.0
-/* Rays per built-in case in the certification, and the longest one
- * configuration may trace them (estimated from its speed on the case's
- * base rays): over that it is named as left out. */
-#define CERT_RAYS 1000000
-#define CERT_RAYS_QUICK 20000
-#define CERT_LIMIT_S 1.5 /* was 6: coincident and same_centroid took 44 and 62 s (issue 38's budget) */
-
-static const char *const extras[] = {"bvh:traverse=packet", "bvh:width=4", "bvh:width=8",
-                                     "grid:traverse=packet", "grid:skip=macro", "irregular_grid",
-                                     "nested_grid:traverse=packet"};
+/* Every packet and stream mode and the wide kernels, beside the kinds:
+ * packets and streams have numerics of their own (a packet's slab tests,
+ * a stream's node tests per ray, the wide nodes' SIMD lanes), so none is
+ * left out as "the same structure" as its single-ray kind. */
+static const char *const extras[] = {
+    "bvh:traverse=packet", "bvh:traverse=packet,frustum=1", "bvh:width=4", "bvh:width=8",
+    "bvh:width=4,traverse=packet", "bvh:width=8,traverse=packet", "bvh:width=4,traverse=stream",
+    "bvh:width=8,traverse=stream", "grid:traverse=packet", "grid:skip=macro", "irregular_grid",
+    "nested_grid:traverse=packet", "instanced:traverse=packet"};
 
 typedef struct {
     double value;
@@ -49,10 +52,14 @@ typedef struct {
     uint64_t distinct_rays;
     worst holes, leaks;
     exp_text clean, cliffs, speeds, left;
-    /* the certification: every built-in case again with >= 10^6 rays */
-    uint64_t cert_cases, cert_bad, cert_rays, cert_min_n, cert_leak_min, cert_traces;
-    uint64_t cert_leaks, cert_leak_rays, contact_leak_rays, contact_leaks;
-    exp_text cert_rows;
+    stab_cert cert; /* the certification (stab_cert.c) */
+    /* each packet mode in the default (sorted) order on the base rays: the
+     * rays its packet kernel traced, of all its rays */
+    struct {
+        char spec[256];
+        uint64_t packet, rays;
+    } share[MAX_CFG];
+    int shares;
 } study;
 
 typedef struct {
@@ -96,86 +103,7 @@ static void note_worst(worst *w, const exp_group *g, const counts *cnt, int m, s
     exp_text_add(&w->what, " on %s", name);
 }
 
-static int cert_threads(const exp_ctx *x)
-{
-    return x->threads_given ? x->threads : accel_cpu_count();
-}
-
-/* Case ci again with at least CERT_RAYS distinct rays, traced by every
- * watertight configuration of g but brute force (the reference's own
- * loop), on every core: holes, false hits and disagreements against the
- * exact reference, leaks of the rays from inside, and of the shadow rays. */
-static void certify(exp_ctx *x, study *st, int ci, const exp_group *g, int m)
-{
-    stiff_case big;
-    accel_error err = {0};
-    if (stiff_case_make_n(ci, x->quick ? CERT_RAYS_QUICK : CERT_RAYS, &big, &err)) {
-        exp_internal(x, "stiff case", &err);
-        return;
-    }
-    int T = cert_threads(x);
-    size_t n = big.rays.count, nl = n - big.leak_begin, ns = big.shadow.count, ref_leaks = 0;
-    accel_hit *ref = malloc(n * sizeof *ref), *h = malloc(n * sizeof *h);
-    uint8_t *occ = malloc(ns ? ns : 1);
-    if (!ref || !h || !occ) exit(CLI_EXIT_INTERNAL);
-    char phase[160];
-    snprintf(phase, sizeof phase, "certification of %s (%zu rays)", big.name, n);
-    bench_progress_begin(x->progress, phase, 0, 1);
-    stiff_reference(&big.scene, big.rays.rays, ref, n, T);
-    for (size_t i = big.leak_begin; i < n; i++) ref_leaks += ref[i].prim == ACCEL_MISS;
-    exp_text faults = {0};
-    int done = 0;
-    for (int k = 0; k < m; k++) {
-        const exp_cfg *f = &g->cfg[k];
-        if (!f->ok || strstr(f->spec, "tri=naive") || !strncmp(f->spec, "brute", 5)) continue;
-        double mr = exp_group_mrays(g, k, BENCH_PRIMARY).median;
-        double est = mr > 0 ? (double)n / (mr * 1e6) * x->threads / T : INFINITY;
-        if (est > (x->quick ? 1.0 : CERT_LIMIT_S)) {
-            exp_text_add(&st->left, "- %s: `%s` not certified on %zu rays (about %.0f s at its "
-                         "speed on the base rays).\n", big.name, f->spec, n, est);
-            continue;
-        }
-        accel_trace(f->kind, f->accel, big.rays.rays, h, n, T, NULL);
-        hits_diff d = hits_compare(&big.scene, big.rays.rays, ref, h, n);
-        size_t leaks = 0, sleaks = 0;
-        for (size_t i = big.leak_begin; i < n; i++) leaks += h[i].prim == ACCEL_MISS;
-        if (ns) accel_trace_occluded(f->kind, f->accel, big.shadow.rays, occ, ns, T, NULL);
-        for (size_t i = 0; i < ns; i++) sleaks += !occ[i];
-        exp_csv(x, "cert,%s,%s,%zu,%zu,%zu,%zu,%zu,%zu,%zu,%zu,,,\n", big.name, f->spec, n, nl, ns,
-                d.holes, d.false_hits, d.disagreements, leaks, sleaks);
-        if (d.holes || d.false_hits || d.disagreements || leaks || sleaks)
-            exp_text_add(&faults, "%s`%s` %zu/%zu/%zu/%zu/%zu", faults.len ? ", " : "", f->spec,
-                         d.holes, d.false_hits, d.disagreements, leaks, sleaks);
-        st->cert_traces += n + ns;
-        st->cert_leaks += leaks + sleaks;
-        if (strstr(big.name, "touching") || strstr(big.name, "interpenetrating"))
-            st->contact_leaks += leaks + sleaks;
-        done++;
-    }
-    bench_progress_end(x->progress);
-    if (ref_leaks) exp_text_add(&faults, "%sthe reference itself misses %zu leak rays (the case "
-                                "is wrong)", faults.len ? "; " : "", ref_leaks);
-    char lb[48] = "-", sb[48] = "-";
-    if (nl) snprintf(lb, sizeof lb, "%zu (< %.1f)", nl, 3e6 / (double)nl);
-    if (ns) snprintf(sb, sizeof sb, "%zu (< %.1f)", ns, 3e6 / (double)ns);
-    exp_text_add(&st->cert_rows, "| %s | %zu (< %.1f) | %s | %s | %d | %s |\n", big.name, n,
-                 3e6 / (double)n, lb, sb, done, faults.len ? exp_text_str(&faults) : "none");
-    st->cert_cases++;
-    st->cert_bad += faults.len > 0;
-    st->cert_rays += n;
-    st->cert_min_n = st->cert_min_n && st->cert_min_n < n ? st->cert_min_n : n;
-    if (nl) {
-        st->cert_leak_min = st->cert_leak_min && st->cert_leak_min < nl ? st->cert_leak_min : nl;
-        st->cert_leak_rays += nl + ns;
-        if (strstr(big.name, "touching") || strstr(big.name, "interpenetrating"))
-            st->contact_leak_rays += nl + ns;
-    }
-    exp_text_free(&faults);
-    free(ref), free(h), free(occ);
-    stiff_case_free(&big);
-}
-
-/* Long on purpose (108 lines): one stiff case's runs against the reference,
+/* Long on purpose (127 lines): one stiff case's runs against the reference,
  * table and findings, in the order the report prints them; the steps share
  * the group, its per-configuration arrays and the study's tallies, which
  * separate functions would take as a dozen parameters each. */
@@ -192,6 +120,7 @@ static void measure_case(exp_ctx *x, study *st, stiff_case *c, int ci, const exp
     exp_group_init(&g, x, &c->scene, &one, BENCH_PRIMARY);
     g.collapse_ms = x->quick ? 500 : 3000;
     g.time_builds = 0; /* no build time is reported here */
+    g.keep_same = 1;   /* packets and streams share their kind's tree, not its numerics */
     for (int i = 0; i < list->count; i++) {
         if (!strncmp(list->spec[i], "brute", 5) && (!list->spec[i][5] || list->spec[i][5] == ':') &&
             c->scene.live_count > 20000) {
@@ -208,19 +137,36 @@ static void measure_case(exp_ctx *x, study *st, stiff_case *c, int ci, const exp
     int m = g.count < MAX_CFG ? g.count : MAX_CFG, all_zero = 1, wt_zero = 1, any_wt = 0;
     for (int k = 0; k < m; k++) {
         if (!g.cfg[k].ok) continue;
+        int packet = stab_cert_is_packet(g.cfg[k].spec), naive = strstr(g.cfg[k].spec, "tri=naive") != NULL;
+        if (packet && !naive) { /* the share the default order gives the packet kernel */
+            accel_coherence_stats s0, s1;
+            accel_coherence_stats_get(&s0);
+            accel_trace(g.cfg[k].kind, g.cfg[k].accel, c->rays.rays, h, n, x->threads, NULL);
+            accel_coherence_stats_get(&s1);
+            int j = 0;
+            while (j < st->shares && strcmp(st->share[j].spec, g.cfg[k].spec)) j++;
+            if (j == st->shares && j < MAX_CFG)
+                snprintf(st->share[st->shares++].spec, sizeof st->share[0].spec, "%s", g.cfg[k].spec);
+            if (j < st->shares) {
+                st->share[j].packet += s1.packet_rays - s0.packet_rays;
+                st->share[j].rays += n;
+            }
+        }
+        int order = accel_coherence_get();
+        if (packet) accel_coherence_set(ACCEL_ORDER_KEEP);
         accel_trace(g.cfg[k].kind, g.cfg[k].accel, c->rays.rays, h, n, x->threads, NULL);
+        accel_coherence_set(order);
         hits_diff d = hits_compare(&c->scene, c->rays.rays, ref, h, n);
         cnt[k].holes = d.holes, cnt[k].false_hits = d.false_hits, cnt[k].dis = d.disagreements;
         for (size_t i = c->leak_begin; i < n; i++) cnt[k].leaks += h[i].prim == ACCEL_MISS;
         int zero = !cnt[k].holes && !cnt[k].false_hits && !cnt[k].dis && !cnt[k].leaks;
-        int naive = strstr(g.cfg[k].spec, "tri=naive") != NULL;
         all_zero &= zero;
         if (!naive) {
             wt_zero &= zero;
             any_wt = 1;
             st->robust_rays += n;
         }
-        exp_csv(x, "stiff,%s,%s,%zu,%zu,0,%zu,%zu,%zu,%zu,,,%.4f,\n", c->name, g.cfg[k].spec, n,
+        exp_csv(x, "stiff,%s,%s,%zu,%zu,0,%zu,%zu,%zu,%zu,,,%.4f,,\n", c->name, g.cfg[k].spec, n,
                 leakable, cnt[k].holes, cnt[k].false_hits, cnt[k].dis, cnt[k].leaks,
                 exp_group_mrays(&g, k, BENCH_PRIMARY).median);
     }
@@ -277,7 +223,7 @@ static void measure_case(exp_ctx *x, study *st, stiff_case *c, int ci, const exp
                          "`%s`.\n", c->name, g.cfg[slow].spec, ratio, g.cfg[fast].spec);
     }
     exp_text_add(&st->speeds, " | %.1f |\n", ratio);
-    if (ci >= 0) certify(x, st, ci, &g, m);
+    if (ci >= 0) stab_cert_case(x, &st->cert, ci, &g, m);
     for (int k = 0; k < g.count; k++)
         if (g.cfg[k].left && (g.cfg[k].left != EXP_LEFT_UNPARSED ||
                               (st->cases == 1 && !strstr(g.cfg[k].spec, "tri=naive"))))
@@ -324,7 +270,7 @@ static void stiff_cases(exp_ctx *x, study *st, const exp_list *list)
     }
 }
 
-/* Long on purpose (140 lines): the options, then each case and scene in
+/* Long on purpose (185 lines): the options, then each case and scene in
  * turn, then the verdicts, read top to bottom as the section they write;
  * each step is a few lines of calls. */
 int main(int argc, char **argv)
@@ -358,10 +304,11 @@ int main(int argc, char **argv)
                "with a million distinct rays and more (a zero is below 3/n by the rule of three: "
                "Hanley and Lippman-Hand, JAMA 249, 1983: 3 per million at n = 10^6).");
     exp_csv(&x, "part,case,spec,rays,leak_rays,shadow_rays,holes,false_hits,disagreements,leaks,"
-                "shadow_leaks,self_hits,mrays,distance\n");
+                "shadow_leaks,self_hits,mrays,distance,note\n");
     const char *names[MAX_CFG / 2];
     int nk = 0;
-    for (size_t k = 0; k < accel_kind_count && nk < MAX_CFG / 2 - 8; k++) names[nk++] = accel_kinds[k]->name;
+    const int n_extras = (int)(sizeof extras / sizeof extras[0]);
+    for (size_t k = 0; k < accel_kind_count && nk < MAX_CFG / 2 - n_extras; k++) names[nk++] = accel_kinds[k]->name;
     for (size_t e = 0; e < sizeof extras / sizeof extras[0]; e++) names[nk++] = extras[e];
     exp_list base;
     exp_list_make(&x, names, nk, NULL, &base);
@@ -388,41 +335,72 @@ int main(int argc, char **argv)
                "million (95%%, over its %llu rays).\n", (unsigned long long)st.robust_rays,
            (unsigned long long)st.distinct_rays, (unsigned long long)st.robust_bad_cases,
            st.robust_bad_cases == 1 ? "" : "s", bound, (unsigned long long)st.distinct_rays);
+    exp_text shares = {0};
+    for (int j = 0; j < st.shares; j++)
+        exp_text_add(&shares, "%s`%s` %.0f%%", j ? ", " : "", st.share[j].spec,
+                     st.share[j].rays ? 100.0 * (double)st.share[j].packet / (double)st.share[j].rays : 0.0);
+    if (!st.shares) exp_text_add(&shares, "(no packet mode measured)");
     exp_md(&x, "\n### Certification: a million rays and more per case (watertight kernels)\n\n"
                "Each built-in case again, its scene unchanged, with every random count scaled up "
                "and its lattices refined until it has at least %d distinct rays (repeats "
                "dropped: a repeat is no new trial), traced on %d thread%s by every watertight "
-               "configuration of the table above but brute force (the reference's own loop). "
+               "configuration of the table above but brute force (the reference's own loop): "
+               "the packet modes (binary, frustum, 4- and 8-wide, grids, instances), the 4- and "
+               "8-wide streams and kernels and every kind. A fixed ray count per case and "
+               "configuration, never a time limit: the few pairs on fewer rays are named below "
+               "with their counts per ray. The packet modes trace with every 64 consecutive rays "
+               "a packet (the caller's order kept), so their packet kernels see every ray: in the "
+               "default sorted order the coherence layer gives the packet kernels only coherent "
+               "groups of 64 (core/coherence.h), on these cases' base rays %s, the rest to the "
+               "kinds' single-ray kernels. "
                "Bounds are per configuration and case, rule of three (95%%): 3/n per million "
-               "rays. Faults: holes/false hits/disagreements/leaks/shadow leaks.\n",
-           x.quick ? CERT_RAYS_QUICK : CERT_RAYS, cert_threads(&x), cert_threads(&x) > 1 ? "s" : "");
+               "rays. Faults: holes/false hits/disagreements/leaks/shadow leaks, with the first "
+               "faulty ray.\n",
+           x.quick ? STAB_CERT_RAYS_QUICK : STAB_CERT_RAYS, stab_cert_threads(&x), stab_cert_threads(&x) > 1 ? "s" : "",
+           exp_text_str(&shares));
     exp_md_table(&x, "case|rays (bound per million)|leak rays (bound)|shadow rays (bound)|"
-                     "configurations|faults");
-    exp_md(&x, "%s", exp_text_str(&st.cert_rows));
+                     "configurations certified|faults");
+    exp_md(&x, "%s", exp_text_str(&st.cert.rows));
+    exp_text_free(&shares);
+    if (st.cert.notes.len)
+        exp_md(&x, "\nOn fewer rays or not certified:\n\n%s", exp_text_str(&st.cert.notes));
     exp_md(&x, "\n### Speed on the stiff cases (watertight, Mrays/s, interleaved rounds)\n");
     exp_md_table(&x, "case|Mrays/s per configuration|fastest / slowest (brute aside)");
     exp_md(&x, "%s", exp_text_str(&st.speeds));
     stab_offsets_result off;
-    stab_offsets(&x, cert_threads(&x), &off);
-    double cb = st.cert_min_n ? 3e6 / (double)st.cert_min_n : 0;
-    double lb = st.cert_leak_min ? 3e6 / (double)st.cert_leak_min : 0;
+    stab_offsets(&x, stab_cert_threads(&x), &off);
+    double cb = st.cert.min_n ? 3e6 / (double)st.cert.min_n : 0;
+    double lb = st.cert.leak_min ? 3e6 / (double)st.cert.leak_min : 0;
     exp_text findings = {0};
     exp_text_add(&findings, "- The watertight kernels, base rays: %s over %llu distinct rays in "
                  "%llu cases (each configuration: fewer than %.1f per million at 95%%).\n",
                  st.robust_bad_cases ? "SOME CASES FAILED (see the rows above)"
                  : "no hole, false hit, disagreement or leak", (unsigned long long)st.distinct_rays,
                  (unsigned long long)st.cases, bound);
-    exp_text_add(&findings, "- Certification: %llu of %llu cases with any fault, %llu rays in all "
-                 "(at least %llu per case: each configuration's rate per case below %.1f per "
-                 "million by the rule of three; leak rays at least %llu per case: below %.1f), "
-                 "%llu ray traces.\n", (unsigned long long)st.cert_bad,
-                 (unsigned long long)st.cert_cases, (unsigned long long)st.cert_rays,
-                 (unsigned long long)st.cert_min_n, cb, (unsigned long long)st.cert_leak_min, lb,
-                 (unsigned long long)st.cert_traces);
+    char fewer_txt[160] = "";
+    if (st.cert.fewer)
+        snprintf(fewer_txt, sizeof fewer_txt, "; %llu pair%s on a fixed fewer, at least %llu "
+                 "rays: below %.0f", (unsigned long long)st.cert.fewer,
+                 st.cert.fewer == 1 ? "" : "s", (unsigned long long)st.cert.fewer_min,
+                 3e6 / (double)st.cert.fewer_min);
+    char per_case[32];
+    if (st.cert.configs_min == st.cert.configs_max) snprintf(per_case, sizeof per_case, "%d", st.cert.configs_max);
+    else snprintf(per_case, sizeof per_case, "%d to %d", st.cert.configs_min, st.cert.configs_max);
+    exp_text_add(&findings, "- Certification: %llu of %llu cases with any fault; %s "
+                 "configurations listed per case, %llu (case, configuration) pairs: %llu on the "
+                 "case's rays, %llu on fewer, %llu not certified; %llu rays in all (at least %llu "
+                 "per case: each configuration's rate per case below %.1f per million by the rule "
+                 "of three%s; leak rays at least %llu per case: below %.1f), %llu ray traces.\n",
+                 (unsigned long long)st.cert.bad, (unsigned long long)st.cert.cases,
+                 per_case, (unsigned long long)st.cert.listed,
+                 (unsigned long long)st.cert.full, (unsigned long long)st.cert.fewer,
+                 (unsigned long long)st.cert.none, (unsigned long long)st.cert.rays,
+                 (unsigned long long)st.cert.min_n, cb, fewer_txt,
+                 (unsigned long long)st.cert.leak_min, lb, (unsigned long long)st.cert.traces);
     exp_text_add(&findings, "- Light leaking at contacts of closed meshes (touching, "
                  "interpenetrating): %llu leaks in %llu leak and shadow rays, each configuration "
                  "(the certification rows of the contact cases).\n",
-                 (unsigned long long)st.contact_leaks, (unsigned long long)st.contact_leak_rays);
+                 (unsigned long long)st.cert.contact_leaks, (unsigned long long)st.cert.contact_leak_rays);
     exp_text_add(&findings, "- The naive kernels: up to %.0f holes per million rays (%s) and %.0f "
                  "leaks per million leak rays (%s).\n", st.holes.value,
                  st.holes.what.len ? exp_text_str(&st.holes.what) : "none", st.leaks.value,
@@ -440,31 +418,41 @@ int main(int argc, char **argv)
                      m ? ";" : "", stab_offsets_name(m), sb, fb, off.self[m], off.leaks[m]);
     }
     exp_text_add(&findings, ".%s\n", off.planted ? " PLANTED broken robust offset." : "");
+    char far[400];
+    stab_offsets_far_text(&off, 0, far, sizeof far);
+    exp_text_add(&findings, "- Far geometry, %s.\n", far);
+    stab_offsets_far_text(&off, 1, far, sizeof far);
     exp_md(&x, "\n**Findings:**\n\n%s", exp_text_str(&findings));
     size_t rob_bad = off.self[STAB_OFFSET_ROBUST] + off.leaks[STAB_OFFSET_ROBUST];
-    /* A request is answered with its numbers (issue 38); the counts of
-     * cases with faults lead the evidence. */
+    /* A request is answered with its numbers (issue 38); the certification
+     * and the far-geometry leak of each origin rule lead the evidence, the
+     * part the summary shows (issue 52). */
+    char fewer_pairs[96] = "";
+    if (st.cert.fewer || st.cert.none)
+        snprintf(fewer_pairs, sizeof fewer_pairs, " (%llu pairs fewer%s)",
+                 (unsigned long long)st.cert.fewer, st.cert.none ? ", some not certified" : "");
     exp_verdict(&x, "stability", EXP_ANSWERED, "every stiff case",
-                "watertight kernels: %llu of %llu cases with any hole, false hit, disagreement or "
-                "leak at >= %llu rays per case (rule of three: each configuration below %.1f per "
-                "million per case; leak rays >= %llu per case: below %.1f), %llu of %llu on the "
-                "base rays; contacts: %llu leaks in %llu leak and shadow rays; robust offset: "
-                "%zu self-hits and leaks in %zu secondary rays (epsilon rules: up to %.0f "
-                "self-hits per million in a case); naive kernels up to %.0f holes per million rays and %.0f leaks per "
-                "million leak rays%s", (unsigned long long)st.cert_bad,
-                (unsigned long long)st.cert_cases, (unsigned long long)st.cert_min_n, cb,
-                (unsigned long long)st.cert_leak_min, lb, (unsigned long long)st.robust_bad_cases,
-                (unsigned long long)st.cases, (unsigned long long)st.contact_leaks,
-                (unsigned long long)st.contact_leak_rays, rob_bad, off.rays,
+                "%llu of %llu cases faulty, %d configurations each (packets, streams, wide) at "
+                ">= %llu rays%s; %s; contacts: %llu leaks in %llu leak and shadow rays; robust "
+                "offset: %zu self-hits and leaks in %zu secondary rays (epsilon rules: up to %.0f "
+                "self-hits per million in a case); naive kernels up to %.0f holes per million "
+                "rays and %.0f leaks per million leak rays; base rays: %llu of %llu cases "
+                "faulty%s%s", (unsigned long long)st.cert.bad, (unsigned long long)st.cert.cases,
+                st.cert.configs_max, (unsigned long long)st.cert.min_n,
+                fewer_pairs, far,
+                (unsigned long long)st.cert.contact_leaks, (unsigned long long)st.cert.contact_leak_rays,
+                rob_bad, off.rays,
                 fmax(fmax(off.worst_self[0], off.worst_self[1]), fmax(off.worst_self[2], off.worst_self[3])),
-                st.holes.value, st.leaks.value,
+                st.holes.value, st.leaks.value, (unsigned long long)st.robust_bad_cases,
+                (unsigned long long)st.cases, st.cert.configs_min != st.cert.configs_max
+                ? "; configurations per case differ: see the section" : "",
                 st.cliffs.len ? "; performance cliffs: see the findings" : "");
     exp_text_free(&findings);
     exp_text_free(&st.clean);
     exp_text_free(&st.cliffs);
     exp_text_free(&st.speeds);
     exp_text_free(&st.left);
-    exp_text_free(&st.cert_rows);
+    stab_cert_free(&st.cert);
     exp_text_free(&st.holes.what);
     exp_text_free(&st.leaks.what);
     exp_list_free(&base);

@@ -136,7 +136,7 @@ static void offset_rows(exp_ctx *x, const char *name, double distance, size_t n,
         }
         exp_md(x, "| %s | %zu (%zu) | %s | %s | %s | %s | %s | %s |\n", m ? "" : name, n,
                inside, method_name[m], sb, hb, fb, lb, sl);
-        exp_csv(x, "offset,%s,%s,%zu,%zu,%zu,%zu,%zu,,%zu,%zu,%zu,,%g\n", name, method_name[m],
+        exp_csv(x, "offset,%s,%s,%zu,%zu,%zu,%zu,%zu,,%zu,%zu,%zu,,%g,\n", name, method_name[m],
                 n, inside, inside, cnt[m].holes, cnt[m].false_hits, cnt[m].leaks,
                 cnt[m].shadow_leaks, cnt[m].self, distance);
         if (n) {
@@ -145,6 +145,19 @@ static void offset_rows(exp_ctx *x, const char *name, double distance, size_t n,
         }
         res->leaks[m] += cnt[m].leaks + cnt[m].shadow_leaks;
         res->self[m] += cnt[m].self;
+    }
+    if (distance >= STAB_FAR_DISTANCE && n && inside) {
+        for (int m = 0; m < M_COUNT; m++) {
+            double lk = (double)cnt[m].leaks / (double)inside, sf = (double)cnt[m].self / (double)n;
+            int first = res->far_cases == 0;
+            res->far_leak_lo[m] = first ? lk : fmin(res->far_leak_lo[m], lk);
+            res->far_leak_hi[m] = first ? lk : fmax(res->far_leak_hi[m], lk);
+            res->far_self_lo[m] = first ? sf : fmin(res->far_self_lo[m], sf);
+            res->far_self_hi[m] = first ? sf : fmax(res->far_self_hi[m], sf);
+        }
+        res->far_d_lo = res->far_cases ? fmin(res->far_d_lo, distance) : distance;
+        res->far_d_hi = res->far_cases ? fmax(res->far_d_hi, distance) : distance;
+        res->far_cases++;
     }
     res->rays += n;
     res->inside += inside;
@@ -204,3 +217,52 @@ void stab_offsets(exp_ctx *x, int threads, stab_offsets_result *res)
 }
 
 const char *stab_offsets_name(int m) { return m >= 0 && m < M_COUNT ? method_name[m] : "?"; }
+
+/* A percentage short enough for the summary: 0, 0.006, 68. */
+static void pct(char *b, size_t n, double f)
+{
+    double p = 100 * f;
+    if (p == 0) snprintf(b, n, "0");
+    else if (p < 1) snprintf(b, n, "%.1g", p);
+    else snprintf(b, n, "%.0f", p);
+}
+
+/* "lo-hi%" of fractions, or "v%" when they print alike. */
+static void pct_range(char *b, size_t n, double lo, double hi)
+{
+    char l[12], h[12];
+    pct(l, sizeof l, lo), pct(h, sizeof h, hi);
+    if (!strcmp(l, h)) snprintf(b, n, "%s%%", l);
+    else snprintf(b, n, "%s-%s%%", l, h);
+}
+
+/* 1e5 for a power of ten, else %g. */
+static void dist_text(char *b, size_t n, double d)
+{
+    double e = round(log10(d));
+    if (d > 0 && pow(10, e) == d) snprintf(b, n, "1e%.0f", e);
+    else snprintf(b, n, "%g", d);
+}
+
+void stab_offsets_far_text(const stab_offsets_result *o, int brief, char *buf, size_t n)
+{
+    if (!o->far_cases) {
+        snprintf(buf, n, "leak at distance >= 1e5: not measured in this budget");
+        return;
+    }
+    double elo = 1, ehi = 0, slo = 1, shi = 0; /* the three epsilon rules together */
+    for (int m = 0; m < STAB_OFFSET_ULPS; m++) {
+        elo = fmin(elo, o->far_leak_lo[m]), ehi = fmax(ehi, o->far_leak_hi[m]);
+        slo = fmin(slo, o->far_self_lo[m]), shi = fmax(shi, o->far_self_hi[m]);
+    }
+    char d0[16], d1[16], rb[32], ub[32], eb[32], sb[32], dist[40];
+    dist_text(d0, sizeof d0, o->far_d_lo), dist_text(d1, sizeof d1, o->far_d_hi);
+    if (strcmp(d0, d1)) snprintf(dist, sizeof dist, "%s-%s", d0, d1);
+    else snprintf(dist, sizeof dist, "%s", d0);
+    pct_range(rb, sizeof rb, o->far_leak_lo[STAB_OFFSET_ROBUST], o->far_leak_hi[STAB_OFFSET_ROBUST]);
+    pct_range(ub, sizeof ub, o->far_leak_lo[STAB_OFFSET_ULPS], o->far_leak_hi[STAB_OFFSET_ULPS]);
+    pct_range(eb, sizeof eb, elo, ehi), pct_range(sb, sizeof sb, slo, shi);
+    snprintf(buf, n, "leak%s at distance %s: robust offset %s, 32 ulps %s, epsilons %s (%s"
+             "self-hits %s)", brief ? "" : " of the secondary rays from inside (a sphere at (d,d,d))",
+             dist, rb, ub, eb, brief ? "" : "their ", sb);
+}

@@ -9,7 +9,9 @@
  * rays are occluded; the scaled cases have the rays they promise, none
  * repeated; the reference on the moved copy of a far scene is bitwise the
  * plain one. Then exp_stability --quick with a planted broken offset must
- * report leaks of the "robust" rule, and without it none.
+ * report leaks of the "robust" rule, and without it none; and its
+ * certification must cover every configuration it lists (the packet,
+ * stream and wide modes by name), or say why not.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -131,8 +133,23 @@ TEST(stiff_reference_far_is_bitwise_plain)
     }
 }
 
+/* The fields of the CSV line [line, end) into f (RFC 4180 quotes, no ""
+ * inside; at most 16 fields, each cut at 127 characters); their count. */
+static int csv_split(const char *line, const char *end, char f[16][128])
+{
+    int nf = 0, quoted = 0;
+    size_t len = 0;
+    for (const char *q = line; q < end && nf < 16; q++) {
+        if (*q == '"') quoted = !quoted;
+        else if (*q == ',' && !quoted) f[nf][len] = 0, nf++, len = 0;
+        else if (len < 127) f[nf][len++] = *q;
+    }
+    if (nf < 16) f[nf][len] = 0, nf++;
+    return nf;
+}
+
 /* Sum of column `col` over the CSV rows whose first field is `part` and
- * third contains `spec` (fields may be quoted, RFC 4180, no "" inside). */
+ * third contains `spec`. */
 static long csv_sum(const char *text, const char *part, const char *spec, int col, int *rows)
 {
     long sum = 0;
@@ -140,19 +157,79 @@ static long csv_sum(const char *text, const char *part, const char *spec, int co
     for (const char *line = text; line && *line;) {
         const char *end = strchr(line, '\n');
         char f[16][128];
-        int nf = 0;
-        size_t len = 0;
-        int quoted = 0;
-        for (const char *q = line; q < (end ? end : line + strlen(line)) && nf < 16; q++) {
-            if (*q == '"') quoted = !quoted;
-            else if (*q == ',' && !quoted) f[nf][len] = 0, nf++, len = 0;
-            else if (len < 127) f[nf][len++] = *q;
-        }
-        if (nf < 16) f[nf][len] = 0, nf++;
+        int nf = csv_split(line, end ? end : line + strlen(line), f);
         if (nf > col && !strcmp(f[0], part) && strstr(f[2], spec)) sum += atol(f[col]), ++*rows;
         line = end ? end + 1 : NULL;
     }
     return sum;
+}
+
+/* The certification row of `spec` on case `name` (part "cert"): 1 and its
+ * rays and note, or 0 when there is none. */
+static int cert_row(const char *text, const char *name, const char *spec, long *rays, char *note,
+                    size_t n)
+{
+    for (const char *line = text; line && *line;) {
+        const char *end = strchr(line, '\n');
+        char f[16][128];
+        int nf = csv_split(line, end ? end : line + strlen(line), f);
+        if (nf >= 15 && !strcmp(f[0], "cert") && !strcmp(f[1], name) && !strcmp(f[2], spec)) {
+            *rays = atol(f[3]);
+            snprintf(note, n, "%s", f[14]);
+            return 1;
+        }
+        line = end ? end + 1 : NULL;
+    }
+    return 0;
+}
+
+/* exp_stability --quick certifies, on each of its three cases, every
+ * configuration it lists: every watertight one of its base-ray table (its
+ * "stiff" rows) but brute force, every kind, and every packet and stream
+ * mode and wide kernel by name (they once went uncertified as "the same
+ * structure" as their kinds). Each has a row with the quick budget's rays,
+ * or (not the packet, stream and wide ones) no rays and its reason. */
+static void check_every_listed_configuration_certified(const char *text)
+{
+    static const char *const must[] = {
+        "bvh:traverse=packet", "bvh:traverse=packet,frustum=1", "bvh:width=4", "bvh:width=8",
+        "bvh:width=4,traverse=packet", "bvh:width=8,traverse=packet", "bvh:width=4,traverse=stream",
+        "bvh:width=8,traverse=stream", "grid:traverse=packet", "nested_grid:traverse=packet",
+        "instanced:traverse=packet"};
+    const int nm = (int)(sizeof must / sizeof must[0]);
+    for (int ci = 0; ci < 3; ci++) {
+        stiff_case c;
+        if (!test_stiff_case(ci, &c)) continue;
+        char listed[96][128];
+        int nl = 0;
+        for (int i = 0; i < nm; i++) snprintf(listed[nl++], sizeof listed[0], "%s", must[i]);
+        for (size_t k = 0; k < accel_kind_count; k++)
+            if (strcmp(accel_kinds[k]->name, "brute"))
+                snprintf(listed[nl++], sizeof listed[0], "%s", accel_kinds[k]->name);
+        for (const char *line = text; line && *line && nl < 96;) {
+            const char *end = strchr(line, '\n');
+            char f[16][128];
+            int nf = csv_split(line, end ? end : line + strlen(line), f), dup = 0;
+            for (int i = 0; i < nl; i++) dup |= !strcmp(listed[i], f[2]);
+            if (nf >= 3 && !strcmp(f[0], "stiff") && !strcmp(f[1], c.name) && !dup &&
+                strncmp(f[2], "brute", 5) && !strstr(f[2], "tri=naive"))
+                snprintf(listed[nl++], sizeof listed[0], "%s", f[2]);
+            line = end ? end + 1 : NULL;
+        }
+        CHECKF(nl >= nm + 5, "%s: only %d configurations listed", c.name, nl);
+        for (int i = 0; i < nl; i++) {
+            long rays = 0;
+            char note[128] = "";
+            int row = cert_row(text, c.name, listed[i], &rays, note, sizeof note);
+            CHECKF(row, "%s: `%s` silently not certified (no certification row)", c.name, listed[i]);
+            if (!row || rays >= 20000) continue;
+            CHECKF(i >= nm, "%s: `%s` (a packet, stream or wide mode) certified on %ld rays, not "
+                   "20000", c.name, listed[i], rays);
+            CHECKF(!strncmp(note, "not certified: ", 15) && strlen(note) > 20,
+                   "%s: `%s` on %ld rays without a reason ('%s')", c.name, listed[i], rays, note);
+        }
+        stiff_case_free(&c);
+    }
 }
 
 TEST(stiff_exp_stability_counts_a_planted_leak)
@@ -182,6 +259,7 @@ TEST(stiff_exp_stability_counts_a_planted_leak)
                    leaks, sleaks, inside);
         else
             CHECKF(leaks == 0 && sleaks == 0, "robust offset: %ld and %ld leaks", leaks, sleaks);
+        if (!plant) check_every_listed_configuration_certified(text);
         free(text);
     }
     test_remove_dir(dir);
