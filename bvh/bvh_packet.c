@@ -495,7 +495,9 @@ packet_batch(const bvh *b, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
     }
 }
 
-ACCEL_KERNEL_PAIR(packet, packet_batch)
+/* The copies the experiments time (core/variant.h; issue 53's GRIDBVH_KLOG
+ * runs): frustum=0|1 on triangles (0, 4) and spheres (2, 6). */
+ACCEL_KERNEL_PAIR_SEL(packet, packet_batch, (1, 0, 1, 0, 1, 0, 1, 0), (1, 0, 1, 0, 1, 0, 1, 0))
 
 static void single_hit(const void *b, const accel_ray *r, accel_hit *h, size_t n, accel_counters *c)
 {

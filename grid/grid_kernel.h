@@ -135,15 +135,17 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
     }
 }
 
-/* Tables per query for one skipping mode (a constant in each copy). */
-#define GRID_KERNELS(NAME, SKIP)                                                            \
+/* Tables per query for one skipping mode (a constant in each copy), with
+ * the timed copies KEEP_HIT and KEEP_OCC (core/variant.h,
+ * ACCEL_KERNEL_TABLE_SEL: the flag combinations the experiments time). */
+#define GRID_KERNELS(NAME, SKIP, KEEP_HIT, KEEP_OCC)                                        \
     static inline __attribute__((always_inline)) void NAME##_mode_kernel(                  \
         const void *a, const accel_ray *rays, accel_hit *hits, uint8_t *occ, size_t count,  \
         accel_counters *c, int naive, int spheres, int mailbox)                             \
     {                                                                                       \
         grid_kernel(a, rays, hits, occ, count, c, naive, spheres, mailbox, SKIP);           \
     }                                                                                       \
-    ACCEL_KERNEL_PAIR(NAME, NAME##_mode_kernel)
+    ACCEL_KERNEL_PAIR_SEL(NAME, NAME##_mode_kernel, KEEP_HIT, KEEP_OCC)
 
 /* The skipping modes' tables (grid_trace_cloud.c, grid_trace_macro.c):
  * [0] closest hit, [1] any hit. */

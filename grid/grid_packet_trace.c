@@ -184,7 +184,10 @@ packet_batch(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_
     }
 }
 
-ACCEL_KERNEL_PAIR(grid_packet, packet_batch)
+/* The copies the experiments time (core/variant.h; issue 53's GRIDBVH_KLOG
+ * runs): the mailbox on triangles (4) and spheres (6), and closest hits
+ * with the naive test (5). */
+ACCEL_KERNEL_PAIR_SEL(grid_packet, packet_batch, (0, 0, 0, 0, 1, 1, 1, 0), (0, 0, 0, 0, 1, 0, 1, 0))
 
 /* Packets in any ray order (core/coherence.h); incoherent packets fall
  * back to the single-ray grid in packet_batch, on the walk's criterion. */

@@ -250,8 +250,12 @@ INST_INLINE void ip_kernel(const void *acc, const accel_ray *rays, void *out, si
 
 #define IP_CLOSEST(a, r, o, n, c, f) ip_kernel(a, r, o, n, c, f, 0)
 #define IP_ANY(a, r, o, n, c, f) ip_kernel(a, r, o, n, c, f, 1)
-ACCEL_KERNEL_TABLE_NO_OPT(ip_closest_table, IP_CLOSEST)
-ACCEL_KERNEL_TABLE_NO_OPT(ip_any_table, IP_ANY)
+/* The copies timed (core/variant.h; issue 53's GRIDBVH_KLOG runs): the
+ * experiments time index 0; spheres (2) and closest hits with the naive
+ * test (1) as for the single-ray kernels (k8_trace.c), which
+ * instanced:traverse=packet's stability rows time. */
+ACCEL_KERNEL_TABLE_SEL(ip_closest_table, IP_CLOSEST, (1, 1, 1, 0, 0, 0, 0, 0))
+ACCEL_KERNEL_TABLE_SEL(ip_any_table, IP_ANY, (1, 0, 1, 0, 0, 0, 0, 0))
 
 static unsigned ip_flags(const inst_accel *a)
 {

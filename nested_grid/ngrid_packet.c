@@ -357,7 +357,10 @@ npacket_batch(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint
     }
 }
 
-ACCEL_KERNEL_PAIR(npacket, npacket_batch)
+/* The copies the experiments time (core/variant.h; issue 53's GRIDBVH_KLOG
+ * runs): the default on triangles (4) and spheres (6), and closest hits
+ * with the naive test (5). */
+ACCEL_KERNEL_PAIR_SEL(npacket, npacket_batch, (0, 0, 0, 0, 1, 1, 1, 0), (0, 0, 0, 0, 1, 0, 1, 0))
 
 /* Packets in any ray order (core/coherence.h); incoherent packets fall
  * back to the single-ray nested grid in npacket_batch, on the walk's

@@ -160,11 +160,68 @@ static void check_build_invariants(test_scene *ts, const char *spec, const accel
     k2->destroy(a2);
 }
 
+/* The primitive tests a set's rays may cost a kind (thin = 1): a kind that
+ * tests every primitive per ray (brute force: 75k per ray on the bunny;
+ * conformance_brute was 65 s of the suite's CPU, the largest test), or a
+ * quarter of them (grid:res=1), is checked on every k-th ray of each set
+ * instead, k chosen to keep the largest set of a scene under this many
+ * tests and over 128 rays (the scanned meshes: every 6th ray; built-in
+ * scenes: every 2nd to 9th), each sampled ray meeting every primitive of
+ * the scene. A structure that pays (fewer tests per ray) keeps every ray,
+ * however slow its scene. */
+#define THIN_TESTS_PER_SET 2e6
+
+/* The stride of every k-th ray for kind's built accel on ts (1: every ray),
+ * from a counted probe of the first 64 primary rays (its primitive tests
+ * per ray into *per_ray_out). */
+static size_t thin_stride(const test_scene *ts, const accel_kind *kind, const void *accel,
+                          double *per_ray_out)
+{
+    const test_set *t = &ts->sets[0];
+    size_t probe = t->rays.count < 64 ? t->rays.count : 64;
+    accel_hit *h = malloc((probe ? probe : 1) * sizeof *h);
+    if (!h || !probe) {
+        free(h);
+        return 1;
+    }
+    accel_counters c = {0};
+    accel_trace(kind, accel, t->rays.rays, h, probe, 1, &c);
+    free(h);
+    double per_ray = (double)c.prim_tests / (double)probe, most = 1;
+    *per_ray_out = per_ray;
+    for (int si = 0; si < ts->set_count; si++)
+        if ((double)ts->sets[si].rays.count > most) most = (double)ts->sets[si].rays.count;
+    /* Only a walk that tests a quarter of the primitives or more per ray:
+     * brute force, or a structure that degenerates to it (grid:res=1). */
+    if (per_ray * 4 < (double)ts->scene.prim_count) return 1;
+    double k = ceil(per_ray * most / THIN_TESTS_PER_SET);
+    if (k > most / 128) k = floor(most / 128); /* the largest set keeps 128 rays or more */
+    return k > 1 ? (size_t)k : 1;
+}
+
+/* Every stride-th ray of t and its reference hit, into rays and ref
+ * (caller frees); the count. */
+static size_t thin_set(const test_set *t, size_t stride, accel_ray **rays, accel_hit **ref)
+{
+    size_t m = (t->rays.count + stride - 1) / stride;
+    *rays = malloc((m ? m : 1) * sizeof **rays);
+    *ref = malloc((m ? m : 1) * sizeof **ref);
+    if (!*rays || !*ref) {
+        free(*rays), free(*ref);
+        *rays = NULL, *ref = NULL;
+        return 0;
+    }
+    for (size_t i = 0; i < m; i++) (*rays)[i] = t->rays.rays[i * stride], (*ref)[i] = t->ref[i * stride];
+    return m;
+}
+
 /* Runs one kind variant on one prepared scene; returns the number of bad
  * rays. `given` (a kind outside the registry, built with its defaults)
- * and `quiet` (count without failing) serve the mutant test below. */
+ * and `quiet` (count without failing) serve the mutant test below; `thin`
+ * lets a kind that tests every primitive per ray run every k-th ray
+ * (thin_stride). */
 static size_t check_variant_of(test_scene *ts, const accel_kind *given, const char *spec, int naive,
-                               int invariants, int quiet)
+                               int invariants, int quiet, int thin)
 {
     accel_error err = {0};
     const accel_kind *kind = given;
@@ -176,8 +233,22 @@ static size_t check_variant_of(test_scene *ts, const accel_kind *given, const ch
         return 1;
     }
     size_t bad_total = 0;
+    double probe_tests = 0;
+    size_t stride = thin ? thin_stride(ts, kind, accel, &probe_tests) : 1;
+    if (stride > 1)
+        test_note("%s on %s: 1 ray in %zu of each set (%.0f primitive tests per ray)", spec,
+                  ts->scene.name, stride, probe_tests);
     for (int si = 0; si < ts->set_count; si++) {
         const test_set *t = &ts->sets[si];
+        test_set thinned = *t;
+        accel_ray *own_rays = NULL;
+        accel_hit *own_ref = NULL;
+        if (stride > 1) {
+            thinned.rays.count = thin_set(t, stride, &own_rays, &own_ref);
+            thinned.rays.rays = own_rays, thinned.ref = own_ref;
+            CHECKF(own_rays != NULL || !t->rays.count, "%s: out of memory", spec);
+            t = &thinned;
+        }
         size_t n = t->rays.count;
         char label[600];
         snprintf(label, sizeof label, "%s on %s/%s", spec, ts->scene.name, t->name);
@@ -187,6 +258,7 @@ static size_t check_variant_of(test_scene *ts, const accel_kind *given, const ch
             test_fail(__FILE__, __LINE__, "%s: out of memory", label);
             free(hits);
             free(occ);
+            free(own_rays), free(own_ref);
             continue;
         }
         test_diff d = test_trace_diff(&ts->scene, kind, accel, t->rays.rays, n, t->ref, 1, hits, occ);
@@ -210,6 +282,7 @@ static size_t check_variant_of(test_scene *ts, const accel_kind *given, const ch
         if (invariants) check_trace_invariants(kind, accel, label, t, hits);
         free(hits);
         free(occ);
+        free(own_rays), free(own_ref);
     }
     if (invariants) check_build_invariants(ts, spec, kind, accel, &st);
     kind->destroy(accel);
@@ -218,7 +291,7 @@ static size_t check_variant_of(test_scene *ts, const accel_kind *given, const ch
 
 static size_t check_variant(test_scene *ts, const char *spec, int naive, int invariants)
 {
-    return check_variant_of(ts, NULL, spec, naive, invariants, 0);
+    return check_variant_of(ts, NULL, spec, naive, invariants, 0, 1);
 }
 
 enum { MAX_SPECS = 64 };
@@ -266,7 +339,9 @@ TEST(conformance_naive_twin_and_variants_run_once)
  * for the large scanned meshes where every variant would cost minutes. The
  * invariants (counted and uncounted, 1 and 2 threads, build statistics) and
  * the naive twin are checked on every built-in scene already; on the meshes
- * they would triple the passes (brute force: 42 of its 63 s went there). */
+ * they would triple the passes (brute force: 42 of its 63 s went there).
+ * A kind that tests every primitive per ray runs every k-th ray of a large
+ * set (thin_stride). */
 static void run_kind(test_scene *ts, const accel_kind *kind, int all_variants)
 {
     static char specs[MAX_SPECS][256];
@@ -400,9 +475,9 @@ TEST(conformance_catches_a_wrong_triangle_at_the_right_t)
         for (int si = 0; si < ts->set_count; si++)
             for (size_t i = 0; i < ts->sets[si].rays.count; i++)
                 hits += ts->sets[si].ref[i].prim != ACCEL_MISS;
-        size_t bad = check_variant_of(ts, &kind, "mutant", 0, 0, 1);
+        size_t bad = check_variant_of(ts, &kind, "mutant", 0, 0, 1, 0);
         /* the unmutated kernel passes on the same rays */
-        size_t good = check_variant_of(ts, NULL, "bvh:width=8", 0, 0, 1);
+        size_t good = check_variant_of(ts, NULL, "bvh:width=8", 0, 0, 1, 0);
         CHECKF(good == 0, "bvh:width=8 on %s: %zu bad rays", ts->scene.name, good);
         CHECKF(!hits || bad * 2 >= hits, "the mutant on %s: only %zu of %zu hits caught",
                ts->scene.name, bad, hits);

@@ -128,6 +128,46 @@ typedef struct {
         {NAME##_v0, NAME##_v1, NAME##_v2, NAME##_v3, NAME##_v0, NAME##_v1, NAME##_v2,       \
          NAME##_v3}};
 
+/* The copies a kind's runs select, nothing more: ACCEL_KERNEL_TABLE_SEL(NAME,
+ * KERNEL, KEEP) compiles the counted copy and, for each of the eight flag
+ * combinations whose bit in KEEP is 1 (KEEP: a parenthesised list of eight
+ * 0/1 tokens, indexed by the flags: 1 naive, 2 spheres, 4 ACCEL_V_OPT; e.g.
+ * (0, 0, 0, 0, 1, 0, 0, 0) for index 4 alone), its timed copy. A combination whose bit is 0 runs the
+ * counted copy with counters off (NULL) and its flags read at run time:
+ * the same source, so the same hits bit for bit (-std=c11 contracts no
+ * float operation), only without the constant flags' specialisation. The
+ * kept combinations are the ones the experiments time (issue 53: a
+ * GRIDBVH_KLOG run of make test, the quick report and every experiment on
+ * its full scenes logged each table's combinations; the tables' KEEP
+ * comments name them); a new experiment that times another combination
+ * adds its bit. Each dropped copy was one full forced-inline kernel body
+ * of compile time. */
+#define ACCEL_KERNEL_SLOT_0(NAME, F) NAME##_counted
+#define ACCEL_KERNEL_SLOT_1(NAME, F) NAME##_v##F
+#define ACCEL_KERNEL_SLOT_(NAME, F, K) ACCEL_KERNEL_SLOT_##K(NAME, F)
+#define ACCEL_KERNEL_KEEP_0(NAME, KERNEL, F)
+#define ACCEL_KERNEL_KEEP_1(NAME, KERNEL, F) ACCEL_KERNEL_COPY_(NAME, KERNEL, F)
+#define ACCEL_KERNEL_KEEP_(NAME, KERNEL, F, K) ACCEL_KERNEL_KEEP_##K(NAME, KERNEL, F)
+#define ACCEL_KERNEL_UNPACK_(...) __VA_ARGS__
+#define ACCEL_KERNEL_TABLE_SEL(NAME, KERNEL, KEEP) ACCEL_KERNEL_TABLE_SEL_X_(NAME, KERNEL, ACCEL_KERNEL_UNPACK_ KEEP)
+#define ACCEL_KERNEL_TABLE_SEL_X_(NAME, KERNEL, ...) ACCEL_KERNEL_TABLE_SEL_(NAME, KERNEL, __VA_ARGS__)
+#define ACCEL_KERNEL_TABLE_SEL_(NAME, KERNEL, k0, k1, k2, k3, k4, k5, k6, k7)                \
+    ACCEL_KERNEL_COUNTED_(NAME, KERNEL)                                                     \
+    ACCEL_KERNEL_KEEP_(NAME, KERNEL, 0, k0)                                                 \
+    ACCEL_KERNEL_KEEP_(NAME, KERNEL, 1, k1)                                                 \
+    ACCEL_KERNEL_KEEP_(NAME, KERNEL, 2, k2)                                                 \
+    ACCEL_KERNEL_KEEP_(NAME, KERNEL, 3, k3)                                                 \
+    ACCEL_KERNEL_KEEP_(NAME, KERNEL, 4, k4)                                                 \
+    ACCEL_KERNEL_KEEP_(NAME, KERNEL, 5, k5)                                                 \
+    ACCEL_KERNEL_KEEP_(NAME, KERNEL, 6, k6)                                                 \
+    ACCEL_KERNEL_KEEP_(NAME, KERNEL, 7, k7)                                                 \
+    static const accel_kernel_table NAME = {                                                \
+        NAME##_counted,                                                                     \
+        {ACCEL_KERNEL_SLOT_(NAME, 0, k0), ACCEL_KERNEL_SLOT_(NAME, 1, k1),                  \
+         ACCEL_KERNEL_SLOT_(NAME, 2, k2), ACCEL_KERNEL_SLOT_(NAME, 3, k3),                  \
+         ACCEL_KERNEL_SLOT_(NAME, 4, k4), ACCEL_KERNEL_SLOT_(NAME, 5, k5),                  \
+         ACCEL_KERNEL_SLOT_(NAME, 6, k6), ACCEL_KERNEL_SLOT_(NAME, 7, k7)}};
+
 /* The flags of a built structure's switches. */
 static inline unsigned accel_variant_flags(int naive, int spheres, int opt)
 {
@@ -143,14 +183,16 @@ static inline unsigned accel_variant_flags(int naive, int spheres, int opt)
  * copy one of hits and occ is a literal NULL, so a kernel tests `occ` for
  * the query; one that wants it as a literal argument uses two
  * ACCEL_KERNEL_TABLEs instead (bvh_single.c). */
-#define ACCEL_KERNEL_QUERY_(NAME, KERNEL, Q, HITS, OCC, TABLE)                              \
+#define ACCEL_KERNEL_ADAPT_(NAME, KERNEL, Q, HITS, OCC)                                     \
     static inline __attribute__((always_inline)) void NAME##_##Q##_kernel_(                \
         const void *a, const accel_ray *r, void *o, size_t n, accel_counters *c, unsigned f) \
     {                                                                                       \
         (void)o;                                                                            \
         KERNEL(a, r, HITS, OCC, n, c, (f & ACCEL_V_NAIVE) != 0, (f & ACCEL_V_SPHERES) != 0, \
                (f & ACCEL_V_OPT) != 0);                                                     \
-    }                                                                                       \
+    }
+#define ACCEL_KERNEL_QUERY_(NAME, KERNEL, Q, HITS, OCC, TABLE)                              \
+    ACCEL_KERNEL_ADAPT_(NAME, KERNEL, Q, HITS, OCC)                                         \
     TABLE(NAME##_##Q##_table, NAME##_##Q##_kernel_)
 
 #define ACCEL_KERNEL_PAIR(NAME, KERNEL)                                                     \
@@ -162,6 +204,15 @@ static inline unsigned accel_variant_flags(int naive, int spheres, int opt)
                         ACCEL_KERNEL_TABLE_NO_OPT)                                          \
     ACCEL_KERNEL_QUERY_(NAME, KERNEL, occ, (accel_hit *)NULL, (uint8_t *)o,                 \
                         ACCEL_KERNEL_TABLE_NO_OPT)
+
+/* The same with the copies each query's runs select (ACCEL_KERNEL_TABLE_SEL):
+ * KEEP_HIT for the closest-hit table, KEEP_OCC for the any-hit one. */
+#define ACCEL_KERNEL_PAIR_SEL(NAME, KERNEL, KEEP_HIT, KEEP_OCC)                              \
+    ACCEL_KERNEL_QUERY_SEL_(NAME, KERNEL, hit, (accel_hit *)o, (uint8_t *)NULL, KEEP_HIT)   \
+    ACCEL_KERNEL_QUERY_SEL_(NAME, KERNEL, occ, (accel_hit *)NULL, (uint8_t *)o, KEEP_OCC)
+#define ACCEL_KERNEL_QUERY_SEL_(NAME, KERNEL, Q, HITS, OCC, KEEP)                           \
+    ACCEL_KERNEL_ADAPT_(NAME, KERNEL, Q, HITS, OCC)                                         \
+    ACCEL_KERNEL_TABLE_SEL(NAME##_##Q##_table, NAME##_##Q##_kernel_, KEEP)
 
 /* Runs one batch with the copy for these flags: the counted copy when
  * counters are given (and compiled in), else the specialized one. */
