@@ -88,52 +88,9 @@ typedef struct {
     int lay_scenes;
     exp_text lay_ev;
     csv_file speedups; /* DIR/exp_sah_speedup.csv (f NULL: not written) */
-    /* The answer's plot (issue 39): per builder, one point per scene: build
-     * time over the pure median split's (x) against the primary speed-up
-     * over it (y, with its interval). */
-    char pname[SVG_MAX_SERIES][64];
-    double px[SVG_MAX_SERIES][12], py[SVG_MAX_SERIES][12], plo[SVG_MAX_SERIES][12],
-        phi[SVG_MAX_SERIES][12];
-    int pn[SVG_MAX_SERIES], np;
+    sah_plot plot; /* the section's builders plot (sah_answer.h) */
     sah_answer ans; /* the answer at the top of the report (sah_answer.h) */
 } study;
-
-/* A point of the answer's plot, under the builder's series. */
-static void plot_point(study *st, const char *spec, double x, const exp_est *y)
-{
-    int k = 0;
-    while (k < st->np && strcmp(st->pname[k], spec)) k++;
-    if (k == st->np) {
-        if (st->np == SVG_MAX_SERIES - 1) return; /* room for the 2x line */
-        snprintf(st->pname[st->np++], sizeof st->pname[0], "%s", spec);
-    }
-    if (st->pn[k] >= 12 || !(x > 0) || !(y->median > 0)) return;
-    int i = st->pn[k]++;
-    st->px[k][i] = x, st->py[k][i] = y->median, st->plo[k][i] = y->lo, st->phi[k][i] = y->hi;
-}
-
-/* The answer's plot: what every builder buys (speed-up) for what it costs
- * (build time), both over the pure median split, with the lecture's 2x. */
-static void answer_plot(exp_ctx *x, study *st)
-{
-    if (!st->np) return;
-    svg_plot p;
-    svg_plot_init(&p, "Builders: primary speed-up against build time, "
-                      "both over the pure median split", "build time / the pure median split's",
-                  "primary speed-up over the pure median split");
-    p.log_x = 1;
-    double lo = INFINITY, hi = 0;
-    for (int k = 0; k < st->np; k++) {
-        svg_add(&p, st->pname[k], st->px[k], st->py[k], st->plo[k], st->phi[k], st->pn[k],
-                SVG_POINTS);
-        for (int i = 0; i < st->pn[k]; i++) lo = fmin(lo, st->px[k][i]), hi = fmax(hi, st->px[k][i]);
-    }
-    double lx[2] = {lo, hi}, ly[2] = {2, 2};
-    if (hi > 0) svg_add(&p, "the lecture's 2x", lx, ly, NULL, NULL, 2, SVG_DASHED);
-    exp_svg(x, &p, "sah_speedup", "Every builder on every scene (one point per scene, 95% "
-            "intervals): primary speed-up over the pure median split against its build time "
-            "over the split's; dashed: the lecture's 2x");
-}
 
 /* "Several times faster": a paired speed-up of spatial splits on the
  * slivers scene counts when it is outside the noise and its whole interval
@@ -377,7 +334,7 @@ static void speedup_table(exp_ctx *x, study *st, const exp_group *g, const accel
         exp_est_ratio(cf->build_samples, g->cfg[pure].build_samples, m, &r);
         exp_md(x, "| `%s` | %s | %s | %s | %s | %s |\n", cf->spec + 4, cell[0], cell[1], cell[2],
                exp_fmt_est(b, sizeof b, &cf->build_ms, 1), exp_fmt_x(br, sizeof br, &r));
-        plot_point(st, cf->spec + 4, r.median, &e[0]);
+        sah_plot_point(&st->plot, cf->spec + 4, r.median, &e[0]);
         if (st->speedups.f)
             for (int k = 0; k < 3; k++)
                 csv_row(&st->speedups, "%s,%u,%s,%s,%d,%d,%.4f,%.4f,%.4f,%d,%.4f,%.4f,%.4f,%.4f\n",
@@ -644,7 +601,7 @@ int main(int argc, char **argv)
     for (int si = 0; si < scene_count; si++) measure_scene(&x, &st, scenes[si], &list, si < mesh_scenes);
     spatial_splits(&x, &st);
     sah_answer_write(&x, &st.ans, st.stride);
-    answer_plot(&x, &st);
+    sah_plot_write(&x, &st.plot);
     exp_md(&x, "\n**Findings** (speed-ups are paired ratios of interleaved rounds, with their 95%% "
                "intervals):\n\n%s", exp_text_str(&st.findings));
     verdicts(&x, &st);

@@ -79,3 +79,40 @@ void sah_answer_write(exp_ctx *x, const sah_answer *a, int stride)
             "lecture's 2x");
     exp_md(x, "\n<!-- /answer -->\n");
 }
+
+/* A point of the answer's plot, under the builder's series. */
+void sah_plot_point(sah_plot *st, const char *spec, double x, const exp_est *y)
+{
+    int k = 0;
+    while (k < st->np && strcmp(st->pname[k], spec)) k++;
+    if (k == st->np) {
+        if (st->np == SVG_MAX_SERIES - 1) return; /* room for the 2x line */
+        snprintf(st->pname[st->np++], sizeof st->pname[0], "%s", spec);
+    }
+    if (st->pn[k] >= 12 || !(x > 0) || !(y->median > 0)) return;
+    int i = st->pn[k]++;
+    st->px[k][i] = x, st->py[k][i] = y->median, st->plo[k][i] = y->lo, st->phi[k][i] = y->hi;
+}
+
+/* The answer's plot: what every builder buys (speed-up) for what it costs
+ * (build time), both over the pure median split, with the lecture's 2x. */
+void sah_plot_write(exp_ctx *x, const sah_plot *st)
+{
+    if (!st->np) return;
+    svg_plot p;
+    svg_plot_init(&p, "Builders: primary speed-up against build time, "
+                      "both over the pure median split", "build time / the pure median split's",
+                  "primary speed-up over the pure median split");
+    p.log_x = 1;
+    double lo = INFINITY, hi = 0;
+    for (int k = 0; k < st->np; k++) {
+        svg_add(&p, st->pname[k], st->px[k], st->py[k], st->plo[k], st->phi[k], st->pn[k],
+                SVG_POINTS);
+        for (int i = 0; i < st->pn[k]; i++) lo = fmin(lo, st->px[k][i]), hi = fmax(hi, st->px[k][i]);
+    }
+    double lx[2] = {lo, hi}, ly[2] = {2, 2};
+    if (hi > 0) svg_add(&p, "the lecture's 2x", lx, ly, NULL, NULL, 2, SVG_DASHED);
+    exp_svg(x, &p, "sah_speedup", "Every builder on every scene (one point per scene, 95% "
+            "intervals): primary speed-up over the pure median split against its build time "
+            "over the split's; dashed: the lecture's 2x");
+}

@@ -8,6 +8,7 @@
 #define EXPERIMENTS_SAH_ANSWER_H
 
 #include "engine/group.h"
+#include "engine/svg.h"
 
 #define SAH_ANSWER_MAX 12
 
@@ -34,5 +35,19 @@ void sah_answer_add(sah_answer *a, const exp_group *g, const accel_scene *s, con
 /* The table and the plot sah_answer.svg, between the answer markers
  * (stride: the rays were one in stride of x->rt_size's 8x8 tiles). */
 void sah_answer_write(exp_ctx *x, const sah_answer *a, int stride);
+
+/* The section's plot (issue 39): per builder, one point per scene: build
+ * time over the pure median split's (x) against the primary speed-up over
+ * it (y, with its interval). */
+typedef struct {
+    char pname[SVG_MAX_SERIES][64];
+    double px[SVG_MAX_SERIES][12], py[SVG_MAX_SERIES][12], plo[SVG_MAX_SERIES][12],
+        phi[SVG_MAX_SERIES][12];
+    int pn[SVG_MAX_SERIES], np;
+} sah_plot;
+/* A point under the builder's series (at most 12 per series). */
+void sah_plot_point(sah_plot *p, const char *spec, double x, const exp_est *y);
+/* The plot sah_speedup.svg, with the lecture's 2x (nothing without points). */
+void sah_plot_write(exp_ctx *x, const sah_plot *p);
 
 #endif
