@@ -279,14 +279,6 @@ static void judge_pick(exp_ctx *x, study *st, exp_group *g, scene_result *r, int
                      100 * (ex.median - 1), hit ? "a hit: tied or within 5%" : "a miss");
 }
 
-/* The lecture's 800x600 image at the work of a size x size one (issue 52):
- * one in this many of its 8x8 tiles (exp_sets_tiles); 1: every tile. */
-static int tiles_stride(const exp_ctx *x)
-{
-    int k = x->rt_size[0] * x->rt_size[1] / (x->size * x->size);
-    return k > 1 ? k : 1;
-}
-
 static void measure_scene(exp_ctx *x, study *st, int si, const char *spec, const exp_list *extra)
 {
     static const double full_l[] = {0.0625, 0.25, 0.5, 1, 2, 4, 8, 16, 32, 64, 128, 256};
@@ -295,7 +287,7 @@ static void measure_scene(exp_ctx *x, study *st, int si, const char *spec, const
     int nl = x->quick ? 4 : 12;
     accel_scene s;
     bench_sets sets;
-    exp_scene_section(x, spec, &s, MASK, tiles_stride(x), &sets);
+    exp_scene_section(x, spec, &s, MASK, exp_tiles_stride(x), &sets);
     exp_group g;
     exp_group_init(&g, x, &s, &sets, MASK);
     g.per_ray = 1;
@@ -575,7 +567,7 @@ int main(int argc, char **argv)
                "find it, and is it the same for every scene and region? ns per ray over the "
                "primary rays of one in %d of the 8x8 tiles of a %dx%d image (its density and "
                "coherence at the work of %dx%d) plus one diffuse bounce, every configuration of a "
-               "scene in interleaved rounds; counts per ray.", tiles_stride(&x), x.rt_size[0],
+               "scene in interleaved rounds; counts per ray.", exp_tiles_stride(&x), x.rt_size[0],
                x.rt_size[1], x.size, x.size);
     const accel_kind *grid = accel_find_kind("grid");
     if (!grid || !exp_kind_wanted(&x, "grid")) {

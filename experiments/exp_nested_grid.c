@@ -67,14 +67,6 @@ static int vs(const exp_group *g, int c, int b, char *buf, size_t n)
     return exp_ratio_cmp(&r, g->floor);
 }
 
-/* The lecture's 800x600 image at the work of a size x size one (issue 52):
- * one in this many of its 8x8 tiles (exp_sets_tiles); 1: every tile. */
-static int tiles_stride(const exp_ctx *x)
-{
-    int k = x->rt_size[0] * x->rt_size[1] / (x->size * x->size);
-    return k > 1 ? k : 1;
-}
-
 /* Long on purpose (122 lines): one scene's nested-grid runs, tables and
  * findings, in the order the report prints them; the steps share the group,
  * its per-configuration arrays and the study's tallies, which separate
@@ -89,7 +81,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     int nh = x->quick ? 2 : 10;
     accel_scene s;
     bench_sets sets;
-    exp_scene_section(x, spec, &s, MASK, tiles_stride(x), &sets);
+    exp_scene_section(x, spec, &s, MASK, exp_tiles_stride(x), &sets);
     exp_group g;
     exp_group_init(&g, x, &s, &sets, MASK);
     g.collapse_ms = x->quick ? 500 : 1500;
@@ -162,7 +154,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
                 char what[400];
                 snprintf(what, sizeof what, "best nested / best regular grid speed-up, %s %u tris, "
                          "primary+diffuse %dx%d (1 in %d tiles)", s.name, s.live_count, x->rt_size[0],
-                         x->rt_size[1], tiles_stride(x));
+                         x->rt_size[1], exp_tiles_stride(x));
                 g.half = 2;
                 exp_est e = exp_group_speedup_level(&g, bg, bn, MASK, exp_tally_level(&st->ad));
                 g.half = 0;
@@ -198,7 +190,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
             char what[400];
             snprintf(what, sizeof what, "defaults / best hand-set nested grid time, %s %u tris, "
                      "primary+diffuse %dx%d (1 in %d tiles)", s.name, s.live_count, x->rt_size[0],
-                     x->rt_size[1], tiles_stride(x));
+                     x->rt_size[1], exp_tiles_stride(x));
             g.half = 2;
             exp_est e = exp_group_speedup_level(&g, df, bh, MASK, exp_tally_level(&st->tw));
             g.half = 0;
@@ -243,7 +235,7 @@ int main(int argc, char **argv)
                "where do BVHs stand? ns per ray over the primary rays of one in %d of the 8x8 "
                "tiles of a %dx%d image (its density and coherence at the work of %dx%d) plus one "
                "diffuse bounce, every configuration of a scene in interleaved rounds; \"vs the "
-               "scene's best\" is the paired ratio of times.", tiles_stride(&x), x.rt_size[0],
+               "scene's best\" is the paired ratio of times.", exp_tiles_stride(&x), x.rt_size[0],
                x.rt_size[1], x.size, x.size);
     if (!accel_find_kind("nested_grid") || !exp_kind_wanted(&x, "nested_grid")) {
         exp_md(&x, "\nLeft out: no `nested_grid` kind in this run.\n");

@@ -237,19 +237,11 @@ static void fit_family(exp_ctx *x, const exp_group *g, const char *family, int s
     }
 }
 
-/* The lecture's 800x600 image at the work of a size x size one (issue 52):
- * one in this many of its 8x8 tiles (exp_sets_tiles); 1: every tile. */
-static int tiles_stride(const exp_ctx *x)
-{
-    int k = x->rt_size[0] * x->rt_size[1] / (x->size * x->size);
-    return k > 1 ? k : 1;
-}
-
 static void measure_scene(exp_ctx *x, const char *spec, const exp_list *specs, study *sd)
 {
     accel_scene s;
     bench_sets sets;
-    exp_scene_section(x, spec, &s, MASK, tiles_stride(x), &sets);
+    exp_scene_section(x, spec, &s, MASK, exp_tiles_stride(x), &sets);
     exp_text_add(&sd->scenes, "%s%s", sd->scenes.len ? ", " : "", s.name);
     exp_group g;
     exp_group_init(&g, x, &s, &sets, MASK);
@@ -523,7 +515,7 @@ int main(int argc, char **argv)
                "density and coherence at the work of %dx%d; interleaved rounds); C_step, "
                "C_intersect and a per-ray C_ray are fitted per kind, scene and ray type (ns per "
                "ray, %d thread%s). The heatmaps are %dx%d pictures, not timings.",
-               tiles_stride(&x), x.rt_size[0], x.rt_size[1], x.size, x.size, x.threads,
+               exp_tiles_stride(&x), x.rt_size[0], x.rt_size[1], x.size, x.size, x.threads,
                x.threads > 1 ? "s" : "", x.size, x.size);
     exp_csv(&x, "scene,family,spec,rayset,ns_per_ray,steps_per_ray,prims_per_ray,fitted_ns,"
                 "heldout_ns,c_step_ns,c_intersect_ns,c_ray_ns,test_lanes,fixed_c_intersect_ns,"

@@ -16,6 +16,18 @@
 
 /* Builds every configuration again in rounds; the last structure built is
  * dropped at once (the traced one stays). */
+/* One timed build of cf, the structure freed: its ms, -1 when it fails. */
+static double build_ms(const exp_cfg *cf, const accel_scene *s)
+{
+    const accel_kind *kind;
+    void *a;
+    accel_build_stats st;
+    accel_error err = {0};
+    if (accel_build_spec(cf->spec, s, cf->threads, &kind, &a, &st, &err)) return -1;
+    kind->destroy(a);
+    return st.ms;
+}
+
 static void build_rounds(exp_group *g)
 {
     exp_ctx *x = g->x;
@@ -37,13 +49,9 @@ static void build_rounds(exp_group *g)
             exp_cfg *cf = &g->cfg[c];
             bench_progress_add(x->progress, 1);
             if (!cf->ok || r >= reps[c]) continue;
-            const accel_kind *kind;
-            void *a;
-            accel_build_stats st;
-            accel_error err = {0};
-            if (accel_build_spec(cf->spec, g->s, cf->threads, &kind, &a, &st, &err)) continue;
-            kind->destroy(a);
-            cf->build_samples[r] = st.ms;
+            double ms = build_ms(cf, g->s);
+            if (ms < 0) continue;
+            cf->build_samples[r] = ms;
             exp_est_of(cf->build_samples, r + 1, &cf->build_ms);
         }
     bench_progress_end(x->progress);
@@ -225,13 +233,8 @@ static void run_round(exp_group *g, int p, int k, int rounds, probe_job *probe, 
     for (int i = 0; i < g->count; i++) {
         exp_cfg *cf = &g->cfg[(i + p) % g->count];
         if (!cf->ok || !cf->build_procs) continue;
-        const accel_kind *kind;
-        void *a;
-        accel_build_stats st;
-        accel_error err = {0};
-        if (accel_build_spec(cf->spec, g->s, cf->threads, &kind, &a, &st, &err)) continue;
-        kind->destroy(a);
-        cf->build_samples[p] = st.ms;
+        double ms = build_ms(cf, g->s);
+        if (ms >= 0) cf->build_samples[p] = ms;
     }
 }
 

@@ -454,6 +454,12 @@ void exp_verdict_num(exp_ctx *x, const char *claim, const char *verdict, const e
     va_end(ap);
 }
 
+int exp_tiles_stride(const exp_ctx *x)
+{
+    int k = x->rt_size[0] * x->rt_size[1] / (x->size * x->size);
+    return k > 1 ? k : 1;
+}
+
 exp_decider exp_decider_of(const char *what, const exp_est *e, double threshold, int sense)
 {
     exp_decider d = {what, e->median, e->lo, e->hi, threshold, sense, e->n};

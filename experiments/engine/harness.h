@@ -222,6 +222,10 @@ void exp_verdict_num(exp_ctx *x, const char *claim, const char *verdict, const e
 #define EXP_NOISY 0.25
 const char *exp_no_difference(double floor);
 /* A decider from an estimate: value median, interval [lo, hi], n. */
+/* 1 in how many of x->rt_size's 8x8 tiles give as many rays as an
+ * x->size square image (at least 1): the sections that sample the 800x600
+ * image at the density of their former 128x128 one. */
+int exp_tiles_stride(const exp_ctx *x);
 exp_decider exp_decider_of(const char *what, const exp_est *e, double threshold, int sense);
 /* For a verdict that says "too slow": on a busy machine (exp_busy) a
  * refutation is not testable here, since the measured times are upper
