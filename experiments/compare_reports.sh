@@ -7,7 +7,8 @@
 #   one), or REPORT.md files (their directory is used). It reads every
 #   <section>.verdicts.csv there, not REPORT.md's summary table (whose
 #   layout mkreport may change): one row per verdict, keyed by section,
-#   claim, scenes and the row's order among equal keys.
+#   claim and the row's order among equal keys (not by the scenes: a row
+#   whose deciding scene moves is the same row, its word compared).
 # Every later run is compared with the first. Any change of word is a
 # change, "on the line" included. Printed apart, and not counted: a row
 # whose interval (lo or hi) ends within 2% of its threshold in either run
@@ -67,7 +68,7 @@ rows() {
       {
         n = parse($0)
         section = n >= 5 ? F[5] : file
-        key = section " | " F[1] " | " F[4]
+        key = section " | " F[1]
         seen[key]++
         nr = n >= 10 && F[10] != "" && (near(F[8], F[10]) || near(F[9], F[10]))
         printf "%s #%d\t%s\t%d\n", key, seen[key], F[2], nr
