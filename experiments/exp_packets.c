@@ -58,7 +58,6 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     exp_group g;
     exp_group_init(&g, x, &s, &sets, MASK);
     g.collapse_ms = x->quick ? 500 : 3000;
-    g.min_rounds = 10; /* packets-speedup is decided here (issue 38: 10 rounds) */
     for (int i = 0; i < list->count; i++) exp_group_add(&g, list->spec[i], 1);
     exp_group_run(&g);
     exp_md_table(x, "traversal|ray set|rays|Mrays/s [95% CI]|speed-up over single rays [95% CI]|"

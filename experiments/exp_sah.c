@@ -354,7 +354,6 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     exp_text_add(&st->names, "%s%s", st->names.len ? ", " : "", s.name);
     exp_group g;
     exp_group_init(&g, x, &s, &sets, MASK);
-    g.min_rounds = 10; /* every comparison here decides a verdict (issue 38: 10 rounds) */
     for (int i = 0; i < list->count; i++) {
         if (!strcmp(list->spec[i], SBVH) && s.live_count > SBVH_MAX_PRIMS) {
             exp_md(x, "\n`build=sbvh` left out here (over %u primitives).\n", SBVH_MAX_PRIMS);

@@ -214,7 +214,6 @@ static void frame_scene(exp_ctx *x, study *st, const char *spec, int max_t, int 
     exp_group g;
     exp_group_init(&g, x, &s, &sets, FRAME_MASK);
     g.collapse_ms = x->quick ? 1000 : 3000;
-    g.min_rounds = 10; /* realtime-20fps is decided here (issue 38: 10 rounds) */
     for (int i = 0; i < list.count; i++) exp_group_add(&g, list.spec[i], max_t);
     exp_group_run(&g);
     exp_est gen = ray_gen_ms(x, &s, &sets);

@@ -342,7 +342,6 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, int 
     exp_group_init(&g, x, &s, &sets, MASK);
     g.time_builds = 0; /* build_table times each tree once per round */
     g.collapse_ms = x->quick ? 500 : 3000;
-    g.min_rounds = 3; /* every ratio gets an interval, on the big scenes too */
     g.thread_probe = 1; /* what the machine gave 2 threads in these rounds (group.h) */
     for (int i = 0; i < list->count; i++) {
         for (size_t k = 0; k < sizeof same_tree / sizeof same_tree[0]; k++)
@@ -563,7 +562,8 @@ int main(int argc, char **argv)
         int tie = st.tie[0] + st.tie[1] + st.tie[2];
         /* claims.h's one rule: a target missed on one scene refutes */
         const char *v = exp_combine_counts(met, all - met - tie, tie, EXP_EVERY);
-        if (!strcmp(v, EXP_REFUTED)) v = exp_slow_verdict(&x, v);
+        /* a ratio of two configurations timed in the same rounds: a busy
+         * machine slows both, so its refutation stands (issue 52) */
         if (st.embree) /* the industrial kernel measured here: the claim judged against it */
             exp_verdict_num(&x, "wide-bvh", exp_judge(&st.emb), &st.emb, st.emb_scene,
                             "this section's targets stand for about 1.1x the industrial kernel; "

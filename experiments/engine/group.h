@@ -127,8 +127,8 @@ typedef struct {
     int keep_same;      /* measure configurations of the same structure too (a control whose
                            difference the counts cannot show, e.g. instanced:world=flat) */
     int add_mask;       /* sets of the next exp_group_add (0: every set of mask) */
-    int min_rounds;     /* unused since issue 52: every configuration gets procs x proc_rounds
-                           rounds (slow passes on a share of their rays) */
+    int proc_rounds;    /* rounds per process (0: the experiment's, 2): 4 gives each half of a
+                           best chosen and judged on half the rounds 2 rounds per process */
     int thread_probe;   /* time the thread probe in the rounds (default 0) */
     /* Results of exp_group_run. */
     double aa_samples[4][EXP_MAX_SAMPLES];
@@ -153,6 +153,7 @@ typedef struct {
     double ref_samples[EXP_MAX_SAMPLES]; /* the reference kernel, ns per ray, per round */
     exp_est ref;        /* the reference over the processes (n 0: none) */
     double ref_stray;   /* max / min - 1 of the reference's process means */
+    double ref_lo, ref_hi; /* the fastest and the slowest process's mean reference, ns per ray */
     double steal;       /* steal time over the rounds, a fraction of the CPU time */
 } exp_group;
 
@@ -214,13 +215,14 @@ int exp_group_compare_build(exp_group *g, int c, int base, char *buf, size_t n);
 int exp_group_best(const exp_group *g, int mask, int lo, int hi, const char *prefix);
 /* A decider with an absolute threshold (fps, Mrays/s, Hz: rate = 1; ms:
  * rate = 0) judged on the number normalized to the stated reference rate
- * (harness.h, EXP_REF_NS_PER_RAY): the value and its interval times the
+ * (harness.h, EXP_REF_NS_PER_RAY, exp_ref_normalize): the value times the
  * group's reference factor (ref / stated) for a rate, divided by it for a
  * time, so that a machine running the reference 1.8x slower does not move
- * the verdict. Returns exp_judge of the normalized decider (*d is
- * normalized in place), or EXP_UNTESTABLE with the reason in why when the
- * reference strayed by more than EXP_REF_STRAY over the group's processes
- * or was not measured. why always gets a note of the factor. */
+ * the verdict; the interval's ends by the fastest and the slowest process's
+ * factor. Returns exp_judge of the normalized decider (*d is normalized in
+ * place), or EXP_UNTESTABLE with the reason in why when the reference was
+ * not measured, or strayed by more than EXP_REF_STRAY over the group's
+ * processes and the word straddles. why always gets a note of the factor. */
 const char *exp_group_absolute(const exp_group *g, exp_decider *d, int rate, char *why, size_t n);
 /* Internal to group.c and group_run.c: one pass of c over the rays r of
  * set bit (counted when cnt is given), and scratch results for the

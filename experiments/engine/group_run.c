@@ -401,7 +401,7 @@ static void plan_samples(exp_group *g, int samples)
     /* A sample lasts at most 2 x sample_ms (10 ms at the full budget), and
      * never more than the set budget over the samples: 16 samples of a
      * slow configuration cost 160 ms per set where issue 38's rounds cost
-     * 400 ms, or up to 1600 ms with min_rounds 10. */
+     * 400 ms, or up to 1600 ms with its 10 rounds. */
     double cap = fmin(x->set_budget_ms / (samples > 0 ? samples : 1), 2 * x->sample_ms);
     for (int bit = 1; bit <= BENCH_AO; bit <<= 1) {
         if (!(g->mask & bit)) continue;
@@ -440,19 +440,20 @@ static void plan_samples(exp_group *g, int samples)
     }
 }
 
-/* The processes' means of the logs of v (0 where <= 0): max / min - 1. */
-static double stray_of(const double *v, const int *proc, int n)
+/* The smallest and largest of the processes' geometric means of v (values
+ * <= 0 left out); 0, 0 when none. */
+static void proc_mean_range(const double *v, const int *proc, int n, double *lo, double *hi)
 {
-    double lo = INFINITY, hi = -INFINITY;
+    double l = INFINITY, h = -INFINITY;
     for (int id = 0; id < EXP_MAX_SAMPLES; id++) {
         double sum = 0;
         int m = 0;
         for (int i = 0; i < n; i++)
             if (proc[i] == id && v[i] > 0) sum += log(v[i]), m++;
         if (!m) continue;
-        lo = fmin(lo, sum / m), hi = fmax(hi, sum / m);
+        l = fmin(l, sum / m), h = fmax(h, sum / m);
     }
-    return hi >= lo ? exp(hi - lo) - 1 : NAN;
+    *lo = h >= l ? exp(l) : 0, *hi = h >= l ? exp(h) : 0;
 }
 
 /* Long on purpose (about 100 lines): the plan, the replicas' start, the
@@ -471,7 +472,7 @@ void exp_group_run(exp_group *g)
         if (g->cfg[c].ok && g->cfg[c].threads > g->probe_threads) g->probe_threads = g->cfg[c].threads;
     probe_job probe = {.iters = g->probe_threads > 1 ? probe_size(x) : 0};
     int aa = g->control && g->count && g->cfg[0].ok;
-    int rounds = procs == 1 ? x->repeats : x->proc_rounds;
+    int rounds = procs == 1 ? x->repeats : g->proc_rounds > 0 ? g->proc_rounds : x->proc_rounds;
     if (rounds < 1) rounds = 1;
     if (procs * rounds > EXP_MAX_SAMPLES) rounds = EXP_MAX_SAMPLES / procs;
     int total = procs * rounds;
@@ -560,7 +561,8 @@ void exp_group_run(exp_group *g)
             exp_est_of_procs(g->cfg[c].build_samples, ids, procs, &g->cfg[c].build_ms);
     if (x->ref_state == 1) {
         exp_est_of_procs(g->ref_samples, g->round_proc, total, &g->ref);
-        g->ref_stray = stray_of(g->ref_samples, g->round_proc, total);
+        proc_mean_range(g->ref_samples, g->round_proc, total, &g->ref_lo, &g->ref_hi);
+        g->ref_stray = g->ref_lo > 0 ? g->ref_hi / g->ref_lo - 1 : NAN;
         exp_ref_note(x, g->ref_samples, total);
     }
     /* The floor: configuration 0's systematic offset from itself, the A/A

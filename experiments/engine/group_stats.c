@@ -201,18 +201,11 @@ int exp_group_find(const exp_group *g, const char *spec)
 
 const char *exp_group_absolute(const exp_group *g, exp_decider *d, int rate, char *why, size_t n)
 {
-    if (g->ref.n < 2 || !(g->ref.median > 0)) {
+    if (g->ref.n < 2 || !(g->ref.median > 0) || !(g->ref_lo > 0)) {
         snprintf(why, n, "the reference kernel was not measured in these rounds: an absolute "
                  "threshold cannot be judged here");
         return EXP_UNTESTABLE;
     }
-    double f = g->ref.median / EXP_REF_NS_PER_RAY, k = rate ? f : 1 / f;
-    d->value *= k, d->lo *= k, d->hi *= k;
-    int off = !(g->ref_stray <= EXP_REF_STRAY);
-    snprintf(why, n, "normalized to the stated reference rate (%.0f ns per ray of the reference "
-             "kernel; %.0f ns in these rounds, so the numbers are x %.2f), the reference's "
-             "process means %s by %.1f%%%s", EXP_REF_NS_PER_RAY, g->ref.median, k,
-             off ? "strayed" : "stayed within", 100 * g->ref_stray,
-             off ? " (more than 10%: not testable here)" : "");
-    return off ? EXP_UNTESTABLE : exp_judge(d);
+    return exp_ref_normalize(d, rate, g->ref.median, g->ref_lo, g->ref_hi, "process means",
+                             g->ref_stray, why, n);
 }

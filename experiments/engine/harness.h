@@ -227,7 +227,8 @@ const char *exp_no_difference(double floor);
  * image at the density of their former 128x128 one. */
 int exp_tiles_stride(const exp_ctx *x);
 exp_decider exp_decider_of(const char *what, const exp_est *e, double threshold, int sense);
-/* For a verdict that says "too slow": on a busy machine (exp_busy) a
+/* For an absolute verdict that says "too slow" (never a ratio of two
+ * configurations timed in the same rounds): on a busy machine (exp_busy) a
  * refutation is not testable here, since the measured times are upper
  * bounds of a quiet machine's. */
 const char *exp_slow_verdict(const exp_ctx *x, const char *verdict);
@@ -279,11 +280,20 @@ int exp_cpu_ticks(double *steal, double *total);
 /* The footer line: the reference's spread over the section and the steal
  * time of its rounds (nothing when no round ran). */
 void exp_ref_footer(exp_ctx *x);
+/* The one normalization of an absolute decider (exp_group_absolute,
+ * exp_ref_absolute): the value by the factor med / EXP_REF_NS_PER_RAY
+ * (rate = 1: multiplied; 0: divided), each end of its interval by the
+ * factor of the reference's end that widens it (fast and slow: the
+ * reference's fast and slow ends, ns per ray; spread names them), so the
+ * word holds whichever normalization is right. When the reference strayed
+ * (stray, max / min - 1, above EXP_REF_STRAY) a word that straddles is
+ * "not testable here"; a decided word stands, and why says both. */
+const char *exp_ref_normalize(exp_decider *d, int rate, double med, double fast, double slow,
+                              const char *spread, double stray, char *why, size_t why_n);
 /* exp_group_absolute (group.h) for timings of one process (n reference
  * times, ns per ray, taken beside the timed work): the decider normalized
- * by median / EXP_REF_NS_PER_RAY (rate = 1: multiplied; 0: divided);
- * "not testable here" when the reference's 10th and 90th percentiles
- * differ by more than EXP_REF_STRAY, or no reference was timed. */
+ * by exp_ref_normalize over the reference's 10th to 90th percentile;
+ * "not testable here" when no reference was timed. */
 const char *exp_ref_absolute(exp_ctx *x, const double *ns, int n, exp_decider *d, int rate,
                              char *why, size_t why_n);
 /* Frees the reference kernel and the section's record. */

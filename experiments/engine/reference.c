@@ -112,6 +112,28 @@ void exp_ref_footer(exp_ctx *x)
     free(v);
 }
 
+const char *exp_ref_normalize(exp_decider *d, int rate, double med, double fast, double slow,
+                              const char *spread, double stray, char *why, size_t why_n)
+{
+    double f = med / EXP_REF_NS_PER_RAY, ff = fast / EXP_REF_NS_PER_RAY,
+           fs = slow / EXP_REF_NS_PER_RAY;
+    if (rate) /* a rate times the factor: the low end by the fast reference's */
+        d->value *= f, d->lo *= ff, d->hi *= fs;
+    else      /* a time over the factor: the low end over the slow reference's */
+        d->value /= f, d->lo /= fs, d->hi /= ff;
+    const char *v = exp_judge(d);
+    int off = !(stray <= EXP_REF_STRAY) && !strcmp(v, EXP_ON_LINE);
+    snprintf(why, why_n, "normalized to the stated reference rate (%.0f ns per ray of the "
+             "reference kernel; %.0f ns beside these rounds, so the number is x %.2f; the "
+             "interval's ends normalized by the fast and slow ends of the %s, %.0f and %.0f ns, so "
+             "that it holds whichever normalization), the reference %s %.1f%%%s",
+             EXP_REF_NS_PER_RAY, med, rate ? f : 1 / f, spread, fast, slow,
+             stray <= EXP_REF_STRAY ? "stayed within" : "strayed by", 100 * stray,
+             off ? " and the word depends on which end normalizes: not testable here"
+             : stray <= EXP_REF_STRAY ? "" : ", but the word is the same at both ends");
+    return off ? EXP_UNTESTABLE : v;
+}
+
 const char *exp_ref_absolute(exp_ctx *x, const double *ns, int n, exp_decider *d, int rate,
                              char *why, size_t why_n)
 {
@@ -127,16 +149,9 @@ const char *exp_ref_absolute(exp_ctx *x, const double *ns, int n, exp_decider *d
     }
     qsort(v, (size_t)m, sizeof *v, cmp_d);
     double med = m % 2 ? v[m / 2] : 0.5 * (v[m / 2 - 1] + v[m / 2]);
-    double stray = v[m - 1 - m / 10] / v[m / 10] - 1, f = med / EXP_REF_NS_PER_RAY;
-    double k = rate ? f : 1 / f;
-    d->value *= k, d->lo *= k, d->hi *= k;
-    int off = !(stray <= EXP_REF_STRAY);
-    snprintf(why, why_n, "normalized to the stated reference rate (%.0f ns per ray of the "
-             "reference kernel; %.0f ns beside these %d rounds, so the numbers are x %.2f), the "
-             "reference's 10th to 90th percentile %s %.1f%%%s", EXP_REF_NS_PER_RAY, med, m, k,
-             off ? "strayed by" : "within", 100 * stray,
-             off ? " (more than 10%: not testable here)" : "");
-    return off ? EXP_UNTESTABLE : exp_judge(d);
+    double p10 = v[m / 10], p90 = v[m - 1 - m / 10];
+    return exp_ref_normalize(d, rate, med, p10, p90, "10th to 90th percentile", p90 / p10 - 1,
+                             why, why_n);
 }
 
 void exp_ref_free(exp_ctx *x)
