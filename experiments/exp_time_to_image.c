@@ -163,8 +163,12 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
         }
         if (next < 0) break;
         char range[96];
-        if (isinf(bhi))
-            snprintf(range, sizeof range, "[%.3g, never within the intervals]", blo);
+        if (isinf(bhi)) /* issue 52: an interval over 3x wide is not printed */
+            snprintf(range, sizeof range, "(not resolved: from %.3g rays on, or never within "
+                     "the intervals)", blo);
+        else if (blo > 0 && bhi > EXP_MAX_SPAN * blo)
+            snprintf(range, sizeof range, "(not resolved: its interval spans more than %.0fx)",
+                     EXP_MAX_SPAN);
         else
             snprintf(range, sizeof range, "[%.3g, %.3g]", blo, bhi);
         exp_md(x, "- from %.3g rays %s (%.2f images of %dx%d primary+diffuse rays, %.3f 1080p "

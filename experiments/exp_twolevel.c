@@ -150,6 +150,9 @@ static void compare_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     exp_group_init(&g, x, &s, &sets, SETS);
     g.collapse_ms = x->quick ? 1000 : 5000;
     g.keep_same = control; /* the control has the counts of instanced:top=bvh,bottom=bvh */
+    /* two-level is decided here, 1% from its line in the last report: 4
+     * rounds per process */
+    g.proc_rounds = x->quick ? 0 : 4;
     for (int i = 0; i < list->count; i++)
         if (control || strcmp(list->spec[i], CONTROL)) exp_group_add(&g, list->spec[i], 0);
     /* 800x600 passes are long: the budget gives slow ones few rounds, never under 3. */

@@ -47,10 +47,13 @@
  * are untouched and absolute numbers are full-pass numbers.
  *
  * Builds (time_builds): a configuration whose build fits the build budget
- * x procs is built once in every process, after its last round
- * (build_samples[p], build_procs = 1: the build time's interval is over
- * processes too); a slower one is built in interleaved rounds in this
- * process before the replicas start, as many as the budget allows.
+ * x procs is built in every process after each of its odd rounds (once
+ * with 2 rounds per process, twice with 4), its sample the fastest of
+ * them (build_samples[p], build_procs = 1: the build time's interval is
+ * over processes too; a slow spell of the machine, 0.2-1 s, covers a
+ * whole build and only adds time); a slower one is built in interleaved
+ * rounds in this process before the replicas start, as many as the budget
+ * allows.
  *
  * The reference kernel (harness.h) is one more slot of every round: its
  * times give the group's machine factor (ref) and its stray (the process
@@ -108,7 +111,7 @@ typedef struct {
     int same_as;   /* the configuration with the same structure, or -1 */
     int want;      /* timed rounds */
     double counted_ms; /* the longest counted pass (a collapsed configuration's only time) */
-    int build_procs;   /* build_samples[p] is process p's build (one per process), else rounds here */
+    int build_procs;   /* build_samples[p] is process p's (fastest) build, else rounds here */
     exp_trace set[4]; /* indexed by exp_set_index */
 } exp_cfg;
 
@@ -203,7 +206,8 @@ double exp_group_boxes(const exp_group *g, int c, int mask);
 void exp_group_compare_head(exp_group *g);
 int exp_group_compare(exp_group *g, int c, int base, int mask, char *buf, size_t n);
 /* The build time ratio a / b at `level`: over processes when both were
- * built once per process, else over this process's build rounds. */
+ * built in every process (group.h: each process's fastest), else over this
+ * process's build rounds. */
 exp_est exp_group_build_ratio_level(const exp_group *g, int a, int b, double level);
 /* The same for build times (paired interleaved build rounds). */
 int exp_group_compare_build(exp_group *g, int c, int base, char *buf, size_t n);

@@ -228,13 +228,15 @@ static void run_round(exp_group *g, int p, int k, int rounds, probe_job *probe, 
                 t->samples[r] = ms;
         }
     }
-    if (k != rounds - 1) return;
-    /* The process's builds (group.h), after its traces, rotated by p. */
+    int last = k == rounds - 1, first = k == (rounds > 1 ? 1 : 0);
+    if (k % 2 == 0 && !last) return;
+    /* The process's builds (group.h), after its odd rounds, rotated by
+     * p + k: its sample is the fastest of them. */
     for (int i = 0; i < g->count; i++) {
-        exp_cfg *cf = &g->cfg[(i + p) % g->count];
+        exp_cfg *cf = &g->cfg[(i + p + k) % g->count];
         if (!cf->ok || !cf->build_procs) continue;
         double ms = build_ms(cf, g->s);
-        if (ms >= 0) cf->build_samples[p] = ms;
+        if (ms >= 0 && (first || ms < cf->build_samples[p])) cf->build_samples[p] = ms;
     }
 }
 

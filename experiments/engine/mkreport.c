@@ -30,6 +30,7 @@
 
 #include "claims.h"
 #include "mdcut.h"
+#include "stats.h"
 
 #define MAX_ROWS 256
 #define REPORT_MAX_LINES 800
@@ -177,6 +178,10 @@ static void deciding_cell(char *dst, size_t n, const verdict *v)
         snprintf(dst, n, "%s%s%s (exact) (claim %s %s)", what, what[0] ? ": " : "",
                  num(a, sizeof a, v->value), v->sense > 0 ? ">=" : v->sense < 0 ? "<=" : "vs",
                  num(d, sizeof d, v->threshold));
+    else if (v->lo > 0 && v->hi > EXP_MAX_SPAN * v->lo) /* stats.h: not printed as an interval */
+        snprintf(dst, n, "%s%s%s (its interval spans more than %.0fx: not resolved) (claim %s %s)",
+                 what, what[0] ? ": " : "", num(a, sizeof a, v->value), EXP_MAX_SPAN,
+                 v->sense > 0 ? ">=" : v->sense < 0 ? "<=" : "vs", num(d, sizeof d, v->threshold));
     else
         snprintf(dst, n, "%s%s%s [%s, %s]%s (claim %s %s)", what, what[0] ? ": " : "",
                  num(a, sizeof a, v->value), num(b, sizeof b, v->lo), num(c, sizeof c, v->hi),

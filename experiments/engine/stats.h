@@ -95,7 +95,10 @@ int exp_cmp(const exp_est *a, const exp_est *b, double floor);
 int exp_ratio_cmp(const exp_est *r, double floor);
 
 /* "12.3 [12.1, 12.6] n=10": the median, its interval and the sample
- * count ("12.3" when n < 2); the formats below print n the same way. */
+ * count ("12.3" when n < 2); the formats below print n the same way. An
+ * interval whose ends are more than EXP_MAX_SPAN apart (hi / lo) is not
+ * printed: "12.3 (n=10; its interval spans more than 3x: not resolved)". */
+#define EXP_MAX_SPAN 3.0
 const char *exp_fmt_est(char *buf, size_t n, const exp_est *e, int decimals);
 /* A ratio as a change: "+20.2% [-3.1%, +41.0%] n=10" ("+20.2%" when n < 2). */
 const char *exp_fmt_pct(char *buf, size_t n, const exp_est *ratio);
