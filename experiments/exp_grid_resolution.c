@@ -330,7 +330,7 @@ static void measure_scene(exp_ctx *x, study *st, int si, const char *spec, const
         exp_md(x, "\nPer region: the %d lambdas within %.1fx of the best whole-image time (%d "
                   "slower ones left out).\n", nlc, REGION_SLACK, far);
     exp_region_result rr;
-    if (exp_region_time(x, &g, lc, nlc, REGIONS, x->quick ? 2 : 8, &rr) == 0) {
+    if (exp_region_time(x, &g, lc, nlc, REGIONS, x->quick ? 2 : 12, &rr) == 0) {
         char e[96];
         r->rgain = rr.gain, r->rchosen = rr.chosen, r->rok = 1;
         snprintf(r->rsingle, sizeof r->rsingle, "%s", g.cfg[lc[rr.best_single]].spec);

@@ -354,9 +354,9 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     exp_text_add(&st->names, "%s%s", st->names.len ? ", " : "", s.name);
     exp_group g;
     exp_group_init(&g, x, &s, &sets, MASK);
-    /* spatial-splits (the meshes) and sah-build-slower were 0.3-5% from
-     * their lines in the last reports: 4 rounds per process, and 2 builds
-     * (group.h) */
+    /* sah-build-slower was 0.3-3% from its line in the last reports, its
+     * intervals +-15% on one build per process: 4 rounds per process give
+     * it 2 builds in each (group.h), spatial-splits 4 paired rounds */
     g.proc_rounds = x->quick ? 0 : 4;
     for (int i = 0; i < list->count; i++) {
         if (!strcmp(list->spec[i], SBVH) && s.live_count > SBVH_MAX_PRIMS) {

@@ -356,12 +356,13 @@ static void replica_main(exp_group *g, int p, int rounds, int cmd, int rep, prob
     _exit(write_all(rep, buf, (size_t)n * sizeof *buf) ? 1 : 0);
 }
 
-/* Forks replica p; its `alive` says whether it is ready. */
+/* Forks replica p (rp->pid 0: it could not start); replica_ready then
+ * waits for it. */
 static void replica_start(exp_group *g, replica *rp, int p, int rounds, probe_job *probe, int aa,
                           const replica *earlier, int earlier_n)
 {
     int c2r[2], r2c[2];
-    rp->alive = 0;
+    rp->alive = 0, rp->pid = 0;
     if (pipe(c2r)) return;
     if (pipe(r2c)) {
         close(c2r[0]), close(c2r[1]);
@@ -377,14 +378,19 @@ static void replica_start(exp_group *g, replica *rp, int p, int rounds, probe_jo
         /* The parent's ends of the earlier replicas' pipes: closed here, so
          * that each sees the end of its pipe when the parent's end closes. */
         for (int q = 0; q < earlier_n; q++)
-            if (earlier[q].alive) close(earlier[q].cmd), close(earlier[q].rep);
+            if (earlier[q].pid > 0) close(earlier[q].cmd), close(earlier[q].rep);
         close(c2r[1]), close(r2c[0]);
         replica_main(g, p, rounds, c2r[0], r2c[1], probe, aa);
     }
     close(c2r[0]), close(r2c[1]);
     rp->pid = pid, rp->cmd = c2r[1], rp->rep = r2c[0];
+}
+
+/* Waits for a started replica's 'r': its `alive` says whether it is ready. */
+static void replica_ready(replica *rp)
+{
     char ready;
-    rp->alive = read_all(rp->rep, &ready, 1) == 0 && ready == 'r';
+    rp->alive = rp->pid > 0 && read_all(rp->rep, &ready, 1) == 0 && ready == 'r';
 }
 
 static void replica_stop(replica *rp)
@@ -485,7 +491,13 @@ void exp_group_run(exp_group *g)
     bench_progress_begin(x->progress, "start the replica processes", 0, 0);
     int live = 0; /* no replica for a group with nothing to measure */
     for (int c = 0; c < g->count; c++) live += g->cfg[c].ok;
-    for (int p = 1; p < procs && live; p++) replica_start(g, &rep[p], p, rounds, &probe, aa, rep, p);
+    /* Two replicas build at a time, one per core (untimed: their rounds
+     * start when every replica is ready). */
+    for (int p = 1; p < procs && live; p += 2) {
+        int q = p + 1 < procs ? p + 1 : p;
+        for (int i = p; i <= q; i++) replica_start(g, &rep[i], i, rounds, &probe, aa, rep, i);
+        for (int i = p; i <= q; i++) replica_ready(&rep[i]);
+    }
     bench_progress_end(x->progress);
     for (int r = 0; r < total; r++) g->round_proc[r] = r / rounds;
     exp_scratch sc = exp_group_scratch(g);
