@@ -166,7 +166,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
         if (isinf(bhi)) /* issue 52: an interval over 3x wide is not printed */
             snprintf(range, sizeof range, "(not resolved: from %.3g rays on, or never within "
                      "the intervals)", blo);
-        else if (blo > 0 && bhi > EXP_MAX_SPAN * blo)
+        else if (exp_span_unresolved(blo, bhi))
             snprintf(range, sizeof range, "(not resolved: its interval spans more than %.0fx)",
                      EXP_MAX_SPAN);
         else

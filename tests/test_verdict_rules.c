@@ -166,3 +166,25 @@ TEST(verdict_rules_floor_widens)
     exp_est a = {10.0, 9.8, 10.2, 9.7, 10.3, 8, 0.95, 8, 0, 0}, b = {10.6, 10.4, 10.8, 10.3, 10.9, 8, 0.95, 8, 0, 0};
     CHECK(!exp_tie(&a, &b, 0.01) && exp_tie(&a, &b, 0.03));
 }
+
+/* Issue 52: no printed interval spans more than 3x (EXP_MAX_SPAN): such an
+ * estimate prints its median and "not resolved"; a narrower one its
+ * interval, in every format. */
+TEST(verdict_rules_wide_intervals_not_printed)
+{
+    exp_est wide = {2.0, 1.0, 4.0, 0.9, 4.2, 8, 0.95, 8, 0, 0};
+    exp_est ok = {2.0, 1.0, 2.9, 0.9, 3.0, 8, 0.95, 8, 0, 0};
+    char b[256];
+    const char *s = exp_fmt_est(b, sizeof b, &wide, 2);
+    CHECKF(strstr(s, "not resolved") && !strchr(s, '['), "est: %s", s);
+    s = exp_fmt_x(b, sizeof b, &wide);
+    CHECKF(strstr(s, "not resolved") && !strchr(s, '['), "x: %s", s);
+    s = exp_fmt_pct(b, sizeof b, &wide);
+    CHECKF(strstr(s, "not resolved") && !strchr(s, '['), "pct: %s", s);
+    s = exp_fmt_est(b, sizeof b, &ok, 2);
+    CHECKF(!strstr(s, "not resolved") && strstr(s, "[1.00, 2.90]"), "est: %s", s);
+    s = exp_fmt_x(b, sizeof b, &ok);
+    CHECKF(!strstr(s, "not resolved") && strchr(s, '['), "x: %s", s);
+    CHECK(exp_span_unresolved(1.0, 3.01) && !exp_span_unresolved(1.0, 3.0) &&
+          !exp_span_unresolved(0.0, 5.0));
+}

@@ -155,8 +155,8 @@ typedef struct {
     double sub_scale[4]; /* full-pass ms over share-pass ms, measured (0: the ray count ratio) */
     double ref_samples[EXP_MAX_SAMPLES]; /* the reference kernel, ns per ray, per round */
     exp_est ref;        /* the reference over the processes (n 0: none) */
-    double ref_stray;   /* max / min - 1 of the reference's process means */
-    double ref_lo, ref_hi; /* the fastest and the slowest process's mean reference, ns per ray */
+    double ref_lo, ref_hi; /* the fastest and the slowest process's mean reference, ns per ray
+                              (its stray: ref_hi / ref_lo - 1) */
     double steal;       /* steal time over the rounds, a fraction of the CPU time */
 } exp_group;
 

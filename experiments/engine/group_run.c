@@ -576,7 +576,6 @@ void exp_group_run(exp_group *g)
     if (x->ref_state == 1) {
         exp_est_of_procs(g->ref_samples, g->round_proc, total, &g->ref);
         proc_mean_range(g->ref_samples, g->round_proc, total, &g->ref_lo, &g->ref_hi);
-        g->ref_stray = g->ref_lo > 0 ? g->ref_hi / g->ref_lo - 1 : NAN;
         exp_ref_note(x, g->ref_samples, total);
     }
     /* The floor: configuration 0's systematic offset from itself, the A/A

@@ -207,5 +207,5 @@ const char *exp_group_absolute(const exp_group *g, exp_decider *d, int rate, cha
         return EXP_UNTESTABLE;
     }
     return exp_ref_normalize(d, rate, g->ref.median, g->ref_lo, g->ref_hi, "process means",
-                             g->ref_stray, why, n);
+                             g->ref_hi / g->ref_lo - 1, why, n);
 }

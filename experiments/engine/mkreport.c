@@ -178,7 +178,7 @@ static void deciding_cell(char *dst, size_t n, const verdict *v)
         snprintf(dst, n, "%s%s%s (exact) (claim %s %s)", what, what[0] ? ": " : "",
                  num(a, sizeof a, v->value), v->sense > 0 ? ">=" : v->sense < 0 ? "<=" : "vs",
                  num(d, sizeof d, v->threshold));
-    else if (v->lo > 0 && v->hi > EXP_MAX_SPAN * v->lo) /* stats.h: not printed as an interval */
+    else if (exp_span_unresolved(v->lo, v->hi)) /* stats.h: not printed as an interval */
         snprintf(dst, n, "%s%s%s (its interval spans more than %.0fx: not resolved) (claim %s %s)",
                  what, what[0] ? ": " : "", num(a, sizeof a, v->value), EXP_MAX_SPAN,
                  v->sense > 0 ? ">=" : v->sense < 0 ? "<=" : "vs", num(d, sizeof d, v->threshold));

@@ -323,11 +323,6 @@ static const char *n_tail(char *b, size_t n, const exp_est *e)
 /* Issue 52: no printed interval spans more than EXP_MAX_SPAN (hi / lo of
  * a positive interval; of 1 + the change for a percent): one that does is
  * printed as its median and "not resolved", never as an interval. */
-static int unresolved(double lo, double hi)
-{
-    return lo > 0 && hi > EXP_MAX_SPAN * lo;
-}
-
 static const char *wide_tail(char *b, size_t n, const exp_est *e)
 {
     snprintf(b, n, " (n=%d; its interval spans more than %.0fx: not resolved)", e->n, EXP_MAX_SPAN);
@@ -342,7 +337,7 @@ const char *exp_fmt_est(char *buf, size_t n, const exp_est *e, int decimals)
     while (decimals < 6 && e->lo > 0 && e->lo < pow(10, 1 - decimals)) decimals++;
     if (e->n < 2 || !(e->hi > e->lo))
         snprintf(buf, n, "%.*f", decimals, e->median);
-    else if (unresolved(e->lo, e->hi))
+    else if (exp_span_unresolved(e->lo, e->hi))
         snprintf(buf, n, "%.*f%s", decimals, e->median, wide_tail(t, sizeof t, e));
     else
         snprintf(buf, n, "%.*f [%.*f, %.*f]%s", decimals, e->median, decimals, e->lo, decimals,
@@ -365,7 +360,7 @@ const char *exp_fmt_pct(char *buf, size_t n, const exp_est *r)
     char t[96];
     if (r->n < 2 || !(r->hi > r->lo))
         snprintf(buf, n, "%+.1f%%", 100 * (r->median - 1));
-    else if (unresolved(r->lo, r->hi))
+    else if (exp_span_unresolved(r->lo, r->hi))
         snprintf(buf, n, "%+.1f%%%s", 100 * (r->median - 1), wide_tail(t, sizeof t, r));
     else
         snprintf(buf, n, "%+.1f%% [%+.1f%%, %+.1f%%]%s", 100 * (r->median - 1),
@@ -378,7 +373,7 @@ const char *exp_fmt_x(char *buf, size_t n, const exp_est *e)
     char t[96];
     if (e->n < 2 || !(e->hi > e->lo))
         snprintf(buf, n, "%.2fx", e->median);
-    else if (unresolved(e->lo, e->hi))
+    else if (exp_span_unresolved(e->lo, e->hi))
         snprintf(buf, n, "%.2fx%s", e->median, wide_tail(t, sizeof t, e));
     else
         snprintf(buf, n, "%.2fx [%.2f, %.2f]%s", e->median, e->lo, e->hi, n_tail(t, sizeof t, e));

@@ -99,6 +99,11 @@ int exp_ratio_cmp(const exp_est *r, double floor);
  * interval whose ends are more than EXP_MAX_SPAN apart (hi / lo) is not
  * printed: "12.3 (n=10; its interval spans more than 3x: not resolved)". */
 #define EXP_MAX_SPAN 3.0
+/* 1 when [lo, hi] (lo > 0) spans more than EXP_MAX_SPAN: not printed. */
+static inline int exp_span_unresolved(double lo, double hi)
+{
+    return lo > 0 && hi > EXP_MAX_SPAN * lo;
+}
 const char *exp_fmt_est(char *buf, size_t n, const exp_est *e, int decimals);
 /* A ratio as a change: "+20.2% [-3.1%, +41.0%] n=10" ("+20.2%" when n < 2). */
 const char *exp_fmt_pct(char *buf, size_t n, const exp_est *ratio);
