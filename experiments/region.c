@@ -99,14 +99,20 @@ int exp_region_time(exp_ctx *x, const exp_group *g, const int *cfgs, int n, int 
                 int j = (int)((seed >> 33) % (uint64_t)(k + 1)), tmp = order[k];
                 order[k] = order[j], order[j] = tmp;
             }
-            for (int k = 0; k < n; k++) {
-                int c = order[k];
-                const exp_cfg *cf = &g->cfg[cfgs[c]];
-                for (int q = 0; q < tiles; q++) /* untimed: the structure back in the caches */
-                    if (count[q]) accel_trace(cf->kind, cf->accel, tile[q], hits, count[q], x->threads, NULL);
-                for (int q = 0; q < tiles; q++) {
+            /* Tile by tile, every configuration in turn (the round's order,
+             * reversed on every other tile): the times a tile compares lie
+             * within a few milliseconds, so a slow spell of the host (0.2-1
+             * s, engine/harness.h) scales all of them alike instead of
+             * falling on some configurations' whole passes. */
+            for (int q = 0; q < tiles; q++) {
+                if (!count[q]) continue;
+                for (int k = 0; k < n; k++) {
+                    int c = order[q % 2 ? n - 1 - k : k];
+                    const exp_cfg *cf = &g->cfg[cfgs[c]];
+                    /* untimed: this tile's part of the structure back in the caches */
+                    accel_trace(cf->kind, cf->accel, tile[q], hits, count[q], x->threads, NULL);
                     double t0 = accel_now_ms();
-                    for (int i = 0; i < reps[c][q] && count[q]; i++)
+                    for (int i = 0; i < reps[c][q]; i++)
                         accel_trace(cf->kind, cf->accel, tile[q], hits, count[q], x->threads, NULL);
                     t[r][c][q] = (accel_now_ms() - t0) / reps[c][q];
                 }

@@ -2,9 +2,11 @@
  * region.h - a group's configurations timed per screen region (issue 38:
  * "region dependence timed per 4x4 region", not judged by a model whose
  * absolute error exceeds the effect). The primary rays of the group are
- * split by pixel into regions x regions screen tiles; every configuration
- * traces every tile in interleaved rounds (a fresh order each round, after
- * an untimed pass over every tile).
+ * split by pixel into regions x regions screen tiles; in each round every
+ * tile is traced by every configuration in turn (a fresh order each round,
+ * reversed on every other tile; each timed sample after an untimed pass of
+ * the same tile), so the times one tile compares are taken milliseconds
+ * apart.
  * The choice (a configuration per tile, and the best single one) is made
  * on the odd rounds and judged on the even ones, so that picking the
  * minimum of noisy medians does not flatter the per-tile choice.

@@ -97,8 +97,10 @@ TEST(stats_coverage_order_statistic)
  *   in 20% of the rounds a spell slows the samples it covers by 1.2-1.5x,
  *   both configurations of the round or only one of them (a spell that
  *   starts or ends between them);
- * - builds: each process's sample the fastest of 2 builds (group.h), each
- *   build inside a spell 20% of the time.
+ * - builds: each process's sample the fastest of 1, 2 or 4 builds
+ *   (group.h), each build inside a spell 20% of the time.
+ * A process's value is the mean of its rounds, their median from 3 on
+ * (stats.c), so 4 rounds per process test the median.
  * The interval is taken at the Bonferroni level a verdict over m
  * comparisons uses. Its coverage of the true ratio 1.3 must reach that
  * level (within 3 simulation standard errors), and the same samples pooled
@@ -114,6 +116,10 @@ static double spell(uint64_t *seed)
 
 static double process_coverage(int m, int rounds, int model, int pooled, uint64_t seed)
 {
+    /* builds: rounds carries the number of builds a process's sample is the
+     * fastest of (1, 2 or 4: group.h), its one sample per process */
+    int builds = model == COV_BUILDS ? rounds : 1;
+    if (model == COV_BUILDS) rounds = 1;
     const int procs = 8;
     int n = procs * rounds;
     double level = exp_bonferroni_level(m);
@@ -136,10 +142,13 @@ static double process_coverage(int m, int rounds, int model, int pooled, uint64_
                     if (u < 0.7) a[j] *= f, b[j] *= f; /* the spell covers both */
                     else if (u < 0.85) a[j] *= f;
                     else b[j] *= f;
-                } else if (model == COV_BUILDS) { /* the faster of 2 builds */
-                    double a2 = a[j] / exp(0.02 * cov_normal(&seed)), b2 = b[j] / exp(0.02 * cov_normal(&seed));
-                    a[j] = fmin(a[j] * spell(&seed), a2 * spell(&seed));
-                    b[j] = fmin(b[j] * spell(&seed), b2 * spell(&seed));
+                } else if (model == COV_BUILDS) { /* the fastest of `builds` builds */
+                    double a0 = a[j], b0 = b[j];
+                    a[j] *= spell(&seed), b[j] *= spell(&seed);
+                    for (int i = 1; i < builds; i++) {
+                        a[j] = fmin(a[j], a0 / exp(0.02 * cov_normal(&seed)) * spell(&seed));
+                        b[j] = fmin(b[j], b0 / exp(0.02 * cov_normal(&seed)) * spell(&seed));
+                    }
                 }
             }
         }
@@ -153,17 +162,16 @@ static double process_coverage(int m, int rounds, int model, int pooled, uint64_
 TEST(stats_coverage_processes_as_used)
 {
     static const char *const names[] = {"", " with preemptions", " with slow spells",
-                                        " (builds: the faster of 2, with slow spells)"};
+                                        " (builds: the fastest of 1, 2 or 4, with slow spells)"};
     for (int m = 1; m <= 8; m *= 8) { /* 95% and a verdict over 8 comparisons (99.375%) */
         double level = exp_bonferroni_level(m), se = sqrt(level * (1 - level) / COV_RUNS);
         for (int model = COV_CLEAN; model <= COV_BUILDS; model++)
-            for (int rounds = 2; rounds <= 4; rounds += 2) {
-                if (model == COV_BUILDS && rounds > 2) continue; /* one sample per process */
-                double c = process_coverage(m, model == COV_BUILDS ? 1 : rounds, model, 0,
+            for (int rounds = model == COV_BUILDS ? 1 : 2; rounds <= 4; rounds *= 2) {
+                double c = process_coverage(m, rounds, model, 0,
                                             0x8A0Cull + (uint64_t)(m * 16 + model * 4 + rounds));
-                CHECKF(c >= level - 3 * se, "8 processes x %d rounds%s at %.3f%%: coverage %.4f "
-                       "(3 SE = %.4f)", model == COV_BUILDS ? 1 : rounds, names[model],
-                       100 * level, c, 3 * se);
+                CHECKF(c >= level - 3 * se, "8 processes x %d %s%s at %.3f%%: coverage %.4f "
+                       "(3 SE = %.4f)", rounds, model == COV_BUILDS ? "builds" : "rounds",
+                       names[model], 100 * level, c, 3 * se);
             }
         double cp = process_coverage(m, 2, COV_CLEAN, 1, 0x9A0Cull + (uint64_t)m);
         CHECKF(cp < level - 3 * se, "the 16 rounds pooled as one process at %.3f%%: coverage "
@@ -186,6 +194,21 @@ TEST(stats_coverage_processes_as_used)
     exp_est_ratio_procs(a, a, proc, 16, &e); /* a self-ratio: 1 [1, 1] */
     CHECKF(!exp_est_is_95(&e) && !strchr(exp_fmt_x(buf, sizeof buf, &e), '['),
            "a self-ratio printed as an interval: %s", buf);
+    /* A process's value is the median of its rounds from 3 on: one round
+     * slowed 1.5x by a spell moves it not at all (the mean would move it by
+     * a quarter of log 1.5), while 2 rounds keep their mean. */
+    double t4[32];
+    int p4[32];
+    for (int j = 0; j < 32; j++) p4[j] = j / 4, t4[j] = 10.0 * (1 + 0.01 * (j / 4));
+    for (int p = 0; p < 8; p++) t4[4 * p + 1] *= 1.5;
+    double gm = 0;
+    for (int p = 0; p < 8; p++) gm += log(10.0 * (1 + 0.01 * p)) / 8;
+    exp_est_of_procs(t4, p4, 32, &e);
+    CHECKF(e.n == 8 && fabs(e.median - exp(gm)) < 1e-9,
+           "4 rounds, one slow: %.4f, expected the spell-free %.4f", e.median, exp(gm));
+    for (int j = 0; j < 16; j++) p4[j] = j / 2;
+    exp_est_of_procs(t4, p4, 16, &e); /* 2 rounds per process: (1, 1.5) and (1, 1) */
+    CHECKF(e.n == 8 && e.median > 10.6, "2 rounds: %.4f, expected the mean with the spell", e.median);
     /* Student's t: the 97.5% point at 2 and 7 degrees of freedom. */
     CHECKF(fabs(exp_t_quantile(0.95, 2) - 4.303) < 2e-3 && fabs(exp_t_quantile(0.95, 7) - 2.365) < 2e-3,
            "t quantiles %.4f %.4f", exp_t_quantile(0.95, 2), exp_t_quantile(0.95, 7));

@@ -48,8 +48,9 @@
  *
  * Builds (time_builds): a configuration whose build fits the build budget
  * x procs is built in every process after each of its odd rounds (once
- * with 2 rounds per process, twice with 4), its sample the fastest of
- * them (build_samples[p], build_procs = 1: the build time's interval is
+ * with 2 rounds per process, twice with 4; each time twice over, A B A B,
+ * where it fits the budget twice: build_procs 2), its sample the fastest
+ * of them (build_samples[p], build_procs >= 1: the build time's interval is
  * over processes too; a slow spell of the machine, 0.2-1 s, covers a
  * whole build and only adds time); a slower one is built in interleaved
  * rounds in this process before the replicas start, as many as the budget
@@ -111,7 +112,8 @@ typedef struct {
     int same_as;   /* the configuration with the same structure, or -1 */
     int want;      /* timed rounds */
     double counted_ms; /* the longest counted pass (a collapsed configuration's only time) */
-    int build_procs;   /* build_samples[p] is process p's (fastest) build, else rounds here */
+    int build_procs;   /* build_samples[p] is process p's (fastest) build, else rounds here;
+                          2: built twice over after each odd round */
     exp_trace set[4]; /* indexed by exp_set_index */
 } exp_cfg;
 
