@@ -26,7 +26,8 @@
  * configuration, the order of the slots rotated per process and reversed
  * in its second round (A B C, then C B A). Sample r belongs to process
  * round_proc[r]; every estimate is the mean over processes of each
- * process's mean log time (or log ratio) with the t-interval over
+ * process's log time (or log ratio; the mean of its rounds, their median
+ * from 3 rounds on: stats.c) with the t-interval over
  * processes (stats.h). A structure whose build took more than
  * EXP_REPLICA_REBUILD_MS is not built again: the replica times the
  * parent's copy, which fork hands it.

@@ -287,7 +287,8 @@ int exp_finish(exp_ctx *x)
                   "into fresh memory; they take turns, one round each, never two at once), %d "
                   "paired rounds of every configuration per process in alternating order. The "
                   "process is the unit: an estimate is the mean over processes of each process's "
-                  "mean log time (or log ratio), its interval the t-interval over processes "
+                  "log time (or log ratio: the mean of its rounds, their median from 3 on), its "
+                  "interval the t-interval over processes "
                   "(df = processes - 1) at the stated level._\n",
                x->procs_used, x->procs_used - 1, EXP_REPLICA_REBUILD_MS, x->proc_rounds);
     exp_ref_footer(x);
