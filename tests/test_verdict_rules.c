@@ -188,3 +188,32 @@ TEST(verdict_rules_wide_intervals_not_printed)
     CHECK(exp_span_unresolved(1.0, 3.01) && !exp_span_unresolved(1.0, 3.0) &&
           !exp_span_unresolved(0.0, 5.0));
 }
+
+/* The normalization of absolute verdicts (claims.h): the value by the
+ * median reference, each end by the reference end that widens it; a word
+ * that depends on the end is "not testable here" only when the reference
+ * strayed by more than EXP_REF_STRAY. */
+TEST(verdict_rules_reference_normalization)
+{
+    const double R = EXP_REF_NS_PER_RAY;
+    char why[512];
+    /* A rate (fps >= 20) on a machine 1.5x slower than stated: x 1.5. */
+    exp_decider d = {"fps", 16, 15, 17, 20.0, +1, 8};
+    const char *v = exp_ref_normalize(&d, 1, 1.5 * R, 1.45 * R, 1.55 * R, "ends", 0.07, why, sizeof why);
+    CHECKF(fabs(d.value - 24) < 1e-9 && fabs(d.lo - 15 * 1.45) < 1e-9 && fabs(d.hi - 17 * 1.55) < 1e-9,
+           "rate normalized to %g [%g, %g]", d.value, d.lo, d.hi);
+    CHECKF(!strcmp(v, EXP_CONFIRMED), "%s: %s", v, why);
+    /* A time (ms <= 33.3): divided, the low end by the slow reference. */
+    exp_decider t = {"ms", 40, 38, 44, 33.3, -1, 8};
+    v = exp_ref_normalize(&t, 0, 1.5 * R, 1.4 * R, 1.6 * R, "ends", 0.14, why, sizeof why);
+    CHECKF(fabs(t.lo - 38 / 1.6) < 1e-9 && fabs(t.hi - 44 / 1.4) < 1e-9, "time ends %g %g", t.lo, t.hi);
+    CHECKF(!strcmp(v, EXP_CONFIRMED) && strstr(why, "strayed by 14.0%") && strstr(why, "same at both"),
+           "a decided word stands although the reference strayed: %s: %s", v, why);
+    /* Straddling after normalization: on the line when the reference held,
+     * not testable when it strayed. */
+    exp_decider s1 = {"fps", 20, 19, 21, 20.0, +1, 8}, s2 = s1;
+    v = exp_ref_normalize(&s1, 1, R, 0.98 * R, 1.02 * R, "ends", 0.04, why, sizeof why);
+    CHECKF(!strcmp(v, EXP_ON_LINE), "held reference: %s", v);
+    v = exp_ref_normalize(&s2, 1, R, 0.9 * R, 1.1 * R, "ends", 0.22, why, sizeof why);
+    CHECKF(!strcmp(v, EXP_UNTESTABLE), "strayed reference: %s", v);
+}

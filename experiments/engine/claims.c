@@ -249,3 +249,25 @@ const char *exp_compound(exp_tally *const *parts, int n, const exp_decider **dec
     if (pick >= 0) *dec = &parts[pick]->worst;
     return word;
 }
+
+const char *exp_ref_normalize(exp_decider *d, int rate, double med, double fast, double slow,
+                              const char *spread, double stray, char *why, size_t why_n)
+{
+    double f = med / EXP_REF_NS_PER_RAY, ff = fast / EXP_REF_NS_PER_RAY,
+           fs = slow / EXP_REF_NS_PER_RAY;
+    if (rate) /* a rate times the factor: the low end by the fast reference's */
+        d->value *= f, d->lo *= ff, d->hi *= fs;
+    else      /* a time over the factor: the low end over the slow reference's */
+        d->value /= f, d->lo /= fs, d->hi /= ff;
+    const char *v = exp_judge(d);
+    int off = !(stray <= EXP_REF_STRAY) && !strcmp(v, EXP_ON_LINE);
+    snprintf(why, why_n, "normalized to the stated reference rate (%.0f ns per ray of the "
+             "reference kernel; %.0f ns beside these rounds, so the number is x %.2f; the "
+             "interval's ends normalized by the fast and slow ends of the %s, %.0f and %.0f ns, so "
+             "that it holds whichever normalization), the reference %s %.1f%%%s",
+             EXP_REF_NS_PER_RAY, med, rate ? f : 1 / f, spread, fast, slow,
+             stray <= EXP_REF_STRAY ? "stayed within" : "strayed by", 100 * stray,
+             off ? " and the word depends on which end normalizes: not testable here"
+             : stray <= EXP_REF_STRAY ? "" : ", but the word is the same at both ends");
+    return off ? EXP_UNTESTABLE : v;
+}

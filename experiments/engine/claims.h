@@ -52,6 +52,27 @@ typedef struct {
  * not an interval (issue 52): on the line. n <= 1 is an exact number
  * (counts), judged as a point. */
 const char *exp_judge(const exp_decider *d);
+
+/* The reference kernel's stated rate (engine/harness.h, reference.c):
+ * brute force over the 250 triangles of soup:tris=250, 1024 primary rays,
+ * one thread, in the quiet run of the committed report of 123ab8c
+ * (report/exp_scaling.csv, soup,brute,250: 2,223 ns per ray [2,160,
+ * 2,308]). */
+#define EXP_REF_NS_PER_RAY 2222.6
+/* Absolute verdicts whose word depends on the normalization are "not
+ * testable here" when the reference strayed by more than this
+ * (max / min - 1). */
+#define EXP_REF_STRAY 0.10
+/* The one normalization of an absolute decider (exp_group_absolute,
+ * exp_ref_absolute): the value by the factor med / EXP_REF_NS_PER_RAY
+ * (rate = 1: multiplied; 0: divided), each end of its interval by the
+ * factor of the reference's end that widens it (fast and slow: the
+ * reference's fast and slow ends, ns per ray; spread names them), so the
+ * word holds whichever normalization is right. When the reference strayed
+ * (stray, max / min - 1, above EXP_REF_STRAY) a word that straddles is
+ * "not testable here"; a decided word stands, and why says both. */
+const char *exp_ref_normalize(exp_decider *d, int rate, double med, double fast, double slow,
+                              const char *spread, double stray, char *why, size_t why_n);
 /* Issue 52: the distance from the threshold to the interval's NEAR end,
  * relative to the threshold (|threshold|; 1 when it is 0), positive on the
  * claim's side: > 0 exactly when confirmed (the near end is lo for "at

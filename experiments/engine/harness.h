@@ -261,15 +261,10 @@ void exp_reference(exp_ctx *x, const accel_scene *s, const accel_ray *rays, acce
 /* The reference kernel (reference.c, issue 52): brute force over the 250
  * triangles of soup:tris=250, 1024 primary rays of a 32x32 image, one
  * thread, a few ms: a fixed piece of work timed beside the configurations
- * in every round, so that each section says what the machine gave it. The
- * stated rate is EXP_REF_NS_PER_RAY: the same kernel on the same scene in
- * the quiet run of the committed report of 123ab8c (report/exp_scaling.csv,
- * soup,brute,250: 2,223 ns per ray [2,160, 2,308], 8.9 ns per triangle
- * test). exp_ref_ready makes it once per section (0 when ready). */
-#define EXP_REF_NS_PER_RAY 2222.6
-/* Absolute verdicts are "not testable here" when the reference's process
- * means differ by more than this (max / min - 1). */
-#define EXP_REF_STRAY 0.10
+ * in every round, so that each section says what the machine gave it. Its
+ * stated rate EXP_REF_NS_PER_RAY and the stray limit EXP_REF_STRAY are in
+ * claims.h, beside the rule that uses them (exp_ref_normalize).
+ * exp_ref_ready makes it once per section (0 when ready). */
 int exp_ref_ready(exp_ctx *x);
 /* The reference rays traced 3 times: the median ns per ray (0 when not ready). */
 double exp_ref_time(const exp_ctx *x);
@@ -280,16 +275,7 @@ int exp_cpu_ticks(double *steal, double *total);
 /* The footer line: the reference's spread over the section and the steal
  * time of its rounds (nothing when no round ran). */
 void exp_ref_footer(exp_ctx *x);
-/* The one normalization of an absolute decider (exp_group_absolute,
- * exp_ref_absolute): the value by the factor med / EXP_REF_NS_PER_RAY
- * (rate = 1: multiplied; 0: divided), each end of its interval by the
- * factor of the reference's end that widens it (fast and slow: the
- * reference's fast and slow ends, ns per ray; spread names them), so the
- * word holds whichever normalization is right. When the reference strayed
- * (stray, max / min - 1, above EXP_REF_STRAY) a word that straddles is
- * "not testable here"; a decided word stands, and why says both. */
-const char *exp_ref_normalize(exp_decider *d, int rate, double med, double fast, double slow,
-                              const char *spread, double stray, char *why, size_t why_n);
+/* exp_ref_normalize: claims.h (the one normalization of an absolute decider). */
 /* exp_group_absolute (group.h) for timings of one process (n reference
  * times, ns per ray, taken beside the timed work): the decider normalized
  * by exp_ref_normalize over the reference's 10th to 90th percentile;
