@@ -105,10 +105,6 @@ typedef struct {
 
 /* One per instance: what the traversal reads, packed together. */
 typedef struct {
-    /* xform's columns (x, y, z, translation), each padded to 4 doubles:
-     * the world vertex as 3 four-lane fused multiply-adds (inst_ray.h),
-     * the same operations as accel_xform_vertex's rows. */
-    double cols[16];
     double inverse[12];   /* world -> object */
     double xform[12];     /* object -> world (for the world triangles) */
     double pad;           /* object-space distance covering the flattening's rounding */

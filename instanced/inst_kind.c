@@ -269,7 +269,6 @@ int inst_set_items(inst_accel *a, const accel_scene *scene, double *grid_pad, ac
     }
     for (uint32_t k = 0; k < a->item_count; k++) {
         inst_item *it = &a->items[k];
-        it->cols[3] = it->cols[7] = it->cols[11] = it->cols[15] = 0.0;
         if (!set) {
             static const double id[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
             memcpy(it->xform, id, sizeof id);
@@ -285,8 +284,6 @@ int inst_set_items(inst_accel *a, const accel_scene *scene, double *grid_pad, ac
                               in->mesh);
         }
         memcpy(it->xform, in->xform, sizeof it->xform);
-        for (int c = 0; c < 4; c++)
-            for (int r = 0; r < 3; r++) it->cols[4 * c + r] = in->xform[4 * r + c];
         memcpy(it->inverse, in->inverse, sizeof it->inverse);
         it->bottom = in->mesh;
         it->base = in->base;

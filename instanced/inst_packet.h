@@ -56,7 +56,7 @@ typedef struct {
     float dx[IP_RAYS] __attribute__((aligned(32))); /* directions */
     float dy[IP_RAYS] __attribute__((aligned(32)));
     float dz[IP_RAYS] __attribute__((aligned(32)));
-    float sx[IP_RAYS] __attribute__((aligned(32))); /* shears (shared: the affine cull) */
+    float sx[IP_RAYS] __attribute__((aligned(32))); /* shears */
     float sy[IP_RAYS] __attribute__((aligned(32)));
     float sz[IP_RAYS] __attribute__((aligned(32)));
     float tf[IP_RAYS] __attribute__((aligned(32))); /* their t_far: the whole range's end */

@@ -32,27 +32,6 @@ extern "C" {
 
 #define INST_INLINE static inline __attribute__((always_inline))
 
-/* The world triangle of mesh triangle m: accel_xform_vertex, the
- * flattener's expression, bit for bit (per row fma(r0, x, fma(r1, y,
- * fma(r2, z, r3))) rounded once to float), with the three rows as the
- * lanes of one 4-double vector. w gets 12 floats (the last unused). */
-INST_INLINE void inst_xform_tri(const inst_item *it, const float *m, float *w)
-{
-#if INST_WIDE_AVX && defined(__FMA__)
-    __m256d c0 = _mm256_loadu_pd(it->cols), c1 = _mm256_loadu_pd(it->cols + 4);
-    __m256d c2 = _mm256_loadu_pd(it->cols + 8), c3 = _mm256_loadu_pd(it->cols + 12);
-    for (int k = 0; k < 3; k++) {
-        const float *p = m + 3 * k;
-        __m256d acc = _mm256_fmadd_pd(c2, _mm256_set1_pd((double)p[2]), c3);
-        acc = _mm256_fmadd_pd(c1, _mm256_set1_pd((double)p[1]), acc);
-        acc = _mm256_fmadd_pd(c0, _mm256_set1_pd((double)p[0]), acc);
-        _mm_storeu_ps(w + 3 * k, _mm256_cvtpd_ps(acc));
-    }
-#else
-    for (int k = 0; k < 3; k++) accel_xform_vertex(it->xform, m + 3 * k, w + 3 * k);
-#endif
-}
-
 /* Object block ob (instance it's mesh, core/block.h) taken to world
  * space into wb: every vertex by accel_xform_vertex's expression (per row
  * fma(r0, x, fma(r1, y, fma(r2, z, r3))) rounded once to float), 4 lanes

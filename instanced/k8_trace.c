@@ -69,7 +69,7 @@ INLINE void test_prim(const inst_accel *a, const inst_item *it, const accel_scen
 {
     const accel_scene *s = a->scene;
     uint32_t id = it->base + q;
-    float w[12];
+    float w[9];
     const float *tri = NULL, *sphere = NULL;
     r->prims++;
     if (spheres && id >= s->tri_count) {
@@ -78,7 +78,8 @@ INLINE void test_prim(const inst_accel *a, const inst_item *it, const accel_scen
     } else if (it->identity || a->world == INST_WORLD_BLOCKS) {
         tri = s->tris + 9 * (size_t)id;
     } else {
-        inst_xform_tri(it, mesh->tris + 9 * (size_t)q, w);
+        const float *m = mesh->tris + 9 * (size_t)q;
+        for (int k = 0; k < 3; k++) accel_xform_vertex(it->xform, m + 3 * k, w + 3 * k);
         tri = w;
     }
     if (inst_decide(&r->p, tri, sphere, id, naive, it->has_dead, &r->t, &r->u, &r->v, &r->prim) &&
