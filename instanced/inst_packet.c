@@ -40,13 +40,62 @@
 #include "core/variant.h"
 #include "inst_packet.h"
 
+/* Each group's rectangle of its live rays' shears: centre and half sizes,
+ * rounded up so that it holds every ray's (sx, sy), and the largest |sx|,
+ * |sy| (aff_cull_rect, core/block_test.h; bvh/wide/packet.h makes its
+ * packets' the same way). */
+static void ip_rects(ip_packet *pk)
+{
+    for (unsigned g = 0; g < IP_RAYS / 8; g++) {
+        float xl = INFINITY, xh = -INFINITY, yl = INFINITY, yh = -INFINITY;
+        for (unsigned m = (unsigned)(pk->live >> (8 * g)) & 0xFFu; m; m &= m - 1) {
+            unsigned r = 8 * g + (unsigned)__builtin_ctz(m);
+            xl = fminf(xl, pk->sx[r]), xh = fmaxf(xh, pk->sx[r]);
+            yl = fminf(yl, pk->sy[r]), yh = fmaxf(yh, pk->sy[r]);
+        }
+        float cx = 0.5f * (xl + xh), cy = 0.5f * (yl + yh);
+        pk->gcx[g] = cx, pk->gcy[g] = cy;
+        pk->ghx[g] = fmaxf(xh - cx, cx - xl) * (1.0f + 0x1p-20f) + 0x1p-100f;
+        pk->ghy[g] = fmaxf(yh - cy, cy - yl) * (1.0f + 0x1p-20f) + 0x1p-100f;
+        pk->gxa[g] = fmaxf(fabsf(xl), fabsf(xh)), pk->gya[g] = fmaxf(fabsf(yl), fabsf(yh));
+    }
+    pk->rects = 1;
+}
+
+/* The leaf cull of rays that share their origin and axes (the block's
+ * relative vertices q): the groups of m whose rectangle of shears surely
+ * misses every lane of the block (the exact test's first rule: edge
+ * functions of mixed signs) skip it, charged its lanes all the same;
+ * returns the others. As bvh/wide/packet.h's leaf cull. */
+static __attribute__((noinline)) uint64_t ip_cull(ip_packet *pk, const wide_leaf_rel_8 *q, uint64_t m,
+                                                  uint32_t lanes, int counted)
+{
+    if (!pk->rects) ip_rects(pk);
+    wide_leaf_aff_8 f;
+    leaf_aff_8(q, &f);
+    for (unsigned g = 0; g < IP_RAYS / 8; g++) {
+        uint64_t gm = m & ((uint64_t)0xFF << (8 * g));
+        if (!gm) continue;
+        pk->cull_tries++;
+        if (aff_cull_rect_8(&f, pk->gcx[g], pk->gcy[g], pk->ghx[g], pk->ghy[g], pk->gxa[g], pk->gya[g]) !=
+            0xFF)
+            continue;
+        pk->cull_wins++;
+        for (uint64_t k = counted ? gm : 0; k; k &= k - 1) pk->prims[__builtin_ctzll(k)] += lanes;
+        m &= ~gm;
+    }
+    return m;
+}
+
 /* A bottom leaf, blocks [first, first + nb) of instance it's bottom
  * level w, for the rays m: each world block (k8_trace.c's test_blocks:
  * the plain scene's own, the instance's copies, or computed once here for
  * all the rays) tested by every ray with the shared block test, as
  * bvh/wide/packet.h's leaves do. Rays that share their origin and axes (a
  * pinhole camera's) share the block's vertices relative to it
- * (leaf_block_rel). */
+ * (leaf_block_rel), and groups of 8 of them skip a block their shears
+ * surely miss (ip_cull: tried from 8 rays on, and where it wins in one
+ * try of 4 or more, else at every 16th leaf, as bvh/wide does). */
 INST_INLINE void ip_leaf(const inst_accel *a, ip_packet *pk, ip_view *v, const inst_item *it,
                          const inst_wide *w, uint32_t first, uint32_t nb, uint64_t m, int naive,
                          int spheres, int counted)
@@ -62,6 +111,7 @@ INST_INLINE void ip_leaf(const inst_accel *a, ip_packet *pk, ip_view *v, const i
         for (int l = 1; l < 8; l++) lanes += b->id[l] != b->id[l - 1];
         const int shared = pk->shared && !naive;
         wide_leaf_rel_8 q;
+        uint64_t todo = m;
         if (shared) {
             accel_ray_prep p0;
             wide_leaf_ray_8 lr0;
@@ -69,8 +119,11 @@ INST_INLINE void ip_leaf(const inst_accel *a, ip_packet *pk, ip_view *v, const i
             leaf_setup_8(&lr0, &p0);
             leaf_rel_8(b, &lr0, &q);
             leaf_rel_mags_8(&q);
+            if (!spheres && __builtin_popcountll(m) >= 8 &&
+                (pk->cull_tries < 64 || 4 * pk->cull_wins >= pk->cull_tries || (++pk->cull_skips & 15) == 0))
+                todo = ip_cull(pk, &q, m, lanes, counted);
         }
-        for (uint64_t todo = m; todo; todo &= todo - 1) {
+        for (; todo; todo &= todo - 1) {
             unsigned r = (unsigned)__builtin_ctzll(todo);
             accel_ray_prep p;
             wide_leaf_ray_8 lr;
@@ -183,6 +236,7 @@ INST_INLINE void ip_kernel(const void *acc, const accel_ray *rays, void *out, si
     const inst_accel *a = acc;
     const int naive = (flags & ACCEL_V_NAIVE) != 0, spheres = (flags & ACCEL_V_SPHERES) != 0;
     ip_packet pk;
+    pk.cull_tries = pk.cull_wins = pk.cull_skips = 0;
     for (unsigned r = 0; r < IP_RAYS; r++) pk.top.pad[r] = 0.0f, pk.top.shift[r] = 0.0; /* world rays */
     for (size_t base = 0; base < count; base += IP_RAYS) {
         unsigned n = count - base < IP_RAYS ? (unsigned)(count - base) : IP_RAYS;

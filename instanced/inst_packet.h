@@ -68,6 +68,13 @@ typedef struct {
     uint64_t live;              /* valid rays still looking (any hit: until one) */
     int any;
     int shared;                 /* every valid ray has the same origin and axes */
+    /* With shared: each group's rectangle of shears (centre, half sizes,
+     * largest |sx| and |sy|) for the leaf cull, made at the first leaf that
+     * culls (rects set); the cull's record (inst_packet.c). */
+    int rects;
+    float gcx[IP_RAYS / 8], gcy[IP_RAYS / 8], ghx[IP_RAYS / 8], ghy[IP_RAYS / 8];
+    float gxa[IP_RAYS / 8], gya[IP_RAYS / 8];
+    uint32_t cull_tries, cull_wins, cull_skips;
     uint32_t top_steps[IP_RAYS], bottom_steps[IP_RAYS], boxes[IP_RAYS], prims[IP_RAYS];
 } ip_packet;
 

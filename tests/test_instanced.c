@@ -502,3 +502,38 @@ TEST(instanced_same_hits_every_walk)
         scene_free(&s);
     }
 }
+
+/* A camera's rays in packets: they share their origin and axes, so the
+ * packets' leaves take the shared-origin path (leaf_block_rel) and their
+ * leaf cull (groups of 8 rays whose shears surely miss a block skip it).
+ * Exact against the oracle, closest and any hit, both world modes. */
+TEST(instanced_packet_camera_rays)
+{
+    accel_scene s;
+    accel_error err = {0};
+    if (scene_create("animated:frame=33,instances=6,detail=2", &s, &err)) {
+        test_fail(__FILE__, __LINE__, "%s", err.msg);
+        return;
+    }
+    rays_set prim = {0};
+    if (rays_primary(&s.camera, 160, 120, &prim, &err)) {
+        test_fail(__FILE__, __LINE__, "%s", err.msg);
+        scene_free(&s);
+        return;
+    }
+    ray_list l = {prim.rays, prim.count, prim.count};
+    accel_hit *ref = malloc(l.n * sizeof *ref);
+    accel_reference_trace(&s, l.r, ref, l.n, 2);
+    size_t hits = 0;
+    for (size_t i = 0; i < l.n; i++) hits += ref[i].prim != ACCEL_MISS;
+    CHECKF(hits > l.n / 4, "only %zu of %zu camera rays hit", hits, l.n);
+    static const char *const specs[] = {"instanced:traverse=packet",
+                                        "instanced:traverse=packet,world=compute"};
+    for (size_t k = 0; k < 2; k++) {
+        size_t bad = inst_bad_rays(&s, &l, ref, specs[k], NULL);
+        CHECKF(bad == 0, "%s on camera rays: %zu bad of %zu", specs[k], bad, l.n);
+    }
+    free(ref);
+    rays_free(&prim);
+    scene_free(&s);
+}
