@@ -81,6 +81,7 @@ size_t inst_wide_memory(const inst_wide *w);
 /* ---- the kind ------------------------------------------------------------- */
 
 enum { INST_BVH = 0, INST_GRID = 1, INST_WALK = 2 };
+enum { INST_WORLD_BLOCKS = 0, INST_WORLD_COMPUTE = 1 };
 
 /* One per mesh: its bottom level, shared by every instance of the mesh. */
 typedef struct {
@@ -104,16 +105,19 @@ typedef struct {
 
 /* One per instance: what the traversal reads, packed together. */
 typedef struct {
-    /* xform's columns (x, y, z, translation), each padded to 4 doubles:
-     * the world vertex as 3 four-lane fused multiply-adds (inst_ray.h),
-     * the same operations as accel_xform_vertex's rows. */
-    double cols[16];
     double inverse[12];   /* world -> object */
     double xform[12];     /* object -> world (for the world triangles) */
     double pad;           /* object-space distance covering the flattening's rounding */
     uint32_t bottom;      /* mesh index */
     uint32_t base;        /* id of its first primitive */
     int identity;         /* object space == world space: no transform at all */
+    int has_dead;         /* some of its flattened triangles have no area */
+    /* world=blocks (bottom=bvh, width=8, a scene of instances): its mesh's
+     * leaf blocks in world space, the flattened triangles (ids base + q)
+     * in the bottom level's block order; a lane dead in the flattened
+     * scene holds a point (never hit). Made at build, made again by the
+     * update for instances that moved or whose mesh changed. */
+    accel_block8 *world;
 } inst_item;
 
 typedef struct {
@@ -123,7 +127,9 @@ typedef struct {
     const accel_kind *walk_kind; /* INST_WALK: the bottom kind, and its parameters */
     char walk_kv[64];
     int threads;
-    int naive, world_flat, spheres;
+    int naive, spheres;
+    int world;                /* INST_WORLD_BLOCKS or INST_WORLD_COMPUTE */
+    int plain;                /* a plain scene: the bottom blocks are world blocks */
     int no_pad;               /* pad=0: boxes not grown (shows what the pad is for) */
     int leaf;                 /* bottom=bvh: largest leaf */
     int width;                /* BVH levels walked as the binary tree (2) or 8-wide (8) */
@@ -143,6 +149,9 @@ typedef struct {
 int inst_set_items(inst_accel *a, const accel_scene *scene, double *grid_pad, accel_error *err);
 int inst_build_bottom(inst_accel *a, uint32_t i, double grid_pad, accel_error *err);
 int inst_build_top(inst_accel *a, accel_error *err);
+/* world=blocks: item k's world blocks made (again) from the flattened
+ * scene, after its bottom level's blocks (inst_kind.c). */
+int inst_world_blocks(inst_accel *a, uint32_t k, accel_error *err);
 void inst_fill_stats(const inst_accel *a, accel_build_stats *stats);
 size_t inst_memory(const void *a);
 void inst_destroy(void *a);

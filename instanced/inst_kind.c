@@ -15,11 +15,12 @@
 #include <string.h>
 
 #include "core/isa.h"
+#include "core/prim.h"
 #include "inst_impl.h"
 #include "instanced.h"
 
 /* The kind's parameters as parsed, one field per key; choices hold their
- * position in the table's list (top: bvh 0, grid 1; world: compute 0, flat 1). */
+ * position in the table's list (top: bvh 0, grid 1; world: blocks 0, compute 1). */
 typedef struct {
     int top, leaf, world, pad, width, traverse, isa;
     double lambda, top_lambda;
@@ -44,8 +45,8 @@ static const accel_param_def inst_params[] = {
      .offset = offsetof(inst_spec, width)},
     {.key = "traverse", .type = ACCEL_PARAM_ENUM, .def = "single", .choices = "single|packet",
      .help = "single: ray by ray; packet: 64 rays walk both 8-wide BVH levels together, each "
-             "world triangle computed once per leaf for all of them (needs top=bvh, bottom=bvh, "
-             "width=8; any ray order: core/coherence.h)",
+             "ray testing each world block of a leaf with the shared block test (needs top=bvh, "
+             "bottom=bvh, width=8; any ray order: core/coherence.h)",
      .offset = offsetof(inst_spec, traverse)},
     {.key = "lambda", .type = ACCEL_PARAM_FLOAT, .def = "2", .min = 0.01, .max = 64,
      .help = "bottom=grid: cells per primitive",
@@ -53,10 +54,12 @@ static const accel_param_def inst_params[] = {
     {.key = "top_lambda", .type = ACCEL_PARAM_FLOAT, .def = "2", .min = 0.01, .max = 64,
      .help = "top=grid: cells per instance",
      .offset = offsetof(inst_spec, top_lambda)},
-    {.key = "world", .type = ACCEL_PARAM_ENUM, .def = "compute", .choices = "compute|flat",
-     .help = "world triangles: computed from the mesh by the flattener's expression (a true "
-             "two-level structure), or read from the flattened scene (the same bits; for "
-             "comparison)",
+    {.key = "world", .type = ACCEL_PARAM_ENUM, .def = "blocks", .choices = "blocks|compute",
+     .help = "world-space leaf blocks the shared block test decides: per-instance copies of the "
+             "flattened triangles in the bottom level's leaf order, made at build and update "
+             "(blocks: the memory of the flattened scene), or each leaf's object block taken to "
+             "world space when a ray reaches it (compute: the flattener's expression, the same "
+             "bits; a true two-level structure)",
      .offset = offsetof(inst_spec, world)},
     {.key = "pad", .type = ACCEL_PARAM_BOOL, .def = "1", .min = 0, .max = 1,
      .help = "grow bottom-level boxes by the flattening's rounding (0: exact object-space boxes, "
@@ -106,6 +109,7 @@ void inst_destroy(void *p)
         if (a->bottoms[i].walk) a->walk_kind->destroy(a->bottoms[i].walk);
         free(a->bottoms[i].dead);
     }
+    for (uint32_t k = 0; a->items && k < a->item_count; k++) free(a->items[k].world);
     bvh_box_tree_free(&a->top_bvh);
     inst_wide_free(&a->top_wide);
     inst_grid_free(&a->top_grid);
@@ -139,6 +143,9 @@ size_t inst_memory(const void *p)
         bytes += bvh_bytes(&b->bvh) + inst_wide_memory(&b->wide) + grid_bytes(&b->grid) + b->dead_count * sizeof(uint32_t);
         if (b->walk) bytes += a->walk_kind->memory(b->walk);
     }
+    for (uint32_t k = 0; k < a->item_count; k++)
+        if (a->items[k].world)
+            bytes += (size_t)a->bottoms[a->items[k].bottom].wide.block_count * sizeof(accel_block8);
     return bytes;
 }
 
@@ -241,6 +248,15 @@ int inst_set_items(inst_accel *a, const accel_scene *scene, double *grid_pad, ac
     const accel_instances *set = scene->instances;
     a->scene = scene;
     a->spheres = scene->sphere_count > 0;
+    a->plain = set == NULL;
+    /* The flattened scene's dead triangles (no area): never hit. */
+    uint8_t *alive = NULL;
+    if (set && scene->degenerate_count) {
+        alive = calloc(scene->tri_count ? scene->tri_count : 1, 1);
+        if (!alive) return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
+        for (uint32_t k = 0; k < scene->live_count; k++)
+            if (scene->live[k] < scene->tri_count) alive[scene->live[k]] = 1;
+    }
     for (uint32_t i = 0; i < a->bottom_count; i++) {
         inst_bottom *b = &a->bottoms[i];
         b->mesh = set ? &set->meshes[i] : scene;
@@ -253,7 +269,6 @@ int inst_set_items(inst_accel *a, const accel_scene *scene, double *grid_pad, ac
     }
     for (uint32_t k = 0; k < a->item_count; k++) {
         inst_item *it = &a->items[k];
-        it->cols[3] = it->cols[7] = it->cols[11] = it->cols[15] = 0.0;
         if (!set) {
             static const double id[12] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0};
             memcpy(it->xform, id, sizeof id);
@@ -263,16 +278,19 @@ int inst_set_items(inst_accel *a, const accel_scene *scene, double *grid_pad, ac
             continue;
         }
         const accel_instance *in = &set->instances[k];
-        if (in->mesh >= a->bottom_count)
+        if (in->mesh >= a->bottom_count) {
+            free(alive);
             return accel_fail(err, ACCEL_ERR_INTERNAL, "instanced: instance %u of mesh %u", k,
                               in->mesh);
+        }
         memcpy(it->xform, in->xform, sizeof it->xform);
-        for (int c = 0; c < 4; c++)
-            for (int r = 0; r < 3; r++) it->cols[4 * c + r] = in->xform[4 * r + c];
         memcpy(it->inverse, in->inverse, sizeof it->inverse);
         it->bottom = in->mesh;
         it->base = in->base;
         it->identity = is_identity(in->xform);
+        it->has_dead = 0;
+        for (uint32_t q = 0; alive && q < set->meshes[in->mesh].tri_count && !it->has_dead; q++)
+            it->has_dead = !alive[in->base + q];
         a->item_boxes[k] = in->bounds;
         double mesh_abs = a->bottoms[in->mesh].vert_abs_max;
         double t_abs = fmax(fabs(in->xform[3]), fmax(fabs(in->xform[7]), fabs(in->xform[11])));
@@ -281,6 +299,38 @@ int inst_set_items(inst_accel *a, const accel_scene *scene, double *grid_pad, ac
         it->pad = it->identity ? 0.0 : 2.0 * row_norm(in->inverse) * e_world;
         double gp = a->no_pad ? 0.0 : 2.0 * it->pad + 0x1p-20 * (mesh_abs + 2.0 * it->pad);
         if (grid_pad) grid_pad[in->mesh] = fmax(grid_pad[in->mesh], gp);
+    }
+    free(alive);
+    return 0;
+}
+
+int inst_world_blocks(inst_accel *a, uint32_t k, accel_error *err)
+{
+    inst_item *it = &a->items[k];
+    free(it->world);
+    it->world = NULL;
+    if (a->plain || a->world != INST_WORLD_BLOCKS || a->bottom_kind != INST_BVH ||
+        a->width != INST_WIDE)
+        return 0;
+    const inst_wide *w = &a->bottoms[it->bottom].wide;
+    if (!w->block_count) return 0;
+    it->world = aligned_alloc(64, (size_t)w->block_count * sizeof *it->world);
+    if (!it->world) return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory for world blocks");
+    const float *tris = a->scene->tris;
+    for (uint32_t i = 0; i < w->block_count; i++) {
+        const accel_block8 *ob = &w->blocks[i];
+        accel_block8 *wb = &it->world[i];
+        for (int lane = 0; lane < 8; lane++) {
+            uint32_t id = it->base + ob->id[lane];
+            const float *t = tris + 9 * (size_t)id;
+            float point[9];
+            if (it->has_dead && accel_tri_is_degenerate(t)) { /* a point: U = V = W = 0, a miss */
+                for (int c = 0; c < 9; c++) point[c] = t[c % 3];
+                t = point;
+            }
+            accel_block_put_lane(wb->v[0][0], 8, lane, t);
+            wb->id[lane] = id;
+        }
     }
     return 0;
 }
@@ -400,7 +450,7 @@ int inst_build_with(const accel_scene *scene, const accel_params *params, int th
         return brc;
     }
     a->naive = params->naive;
-    a->world_flat = spec->world == 1;
+    a->world = spec->world;
     a->no_pad = spec->pad == 0;
     a->leaf = spec->leaf;
     a->width = spec->width;
@@ -430,6 +480,7 @@ int inst_build_with(const accel_scene *scene, const accel_params *params, int th
     for (uint32_t i = 0; rc == 0 && i < a->bottom_count; i++)
         rc = inst_build_bottom(a, i, grid_pad[i], err);
     free(grid_pad);
+    for (uint32_t k = 0; rc == 0 && k < a->item_count; k++) rc = inst_world_blocks(a, k, err);
     if (rc == 0) rc = inst_build_top(a, err);
     if (rc) {
         inst_destroy(a);
@@ -461,9 +512,9 @@ int instanced_build_with_bottom(const accel_scene *scene, const char *kv, const 
 }
 
 static const char *const inst_variants[] = {
-    "", "top=grid", "bottom=grid", "top=grid,bottom=grid", "world=flat,leaf=1", "width=2",
+    "", "top=grid", "bottom=grid", "top=grid,bottom=grid", "world=compute,leaf=1", "width=2",
     "bottom=bvh:width=8", "top=grid,bottom=nested_grid", "bottom=grid:", "traverse=packet",
-    "traverse=packet,world=flat,leaf=1", "isa=avx2", NULL,
+    "traverse=packet,world=compute,leaf=1", "isa=avx2", NULL,
 };
 
 const accel_kind accel_kind_instanced = {

@@ -11,14 +11,13 @@
  * it (inst_ray.h: the same double transform, pad, clip and float ray from
  * the box entry), and the rays that reach the mesh's padded box walk its
  * wide bottom level as a packet, each lane's box grown by its own ray's
- * pad. At a bottom leaf each world triangle is computed once
- * (inst_xform_tri) and decided for every ray of the packet that reached
- * the leaf, on the ray's whole range: the watertight test's float path on
- * 8 rays at once (ip_tri8, the scalar operations lane by lane), inst_decide
- * for the rays it leaves undecided. So a ray gets the answer the
- * single-ray walk gives it, bit for bit, whatever its packet's other rays
- * (README.md: every walk that reaches the triangles names the same
- * triangle with the same bits).
+ * pad. At a bottom leaf each world block (the instance's copy, or
+ * computed once for the packet) is tested by every ray of the packet that
+ * reached the leaf with the shared block test (core/block_test.h), as
+ * bvh/wide/packet.h's leaves do. So a ray gets the single-ray walk's
+ * primitive; its t, u, v too but for rare near-ties, where which of the
+ * test's float or double steps decides depends on the closest hit the ray
+ * carries (bvh/wide/packet.h says the same of its packets).
  *
  * A stack entry holds the mask of the rays that hit its box and the
  * smallest of their entry distances; at the pop, rays whose closest hit
@@ -41,93 +40,107 @@
 #include "core/variant.h"
 #include "inst_packet.h"
 
-/* A bottom leaf: its triangles (mesh ids qs) decided in world space for
- * the rays m, each world triangle computed once for all of them. */
-INST_INLINE void ip_leaf(const inst_accel *a, ip_packet *pk, ip_view *v, const inst_item *it,
-                         const accel_block8 *blk, uint32_t count, uint64_t m,
-                         int naive, int spheres, int counted)
+/* Each group's rectangle of its live rays' shears: centre and half sizes,
+ * rounded up so that it holds every ray's (sx, sy), and the largest |sx|,
+ * |sy| (aff_cull_rect, core/block_test.h; bvh/wide/packet.h makes its
+ * packets' the same way). */
+static void ip_rects(ip_packet *pk)
 {
-    const accel_scene *s = a->scene;
-    for (uint32_t i = 0; i < count && (m &= pk->live); i++) {
-        const accel_block8 *bk = blk + i / 8;
-        int lane = (int)(i % 8);
-        if (lane && bk->id[lane] == bk->id[lane - 1]) { /* the padding of the leaf's last block */
-            i |= 7;
+    for (unsigned g = 0; g < IP_RAYS / 8; g++) {
+        float xl = INFINITY, xh = -INFINITY, yl = INFINITY, yh = -INFINITY;
+        for (unsigned m = (unsigned)(pk->live >> (8 * g)) & 0xFFu; m; m &= m - 1) {
+            unsigned r = 8 * g + (unsigned)__builtin_ctz(m);
+            xl = fminf(xl, pk->sx[r]), xh = fmaxf(xh, pk->sx[r]);
+            yl = fminf(yl, pk->sy[r]), yh = fmaxf(yh, pk->sy[r]);
+        }
+        float cx = 0.5f * (xl + xh), cy = 0.5f * (yl + yh);
+        pk->gcx[g] = cx, pk->gcy[g] = cy;
+        pk->ghx[g] = fmaxf(xh - cx, cx - xl) * (1.0f + 0x1p-20f) + 0x1p-100f;
+        pk->ghy[g] = fmaxf(yh - cy, cy - yl) * (1.0f + 0x1p-20f) + 0x1p-100f;
+        pk->gxa[g] = fmaxf(fabsf(xl), fabsf(xh)), pk->gya[g] = fmaxf(fabsf(yl), fabsf(yh));
+    }
+    pk->rects = 1;
+}
+
+/* The leaf cull of rays that share their origin and axes (the block's
+ * relative vertices q): the groups of m whose rectangle of shears surely
+ * misses every lane of the block (the exact test's first rule: edge
+ * functions of mixed signs) skip it, charged its lanes all the same;
+ * returns the others. As bvh/wide/packet.h's leaf cull. */
+static __attribute__((noinline)) uint64_t ip_cull(ip_packet *pk, const wide_leaf_rel_8 *q, uint64_t m,
+                                                  uint32_t lanes, int counted)
+{
+    if (!pk->rects) ip_rects(pk);
+    wide_leaf_aff_8 f;
+    leaf_aff_8(q, &f);
+    for (unsigned g = 0; g < IP_RAYS / 8; g++) {
+        uint64_t gm = m & ((uint64_t)0xFF << (8 * g));
+        if (!gm) continue;
+        pk->cull_tries++;
+        if (aff_cull_rect_8(&f, pk->gcx[g], pk->gcy[g], pk->ghx[g], pk->ghy[g], pk->gxa[g], pk->gya[g]) !=
+            0xFF)
             continue;
-        }
-        uint32_t q = bk->id[lane], id = it->base + q;
-        float w[12], lt[9];
-        inst_block_lane(bk, lane, lt);
-        const float *tri = NULL, *sphere = NULL;
-        if (spheres && id >= s->tri_count) { /* only plain scenes hold spheres */
-            sphere = s->spheres + 4 * (size_t)(id - s->tri_count);
-        } else if (a->world_flat || (it->identity && s->instances)) {
-            tri = s->tris + 9 * (size_t)id;
-        } else if (it->identity) { /* a plain scene: its own triangles */
-            tri = lt;
-        } else {
-            inst_xform_tri(it, lt, w);
-            tri = w;
-        }
-        /* Rays that share their origin and axes (a pinhole camera's)
-         * share the triangle's relative vertices, and skip it where its
-         * edge functions, affine in their shear, surely mix signs: the
-         * exact test's first rule (core/prim.h), so the answer stands. */
-        accel_tri_rel rel;
-        const int shared = pk->shared && tri && !naive;
+        pk->cull_wins++;
+        for (uint64_t k = counted ? gm : 0; k; k &= k - 1) pk->prims[__builtin_ctzll(k)] += lanes;
+        m &= ~gm;
+    }
+    return m;
+}
+
+/* A bottom leaf, blocks [first, first + nb) of instance it's bottom
+ * level w, for the rays m: each world block (k8_trace.c's test_blocks:
+ * the plain scene's own, the instance's copies, or computed once here for
+ * all the rays) tested by every ray with the shared block test, as
+ * bvh/wide/packet.h's leaves do. Rays that share their origin and axes (a
+ * pinhole camera's) share the block's vertices relative to it
+ * (leaf_block_rel), and groups of 8 of them skip a block their shears
+ * surely miss (ip_cull: tried from 8 rays on, and where it wins in one
+ * try of 4 or more, else at every 16th leaf, as bvh/wide does). */
+INST_INLINE void ip_leaf(const inst_accel *a, ip_packet *pk, ip_view *v, const inst_item *it,
+                         const inst_wide *w, uint32_t first, uint32_t nb, uint64_t m, int naive,
+                         int spheres, int counted)
+{
+    const uint32_t tri_count = a->scene->tri_count;
+    const accel_block8 *blk = a->plain ? w->blocks + first : it->world ? it->world + first : NULL;
+    const uint64_t reached = m;
+    for (uint32_t k = 0; k < nb && (m &= pk->live); k++) {
+        accel_block8 tmp __attribute__((aligned(64)));
+        const accel_block8 *b = blk ? blk + k : &tmp;
+        if (!blk) inst_world_block(it, w->blocks + first + k, &tmp);
+        uint32_t lanes = 1;
+        for (int l = 1; l < 8; l++) lanes += b->id[l] != b->id[l - 1];
+        const int shared = pk->shared && !naive;
+        wide_leaf_rel_8 q;
         uint64_t todo = m;
         if (shared) {
-            accel_tri_aff f;
             accel_ray_prep p0;
+            wide_leaf_ray_8 lr0;
             ip_prep(pk, (unsigned)__builtin_ctzll(m), &p0);
-            accel_tri_rel_of(&p0, tri, &rel);
-            accel_tri_aff_of(&rel, &f);
-            todo = ip_aff_keep(pk, &f, m);
+            leaf_setup_8(&lr0, &p0);
+            leaf_rel_8(b, &lr0, &q);
+            leaf_rel_mags_8(&q);
+            if (!spheres && __builtin_popcountll(m) >= 8 &&
+                (pk->cull_tries < 64 || 4 * pk->cull_wins >= pk->cull_tries || (++pk->cull_skips & 15) == 0))
+                todo = ip_cull(pk, &q, m, lanes, counted);
         }
-        for (uint64_t k = m; k; k &= k - 1) { /* a ray's current best is not tested again */
-            unsigned r = (unsigned)__builtin_ctzll(k);
-            if (id == pk->prim[r]) todo &= ~IP_BIT(r);
-            else if (counted) pk->prims[r]++;
-        }
-#if INST_WIDE_AVX
-        /* The test's float path on 8 rays at once; the rays it leaves
-         * undecided run it alone below. */
-        if (tri && !naive && todo) {
-            ip_rel8 q8 = {0}; /* set below: shared once, else per group */
-            if (shared) ip_rel8_shared(&rel, &q8);
-            int dead = -1;
-            uint64_t rest = 0;
-            for (unsigned g = 0; g < IP_RAYS / 8; g++) {
-                unsigned gm = (unsigned)(todo >> (8 * g)) & 0xFFu;
-                if (!gm) continue;
-                if (!shared) ip_rel8_lanes(pk, tri, g, &q8);
-                ip_tri8_out o;
-                ip_tri8(pk, &q8, g, gm, &o);
-                rest |= (uint64_t)o.scalar << (8 * g);
-                for (unsigned h = o.hit; h; h &= h - 1) {
-                    unsigned l = (unsigned)__builtin_ctz(h), r = 8 * g + l;
-                    float th = o.t[l];
-                    if (th > pk->t[r] || (th == pk->t[r] && id > pk->prim[r])) continue;
-                    if (dead < 0) dead = accel_tri_is_degenerate(tri); /* never hit (inst_decide) */
-                    if (dead) break;
-                    pk->t[r] = th, pk->u[r] = o.u[l], pk->v[r] = o.v[l], pk->prim[r] = id;
-                    if (pk->any) pk->live &= ~IP_BIT(r);
-                }
-            }
-            todo = rest;
-        }
-#endif
-        for (uint64_t k = todo; k; k &= k - 1) {
-            unsigned r = (unsigned)__builtin_ctzll(k);
+        for (; todo; todo &= todo - 1) {
+            unsigned r = (unsigned)__builtin_ctzll(todo);
             accel_ray_prep p;
+            wide_leaf_ray_8 lr;
             ip_prep(pk, r, &p);
-            if (inst_decide(&p, tri, shared ? &rel : NULL, sphere, id, naive, &pk->t[r],
-                            &pk->u[r], &pk->v[r], &pk->prim[r]) &&
-                pk->any)
+            leaf_setup_8(&lr, &p);
+            if (counted) pk->prims[r] += lanes;
+            int hit = shared ? leaf_block_rel_8(b, &q, &lr, 1, &p, &pk->t[r], &pk->u[r], &pk->v[r],
+                                                &pk->prim[r], tri_count, spheres, pk->any)
+                             : leaf_block_8(b, &lr, &p, &pk->t[r], &pk->u[r], &pk->v[r], &pk->prim[r],
+                                            tri_count, naive, spheres, pk->any);
+            if (hit && pk->any) {
+                pk->prim[r] = b->id[0]; /* occluded: which primitive does not matter */
                 pk->live &= ~IP_BIT(r);
+            }
         }
     }
-    for (uint64_t k = m; k; k &= k - 1) {
+    for (uint64_t k = reached; k; k &= k - 1) {
         unsigned r = (unsigned)__builtin_ctzll(k);
         v->hi[r] = inst_walk_hi(pk->t[r], v->shift[r], v->slack);
         pk->top.hi[r] = pk->t[r];
@@ -161,7 +174,7 @@ INST_INLINE void ip_walk(const inst_accel *a, ip_packet *pk, ip_view *v, const i
                 for (uint32_t i = 0; i < nb && (em &= pk->live); i++)
                     ip_instance(a, pk, w->ids[first + i], em, naive, spheres, counted);
             } else {
-                ip_leaf(a, pk, v, it, w->blocks + first, 8 * nb, em, naive, spheres, counted);
+                ip_leaf(a, pk, v, it, w, first, nb, em, naive, spheres, counted);
             }
             continue;
         }
@@ -223,6 +236,7 @@ INST_INLINE void ip_kernel(const void *acc, const accel_ray *rays, void *out, si
     const inst_accel *a = acc;
     const int naive = (flags & ACCEL_V_NAIVE) != 0, spheres = (flags & ACCEL_V_SPHERES) != 0;
     ip_packet pk;
+    pk.cull_tries = pk.cull_wins = pk.cull_skips = 0;
     for (unsigned r = 0; r < IP_RAYS; r++) pk.top.pad[r] = 0.0f, pk.top.shift[r] = 0.0; /* world rays */
     for (size_t base = 0; base < count; base += IP_RAYS) {
         unsigned n = count - base < IP_RAYS ? (unsigned)(count - base) : IP_RAYS;

@@ -357,6 +357,7 @@ void ip_load(ip_packet *pk, const accel_ray *rays, unsigned n, int any, int coun
     ip_view *v = &pk->top;
     pk->live = 0;
     pk->any = any;
+    pk->rects = 0;
     v->slack = 0.0f, v->padded = 0;
     /* The top view's pads and shifts stay 0 (ip_kernel); u, v are read
      * only where a hit set them; the counters only when counted. */

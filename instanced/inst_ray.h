@@ -1,10 +1,12 @@
 /*
- * inst_ray.h - the two per-ray steps every walk of the `instanced` kind
+ * inst_ray.h - the per-ray steps every walk of the `instanced` kind
  * shares (k8_trace.c ray by ray, inst_packet.c in packets), so that both
  * compute them with the very same operations: a world ray taken to an
  * instance's object space with the pad that keeps the bottom walk
- * conservative, and the world-space decision of a triangle. README.md
- * explains the pad and why the decision is made in world space.
+ * conservative, and the world triangles the decision is made on (a
+ * leaf's world block for the shared block test, core/block_test.h; one
+ * triangle for the walks that meet them one by one). README.md explains
+ * the pad and why the decision is made in world space.
  */
 #ifndef INSTANCED_INST_RAY_H
 #define INSTANCED_INST_RAY_H
@@ -30,32 +32,46 @@ extern "C" {
 
 #define INST_INLINE static inline __attribute__((always_inline))
 
-/* The world triangle of mesh triangle m: accel_xform_vertex, the
- * flattener's expression, bit for bit (per row fma(r0, x, fma(r1, y,
- * fma(r2, z, r3))) rounded once to float), with the three rows as the
- * lanes of one 4-double vector. w gets 12 floats (the last unused). */
-INST_INLINE void inst_xform_tri(const inst_item *it, const float *m, float *w)
+/* Object block ob (instance it's mesh, core/block.h) taken to world
+ * space into wb: every vertex by accel_xform_vertex's expression (per row
+ * fma(r0, x, fma(r1, y, fma(r2, z, r3))) rounded once to float), 4 lanes
+ * per double vector, so each lane is the flattened triangle bit for bit;
+ * ids base + q. A lane dead in the flattened scene (no area; only where
+ * the instance has such lanes) becomes a point, which the block test
+ * never hits (U = V = W = 0: its double test finds det = 0). */
+INST_INLINE void inst_world_block(const inst_item *it, const accel_block8 *ob, accel_block8 *wb)
 {
+    const double *m = it->xform;
 #if INST_WIDE_AVX && defined(__FMA__)
-    __m256d c0 = _mm256_loadu_pd(it->cols), c1 = _mm256_loadu_pd(it->cols + 4);
-    __m256d c2 = _mm256_loadu_pd(it->cols + 8), c3 = _mm256_loadu_pd(it->cols + 12);
-    for (int k = 0; k < 3; k++) {
-        const float *p = m + 3 * k;
-        __m256d acc = _mm256_fmadd_pd(c2, _mm256_set1_pd((double)p[2]), c3);
-        acc = _mm256_fmadd_pd(c1, _mm256_set1_pd((double)p[1]), acc);
-        acc = _mm256_fmadd_pd(c0, _mm256_set1_pd((double)p[0]), acc);
-        _mm_storeu_ps(w + 3 * k, _mm256_cvtpd_ps(acc));
-    }
+    for (int h = 0; h < 8; h += 4)
+        for (int vtx = 0; vtx < 3; vtx++) {
+            __m256d x = _mm256_cvtps_pd(_mm_loadu_ps(&ob->v[vtx][0][h]));
+            __m256d y = _mm256_cvtps_pd(_mm_loadu_ps(&ob->v[vtx][1][h]));
+            __m256d z = _mm256_cvtps_pd(_mm_loadu_ps(&ob->v[vtx][2][h]));
+            for (int r = 0; r < 3; r++) {
+                const double *row = m + 4 * r;
+                __m256d acc = _mm256_fmadd_pd(_mm256_set1_pd(row[2]), z, _mm256_set1_pd(row[3]));
+                acc = _mm256_fmadd_pd(_mm256_set1_pd(row[1]), y, acc);
+                acc = _mm256_fmadd_pd(_mm256_set1_pd(row[0]), x, acc);
+                _mm_storeu_ps(&wb->v[vtx][r][h], _mm256_cvtpd_ps(acc));
+            }
+        }
 #else
-    for (int k = 0; k < 3; k++) accel_xform_vertex(it->xform, m + 3 * k, w + 3 * k);
+    for (int lane = 0; lane < 8; lane++)
+        for (int vtx = 0; vtx < 3; vtx++) {
+            float p[3] = {ob->v[vtx][0][lane], ob->v[vtx][1][lane], ob->v[vtx][2][lane]}, w[3];
+            accel_xform_vertex(m, p, w);
+            for (int r = 0; r < 3; r++) wb->v[vtx][r][lane] = w[r];
+        }
 #endif
-}
-
-/* Lane `lane` of a block of 8 (core/block.h) as a primitive's 9 floats. */
-INST_INLINE void inst_block_lane(const accel_block8 *b, int lane, float *tri)
-{
-    const float *rows = b->v[0][0];
-    for (int k = 0; k < 9; k++) tri[k] = rows[8 * k + lane];
+    for (int lane = 0; lane < 8; lane++) wb->id[lane] = it->base + ob->id[lane];
+    if (!it->has_dead) return;
+    for (int lane = 0; lane < 8; lane++) {
+        float t[9];
+        for (int k = 0; k < 9; k++) t[k] = wb->v[k / 3][k % 3][lane];
+        if (accel_tri_is_degenerate(t))
+            for (int k = 3; k < 9; k++) wb->v[k / 3][k % 3][lane] = t[k % 3];
+    }
 }
 
 /* Compare-and-select (libm's fmax is a call: it must order NaNs). */
@@ -151,35 +167,22 @@ INST_INLINE float inst_walk_hi(float t, double shift, float slack)
     return hi;
 }
 
-/* The world-space decision of primitive id (world triangle tri, or a
- * sphere of a plain scene) for the prepared world ray p, against its
- * closest hit so far (*t, *prim). The test runs on the ray's whole range,
- * not up to the closest hit: the shared kernels' answer for a triangle
- * (which of their float or double paths decides it, hence the last bits of
- * t, u, v) depends on the range they are given, so with the current hit
- * as its end it would depend on the order the walk meets the triangles.
- * Then the closest (t, id) wins: the answer is the same for every walk
- * that reaches the triangles (width=2 or 8, top=grid, bottom=grid,
- * packets), however often each is met; the current best is not tested
- * again (the caller skips id == *prim). rel, when given, holds tri's
- * vertices relative to p's origin on p's axes (accel_tri_rel_of, for a
- * packet whose rays share them): the same test, bit for bit. Returns 1
+/* The decision of one primitive for the walks that meet primitives one
+ * by one (width=2, the grids, a walked kind): the shared scalar tests of
+ * core/prim.h (those the block test runs on its uncertain and sphere
+ * lanes), on the world triangle tri (or a plain scene's sphere) within
+ * [t_near, *t]; a triangle dead in the flattened scene (no area: checked
+ * where the instance has such triangles, dead) is never hit. Returns 1
  * when id becomes the closest hit. */
-INST_INLINE int inst_decide(const accel_ray_prep *p, const float *tri, const accel_tri_rel *rel,
-                            const float *sphere, uint32_t id, int naive, float *t, float *u,
-                            float *v, uint32_t *prim)
+INST_INLINE int inst_decide(const accel_ray_prep *p, const float *tri, const float *sphere,
+                            uint32_t id, int naive, int dead, float *t, float *u, float *v,
+                            uint32_t *prim)
 {
-    float th = p->t_far, uh = 0.0f, vh = 0.0f;
-    if (sphere) {
-        if (!accel_sphere_hit(p, sphere, &th, &uh, &vh)) return 0;
-    } else {
-        int hit = naive ? accel_tri_naive(p, tri, &th, &uh, &vh)
-                  : rel ? accel_tri_watertight_rel(p, tri, rel, &th, &uh, &vh)
-                        : accel_tri_watertight(p, tri, &th, &uh, &vh);
-        /* A triangle dead in the flattened scene (no area) is never hit. */
-        if (!hit || th > *t || (th == *t && id > *prim) || accel_tri_is_degenerate(tri)) return 0;
-    }
-    if (th > *t || (th == *t && id > *prim)) return 0;
+    float th = *t, uh = 0.0f, vh = 0.0f;
+    int hit = sphere  ? accel_sphere_hit(p, sphere, &th, &uh, &vh)
+              : naive ? accel_tri_naive(p, tri, &th, &uh, &vh)
+                      : accel_tri_watertight(p, tri, &th, &uh, &vh);
+    if (!hit || (dead && !sphere && accel_tri_is_degenerate(tri))) return 0;
     *t = th, *u = uh, *v = vh, *prim = id;
     return 1;
 }

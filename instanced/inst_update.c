@@ -6,7 +6,7 @@
  * Hierarchies", ACM TOG 26(1), 2007) or rebuilt; meshes that did not change
  * keep theirs untouched; moved instances only need the per-instance data
  * and the top level, which are rebuilt every frame (they are small: one
- * entry per instance).
+ * entry per instance), and (world=blocks) their world blocks made again.
  *
  * A refit tree stays exact (its boxes bound the new triangles), but its
  * splits were chosen for the old shape: the study measures how much slower
@@ -97,6 +97,16 @@ int inst_update(void *acc, const accel_scene *scene, int refit, accel_update_sta
     for (uint32_t i = 0; i < a->bottom_count; i++)
         changed[i] = memcmp(set->meshes[i].tris, old->meshes[i].tris,
                             9 * sizeof(float) * (size_t)set->meshes[i].tri_count) != 0;
+    /* Instances that moved (or changed mesh) need their world blocks again. */
+    uint8_t *moved = calloc(a->item_count ? a->item_count : 1, 1);
+    if (!moved) {
+        free(changed), free(grid_pad);
+        return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory");
+    }
+    for (uint32_t k = 0; k < a->item_count; k++)
+        moved[k] = memcmp(a->items[k].xform, set->instances[k].xform, sizeof a->items[k].xform) != 0 ||
+                   a->items[k].bottom != set->instances[k].mesh ||
+                   a->items[k].base != set->instances[k].base;
     int rc = inst_set_items(a, scene, grid_pad, err);
     double t1 = accel_now_ms();
     for (uint32_t i = 0; rc == 0 && i < a->bottom_count; i++) {
@@ -121,6 +131,10 @@ int inst_update(void *acc, const accel_scene *scene, int refit, accel_update_sta
         rc = inst_build_bottom(a, i, grid_pad[i], err);
         st->meshes_rebuilt++;
     }
+    /* World blocks (world=blocks): the flattened triangles of every
+     * instance that moved or whose mesh changed, in its (new) leaf order. */
+    for (uint32_t k = 0; rc == 0 && k < a->item_count; k++)
+        if (moved[k] || changed[a->items[k].bottom]) rc = inst_world_blocks(a, k, err);
     double t2 = accel_now_ms();
     if (rc == 0) rc = inst_build_top(a, err);
     double t3 = accel_now_ms();
@@ -128,5 +142,6 @@ int inst_update(void *acc, const accel_scene *scene, int refit, accel_update_sta
     st->top_ms = (t1 - t0) + (t3 - t2);
     free(changed);
     free(grid_pad);
+    free(moved);
     return rc;
 }

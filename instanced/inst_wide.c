@@ -5,7 +5,11 @@
  * into its 8-wide nodes, which the traversal tests with the wide BVH's
  * node test (bvh/wide/kernel.h). This file only fills the leaves: the top
  * level's with item ids (blocks of one), the bottom level's with the
- * mesh's primitives in blocks of 8 (core/block.h), object space.
+ * mesh's primitives in blocks of 8 (core/block.h), object space (a
+ * sphere's lane, plain scenes only, holds its centre and radius as
+ * bvh/wide's blocks do). A plain scene's blocks are its world blocks;
+ * an instance's are made from them (inst_world_blocks, or per leaf at
+ * trace time with world=compute).
  *
  * Each slot keeps its binary node's box exactly, so the wide tree holds the
  * same boxes over the same leaves: a walk of it with a conservative slab
@@ -43,7 +47,6 @@ int inst_wide_build(const bvh_box_tree *h, const accel_scene *mesh, inst_wide *o
         inst_wide_free(out);
         return accel_fail(err, ACCEL_ERR_NOMEM, "instanced: out of memory for a wide BVH's leaves");
     }
-    static const float none[9] = {0}; /* a sphere's lane (plain scenes): decided by its id */
     for (uint32_t l = 0; l < pool.leaf_count; l++) {
         const bvh_wide_pool_leaf *leaf = &pool.leaves[l];
         const uint32_t *order = h->order + leaf->first_slot;
@@ -54,9 +57,15 @@ int inst_wide_build(const bvh_box_tree *h, const accel_scene *mesh, inst_wide *o
         for (uint32_t k = 0; 8 * k < leaf->count; k++) {
             int count = leaf->count - 8 * k < 8 ? (int)(leaf->count - 8 * k) : 8;
             const float *tris[8];
+            float sph[8][9] = {{0}}; /* a sphere's lane (plain scenes): centre, radius */
             for (int i = 0; i < count; i++) {
                 uint32_t q = order[8 * k + (uint32_t)i];
-                tris[i] = q < mesh->tri_count ? mesh->tris + 9 * (size_t)q : none;
+                if (q < mesh->tri_count) {
+                    tris[i] = mesh->tris + 9 * (size_t)q;
+                } else {
+                    memcpy(sph[i], mesh->spheres + 4 * (size_t)(q - mesh->tri_count), 4 * sizeof(float));
+                    tris[i] = sph[i];
+                }
             }
             accel_block8 *blk = &out->blocks[leaf->first_block + k];
             accel_block_fill(blk->v[0][0], blk->id, 8, tris, order + 8 * k, count);

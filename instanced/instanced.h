@@ -8,8 +8,9 @@
  *   instanced:bottom=nested_grid       any kind with a walk (accel.h) as the
  *                                      bottom level: bottom=<kind> or
  *                                      bottom=<kind>:k=v;k=v (';' for ',')
- *   instanced:world=flat               world triangles read from the
- *                                      flattened scene, not recomputed
+ *   instanced:world=compute            each leaf's world blocks computed
+ *                                      when a ray reaches it (default:
+ *                                      per-instance copies, world=blocks)
  *   instanced:traverse=packet          64 rays walk both 8-wide levels
  *                                      together (the same answers, bit for bit)
  *
@@ -23,7 +24,7 @@
  *
  * Parameters (bin/trace --help): top, bottom (bvh|grid or a kind spec), leaf (bottom BVH
  * leaf size), width (BVH levels walked 8-wide, or 2: the binary tree), lambda and top_lambda (grid cells per primitive / instance),
- * world (compute|flat), traverse (single|packet), and the common tri=watertight|naive.
+ * world (blocks|compute), traverse (single|packet), and the common tri=watertight|naive.
  *
  * A plain scene is one identity instance of itself. The kind is reached
  * through the registry only (registry.c): accel_kind_instanced.

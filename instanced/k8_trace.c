@@ -17,10 +17,13 @@
  * rounding of the object-space ray. So the bottom level is conservative:
  * it reaches every triangle whose world copy the ray may hit. Each
  * triangle it reaches is then decided in world space, on the world ray and
- * the world triangle computed exactly as the flattener computes it
- * (accel_xform_vertex), with the shared kernels of prim.h: the same test,
- * on the same floats, as any kind on the flattened scene, hence the same
- * answer as the oracle.
+ * the flattened triangle's very floats: at an 8-wide leaf, the leaf's
+ * world blocks (copies made at build with world=blocks, or the object
+ * block taken to world space by the flattener's expression with
+ * world=compute) with the shared block test (core/block_test.h, bvh/wide's
+ * leaf test); in the walks that meet triangles one by one, the shared
+ * scalar test (core/prim.h). The same tests, on the same floats, as any
+ * kind on the flattened scene, hence the same answers as the oracle.
  *
  * An identity instance (and a plain scene, one identity instance of
  * itself) needs no pad and no transform: its walk is a plain BVH or grid.
@@ -34,9 +37,8 @@
 #include "inst_impl.h"
 #include "inst_ray.h"
 
-/* The wide BVH's node test and child order (bvh/wide/kernel.h, 8 wide;
- * its leaf test, core/block_test.h, comes with it but the leaves here are
- * decided in world space: test_prim). */
+/* The wide BVH's node test and child order (bvh/wide/kernel.h, 8 wide)
+ * and its leaf test (core/block_test.h), run on world blocks. */
 #define WIDE_NW 8
 #define WIDE_LB 8
 #include "core/block_test.h"
@@ -46,6 +48,7 @@
 
 typedef struct {
     accel_ray_prep p;   /* world ray for the float kernels */
+    wide_leaf_ray_8 lr; /* its constants for the block test (once per ray) */
     double o[3], d[3];  /* world ray in double */
     float t, u, v;      /* closest hit so far (t = t_far before any) */
     uint32_t prim;
@@ -57,37 +60,56 @@ typedef struct {
 
 /* ---- the world-space decision ------------------------------------------------ */
 
-INLINE void test_prim_obj(const inst_accel *a, const inst_item *it, const float *obj, uint32_t q,
-                          ray_state *r, int naive, int spheres);
-
+/* Mesh triangle q of instance it, met alone (width=2, grids, a walked
+ * kind): its world triangle (the flattened scene's, or computed by the
+ * flattener's expression with world=compute) decided by the shared scalar
+ * test (inst_decide). */
 INLINE void test_prim(const inst_accel *a, const inst_item *it, const accel_scene *mesh,
                       uint32_t q, ray_state *r, int naive, int spheres)
 {
-    test_prim_obj(a, it, mesh->tris + 9 * (size_t)q, q, r, naive, spheres);
-}
-
-/* The same with mesh triangle q's object-space floats at obj (read only
- * for a transformed triangle). */
-INLINE void test_prim_obj(const inst_accel *a, const inst_item *it, const float *obj, uint32_t q,
-                          ray_state *r, int naive, int spheres)
-{
     const accel_scene *s = a->scene;
     uint32_t id = it->base + q;
-    if (id == r->prim) return; /* the current best is not tested again (inst_decide) */
-    float w[12];
+    float w[9];
     const float *tri = NULL, *sphere = NULL;
     r->prims++;
     if (spheres && id >= s->tri_count) {
         /* Only plain scenes hold spheres (meshes of instances cannot). */
         sphere = s->spheres + 4 * (size_t)(id - s->tri_count);
-    } else if (it->identity || a->world_flat) {
+    } else if (it->identity || a->world == INST_WORLD_BLOCKS) {
         tri = s->tris + 9 * (size_t)id;
     } else {
-        inst_xform_tri(it, obj, w);
+        const float *m = mesh->tris + 9 * (size_t)q;
+        for (int k = 0; k < 3; k++) accel_xform_vertex(it->xform, m + 3 * k, w + 3 * k);
         tri = w;
     }
-    if (inst_decide(&r->p, tri, NULL, sphere, id, naive, &r->t, &r->u, &r->v, &r->prim) && r->any)
+    if (inst_decide(&r->p, tri, sphere, id, naive, it->has_dead, &r->t, &r->u, &r->v, &r->prim) &&
+        r->any)
         r->done = 1;
+}
+
+/* The blocks [first, first + nb) of instance it's bottom level, in world
+ * space, against the world ray with the shared block test: a plain
+ * scene's own blocks, the instance's copies (world=blocks), or each
+ * object block taken to world space here (world=compute). Counts the
+ * triangles (lanes) tested, as bvh/wide does. */
+INLINE void test_blocks(const inst_accel *a, const inst_item *it, const inst_wide *w,
+                        uint32_t first, uint32_t nb, ray_state *r, int naive, int spheres)
+{
+    const accel_block8 *blk = a->plain ? w->blocks + first : it->world ? it->world + first : NULL;
+    for (uint32_t k = 0; k < nb; k++) {
+        accel_block8 tmp __attribute__((aligned(64)));
+        const accel_block8 *b = blk ? blk + k : &tmp;
+        if (!blk) inst_world_block(it, w->blocks + first + k, &tmp);
+        r->prims++;
+        for (int lane = 1; lane < 8; lane++) r->prims += b->id[lane] != b->id[lane - 1];
+        if (leaf_block_8(b, &r->lr, &r->p, &r->t, &r->u, &r->v, &r->prim, a->scene->tri_count, naive,
+                         spheres, r->any) &&
+            r->any) {
+            r->prim = b->id[0]; /* occluded: which primitive does not matter */
+            r->done = 1;
+            return;
+        }
+    }
 }
 
 /* ---- bottom level: BVH ------------------------------------------------------ */
@@ -202,14 +224,8 @@ INLINE void walk_wide(const inst_accel *a, const inst_item *it, const inst_wide 
                     if (r->done) return;
                 }
             } else {
-                for (const accel_block8 *blk = w->blocks + first; nb--; blk++)
-                    for (int lane = 0; lane < 8; lane++) {
-                        if (lane && blk->id[lane] == blk->id[lane - 1]) break; /* the padding */
-                        float obj[9];
-                        inst_block_lane(blk, lane, obj);
-                        test_prim_obj(a, it, obj, blk->id[lane], r, naive, spheres);
-                        if (r->done) return;
-                    }
+                test_blocks(a, it, w, first, nb, r, naive, spheres);
+                if (r->done) return;
             }
             hi_t = inst_walk_hi(r->t, shift, slack);
         } else {
@@ -538,6 +554,7 @@ INLINE void kernel(const void *acc, const accel_ray *rays, void *out, size_t cou
         r.top_steps = r.bottom_steps = r.boxes = r.prims = r.empties = r.skips = 0;
         r.u = r.v = 0.0f;
         if (accel_prep_ray(&rays[i], &r.p)) {
+            leaf_setup_8(&r.lr, &r.p);
             r.t = r.p.t_far;
             r.o[0] = r.p.org.x, r.o[1] = r.p.org.y, r.o[2] = r.p.org.z;
             r.d[0] = r.p.dir.x, r.d[1] = r.p.dir.y, r.d[2] = r.p.dir.z;

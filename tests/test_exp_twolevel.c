@@ -143,7 +143,7 @@ TEST(exp_twolevel_quick_csv)
             for (int q = 0; q < 8; q++)
                 CHECKF(count(r, n, "two_level", scenes[s], configs[c], 0, q1[q]) == 1,
                        "no single %s row for %s on %s", q1[q], configs[c], scenes[s]);
-    CHECKF(count(r, n, "two_level", NULL, "instanced:world=flat", 0, "mrays_primary") == 1,
+    CHECKF(count(r, n, "two_level", NULL, "instanced:world=compute", 0, "mrays_primary") == 1,
            "the control is not measured exactly once");
     /* Part 2: refit at k = 1 and 3, the update times. */
     for (int k = 1; k <= 3; k += 2) {
