@@ -234,23 +234,28 @@ static void compare_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     g.half = 1; /* issue 52: the fastest chosen on half the rounds, judged on the other */
     int two = exp_group_best(&g, SETS, 0, g.count, "instanced:top="), flat = best_of(&g, SETS, 0, 0, dis);
     g.half = 0;
-    if (two >= 0 && base->ok) {
+    /* The two-level claim against the fastest flattened structure (on
+     * animated and field the 8-wide BVH: the same kernels as the two-level
+     * BVH levels), not the binary `bvh` of the tables' first column. */
+    int fi = flat >= 0 ? flat : 0;
+    const exp_cfg *fb = &g.cfg[fi];
+    if (two >= 0 && fb->ok) {
         const exp_cfg *tc = &g.cfg[two];
         exp_est sp[3], br;
-        for (int k = 0; k < 3; k++) sp[k] = exp_group_speedup(&g, 0, two, set_bits[k]);
-        int m = tc->build_ms.n < base->build_ms.n ? tc->build_ms.n : base->build_ms.n;
-        exp_est_ratio(base->build_samples, tc->build_samples, m, &br);
-        double tr = bytes_read(tc, &s) / s.tri_count, fr = (double)base->build.bytes / s.tri_count;
+        for (int k = 0; k < 3; k++) sp[k] = exp_group_speedup(&g, fi, two, set_bits[k]);
+        int m = tc->build_ms.n < fb->build_ms.n ? tc->build_ms.n : fb->build_ms.n;
+        exp_est_ratio(fb->build_samples, tc->build_samples, m, &br);
+        double tr = bytes_read(tc, &s) / s.tri_count, fr = (double)fb->build.bytes / s.tri_count;
         exp_text_add(&st->findings, "- %s: the fastest two-level combination, `%s`, traces at %s "
                      "the speed of `%s` on primary, %s on shadow and %s on diffuse rays; it builds "
                      "in %s ms against %s ms (build speed %s) and needs %.1f against %.1f B/triangle "
                      "with the triangles it reads.\n", s.name, tc->spec,
-                     exp_anim_ratio(b1, sizeof b1, &sp[0], g.floor), base->spec,
+                     exp_anim_ratio(b1, sizeof b1, &sp[0], g.floor), fb->spec,
                      exp_anim_ratio(b2, sizeof b2, &sp[1], g.floor), exp_anim_ratio(b3, sizeof b3, &sp[2], g.floor),
                      exp_fmt_est(b4, sizeof b4, &tc->build_ms, 2),
-                     exp_fmt_est(b5, sizeof b5, &base->build_ms, 2), exp_anim_ratio(b6, sizeof b6, &br, g.floor),
+                     exp_fmt_est(b5, sizeof b5, &fb->build_ms, 2), exp_anim_ratio(b6, sizeof b6, &br, g.floor),
                      tr, fr);
-        exp_est all = exp_group_speedup(&g, 0, two, SETS);
+        exp_est all = exp_group_speedup(&g, fi, two, SETS);
         int build_ok = exp_ratio_cmp(&br, g.floor) > 0, mem_ok = tr < fr;
         int slower = exp_ratio_cmp(&all, g.floor) < 0;
         st->scenes++, st->build_ok += build_ok, st->mem_ok += mem_ok, st->slower += slower;
@@ -263,7 +268,7 @@ static void compare_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
             snprintf(w[2], sizeof w[2], "two-level / flattened trace speed, `%s`, %s %u tris, "
                      "primary+shadow+diffuse", tc->spec, s.name, s.tri_count);
             g.half = 2;
-            exp_est b = br, t = exp_group_speedup_level(&g, 0, two, SETS, exp_tally_level(&st->tt));
+            exp_est b = br, t = exp_group_speedup_level(&g, fi, two, SETS, exp_tally_level(&st->tt));
             g.half = 0;
             exp_est mem = {tr / fr, tr / fr, tr / fr, tr / fr, tr / fr, 1, 1, 1, 0, 0};
             exp_decider d0 = exp_decider_of(w[0], &b, 1.0, +1), d1 = exp_decider_of(w[1], &mem, 1.0, -1),
@@ -273,7 +278,7 @@ static void compare_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
         exp_text_add(&st->ev_two, "%s%s: `%s` builds at %s the speed, needs %.1f against %.1f "
                      "B/triangle, traces the three ray sets at %s the speed of `%s`",
                      st->ev_two.len ? "; " : "", s.name, tc->spec, b6, tr, fr,
-                     exp_anim_ratio(b1, sizeof b1, &all, g.floor), base->spec);
+                     exp_anim_ratio(b1, sizeof b1, &all, g.floor), fb->spec);
         exp_text_add(&st->two_scenes, "%s%s", st->two_scenes.len ? ", " : "", s.name);
     }
     if (flat >= 0 && flat != 0 && base->ok) {
@@ -340,7 +345,8 @@ static void verdicts(exp_ctx *x, study *st, const exp_anim *an)
         const char *v = exp_compound(parts, 3, &d);
         exp_verdict_num(x, "two-level", v, d, exp_text_str(&st->two_scenes),
                         "three parts on each of %d scenes (the fastest two-level combination "
-                        "against `bvh`; thresholds 1.0x; Bonferroni): builds faster: %s; less "
+                        "against the fastest flattened structure; thresholds 1.0x; Bonferroni): "
+                        "builds faster: %s; less "
                         "memory: %s; slower traces: %s (%s)", st->scenes,
                         exp_tally_verdict(&st->tb), exp_tally_verdict(&st->tm),
                         exp_tally_verdict(&st->tt), exp_text_str(&st->ev_two));
