@@ -256,7 +256,9 @@ static const char *const grid_variants[] = {
     "skip=macro,lambda=64,macro=8", "traverse=packet", "traverse=packet,mailbox=0",
     "traverse=packet,res=128", "traverse=packet,res=7x1x13", "traverse=packet,tri=naive",
     "cells=ids", "cells=ids,lambda=1", "traverse=packet,cells=ids",
-    "traverse=packet,cells=ids,res=7x1x13", "traverse=packet,lambda=1", NULL,
+    "traverse=packet,cells=ids,res=7x1x13", "traverse=packet,lambda=1",
+    /* the baseline units where auto picks AVX-512 (core/isa.h; tests/test_isa.c) */
+    "isa=avx2", "traverse=packet,isa=avx2", NULL,
 };
 
 const accel_kind accel_kind_grid = {

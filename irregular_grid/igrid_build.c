@@ -623,6 +623,7 @@ static const char *const igrid_variants[] = {
     "cells=blocks",
     "cells=blocks,merge=0,expand=0",
     "cells=blocks,top_lambda=2,max_depth=2",
+    "cells=blocks,isa=avx2", /* the baseline unit where auto picks AVX-512 (test_isa.c) */
     NULL,
 };
 

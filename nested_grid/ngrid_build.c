@@ -474,7 +474,9 @@ static const char *const ngrid_variants[] = {
     "traverse=packet,mailbox=0", "traverse=packet,tri=naive", "traverse=packet,layout=compact",
     "traverse=packet,threshold=2,sub_res=24", "cells=blocks", "cells=blocks,threshold=1,depth=4,sub_res=3",
     "traverse=packet,cells=blocks", "traverse=packet,cells=blocks,threshold=1,depth=4,sub_res=3",
-    "traverse=packet,cells=blocks,mailbox=0", NULL,
+    "traverse=packet,cells=blocks,mailbox=0",
+    /* the baseline units where auto picks AVX-512 (core/isa.h; tests/test_isa.c) */
+    "cells=blocks,isa=avx2", "traverse=packet,cells=blocks,isa=avx2", NULL,
 };
 
 const accel_kind accel_kind_nested_grid = {
