@@ -76,8 +76,8 @@ packet_walk(const grid_accel *g, grid_packet *pk, grid_packet_count *cn, accel_c
             slices++;
             if (ACCEL_STEP_BOUND_BROKEN(c, slices, nk)) return;
             if (grid_packet_span(f, pk, k, k, lo, hi, hull) &&
-                !walk_slice(g, pk, cn, c, mail, k, lo, hi, hull, naive, spheres, mailbox, any_hit,
-                            use_blocks))
+                !walk_slice(g, pk, cn, c, mail, k, lo, hi, (const double(*)[2])hull, naive,
+                            spheres, mailbox, any_hit, use_blocks))
                 return;
             if (!grid_packet_leave_slice(f, pk, cn, c, k)) return;
             if (k == k_end) break;

@@ -50,6 +50,7 @@
 #include "core/coherence.h"
 #include "core/isa.h"
 #include "ngrid_packet_kernel.h"
+
 /* The copies the experiments time (core/variant.h; issue 53's GRIDBVH_KLOG
  * runs): the default on triangles (4) and spheres (6), and closest hits
  * with the naive test (5). */

@@ -1,9 +1,9 @@
 /*
  * ngrid_packet_kernel.h - the `nested_grid` kind's coherent packet walk
- * through every level (described in ngrid_packet.c). A kernel body (C
- * only), private to nested_grid/: the including unit defines
- * NGRID_PACKET_BLOCKS, 0 for the walk on id lists (ngrid_packet.c) or 1 for
- * the walk on blocks (cells=blocks: the kernel unit k8_packet.c, compiled
+ * through every level (described in ngrid_packet.c).
+ * A kernel body (C only), private to nested_grid/: the including unit
+ * defines NGRID_PACKET_BLOCKS, 0 (the default) for the walk on id lists
+ * (ngrid_packet.c) or 1 for the walk on blocks (cells=blocks: the kernel unit k8_packet.c, compiled
  * once per ISA, core/isa.h, since it inlines the shared block test). The
  * sub-grid walk is recursive, so the choice is the preprocessor's, not a
  * constant argument.
@@ -19,7 +19,7 @@
 #include "ngrid_impl.h"
 
 #ifndef NGRID_PACKET_BLOCKS
-#error "define NGRID_PACKET_BLOCKS (0: ids, 1: blocks) before including ngrid_packet_kernel.h"
+#define NGRID_PACKET_BLOCKS 0 /* the walk on ids */
 #endif
 
 #define P GRID_PACKET_SIZE
@@ -163,7 +163,7 @@ static int walk_sub(nwalk *w, const grid_frame *f, const ngrid_node *node, const
         if (first && (hi[0] - lo[0] >= NGRID_PACKET_WIDE || hi[1] - lo[1] >= NGRID_PACKET_WIDE))
             return give_up(w);
         first = 0;
-        if (!visit_cells(w, f, node, leaf, k, lo, hi, hull)) return 0;
+        if (!visit_cells(w, f, node, leaf, k, lo, hi, (const double(*)[2])hull)) return 0;
     }
     return 1;
 }
@@ -234,8 +234,9 @@ static void packet_walk(nwalk *w, const grid_frame *top)
         double hull[2][2];
         if (grid_packet_span(top, pk, k, k, lo, hi, hull)) {
             w->w_max = active_w_max(pk);
-            if (!(w->g->compact ? visit_compact(w, k, lo, hi, hull)
-                                : visit_cells(w, top, &w->g->nodes[0], NULL, k, lo, hi, hull)))
+            const double(*ch)[2] = (const double(*)[2])hull; /* C11: no implicit const */
+            if (!(w->g->compact ? visit_compact(w, k, lo, hi, ch)
+                                : visit_cells(w, top, &w->g->nodes[0], NULL, k, lo, hi, ch)))
                 return;
         }
         if (!grid_packet_leave_slice(top, pk, w->cn, w->c, k)) return;
