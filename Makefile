@@ -33,8 +33,8 @@ endif
 $(foreach v,$(BOOL_VARS),$(if $(filter-out 0 1,$($(v))),$(error $(v)=$($(v)): $(v) takes 1 (on) or 0 (off))))
 CC      ?= cc
 # The baseline instruction set of every unit is AVX2 (x86-64-v3), whatever
-# the build machine; the wide BVH's kernel units (SLOW_SRC) are compiled a
-# second time with ARCH512 and picked at run time where the CPU has it
+# the build machine; the kernel units (SLOW_SRC: the wide BVH's, instanced/'s
+# and the grid family's block kernels) are compiled a second time with ARCH512 and picked at run time where the CPU has it
 # (accel/core/isa.c; GRIDBVH_ISA=avx2 forces the baseline). By default that
 # second copy is built only where it can run: when the build machine's CPU
 # has x86-64-v4's AVX-512 (avx512f, cd, bw, dq and vl in /proc/cpuinfo).
@@ -70,12 +70,17 @@ endif
 LIB_OBJ  := $(LIB_SRC:%.c=$(BUILD)/%.o)
 # The AVX-512 twins of the kernel units: the same sources with ARCH512 in
 # place of ARCH and WIDE_AVX512_UNIT defined (their symbols end in _avx512,
-# bvh/wide/node.h), linked beside the AVX2 ones.
+# bvh/wide/node.h, core/isa.h), linked beside the AVX2 ones. ISA_DISPATCH:
+# the units that pick a twin by a structure's isa, compiled with
+# GRIDBVH_AVX512 where the twins are linked.
+ISA_DISPATCH := accel/core/isa.c bvh/wide/trace.c instanced/inst_packet.c grid/grid_trace.c \
+                grid/grid_packet_trace.c nested_grid/ngrid_trace.c nested_grid/ngrid_packet.c \
+                irregular_grid/igrid_trace.c
 HAVE_512 := $(if $(strip $(ARCH512)),$(shell $(CC) $(ARCH512) -x c -c /dev/null -o /dev/null 2>/dev/null && echo 1))
 ifeq ($(HAVE_512),1)
 SLOW_512 := $(SLOW_SRC:%.c=$(BUILD)/%.avx512.o)
 LIB_OBJ  := $(SLOW_512) $(LIB_OBJ)
-$(BUILD)/accel/core/isa.o $(BUILD)/bvh/wide/trace.o $(BUILD)/instanced/inst_packet.o: ALL_CFLAGS += -DGRIDBVH_AVX512
+$(ISA_DISPATCH:%.c=$(BUILD)/%.o): ALL_CFLAGS += -DGRIDBVH_AVX512
 endif
 LIB      := $(BUILD)/libgridbvh.a
 # The kernel units first compiled (SLOW_SRC, sources.mk) keep line tables

@@ -51,11 +51,12 @@ extern const accel_kind accel_kind_grid;
 
 /* The kind's parameters as parsed, one field per key (grid_build.c's
  * table: ACCEL_SPEC(params, grid_spec)); choices hold their position in
- * the table's list (traverse: single 0, packet 1; skip: none, cloud, macro). */
+ * the table's list (traverse: single 0, packet 1; skip: none, cloud, macro;
+ * isa: ACCEL_ISA_AUTO, _AVX2, _AVX512, core/isa.h). */
 typedef struct {
     double lambda, max_mb;
     char res[ACCEL_PARAM_TEXT];
-    int overlap, mailbox, traverse, skip, skip_min, macro, cells;
+    int overlap, mailbox, traverse, skip, skip_min, macro, cells, isa;
 } grid_spec;
 
 /* Read-only view of a built grid (tests, tools, heatmaps). */

@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/isa.h"
 #include "grid_packet.h"
 
 #define STR_(x) #x
@@ -52,6 +53,11 @@ static const accel_param_def grid_params[] = {
              "time by the block test the wide BVH uses, single rays and packets) or ids (a list "
              "of primitive ids, tested one by one); spheres and tri=naive use ids",
      .offset = offsetof(grid_spec, cells)},
+    {.key = "isa", .type = ACCEL_PARAM_ENUM, .def = "auto", .choices = ACCEL_ISA_CHOICES,
+     .help = "cells=blocks: the block kernels' instruction set: auto (GRIDBVH_ISA if set, else "
+             "AVX-512 where the CPU and the build have it, else AVX2), avx2, or avx512 (an error "
+             "where the CPU lacks it); the same hits, bit for bit",
+     .offset = offsetof(grid_spec, isa)},
 };
 
 static void grid_destroy(void *a)
@@ -138,9 +144,12 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
     rc = grid_cell_count("grid", res, max_bytes, &cells, err);
     if (rc) return rc;
 
+    int isa;
+    if (accel_isa_resolve(spec->isa, &isa, err)) return ACCEL_ERR_SPEC;
     grid_accel *g = calloc(1, sizeof *g);
     if (!g) return accel_fail(err, ACCEL_ERR_NOMEM, "grid: out of memory");
     g->naive = params->naive;
+    g->isa = isa;
     /* Blocks have no mailbox (grid_blocks.h): their copies are the
      * mailbox=0 ones, so the block test is compiled into half the copies. */
     g->mailbox = spec->mailbox != 0 && !use_blocks;
@@ -195,6 +204,7 @@ static int grid_build(const accel_scene *scene, const accel_params *params, int 
     stats->sah_cost = NAN;
     stats->depth = 1;
     stats->test_lanes = g->blocks.blocks ? 8 : 0;
+    stats->isa = g->blocks.blocks ? accel_isa_label(g->isa) : NULL; /* the per-id kernels have one */
     for (int a = 0; a < 3; a++) stats->res[a] = g->frame.res[a];
     *out = g;
     return ACCEL_OK;
@@ -246,7 +256,9 @@ static const char *const grid_variants[] = {
     "skip=macro,lambda=64,macro=8", "traverse=packet", "traverse=packet,mailbox=0",
     "traverse=packet,res=128", "traverse=packet,res=7x1x13", "traverse=packet,tri=naive",
     "cells=ids", "cells=ids,lambda=1", "traverse=packet,cells=ids",
-    "traverse=packet,cells=ids,res=7x1x13", "traverse=packet,lambda=1", NULL,
+    "traverse=packet,cells=ids,res=7x1x13", "traverse=packet,lambda=1",
+    /* the baseline units where auto picks AVX-512 (core/isa.h; tests/test_isa.c) */
+    "isa=avx2", "traverse=packet,isa=avx2", NULL,
 };
 
 const accel_kind accel_kind_grid = {

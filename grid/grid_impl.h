@@ -29,6 +29,7 @@ typedef struct {
     int mailbox;        /* the single-ray kernels' mailbox (off with blocks) */
     int packet_mailbox; /* traverse=packet: the packets' mailbox (mailbox=1) */
     int has_spheres;
+    int isa;            /* ACCEL_ISA_AVX2 or _AVX512 (core/isa.h): whose block kernels run */
     int traverse;       /* GRID_TRAVERSE_SINGLE / GRID_TRAVERSE_PACKET */
     uint8_t *macro;     /* traverse=packet: occupancy of GRID_MACRO^3 blocks of cells */
     /* Empty-space skipping (grid_skip.h): skip=cloud keeps one distance

@@ -74,18 +74,19 @@ static __attribute__((noinline)) int skip_jump_call(const grid_accel *g, grid_dd
 static inline __attribute__((always_inline)) void
 grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
             size_t count, accel_counters *c, int naive, int spheres, int mailbox,
-            grid_skip_mode skip)
+            grid_skip_mode skip, int use_blocks)
 {
     const accel_scene *s = &g->store.prims;
     const grid_frame *f = &g->frame;
     const uint32_t *offsets = g->cells.offsets;
     const uint32_t *refs = g->cells.refs;
     const uint64_t bound = (uint64_t)f->res[0] + f->res[1] + f->res[2] + 3;
-    /* cells=blocks: the shared block test (grid_blocks.h); built only for
-     * triangles with the watertight test and traced by the mailbox=0
-     * copies (grid_build.c), so the other copies never compile it. */
-    const grid_cell_blocks *blocks =
-        !naive && !spheres && !mailbox && g->blocks.offsets ? &g->blocks : NULL;
+    /* cells=blocks: the shared block test (grid_blocks.h), a constant of
+     * the copy: only the kernel unit k8_cells.c compiles it (once per ISA),
+     * for triangles with the watertight test and no mailbox (grid_build.c),
+     * and grid_trace.c sends a grid with blocks there. */
+    const grid_cell_blocks *blocks = use_blocks ? &g->blocks : NULL;
+    (void)naive, (void)spheres, (void)mailbox;
     for (size_t i = 0; i < count; i++) {
         accel_ray_prep p;
         accel_hit h = accel_hit_miss();
@@ -143,14 +144,35 @@ grid_kernel(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t
         const void *a, const accel_ray *rays, accel_hit *hits, uint8_t *occ, size_t count,  \
         accel_counters *c, int naive, int spheres, int mailbox)                             \
     {                                                                                       \
-        grid_kernel(a, rays, hits, occ, count, c, naive, spheres, mailbox, SKIP);           \
+        grid_kernel(a, rays, hits, occ, count, c, naive, spheres, mailbox, SKIP, 0);        \
     }                                                                                       \
     ACCEL_KERNEL_PAIR_SEL(NAME, NAME##_mode_kernel, KEEP_HIT, KEEP_OCC)
+
+/* The same on blocks (cells=blocks) for one skipping mode: triangles, the
+ * watertight test, no mailbox, so the flags are always 0 (the timed copy 0
+ * and the counted one; the flags passed are ignored). Compiled by the
+ * kernel unit k8_cells.c, once per ISA. */
+#define GRID_BLOCK_KERNELS(NAME, SKIP)                                                      \
+    static inline __attribute__((always_inline)) void NAME##_mode_kernel(                  \
+        const void *a, const accel_ray *rays, accel_hit *hits, uint8_t *occ, size_t count,  \
+        accel_counters *c, int naive, int spheres, int mailbox)                             \
+    {                                                                                       \
+        (void)naive, (void)spheres, (void)mailbox;                                          \
+        grid_kernel(a, rays, hits, occ, count, c, 0, 0, 0, SKIP, 1);                        \
+    }                                                                                       \
+    ACCEL_KERNEL_PAIR_SEL(NAME, NAME##_mode_kernel, (1, 0, 0, 0, 0, 0, 0, 0),               \
+                          (1, 0, 0, 0, 0, 0, 0, 0))
 
 /* The skipping modes' tables (grid_trace_cloud.c, grid_trace_macro.c):
  * [0] closest hit, [1] any hit. */
 extern const accel_kernel_table *const grid_cloud_tables[2];
 extern const accel_kernel_table *const grid_macro_tables[2];
+
+/* The block kernels' table of a skipping mode (GRID_SKIP_*) and query (0
+ * closest hit, 1 any hit), from the kernel unit k8_cells.c: the AVX2 copy
+ * and, where the build has it, the AVX-512 one (core/isa.h). */
+const accel_kernel_table *grid_k8_cells(int skip, int query);
+const accel_kernel_table *grid_k8_cells_avx512(int skip, int query);
 
 #ifdef __cplusplus
 }

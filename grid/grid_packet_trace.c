@@ -86,111 +86,53 @@
  * step bound is res[K] slices per packet (ACCEL_STEP_BOUND_BROKEN).
  */
 #include "core/coherence.h"
-#include "grid_packet_walk.h"
-
-#define P GRID_PACKET_SIZE
-
-_Static_assert(P == 64, "the active-ray mask is one uint64_t");
-
-/* Tests the primitives of slice k's cells [lo, hi] against the packet.
- * Returns 0 when an any-hit packet has no active ray left. */
-static inline __attribute__((always_inline)) int
-walk_slice(const grid_accel *g, grid_packet *pk, grid_packet_count *cn, accel_counters *c,
-           uint32_t *mail, int k, const int lo[2], const int hi[2], const double hull[2][2],
-           int naive, int spheres, int mailbox, int any_hit)
-{
-    const grid_frame *f = &g->frame;
-    const uint32_t *offsets = g->cells.offsets, *refs = g->cells.refs;
-    const uint32_t st1 = f->stride[pk->axis[1]], st2 = f->stride[pk->axis[2]];
-    /* cells=blocks: built for triangles with the watertight test only. */
-    const grid_cell_blocks *blocks = !naive && !spheres && g->blocks.offsets ? &g->blocks : NULL;
-    for (int j = lo[1]; j <= hi[1]; j++) {
-        const uint32_t row = (uint32_t)k * f->stride[pk->axis[0]] + (uint32_t)j * st2;
-        for (int i = lo[0]; i <= hi[0]; i++) {
-            const uint32_t cell = row + (uint32_t)i * st1, r = offsets[cell];
-            if (blocks ? !grid_packet_test_blocks(pk, cn, c, mail, blocks->blocks,
-                                                  blocks->offsets[cell], offsets[cell + 1] - r,
-                                                  g->store.prims.tri_count, hull, mailbox, any_hit)
-                       : !grid_packet_test_list(&g->store.prims, pk, cn, c, mail, refs + r,
-                                                offsets[cell + 1] - r, hull, naive, spheres,
-                                                mailbox, any_hit))
-                return 0;
-        }
-    }
-    return 1;
-}
-
-static inline __attribute__((always_inline)) void
-packet_walk(const grid_accel *g, grid_packet *pk, grid_packet_count *cn, accel_counters *c, int naive,
-            int spheres, int mailbox, int any_hit)
-{
-    const grid_frame *f = &g->frame;
-    const int K = pk->axis[0], nk = f->res[K], M = GRID_MACRO;
-    uint32_t mail[GRID_PACKET_MAIL];
-    if (mailbox) memset(mail, 0xFF, sizeof mail); /* ACCEL_MISS: no primitive */
-    uint32_t slices = 0;
-    for (int k = pk->k_start; k >= 0 && k < nk;) {
-        /* The slices left in this layer of macro cells, in walk order. */
-        const int layer = k / M;
-        int k_end = pk->kstep > 0 ? (layer + 1) * M - 1 : layer * M;
-        k_end = k_end < nk ? k_end : nk - 1;
-        int lo[2], hi[2];
-        double hull[2][2];
-        /* Tighter bounds once a quarter of the rays have stopped. */
-        if (4 * __builtin_popcountll(pk->active) <= 3 * __builtin_popcountll(pk->bounded))
-            grid_packet_bound(pk);
-        if (k_end != k && (!grid_packet_span(f, pk, k, k_end, lo, hi, hull) ||
-                           !grid_macro_any(g, K, pk->axis[1], pk->axis[2], layer, lo, hi))) {
-            slices += (uint32_t)(pk->kstep * (k_end - k) + 1);
-            if (ACCEL_STEP_BOUND_BROKEN(c, slices, nk)) return;
-            if (!grid_packet_leave_slice(f, pk, cn, c, k_end)) return;
-            k = k_end + pk->kstep;
-            continue;
-        }
-        for (;; k += pk->kstep) {
-            slices++;
-            if (ACCEL_STEP_BOUND_BROKEN(c, slices, nk)) return;
-            if (grid_packet_span(f, pk, k, k, lo, hi, hull) &&
-                !walk_slice(g, pk, cn, c, mail, k, lo, hi, hull, naive, spheres, mailbox, any_hit))
-                return;
-            if (!grid_packet_leave_slice(f, pk, cn, c, k)) return;
-            if (k == k_end) break;
-        }
-        k += pk->kstep;
-    }
-}
-
-static inline __attribute__((always_inline)) void
-packet_batch(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
-             size_t count, accel_counters *c, int naive, int spheres, int mailbox)
-{
-    grid_packet pk; /* about 24 KB, aligned by its members */
-    grid_packet_count cn;
-    for (size_t base = 0; base < count; base += P) {
-        const uint32_t n = (uint32_t)(count - base < P ? count - base : P);
-        for (size_t i = base + P; i < base + 2 * P && i < count; i += 2)
-            __builtin_prefetch(&rays[i]); /* the next packet: 2 rays per cache line */
-        const int mode = grid_packet_setup(&g->frame, g->cells.ref_count, GRID_PACKET_MAX_CELLS, &pk, rays + base, n);
-        if (mode == GRID_PACKET_SINGLE) {
-            grid_packet_trace_single(g, grid_intersect, grid_occluded, rays + base,
-                                     hits ? hits + base : NULL, occ ? occ + base : NULL, n, c,
-                                     base);
-            continue;
-        }
-        if (c) memset(&cn, 0, sizeof cn);
-        if (mode == GRID_PACKET_WALK)
-            packet_walk(g, &pk, &cn, c, naive, spheres, mailbox, occ != NULL);
-        grid_packet_finish(&g->store, &pk, &cn, hits, occ, c, base, mode == GRID_PACKET_WALK);
-    }
-}
+#include "core/isa.h"
+#include "grid_packet_kernel.h"
 
 /* The copies the experiments time (core/variant.h; issue 53's GRIDBVH_KLOG
  * runs): the mailbox on triangles (4) and spheres (6), and closest hits
- * with the naive test (5). */
-ACCEL_KERNEL_PAIR_SEL(grid_packet, packet_batch, (0, 0, 0, 0, 1, 1, 1, 0), (0, 0, 0, 0, 1, 0, 1, 0))
+ * with the naive test (5). The copies on blocks are k8_packet.c's. */
+static inline __attribute__((always_inline)) void
+packet_batch_ids(const grid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
+                 size_t count, accel_counters *c, int naive, int spheres, int mailbox)
+{
+    packet_batch(g, rays, hits, occ, count, c, naive, spheres, mailbox, 0);
+}
+ACCEL_KERNEL_PAIR_SEL(grid_packet, packet_batch_ids, (0, 0, 0, 0, 1, 1, 1, 0), (0, 0, 0, 0, 1, 0, 1, 0))
 
-/* Packets in any ray order (core/coherence.h); incoherent packets fall
- * back to the single-ray grid in packet_batch, on the walk's criterion. */
-ACCEL_COHERENT_ENTRIES(grid_packet_intersect, grid_packet_occluded, const void,
-                       grid_packet_hit_table, grid_packet_occ_table, grid_packet_variant_flags,
-                       (accel_hit_batch_fn)NULL, (accel_occ_batch_fn)NULL)
+/* The packet table of g: with cells=blocks the kernel unit's of g's isa. */
+static const accel_kernel_table *packet_table(const grid_accel *g, int query)
+{
+    if (g->blocks.offsets) {
+#ifdef GRIDBVH_AVX512
+        if (g->isa == ACCEL_ISA_AVX512) return grid_k8_packet_avx512(query);
+#endif
+        return grid_k8_packet(query);
+    }
+    return query ? &grid_packet_occ_table : &grid_packet_hit_table;
+}
+
+static void packets_hit(const void *a, const accel_ray *r, accel_hit *h, size_t n, accel_counters *c)
+{
+    accel_run_kernel(packet_table(a, 0), a, r, h, n, c, grid_packet_variant_flags(a));
+}
+
+static void packets_occ(const void *a, const accel_ray *r, uint8_t *o, size_t n, accel_counters *c)
+{
+    accel_run_kernel(packet_table(a, 1), a, r, o, n, c, grid_packet_variant_flags(a));
+}
+
+/* Packets in any ray order (core/coherence.h, ACCEL_COHERENT_ENTRIES's
+ * entries with the table chosen per grid); incoherent packets fall back to
+ * the single-ray grid in packet_batch, on the walk's criterion. */
+void grid_packet_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
+                           size_t count, accel_counters *c)
+{
+    accel_coherent_intersect(accel, rays, hits, count, c, packets_hit, (accel_hit_batch_fn)NULL);
+}
+
+void grid_packet_occluded(const void *accel, const accel_ray *rays, uint8_t *occ, size_t count,
+                          accel_counters *c)
+{
+    accel_coherent_occluded(accel, rays, occ, count, c, packets_occ, (accel_occ_batch_fn)NULL);
+}

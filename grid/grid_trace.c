@@ -25,8 +25,11 @@
  * into one variant table per query and skipping mode (core/variant.h):
  * spheres, naive triangles and mailbox (ACCEL_V_OPT) as constants. The
  * uncounted copies contain no counting code and no step-bound check;
- * counted runs check the bound nx+ny+nz+3 cells.
+ * counted runs check the bound nx+ny+nz+3 cells. The kernels on blocks
+ * (cells=blocks) live in the kernel unit k8_cells.c, compiled once per
+ * ISA (core/isa.h); grid_table picks the grid's.
  */
+#include "core/isa.h"
 #include "grid_kernel.h"
 
 /* The copies the experiments time (core/variant.h; issue 53's GRIDBVH_KLOG
@@ -34,9 +37,16 @@
  * and closest hits with the naive test (5). */
 GRID_KERNELS(grid, GRID_SKIP_NONE, (1, 0, 0, 0, 1, 1, 1, 0), (1, 0, 0, 0, 1, 0, 1, 0))
 
-/* The table of g's skipping mode; query 0: closest hit, 1: any hit. */
+/* The table of g's skipping mode; query 0: closest hit, 1: any hit. With
+ * cells=blocks the kernel unit's (k8_cells.c) of the grid's isa. */
 static const accel_kernel_table *grid_table(const grid_accel *g, int query)
 {
+    if (g->blocks.offsets) {
+#ifdef GRIDBVH_AVX512
+        if (g->isa == ACCEL_ISA_AVX512) return grid_k8_cells_avx512(g->skip, query);
+#endif
+        return grid_k8_cells(g->skip, query);
+    }
     if (g->skip == GRID_SKIP_CLOUD) return grid_cloud_tables[query];
     if (g->skip == GRID_SKIP_MACRO) return grid_macro_tables[query];
     return query ? &grid_occ_table : &grid_hit_table;

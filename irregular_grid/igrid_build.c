@@ -33,6 +33,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/isa.h"
 #include "igrid_impl.h"
 
 /* split=adaptive, above the paper's depth too, for nodes of at least this
@@ -537,9 +538,12 @@ static int igrid_build(const accel_scene *scene, const accel_params *params, int
     *out = NULL;
     const igrid_spec *spec = ACCEL_SPEC(params, igrid_spec);
     double max_bytes = spec->max_mb * 1048576.0;
+    int isa;
+    if (accel_isa_resolve(spec->isa, &isa, err)) return ACCEL_ERR_SPEC;
     igrid_accel *g = calloc(1, sizeof *g);
     if (!g) return accel_fail(err, ACCEL_ERR_NOMEM, "irregular_grid: out of memory");
     g->naive = params->naive;
+    g->isa = isa;
     g->has_spheres = scene->sphere_count > 0;
     /* Blocks where the block test applies (triangles, the watertight
      * test); a block is tested whole, so they have no mailbox and are
@@ -578,6 +582,7 @@ static int igrid_build(const accel_scene *scene, const accel_params *params, int
     stats->sah_cost = NAN;
     stats->depth = g->shift + 1;
     stats->test_lanes = g->blocks.blocks ? 8 : 0;
+    stats->isa = g->blocks.blocks ? accel_isa_label(g->isa) : NULL; /* the per-id walk has one */
     for (int a = 0; a < 3; a++) stats->res[a] = g->top_res[a];
     *out = g;
     return ACCEL_OK;
@@ -618,6 +623,7 @@ static const char *const igrid_variants[] = {
     "cells=blocks",
     "cells=blocks,merge=0,expand=0",
     "cells=blocks,top_lambda=2,max_depth=2",
+    "cells=blocks,isa=avx2", /* the baseline unit where auto picks AVX-512 (test_isa.c) */
     NULL,
 };
 

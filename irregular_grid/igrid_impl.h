@@ -18,9 +18,10 @@ extern "C" {
 typedef struct {
     double top_lambda, sub_lambda, split_ratio, alpha, ct, max_mb;
     int max_depth, split, subdivide, split_min, merge, expand, mailbox, cells;
+    int isa; /* ACCEL_ISA_AUTO, _AVX2, _AVX512 (core/isa.h) */
 } igrid_spec;
 
-#define IGRID_PARAM_COUNT 14
+#define IGRID_PARAM_COUNT 15
 extern const accel_param_def igrid_params[IGRID_PARAM_COUNT];
 
 typedef struct {
@@ -42,6 +43,7 @@ typedef struct {
     grid_cell_blocks blocks;
     uint64_t step_bound; /* most cells one ray can visit: voxels per axis summed, + 3 */
     int naive, mailbox, has_spheres;
+    int isa; /* ACCEL_ISA_AVX2 or _AVX512 (core/isa.h): whose block kernels run */
 } igrid_accel;
 
 /*

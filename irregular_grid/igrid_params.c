@@ -3,6 +3,7 @@
  * (key, type, default, range, help), which the spec parser and --help
  * read, and where each value goes in igrid_spec (igrid_impl.h).
  */
+#include "core/isa.h"
 #include "igrid_impl.h"
 
 #define STR_(x) #x
@@ -77,4 +78,9 @@ const accel_param_def igrid_params[IGRID_PARAM_COUNT] = {
              "mailbox) or blocks (its triangles copied 8 to a block, tested 8 at a time by the "
              "block test the wide BVH and the grid use; no mailbox); spheres and tri=naive use ids",
      .offset = offsetof(igrid_spec, cells)},
+    {.key = "isa", .type = ACCEL_PARAM_ENUM, .def = "auto", .choices = ACCEL_ISA_CHOICES,
+     .help = "cells=blocks: the block kernels' instruction set: auto (GRIDBVH_ISA if set, else "
+             "AVX-512 where the CPU and the build have it, else AVX2), avx2, or avx512 (an error "
+             "where the CPU lacks it); the same hits, bit for bit",
+     .offset = offsetof(igrid_spec, isa)},
 };

@@ -31,6 +31,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "core/isa.h"
 #include "ngrid_impl.h"
 
 #define STR_(x) #x
@@ -43,6 +44,7 @@ typedef struct {
     double lambda, sub_lambda, c_step, c_isect, max_mb;
     char res[ACCEL_PARAM_TEXT];
     int sub_res, threshold, depth, is_auto, lookahead, overlap, mailbox, layout, traverse, cells;
+    int isa; /* ACCEL_ISA_AUTO, _AVX2, _AVX512 (core/isa.h) */
 } ngrid_spec;
 
 static const accel_param_def ngrid_params[] = {
@@ -112,6 +114,11 @@ static const accel_param_def ngrid_params[] = {
              "the block test the wide BVH uses; the levels' cost model is still priced for ids, "
              "so ids stay the default); layout=compact, spheres and tri=naive use ids",
      .offset = offsetof(ngrid_spec, cells)},
+    {.key = "isa", .type = ACCEL_PARAM_ENUM, .def = "auto", .choices = ACCEL_ISA_CHOICES,
+     .help = "cells=blocks: the block kernels' instruction set: auto (GRIDBVH_ISA if set, else "
+             "AVX-512 where the CPU and the build have it, else AVX2), avx2, or avx512 (an error "
+             "where the CPU lacks it); the same hits, bit for bit",
+     .offset = offsetof(ngrid_spec, isa)},
 };
 
 /* ---- the flat structure ------------------------------------------------------------ */
@@ -335,6 +342,8 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
         return accel_fail(err, ACCEL_ERR_RANGE,
                           "nested_grid: sub_res=1 makes sub-grids of one cell (use 0 or 2..256)");
 
+    int isa;
+    if (accel_isa_resolve(spec->isa, &isa, err)) return ACCEL_ERR_SPEC;
     int res[3];
     int rc = grid_parse_res(spec->res, res, err);
     if (rc) return ngrid_wrap_error(err, rc, "top level");
@@ -361,6 +370,7 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
     }
     if (!rc) {
         g->naive = params->naive;
+        g->isa = isa;
         /* lists as blocks have no mailbox in single rays: traced by the
          * mailbox=0 copies; a packet's mailbox pays with blocks too */
         g->mailbox = spec->mailbox != 0 &&
@@ -390,6 +400,7 @@ static int build_over(const accel_scene *scene, const accel_params *params, int 
     stats->sah_cost = NAN;
     stats->depth = g->levels;
     stats->test_lanes = g->blocks.first ? 8 : 0;
+    stats->isa = g->blocks.first ? accel_isa_label(g->isa) : NULL; /* the per-id walks have one */
     for (int a = 0; a < 3; a++) stats->res[a] = res[a];
     *out = g;
     return ACCEL_OK;
@@ -463,7 +474,9 @@ static const char *const ngrid_variants[] = {
     "traverse=packet,mailbox=0", "traverse=packet,tri=naive", "traverse=packet,layout=compact",
     "traverse=packet,threshold=2,sub_res=24", "cells=blocks", "cells=blocks,threshold=1,depth=4,sub_res=3",
     "traverse=packet,cells=blocks", "traverse=packet,cells=blocks,threshold=1,depth=4,sub_res=3",
-    "traverse=packet,cells=blocks,mailbox=0", NULL,
+    "traverse=packet,cells=blocks,mailbox=0",
+    /* the baseline units where auto picks AVX-512 (core/isa.h; tests/test_isa.c) */
+    "cells=blocks,isa=avx2", "traverse=packet,cells=blocks,isa=avx2", NULL,
 };
 
 const accel_kind accel_kind_nested_grid = {

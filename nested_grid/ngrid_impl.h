@@ -59,6 +59,7 @@ typedef struct {
     uint64_t step_bound; /* most cells (all levels) one ray can visit */
     int levels;
     int naive, mailbox, has_spheres; /* mailbox: the single-ray walks' (off with blocks) */
+    int isa;                /* ACCEL_ISA_AVX2 or _AVX512 (core/isa.h): whose block kernels run */
     int packet_mailbox;     /* traverse=packet: the packets' mailbox (mailbox=1) */
     int traverse;           /* NGRID_TRAVERSE_SINGLE / NGRID_TRAVERSE_PACKET */
     ngrid_compact *compact; /* layout=compact: the only arrays kept (nodes etc. freed) */

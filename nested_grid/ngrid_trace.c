@@ -25,103 +25,36 @@
  * table per query (core/variant.h): spheres, naive triangles and mailbox
  * (ACCEL_V_OPT) as constants. The uncounted copies contain no counting code and
  * no step-bound check; counted runs check the build's bound on the cells one
- * ray can visit over all levels.
+ * ray can visit over all levels. The walk itself is ngrid_kernel.h's; its
+ * copies on blocks (cells=blocks) are the kernel unit k8_cells.c's, one
+ * per ISA (core/isa.h).
  */
-#include "core/variant.h"
-#include "ngrid_impl.h"
-
-
-static inline __attribute__((always_inline)) void
-ngrid_kernel(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
-             size_t count, accel_counters *c, int naive, int spheres, int mailbox)
-{
-    const accel_scene *s = &g->store.prims;
-    const ngrid_node *nodes = g->nodes;
-    const grid_frame *top = &nodes[0].frame;
-    const uint32_t *lists = g->lists;
-    /* cells=blocks: the shared block test (grid/grid_blocks.h). */
-    const grid_list_blocks *blocks =
-        !naive && !spheres && !mailbox && g->blocks.first ? &g->blocks : NULL;
-    for (size_t i = 0; i < count; i++) {
-        accel_ray_prep p;
-        accel_hit h = accel_hit_miss();
-        uint32_t steps = 0, empty = 0, tests = 0, skips = 0, boxes = 0;
-        uint32_t level_steps[NGRID_MAX_LEVELS] = {0};
-        if (grid_ray_enter(top, &rays[i], g->ref_count > 0, &p, &boxes)) {
-            /* Set up the top-level 3D DDA for the ray. The current level's
-             * walk lives in `d` (registers); the parents' walks wait on a
-             * small stack while a sub-grid is walked. Distances are doubles
-             * (grid_core.h); t_cell is where the ray entered the current
-             * cell, at whatever level. */
-            grid_dda d, parents[NGRID_MAX_LEVELS - 1];
-            const uint32_t *parent_words[NGRID_MAX_LEVELS - 1];
-            int level = 0;
-            double t_cell = grid_dda_init(&d, top, &p, p.t_near);
-            const uint32_t *words = g->cells + nodes[0].cell_base;
-            uint32_t box[GRID_MAILBOX];
-            wide_leaf_ray_8 lr; /* a few broadcasts: set always, used by blocks */
-            leaf_setup_8(&lr, &p);
-            if (mailbox) grid_mailbox_clear(box);
-            float t = p.t_far, u = 0.0f, v = 0.0f;
-            /* Walk the ray through the cells, descending into sub-grids. */
-            for (;;) {
-                if (c) {
-                    steps++;
-                    level_steps[level]++;
-                }
-                if (ACCEL_STEP_BOUND_BROKEN(c, steps, g->step_bound)) break;
-                uint32_t w = words[d.cell];
-                if (w & NGRID_CHILD) {
-                    /* Continue in the sub-grid from the ray's entry into this cell. */
-                    const ngrid_node *child = &nodes[w & ~NGRID_CHILD];
-                    parents[level] = d;
-                    parent_words[level] = words;
-                    level++;
-                    words = g->cells + child->cell_base;
-                    grid_dda_init(&d, &child->frame, &p, t_cell);
-                    continue;
-                }
-                const uint32_t *list = lists + w;
-                uint32_t n = list[0];
-                if (c && n == 0) empty++;
-                if (blocks) {
-                    if (c) tests += n;
-                    uint32_t b0 = blocks->first[w];
-                    if (n && grid_blocks_hit(blocks->blocks, b0, b0 + (n + 7) / 8, s->tri_count,
-                                             &lr, &p, &h, &t, &u, &v, occ != NULL))
-                        goto done;
-                } else if (grid_cell_hit(s, list + 1, n, &p, &h, &t, &u, &v, box, &tests, &skips,
-                                         c, occ != NULL, naive, spheres, mailbox)) {
-                    goto done;
-                }
-                /* A hit (or the ray's end) before this cell's exit: nothing
-                 * in a later cell, at any level, can be nearer. */
-                double t_exit = grid_dda_exit(&d);
-                if (t_exit >= t) break;
-                /* Next cell of this grid; once the ray leaves a sub-grid,
-                 * the parent's walk resumes with its next cell. */
-                while (!grid_dda_step(&d)) {
-                    if (level == 0) goto done;
-                    level--;
-                    d = parents[level];
-                    words = parent_words[level];
-                }
-                t_cell = t_exit;
-            }
-        }
-    done:
-        accel_prim_store_answer(&g->store, h, hits, occ, i);
-        if (c) {
-            accel_count_ray(c, i, steps, empty, boxes, tests, skips);
-            for (int l = 0; l < NGRID_MAX_LEVELS; l++) c->level_steps[l] += level_steps[l];
-        }
-    }
-}
+#include "core/isa.h"
+#include "ngrid_kernel.h"
 
 /* The copies the experiments time (core/variant.h; issue 53's GRIDBVH_KLOG
  * runs): index 0, the default on triangles (4) and spheres (6), and
  * closest hits with the naive test (5). */
-ACCEL_KERNEL_PAIR_SEL(ngrid, ngrid_kernel, (1, 0, 0, 0, 1, 1, 1, 0), (1, 0, 0, 0, 1, 0, 1, 0))
+static inline __attribute__((always_inline)) void
+ngrid_kernel_ids(const ngrid_accel *g, const accel_ray *rays, accel_hit *hits, uint8_t *occ,
+                 size_t count, accel_counters *c, int naive, int spheres, int mailbox)
+{
+    ngrid_kernel(g, rays, hits, occ, count, c, naive, spheres, mailbox, 0);
+}
+ACCEL_KERNEL_PAIR_SEL(ngrid, ngrid_kernel_ids, (1, 0, 0, 0, 1, 1, 1, 0), (1, 0, 0, 0, 1, 0, 1, 0))
+
+/* The table of g (query 0 closest hit, 1 any hit): with cells=blocks the
+ * kernel unit's (k8_cells.c) of g's isa. */
+static const accel_kernel_table *ngrid_table(const ngrid_accel *g, int query)
+{
+    if (g->blocks.first) {
+#ifdef GRIDBVH_AVX512
+        if (g->isa == ACCEL_ISA_AVX512) return ngrid_k8_cells_avx512(query);
+#endif
+        return ngrid_k8_cells(query);
+    }
+    return query ? &ngrid_occ_table : &ngrid_hit_table;
+}
 
 void ngrid_single_intersect(const void *accel, const accel_ray *rays, accel_hit *hits,
                             size_t count, accel_counters *counters)
@@ -131,7 +64,7 @@ void ngrid_single_intersect(const void *accel, const accel_ray *rays, accel_hit 
         ngrid_compact_intersect(g, rays, hits, count, counters);
         return;
     }
-    accel_run_kernel(&ngrid_hit_table, accel, rays, hits, count, counters, ngrid_flags(accel));
+    accel_run_kernel(ngrid_table(g, 0), accel, rays, hits, count, counters, ngrid_flags(accel));
 }
 
 void ngrid_single_occluded(const void *accel, const accel_ray *rays, uint8_t *occluded,
@@ -142,7 +75,7 @@ void ngrid_single_occluded(const void *accel, const accel_ray *rays, uint8_t *oc
         ngrid_compact_occluded(g, rays, occluded, count, counters);
         return;
     }
-    accel_run_kernel(&ngrid_occ_table, accel, rays, occluded, count, counters, ngrid_flags(accel));
+    accel_run_kernel(ngrid_table(g, 1), accel, rays, occluded, count, counters, ngrid_flags(accel));
 }
 
 /* ---- accel.h's conservative walk --------------------------------------------

@@ -1,12 +1,14 @@
 /*
- * test_isa.c - the wide BVH's two instruction sets (core/isa.h): the
+ * test_isa.c - the kernel units' two instruction sets (core/isa.h): the
  * detection agrees with the kernel's own list of CPU flags, the switches
  * (isa=, GRIDBVH_ISA) choose what they say and refuse what cannot run, and
  * the AVX-512 tables answer bit for bit what the AVX2 tables answer (t, u,
  * v, prim, the any-hit answers and every counter) for every row: single
  * rays in both orders, branchy, quantized, packets, streams, widths 4 and 8, blocks
  * of 4 and 8, on built-in scenes with primary, shadow and diffuse rays and
- * on the stability study's stiff cases. Where the CPU or the build has no
+ * on the stability study's stiff cases; the same for the grid family's
+ * block kernels (grid, nested_grid and irregular_grid with cells=blocks,
+ * single rays and packets, every skipping mode). Where the CPU or the build has no
  * AVX-512 the comparison is skipped (a note says why) and the AVX2 tables
  * are still checked against the reference.
  */
@@ -30,6 +32,23 @@ static const char *const isa_specs[] = {
     "width=8,traverse=stream", "width=4,block=4,traverse=stream,stream=64,hybrid=0",
 };
 #define ISA_SPEC_COUNT (sizeof isa_specs / sizeof *isa_specs)
+
+/* The grid family's kernel units on blocks (grid/k8_*.c, nested_grid/k8_*.c,
+ * irregular_grid/k8_cells.c): single rays in every skipping mode, packets
+ * with and without their mailbox, nested levels of both walks. */
+static const char *const isa_grid_specs[] = {
+    "grid:skip=none",
+    "grid:skip=cloud",
+    "grid:skip=macro",
+    "grid:traverse=packet",
+    "grid:traverse=packet,mailbox=0",
+    "nested_grid:cells=blocks",
+    "nested_grid:cells=blocks,depth=3,threshold=4",
+    "nested_grid:cells=blocks,traverse=packet",
+    "nested_grid:cells=blocks,traverse=packet,mailbox=0,threshold=4",
+    "irregular_grid:cells=blocks",
+};
+#define ISA_GRID_SPEC_COUNT (sizeof isa_grid_specs / sizeof *isa_grid_specs)
 
 static int avx512_usable(void) { return accel_isa_built_avx512() && accel_isa_cpu_avx512(); }
 
@@ -118,6 +137,47 @@ TEST(isa_detection_and_switches)
         CHECK(st.isa && !strcmp(st.isa, "avx512"));
         kind->destroy(a);
     }
+
+    /* The grid family: isa= where the cells hold blocks, recorded in the
+     * statistics; the per-id cells (one kernel) record none; avx512 where
+     * it cannot run is the wide BVH's spec error. */
+    static const char *const grids[][2] = {{"grid", ""},
+                                           {"nested_grid", "cells=blocks,"},
+                                           {"irregular_grid", "cells=blocks,"}};
+    for (int k = 0; k < 3; k++) {
+        char spec[128];
+        snprintf(spec, sizeof spec, "%s:%sisa=avx2", grids[k][0], grids[k][1]);
+        rc = accel_build_spec(spec, &s, 1, &kind, &a, &st, &err);
+        CHECKF(rc == 0, "%s: rc %d (%s)", spec, rc, rc ? err.msg : "");
+        if (rc == 0) {
+            CHECKF(st.isa && !strcmp(st.isa, "avx2"), "%s built with %s", spec, st.isa ? st.isa : "(none)");
+            kind->destroy(a);
+        }
+        snprintf(spec, sizeof spec, "%s:%sisa=auto", grids[k][0], grids[k][1]);
+        rc = accel_build_spec(spec, &s, 1, &kind, &a, &st, &err);
+        CHECKF(rc == 0, "%s: rc %d (%s)", spec, rc, rc ? err.msg : "");
+        if (rc == 0) {
+            const char *want = getenv("GRIDBVH_ISA") ? NULL : have ? "avx512" : "avx2";
+            CHECKF(st.isa && (!want || !strcmp(st.isa, want)), "%s built with %s", spec,
+                   st.isa ? st.isa : "(none)");
+            kind->destroy(a);
+        }
+        snprintf(spec, sizeof spec, "%s:cells=ids", grids[k][0]);
+        rc = accel_build_spec(spec, &s, 1, &kind, &a, &st, &err);
+        CHECKF(rc == 0, "%s: rc %d (%s)", spec, rc, rc ? err.msg : "");
+        if (rc == 0) {
+            CHECKF(st.isa == NULL, "%s records isa %s", spec, st.isa);
+            kind->destroy(a);
+        }
+        snprintf(spec, sizeof spec, "%s:%sisa=avx512", grids[k][0], grids[k][1]);
+        rc = accel_build_spec(spec, &s, 1, &kind, &a, &st, &err);
+        CHECKF(have ? rc == 0 : rc == ACCEL_ERR_SPEC && strstr(err.msg, "isa=avx512"), "%s: rc %d (%s)", spec,
+               rc, rc ? err.msg : "");
+        if (rc == 0) {
+            CHECKF(st.isa && !strcmp(st.isa, "avx512"), "%s built with %s", spec, st.isa ? st.isa : "(none)");
+            kind->destroy(a);
+        }
+    }
     scene_free(&s);
 }
 
@@ -150,14 +210,16 @@ static void isa_trace(const accel_kind *kind, const void *a, const isa_set *set,
     free(counted);
 }
 
-/* One spec built for both ISAs (or AVX2 alone), compared ray by ray.
- * Returns the rays that differ. */
+/* One spec built for both ISAs (or AVX2 alone), compared ray by ray;
+ * spec is bvh's parameters, or a whole kind:parameters when it names its
+ * kind. Returns the rays that differ. */
 static size_t isa_compare(const accel_scene *s, const char *spec, const isa_set *sets, int set_count,
                           int both)
 {
     char specs[2][256];
-    snprintf(specs[0], sizeof specs[0], "bvh:%s,isa=avx2", spec);
-    snprintf(specs[1], sizeof specs[1], "bvh:%s,isa=avx512", spec);
+    const char *kind_prefix = strchr(spec, ':') ? "" : "bvh:";
+    snprintf(specs[0], sizeof specs[0], "%s%s,isa=avx2", kind_prefix, spec);
+    snprintf(specs[1], sizeof specs[1], "%s%s,isa=avx512", kind_prefix, spec);
     const accel_kind *kind;
     void *a[2] = {NULL, NULL};
     accel_build_stats st;
@@ -223,8 +285,8 @@ static int isa_both(void)
 }
 
 /* Built-in scenes (spheres included) and the bunny if ../shared is there,
- * with primary, shadow and diffuse rays. */
-TEST(isa_same_hits_scenes)
+ * with primary, shadow and diffuse rays, for every spec of the list. */
+static void isa_scenes(const char *const *specs, size_t spec_count)
 {
     int both = isa_both();
     char bunny[512] = "";
@@ -255,7 +317,7 @@ TEST(isa_same_hits_scenes)
             static const char *const names[] = {"primary", "shadow", "diffuse"};
             isa_set sets[3];
             for (int k = 0; k < 3; k++) sets[k] = (isa_set){names[k], rs[k].rays, rs[k].count, ref[k]};
-            for (size_t i = 0; i < ISA_SPEC_COUNT; i++) isa_compare(&s, isa_specs[i], sets, 3, both);
+            for (size_t i = 0; i < spec_count; i++) isa_compare(&s, specs[i], sets, 3, both);
         } else {
             test_fail(__FILE__, __LINE__, "%s: rays: %s", scenes[si], err.msg);
         }
@@ -267,9 +329,12 @@ TEST(isa_same_hits_scenes)
     }
 }
 
+TEST(isa_same_hits_scenes) { isa_scenes(isa_specs, ISA_SPEC_COUNT); }
+TEST(isa_grid_same_hits_scenes) { isa_scenes(isa_grid_specs, ISA_GRID_SPEC_COUNT); }
+
 /* The stability study's stiff cases (vertex and edge rays, axis rays on
- * split planes, far and tiny scenes...), every row. */
-TEST(isa_same_hits_stiff)
+ * split planes, far and tiny scenes...), every spec of the list. */
+static void isa_stiff(const char *const *specs, size_t spec_count)
 {
     int both = isa_both();
     for (int ci = 0; ci < stiff_case_count(); ci++) {
@@ -278,9 +343,12 @@ TEST(isa_same_hits_stiff)
         accel_hit *ref = test_oracle_hits(&c.scene, c.rays.rays, c.rays.count, TEST_ORACLE_REFERENCE);
         if (ref) {
             isa_set set = {c.name, c.rays.rays, c.rays.count, ref};
-            for (size_t i = 0; i < ISA_SPEC_COUNT; i++) isa_compare(&c.scene, isa_specs[i], &set, 1, both);
+            for (size_t i = 0; i < spec_count; i++) isa_compare(&c.scene, specs[i], &set, 1, both);
         }
         free(ref);
         stiff_case_free(&c);
     }
 }
+
+TEST(isa_same_hits_stiff) { isa_stiff(isa_specs, ISA_SPEC_COUNT); }
+TEST(isa_grid_same_hits_stiff) { isa_stiff(isa_grid_specs, ISA_GRID_SPEC_COUNT); }
