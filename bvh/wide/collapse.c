@@ -30,6 +30,8 @@
  * the collapse reaches them, so a depth-first walk streams memory forward.
  * Node and block indices depend only on the binary tree, so the wide tree
  * is as deterministic as the binary one (identical for any thread count).
+ * That is layout=dfs; layout=bfs and layout=mixed place the same tree
+ * otherwise afterwards (place_bfs, place_mixed; wide.h).
  */
 #include <math.h>
 #include <stdlib.h>
@@ -709,6 +711,8 @@ static int collapse_tree(const bvh *b, bvh_wide *w, const bvh_wide_collapse *cc,
                                  (double)x.block_count * block_size(w->block) +
                                  (w->layout == WIDE_LAYOUT_MIXED
                                       ? (double)x.block_count * sizeof(uint64_t) + 64.0 * x.leaf_count
+                                  : w->layout == WIDE_LAYOUT_BFS /* the renumbered copy */
+                                      ? (double)x.node_count * node_size(w->width)
                                       : 0.0),
                              "collapse tables, wide nodes and leaf blocks", err);
     if (rc == 0 && w->layout == WIDE_LAYOUT_BFS && x.node_count) {
