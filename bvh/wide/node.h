@@ -193,6 +193,17 @@ void bvh_wide_set_perm(float *rows, int width, int k);
  * perm rows (bits 24..29, wide.h); its k used slots' boxes and child
  * references must be set (collapse.c). */
 void bvh_wide_set_any_perm(float *rows, int width, int k);
+/* layout=bfs (layout.c): the depth-first nodes src (n, root 0) copied to
+ * dst level by level, the leaves' blocks renumbered in that order
+ * (leaves[].first_block follows). Returns 1 when out of memory. */
+int bvh_wide_place_bfs(const float *src, float *dst, uint32_t n, int width, bvh_wide_pool_leaf *leaves,
+                       uint32_t leaf_count, uint32_t block_count);
+/* layout=mixed (layout.c): the one pool of w (w->nodes == w->blocks) with
+ * the depth-first nodes (node_count of them, root 0, references to block
+ * indices) placed in it, references rewritten to 64-byte lines, w->root,
+ * w->pool_bytes and w->block_at set; the blocks are left to pack. */
+int bvh_wide_place_mixed(bvh_wide *w, const float *nodes, uint32_t node_count, uint32_t block_count,
+                         accel_error *err);
 /* The decoded box of child c of a quantized node (lo[3], hi[3]). */
 void bvh_wide_qbox(const wide_qnode8 *n, int c, float *lo, float *hi);
 /* Block k of w's pool as its rows (v[(3 * vertex + axis) * block + lane])
