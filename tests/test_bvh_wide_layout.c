@@ -319,3 +319,71 @@ TEST(bvh_wide_layout_placement)
     }
     scene_free(&s);
 }
+
+/* ---- the conservative walk (wide/walk.c) on every layout ---------------------- */
+
+typedef struct {
+    uint32_t *ids;
+    size_t n, cap;
+} walk_log;
+
+static float log_visit(void *ctx, uint32_t prim, float t_max)
+{
+    walk_log *l = ctx;
+    if (l->n < l->cap) l->ids[l->n] = prim;
+    l->n++;
+    return t_max;
+}
+
+/* The same tree placed otherwise: the walk visits the same primitives in
+ * the same order, with the same step count, ray by ray. */
+TEST(bvh_wide_layout_walk_same_visits)
+{
+    accel_scene s;
+    accel_error err = {0};
+    if (scene_create("teapot_stadium:n=4,stadium=16,tiers=3", &s, &err)) {
+        test_fail(__FILE__, __LINE__, "%s", err.msg);
+        return;
+    }
+    lay_set sets[4];
+    if (!lay_sets(&s, 16, sets)) {
+        lay_free(sets);
+        scene_free(&s);
+        return;
+    }
+    static const char *const specs[] = {"bvh:width=8", "bvh:width=8,layout=bfs", "bvh:width=8,layout=mixed"};
+    const accel_kind *kinds[3];
+    void *accels[3] = {NULL, NULL, NULL};
+    accel_build_stats st;
+    int built = 1;
+    for (int k = 0; k < 3; k++)
+        if (accel_build_spec(specs[k], &s, 1, &kinds[k], &accels[k], &st, &err)) {
+            test_fail(__FILE__, __LINE__, "%s: %s", specs[k], err.msg);
+            built = 0;
+        }
+    enum { CAP = 4096 };
+    static uint32_t ids[3][CAP];
+    size_t walked = 0, differ = 0, visits = 0;
+    for (int i = 0; built && i < 4; i++) {
+        for (size_t r = 0; r < sets[i].rays.count; r += 3) {
+            walk_log logs[3];
+            uint32_t steps[3];
+            for (int k = 0; k < 3; k++) {
+                logs[k] = (walk_log){ids[k], 0, CAP};
+                steps[k] = 0;
+                kinds[k]->walk(accels[k], &sets[i].rays.rays[r], 1e-3f, log_visit, &logs[k], &steps[k]);
+            }
+            walked++;
+            visits += logs[0].n;
+            for (int k = 1; k < 3; k++)
+                differ += logs[k].n != logs[0].n || steps[k] != steps[0] ||
+                          memcmp(ids[k], ids[0], (logs[0].n < CAP ? logs[0].n : CAP) * sizeof(uint32_t)) != 0;
+        }
+    }
+    CHECKF(!built || (walked > 100 && visits > walked), "%zu rays walked, %zu visits", walked, visits);
+    CHECKF(differ == 0, "%zu walks differ from layout=dfs's", differ);
+    for (int k = 0; k < 3; k++)
+        if (accels[k]) kinds[k]->destroy(accels[k]);
+    lay_free(sets);
+    scene_free(&s);
+}
