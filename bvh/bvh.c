@@ -109,6 +109,18 @@ static const accel_param_def bvh_params[] = {
              "outward (128-byte nodes instead of 256; the octant order pushed by branches, as "
              "order=branchy; update rebuilds) (0/1)",
      .offset = offsetof(bvh_spec, quant)},
+    {.key = "layout", .type = ACCEL_PARAM_ENUM, .def = "dfs", .choices = "dfs|bfs|mixed",
+     .help = "width=4|8: nodes and leaf blocks in memory: two pools numbered depth-first (dfs), "
+             "or level by level (bfs), or (width=8, single rays; update rebuilds) one pool, each "
+             "node followed by its leaf children's blocks, then its node children depth-first "
+             "(mixed); the same hits and counts",
+     .offset = offsetof(bvh_spec, layout)},
+    {.key = "any_order", .type = ACCEL_PARAM_ENUM, .def = "near",
+     .choices = "near|octant|area|leaf",
+     .help = "width=8, single rays, order=octant: the child order of any-hit queries: the "
+             "closest-hit one (near), the ray's octant order for every count (octant), the "
+             "largest box first (area), or leaf children first, most blocks first (leaf)",
+     .offset = offsetof(bvh_spec, any_order)},
     {.key = "isa", .type = ACCEL_PARAM_ENUM, .def = "auto", .choices = ACCEL_ISA_CHOICES,
      .help = "width=4|8: the kernels' instruction set: auto (GRIDBVH_ISA if set, else AVX-512 "
              "where the CPU has it, else AVX2), avx2, or avx512 (an error where the CPU lacks it); "
@@ -191,6 +203,19 @@ static int options_from_params(const accel_params *p, bvh_build_opts *o, int *tr
     wo->collapse.leaf_cost = s->leaf_cost;
     wo->collapse.leaf_blocks = s->leaf_blocks;
     wo->leaf_below = s->leaf_below;
+    wo->collapse.layout = s->layout;
+    wo->collapse.any_order = s->any_order;
+    if (wo->width == 2 && (GIVEN(layout) || GIVEN(any_order)))
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: layout and any_order apply to width=4|8");
+    if (wo->collapse.layout == WIDE_LAYOUT_MIXED &&
+        (wo->width != 8 || *traverse != BVH_TRAVERSE_SINGLE || wo->quant || wo->order == WIDE_ORDER_BRANCHY))
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: layout=mixed applies to width=8 with single rays "
+                                               "(no traverse=packet|stream, quant=1 or order=branchy)");
+    if (wo->collapse.any_order != WIDE_ANY_NEAR &&
+        (wo->width != 8 || *traverse != BVH_TRAVERSE_SINGLE || wo->quant || wo->order != WIDE_ORDER_OCTANT ||
+         wo->collapse.layout == WIDE_LAYOUT_MIXED))
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: any_order applies to width=8 with single rays and "
+                                               "order=octant (no quant=1, no layout=mixed)");
     if ((wo->width == 2 && (GIVEN(collapse) || GIVEN(leaf_below))) ||
         (!wo->collapse.dp && (GIVEN(leaf_cost) || GIVEN(leaf_blocks))))
         return accel_fail(err, ACCEL_ERR_SPEC, "bvh: collapse and leaf_below apply to width=4|8, "
@@ -322,7 +347,8 @@ static void wide_release(bvh *b)
 const bvh_path bvh_path_wide = {wide_intersect, wide_occluded, wide_walk,    wide_mark_ids,
                                 wide_refit,     wide_memory,   wide_release, 1,
                                 0};
-/* quantized nodes keep no float boxes to refit: their path rebuilds */
+/* quantized nodes keep no float boxes to refit, and layout=mixed's nodes
+ * are not numbered for the refit's backward pass: their path rebuilds */
 static const bvh_path bvh_path_wide_quant = {wide_intersect, wide_occluded, wide_walk,    wide_mark_ids,
                                              wide_refit,     wide_memory,   wide_release, 0,
                                              0};
@@ -370,7 +396,9 @@ static int build_tree(const accel_scene *scene, const bvh_build_opts *opts, cons
         if (rc == 0) out->wide->stream = traverse == BVH_TRAVERSE_STREAM ? wo->stream : 0;
         if (rc == 0) out->wide->isa = wo->isa, stats->isa = accel_isa_label(wo->isa);
         if (rc == 0) stats->test_lanes = block;
-        if (rc == 0) out->path = out->wide->quant ? &bvh_path_wide_quant : &bvh_path_wide;
+        if (rc == 0)
+            out->path = out->wide->quant || out->wide->layout == WIDE_LAYOUT_MIXED ? &bvh_path_wide_quant
+                                                                                 : &bvh_path_wide;
         if (rc) bvh_release(out);
     }
     return rc;
@@ -535,6 +563,15 @@ static const char *const bvh_variants[] = {
     "build=sbvh,width=8,traverse=packet",
     "width=8,quant=1",
     "width=8,quant=1,block=4,build=sbvh",
+    /* placement in memory and the any-hit order (issue 50): the default's hits (and, for
+     * layout, counts; tests/test_bvh_wide_layout.c: bit for bit) */
+    "width=8,layout=bfs",
+    "width=4,block=4,layout=bfs,traverse=packet",
+    "width=8,layout=mixed",
+    "width=8,block=4,layout=mixed,order=dist,build=sbvh",
+    "width=8,any_order=octant",
+    "width=8,any_order=area",
+    "width=8,block=4,any_order=leaf,build=sbvh",
     /* the baseline tables where auto picks AVX-512 (core/isa.h; tests/test_isa.c: same bits) */
     "width=8,isa=avx2",
     "width=4,block=4,isa=avx2",

@@ -96,6 +96,7 @@ typedef struct {
     int term, traverse, frustum, width, block, order, collapse;
     double leaf_cost;
     int leaf_blocks, leaf_below, hybrid, quant, first, pairs, isa, stream;
+    int layout, any_order; /* wide/wide.h: WIDE_LAYOUT_*, WIDE_ANY_* */
 } bvh_spec;
 
 /* The node pool of a built bvh (node 0 is the root; node 1 is padding) and

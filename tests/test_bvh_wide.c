@@ -477,7 +477,17 @@ TEST(bvh_wide_spec_errors)
                                       "bvh:width=8,first=left", "bvh:width=4,pairs=split",
                                       "bvh:collapse=dp", "bvh:leaf_below=4",
                                       "bvh:width=8,collapse=greedy,leaf_cost=2",
-                                      "bvh:width=4,collapse=greedy,leaf_blocks=1"};
+                                      "bvh:width=4,collapse=greedy,leaf_blocks=1",
+                                      /* issue 50: layout and any_order */
+                                      "bvh:layout=bfs", "bvh:any_order=area", "bvh:width=4,layout=mixed",
+                                      "bvh:width=8,layout=mixed,traverse=packet",
+                                      "bvh:width=8,layout=mixed,traverse=stream", "bvh:width=8,layout=mixed,quant=1",
+                                      "bvh:width=8,layout=mixed,order=branchy", "bvh:width=4,any_order=area",
+                                      "bvh:width=8,any_order=area,order=dist",
+                                      "bvh:width=8,any_order=leaf,order=branchy",
+                                      "bvh:width=8,any_order=octant,traverse=packet",
+                                      "bvh:width=8,any_order=area,quant=1",
+                                      "bvh:width=8,any_order=area,layout=mixed", "bvh:width=8,layout=dfz"};
     accel_scene s;
     accel_error err = {0};
     if (scene_create("soup:tris=100", &s, &err)) return;

@@ -37,7 +37,7 @@ static void wide_counts(const accel_scene *s, int width, int leaf_below, int thr
     o.reorder = 1, o.max_mb = 4096, o.leaf_below = leaf_below;
     bvh b;
     accel_error err = {0};
-    const bvh_wide_collapse greedy = {0, 1.5, 2, 0};
+    const bvh_wide_collapse greedy = {0, 1.5, 2, 0, WIDE_LAYOUT_DFS, WIDE_ANY_NEAR};
     memset(st, 0, sizeof *st);
     *blocks = 0;
     if (bvh_build_run(s, &o, threads, &b, st, &err) ||

@@ -30,6 +30,8 @@
  * the collapse reaches them, so a depth-first walk streams memory forward.
  * Node and block indices depend only on the binary tree, so the wide tree
  * is as deterministic as the binary one (identical for any thread count).
+ * That is layout=dfs; layout=bfs and layout=mixed place the same tree
+ * otherwise afterwards (place_bfs, place_mixed; wide.h).
  */
 #include <math.h>
 #include <stdlib.h>
@@ -64,6 +66,7 @@ typedef struct {
      * (see plan_dp); split[n] the choice for n's own wide node. NULL for
      * the greedy collapse. */
     const uint8_t *dec, *split;
+    int any_perm; /* any_order=area|leaf: store their orders in the perm rows */
 } collapse_ctx;
 
 static float *node_rows(collapse_ctx *x, uint32_t idx)
@@ -291,6 +294,7 @@ static uint32_t collapse(collapse_ctx *x, uint32_t n, int level)
         uint32_t ref = collapse(x, set[i], level + 1);
         node_children(x, idx)[i] = ref;
     }
+    if (x->any_perm) bvh_wide_set_any_perm(node_rows(x, idx), w, k);
     return idx;
 }
 
@@ -401,20 +405,6 @@ static void *alloc_aligned(size_t n, size_t size)
     return accel_alloc_large(n ? n : 1, size, BVH_NODE_ALIGN);
 }
 
-size_t bvh_wide_memory(const bvh_wide *w)
-{
-    return sizeof *w + (size_t)w->node_count * tree_node_size(w) +
-           (size_t)w->block_count * block_size(w->block);
-}
-
-void bvh_wide_free(bvh_wide *w)
-{
-    if (!w) return;
-    free(w->nodes);
-    free(w->blocks);
-    free(w);
-}
-
 /* The collapse's memory against the build's limit (max_mb, MiB; 0: none):
  * the binary tree it reads (nodes and leaf-order slots) plus `more` bytes
  * of its own. Fails with the whole account in the message. */
@@ -478,6 +468,7 @@ static int collapse_tree(const bvh *b, bvh_wide *w, const bvh_wide_collapse *cc,
     memset(&x, 0, sizeof x);
     x.bin = bin, x.sub_first = sub_first, x.sub_count = sub_count, x.area = area;
     x.width = w->width, x.block = w->block;
+    x.any_perm = w->any_order == WIDE_ANY_AREA || w->any_order == WIDE_ANY_LEAF;
     float *dp_cost = NULL;
     uint8_t *dp_dec = NULL;
     if (cc->dp) {
@@ -517,9 +508,27 @@ static int collapse_tree(const bvh *b, bvh_wide *w, const bvh_wide_collapse *cc,
     if (rc == 0)
         rc = collapse_within(b, w, cc->max_mb,
                              scratch + (double)x.node_count * tree_node_size(w) +
-                                 (double)x.block_count * block_size(w->block),
+                                 (double)x.block_count * block_size(w->block) +
+                                 (w->layout == WIDE_LAYOUT_MIXED
+                                      ? (double)x.block_count * sizeof(uint64_t) + 64.0 * x.leaf_count
+                                  : w->layout == WIDE_LAYOUT_BFS /* the renumbered copy */
+                                      ? (double)x.node_count * node_size(w->width)
+                                      : 0.0),
                              "collapse tables, wide nodes and leaf blocks", err);
-    if (rc == 0) {
+    if (rc == 0 && w->layout == WIDE_LAYOUT_BFS && x.node_count) {
+        /* the depth-first nodes renumbered level by level, into a copy */
+        float *bfs = alloc_aligned(x.node_count, node_size(w->width));
+        if (!bfs || bvh_wide_place_bfs(x.node_box, bfs, x.node_count, w->width, x.leaves, x.leaf_count, x.block_count)) {
+            free(bfs);
+            rc = accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for layout=bfs");
+        } else {
+            free(x.node_box);
+            x.node_box = bfs;
+        }
+    }
+    if (rc == 0 && w->layout == WIDE_LAYOUT_MIXED) {
+        rc = bvh_wide_place_mixed(w, x.node_box, x.node_count, x.block_count, err); /* layout.c */
+    } else if (rc == 0) {
         /* Keep exactly the nodes used, aligned. */
         w->nodes = alloc_aligned(x.node_count, tree_node_size(w));
         w->blocks = alloc_aligned(x.block_count, block_size(w->block));
@@ -536,14 +545,14 @@ static int collapse_tree(const bvh *b, bvh_wide *w, const bvh_wide_collapse *cc,
         } else {
             memcpy(w->nodes, x.node_box, (size_t)x.node_count * node_size(w->width));
         }
-        if (rc == 0 && w->nodes && w->blocks) {
-            w->node_count = x.node_count;
-            w->leaf_count = x.leaf_count;
-            w->block_count = x.block_count;
-            w->depth = x.depth;
-            pack_job job = {b, w, x.leaves};
-            accel_parallel_for(x.leaf_count, 1024, threads, pack_chunk, &job);
-        }
+    }
+    if (rc == 0 && w->nodes && w->blocks) {
+        w->node_count = x.node_count;
+        w->leaf_count = x.leaf_count;
+        w->block_count = x.block_count;
+        w->depth = x.depth;
+        pack_job job = {b, w, x.leaves};
+        accel_parallel_for(x.leaf_count, 1024, threads, pack_chunk, &job);
     }
     free(x.node_box);
     free(x.leaves);
@@ -609,6 +618,11 @@ int bvh_wide_build(bvh *b, bvh_wide **out, int width, int block, int order, int 
     bvh_wide *w = calloc(1, sizeof *w);
     if (!w) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory");
     w->quant = quant && width == 8;
+    w->layout = cc->layout;
+    w->any_order = cc->any_order;
+    w->any_shift = cc->any_order == WIDE_ANY_AREA   ? WIDE_PERM_AREA_SHIFT
+                   : cc->any_order == WIDE_ANY_LEAF ? WIDE_PERM_LEAF_SHIFT
+                                                    : -1;
     w->width = width;
     w->block = block;
     w->order = order;

@@ -55,6 +55,16 @@
 #define WK_JOIN(a, b) WK_JOIN_(a, b)
 #define KNODE WK_JOIN(wide_node, WIDE_NW)
 #define KBLOCK WK_JOIN(wide_block, WIDE_LB)
+/* A node and a leaf's first block from their references: indices of the
+ * two pools, or, in the unit of layout=mixed (k8_mixed.c defines
+ * WIDE_MIXED), 64-byte lines of the one pool (wide.h, node.h). */
+#if defined(WIDE_MIXED) && WIDE_MIXED
+#define WK_NODE_AT(tree, pool, r) ((void)(pool), (const KNODE *)((const char *)(tree)->nodes + ((size_t)(r) << 6)))
+#define WK_LEAF_AT(tree, r) ((const KBLOCK *)((const char *)(tree)->nodes + ((size_t)wide_leaf_first(r) << 6)))
+#else
+#define WK_NODE_AT(tree, pool, r) (&(pool)[r])
+#define WK_LEAF_AT(tree, r) ((const KBLOCK *)(tree)->blocks + wide_leaf_first(r))
+#endif
 
 /* Per-ray constants of the slab test: origin, 1/dir (near planes) and the
  * far reciprocals with the padding folded in (ACCEL_FAR_PAD, core/geom.h),
@@ -198,7 +208,7 @@ WIDE_INLINE int WK(visit_leaf)(const bvh_wide *w, uint32_t ref, const KL(wide_le
                                int any_hit)
 {
     const int naive = (flags & ACCEL_V_NAIVE) != 0, has_spheres = (flags & ACCEL_V_SPHERES) != 0;
-    const KBLOCK *blk = (const KBLOCK *)w->blocks + wide_leaf_first(ref);
+    const KBLOCK *blk = WK_LEAF_AT(w, ref);
     uint32_t nb = wide_leaf_blocks(ref);
     for (uint32_t k = 0; k < nb; k++) {
         if (counted) {
@@ -271,7 +281,7 @@ WIDE_INLINE void WK(trace_ray)(const bvh_wide *w, const accel_ray *ray, void *ou
             if (ACCEL_STEP_BOUND_BROKEN(c, steps, w->step_bound)) break;
             if (!(ref & WIDE_LEAF)) {
                 boxes += WIDE_NW;
-                if (WK(visit_node)(&nodes[ref], &nr, t, &ref, stack, &sp)) continue;
+                if (WK(visit_node)(WK_NODE_AT(w, nodes, ref), &nr, t, &ref, stack, &sp)) continue;
             } else if (WK(visit_leaf)(w, ref, &lr, &p, &t, &hit.u, &hit.v, &hit_id, &prims, c != NULL,
                                       flags, any_hit)) {
                 break;
@@ -383,14 +393,67 @@ WIDE_INLINE int WK(push_octant)(const uint32_t *child, const uint32_t *perm, NF 
 }
 
 /*
+ * any_order= (wide.h): the hit children pushed in the order of perm's bits
+ * `shift`.. for every count of them, two included (no entry-distance
+ * compare), by push_octant's compress-store; a function of its own so that
+ * push_octant's code stays as it is (gcc lays the default kernels out
+ * otherwise when push_octant's conditions change).
+ */
+WIDE_INLINE int WK(push_fixed)(const uint32_t *child, const uint32_t *perm, NF hit, NF t0, unsigned mask,
+                               uint32_t *ref, uint32_t *sref, float *st, int *sp_io, int shift)
+{
+#if WIDE_AVX && WIDE_NW == 8
+    if (!mask) return 0;
+    if (!(mask & (mask - 1))) {
+        *ref = child[__builtin_ctz(mask)];
+        return 1;
+    }
+    int sp = *sp_io;
+#if WIDE_AVX512
+    const __m256i back = _mm256_setr_epi32(7, 6, 5, 4, 3, 2, 1, 0);
+    __m256i pv = _mm256_and_si256(_mm256_srl_epi32(_mm256_permutevar8x32_epi32(
+                                                       _mm256_load_si256((const __m256i *)perm), back),
+                                                   _mm_cvtsi32_si128(shift)),
+                                  _mm256_set1_epi32(7));
+    __mmask8 m = _mm256_movepi32_mask(_mm256_permutevar8x32_epi32(_mm256_castps_si256(hit), pv));
+    __m256i kids = _mm256_permutevar8x32_epi32(_mm256_load_si256((const __m256i *)child), pv);
+    _mm256_storeu_si256((__m256i *)(sref + sp), _mm256_maskz_compress_epi32(m, kids));
+    _mm256_storeu_ps(st + sp, _mm256_maskz_compress_ps(m, _mm256_permutevar8x32_ps(t0, pv)));
+#else
+    __m256i pv = _mm256_and_si256(_mm256_srl_epi32(_mm256_load_si256((const __m256i *)perm),
+                                                   _mm_cvtsi32_si128(shift)),
+                                  _mm256_set1_epi32(7));
+    unsigned ranked = (unsigned)_mm256_movemask_ps(_mm256_permutevar8x32_ps(hit, pv));
+    __m256i sel = _mm256_and_si256(_mm256_srlv_epi32(_mm256_set1_epi32((int)wide_compress_lut[ranked]),
+                                                     _mm256_setr_epi32(0, 4, 8, 12, 16, 20, 24, 28)),
+                                   _mm256_set1_epi32(15));
+    __m256i lane = _mm256_permutevar8x32_epi32(pv, sel);
+    _mm256_storeu_si256((__m256i *)(sref + sp),
+                        _mm256_permutevar8x32_epi32(_mm256_load_si256((const __m256i *)child), lane));
+    _mm256_storeu_ps(st + sp, _mm256_permutevar8x32_ps(t0, lane));
+#endif
+    sp += __builtin_popcount(mask);
+    *ref = sref[--sp];
+    *sp_io = sp;
+    return 1;
+#else
+    /* no AVX2: branchy's push (perm order for every count already) */
+    return WK(push_octant)(child, perm, hit, t0, mask, ref, sref, st, sp_io, shift, 1);
+#endif
+}
+
+/*
  * order=octant (and branchy): one interior node, its hit children pushed
  * in the node's precomputed order for the ray's octant (push_octant),
- * instead of the per-count branches and the sort of visit_node.
+ * instead of the per-count branches and the sort of visit_node;
+ * branchy = 2 (any_order=): push_fixed.
  */
 WIDE_INLINE int WK(visit_node_oct)(const KNODE *n, const WK(node_ray) *r, float t, uint32_t *ref,
                                    uint32_t *sref, float *st, int *sp_io, int shift, int branchy)
 {
     NF t0, hit = WK(slab_rows)(n->box[0], r, t, &t0);
+    if (branchy == 2) /* any_order= */
+        return WK(push_fixed)(n->child, n->perm, hit, t0, (unsigned)NV(mask)(hit), ref, sref, st, sp_io, shift);
     return WK(push_octant)(n->child, n->perm, hit, t0, (unsigned)NV(mask)(hit), ref, sref, st, sp_io, shift,
                            branchy);
 }
@@ -458,6 +521,7 @@ WIDE_INLINE int WK(walk_oct)(const bvh_wide *w, const accel_ray_prep *p, uint32_
     uint32_t sref[WIDE_STACK(WIDE_NW) + WIDE_NW];
     float st[WIDE_STACK(WIDE_NW) + WIDE_NW];
     int sp = 0, shift = 3 * (p->neg[0] | p->neg[1] << 1 | p->neg[2] << 2), stop = 0;
+    if (branchy == 2 && w->any_shift >= 0) shift = w->any_shift; /* any_order=area|leaf */
     uint32_t steps = *steps_io, boxes = *boxes_io;
     float t = *t_io;
     for (;;) {
@@ -474,7 +538,8 @@ WIDE_INLINE int WK(walk_oct)(const bvh_wide *w, const accel_ray_prep *p, uint32_
                     continue;
             } else
 #endif
-            if (WK(visit_node_oct)(&nodes[ref], &nr, t, &ref, sref, st, &sp, shift, branchy)) continue;
+            if (WK(visit_node_oct)(WK_NODE_AT(w, nodes, ref), &nr, t, &ref, sref, st, &sp, shift, branchy))
+                continue;
         } else if (WK(visit_leaf)(w, ref, &lr, p, &t, u, v, hit_id, prims, c != NULL, flags, any_hit)) {
             stop = 1;
             break;
@@ -559,7 +624,10 @@ WIDE_INLINE void WK(wide_any)(const void *a, const accel_ray *rays, void *out, s
     }
 WK_OCT_BATCHES(wide_closest_br, wide_any_br, 1, 0)
 WK_OCT_BATCHES(wide_closest_q, wide_any_q, 1, 1)
+WK_OCT_BATCHES(wide_closest_fix, wide_any_fix, 2, 0) /* any_order= (only its any-hit table is used) */
 #undef WK_OCT_BATCHES
+#undef WK_NODE_AT
+#undef WK_LEAF_AT
 
 #undef WK_CAT_
 #undef WK_CAT

@@ -24,7 +24,9 @@
  * rank r when the children are sorted by their box centres along the
  * octant's diagonal direction (nearest first), the precomputed order of
  * Fuetterling et al., "Accelerated Single Ray Tracing for Wide Vector
- * Units", HPG 2017.
+ * Units", HPG 2017. Bits 24..26 and 27..29 hold the orders of
+ * any_order=area and any_order=leaf (wide.h) when the tree was built with
+ * one of them, and are 0 otherwise.
  *
  * An unused child slot has the empty box lo = +inf, hi = -inf, which the
  * slab test rejects for every ray (its far distance is -inf or NaN).
@@ -34,6 +36,9 @@
  *   bit 31      1
  *   bits 25..30 number of leaf blocks - 1 (1..64 blocks)
  *   bits  0..24 first leaf block (at most 2^25 blocks in a tree)
+ *
+ * With layout=mixed (wide.h) nodes and blocks share one pool and both a
+ * node index and a first block count 64-byte lines from its start.
  *
  * A leaf block holds B = 4 or 8 primitives in SoA form, the three vertices'
  * coordinates as rows of B floats, followed by the B scene ids:
@@ -184,12 +189,33 @@ int bvh_wide_collapse_pool(const bvh_node *bin, uint32_t nc, int width, int bloc
 /* Recomputes a node's octant orders (perm) from its box rows; its first k
  * child slots are used (collapse.c; bvh_refit.c calls it after a refit). */
 void bvh_wide_set_perm(float *rows, int width, int k);
+/* Stores any_order=area's and any_order=leaf's child orders in a node's
+ * perm rows (bits 24..29, wide.h); its k used slots' boxes and child
+ * references must be set (collapse.c). */
+void bvh_wide_set_any_perm(float *rows, int width, int k);
+/* layout=bfs (layout.c): the depth-first nodes src (n, root 0) copied to
+ * dst level by level, the leaves' blocks renumbered in that order
+ * (leaves[].first_block follows). Returns 1 when out of memory. */
+int bvh_wide_place_bfs(const float *src, float *dst, uint32_t n, int width, bvh_wide_pool_leaf *leaves,
+                       uint32_t leaf_count, uint32_t block_count);
+/* layout=mixed (layout.c): the one pool of w (w->nodes == w->blocks) with
+ * the depth-first nodes (node_count of them, root 0, references to block
+ * indices) placed in it, references rewritten to 64-byte lines, w->root,
+ * w->pool_bytes and w->block_at set; the blocks are left to pack. */
+int bvh_wide_place_mixed(bvh_wide *w, const float *nodes, uint32_t node_count, uint32_t block_count,
+                         accel_error *err);
 /* The decoded box of child c of a quantized node (lo[3], hi[3]). */
 void bvh_wide_qbox(const wide_qnode8 *n, int c, float *lo, float *hi);
 /* Block k of w's pool as its rows (v[(3 * vertex + axis) * block + lane])
  * and ids, for either block size. */
 static inline void wide_block_rows(const bvh_wide *w, uint32_t k, float **v, uint32_t **id)
 {
+    if (w->block_at) { /* layout=mixed: the block's place in the one pool */
+        char *at = (char *)w->nodes + w->block_at[k];
+        *v = (float *)at;
+        *id = (uint32_t *)(at + (w->block == 8 ? offsetof(wide_block8, id) : offsetof(wide_block4, id)));
+        return;
+    }
     if (w->block == 8) {
         wide_block8 *blk = (wide_block8 *)w->blocks + k;
         *v = blk->v[0][0], *id = blk->id;
@@ -197,6 +223,24 @@ static inline void wide_block_rows(const bvh_wide *w, uint32_t k, float **v, uin
         wide_block4 *blk = (wide_block4 *)w->blocks + k;
         *v = blk->v[0][0], *id = blk->id;
     }
+}
+
+/* The bytes of node reference ref and of leaf reference ref's first block,
+ * for every layout (layout=mixed: both count 64-byte lines of the one
+ * pool); the walk's and the tests' form (the kernels compile their own). */
+#define WIDE_LINE_SHIFT 6
+static inline const char *wide_node_addr(const bvh_wide *w, uint32_t ref)
+{
+    size_t bytes = w->quant ? sizeof(wide_qnode8) : w->width == 8 ? sizeof(wide_node8) : sizeof(wide_node4);
+    return (const char *)w->nodes + (w->layout == WIDE_LAYOUT_MIXED ? (size_t)ref << WIDE_LINE_SHIFT
+                                                                     : bytes * ref);
+}
+static inline const char *wide_leaf_addr(const bvh_wide *w, uint32_t ref)
+{
+    size_t bytes = w->block == 8 ? sizeof(wide_block8) : sizeof(wide_block4);
+    return w->layout == WIDE_LAYOUT_MIXED
+               ? (const char *)w->nodes + ((size_t)wide_leaf_first(ref) << WIDE_LINE_SHIFT)
+               : (const char *)w->blocks + bytes * wide_leaf_first(ref);
 }
 
 /* One lane of a block's rows from a primitive slot (9 floats). */
@@ -212,6 +256,8 @@ static inline void wide_put_lane(float *v, int block, int lane, const float *slo
 #define WIDE_ROW_BRANCHY 2
 #define WIDE_ROW_QUANT 3
 #define WIDE_ROW_STREAM 4
+#define WIDE_ROW_MIXED 5 /* layout=mixed (width 8): single rays on the one pool */
+#define WIDE_ROW_ANY 6   /* any_order=octant|area|leaf (width 8): any-hit queries only */
 
 /* One row's kernel table of one width, for a query and a block size: each
  * defined by its own unit, k<width>_<row>.c (tables.h; the packet row one
@@ -235,6 +281,8 @@ typedef const accel_kernel_table *(*wide_row_fn)(int any_hit, int block8);
     const accel_kernel_table *bvh_wide_k8_packet_any##sfx(int block8);                             \
     const accel_kernel_table *bvh_wide_k8_branchy##sfx(int any_hit, int block8);                   \
     const accel_kernel_table *bvh_wide_k8_quant##sfx(int any_hit, int block8);                     \
+    const accel_kernel_table *bvh_wide_k8_mixed##sfx(int any_hit, int block8);                     \
+    const accel_kernel_table *bvh_wide_k8_anyord##sfx(int any_hit, int block8);                    \
     const accel_kernel_table *bvh_wide_k4_stream_hit##sfx(int block8);                             \
     const accel_kernel_table *bvh_wide_k4_stream_any##sfx(int block8);                             \
     const accel_kernel_table *bvh_wide_k8_stream_hit##sfx(int block8);                             \

@@ -74,6 +74,8 @@ int bvh_wide_refit(bvh_wide *w, const accel_scene *s, int threads, int boxes, ac
     /* The blocks' boxes come with the (parallel) copy. Allocated before
      * anything changes, so a failure leaves the tree as it was. */
     box3 *block_box = NULL;
+    if (boxes && w->layout == WIDE_LAYOUT_MIXED) /* its path rebuilds instead (bvh.c) */
+        return accel_fail(err, ACCEL_ERR_SPEC, "bvh: layout=mixed trees are rebuilt, not refit");
     if (boxes) {
         block_box = malloc((w->block_count ? w->block_count : 1) * sizeof *block_box);
         if (!block_box) return accel_fail(err, ACCEL_ERR_NOMEM, "bvh: out of memory for the refit");
@@ -117,6 +119,7 @@ int bvh_wide_refit(bvh_wide *w, const accel_scene *s, int threads, int boxes, ac
         /* The children's octant order follows their moved centres (it only
          * orders the traversal: stale, it is slower, never wrong). */
         bvh_wide_set_perm(rows, wd, used);
+        if (w->any_shift >= 0) bvh_wide_set_any_perm(rows, wd, used);
     }
     free(block_box);
     return 0;

@@ -93,6 +93,17 @@ static const accel_kernel_table *const wide_query[2] = {&WT_CAT(sany, WIDE_NW, 4
 WT_BOTH(bclosest, wide_closest_br, WT_K4_OCT, WT_K8_ANY)
 WT_BOTH(bany, wide_any_br, WT_K4_OCT, WT_K8_ANY)
 static const accel_kernel_table *const wide_row[2][2] = WT_ROW(bclosest, bany);
+#elif WIDE_ROW == WIDE_ROW_MIXED && WIDE_NW == 8
+/* layout=mixed: the single-ray kernels on the one pool (WIDE_MIXED set by
+ * the unit, k8_mixed.c) */
+WT_BOTH(mclosest, wide_closest, WT_K4_OCT, WT_K8_HIT)
+WT_BOTH(many, wide_any, WT_K4_OCT, WT_K8_ANY)
+static const accel_kernel_table *const wide_row[2][2] = WT_ROW(mclosest, many);
+#elif WIDE_ROW == WIDE_ROW_ANY && WIDE_NW == 8
+/* any_order=octant|area|leaf: the any-hit kernel alone (trace.c asks this
+ * row for any-hit queries only; its closest slot repeats the any table) */
+WT_BOTH(fany, wide_any_fix, WT_K4_OCT, WT_K8_ANY)
+static const accel_kernel_table *const wide_row[2][2] = WT_ROW(fany, fany);
 #elif WIDE_ROW == WIDE_ROW_QUANT && WIDE_NW == 8
 WT_BOTH(qclosest, wide_closest_q, WT_K4_SPH, WT_K8_ANY)
 WT_BOTH(qany, wide_any_q, WT_K4_SPH, WT_K8_ANY)

@@ -15,7 +15,6 @@ void bvh_wide_walk(const bvh_wide *w, const accel_ray_prep *p, float pad, accel_
 {
     if (w->root == WIDE_EMPTY) return;
     const int W = w->width;
-    const size_t node_bytes = W == 8 ? sizeof(wide_node8) : sizeof(wide_node4);
     const size_t block_bytes = w->block == 8 ? sizeof(wide_block8) : sizeof(wide_block4);
     const size_t id_ofs = w->block == 8 ? offsetof(wide_block8, id) : offsetof(wide_block4, id);
     float t_max = p->t_far;
@@ -28,7 +27,7 @@ void bvh_wide_walk(const bvh_wide *w, const accel_ray_prep *p, float pad, accel_
         if (!box3_entry_before(top.entry, t_max)) continue;
         (*steps)++;
         if (top.node & WIDE_LEAF) {
-            const char *blk = (const char *)w->blocks + block_bytes * wide_leaf_first(top.node);
+            const char *blk = wide_leaf_addr(w, top.node);
             for (uint32_t k = 0; k < wide_leaf_blocks(top.node); k++, blk += block_bytes) {
                 const uint32_t *ids = (const uint32_t *)(blk + id_ofs);
                 for (int lane = 0; lane < w->block; lane++) {
@@ -38,7 +37,7 @@ void bvh_wide_walk(const bvh_wide *w, const accel_ray_prep *p, float pad, accel_
             }
             continue;
         }
-        const char *nd = (const char *)w->nodes + (w->quant ? sizeof(wide_qnode8) : node_bytes) * top.node;
+        const char *nd = wide_node_addr(w, top.node);
         const float *rows = (const float *)nd;
         const uint32_t *child = w->quant ? ((const wide_qnode8 *)nd)->child
                                          : (const uint32_t *)(nd + (size_t)6 * W * sizeof(float));

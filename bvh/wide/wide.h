@@ -25,6 +25,28 @@ extern "C" {
  * with one branch per child (branchy; single rays only). */
 enum { WIDE_ORDER_DIST = 0, WIDE_ORDER_OCTANT = 1, WIDE_ORDER_BRANCHY = 2 };
 
+/* Placement of nodes and leaf blocks in memory (parameter layout=; issue
+ * 50): dfs, the collapse's own numbering (nodes depth-first in one pool,
+ * each child's subtree before its next sibling's; blocks in a second pool
+ * in the order the collapse reaches the leaves, also depth-first); bfs,
+ * the same two pools renumbered level by level (the top levels packed
+ * together); mixed, one pool in which each node is followed by the blocks
+ * of its leaf children, then its node children's subtrees depth-first
+ * (Embree's allocation order), references counting 64-byte lines from the
+ * pool's start (width 8, single rays; its own kernel unit, k8_mixed.c). */
+enum { WIDE_LAYOUT_DFS = 0, WIDE_LAYOUT_BFS = 1, WIDE_LAYOUT_MIXED = 2 };
+
+/* The child order of any-hit queries (parameter any_order=; single rays,
+ * width 8): near, the closest-hit order (entry distance for two hit
+ * children, the octant order for more); octant, the octant order for any
+ * count (no distance compare); area, the largest child box first; leaf,
+ * leaf children first (most blocks first, then largest box), then nodes by
+ * largest box. area and leaf are stored in the unused bits 24..29 of each
+ * node's perm rows (node.h), so the kernel's octant push serves them. */
+enum { WIDE_ANY_NEAR = 0, WIDE_ANY_OCTANT = 1, WIDE_ANY_AREA = 2, WIDE_ANY_LEAF = 3 };
+#define WIDE_PERM_AREA_SHIFT 24
+#define WIDE_PERM_LEAF_SHIFT 27
+
 /* The wide tree: its own type, which the kind's wide code path (bvh.c)
  * holds. Immutable after the build, but for a refit (refit.c). */
 typedef struct bvh_wide {
@@ -47,6 +69,13 @@ typedef struct bvh_wide {
     int depth;            /* levels of wide nodes and leaves (a lone leaf is 1) */
     void *nodes;          /* wide_node4 or wide_node8, 64-byte aligned */
     void *blocks;         /* wide_block4 or wide_block8, 64-byte aligned */
+    /* issue 50's variants, after the fields the default kernels read (so
+     * that their offsets, and the default kernels' code, stay as they were) */
+    int layout;           /* WIDE_LAYOUT_*: where nodes and blocks sit in memory */
+    int any_order;        /* WIDE_ANY_*: the child order of any-hit queries */
+    int any_shift;        /* any_order=area|leaf: its perm bits' shift; else -1 (the ray's octant) */
+    size_t pool_bytes;    /* layout=mixed: bytes of the one pool (nodes == blocks) */
+    uint64_t *block_at;   /* layout=mixed: byte offset of block k in the pool; else NULL */
 } bvh_wide;
 
 struct bvh;
@@ -59,6 +88,8 @@ typedef struct {
     double leaf_cost;
     int leaf_blocks;
     double max_mb; /* the build's memory limit (bvh's max_mb), MiB; 0: none */
+    int layout;    /* WIDE_LAYOUT_* */
+    int any_order; /* WIDE_ANY_*: area and leaf store their orders in the perm rows */
 } bvh_wide_collapse;
 /* Collapses the built binary tree of b into *out (width 4 or 8, leaf
  * blocks of `block` primitives) and frees the binary pools, which the wide
