@@ -457,8 +457,11 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, int div, int 
         }
         for (int t = first_twin; t < g.count; t++) {
             if (!g.cfg[t].ok) continue;
+            /* Both twins (the 8-wide single and packet kernels) get their
+             * row, whichever kernel was fastest in this run's rounds: a
+             * row that came and went with the pick of the best made the
+             * section's shape depend on the noise. */
             int one = twin_of[t - first_twin];
-            if (one != best && one != bestc) continue;
             exp_est rt = exp_group_speedup(&g, one, t, bit);
             char probe[96] = "";
             if (g.probe.n) {
