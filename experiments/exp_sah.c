@@ -358,6 +358,7 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
      * intervals +-15% on one build per process: 4 rounds per process give
      * it 2 builds in each (group.h), spatial-splits 4 paired rounds */
     g.proc_rounds = x->quick ? 0 : 4;
+    g.build_twice = 1; /* sah-build-slower: each process's build the fastest of 4 */
     for (int i = 0; i < list->count; i++) {
         if (!strcmp(list->spec[i], SBVH) && s.live_count > SBVH_MAX_PRIMS) {
             exp_md(x, "\n`build=sbvh` left out here (over %u primitives).\n", SBVH_MAX_PRIMS);

@@ -50,7 +50,8 @@
  * Builds (time_builds): a configuration whose build fits the build budget
  * x procs is built in every process after each of its odd rounds (once
  * with 2 rounds per process, twice with 4; each time twice over, A B A B,
- * where it fits the budget twice: build_procs 2), its sample the fastest
+ * in a group that asks for it (build_twice) where the build fits the
+ * budget twice: build_procs 2), its sample the fastest
  * of them (build_samples[p], build_procs >= 1: the build time's interval is
  * over processes too; a slow spell of the machine, 0.2-1 s, covers a
  * whole build and only adds time); a slower one is built in interleaved
@@ -129,6 +130,8 @@ typedef struct {
     int control;        /* A/A control of configuration 0 (default 1) */
     int per_ray;        /* keep per-ray steps and tests of the primary set */
     int time_builds;    /* time builds in interleaved rounds (default 1) */
+    int build_twice;    /* builds that fit the budget twice are built twice over after each
+                           odd round (build_procs 2; default 0: once) */
     double collapse_ms; /* leave out a configuration whose first pass is longer (0: never) */
     int keep_same;      /* measure configurations of the same structure too (a control whose
                            difference the counts cannot show, e.g. instanced:world=flat) */

@@ -476,7 +476,8 @@ void exp_group_run(exp_group *g)
     for (int c = 0; c < g->count; c++)
         g->cfg[c].build_procs = g->time_builds && procs > 1 && g->cfg[c].ok &&
                                         g->cfg[c].build.ms * procs <= x->build_budget_ms
-                                    ? 1 + (g->cfg[c].build.ms * procs * 2 <= x->build_budget_ms)
+                                    ? 1 + (g->build_twice &&
+                                           g->cfg[c].build.ms * procs * 2 <= x->build_budget_ms)
                                     : 0;
     if (g->time_builds) build_rounds(g);
     exp_ref_ready(x);
