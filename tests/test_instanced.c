@@ -451,7 +451,9 @@ static void compute_equals_blocks(const accel_scene *s, const char *name)
     free(l.r);
 }
 
-TEST(instanced_world_compute_equals_blocks)
+/* fn on each of the three stiff instance scenes (mirrored and scaled, far
+ * from the origin, overlapping instances). */
+static void on_stiff_scenes(void (*fn)(const accel_scene *, const char *))
 {
     const char *const texts[] = {inst_scene_mirrored_scaled, inst_scene_far, inst_scene_overlap};
     for (size_t i = 0; i < 3; i++) {
@@ -462,9 +464,14 @@ TEST(instanced_world_compute_equals_blocks)
             test_fail(__FILE__, __LINE__, "%s", err.msg);
             continue;
         }
-        compute_equals_blocks(&s, texts[i]);
+        fn(&s, texts[i]);
         scene_free(&s);
     }
+}
+
+TEST(instanced_world_compute_equals_blocks)
+{
+    on_stiff_scenes(compute_equals_blocks);
     accel_scene s;
     accel_error err = {0};
     if (scene_create("animated:frame=41,instances=6,detail=2", &s, &err) == 0) {
@@ -477,18 +484,7 @@ TEST(instanced_world_compute_equals_blocks)
 
 TEST(instanced_same_hits_every_walk)
 {
-    const char *const texts[] = {inst_scene_mirrored_scaled, inst_scene_far, inst_scene_overlap};
-    for (size_t i = 0; i < 3; i++) {
-        accel_scene s;
-        accel_error err = {0};
-        scene_file_options o = {0, inst_stiff_mesh, NULL};
-        if (scene_parse_scene("stiff", "", texts[i], strlen(texts[i]), &o, &s, &err)) {
-            test_fail(__FILE__, __LINE__, "%s", err.msg);
-            continue;
-        }
-        same_hits_every_walk(&s, texts[i]);
-        scene_free(&s);
-    }
+    on_stiff_scenes(same_hits_every_walk);
     static const char *const specs[] = {"animated:frame=41,instances=6,detail=2", "cube:n=8",
                                         "sphereflake:level=2"};
     for (size_t i = 0; i < 3; i++) {
