@@ -153,7 +153,8 @@ $(BUILD)/tests/%.o: tests/%.c $(FLAGS_STAMP)
 	$(CC) $(TEST_CFLAGS) $(DEPFLAGS) -c $< -o $@
 
 # A tool's own pieces, if any: tools/<tool>/*.c.
-TOOL_PARTS := $(patsubst %.c,$(BUILD)/%.o,$(wildcard tools/*/*.c))
+# (tools/embree_ref/: only `make embree` builds it)
+TOOL_PARTS := $(patsubst %.c,$(BUILD)/%.o,$(filter-out tools/embree_ref/%,$(wildcard tools/*/*.c)))
 $(TOOLS): $(TOOL_PARTS)
 $(BIN)/%: $(BUILD)/tools/%.o $(LIB)
 	@mkdir -p $(BIN)
@@ -175,7 +176,7 @@ embree-header:
 $(BUILD)/tools/embree_ref.o: tools/embree_ref.c $(FLAGS_STAMP) | embree-header
 	@mkdir -p $(dir $@)
 	$(CC) $(ALL_CFLAGS) $(EMBREE_CFLAGS) $(DEPFLAGS) -c $< -o $@
-$(BIN)/embree_ref: $(BUILD)/tools/embree_ref.o $(LIB)
+$(BIN)/embree_ref: $(BUILD)/tools/embree_ref.o $(patsubst %.c,$(BUILD)/%.o,$(wildcard tools/embree_ref/*.c)) $(LIB)
 	@mkdir -p $(BIN)
 	$(CC) $(ALL_CFLAGS) $^ -o $@ $(LDLIBS) $(EMBREE_LIBS)
 

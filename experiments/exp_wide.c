@@ -29,6 +29,7 @@
 #include <unistd.h>
 
 #include "engine/group.h"
+#include "wide_embree.h"
 
 #define MASK (BENCH_PRIMARY | BENCH_SHADOW | BENCH_DIFFUSE)
 #define MAX_SCENES 16
@@ -105,102 +106,22 @@ typedef struct {
     int met[3], tie[3], scenes;
     int two[3]; /* rows of 2 threads over 1: met, not met, all */
     int heat;   /* scenes with heatmaps so far (their images' numbers) */
-    int embree; /* scenes with Embree's row */
-    exp_decider emb; /* the first of them: best wide single / Embree, primary rays */
-    char emb_what[600], emb_scene[128], emb_runs[300];
+    wide_embree emb; /* Embree's rows and the verdict's comparison */
 } study;
 
-/* The industrial reference (issue 39): Embree 3's Mrays/s on the same
- * triangles and rays, through tools/embree_row.sh OBJ RAYS MODE (it runs
- * bin/embree_ref, which only `make embree` builds, and prints
- * mrays=<x>). Returns 0 with *mrays, or -1: not built, spheres in the
- * scene (Embree's row is for triangles), or it failed. */
-/* Runs of Embree per ray set (issue 52). */
-#define EMBREE_RUNS 3
-
-static int embree_mrays(exp_ctx *x, const accel_scene *s, const rays_set *r, int occlusion,
-                        double *mrays)
-{
-    if (access("bin/embree_ref", X_OK) || access("tools/embree_row.sh", X_OK)) return -1;
-    if (s->prim_count != s->tri_count || !r->count) return -1;
-    char obj[1024], rp[1024], cmd[2300];
-    snprintf(obj, sizeof obj, "%s/embree_ref_scene.obj", x->out_dir);
-    snprintf(rp, sizeof rp, "%s/embree_ref.rays", x->out_dir);
-    FILE *f = fopen(obj, "w");
-    if (!f) return -1;
-    for (uint32_t t = 0; t < s->tri_count; t++) {
-        const float *v = s->tris + 9 * (size_t)t;
-        fprintf(f, "v %.9g %.9g %.9g\nv %.9g %.9g %.9g\nv %.9g %.9g %.9g\nf -3 -2 -1\n", v[0], v[1],
-                v[2], v[3], v[4], v[5], v[6], v[7], v[8]);
-    }
-    int rc = fclose(f) ? -1 : 0;
-    accel_error err = {0};
-    if (!rc) rc = rays_write(rp, r->rays, r->count, &err) ? -1 : 0;
-    snprintf(cmd, sizeof cmd, "tools/embree_row.sh '%s' '%s' %s", obj, rp, occlusion ? "occluded" : "closest");
-    FILE *p = rc ? NULL : popen(cmd, "r");
-    char line[256];
-    rc = -1;
-    while (p && fgets(line, sizeof line, p))
-        if (sscanf(line, "mrays=%lf", mrays) == 1 && *mrays > 0) rc = 0;
-    if (p && pclose(p)) rc = -1;
-    remove(obj), remove(rp);
-    return rc;
-}
-
-/* Embree beside the project's best single-thread kernel per ray set. */
+/* Embree beside the project's best wide single-thread kernel of primary
+ * rays, chosen on the choosing half (wide_embree.h). */
 static void embree_row(exp_ctx *x, study *st, const accel_scene *s, const bench_sets *sets,
                        exp_group *g, int first_twin)
 {
-    /* Embree runs in processes of its own after the rounds: EMBREE_RUNS
-     * runs per set, their median shown; the primary rays' verdict takes
-     * their spread into its interval (issue 52: one run made the ratio
-     * move from 1.01x to 1.68x between two reports). */
-    double em[3], runs[3][EMBREE_RUNS];
-    int have = 0;
-    for (int k = 0; k < 3; k++) {
-        int ok = 1;
-        for (int i = 0; i < EMBREE_RUNS && ok; i++)
-            ok = embree_mrays(x, s, bench_sets_get(sets, set_bits[k]),
-                              bench_set_is_occlusion(set_bits[k]), &runs[k][i]) == 0;
-        if (!ok) continue;
-        have++;
-        for (int i = 1; i < EMBREE_RUNS; i++) /* sorted: few values */
-            for (int j = i; j > 0 && runs[k][j] < runs[k][j - 1]; j--) {
-                double t = runs[k][j];
-                runs[k][j] = runs[k][j - 1], runs[k][j - 1] = t;
-            }
-        em[k] = runs[k][EMBREE_RUNS / 2];
-    }
-    if (have < 3) { /* absent: one line at the end of the section; present but failed: here */
-        if (!access("bin/embree_ref", X_OK))
-            exp_md(x, "\nEmbree: bin/embree_ref did not measure this scene (%d of 3 ray sets).\n", have);
-        return;
-    }
-    exp_md(x, "\nThe industrial reference: Embree 3 (bin/embree_ref, one run per ray set, the same "
-              "triangles and rays, 1 thread) beside this project's best wide single-ray kernel (1 thread).\n");
-    exp_md_table(x, "kernel|primary Mrays/s|shadow Mrays/s|diffuse Mrays/s");
-    exp_md(x, "| Embree 3 | %.2f | %.2f | %.2f |\n", em[0], em[1], em[2]);
-    int bw = -1; /* the best wide single-ray kernel on primary rays, on the choosing half */
+    int bw = -1;
     g->half = 1;
     for (int c = 0; c < first_twin; c++)
         if (g->cfg[c].ok && is_wide(g->cfg[c].spec) && !is_coherent(g->cfg[c].spec) && !is_stream(g->cfg[c].spec) &&
             (bw < 0 || exp_group_mrays(g, c, BENCH_PRIMARY).median > exp_group_mrays(g, bw, BENCH_PRIMARY).median))
             bw = c;
-    g->half = 2; /* judged on the other half */
-    exp_est m[3];
-    for (int k = 0; k < 3 && bw >= 0; k++) m[k] = exp_group_mrays(g, bw, set_bits[k]);
     g->half = 0;
-    if (bw < 0) return;
-    exp_md(x, "| `%s` | %.2f | %.2f | %.2f |\n", g->cfg[bw].spec, m[0].median, m[1].median, m[2].median);
-    if (st->embree++) return;
-    snprintf(st->emb_scene, sizeof st->emb_scene, "%s", s->name);
-    snprintf(st->emb_what, sizeof st->emb_what, "best wide single `%s` / Embree 3, primary rays, "
-             "%s (%u tris)", g->cfg[bw].spec, s->name, s->live_count);
-    st->emb = (exp_decider){st->emb_what, m[0].median / em[0], m[0].lo / runs[0][EMBREE_RUNS - 1],
-                            m[0].hi / runs[0][0], 1.1, +1, m[0].n};
-    snprintf(st->emb_runs, sizeof st->emb_runs, "Embree's %d runs on primary rays: %.2f to %.2f "
-             "Mrays/s (the interval spans them; ours on the half of the rounds the best was not "
-             "chosen on)", EMBREE_RUNS, runs[0][0], runs[0][EMBREE_RUNS - 1]);
+    if (bw >= 0) wide_embree_row(x, &st->emb, s, sets, g, bw);
 }
 
 /* One row of a scene's targets table, quoted by its finding (t == 0: no target). */
@@ -567,10 +488,10 @@ int main(int argc, char **argv)
         const char *v = exp_combine_counts(met, all - met - tie, tie, EXP_EVERY);
         /* a ratio of two configurations timed in the same rounds: a busy
          * machine slows both, so its refutation stands (issue 52) */
-        if (st.embree) /* the industrial kernel measured here: the claim judged against it */
-            exp_verdict_num(&x, "wide-bvh", exp_judge(&st.emb), &st.emb, st.emb_scene,
+        if (st.emb.scenes) /* the industrial kernel measured here: the claim judged against it */
+            exp_verdict_num(&x, "wide-bvh", exp_judge(&st.emb.d), &st.emb.d, st.emb.scene,
                             "this section's targets stand for about 1.1x the industrial kernel; "
-                            "measured beside it in this run; %s", st.emb_runs);
+                            "measured beside it in this run; %s", st.emb.runs);
         else
             exp_md(&x, "\nEmbree: not measured here (make embree needs libembree-dev); the "
                        "verdict is judged on the ratios to `bvh`.\n");

@@ -34,9 +34,10 @@
 #include "cli/cli.h"
 #include "rays/rays.h"
 #include "scene/scene.h"
+#include "embree_ref/vs.h"
 
 typedef struct {
-    const char *obj, *rays, *hits, *mode, *quality, *isa;
+    const char *obj, *rays, *hits, *mode, *quality, *isa, *vs;
     int threads, build_threads, passes, builds, occluded, coherent, check, help;
 } options;
 
@@ -69,6 +70,8 @@ static const cli_option ref_options[] = {
      100},
     {"--check", NULL, "compare Embree's answers with the project's oracle (double precision,\n"
      "watertight): holes, false hits, disagreements (FORMATS.md rules)", cli_flag, OPT(check), 0, 0},
+    {"--vs", "SPEC", "also time this project's SPEC here on the same rays, pass for pass in\n"
+     "turn with Embree's (embree_ref/vs.h): a line `vs`", cli_string, OPT(vs), 0, 0},
     {"--help", NULL, "this text", cli_flag, OPT(help), 0, 0},
 };
 #define OPTION_COUNT (sizeof ref_options / sizeof ref_options[0])
@@ -563,9 +566,22 @@ static RTCDevice make_device(const options *o, char *isa, size_t size)
     return dev;
 }
 
+/* --vs (embree_ref/vs.h): one of Embree's passes. */
+typedef struct {
+    const job *proto;
+    size_t n;
+    int threads;
+} vs_ctx;
+
+static double vs_embree_pass(void *p)
+{
+    const vs_ctx *c = p;
+    return trace_pass(c->proto, c->n, c->threads);
+}
+
 /* Builds, traces, prints the measurement line; the answers into hits. */
 static int measure(const options *o, int layout, const ref_mesh *m, accel_ray *rays, size_t n,
-                   accel_hit *hits, uint8_t *occ)
+                   accel_hit *hits, uint8_t *occ, const accel_ray *ours_rays)
 {
     char isa[32];
     RTCDevice dev = make_device(o, isa, sizeof isa);
@@ -576,6 +592,9 @@ static int measure(const options *o, int layout, const ref_mesh *m, accel_ray *r
     long long peak = mem_peak; /* of the builds, before the recording scene */
     job proto = {sc, rays, 0, n, layout, o->occluded, o->coherent, hits, occ};
     time_passes(&proto, n, o, mr);
+    vs_ctx vc = {&proto, n, o->threads};
+    int vs_rc = o->vs ? vs_time(o->vs, &m->scene, ours_rays, n, o->threads, o->occluded, o->passes,
+                                vs_embree_pass, &vc) : 0;
     size_t lost = o->occluded ? anyhit_answers(dev, m, sc, rays, occ, n, hits) : 0;
     size_t hit_count = 0;
     for (size_t i = 0; i < n; i++) hit_count += hits[i].prim != ACCEL_MISS;
@@ -591,7 +610,7 @@ static int measure(const options *o, int layout, const ref_mesh *m, accel_ray *r
                 "misses)\n", lost);
     rtcReleaseScene(sc);
     rtcReleaseDevice(dev);
-    return 0;
+    return vs_rc;
 }
 
 int main(int argc, char **argv)
@@ -603,7 +622,7 @@ int main(int argc, char **argv)
     if ((rc = load_mesh(o.obj, o.quality, &m))) return rc;
     rays_set rs, orig = {0};
     accel_error err;
-    if (rays_read(o.rays, &rs, &err) || (o.check && rays_read(o.rays, &orig, &err))) {
+    if (rays_read(o.rays, &rs, &err) || ((o.check || o.vs) && rays_read(o.rays, &orig, &err))) {
         fprintf(stderr, "embree_ref: %s\n", err.msg);
         return CLI_EXIT_INPUT;
     }
@@ -617,7 +636,7 @@ int main(int argc, char **argv)
         fprintf(stderr, "embree_ref: out of memory\n");
         return CLI_EXIT_INTERNAL;
     }
-    rc = measure(&o, layout, &m, rs.rays, n, hits, occ);
+    rc = measure(&o, layout, &m, rs.rays, n, hits, occ, orig.rays);
     if (!rc && o.check) check_answers(&m, orig.rays, hits, n, o.occluded, o.threads);
     if (!rc && o.hits && hits_write(o.hits, hits, n, &err)) {
         fprintf(stderr, "embree_ref: %s\n", err.msg);
