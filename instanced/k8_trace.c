@@ -53,6 +53,10 @@ typedef struct {
     float t, u, v;      /* closest hit so far (t = t_far before any) */
     uint32_t prim;
     int any, done;      /* occlusion query; a hit ends it */
+    /* Counted runs only (core/variant.h: the timed copies count nothing):
+     * the hot walks (walk_wide, test_blocks) take it as a literal, so
+     * their timed copies hold no counting code; the rest test it. */
+    int counted;
     uint32_t top_steps, bottom_steps, boxes, prims, empties, skips;
 } ray_state;
 
@@ -71,7 +75,7 @@ INLINE void test_prim(const inst_accel *a, const inst_item *it, const accel_scen
     uint32_t id = it->base + q;
     float w[9];
     const float *tri = NULL, *sphere = NULL;
-    r->prims++;
+    if (r->counted) r->prims++;
     if (spheres && id >= s->tri_count) {
         /* Only plain scenes hold spheres (meshes of instances cannot). */
         sphere = s->spheres + 4 * (size_t)(id - s->tri_count);
@@ -93,15 +97,17 @@ INLINE void test_prim(const inst_accel *a, const inst_item *it, const accel_scen
  * object block taken to world space here (world=compute). Counts the
  * triangles (lanes) tested, as bvh/wide does. */
 INLINE void test_blocks(const inst_accel *a, const inst_item *it, const inst_wide *w,
-                        uint32_t first, uint32_t nb, ray_state *r, int naive, int spheres)
+                        uint32_t first, uint32_t nb, ray_state *r, int naive, int spheres, int cnt)
 {
     const accel_block8 *blk = a->plain ? w->blocks + first : it->world ? it->world + first : NULL;
     for (uint32_t k = 0; k < nb; k++) {
         accel_block8 tmp __attribute__((aligned(64)));
         const accel_block8 *b = blk ? blk + k : &tmp;
         if (!blk) inst_world_block(it, w->blocks + first + k, &tmp);
-        r->prims++;
-        for (int lane = 1; lane < 8; lane++) r->prims += b->id[lane] != b->id[lane - 1];
+        if (cnt) {
+            r->prims++;
+            for (int lane = 1; lane < 8; lane++) r->prims += b->id[lane] != b->id[lane - 1];
+        }
         if (leaf_block_8(b, &r->lr, &r->p, &r->t, &r->u, &r->v, &r->prim, a->scene->tri_count, naive,
                          spheres, r->any) &&
             r->any) {
@@ -142,7 +148,7 @@ INLINE void walk_bvh(const inst_accel *a, const inst_item *it, const inst_bottom
     uint32_t node = 0;
     for (;;) {
         const bvh_node *n = &h->nodes[node];
-        r->bottom_steps++;
+        if (r->counted) r->bottom_steps++;
         if (n->count) {
             for (uint32_t i = 0; i < n->count; i++) {
                 test_prim(a, it, b->mesh, h->order[n->left_first + i], r, naive, spheres);
@@ -154,7 +160,7 @@ INLINE void walk_bvh(const inst_accel *a, const inst_item *it, const inst_bottom
             float e0, e1;
             int h0 = node_slab(&h->nodes[c0], pad, org, inv, neg, lo_t, hi_t, &e0);
             int h1 = node_slab(&h->nodes[c1], pad, org, inv, neg, lo_t, hi_t, &e1);
-            r->boxes += 2;
+            if (r->counted) r->boxes += 2;
             if (h0 && h1) {
                 int near0 = e0 <= e1;
                 stack[sp].node = near0 ? c1 : c0;
@@ -191,7 +197,7 @@ static void visit_instance_flat(const inst_accel *a, uint32_t k, ray_state *r, i
  * hit children pushed in the node's octant order, the nearest first); a
  * pushed child is skipped when it starts beyond the closest hit found since. */
 INLINE void walk_wide(const inst_accel *a, const inst_item *it, const inst_wide *w, ray_state *r,
-                      vec3 org, vec3 dir, float pad, double shift, int naive, int spheres)
+                      vec3 org, vec3 dir, float pad, double shift, int naive, int spheres, int cnt)
 {
     if (w->root == WIDE_EMPTY) return;
     const int top = it == NULL;
@@ -224,16 +230,18 @@ INLINE void walk_wide(const inst_accel *a, const inst_item *it, const inst_wide 
                     if (r->done) return;
                 }
             } else {
-                test_blocks(a, it, w, first, nb, r, naive, spheres);
+                test_blocks(a, it, w, first, nb, r, naive, spheres, cnt);
                 if (r->done) return;
             }
             hi_t = inst_walk_hi(r->t, shift, slack);
         } else {
-            if (top)
-                r->top_steps++;
-            else
-                r->bottom_steps++;
-            r->boxes += INST_WIDE;
+            if (cnt) {
+                if (top)
+                    r->top_steps++;
+                else
+                    r->bottom_steps++;
+                r->boxes += INST_WIDE;
+            }
             if (padded ? visit_node_oct_pad_8_8(&nodes[ref], &nr, &np, hi_t, &ref, sref, st, &sp, oct)
                        : visit_node_oct_8_8(&nodes[ref], &nr, hi_t, &ref, sref, st, &sp, oct, 0))
                 continue;
@@ -299,8 +307,7 @@ INLINE void walk_grid(const inst_accel *a, const inst_item *it, const inst_botto
     grid_mailbox_clear(mb);
     do {
         uint32_t begin = g->cells.offsets[w.cell], end = g->cells.offsets[w.cell + 1];
-        r->bottom_steps++;
-        r->empties += begin == end;
+        if (r->counted) r->bottom_steps++, r->empties += begin == end;
         if (!grid_cell_visit(g->cells.refs + begin, end - begin, mb, &r->skips, bottom_prim, &v))
             return;
         if (r->t <= grid_dda_exit(&w)) return;
@@ -328,12 +335,19 @@ walk_wide_flat(const inst_accel *a, const inst_item *it, const inst_bottom *b, r
                vec3 org, vec3 dir, float pad, double shift, int naive, int spheres)
 {
     const inst_wide *w = &b->wide;
-    if (naive)
-        walk_wide(a, it, w, r, org, dir, pad, shift, 1, spheres);
+    if (r->counted) {
+        if (naive)
+            walk_wide(a, it, w, r, org, dir, pad, shift, 1, spheres, 1);
+        else if (spheres)
+            walk_wide(a, it, w, r, org, dir, pad, shift, 0, 1, 1);
+        else
+            walk_wide(a, it, w, r, org, dir, pad, shift, 0, 0, 1);
+    } else if (naive)
+        walk_wide(a, it, w, r, org, dir, pad, shift, 1, spheres, 0);
     else if (spheres)
-        walk_wide(a, it, w, r, org, dir, pad, shift, 0, 1);
+        walk_wide(a, it, w, r, org, dir, pad, shift, 0, 1, 0);
     else
-        walk_wide(a, it, w, r, org, dir, pad, shift, 0, 0);
+        walk_wide(a, it, w, r, org, dir, pad, shift, 0, 0, 0);
 }
 
 static __attribute__((flatten, noinline)) void
@@ -418,7 +432,7 @@ INLINE void visit_instance(const inst_accel *a, uint32_t k, ray_state *r, int na
     inst_oray q;
     int clip = inst_object_ray(a, it, b, r->o, r->d, r->p.t_near, r->t, &q);
     if (clip < 0) return;
-    r->boxes++;
+    if (r->counted) r->boxes++;
     if (!clip) return;
     const double *o = q.o, *d = q.d, s0 = q.s0, e_ray = q.e_ray;
     if (a->bottom_kind == INST_GRID) {
@@ -460,13 +474,13 @@ INLINE void top_bvh(const inst_accel *a, ray_state *r, int naive, int spheres)
     int sp = 0;
     uint32_t node = 0;
     float e;
-    r->boxes++;
+    if (r->counted) r->boxes++;
     if (!box3_slab(h->nodes[0].bmin, h->nodes[0].bmax, r->p.org, r->p.inv_dir, r->p.neg, r->p.t_near,
                    r->t, &e))
         return;
     for (;;) {
         const bvh_node *n = &h->nodes[node];
-        r->top_steps++;
+        if (r->counted) r->top_steps++;
         if (n->count) {
             for (uint32_t i = 0; i < n->count; i++) {
                 visit_instance(a, h->order[n->left_first + i], r, naive, spheres);
@@ -479,7 +493,7 @@ INLINE void top_bvh(const inst_accel *a, ray_state *r, int naive, int spheres)
                                r->p.t_near, r->t, &e0);
             int h1 = box3_slab(h->nodes[c1].bmin, h->nodes[c1].bmax, r->p.org, r->p.inv_dir, r->p.neg,
                                r->p.t_near, r->t, &e1);
-            r->boxes += 2;
+            if (r->counted) r->boxes += 2;
             if (h0 && h1) {
                 int near0 = e0 <= e1;
                 stack[sp].node = near0 ? c1 : c0;
@@ -513,7 +527,7 @@ INLINE int top_item(void *ctx, uint32_t k)
     const top_cell *v = ctx;
     ray_state *r = v->r;
     float e;
-    r->boxes++;
+    if (r->counted) r->boxes++;
     const box3 *bb = &v->a->item_boxes[k];
     if (!box3_slab(&bb->min.x, &bb->max.x, r->p.org, r->p.inv_dir, r->p.neg, r->p.t_near, r->t,
                    &e))
@@ -532,8 +546,7 @@ INLINE void top_grid(const inst_accel *a, ray_state *r, int naive, int spheres)
     grid_mailbox_clear(mb);
     do {
         uint32_t begin = g->cells.offsets[w.cell], end = g->cells.offsets[w.cell + 1];
-        r->top_steps++;
-        r->empties += begin == end;
+        if (r->counted) r->top_steps++, r->empties += begin == end;
         if (!grid_cell_visit(g->cells.refs + begin, end - begin, mb, &r->skips, top_item, &v))
             return;
         if (r->t <= grid_dda_exit(&w)) return;
@@ -550,7 +563,7 @@ INLINE void kernel(const void *acc, const accel_ray *rays, void *out, size_t cou
     for (size_t i = 0; i < count; i++) {
         ray_state r;
         r.prim = ACCEL_MISS;
-        r.any = any, r.done = 0;
+        r.any = any, r.done = 0, r.counted = c != NULL;
         r.top_steps = r.bottom_steps = r.boxes = r.prims = r.empties = r.skips = 0;
         r.u = r.v = 0.0f;
         if (accel_prep_ray(&rays[i], &r.p)) {
@@ -559,7 +572,8 @@ INLINE void kernel(const void *acc, const accel_ray *rays, void *out, size_t cou
             r.o[0] = r.p.org.x, r.o[1] = r.p.org.y, r.o[2] = r.p.org.z;
             r.d[0] = r.p.dir.x, r.d[1] = r.p.dir.y, r.d[2] = r.p.dir.z;
             if (a->top == INST_BVH && a->width == INST_WIDE)
-                walk_wide(a, NULL, &a->top_wide, &r, r.p.org, r.p.dir, 0.0f, 0.0, naive, spheres);
+                walk_wide(a, NULL, &a->top_wide, &r, r.p.org, r.p.dir, 0.0f, 0.0, naive, spheres,
+                          c != NULL);
             else if (a->top == INST_BVH)
                 top_bvh(a, &r, naive, spheres);
             else
