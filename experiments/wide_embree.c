@@ -22,12 +22,11 @@ static const int set_bits[3] = {BENCH_PRIMARY, BENCH_SHADOW, BENCH_DIFFUSE};
 #define EMBREE_RUNS 3
 /* The verdict's primary rays (issue 52): EMBREE_PROCS fresh processes of
  * bin/embree_ref --vs, each timing our kernel and Embree's in alternating
- * passes (tools/embree_ref.c, time_vs) and giving the median of its pass
+ * passes (tools/embree_ref/vs.c) and giving the median of its pass
  * pairs' ratios; the estimate is the mean of the processes' log ratios
  * with a t-interval over them (df 7). Three Embree runs after the rounds,
  * against ours from the rounds, let one slow Embree process (8.76 against
- * 13.4-14.5 Mrays/s) make the word; fresh processes of each in turn gave
- * pair ratios from 0.69 to 1.22. */
+ * 13.4-14.5 Mrays/s) make the word (the spread of each way: vs.c). */
 #define EMBREE_PROCS 8
 #define VS_PASSES 9
 
