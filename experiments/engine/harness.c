@@ -182,7 +182,7 @@ void exp_init(exp_ctx *x, int argc, char **argv, const char *name, const char *q
      * (group.h). --repeat is the rounds of the experiments that time
      * outside groups (anim.c, exp_stability). */
     if (x->repeats < 0) x->repeats = x->quick ? 3 : 10;
-    if (x->procs <= 0) x->procs = EXP_PROCS;
+    if (x->procs <= 0) x->procs = x->quick ? EXP_PROCS_QUICK : EXP_PROCS;
     x->proc_rounds = EXP_PROC_ROUNDS;
     if (x->size < 0) x->size = x->quick ? 64 : 128;
     if (x->rt_size[0] <= 0) x->rt_size[0] = x->quick ? 160 : 800, x->rt_size[1] = x->quick ? 120 : 600;
