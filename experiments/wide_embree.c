@@ -3,7 +3,6 @@
  * on the same triangles and rays as the section's best wide single-ray
  * kernel, and the one comparison the wide-bvh verdict judges.
  */
-#include <math.h>
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
@@ -84,7 +83,7 @@ void wide_embree_row(exp_ctx *x, wide_embree *st, const accel_scene *s, const be
     char obj[1024], rp[1024];
     snprintf(obj, sizeof obj, "%s/embree_ref_scene.obj", x->out_dir);
     snprintf(rp, sizeof rp, "%s/embree_ref.rays", x->out_dir);
-    double em[3], runs[EMBREE_PROCS], ratio[EMBREE_PROCS], one[EMBREE_PROCS], pr[EMBREE_PROCS];
+    double em[3], ratio[EMBREE_PROCS];
     double emb_lo = 0, emb_hi = 0;
     /* only the first scene's primary rays decide: the others get Embree's runs */
     int have = 0, pairs = 0, idx[EMBREE_PROCS], decide = !st->scenes;
@@ -99,26 +98,18 @@ void wide_embree_row(exp_ctx *x, wide_embree *st, const accel_scene *s, const be
         snprintf(vs, sizeof vs, "bin/embree_ref --obj '%s' --rays '%s' --passes %d --builds 1 "
                  "--vs '%s'", obj, rp, VS_PASSES, g->cfg[bw].spec);
         int vs_here = k == 0 && decide, n = vs_here ? EMBREE_PROCS : EMBREE_RUNS, got = 0;
+        double mr[EMBREE_PROCS]; /* Embree's Mrays/s, one per process */
         for (int i = 0; i < n; i++) {
             double e = 0, o = 0, q = 0;
-            if (vs_here) {
-                if (run_vs(vs, &q, &o, &e)) continue;
-                ratio[pairs] = q, one[pairs] = 1, idx[pairs] = pairs, runs[pairs++] = e;
-            } else if (run_mrays(emb, &e) == 0)
-                pr[got++] = e;
+            if (vs_here ? run_vs(vs, &q, &o, &e) : run_mrays(emb, &e)) continue;
+            if (vs_here) ratio[got] = q, idx[got] = got;
+            mr[got++] = e;
         }
-        double *v = vs_here ? runs : pr;
-        n = vs_here ? pairs : got;
-        if (n < (vs_here ? 6 : 1)) break;
-        double sorted[EMBREE_PROCS];
-        memcpy(sorted, v, (size_t)n * sizeof *v);
-        for (int i = 1; i < n; i++) /* sorted: few values */
-            for (int j = i; j > 0 && sorted[j] < sorted[j - 1]; j--) {
-                double t = sorted[j];
-                sorted[j] = sorted[j - 1], sorted[j - 1] = t;
-            }
-        em[k] = n % 2 ? sorted[n / 2] : sqrt(sorted[n / 2 - 1] * sorted[n / 2]);
-        if (vs_here) emb_lo = sorted[0], emb_hi = sorted[n - 1];
+        if (got < (vs_here ? 6 : 1)) break;
+        exp_est e; /* the median shown, and the range of Embree's runs */
+        exp_est_of(mr, got, &e);
+        em[k] = e.median;
+        if (vs_here) pairs = got, emb_lo = e.min, emb_hi = e.max;
         have++;
     }
     remove(obj), remove(rp);
@@ -144,8 +135,8 @@ void wide_embree_row(exp_ctx *x, wide_embree *st, const accel_scene *s, const be
     g->half = 0;
     exp_md(x, "| `%s` | %.2f | %.2f | %.2f |\n", g->cfg[bw].spec, m[0].median, m[1].median, m[2].median);
     if (st->scenes++) return;
-    exp_est q;
-    exp_est_ratio_level(ratio, one, idx, pairs, 0.95, &q);
+    exp_est q; /* each process its own: the mean of their logs, a t-interval over them */
+    exp_est_of_level(ratio, idx, pairs, 0.95, &q);
     snprintf(st->scene, sizeof st->scene, "%s", s->name);
     snprintf(st->what, sizeof st->what, "best wide single `%s` / Embree 3, primary rays, "
              "%s (%u tris), %d processes timing both in turn", g->cfg[bw].spec, s->name,

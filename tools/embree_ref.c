@@ -26,7 +26,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <time.h>
 #include <unistd.h>
 
 #include <embree3/rtcore.h>
@@ -79,24 +78,6 @@ static const cli_option ref_options[] = {
 enum { LAYOUT_SINGLE, LAYOUT_PACKET16, LAYOUT_STREAM };
 #define STREAM_CHUNK 256
 
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, cmp_double);
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 
 /* ---- device: errors, memory, ISA ------------------------------------------ */
 
@@ -385,7 +366,7 @@ static double trace_pass(const job *proto, size_t n, int threads)
     size_t per = (n + (size_t)threads - 1) / (size_t)threads;
     per = (per + 15) / 16 * 16;
     int created[256] = {0};
-    double t0 = now_ms();
+    double t0 = accel_now_ms();
     for (int t = 0; t < threads; t++) {
         jobs[t] = *proto;
         jobs[t].begin = (size_t)t * per < n ? (size_t)t * per : n;
@@ -397,7 +378,7 @@ static double trace_pass(const job *proto, size_t n, int threads)
         if (created[t]) pthread_join(tid[t], NULL);
         else run_job(&jobs[t]); /* no thread: this one traces the slice */
     }
-    return now_ms() - t0;
+    return accel_now_ms() - t0;
 }
 
 /* ---- any-hit answers ---------------------------------------------------------- */
@@ -503,12 +484,12 @@ static RTCScene build(RTCDevice dev, const ref_mesh *m, int builds, double *ms, 
     for (int b = 0; b < builds; b++) {
         if (sc) rtcReleaseScene(sc);
         long long before = mem_now;
-        double t0 = now_ms();
+        double t0 = accel_now_ms();
         sc = make_scene(dev, m, NULL, NULL);
-        t[b] = now_ms() - t0;
+        t[b] = accel_now_ms() - t0;
         *bytes = mem_now - before;
     }
-    *ms = median(t, builds);
+    *ms = vs_median(t, builds);
     return sc;
 }
 
@@ -518,7 +499,7 @@ static void time_passes(const job *proto, size_t n, const options *o, double mr[
     double ms[1000];
     trace_pass(proto, n, o->threads);
     for (int p = 0; p < o->passes; p++) ms[p] = trace_pass(proto, n, o->threads);
-    double med = median(ms, o->passes);
+    double med = vs_median(ms, o->passes);
     mr[0] = n / (med * 1e3), mr[1] = n / (ms[o->passes - 1] * 1e3), mr[2] = n / (ms[0] * 1e3);
 }
 

@@ -9,17 +9,9 @@
  */
 #include <stdio.h>
 #include <stdlib.h>
-#include <time.h>
 
 #include "cli/cli.h"
 #include "vs.h"
-
-static double now_ms(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
 
 static int cmp_double(const void *a, const void *b)
 {
@@ -27,7 +19,7 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-static double median(double *v, int n)
+double vs_median(double *v, int n)
 {
     qsort(v, (size_t)n, sizeof *v, cmp_double);
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
@@ -61,15 +53,15 @@ int vs_time(const char *spec, const accel_scene *scene, const accel_ray *rays, s
                 t[0] = other(ctx);
                 continue;
             }
-            double t0 = now_ms();
+            double t0 = accel_now_ms();
             if (occluded) accel_trace_occluded(kind, a, rays, occ, n, threads, NULL);
             else accel_trace(kind, a, rays, hits, n, threads, NULL);
-            t[1] = now_ms() - t0;
+            t[1] = accel_now_ms() - t0;
         }
         if (p < 0) continue;
         ours[p] = t[1], theirs[p] = t[0], ratio[p] = t[1] > 0 ? t[0] / t[1] : 0;
     }
-    double r = median(ratio, passes), mo = median(ours, passes), mt = median(theirs, passes);
+    double r = vs_median(ratio, passes), mo = vs_median(ours, passes), mt = vs_median(theirs, passes);
     printf("vs spec=%s mrays=%.3f embree_mrays=%.3f ratio=%.4f ratio_min=%.4f ratio_max=%.4f "
            "passes=%d\n", spec, n / (mo * 1e3), n / (mt * 1e3), r, ratio[0], ratio[passes - 1], passes);
     fflush(stdout);

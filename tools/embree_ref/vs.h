@@ -10,6 +10,10 @@
 
 #include "accel.h"
 
+/* The median of v[0..n) (n >= 1), which it sorts: embree_ref's passes and
+ * builds too. */
+double vs_median(double *v, int n);
+
 /* One timed pass of the other tracer over every ray; its milliseconds. */
 typedef double (*vs_pass_fn)(void *ctx);
 
