@@ -42,14 +42,15 @@ static const char *const others[] = {"nested_grid:auto", "bvh", "bvh:build=sah",
  * over the best regular grid >= 1.0 on each non-uniform scene.
  * nested-tweaking: the defaults' time over the best hand-set nested
  * grid's above TWEAK_GAIN (a tweak that gains less than 5% is not
- * "required"). Both bests are chosen on half the rounds and judged on the
- * other half (issue 52; group.h: half). */
+ * "required"). Both bests are chosen on the group's rounds and judged in
+ * a decider pass (issue 52; group.h: exp_group_duel). */
 #define TWEAK_GAIN 1.05
 
 typedef struct {
     exp_tally ad, tw;
     int collapsed_adapts; /* non-uniform scenes where every regular grid collapsed */
     int d, a, t, adapts, nonuniform;
+    int duels, duel_procs, duel_rounds; /* decider passes (duel) and the last one's shape */
     exp_text tweak_ev, adapt_ev, findings, scenes;
 } study;
 
@@ -57,6 +58,18 @@ typedef struct {
 static int best_of(const exp_group *g, const char *prefix, int lo, int hi)
 {
     return exp_group_best(g, MASK, lo, hi, prefix);
+}
+
+/* time(a) / time(b) at level, judged in a decider pass (group.h:
+ * exp_group_duel). */
+static exp_est duel(const exp_group *g, int a, int b, double level, study *st)
+{
+    exp_group d;
+    exp_group_duel(g, a, b, MASK, 0, &d);
+    exp_est e = exp_group_speedup_level(&d, 0, 1, MASK, level);
+    st->duels++, st->duel_procs = d.procs, st->duel_rounds = d.per_proc;
+    exp_group_duel_free(&d);
+    return e;
 }
 
 /* c against b: "+12.0% [...]" of time, and whether they tie. */
@@ -86,12 +99,11 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     exp_group_init(&g, x, &s, &sets, MASK);
     g.collapse_ms = x->quick ? 500 : 1500;
     /* nested-adapts and nested-tweaking are decided here, each best chosen
-     * on half the rounds: 6 rounds per process give each half 3, whose
-     * median leaves out a round a slow spell of the host hit (with 2, one
-     * round per process judged, such a spell made the interval +-25%; with
-     * 4, bunny's read -14.0%, -17.9% and -12.6% of time in three runs but
-     * its judged interval once [0.89, 1.24]) */
-    g.proc_rounds = x->quick ? 0 : 6;
+     * on the group's rounds and judged in a decider pass (exp_group_duel:
+     * the two timed back to back in fresh processes). Judged on half the
+     * group's rounds instead, with 6 rounds per process, bunny's interval
+     * read [0.95, 1.28] in one of three runs of one commit: a dozen
+     * configurations lay between the two in every round. */
     g.time_builds = 0; /* the table shows one build time; no verdict rests on it */
     int hand_lo = 0;
     if (exp_kind_wanted(x, "nested_grid"))
@@ -133,9 +145,8 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     }
     exp_group_note(&g);
     exp_text_add(&st->scenes, "%s%s", st->scenes.len ? ", " : "", s.name);
-    /* issue 52: every best chosen on half the rounds (group.h: half), the
-     * deciders judged on the other half */
-    g.half = 1;
+    /* issue 52: every best chosen on the group's rounds, every decider
+     * judged in its own decider pass (duel) */
     int bg = best_of(&g, "grid:cells=ids,lambda=", hand_hi, grid_hi), bh = best_of(&g, "", hand_lo, hand_hi);
     int au = exp_group_find(&g, "nested_grid:auto"), df = hand_hi > hand_lo ? hand_lo : -1;
     if (au >= 0 && !g.cfg[au].ok) au = -1;
@@ -148,7 +159,6 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     int bn = bh;
     if (au >= 0 && (bn < 0 || exp_group_ns(&g, au, MASK).median < exp_group_ns(&g, bn, MASK).median))
         bn = au;
-    g.half = 0;
     if (bn >= 0) {
         if (bg >= 0) {
             int cmp = exp_group_compare(&g, bn, bg, MASK, a, sizeof a);
@@ -161,12 +171,12 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
                 snprintf(what, sizeof what, "best nested / best regular grid speed-up, %s %u tris, "
                          "primary+diffuse %dx%d (1 in %d tiles)", s.name, s.live_count, x->rt_size[0],
                          x->rt_size[1], exp_tiles_stride(x));
-                g.half = 2;
-                exp_est e = exp_group_speedup_level(&g, bg, bn, MASK, exp_tally_level(&st->ad));
-                g.half = 0;
+                exp_est e = duel(&g, bg, bn, exp_tally_level(&st->ad), st);
                 exp_decider d = exp_decider_of(what, &e, 1.0, +1);
                 exp_tally_add(&st->ad, &d);
-                exp_text_add(&st->adapt_ev, "%s%s %s", st->adapt_ev.len ? "; " : "", s.name, a);
+                char j[96];
+                exp_text_add(&st->adapt_ev, "%s%s %s, judged back to back %s", st->adapt_ev.len
+                             ? "; " : "", s.name, a, exp_fmt_x(j, sizeof j, &e));
             }
         } else if (nonuniform) {
             /* Every regular grid collapsed: a nested grid that ran adapts. */
@@ -192,14 +202,13 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
         exp_text_add(&st->findings, "- %s: the best nested grid is `%s`; time of the defaults %s, "
                      "of `auto` %s: %s.\n", s.name, g.cfg[bn].spec, df == bn ? "(the same)" : a,
                      au < 0 ? "(not measured)" : au == bn ? "(the same)" : b, cls);
+        char judged[96] = "";
         if (bh >= 0) {
             char what[400];
             snprintf(what, sizeof what, "defaults / best hand-set nested grid time, %s %u tris, "
                      "primary+diffuse %dx%d (1 in %d tiles)", s.name, s.live_count, x->rt_size[0],
                      x->rt_size[1], exp_tiles_stride(x));
-            g.half = 2;
-            exp_est e = exp_group_speedup_level(&g, df, bh, MASK, exp_tally_level(&st->tw));
-            g.half = 0;
+            exp_est e = df == bh ? (exp_est){0} : duel(&g, df, bh, exp_tally_level(&st->tw), st);
             exp_decider d = exp_decider_of(what, &e, TWEAK_GAIN, +1);
             /* The defaults are the best hand-set configuration: the ratio
              * is 1 exactly (no interval to take), and tweaking gains
@@ -210,9 +219,13 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
                 d = (exp_decider){what, 1.0, 1.0, 1.0, TWEAK_GAIN, +1, 1};
             }
             exp_tally_add(&st->tw, &d);
+            if (df != bh)
+                exp_fmt_x(judged, sizeof judged, &e);
         }
-        exp_text_add(&st->tweak_ev, "%s%s: defaults %s, auto %s", st->tweak_ev.len ? "; " : "",
-                     s.name, df == bn ? "best" : a, au < 0 ? "n/a" : au == bn ? "best" : b);
+        exp_text_add(&st->tweak_ev, "%s%s: defaults %s, auto %s%s%s", st->tweak_ev.len ? "; " : "",
+                     s.name, df == bn ? "best" : a, au < 0 ? "n/a" : au == bn ? "best" : b,
+                     judged[0] ? ", the defaults over the best hand-set judged back to back " : "",
+                     judged);
     }
     if (bv >= 0 && bn >= 0) {
         exp_group_compare(&g, bv, bn, MASK, a, sizeof a);
@@ -272,8 +285,9 @@ int main(int argc, char **argv)
                         exp_text_str(&st.scenes),
                         "\"requires manual tweaking\" read as the defaults' time more than %.2fx "
                         "the best hand-set nested grid's, on each of %d scenes (intervals at "
-                        "%.2f%%, Bonferroni): %d confirm, %d miss, %d on the line; `auto` ties with "
-                        "the best on %d (time against the best: %s)", TWEAK_GAIN, st.tw.added,
+                        "%.2f%%, Bonferroni, each judged in a decider pass: the two timed back to "
+                        "back in fresh processes): %d confirm, %d miss, %d on the line; `auto` ties "
+                        "with the best on %d (time against the best: %s)", TWEAK_GAIN, st.tw.added,
                         100 * exp_tally_level(&st.tw), st.tw.confirmed, st.tw.refuted,
                         st.tw.online, st.a, exp_text_str(&st.tweak_ev));
     else
@@ -284,9 +298,12 @@ int main(int argc, char **argv)
                         "the best nested grid faster than the best regular grid (speed-up >= "
                         "1.0) on each of %d non-uniform scenes (intervals at %.2f%%, Bonferroni): "
                         "%d confirm, %d miss, %d on the line; every regular grid collapsed on %d "
-                        "more (time against the grid: %s)", st.ad.added,
+                        "more (time against the grid, then the speed-up judged in a decider pass: "
+                        "the two timed back to back, A B then B A, in %d fresh processes of %d "
+                        "rounds: %s)", st.ad.added,
                         100 * exp_tally_level(&st.ad), st.ad.confirmed, st.ad.refuted,
-                        st.ad.online, st.collapsed_adapts, exp_text_str(&st.adapt_ev));
+                        st.ad.online, st.collapsed_adapts, st.duel_procs, st.duel_rounds,
+                        exp_text_str(&st.adapt_ev));
     } else if (st.collapsed_adapts)
         exp_verdict(&x, "nested-adapts", EXP_CONFIRMED, exp_text_str(&st.scenes),
                     "every regular grid collapsed on the %d non-uniform scenes, the nested grid "

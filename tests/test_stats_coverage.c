@@ -10,6 +10,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "experiments/engine/group.h" /* EXP_DUEL_* */
 #include "experiments/engine/stats.h"
 #include "test.h"
 
@@ -114,19 +115,18 @@ static double spell(uint64_t *seed)
     return cov_uniform(seed) < 0.2 ? 1.2 + 0.3 * cov_uniform(seed) : 1.0;
 }
 
-static double process_coverage(int m, int rounds, int model, int pooled, uint64_t seed)
+static double process_coverage(int m, int procs, int rounds, int model, int pooled, uint64_t seed)
 {
     /* builds: rounds carries the number of builds a process's sample is the
      * fastest of (1, 2 or 4: group.h), its one sample per process */
     int builds = model == COV_BUILDS ? rounds : 1;
     if (model == COV_BUILDS) rounds = 1;
-    const int procs = 8;
     int n = procs * rounds;
     double level = exp_bonferroni_level(m);
     int hold = 0;
     for (int e = 0; e < COV_RUNS; e++) {
-        double a[32], b[32];
-        int proc[32];
+        double a[64], b[64];
+        int proc[64];
         for (int p = 0; p < procs; p++) {
             double eff_a = 0.06 * cov_normal(&seed), eff_b = 0.06 * cov_normal(&seed);
             for (int k = 0; k < rounds; k++) {
@@ -166,14 +166,19 @@ TEST(stats_coverage_processes_as_used)
     for (int m = 1; m <= 8; m *= 8) { /* 95% and a verdict over 8 comparisons (99.375%) */
         double level = exp_bonferroni_level(m), se = sqrt(level * (1 - level) / COV_RUNS);
         for (int model = COV_CLEAN; model <= COV_BUILDS; model++)
-            for (int rounds = model == COV_BUILDS ? 1 : 2; rounds <= 4; rounds *= 2) {
-                double c = process_coverage(m, rounds, model, 0,
+            /* the groups' 2 and 4 rounds, the decider pass's 6 (group.h:
+             * EXP_DUEL_ROUNDS); builds the fastest of 1, 2 or 4 in 8
+             * processes, and of 4 in the build duel's 16 */
+            for (int rounds = model == COV_BUILDS ? 1 : 2; rounds <= 6; rounds += rounds == 4 ? 2 : rounds) {
+                int procs = model == COV_BUILDS && rounds == 4 ? EXP_DUEL_BUILD_PROCS : 8;
+                if (model == COV_BUILDS && rounds > 4) continue;
+                double c = process_coverage(m, procs, rounds, model, 0,
                                             0x8A0Cull + (uint64_t)(m * 16 + model * 4 + rounds));
-                CHECKF(c >= level - 3 * se, "8 processes x %d %s%s at %.3f%%: coverage %.4f "
-                       "(3 SE = %.4f)", rounds, model == COV_BUILDS ? "builds" : "rounds",
+                CHECKF(c >= level - 3 * se, "%d processes x %d %s%s at %.3f%%: coverage %.4f "
+                       "(3 SE = %.4f)", procs, rounds, model == COV_BUILDS ? "builds" : "rounds",
                        names[model], 100 * level, c, 3 * se);
             }
-        double cp = process_coverage(m, 2, COV_CLEAN, 1, 0x9A0Cull + (uint64_t)m);
+        double cp = process_coverage(m, 8, 2, COV_CLEAN, 1, 0x9A0Cull + (uint64_t)m);
         CHECKF(cp < level - 3 * se, "the 16 rounds pooled as one process at %.3f%%: coverage "
                "%.4f, expected under the level by more than 3 SE", 100 * level, cp);
     }

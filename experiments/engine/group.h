@@ -139,6 +139,8 @@ typedef struct {
     int proc_rounds;    /* rounds per process (0: the experiment's, 2): 4 gives each half of a
                            best chosen and judged on half the rounds 2 rounds per process */
     int thread_probe;   /* time the thread probe in the rounds (default 0) */
+    int duel;           /* a decider pass (exp_group_duel): no A/A floor of its own */
+    int want_procs;     /* processes (0: x->procs; at most 16) */
     /* Results of exp_group_run. */
     double aa_samples[4][EXP_MAX_SAMPLES];
     exp_est aa;         /* configuration 0 against itself: paired ratio over the mask */
@@ -244,6 +246,31 @@ typedef struct {
     uint8_t *occ;
 } exp_scratch;
 exp_scratch exp_group_scratch(const exp_group *g);
+/* The decider pass (issue 52). A verdict that rests on one comparison
+ * of two configurations of a group (a best against a pick, a builder
+ * against another) is judged on the pair timed again alone: d gets
+ * copies of configurations a and b (d's 0 and 1; the structures stay
+ * g's), timed on the sets of mask in x->procs fresh processes of
+ * EXP_DUEL_ROUNDS rounds each, A B then B A, and, with builds, built after
+ * every odd round twice over (A B A B), each process's fastest kept (a
+ * budget of EXP_DUEL_BUILD_MS per process) in EXP_DUEL_BUILD_PROCS
+ * processes: a build's time depends on where its process's allocator
+ * puts it (armadillo's SAH build ran 39.5-42.9 ms, the fastest of 6 in
+ * each of 8 processes, its ratio to the median split's 2.02-2.17), so a
+ * build ratio needs more processes than a trace ratio. In the group's rounds the
+ * two were timed up to a dozen configurations apart, and their per-round
+ * ratio scattered from 0.79 to 1.39 on one scene (slivers, the model's
+ * pick against the best lambda); back to back the ratio is the two
+ * structures', not the machine's minute. The choice (which best, which
+ * pick) is made on the group's rounds and judged on the duel's, so the
+ * judging rounds are never the choosing ones. Free d with
+ * exp_group_duel_free (never exp_group_free). */
+#define EXP_DUEL_ROUNDS 6
+#define EXP_DUEL_ROUNDS_QUICK 2
+#define EXP_DUEL_BUILD_MS 4000.0
+#define EXP_DUEL_BUILD_PROCS 16
+void exp_group_duel(const exp_group *g, int a, int b, int mask, int builds, exp_group *d);
+void exp_group_duel_free(exp_group *d);
 /* Index of the configuration named spec, or -1. */
 int exp_group_find(const exp_group *g, const char *spec);
 

@@ -322,7 +322,9 @@ static void replica_main(exp_group *g, int p, int rounds, int cmd, int rep, prob
         else if (all[i]->count) copy_set(all[i]);
     }
     g->sets = &fresh;
-    for (int c = 0; c < g->count; c++) {
+    /* A group that times builds only (no set: a duel of builders) traces
+     * nothing: its structures are not built again here. */
+    for (int c = 0; c < g->count && g->mask; c++) {
         exp_cfg *cf = &g->cfg[c];
         /* A slow build is not repeated (group.h: EXP_REPLICA_REBUILD_MS):
          * the replica times the parent's structure, inherited by fork. */
@@ -472,12 +474,17 @@ static void proc_mean_range(const double *v, const int *proc, int n, double *lo,
 void exp_group_run(exp_group *g)
 {
     exp_ctx *x = g->x;
-    int procs = x->procs < 1 ? 1 : x->procs > 16 ? 16 : x->procs;
+    int procs = g->want_procs > 0 && x->procs > 1 ? g->want_procs : x->procs;
+    procs = procs < 1 ? 1 : procs > 16 ? 16 : procs;
+    /* a duel's builds: every build point of every process (group.h) */
+    double budget = g->duel ? EXP_DUEL_BUILD_MS * procs / (x->quick ? 4 : 1)
+                            : x->build_budget_ms;
+    int points = g->duel ? (g->proc_rounds + 1) / 2 : 1;
     for (int c = 0; c < g->count; c++)
         g->cfg[c].build_procs = g->time_builds && procs > 1 && g->cfg[c].ok &&
-                                        g->cfg[c].build.ms * procs <= x->build_budget_ms
+                                        g->cfg[c].build.ms * procs * points <= budget
                                     ? 1 + (g->build_twice &&
-                                           g->cfg[c].build.ms * procs * 2 <= x->build_budget_ms)
+                                           g->cfg[c].build.ms * procs * points * 2 <= budget)
                                     : 0;
     if (g->time_builds) build_rounds(g);
     exp_ref_ready(x);
@@ -602,6 +609,6 @@ void exp_group_run(exp_group *g)
         g->floor = fmax(fabs(g->aa.median - 1), fabs(1 / g->aa.median - 1));
         if (!(g->floor >= EXP_MIN_FLOOR)) g->floor = EXP_MIN_FLOOR;
     }
-    exp_note_floor(x, g->floor, g->aa.n >= 3);
+    if (!g->duel) exp_note_floor(x, g->floor, g->aa.n >= 3);
 }
 
