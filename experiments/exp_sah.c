@@ -377,9 +377,12 @@ static void measure_scene(exp_ctx *x, study *st, const char *spec, const exp_lis
     exp_group g;
     exp_group_init(&g, x, &s, &sets, MASK);
     /* sah-build-slower and the meshes' part of spatial-splits are judged
-     * in decider passes (claim, sbvh_notes); the tables' builds are each
-     * process's fastest of 2 */
-    g.build_twice = 1;
+     * in decider passes (claim, sbvh_notes). bvh-layout is judged on the
+     * group's rounds: 4 per process, so that a process's value is their
+     * median (with 2, in a run with a busy loop on the second core, the
+     * near-first order on armadillo read 1.13 [0.96, 1.32]); the tables'
+     * builds are each process's fastest of 2 (one after each odd round) */
+    g.proc_rounds = x->quick ? 0 : 4;
     for (int i = 0; i < list->count; i++) {
         if (!strcmp(list->spec[i], SBVH) && s.live_count > SBVH_MAX_PRIMS) {
             exp_md(x, "\n`build=sbvh` left out here (over %u primitives).\n", SBVH_MAX_PRIMS);

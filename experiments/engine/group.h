@@ -267,7 +267,7 @@ exp_scratch exp_group_scratch(const exp_group *g);
  * exp_group_duel_free (never exp_group_free). */
 #define EXP_DUEL_ROUNDS 6
 #define EXP_DUEL_ROUNDS_QUICK 2
-#define EXP_DUEL_BUILD_MS 4000.0
+#define EXP_DUEL_BUILD_MS 1000.0
 #define EXP_DUEL_BUILD_PROCS 16
 void exp_group_duel(const exp_group *g, int a, int b, int mask, int builds, exp_group *d);
 void exp_group_duel_free(exp_group *d);
