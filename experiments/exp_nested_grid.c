@@ -50,7 +50,7 @@ typedef struct {
     exp_tally ad, tw;
     int collapsed_adapts; /* non-uniform scenes where every regular grid collapsed */
     int d, a, t, adapts, nonuniform;
-    int duels, duel_procs, duel_rounds; /* decider passes (duel) and the last one's shape */
+    int duel_procs, duel_rounds; /* the last decider pass's shape (duel) */
     exp_text tweak_ev, adapt_ev, findings, scenes;
 } study;
 
@@ -67,7 +67,7 @@ static exp_est duel(const exp_group *g, int a, int b, double level, study *st)
     exp_group d;
     exp_group_duel(g, a, b, MASK, 0, &d);
     exp_est e = exp_group_speedup_level(&d, 0, 1, MASK, level);
-    st->duels++, st->duel_procs = d.procs, st->duel_rounds = d.per_proc;
+    st->duel_procs = d.procs, st->duel_rounds = d.per_proc;
     exp_group_duel_free(&d);
     return e;
 }

@@ -169,15 +169,18 @@ TEST(stats_coverage_processes_as_used)
             /* the groups' 2 and 4 rounds, the decider pass's 6 (group.h:
              * EXP_DUEL_ROUNDS); builds the fastest of 1, 2 or 4 in 8
              * processes, and of 4 in the build duel's 16 */
-            for (int rounds = model == COV_BUILDS ? 1 : 2; rounds <= 6; rounds += rounds == 4 ? 2 : rounds) {
-                int procs = model == COV_BUILDS && rounds == 4 ? EXP_DUEL_BUILD_PROCS : 8;
-                if (model == COV_BUILDS && rounds > 4) continue;
-                double c = process_coverage(m, procs, rounds, model, 0,
-                                            0x8A0Cull + (uint64_t)(m * 16 + model * 4 + rounds));
-                CHECKF(c >= level - 3 * se, "%d processes x %d %s%s at %.3f%%: coverage %.4f "
-                       "(3 SE = %.4f)", procs, rounds, model == COV_BUILDS ? "builds" : "rounds",
-                       names[model], 100 * level, c, 3 * se);
-            }
+            for (int rounds = model == COV_BUILDS ? 1 : 2; rounds <= 6; rounds += rounds == 4 ? 2 : rounds)
+                for (int procs = 8; procs <= EXP_DUEL_BUILD_PROCS; procs *= 2) {
+                    if ((model == COV_BUILDS && rounds > 4) ||
+                        (procs > 8 && !(model == COV_BUILDS && rounds == 4)))
+                        continue;
+                    double c = process_coverage(m, procs, rounds, model, 0,
+                                                0x8A0Cull + (uint64_t)(m * 16 + model * 4 + rounds) +
+                                                    (procs > 8 ? 4096u : 0u));
+                    CHECKF(c >= level - 3 * se, "%d processes x %d %s%s at %.3f%%: coverage %.4f "
+                           "(3 SE = %.4f)", procs, rounds, model == COV_BUILDS ? "builds" : "rounds",
+                           names[model], 100 * level, c, 3 * se);
+                }
         double cp = process_coverage(m, 8, 2, COV_CLEAN, 1, 0x9A0Cull + (uint64_t)m);
         CHECKF(cp < level - 3 * se, "the 16 rounds pooled as one process at %.3f%%: coverage "
                "%.4f, expected under the level by more than 3 SE", 100 * level, cp);

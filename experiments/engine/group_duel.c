@@ -38,7 +38,7 @@ void exp_group_duel(const exp_group *g, int a, int b, int mask, int builds, exp_
             t->ray_steps = t->ray_prims = NULL; /* the parent's to free */
             memset(t->samples, 0, sizeof t->samples);
             t->n = 0;
-            if (!((mask & g->mask) & (1 << s))) t->have = 0;
+            if (!(d->mask & (1 << s))) t->have = 0; /* set index s is bit 1 << s */
         }
     }
     exp_group_run(d);
