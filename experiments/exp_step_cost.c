@@ -47,7 +47,9 @@ static const char *const default_specs[] = {
     "nested_grid:lambda=64",
     "irregular_grid:top_lambda=0.25", "irregular_grid:top_lambda=1", "irregular_grid:top_lambda=4",
     "irregular_grid:top_lambda=16", "irregular_grid:top_lambda=64",
-    "instanced:bottom=bvh:leaf=1", "instanced", "instanced:bottom=bvh:leaf=32;ct=4",
+    /* instanced over walked binary bvh bottoms, all meeting triangles one by one (its
+     * default, the 8-wide levels on blocks, cannot vary its leaves: one point) */
+    "instanced:bottom=bvh:leaf=1", "instanced:bottom=bvh:leaf=4", "instanced:bottom=bvh:leaf=32;ct=4",
     "instanced:bottom=bvh:leaf=64;ct=16", "instanced:bottom=bvh:leaf=256;ct=64",
     "bvh:leaf=1", "bvh", "bvh:leaf=32,ct=4", "bvh:leaf=64,ct=16", "bvh:leaf=256,ct=64",
     "bvh:width=4,leaf=1", "bvh:width=4,leaf=8,ct=2", "bvh:width=4,leaf=16,ct=2", "bvh:width=4,leaf=32,ct=4",

@@ -382,6 +382,10 @@ void inst_fill_stats(const inst_accel *a, accel_build_stats *stats)
     stats->depth = (a->top == INST_BVH ? a->top_bvh.depth : 1) + bottom_depth;
     for (int k = 0; k < 3; k++) stats->res[k] = a->top_grid.frame.res[k];
     stats->bytes = inst_memory(a);
+    /* The 8-wide bottom level tests its leaves' world blocks with the
+     * shared block test (k8_trace.c's test_blocks); the other bottoms meet
+     * triangles one by one. */
+    stats->test_lanes = a->bottom_kind == INST_BVH && a->width == INST_WIDE ? 8 : 0;
 }
 
 /* bottom=<text>: bvh and grid are the kind's own; anything else names a
