@@ -18,6 +18,9 @@
 #   occluded  rtcOccluded1   vs bvh:width=8 --occluded       (any-hit queries)
 #   packet    rtcIntersect16 vs bvh:width=8,traverse=packet  (16 consecutive rays)
 #   stream    rtcIntersect1M vs bvh:width=8,traverse=stream (ray streams)
+#   occluded-stream
+#             rtcOccluded1M  vs bvh:width=8,traverse=stream --occluded (any-hit streams;
+#             on shadow rays to one light Embree's fastest any-hit mode)
 # Other settings: ROUNDS (6), SETS (primary,diffuse,shadow), PASSES (timed
 # passes per process, 5, after a warm-up pass), THREADS (1), QUALITY (Embree's
 # build quality, medium), DIR (build/vs_embree/<scene>-<hash>-<size>: the
@@ -54,12 +57,14 @@ CHECK=${CHECK:-1}
 read -r -a trace_opts <<< "${TRACE_OPTS:-}"
 read -r -a embree_opts <<< "${EMBREE_OPTS:-}"
 occl=()
+eoccl=()
 case $MODE in
 single) emode=single; defspec=bvh:width=8 ;;
 occluded) emode=occluded; defspec=bvh:width=8; occl=(--occluded) ;;
 packet) emode=packet16; defspec=bvh:width=8,traverse=packet ;;
 stream) emode=stream; defspec=bvh:width=8,traverse=stream ;;
-*) echo "vs_embree: MODE=$MODE: expected single, occluded, packet or stream" >&2; exit 2 ;;
+occluded-stream) emode=stream; defspec=bvh:width=8,traverse=stream; occl=(--occluded); eoccl=(--occluded) ;;
+*) echo "vs_embree: MODE=$MODE: expected single, occluded, packet, stream or occluded-stream" >&2; exit 2 ;;
 esac
 specs=("$@")
 [ ${#specs[@]} -gt 0 ] || specs=("$defspec")
@@ -150,7 +155,7 @@ for ((r = 1; r <= ROUNDS; r++)); do
             echo "$set $r ours$k $mr" >> "$res"
             hits=()
             [ "$r" = 1 ] && [ "$k" = 0 ] && [ "$CHECK" = 1 ] && hits=(--hits "$DIR/embree.$MODE.$set.hits")
-            out=$("$BIN/embree_ref" --obj "$obj" --rays "$rays" --mode "$emode" --threads "$THREADS" \
+            out=$("$BIN/embree_ref" --obj "$obj" --rays "$rays" --mode "$emode" "${eoccl[@]}" --threads "$THREADS" \
                 --passes "$PASSES" --builds 1 --quality "$QUALITY" "${hits[@]}" "${embree_opts[@]}")
             mr=$(printf '%s\n' "$out" | sed -n 's/.* mrays=\([0-9.]*\) .*/\1/p')
             embree_isa=$(printf '%s\n' "$out" | sed -n 's/.* isa=\([^ ]*\) .*/\1/p')
@@ -185,7 +190,7 @@ done
 
 if [ "$CHECK" = 1 ]; then
     cmp_opt=()
-    [ "$MODE" = occluded ] && cmp_opt=(--occluded)
+    [ ${#occl[@]} -gt 0 ] && cmp_opt=(--occluded)
     echo "hits of round 1, ours (${specs[0]}) against Embree's (trace compare${cmp_opt:+ --occluded}):"
     for set in "${sets[@]}"; do
         printf '%-9s ' "$set"
