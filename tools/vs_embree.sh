@@ -57,13 +57,12 @@ CHECK=${CHECK:-1}
 read -r -a trace_opts <<< "${TRACE_OPTS:-}"
 read -r -a embree_opts <<< "${EMBREE_OPTS:-}"
 occl=()
-eoccl=()
 case $MODE in
 single) emode=single; defspec=bvh:width=8 ;;
-occluded) emode=occluded; defspec=bvh:width=8; occl=(--occluded) ;;
+occluded) emode=single; defspec=bvh:width=8; occl=(--occluded) ;;
 packet) emode=packet16; defspec=bvh:width=8,traverse=packet ;;
 stream) emode=stream; defspec=bvh:width=8,traverse=stream ;;
-occluded-stream) emode=stream; defspec=bvh:width=8,traverse=stream; occl=(--occluded); eoccl=(--occluded) ;;
+occluded-stream) emode=stream; defspec=bvh:width=8,traverse=stream; occl=(--occluded) ;;
 *) echo "vs_embree: MODE=$MODE: expected single, occluded, packet, stream or occluded-stream" >&2; exit 2 ;;
 esac
 specs=("$@")
@@ -155,7 +154,7 @@ for ((r = 1; r <= ROUNDS; r++)); do
             echo "$set $r ours$k $mr" >> "$res"
             hits=()
             [ "$r" = 1 ] && [ "$k" = 0 ] && [ "$CHECK" = 1 ] && hits=(--hits "$DIR/embree.$MODE.$set.hits")
-            out=$("$BIN/embree_ref" --obj "$obj" --rays "$rays" --mode "$emode" "${eoccl[@]}" --threads "$THREADS" \
+            out=$("$BIN/embree_ref" --obj "$obj" --rays "$rays" --mode "$emode" "${occl[@]}" --threads "$THREADS" \
                 --passes "$PASSES" --builds 1 --quality "$QUALITY" "${hits[@]}" "${embree_opts[@]}")
             mr=$(printf '%s\n' "$out" | sed -n 's/.* mrays=\([0-9.]*\) .*/\1/p')
             embree_isa=$(printf '%s\n' "$out" | sed -n 's/.* isa=\([^ ]*\) .*/\1/p')
@@ -189,8 +188,7 @@ for k in "${!specs[@]}"; do
 done
 
 if [ "$CHECK" = 1 ]; then
-    cmp_opt=()
-    [ ${#occl[@]} -gt 0 ] && cmp_opt=(--occluded)
+    cmp_opt=("${occl[@]}") # any-hit answers compare by the any-hit rule
     echo "hits of round 1, ours (${specs[0]}) against Embree's (trace compare${cmp_opt:+ --occluded}):"
     for set in "${sets[@]}"; do
         printf '%-9s ' "$set"
