@@ -108,11 +108,23 @@ typedef struct {
 } study;
 
 /* ns per primitive test of a kind that tests `lanes` at once (0: one by
- * one): the scalar test, or a full block's time over its lanes. */
-static double micro_per_prim(const step_micro *m, int lanes)
+ * one): the scalar test, or a full block's time over its lanes; hot in L1,
+ * or (mem) read in a shuffled order from a scene-sized array. */
+static double micro_per_prim(const step_micro *m, int lanes, int mem)
 {
+    if (mem)
+        return lanes == 8 ? m->block8_mem.median / 8 : lanes == 4 ? m->block4_mem.median / 4
+                                                                  : m->tri_mem.median;
     return lanes == 8 ? m->block8.median / 8 : lanes == 4 ? m->block4.median / 4 : m->tri.median;
 }
+
+/* Which micro-benchmark holds C_intersect for a ray set, decided before
+ * any fit by how the rays meet their triangles: primary rays (8x8 tiles)
+ * and shadow rays (toward one light, in pixel order) are coherent, so a
+ * test mostly reads what the neighbouring rays just read (hot); diffuse
+ * rays scatter, so a test reads primitives no recent ray touched (from
+ * memory). */
+static int set_reads_memory(int set) { return set == 2; }
 
 /* C_step and C_ray by non-negative least squares on y - ci * prims, with
  * the held-out errors (each point predicted by the fit on the others). */
@@ -178,7 +190,7 @@ static void fit_family(exp_ctx *x, const exp_group *g, const char *family, int s
         pr[n] = (double)tr->counters.prim_tests / (double)tr->rays;
         ns[n] = exp_est_scale(&tr->ms, 1e6 / (double)tr->rays).median;
         /* each configuration's own test (a family may mix blocks of 4 and 8) */
-        ci[n] = micro_per_prim(sd->m, cf->build.test_lanes);
+        ci[n] = micro_per_prim(sd->m, cf->build.test_lanes, set_reads_memory(set));
         lanes = lanes == -1 || lanes == cf->build.test_lanes ? cf->build.test_lanes : -2;
         one[n] = 1, cfg_of[n++] = c;
     }
@@ -333,9 +345,12 @@ static void answer_fixed(exp_ctx *x, const study *sd)
               "free fit above may trade one count for the other. Here every family's C_intersect "
               "is the micro-benchmark's cost per primitive of the test it runs (a block test's "
               "time over its lanes, or the scalar test), the same number for every kind with the "
-              "same test, and C_step and C_ray are fitted beside it (non-negative least "
-              "squares, held-out error as above). A partly filled block costs a whole block: "
-              "that shows in C_step. Primary and diffuse rays on %s.\n",
+              "same test: hot in L1 for primary and shadow rays (coherent: a test mostly reads "
+              "what the neighbouring rays just read), from a scene-sized array in a shuffled "
+              "order for diffuse rays (scattered: a test reads what no recent ray touched), "
+              "chosen by the ray set before any fit. C_step and C_ray are fitted beside it "
+              "(non-negative least squares, held-out error as above). A partly filled block "
+              "costs a whole block: that shows in C_step. Primary and diffuse rays on %s.\n",
            sd->count ? sd->f[0].scene : "-");
     exp_md_table(x, "family|rays|a step is|a test is|C_intersect ns (fixed)|C_step ns|C_ray ns|"
                     "held-out median (worst)|free fit: C_step, C_intersect ns");
@@ -362,14 +377,17 @@ static void answer_top(exp_ctx *x, const study *sd)
 {
     if (!sd->count) return;
     exp_md(x, "\n<!-- answer -->\n\n### What a step and a test cost, per kind\n\nOn equal terms: "
-              "C_intersect is the micro-benchmark's cost per primitive of the kind's own test (hot "
-              "in L1; a block test over its lanes), C_step and C_ray are fitted beside it on %s "
+              "C_intersect is the micro-benchmark's cost per primitive of the kind's own test (a "
+              "block test over its lanes): hot in L1 for the coherent primary rays, and read in "
+              "a shuffled order from arrays of %d triangles for the scattered diffuse rays, whose "
+              "tests pay cache misses. C_step and C_ray are fitted beside it on %s "
               "(ns per ray = C_step N_steps + C_intersect N_intersect + C_ray; held-out error: "
               "each configuration predicted by the fit without it). A step in tests: C_step / "
               "C_intersect.\n",
-           sd->f[0].scene);
-    exp_md_table(x, "kind|a step is|a test is|C_intersect ns (fixed)|C_step ns: primary, diffuse|"
-                    "a step in tests: primary, diffuse|held-out error median: primary, diffuse");
+           sd->m->mem_tris, sd->f[0].scene);
+    exp_md_table(x, "kind|a step is|a test is|C_intersect ns (fixed): primary, diffuse|C_step ns: "
+                    "primary, diffuse|a step in tests: primary, diffuse|held-out error median: "
+                    "primary, diffuse");
     svg_plot p;
     svg_plot_init(&p, "What a step costs against what a test costs, per kind (equal terms)",
                   "C_intersect, ns per primitive test (fixed by the micro-benchmark)",
@@ -383,32 +401,34 @@ static void answer_top(exp_ctx *x, const study *sd)
             if (sd->f[j].set == 2 && sd->f[j].fixed_ok && !strcmp(sd->f[j].scene, a->scene) &&
                 !strcmp(sd->f[j].family, a->family))
                 d = &sd->f[j];
-        char cs[64] = "-", ct[64] = "-", he[64] = "-";
-        double ci = a->fixed_ci;
+        char cc[64] = "-", cs[64] = "-", ct[64] = "-", he[64] = "-";
+        double ci = a->fixed_ci, cd = d ? d->fixed_ci : ci;
         if (d) {
+            snprintf(cc, sizeof cc, "%.2f, %.2f", ci, cd);
             snprintf(cs, sizeof cs, "%.2f, %.2f", a->fixed_c[0], d->fixed_c[0]);
-            snprintf(ct, sizeof ct, "%.2f, %.2f", a->fixed_c[0] / ci, d->fixed_c[0] / ci);
+            snprintf(ct, sizeof ct, "%.2f, %.2f", a->fixed_c[0] / ci, d->fixed_c[0] / cd);
             snprintf(he, sizeof he, "%.0f%%, %.0f%%", 100 * a->fixed_med, 100 * d->fixed_med);
         } else {
+            snprintf(cc, sizeof cc, "%.2f, -", ci);
             snprintf(cs, sizeof cs, "%.2f, -", a->fixed_c[0]);
             snprintf(ct, sizeof ct, "%.2f, -", a->fixed_c[0] / ci);
             snprintf(he, sizeof he, "%.0f%%, -", 100 * a->fixed_med);
         }
-        exp_md(x, "| `%s` | %s | %s | %.2f | %s | %s | %s |\n", a->family, step_of(a->family),
-               test_of(a->lanes), ci, cs, ct, he);
-        double px[2] = {ci, ci}, py[2] = {a->fixed_c[0], d ? d->fixed_c[0] : 0};
+        exp_md(x, "| `%s` | %s | %s | %s | %s | %s | %s |\n", a->family, step_of(a->family),
+               test_of(a->lanes), cc, cs, ct, he);
+        double px[2] = {ci, cd}, py[2] = {a->fixed_c[0], d ? d->fixed_c[0] : 0};
         /* a C_step pinned at 0 cannot show on a log axis: svg_add leaves it out */
         if (p.count < SVG_MAX_SERIES - 1) svg_add(&p, a->family, px, py, NULL, NULL, d ? 2 : 1,
                                                   SVG_LINE | SVG_POINTS);
-        lo = fmin(lo, ci), hi = fmax(hi, ci);
+        lo = fmin(lo, fmin(ci, cd)), hi = fmax(hi, fmax(ci, cd));
     }
     if (hi > 0) {
         double ex[2] = {lo / 2, hi * 2};
         svg_add(&p, "a step costs one test", ex, ex, NULL, NULL, 2, SVG_DASHED);
     }
     exp_svg(x, &p, "step_cost_answer", "C_step against C_intersect per kind, on equal terms: "
-            "each kind's two points (one x: its test) are its primary and its diffuse rays; above "
-            "the dashed line a step costs more than a test");
+            "each kind's two points are its primary rays (x: its test hot in L1) and its diffuse "
+            "rays (x: its test from memory); above the dashed line a step costs more than a test");
     exp_md(x, "\n<!-- /answer -->\n");
 }
 
@@ -427,15 +447,19 @@ static void answer(exp_ctx *x, study *sd, const step_micro *m)
         exp_md(x, "| `%s` | %s | %.2f | %.2f | %.0f | %.0f%% (%.0f%%) | %d |\n", f->family,
                set_names[f->set], f->c[0], f->c[1], f->c[2], 100 * f->held_med, 100 * f->held_max, f->n);
     }
+    char f[64], g[64], h[64];
     exp_md(x, "\nOn this machine, hot in L1 (median of 15 samples [95%% interval], ns per "
               "operation): one watertight triangle test %s, one block test of 8 triangles %s "
               "and of 4 %s (the shared block test of the wide BVH and the block grids, %s "
               "path), one binary node visit (two slab tests) %s, one 3D-DDA cell step with its "
-              "cell read %s. A fitted constant below these is the fit trading one count for the "
-              "other, not the machine.\n",
+              "cell read %s. The same tests on %d triangles read in a shuffled order (the "
+              "triangle through an id array, or the blocks), what a scattered ray's test pays: "
+              "triangle %s, block of 8 %s, block of 4 %s. A fitted constant below the hot ones "
+              "is the fit trading one count for the other, not the machine.\n",
            exp_fmt_est(a, sizeof a, &m->tri, 2), exp_fmt_est(d, sizeof d, &m->block8, 2),
            exp_fmt_est(e, sizeof e, &m->block4, 2), "AVX2", exp_fmt_est(b, sizeof b, &m->node, 2),
-           exp_fmt_est(c, sizeof c, &m->step, 2));
+           exp_fmt_est(c, sizeof c, &m->step, 2), m->mem_tris, exp_fmt_est(f, sizeof f, &m->tri_mem, 2),
+           exp_fmt_est(g, sizeof g, &m->block8_mem, 2), exp_fmt_est(h, sizeof h, &m->block4_mem, 2));
     answer_fixed(x, sd);
     svg_plot p;
     svg_plot_init(&p, "Held-out prediction against measurement", "measured ns per ray",

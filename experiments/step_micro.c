@@ -2,6 +2,7 @@
  * step_micro.c - the micro-benchmarks of exp_step_cost (step_micro.h).
  */
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "core/prim.h"
@@ -81,6 +82,96 @@ static accel_block4 micro_b4[4] __attribute__((aligned(32)));
     }
 MICRO_BLOCK(8)
 MICRO_BLOCK(4)
+
+/* The same tests from memory: arrays of a scene's size, visited in a
+ * shuffled order. The primitive met at the i-th visit has the shape of
+ * micro_tris[i % 8] (micro_b<LB>[i % 4]), so the hits and misses come in
+ * the hot micro's predictable order and only the memory differs. */
+static float *mem_tris;          /* 9 floats per triangle */
+static uint32_t *mem_ids;        /* visit i reads triangle mem_ids[i] */
+static accel_block8 *mem_b8;     /* mem_tris as blocks of 8 */
+static accel_block4 *mem_b4;     /* and of 4 */
+static uint32_t *mem_order8, *mem_order4; /* visit i reads block mem_order<LB>[i] */
+static long mem_n, mem_pos;
+
+static double micro_tri_mem(long reps)
+{
+    double acc = 0;
+    long pos = mem_pos;
+    for (long r = 0; r < reps; r++) {
+        MICRO_FRESH();
+        for (int k = 0; k < 8; k++) {
+            float t = 1e30f, u, v;
+            acc += accel_tri_watertight(&micro_ray, mem_tris + 9 * (size_t)mem_ids[pos], &t, &u, &v);
+            if (++pos == mem_n) pos = 0;
+        }
+    }
+    mem_pos = pos;
+    return acc;
+}
+
+#define MICRO_BLOCK_MEM(LB)                                                                 \
+    static double micro_block##LB##_mem(long reps)                                          \
+    {                                                                                       \
+        wide_leaf_ray_##LB lr;                                                              \
+        leaf_setup_##LB(&lr, &micro_ray);                                                   \
+        double acc = 0;                                                                     \
+        long n = mem_n / LB, pos = mem_pos % n;                                             \
+        for (long r = 0; r < reps; r++) {                                                   \
+            MICRO_FRESH();                                                                  \
+            for (int k = 0; k < 4; k++) {                                                   \
+                float t = 1e30f, u, v;                                                      \
+                uint32_t id = ACCEL_MISS;                                                   \
+                acc += leaf_block_##LB(&mem_b##LB[mem_order##LB[pos]], &lr, &micro_ray, &t, \
+                                       &u, &v, &id, 1u << 30, 0, 0, 0);                     \
+                if (++pos == n) pos = 0;                                                    \
+            }                                                                               \
+        }                                                                                   \
+        mem_pos = pos;                                                                      \
+        return acc;                                                                         \
+    }
+MICRO_BLOCK_MEM(8)
+MICRO_BLOCK_MEM(4)
+
+/* A random permutation of 0..n-1 (a fixed seed: the same order in every
+ * run). */
+static void mem_shuffle(uint32_t *a, long n)
+{
+    uint64_t s = 0x9E3779B97F4A7C15u;
+    for (long i = 0; i < n; i++) a[i] = (uint32_t)i;
+    for (long i = n - 1; i > 0; i--) {
+        s ^= s << 13, s ^= s >> 7, s ^= s << 17;
+        long j = (long)(s % (uint64_t)(i + 1));
+        uint32_t x = a[i];
+        a[i] = a[j], a[j] = x;
+    }
+}
+
+/* The memory micro's arrays (n a multiple of 8); 0, or -1 without memory. */
+static int mem_make(long n)
+{
+    mem_n = n, mem_pos = 0;
+    mem_tris = malloc((size_t)n * 9 * sizeof *mem_tris);
+    mem_ids = malloc((size_t)n * sizeof *mem_ids);
+    mem_b8 = aligned_alloc(64, (size_t)(n / 8) * sizeof *mem_b8);
+    mem_b4 = aligned_alloc(64, (size_t)(n / 4) * sizeof *mem_b4);
+    mem_order8 = malloc((size_t)(n / 8) * sizeof *mem_order8);
+    mem_order4 = malloc((size_t)(n / 4) * sizeof *mem_order4);
+    if (!mem_tris || !mem_ids || !mem_b8 || !mem_b4 || !mem_order8 || !mem_order4) return -1;
+    mem_shuffle(mem_ids, n);
+    for (long i = 0; i < n; i++) memcpy(mem_tris + 9 * (size_t)mem_ids[i], micro_tris[i % 8], 9 * sizeof(float));
+    mem_shuffle(mem_order8, n / 8);
+    for (long i = 0; i < n / 8; i++) mem_b8[mem_order8[i]] = micro_b8[i % 4];
+    mem_shuffle(mem_order4, n / 4);
+    for (long i = 0; i < n / 4; i++) mem_b4[mem_order4[i]] = micro_b4[i % 4];
+    return 0;
+}
+
+static void mem_free(void)
+{
+    free(mem_tris), free(mem_ids), free(mem_b8), free(mem_b4), free(mem_order8), free(mem_order4);
+    mem_tris = NULL, mem_ids = NULL, mem_b8 = NULL, mem_b4 = NULL, mem_order8 = mem_order4 = NULL;
+}
 
 /* A binary node's visit: the slab test of its two child boxes (Kay and
  * Kajiya 1986, with the precomputed inverse direction); 8 nodes per rep. */
@@ -167,4 +258,17 @@ void step_micro_run(exp_ctx *x, step_micro *m)
     m->block4 = micro_time(micro_block4, reps, 4);
     m->node = micro_time(micro_node, reps, 8); /* 16 boxes: 8 binary nodes */
     m->step = micro_time(micro_step, reps * 8, 1);
+    long n = x->quick ? STEP_MICRO_MEM_TRIS_QUICK : STEP_MICRO_MEM_TRIS;
+    m->mem_tris = 0;
+    if (mem_make(n) == 0) {
+        /* one pass over the arrays per sample, or more */
+        long mreps = (reps > n / 8 ? reps : n / 8) / 4;
+        m->mem_tris = (int)n;
+        m->tri_mem = micro_time(micro_tri_mem, mreps, 8);
+        m->block8_mem = micro_time(micro_block8_mem, mreps, 4);
+        m->block4_mem = micro_time(micro_block4_mem, mreps, 4);
+    } else {
+        m->tri_mem = m->tri, m->block8_mem = m->block8, m->block4_mem = m->block4;
+    }
+    mem_free();
 }
