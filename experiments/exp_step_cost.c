@@ -418,9 +418,8 @@ static void answer_top(exp_ctx *x, const study *sd)
         if (strcmp(a->scene, sd->f[0].scene) || a->set != 0) continue;
         if (!a->fixed_ok) {
             const char *why = fixed_skip_reason(a->family);
-            if (why)
-                exp_md(x, "| `%s` | %s | %s | - | - | - | %s |\n", a->family, step_of(a->family),
-                       test_of(a->lanes), why);
+            exp_md(x, "| `%s` | %s | %s | - | - | - | %s |\n", a->family, step_of(a->family),
+                   test_of(a->lanes), why ? why : "no fit on equal terms (free fit below)");
             continue;
         }
         for (int j = 0; j < sd->count; j++)

@@ -498,8 +498,13 @@ int exp_lsq(const double *const *x, int m, const double *y, int n, double coef[3
 int exp_nnls(const double *const *x, int m, const double *y, int n, exp_fit *out)
 {
     memset(out, 0, sizeof *out);
-    out->sse = INFINITY;
-    int found = 0;
+    /* Every coefficient pinned at 0 is feasible too: the answer when every
+     * other subset wants a negative coefficient (a fixed term that alone
+     * over-predicts every point). */
+    out->sse = 0;
+    for (int i = 0; i < n; i++) out->sse += y[i] * y[i];
+    for (int j = 0; j < m; j++) out->pinned[j] = 1;
+    int found = 1;
     for (unsigned use = 1; use < (1u << m); use++) {
         double c[3];
         double sse = lsq_subset(x, m, y, n, use, c);
