@@ -108,28 +108,17 @@ typedef struct {
 } study;
 
 /* ns per primitive test of a kind that tests `lanes` at once (0: one by
- * one): the scalar test, or a full block's time over its lanes; hot in L1,
- * or (mem) read in a shuffled order from a scene-sized array. */
-static double micro_per_prim(const step_micro *m, int lanes, int mem)
+ * one): the scalar test, or a full block's time over its lanes, hot in L1.
+ * The memory micro (the same tests on a scene-sized array in a shuffled
+ * order) was tried as the diffuse rays' value for scalar tests
+ * (67d717c-a18df72): on this VM it read 18.7, 25.5, 29.9, 53.5 and 70.2 ns
+ * in five runs of one afternoon, while the traces' own free fits put a
+ * diffuse scalar test at 23-49 ns; fixed at those readings, bvh's diffuse
+ * fit swung from a 24 ns step to 0 with 85% held-out error. It is printed
+ * beside the hot micro, not held fixed. */
+static double micro_per_prim(const step_micro *m, int lanes)
 {
-    if (mem)
-        return lanes == 8 ? m->block8_mem.median / 8 : lanes == 4 ? m->block4_mem.median / 4
-                                                                  : m->tri_mem.median;
     return lanes == 8 ? m->block8.median / 8 : lanes == 4 ? m->block4.median / 4 : m->tri.median;
-}
-
-/* The fixed C_intersect is the hot micro's for every ray set. The memory
- * micro (a scalar test on a scene-sized array in a shuffled order) was
- * tried as the diffuse rays' value for scalar tests (67d717c-a18df72):
- * on this VM it read 18.7, 25.5, 29.9, 53.5 and 70.2 ns in five runs of
- * one afternoon, while the traces' own free fits put a diffuse scalar
- * test at 23-49 ns; fixed at those readings, bvh's diffuse fit swung from
- * a 24 ns step to 0 with 85% held-out error. It is printed beside the
- * hot micro, as the size of what a diffuse C_step of 0 hides. */
-static int reads_memory(int set, int lanes)
-{
-    (void)set, (void)lanes;
-    return 0;
 }
 
 /* Why a family has no fit on equal terms, or NULL. instanced's family is
@@ -209,7 +198,7 @@ static void fit_family(exp_ctx *x, const exp_group *g, const char *family, int s
         pr[n] = (double)tr->counters.prim_tests / (double)tr->rays;
         ns[n] = exp_est_scale(&tr->ms, 1e6 / (double)tr->rays).median;
         /* each configuration's own test (a family may mix blocks of 4 and 8) */
-        ci[n] = micro_per_prim(sd->m, cf->build.test_lanes, reads_memory(set, cf->build.test_lanes));
+        ci[n] = micro_per_prim(sd->m, cf->build.test_lanes);
         lanes = lanes == -1 || lanes == cf->build.test_lanes ? cf->build.test_lanes : -2;
         one[n] = 1, cfg_of[n++] = c;
     }
@@ -397,9 +386,10 @@ static void answer_top(exp_ctx *x, const study *sd)
     if (!sd->count) return;
     exp_md(x, "\n<!-- answer -->\n\n### What a step and a test cost, per kind\n\nOn equal terms: "
               "C_intersect is the micro-benchmark's cost per primitive of the kind's own test (hot "
-              "in L1; a block test over its lanes; the same test read from %d triangles in a "
-              "shuffled order costs more, see the section: a diffuse C_step of 0 is the fit "
-              "putting those misses in C_ray). C_step and C_ray are fitted beside it on %s "
+              "in L1; a block test over its lanes; the same test on %d triangles read in a "
+              "shuffled order is timed too, see the section: where that costs more, a diffuse "
+              "C_step of 0 can be the fit putting those misses in C_ray). C_step and C_ray are "
+              "fitted beside it on %s "
               "(ns per ray = C_step N_steps + C_intersect N_intersect + C_ray; held-out error: "
               "each configuration predicted by the fit without it). A step in tests: C_step / "
               "C_intersect.\n",
@@ -425,29 +415,24 @@ static void answer_top(exp_ctx *x, const study *sd)
             if (sd->f[j].set == 2 && sd->f[j].fixed_ok && !strcmp(sd->f[j].scene, a->scene) &&
                 !strcmp(sd->f[j].family, a->family))
                 d = &sd->f[j];
-        char cc[64] = "-", cs[64] = "-", ct[64] = "-", he[64] = "-";
-        double ci = a->fixed_ci, cd = d ? d->fixed_ci : ci;
+        char cs[64] = "-", ct[64] = "-", he[64] = "-";
+        double ci = a->fixed_ci;
         if (d) {
-            if (cd == ci)
-                snprintf(cc, sizeof cc, "%.2f", ci);
-            else
-                snprintf(cc, sizeof cc, "%.2f, %.2f", ci, cd);
             snprintf(cs, sizeof cs, "%.2f, %.2f", a->fixed_c[0], d->fixed_c[0]);
-            snprintf(ct, sizeof ct, "%.2f, %.2f", a->fixed_c[0] / ci, d->fixed_c[0] / cd);
+            snprintf(ct, sizeof ct, "%.2f, %.2f", a->fixed_c[0] / ci, d->fixed_c[0] / ci);
             snprintf(he, sizeof he, "%.0f%%, %.0f%%", 100 * a->fixed_med, 100 * d->fixed_med);
         } else {
-            snprintf(cc, sizeof cc, "%.2f, -", ci);
             snprintf(cs, sizeof cs, "%.2f, -", a->fixed_c[0]);
             snprintf(ct, sizeof ct, "%.2f, -", a->fixed_c[0] / ci);
             snprintf(he, sizeof he, "%.0f%%, -", 100 * a->fixed_med);
         }
-        exp_md(x, "| `%s` | %s | %s | %s | %s | %s | %s |\n", a->family, step_of(a->family),
-               test_of(a->lanes), cc, cs, ct, he);
-        double px[2] = {ci, cd}, py[2] = {a->fixed_c[0], d ? d->fixed_c[0] : 0};
+        exp_md(x, "| `%s` | %s | %s | %.2f | %s | %s | %s |\n", a->family, step_of(a->family),
+               test_of(a->lanes), ci, cs, ct, he);
+        double px[2] = {ci, ci}, py[2] = {a->fixed_c[0], d ? d->fixed_c[0] : 0};
         /* a C_step pinned at 0 cannot show on a log axis: svg_add leaves it out */
         if (p.count < SVG_MAX_SERIES - 1) svg_add(&p, a->family, px, py, NULL, NULL, d ? 2 : 1,
                                                   SVG_LINE | SVG_POINTS);
-        lo = fmin(lo, fmin(ci, cd)), hi = fmax(hi, fmax(ci, cd));
+        lo = fmin(lo, ci), hi = fmax(hi, ci);
     }
     if (hi > 0) {
         double ex[2] = {lo / 2, hi * 2};

@@ -9,9 +9,10 @@
  * of a scene's (STEP_MICRO_MEM_TRIS triangles: the triangle array read
  * through an id array, as the per-id cells and the binary BVH read it,
  * and the same triangles as blocks), so that every test pays the cache
- * misses of a scattered ray. They give the C_intersect the step-cost fit
- * holds fixed (hot for coherent rays, from memory for diffuse ones) and
- * bound the fitted constants from below.
+ * misses of a scattered ray. The hot ones give the C_intersect the
+ * step-cost fit holds fixed and bound the fitted constants from below;
+ * the memory ones are printed beside them (too unsteady on a shared
+ * machine to hold a fit: exp_step_cost.c, micro_per_prim).
  */
 #ifndef EXPERIMENTS_STEP_MICRO_H
 #define EXPERIMENTS_STEP_MICRO_H

@@ -504,7 +504,6 @@ int exp_nnls(const double *const *x, int m, const double *y, int n, exp_fit *out
     out->sse = 0;
     for (int i = 0; i < n; i++) out->sse += y[i] * y[i];
     for (int j = 0; j < m; j++) out->pinned[j] = 1;
-    int found = 1;
     for (unsigned use = 1; use < (1u << m); use++) {
         double c[3];
         double sse = lsq_subset(x, m, y, n, use, c);
@@ -517,9 +516,8 @@ int exp_nnls(const double *const *x, int m, const double *y, int n, exp_fit *out
             out->coef[j] = c[j];
             out->pinned[j] = !(use & (1u << j));
         }
-        found = 1;
     }
-    return found ? 0 : -1;
+    return 0;
 }
 
 /* 97.5% points of Student's t for 1..30 degrees of freedom. */

@@ -134,8 +134,9 @@ double exp_binom_upper(uint64_t k, uint64_t n);
 
 /* Non-negative least squares of y = sum_j coef[j] * x[j][i] over m <= 3
  * columns: every subset of free columns is solved and the feasible one with
- * the least squared residual kept. pinned[j] = 1 when coef[j] was held at 0.
- * Returns 0, or -1 when no subset is solvable (n < m or singular). */
+ * the least squared residual kept, the empty subset (every coef 0)
+ * included, so that there is always an answer. pinned[j] = 1 when coef[j]
+ * was held at 0. Returns 0. */
 typedef struct {
     double coef[3];
     int pinned[3];
